@@ -1,0 +1,51 @@
+#pragma once
+/// @file
+/// An independent validity check of any mixed mesh against the tet mesh it came from.
+///
+/// It shares no code path with the engine beyond the cell tables and the geometric measures:
+/// faces are rebuilt from the output cells alone.
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "hexmerge/mesh/mixed_mesh.h"
+#include "hexmerge/mesh/tet_mesh.h"
+
+namespace hexmerge {
+
+/// What the checker found. A mesh is valid when `valid()` holds.
+struct CheckReport {
+  std::size_t nb_cells = 0;
+  std::array<std::size_t, NB_CELL_TYPES> counts{};
+  std::size_t inverted_cells = 0;         ///< scaled Jacobian <= 0
+  double min_scaled_jacobian = 0.0;       ///< over all cells
+  index_t worst_cell = NO_INDEX;          ///< the cell with the minimum scaled Jacobian
+  std::size_t nonconforming_quads = 0;    ///< quads matched by two triangles, not a quad
+  std::size_t cracks = 0;                 ///< interior faces with no partner at all
+  std::size_t overshared_faces = 0;       ///< faces shared by three or more cells
+  std::size_t unused_input_nodes = 0;     ///< corner nodes of the input missing from the output
+  std::size_t moved_nodes = 0;            ///< nodes whose coordinates differ from the input's
+  std::size_t region_mismatches = 0;      ///< cells whose region differs from a source tet's
+  double input_volume = 0.0;
+  double output_volume = 0.0;             ///< with bilinear quad faces
+  double relative_volume_difference = 0.0;
+  std::vector<std::string> problems;      ///< human-readable, one line each, first few of each kind
+
+  bool valid() const {
+    return inverted_cells == 0 && cracks == 0 && overshared_faces == 0 &&
+           unused_input_nodes == 0 && moved_nodes == 0 && region_mismatches == 0;
+  }
+};
+
+/// Checks `mesh` against the tet mesh `input` it was made from.
+///
+/// Every cell positively oriented (scaled Jacobian > 0); every face of the domain's interior
+/// shared by exactly two cells, a quad with the identical quad or counted as non-conforming when
+/// two triangles cover it, no unpaired interior face (a crack); every corner node of the input
+/// used, at its exact coordinates; regions preserved (via MixedMesh::source_tets when present,
+/// else skipped); total volume compared with the input's.
+CheckReport check_mesh(const MixedMesh& mesh, const TetMesh& input);
+
+}  // namespace hexmerge

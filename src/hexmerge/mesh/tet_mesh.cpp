@@ -1,0 +1,79 @@
+#include "hexmerge/mesh/tet_mesh.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <string>
+
+#include "hexmerge/core/error.h"
+#include "hexmerge/geometry/quality.h"
+
+namespace hexmerge {
+
+void validate_tet_mesh(const TetMesh& mesh) {
+  if (mesh.points.size() % 3 != 0) {
+    throw InputError("the point array must have 3 coordinates per point");
+  }
+  if (mesh.tets.size() % 4 != 0) {
+    throw InputError("the tetrahedron array must have 4 vertex ids per tetrahedron");
+  }
+  const index_t nv = mesh.nb_vertices();
+  const index_t nt = mesh.nb_tets();
+  if (nt == 0) throw InputError("the mesh has no tetrahedra");
+  if (!mesh.regions.empty() && mesh.regions.size() != nt) {
+    throw InputError("the region array has " + std::to_string(mesh.regions.size()) +
+                     " entries for " + std::to_string(nt) + " tetrahedra");
+  }
+  for (index_t v = 0; v < nv; ++v) {
+    const double* p = mesh.point(v);
+    if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2])) {
+      throw InputError("node " + std::to_string(v) + " has a NaN or infinite coordinate",
+                       Entity::Node, v);
+    }
+  }
+  for (index_t t = 0; t < nt; ++t) {
+    const index_t* q = mesh.tet(t);
+    for (int i = 0; i < 4; ++i) {
+      if (q[i] >= nv) {
+        throw InputError("tetrahedron " + std::to_string(t) + " refers to node " +
+                             std::to_string(q[i]) + ", but the mesh has " + std::to_string(nv) +
+                             " nodes",
+                         Entity::Element, t);
+      }
+      for (int j = 0; j < i; ++j) {
+        if (q[i] == q[j]) {
+          throw InputError("tetrahedron " + std::to_string(t) + " uses node " +
+                               std::to_string(q[i]) + " twice",
+                           Entity::Element, t);
+        }
+      }
+    }
+    const double v = tet_volume(mesh.point(q[0]), mesh.point(q[1]), mesh.point(q[2]),
+                                mesh.point(q[3]));
+    if (!(v > 0.0)) {
+      throw InputError("tetrahedron " + std::to_string(t) +
+                           (v < 0.0 ? " is inverted (negative volume " : " has zero volume (") +
+                           std::to_string(v) + ")",
+                       Entity::Element, t);
+    }
+  }
+  // Duplicate tets: sort the sorted vertex quadruples and compare neighbours.
+  std::vector<std::array<index_t, 5>> keys(nt);
+  for (index_t t = 0; t < nt; ++t) {
+    const index_t* q = mesh.tet(t);
+    std::array<index_t, 5>& k = keys[t];
+    std::copy(q, q + 4, k.begin());
+    std::sort(k.begin(), k.begin() + 4);
+    k[4] = t;
+  }
+  std::sort(keys.begin(), keys.end());
+  for (index_t i = 1; i < nt; ++i) {
+    if (std::equal(keys[i].begin(), keys[i].begin() + 4, keys[i - 1].begin())) {
+      throw InputError("tetrahedra " + std::to_string(keys[i - 1][4]) + " and " +
+                           std::to_string(keys[i][4]) + " are duplicates (same four nodes)",
+                       Entity::Element, keys[i][4]);
+    }
+  }
+}
+
+}  // namespace hexmerge

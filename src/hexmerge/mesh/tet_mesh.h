@@ -1,0 +1,33 @@
+#pragma once
+/// @file
+/// The engine's input: a linear tetrahedral mesh as flat arrays (structure of arrays).
+
+#include <cstdint>
+#include <vector>
+
+#include "hexmerge/core/index.h"
+
+namespace hexmerge {
+
+/// A tetrahedral mesh. Tet t has vertices tets[4t .. 4t+3] in VTK order (positive volume:
+/// det(p1-p0, p2-p0, p3-p0) > 0). Coordinates of vertex v: points[3v .. 3v+2].
+struct TetMesh {
+  std::vector<double> points;    ///< #V by 3, row-major
+  std::vector<index_t> tets;     ///< #T by 4, row-major
+  std::vector<std::int32_t> regions;  ///< #T region ids (material / solid), or empty: one region
+
+  index_t nb_vertices() const { return static_cast<index_t>(points.size() / 3); }
+  index_t nb_tets() const { return static_cast<index_t>(tets.size() / 4); }
+  std::int32_t region(index_t t) const { return regions.empty() ? 0 : regions[t]; }
+  const double* point(index_t v) const { return &points[3 * static_cast<std::size_t>(v)]; }
+  const index_t* tet(index_t t) const { return &tets[4 * static_cast<std::size_t>(t)]; }
+};
+
+/// Checks a TetMesh for everything the engine cannot process and throws InputError naming the
+/// first node or element at fault: an empty mesh, array sizes that do not match, NaN or infinite
+/// coordinates, vertex ids out of range, a tet with a repeated vertex, an inverted or zero-volume
+/// tet, two tets on the same four vertices. (Faces shared by three or more tets are found by
+/// TetTopology.) The mesh is never modified.
+void validate_tet_mesh(const TetMesh& mesh);
+
+}  // namespace hexmerge

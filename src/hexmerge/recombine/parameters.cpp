@@ -1,0 +1,153 @@
+#include "hexmerge/recombine/parameters.h"
+
+#include <algorithm>
+#include <cstdlib>
+#include <sstream>
+
+#include "hexmerge/core/error.h"
+
+namespace hexmerge {
+namespace {
+
+std::string number(double value) {
+  std::ostringstream out;
+  out << value;
+  return out.str();
+}
+
+std::string flag(bool value) { return value ? "true" : "false"; }
+
+const std::vector<std::string> kConformityChoices = {"conforming", "last_resort", "allow"};
+const std::vector<std::string> kFinderChoices = {"programs"};
+
+InputError bad_value(const std::string& name, const std::string& value, const std::string& why) {
+  return InputError("parameter '" + name + "': " + why + " (got '" + value + "')",
+                    Entity::Parameter);
+}
+
+double parse_number(const std::string& name, const std::string& value, double lo, double hi) {
+  char* end = nullptr;
+  const double x = std::strtod(value.c_str(), &end);
+  if (value.empty() || end == nullptr || *end != '\0') throw bad_value(name, value, "not a number");
+  if (!(x >= lo && x <= hi)) {
+    throw bad_value(name, value, "must be between " + number(lo) + " and " + number(hi));
+  }
+  return x;
+}
+
+bool parse_bool(const std::string& name, const std::string& value) {
+  std::string v = value;
+  std::transform(v.begin(), v.end(), v.begin(), ::tolower);
+  if (v == "true" || v == "1" || v == "yes" || v == "on") return true;
+  if (v == "false" || v == "0" || v == "no" || v == "off") return false;
+  throw bad_value(name, value, "must be true or false");
+}
+
+int parse_choice(const std::string& name, const std::string& value,
+                 const std::vector<std::string>& choices) {
+  const auto it = std::find(choices.begin(), choices.end(), value);
+  if (it == choices.end()) {
+    std::string all;
+    for (const auto& c : choices) all += (all.empty() ? "" : ", ") + c;
+    throw bad_value(name, value, "must be one of " + all);
+  }
+  return static_cast<int>(it - choices.begin());
+}
+
+std::vector<ParameterInfo> make_table() {
+  const RecombineParameters d;
+  return {
+      {"min_dihedral_angle", "float", number(d.min_dihedral_angle), "deg", 90, 180, {},
+       "Min. quad dihedral angle",
+       "Smallest accepted dihedral angle between the two triangles of a quad face (180 = flat)"},
+      {"max_face_angle", "float", number(d.max_face_angle), "deg", 90, 180, {},
+       "Max. face angle",
+       "Largest accepted corner angle of a quad face (90 = rectangle)"},
+      {"min_scaled_jacobian", "float", number(d.min_scaled_jacobian), "", -1, 1, {},
+       "Min. scaled Jacobian",
+       "Smallest accepted scaled Jacobian (Verdict) of a new hex, prism or pyramid (1 = ideal)"},
+      {"make_hexahedra", "bool", flag(d.make_hexahedra), "", 0, 1, {}, "Hexahedra",
+       "Merge tetrahedra into hexahedra"},
+      {"make_prisms", "bool", flag(d.make_prisms), "", 0, 1, {}, "Prisms",
+       "Merge tetrahedra into prisms (pentahedra)"},
+      {"make_pyramids", "bool", flag(d.make_pyramids), "", 0, 1, {}, "Pyramids",
+       "Merge tetrahedra into pyramids (also used to close quad faces)"},
+      {"conformity", "choice", to_string(d.conformity), "", 0, 0, kConformityChoices,
+       "Conformity",
+       "Quad faces meeting two triangles: never (conforming), only where nothing else is "
+       "possible (last_resort), or freely (allow)"},
+      {"respect_regions", "bool", flag(d.respect_regions), "", 0, 1, {}, "Respect regions",
+       "Never merge tetrahedra of different regions (materials, solids)"},
+      {"local_optimisation", "bool", flag(d.local_optimisation), "", 0, 1, {},
+       "Local optimisation",
+       "Rearrange elements around unmatched boundary tetrahedra (Meshkat-Talmor 4.2)"},
+      {"finder", "choice", to_string(d.finder), "", 0, 0, kFinderChoices, "Candidate finder",
+       "How candidate elements are found: the paper's RF-graph search programs"},
+      {"threads", "int", number(d.threads), "", 0, 1024, {}, "Threads",
+       "Threads for the candidate search; 0 uses every hardware thread"},
+  };
+}
+
+}  // namespace
+
+std::string to_string(Conformity conformity) {
+  return kConformityChoices[static_cast<int>(conformity)];
+}
+
+std::string to_string(Finder finder) { return kFinderChoices[static_cast<int>(finder)]; }
+
+const std::vector<ParameterInfo>& parameter_table() {
+  static const std::vector<ParameterInfo> table = make_table();
+  return table;
+}
+
+void set_parameter(RecombineParameters& p, const std::string& name, const std::string& value) {
+  const auto& table = parameter_table();
+  const auto row = std::find_if(table.begin(), table.end(),
+                                [&](const ParameterInfo& info) { return info.name == name; });
+  if (row == table.end()) {
+    throw InputError("unknown parameter '" + name + "'", Entity::Parameter);
+  }
+  if (name == "min_dihedral_angle") {
+    p.min_dihedral_angle = parse_number(name, value, row->min, row->max);
+  } else if (name == "max_face_angle") {
+    p.max_face_angle = parse_number(name, value, row->min, row->max);
+  } else if (name == "min_scaled_jacobian") {
+    p.min_scaled_jacobian = parse_number(name, value, row->min, row->max);
+  } else if (name == "make_hexahedra") {
+    p.make_hexahedra = parse_bool(name, value);
+  } else if (name == "make_prisms") {
+    p.make_prisms = parse_bool(name, value);
+  } else if (name == "make_pyramids") {
+    p.make_pyramids = parse_bool(name, value);
+  } else if (name == "conformity") {
+    p.conformity = static_cast<Conformity>(parse_choice(name, value, row->choices));
+  } else if (name == "respect_regions") {
+    p.respect_regions = parse_bool(name, value);
+  } else if (name == "local_optimisation") {
+    p.local_optimisation = parse_bool(name, value);
+  } else if (name == "finder") {
+    p.finder = static_cast<Finder>(parse_choice(name, value, row->choices));
+  } else if (name == "threads") {
+    const double x = parse_number(name, value, row->min, row->max);
+    if (x != static_cast<int>(x)) throw bad_value(name, value, "must be a whole number");
+    p.threads = static_cast<int>(x);
+  } else {
+    HEXMERGE_ASSERT(false, "parameter in the table without a setter");
+  }
+}
+
+void validate_parameters(const RecombineParameters& p) {
+  // Range checks go through the same parser as text input, so the two can never disagree.
+  RecombineParameters scratch;
+  set_parameter(scratch, "min_dihedral_angle", number(p.min_dihedral_angle));
+  set_parameter(scratch, "max_face_angle", number(p.max_face_angle));
+  set_parameter(scratch, "min_scaled_jacobian", number(p.min_scaled_jacobian));
+  set_parameter(scratch, "threads", number(p.threads));
+  if (!p.make_hexahedra && !p.make_prisms && !p.make_pyramids) {
+    throw InputError("no element type is enabled: enable hexahedra, prisms or pyramids",
+                     Entity::Parameter);
+  }
+}
+
+}  // namespace hexmerge

@@ -1,0 +1,76 @@
+#pragma once
+/// @file
+/// The engine's parameters and the one table that documents them for every front end.
+///
+/// The CLI's options, the FreeCAD object's properties and the task panel's widgets are all built
+/// from parameter_table() (exported by the Python module), so defaults never drift apart.
+
+#include <string>
+#include <vector>
+
+namespace hexmerge {
+
+/// How quad faces that would meet two triangles (of tets or other elements) are treated.
+enum class Conformity {
+  /// Never: every quad face ends on the boundary or on the identical quad face of another
+  /// element, or is closed by a pyramid made of the two tets behind it.
+  Conforming,
+  /// Only when nothing else is possible at a tet: a non-conforming element is taken only where
+  /// no conforming element exists; each one is counted in the report.
+  LastResort,
+  /// The paper's liberty: element type first, non-conformities only break ties.
+  Allow,
+};
+
+/// Which candidate finder produces the elements that the selection chooses from.
+enum class Finder {
+  /// The paper's RF-graph search programs (LINK/QUAD), 5- and 6-tet hexahedra.
+  Programs,
+};
+
+/// Parameters of hexmerge::recombine. Every field is listed in parameter_table() with its unit,
+/// range and documentation.
+struct RecombineParameters {
+  double min_dihedral_angle = 160.0;  ///< degrees, [90, 180]: the paper's dangle
+  double max_face_angle = 160.0;      ///< degrees, [90, 180]: the paper's fangle
+  double min_scaled_jacobian = 0.3;   ///< [-1, 1]: Verdict scaled Jacobian of every new element
+  bool make_hexahedra = true;
+  bool make_prisms = true;
+  bool make_pyramids = true;
+  Conformity conformity = Conformity::LastResort;
+  bool respect_regions = true;        ///< never merge tets of different regions
+  bool local_optimisation = true;     ///< the paper's section 4.2
+  Finder finder = Finder::Programs;
+  int threads = 0;                    ///< candidate search threads; 0: all hardware threads
+};
+
+/// One row of the parameter table.
+struct ParameterInfo {
+  std::string name;     ///< field name, also the Python keyword and the CLI option (--min-...)
+  std::string type;     ///< "float", "int", "bool" or "choice"
+  std::string default_value;  ///< as text: "160", "true", "last_resort"
+  std::string unit;     ///< "deg", "" when dimensionless
+  double min = 0.0;     ///< for float and int
+  double max = 0.0;
+  std::vector<std::string> choices;  ///< for "choice"
+  std::string label;    ///< short human label for GUIs
+  std::string doc;      ///< one-line documentation
+};
+
+/// The table of every engine parameter, in display order, with RecombineParameters{}'s defaults.
+const std::vector<ParameterInfo>& parameter_table();
+
+/// Sets one parameter from text (as given on a command line or in a property); throws
+/// InputError (Entity::Parameter) naming the parameter when the name or value is invalid or out
+/// of range.
+void set_parameter(RecombineParameters& parameters, const std::string& name,
+                   const std::string& value);
+
+/// Checks every parameter against its range; throws InputError naming the first bad one.
+void validate_parameters(const RecombineParameters& parameters);
+
+/// Text of an enum value as used in the table ("conforming", "last_resort", "allow", ...).
+std::string to_string(Conformity conformity);
+std::string to_string(Finder finder);
+
+}  // namespace hexmerge

@@ -1,0 +1,47 @@
+#pragma once
+/// @file
+/// The engine's entry point: recombine a tetrahedral mesh into a hex-dominant mesh
+/// (Meshkat & Talmor).
+
+#include <array>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "hexmerge/core/progress.h"
+#include "hexmerge/mesh/mixed_mesh.h"
+#include "hexmerge/mesh/tet_mesh.h"
+#include "hexmerge/recombine/parameters.h"
+
+namespace hexmerge {
+
+/// Statistics of one run. Counts and per-type arrays are indexed by CellType.
+struct RecombineReport {
+  std::size_t input_tets = 0;
+  std::array<std::size_t, NB_CELL_TYPES> output_counts{};  ///< cells of each type
+  std::size_t output_cells = 0;
+  double element_reduction_percent = 0.0;  ///< 100 * (1 - output_cells / input_tets)
+  double input_volume = 0.0;               ///< sum of the input tets' volumes
+  std::array<double, NB_CELL_TYPES> volume_fraction{};  ///< share of input volume per type
+  std::size_t nonconforming_quads = 0;     ///< quad faces meeting two triangles in the output
+  std::size_t closing_pyramids = 0;        ///< pyramids made to close a quad face
+  std::size_t released_elements = 0;       ///< elements split back to tets to restore conformity
+  std::array<double, NB_CELL_TYPES> min_scaled_jacobian{};   ///< per type (0 when none)
+  std::array<double, NB_CELL_TYPES> mean_scaled_jacobian{};  ///< per type (0 when none)
+  std::map<std::string, std::size_t> candidates_per_template;  ///< accepted candidates
+  std::size_t candidates_total = 0;
+  std::vector<std::pair<std::string, double>> phase_seconds;  ///< wall time per phase, in order
+};
+
+/// Merges groups of tetrahedra into hexahedra, prisms and pyramids.
+///
+/// @param[in]  input       linear tet mesh; validated first (InputError names what is wrong)
+/// @param[in]  parameters  acceptance thresholds, element types, strategy
+/// @param[out] report      statistics of the run
+/// @param[in]  progress    optional progress callback (may cancel)
+/// @return the mixed mesh on the input's points; every cell is the union of its source tets,
+///         positively oriented in the local order of cell_type.h, in the region of its tets.
+MixedMesh recombine(const TetMesh& input, const RecombineParameters& parameters,
+                    RecombineReport& report, const ProgressCallback& progress = {});
+
+}  // namespace hexmerge
