@@ -1,0 +1,406 @@
+// The private module hexmerge._core: numpy arrays in, numpy arrays out, exceptions translated.
+//
+// Validation with friendly messages lives in the pure-Python package (hexmerge/_validate.py);
+// this file only converts data and errors. The GIL is released while the core works.
+
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <chrono>
+#include <cstring>
+#include <exception>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "hexmerge/check/check_mesh.h"
+#include "hexmerge/core/error.h"
+#include "hexmerge/core/progress.h"
+#include "hexmerge/mesh/cell_type.h"
+#include "hexmerge/mesh/mixed_mesh.h"
+#include "hexmerge/mesh/second_order.h"
+#include "hexmerge/mesh/tet_mesh.h"
+#include "hexmerge/recombine/parameters.h"
+#include "hexmerge/recombine/recombine.h"
+
+namespace py = pybind11;
+using namespace hexmerge;
+
+namespace {
+
+constexpr auto kIn = py::array::c_style | py::array::forcecast;
+using PointsIn = py::array_t<double, kIn>;
+using IndexIn = py::array_t<index_t, kIn>;
+using RegionsIn = py::array_t<std::int32_t, kIn>;
+using TypesIn = py::array_t<std::uint8_t, kIn>;
+
+// The Python type of InputError, created at import and kept for the interpreter's lifetime (a
+// raw pointer: a static py::object would be released after the interpreter is gone).
+PyObject* g_input_error = nullptr;
+
+const char* entity_name(Entity entity) {
+  switch (entity) {
+    case Entity::Node: return "node";
+    case Entity::Element: return "element";
+    case Entity::Parameter: return "parameter";
+    case Entity::None: break;
+  }
+  return nullptr;
+}
+
+// Copies a numpy array of any shape into a flat vector, checking its shape.
+template <class T, int F>
+std::vector<T> flat(const py::array_t<T, F>& a, py::ssize_t columns, const char* what) {
+  if (columns > 0 ? (a.ndim() != 2 || a.shape(1) != columns) : a.ndim() != 1) {
+    throw py::value_error(std::string(what) + ": wrong array shape");
+  }
+  return std::vector<T>(a.data(), a.data() + a.size());
+}
+
+// Moves a vector into a numpy array without copying the data.
+template <class T>
+py::array_t<T> to_numpy(std::vector<T>&& v, std::vector<py::ssize_t> shape) {
+  auto* heap = new std::vector<T>(std::move(v));
+  py::capsule owner(heap, [](void* p) { delete static_cast<std::vector<T>*>(p); });
+  return py::array_t<T>(shape, heap->data(), owner);
+}
+
+template <class T>
+py::array_t<T> to_numpy(std::vector<T>&& v) {
+  const auto n = static_cast<py::ssize_t>(v.size());
+  return to_numpy(std::move(v), {n});
+}
+
+template <class T, std::size_t N>
+py::dict per_type(const std::array<T, N>& values) {
+  py::dict d;
+  for (int t = 0; t < NB_CELL_TYPES; ++t) {
+    d[descriptor(static_cast<CellType>(t)).name] = values[t];
+  }
+  return d;
+}
+
+py::object optional_index(index_t i) {
+  return i == NO_INDEX ? py::object(py::none()) : py::object(py::int_(i));
+}
+
+// Builds the core's parameters from {name: text}; set_parameter checks names and ranges.
+RecombineParameters make_parameters(const std::map<std::string, std::string>& options) {
+  RecombineParameters parameters;
+  for (const auto& [name, value] : options) set_parameter(parameters, name, value);
+  validate_parameters(parameters);
+  return parameters;
+}
+
+std::vector<std::int32_t> regions_of(const py::object& regions, const char* what) {
+  if (regions.is_none()) return {};
+  return flat(regions.cast<RegionsIn>(), 0, what);
+}
+
+// Wraps the optional Python progress function. The core calls it from the thread that started
+// the run (this one), with the GIL released: take it back for the call. Calls are throttled so a
+// chatty phase does not spend its time in Python; Ctrl-C (a pending signal) cancels the run.
+class Progress {
+ public:
+  explicit Progress(py::object function) : function_(std::move(function)) {}
+
+  ProgressCallback callback() {
+    return [this](const std::string& phase, double fraction) { return call(phase, fraction); };
+  }
+
+  // Re-raises what the Python side raised (KeyboardInterrupt, an error in the callback) in place
+  // of the core's Cancelled.
+  void rethrow_python_error() const {
+    if (error_) std::rethrow_exception(error_);
+  }
+
+ private:
+  bool call(const std::string& phase, double fraction) {
+    const auto now = std::chrono::steady_clock::now();
+    const bool due = phase != last_phase_ || fraction >= 1.0 || now - last_call_ > kInterval;
+    if (!due) return true;
+    last_phase_ = phase;
+    last_call_ = now;
+    py::gil_scoped_acquire gil;
+    try {
+      if (PyErr_CheckSignals() != 0) throw py::error_already_set();
+      if (function_.is_none()) return true;
+      const py::object answer = function_(phase, fraction);
+      return answer.is_none() || answer.cast<bool>();
+    } catch (...) {
+      error_ = std::current_exception();
+      return false;
+    }
+  }
+
+  static constexpr std::chrono::milliseconds kInterval{50};
+  py::object function_;
+  std::string last_phase_;
+  std::chrono::steady_clock::time_point last_call_{};
+  std::exception_ptr error_;
+};
+
+py::dict report_to_dict(const RecombineReport& r) {
+  py::dict d;
+  d["input_tets"] = r.input_tets;
+  d["output_cells"] = r.output_cells;
+  d["output_counts"] = per_type(r.output_counts);
+  d["element_reduction_percent"] = r.element_reduction_percent;
+  d["input_volume"] = r.input_volume;
+  d["volume_fraction"] = per_type(r.volume_fraction);
+  d["nonconforming_quads"] = r.nonconforming_quads;
+  d["closing_pyramids"] = r.closing_pyramids;
+  d["released_elements"] = r.released_elements;
+  d["min_scaled_jacobian"] = per_type(r.min_scaled_jacobian);
+  d["mean_scaled_jacobian"] = per_type(r.mean_scaled_jacobian);
+  py::dict templates;
+  for (const auto& [name, count] : r.candidates_per_template) templates[name.c_str()] = count;
+  d["candidates_per_template"] = templates;
+  d["candidates_total"] = r.candidates_total;
+  py::dict phases;
+  for (const auto& [name, seconds] : r.phase_seconds) phases[name.c_str()] = seconds;
+  d["phase_seconds"] = phases;
+  return d;
+}
+
+py::dict check_report_to_dict(const CheckReport& r) {
+  py::dict d;
+  d["valid"] = r.valid();
+  d["nb_cells"] = r.nb_cells;
+  d["counts"] = per_type(r.counts);
+  d["inverted_cells"] = r.inverted_cells;
+  d["min_scaled_jacobian"] = r.min_scaled_jacobian;
+  d["worst_cell"] = optional_index(r.worst_cell);
+  d["nonconforming_quads"] = r.nonconforming_quads;
+  d["cracks"] = r.cracks;
+  d["overshared_faces"] = r.overshared_faces;
+  d["unused_input_nodes"] = r.unused_input_nodes;
+  d["moved_nodes"] = r.moved_nodes;
+  d["region_mismatches"] = r.region_mismatches;
+  d["input_volume"] = r.input_volume;
+  d["output_volume"] = r.output_volume;
+  d["relative_volume_difference"] = r.relative_volume_difference;
+  d["problems"] = r.problems;
+  return d;
+}
+
+py::dict mesh_to_dict(MixedMesh&& m) {
+  py::dict d;
+  const auto nb_points = static_cast<py::ssize_t>(m.nb_vertices());
+  std::vector<std::uint8_t> types(m.types.size());
+  for (std::size_t c = 0; c < m.types.size(); ++c) types[c] = static_cast<std::uint8_t>(m.types[c]);
+  d["points"] = to_numpy(std::move(m.points), {nb_points, 3});
+  d["types"] = to_numpy(std::move(types));
+  d["offsets"] = to_numpy(std::move(m.offsets));
+  d["cell_vertices"] = to_numpy(std::move(m.cell_vertices));
+  d["regions"] = m.regions.empty() ? py::object(py::none()) : py::object(to_numpy(std::move(m.regions)));
+  d["source_offsets"] = to_numpy(std::move(m.source_offsets));
+  d["source_tets"] = to_numpy(std::move(m.source_tets));
+  return d;
+}
+
+MixedMesh mesh_from_arrays(const PointsIn& points, const TypesIn& types, const IndexIn& offsets,
+                           const IndexIn& cell_vertices, const py::object& regions,
+                           const py::object& source_offsets, const py::object& source_tets) {
+  MixedMesh m;
+  m.points = flat(points, 3, "points");
+  const auto raw_types = flat(types, 0, "types");
+  m.types.resize(raw_types.size());
+  for (std::size_t c = 0; c < raw_types.size(); ++c) {
+    if (raw_types[c] >= NB_CELL_TYPES) throw py::value_error("types: unknown cell type");
+    m.types[c] = static_cast<CellType>(raw_types[c]);
+  }
+  m.offsets = flat(offsets, 0, "offsets");
+  m.cell_vertices = flat(cell_vertices, 0, "cell_vertices");
+  m.regions = regions_of(regions, "regions");
+  if (!source_offsets.is_none()) {
+    m.source_offsets = flat(source_offsets.cast<IndexIn>(), 0, "source_offsets");
+    m.source_tets = flat(source_tets.cast<IndexIn>(), 0, "source_tets");
+  }
+  return m;
+}
+
+py::tuple run_recombine(const PointsIn& points, const IndexIn& cells, const py::object& regions,
+                        const std::map<std::string, std::string>& options,
+                        const py::object& progress) {
+  const bool quadratic = cells.ndim() == 2 && cells.shape(1) == 10;
+  Tet10Mesh tet10;
+  TetMesh input;
+  if (quadratic) {
+    tet10.points = flat(points, 3, "points");
+    tet10.tets10 = flat(cells, 10, "cells");
+    tet10.regions = regions_of(regions, "regions");
+  } else {
+    input.points = flat(points, 3, "points");
+    input.tets = flat(cells, 4, "cells");
+    input.regions = regions_of(regions, "regions");
+  }
+  const RecombineParameters parameters = make_parameters(options);
+  Progress watcher(progress);
+  RecombineReport report;
+  MixedMesh mesh;
+  QuadraticCells second;
+  try {
+    py::gil_scoped_release released;
+    if (quadratic) input = corner_mesh(tet10);
+    mesh = recombine(input, parameters, report, watcher.callback());
+    if (quadratic) second = quadratic_cells(mesh, tet10);
+  } catch (const Cancelled&) {
+    watcher.rethrow_python_error();
+    throw;
+  }
+  py::dict out = mesh_to_dict(std::move(mesh));
+  if (quadratic) {
+    out["quadratic_offsets"] = to_numpy(std::move(second.offsets));
+    out["quadratic_nodes"] = to_numpy(std::move(second.nodes));
+  }
+  return py::make_tuple(out, report_to_dict(report));
+}
+
+py::dict run_check(const PointsIn& points, const TypesIn& types, const IndexIn& offsets,
+                   const IndexIn& cell_vertices, const py::object& regions,
+                   const py::object& source_offsets, const py::object& source_tets,
+                   const PointsIn& input_points, const IndexIn& input_tets,
+                   const py::object& input_regions) {
+  const MixedMesh mesh = mesh_from_arrays(points, types, offsets, cell_vertices, regions,
+                                          source_offsets, source_tets);
+  TetMesh input;
+  input.points = flat(input_points, 3, "input_points");
+  input.tets = flat(input_tets, 4, "input_tets");
+  input.regions = regions_of(input_regions, "input_regions");
+  CheckReport report;
+  {
+    py::gil_scoped_release released;
+    report = check_mesh(mesh, input);
+  }
+  return check_report_to_dict(report);
+}
+
+void run_validate(const PointsIn& points, const IndexIn& cells, const py::object& regions) {
+  TetMesh input;
+  input.points = flat(points, 3, "points");
+  input.tets = flat(cells, 4, "cells");
+  input.regions = regions_of(regions, "regions");
+  py::gil_scoped_release released;
+  validate_tet_mesh(input);
+}
+
+py::list table() {
+  py::list rows;
+  for (const ParameterInfo& p : parameter_table()) {
+    py::dict row;
+    row["name"] = p.name;
+    row["type"] = p.type;
+    row["default"] = p.default_value;
+    row["unit"] = p.unit;
+    row["min"] = p.min;
+    row["max"] = p.max;
+    row["choices"] = p.choices;
+    row["label"] = p.label;
+    row["doc"] = p.doc;
+    rows.append(row);
+  }
+  return rows;
+}
+
+py::list cell_types() {
+  py::list rows;
+  for (int t = 0; t < NB_CELL_TYPES; ++t) {
+    const CellDescriptor& d = descriptor(static_cast<CellType>(t));
+    py::list faces;
+    for (int f = 0; f < d.nb_faces; ++f) {
+      py::list face;
+      for (int k = 0; k < d.face_size[f]; ++k) face.append(d.face[f][k]);
+      faces.append(py::tuple(face));
+    }
+    py::list edges;
+    for (int e = 0; e < d.nb_edges; ++e) edges.append(py::make_tuple(d.edge[e][0], d.edge[e][1]));
+    py::dict row;
+    row["value"] = t;
+    row["name"] = d.name;
+    row["nb_vertices"] = d.nb_vertices;
+    row["nb_edges"] = d.nb_edges;
+    row["nb_faces"] = d.nb_faces;
+    row["faces"] = faces;
+    row["edges"] = edges;
+    row["vtk_id"] = d.vtk_id;
+    row["nb_quad_faces"] = d.nb_quad_faces;
+    rows.append(row);
+  }
+  return rows;
+}
+
+}  // namespace
+
+PYBIND11_MODULE(_core, m) {
+  m.doc() = R"doc(HexMerge's compiled core (private: use the package `hexmerge`).
+
+Arrays in, arrays out. Bad input raises InputError (a ValueError) naming the node or element
+at fault; a run cancelled from the progress callback raises Cancelled; a broken internal
+invariant raises RuntimeError.)doc";
+
+  // InputError is a ValueError carrying `entity` ("node", "element", "parameter" or None) and
+  // `index` (0-based, or None).
+  static py::exception<InputError> input_error(m, "InputError", PyExc_ValueError);
+  static py::exception<Cancelled> cancelled(m, "Cancelled", PyExc_Exception);
+  g_input_error = input_error.ptr();
+  py::register_exception_translator([](std::exception_ptr p) {
+    try {
+      if (p) std::rethrow_exception(p);
+    } catch (const InputError& e) {
+      py::object error = py::reinterpret_borrow<py::object>(g_input_error)(e.what());
+      const char* entity = entity_name(e.entity());
+      error.attr("entity") = entity ? py::object(py::str(entity)) : py::object(py::none());
+      error.attr("index") = optional_index(e.id());
+      PyErr_SetObject(g_input_error, error.ptr());
+    } catch (const Cancelled& e) {
+      cancelled(e.what());
+    } catch (const InternalError& e) {
+      PyErr_SetString(PyExc_RuntimeError, (std::string("HexMerge internal error: ") + e.what() +
+                                           " (please report this bug)").c_str());
+    }
+  });
+
+  m.def("recombine", &run_recombine, py::arg("points"), py::arg("cells"),
+        py::arg("regions") = py::none(), py::arg("options") = std::map<std::string, std::string>{},
+        py::arg("progress") = py::none(),
+        R"doc(Merges the tets of a Tet4 or Tet10 mesh into hexahedra, prisms and pyramids.
+
+points   float64 (N, 3).
+cells    (M, 4) linear tets or (M, 10) quadratic tets, VTK node order, uint32-compatible ids.
+regions  int32 (M,) region id per tet, or None (one region).
+options  {parameter name: value as text}; see parameter_table().
+progress callable(phase: str, fraction: float) -> bool | None, called from this thread with
+         the GIL held; returning False cancels the run (raises Cancelled).
+
+Returns (mesh, report): mesh is a dict of arrays points (N, 3), types uint8 (C,) (CellType
+values), offsets (C+1,), cell_vertices, regions (C,) or None, source_offsets (C+1,),
+source_tets; for Tet10 input also quadratic_offsets (C+1,) and quadratic_nodes (corners then
+mid-edge nodes in VTK quadratic order, ids of the input's points). report is a dict.)doc");
+
+  m.def("check_mesh", &run_check, py::arg("points"), py::arg("types"), py::arg("offsets"),
+        py::arg("cell_vertices"), py::arg("regions"), py::arg("source_offsets"),
+        py::arg("source_tets"), py::arg("input_points"), py::arg("input_tets"),
+        py::arg("input_regions"),
+        R"doc(Checks a linear mixed mesh against the tet mesh it came from.
+
+The mixed mesh is given by the arrays of recombine()'s result (source_offsets and source_tets
+may be None: regions are then not traced). The input is a linear tet mesh (input_tets (M, 4)).
+Returns the CheckReport as a dict; `valid` is True when the mesh passes.)doc");
+
+  m.def("validate_tet_mesh", &run_validate, py::arg("points"), py::arg("cells"),
+        py::arg("regions") = py::none(),
+        R"doc(Raises InputError naming the first node or element that the engine cannot process.
+
+points float64 (N, 3); cells (M, 4); regions int32 (M,) or None.)doc");
+
+  m.def("parameter_table", &table,
+        R"doc(The engine's parameters, in display order: a list of dicts with name, type ("float",
+"int", "bool", "choice"), default (text), unit, min, max, choices, label and doc.)doc");
+
+  m.def("cell_types", &cell_types,
+        R"doc(The linear cell types, by value: a list of dicts with value, name, nb_vertices,
+nb_edges, nb_faces, faces (outward, VTK order), edges (VTK quadratic mid-edge order), vtk_id and
+nb_quad_faces.)doc");
+}

@@ -1,0 +1,38 @@
+"""HexMerge: merge tetrahedral meshes into hex-dominant meshes (Meshkat & Talmor).
+
+>>> mesh, report = hexmerge.recombine(points, tets)          # numpy arrays in
+>>> mesh.cells("hexahedron"), report["element_reduction_percent"]
+
+The engine is the compiled module ``hexmerge._core``; this package validates input, converts
+Tet10 meshes and offers the command line (``python -m hexmerge``, or ``hexmerge``).
+"""
+
+from __future__ import annotations
+
+try:
+    from . import _core
+except ImportError as e:  # pragma: no cover - depends on the build
+    raise ImportError(
+        "hexmerge._core is not built for this interpreter: build the project with "
+        "`cmake -S . -B build -DPython_EXECUTABLE=/usr/bin/python3.11 && cmake --build build` "
+        f"(the module lands in src/python/hexmerge). Cause: {e}"
+    ) from e
+
+from ._api import CellBlock, MixedMesh, cell_types, check, parameters, recombine, validate
+
+InputError = _core.InputError
+Cancelled = _core.Cancelled
+
+__version__ = "0.1.0"
+
+__all__ = [
+    "Cancelled",
+    "CellBlock",
+    "InputError",
+    "MixedMesh",
+    "cell_types",
+    "check",
+    "parameters",
+    "recombine",
+    "validate",
+]

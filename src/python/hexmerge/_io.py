@@ -1,0 +1,264 @@
+"""Reading tet meshes and writing mixed meshes with meshio (every volume format it handles).
+
+meshio keeps every cell in VTK's node order and converts the formats that differ (Gmsh's
+second-order cells, for one) when reading and writing.
+"""
+
+from __future__ import annotations
+
+import os
+import tempfile
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from . import _cells
+from ._api import MixedMesh
+
+#: cell_data keys that carry a region (material, solid) id, by priority.
+REGION_KEYS = (
+    "gmsh:physical",
+    "medit:ref",
+    "netgen:index",
+    "region",
+    "CellEntityIds",
+    "material",
+    "gmsh:geometrical",
+)
+_SURFACE_OR_LOWER = {"vertex", "line", "line3", "triangle", "triangle6", "triangle7", "quad", "quad8", "quad9"}
+
+
+class MeshFileError(ValueError):
+    """A file that cannot be read or written as asked."""
+
+
+@dataclass
+class TetFile:
+    """A tet mesh read from a file: arrays for recombine() plus what writing back needs."""
+
+    points: np.ndarray
+    cells: np.ndarray  # (M, 4) or (M, 10)
+    regions: np.ndarray | None
+    region_key: str | None = None
+    region_names: dict[int, str] = field(default_factory=dict)  # from Abaqus element sets
+    ignored: dict[str, int] = field(default_factory=dict)  # lower-dimensional cells left out
+
+
+def read(path: str | os.PathLike[str], file_format: str | None = None) -> Any:
+    import meshio
+
+    if not Path(path).is_file():
+        raise MeshFileError(f"{path}: no such file")
+    try:
+        return meshio.read(path, file_format=file_format)
+    except Exception as e:  # meshio raises ReadError, KeyError, ValueError... for bad files
+        raise MeshFileError(f"{path}: cannot read the mesh: {type(e).__name__}: {e}") from None
+
+
+def _block_regions(mesh: Any, b: int) -> tuple[str | None, np.ndarray | None]:
+    for key in REGION_KEYS:
+        data = mesh.cell_data.get(key)
+        if data is not None and b < len(data) and data[b] is not None:
+            return key, np.asarray(data[b]).reshape(-1)
+    return None, None
+
+
+def _regions_from_sets(mesh: Any, volume_blocks: list[int]) -> tuple[list[np.ndarray] | None, dict[int, str]]:
+    """Regions from element sets (Abaqus ELSETs): sets that hold some but not all of the tets,
+    in file order; a tet in several takes the first, one in none gets 0."""
+    sets = getattr(mesh, "cell_sets", None) or {}
+    total = sum(len(mesh.cells[b].data) for b in volume_blocks)
+    parts = [np.zeros(len(mesh.cells[b].data), dtype=np.int64) for b in volume_blocks]
+    names: dict[int, str] = {}
+    for name, per_block in sets.items():
+        members = [np.asarray(per_block[b], dtype=np.int64) if b < len(per_block) else np.empty(0, np.int64) for b in volume_blocks]
+        count = sum(len(np.unique(m)) for m in members)
+        if count == 0 or count == total:
+            continue
+        rid = len(names) + 1
+        names[rid] = name
+        for part, m in zip(parts, members):
+            fresh = m[part[m] == 0]
+            part[fresh] = rid
+    if not names:
+        return None, {}
+    return parts, names
+
+
+def read_tets(path: str | os.PathLike[str], file_format: str | None = None) -> TetFile:
+    """The tetrahedra of a mesh file (Tet4 or Tet10) with their regions; other volume cells
+    are an error, surface, line and vertex cells are left out (and counted in ``ignored``)."""
+    mesh = read(path, file_format)
+    volume_blocks, ignored, kinds = [], {}, set()
+    for b, block in enumerate(mesh.cells):
+        name = block.type
+        if name in ("tetra", "tetra10"):
+            volume_blocks.append(b)
+            kinds.add(name)
+        elif name in _cells.BY_MESHIO_NAME or name in _cells.OTHER_VOLUME_NAMES:
+            raise MeshFileError(
+                f"{path}: unsupported cell type {name!r} ({len(block.data)} cells): hexmerge "
+                "merges tetrahedral meshes (linear tetra or quadratic tetra10) only"
+            )
+        else:
+            ignored[name] = ignored.get(name, 0) + len(block.data)
+    if not volume_blocks:
+        raise MeshFileError(f"{path}: the mesh has no tetrahedra")
+    if len(kinds) > 1:
+        raise MeshFileError(f"{path}: the mesh mixes linear (tetra) and quadratic (tetra10) tetrahedra")
+    cells = np.concatenate([np.asarray(mesh.cells[b].data) for b in volume_blocks])
+    key, regions = None, None
+    parts = []
+    for b in volume_blocks:
+        k, r = _block_regions(mesh, b)
+        if r is None or (key is not None and k != key):
+            parts = []
+            break
+        key = k
+        parts.append(r)
+    names: dict[int, str] = {}
+    if parts:
+        regions = np.concatenate(parts)
+        if key == "gmsh:physical" and not regions.any():
+            # No physical groups in the file: the geometric volumes (solids) are the regions.
+            _, geo = zip(*(_block_regions_key(mesh, b, "gmsh:geometrical") for b in volume_blocks))
+            if all(g is not None for g in geo):
+                key, regions = "gmsh:geometrical", np.concatenate(geo)
+    else:
+        key = None
+        set_parts, names = _regions_from_sets(mesh, volume_blocks)
+        if set_parts is not None:
+            regions, key = np.concatenate(set_parts), "cell_sets"
+    return TetFile(
+        points=np.asarray(mesh.points, dtype=np.float64)[:, :3] if mesh.points.shape[1] >= 3 else mesh.points,
+        cells=cells,
+        regions=regions,
+        region_key=key,
+        region_names=names,
+        ignored=ignored,
+    )
+
+
+def _block_regions_key(mesh: Any, b: int, key: str) -> tuple[str, np.ndarray | None]:
+    data = mesh.cell_data.get(key)
+    if data is None or b >= len(data):
+        return key, None
+    return key, np.asarray(data[b]).reshape(-1)
+
+
+def read_mixed(path: str | os.PathLike[str], file_format: str | None = None) -> tuple[MixedMesh, Any]:
+    """A mixed mesh (linear or quadratic tets, pyramids, prisms, hexes) from a file, with the
+    raw meshio mesh. Lower-dimensional cells are left out."""
+    mesh = read(path, file_format)
+    blocks, region_parts = [], []
+    have_regions = True
+    for b, block in enumerate(mesh.cells):
+        if block.type in _cells.BY_MESHIO_NAME:
+            blocks.append((block.type, block.data))
+            _, r = _block_regions(mesh, b)
+            have_regions = have_regions and r is not None
+            region_parts.append(r)
+        elif block.type in _cells.OTHER_VOLUME_NAMES:
+            raise MeshFileError(f"{path}: unsupported cell type {block.type!r} ({len(block.data)} cells)")
+    if not blocks:
+        raise MeshFileError(f"{path}: the mesh has no volume cells")
+    try:
+        mixed = MixedMesh.from_blocks(mesh.points[:, :3], blocks, region_parts if have_regions else None)
+    except ValueError as e:
+        raise MeshFileError(f"{path}: {e}") from None
+    return mixed, mesh
+
+
+def format_of(path: str | os.PathLike[str], file_format: str | None) -> str:
+    """The meshio format name for writing `path`."""
+    if file_format:
+        return file_format
+    from meshio._helpers import _filetypes_from_path  # meshio's own extension table
+
+    try:
+        types = _filetypes_from_path(Path(path))
+    except Exception:
+        types = []
+    if not types:
+        raise MeshFileError(f"{path}: unknown mesh file extension; give the format with --output-format")
+    return types[0]
+
+
+def _collapsed_pyramids(blocks: list[tuple[str, np.ndarray]]) -> list[tuple[str, np.ndarray]]:
+    """Pyramids as degenerate hexahedra (base, then the apex four times): the form CalculiX
+    and Abaqus accept where they have no pyramid element."""
+    out = []
+    for name, data in blocks:
+        if name == "pyramid":
+            name, data = "hexahedron", data[:, [0, 1, 2, 3, 4, 4, 4, 4]]
+        out.append((name, data))
+    return out
+
+
+def to_meshio(
+    mesh: MixedMesh,
+    fmt: str,
+    *,
+    region_key: str | None = None,
+    region_names: dict[int, str] | None = None,
+    collapse_pyramids: bool = False,
+) -> Any:
+    """A meshio.Mesh of the mixed mesh, with its regions stored the way `fmt` keeps them."""
+    import meshio
+
+    blocks = mesh.cell_blocks(by_region=mesh.regions is not None)
+    cells = [(b.type, b.data) for b in blocks]
+    if fmt == "abaqus" and not collapse_pyramids and any(b.type.startswith("pyramid") for b in blocks):
+        raise MeshFileError(
+            "the Abaqus/CalculiX format (.inp) has no pyramid element: add --collapse-pyramids "
+            "(pyramids written as degenerate hexahedra), --no-make-pyramids, or write another "
+            "format (.vtu, .msh, .mesh)"
+        )
+    if collapse_pyramids:
+        if mesh.order == 2 and any(b.type == "pyramid13" for b in blocks):
+            raise MeshFileError("--collapse-pyramids works on linear meshes only")
+        cells = _collapsed_pyramids(cells)
+    regions = [mesh.regions[b.cells] if mesh.regions is not None else np.zeros(len(b.cells), np.int64) for b in blocks]
+    cell_data: dict[str, list[np.ndarray]] = {}
+    cell_sets: dict[str, list[np.ndarray]] = {}
+    if fmt.startswith("gmsh"):
+        # Gmsh needs both tags; the entity (geometrical) tag is one per block, blocks are
+        # split by region.
+        cell_data["gmsh:physical"] = [r.astype(np.int64) for r in regions]
+        cell_data["gmsh:geometrical"] = [(r if mesh.regions is not None else r + 1).astype(np.int64) for r in regions]
+    elif mesh.regions is not None:
+        if fmt == "abaqus":
+            names = region_names or {}
+            for b, block in enumerate(blocks):
+                rid = int(block.region) if block.region is not None else 0
+                name = names.get(rid, f"Region{rid}")
+                cell_sets.setdefault(name, [np.empty(0, np.int64) for _ in blocks])[b] = np.arange(len(block.cells))
+        elif fmt == "medit":
+            cell_data["medit:ref"] = regions
+        else:
+            key = region_key if region_key and not region_key.startswith(("gmsh:", "medit:")) and region_key != "cell_sets" else "region"
+            cell_data[key] = regions
+    return meshio.Mesh(mesh.points, cells, cell_data=cell_data, cell_sets=cell_sets or None)
+
+
+def write_atomic(path: str | os.PathLike[str], mesh: Any, fmt: str, **kwargs: Any) -> None:
+    """Writes through a temporary file in the same folder, renamed over `path` only on success:
+    a failed write never leaves a partial or stale output."""
+    import meshio
+
+    path = Path(path)
+    folder = path.parent if str(path.parent) else Path(".")
+    if not folder.is_dir():
+        raise MeshFileError(f"{path}: the folder {folder} does not exist")
+    fd, tmp = tempfile.mkstemp(dir=folder, prefix=f".{path.stem}.", suffix=".tmp" + "".join(path.suffixes))
+    os.close(fd)
+    try:
+        meshio.write(tmp, mesh, file_format=fmt, **kwargs)
+        os.replace(tmp, path)
+    except BaseException as e:
+        Path(tmp).unlink(missing_ok=True)
+        if isinstance(e, Exception) and not isinstance(e, MeshFileError):
+            raise MeshFileError(f"{path}: cannot write the mesh as {fmt}: {type(e).__name__}: {e}") from None
+        raise

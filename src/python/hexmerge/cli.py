@@ -1,0 +1,289 @@
+"""The command line: ``hexmerge recombine``, ``hexmerge check``, ``hexmerge parameters``.
+
+Every engine option is generated from the parameter table, so ``--help`` shows the same names,
+units and defaults as the Python API and the FreeCAD add-on. main() only parses, loads, calls
+the library and saves.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+import time
+from pathlib import Path
+from typing import Any, Sequence, TextIO
+
+import numpy as np
+
+from . import __version__, _api, _core, _io
+
+EXIT_OK = 0
+EXIT_ERROR = 1  # bad input, unreadable or unwritable file, failed run
+EXIT_USAGE = 2  # argparse's own code for a bad command line
+EXIT_INVALID = 3  # `check` ran and found the mesh invalid
+EXIT_INTERRUPTED = 130
+
+EXIT_CODES = """exit codes: 0 success, 1 error (bad input, unreadable file, failed run; nothing is
+written), 2 bad command line, 3 `check` found the mesh invalid, 130 interrupted"""
+
+
+def option_name(name: str) -> str:
+    return "--" + name.replace("_", "-")
+
+
+def _help(row: dict[str, Any]) -> str:
+    unit = f" {row['unit']}" if row["unit"] else ""
+    if row["type"] in ("float", "int"):
+        lo, hi = (f"{v:g}" for v in (row["min"], row["max"]))
+        extra = f"range {lo} to {hi}{unit}; default: {row['default_text']}{unit}"
+    elif row["type"] == "choice":
+        extra = f"one of {', '.join(row['choices'])}; default: {row['default_text']}"
+    else:
+        extra = f"default: {'on' if row['default'] else 'off'}"
+    return f"{row['doc']} ({extra})".replace("%", "%%")
+
+
+def add_parameter_options(parser: argparse.ArgumentParser) -> None:
+    """One option per row of the parameter table; unset options keep the engine's default."""
+    group = parser.add_argument_group("engine parameters (from hexmerge.parameters())")
+    for row in _api.parameters():
+        flag = option_name(row["name"])
+        common = dict(dest=row["name"], default=None, help=_help(row))
+        if row["type"] == "bool":
+            group.add_argument(flag, action=argparse.BooleanOptionalAction, **common)
+        elif row["type"] == "choice":
+            group.add_argument(flag, choices=row["choices"], **common)
+        elif row["type"] == "int":
+            group.add_argument(flag, type=int, metavar="N", **common)
+        else:
+            group.add_argument(flag, type=float, metavar=(row["unit"].upper() or "X"), **common)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="hexmerge",
+        description="Merge tetrahedral meshes into hex-dominant meshes (Meshkat & Talmor). "
+        "Reads and writes every volume mesh format meshio handles (.msh, .vtu, .vtk, .inp, "
+        ".mesh, .med, .vol, ...).",
+        epilog=EXIT_CODES,
+    )
+    parser.add_argument("--version", action="version", version=f"hexmerge {__version__}")
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+
+    rec = sub.add_parser(
+        "recombine",
+        help="merge the tets of a mesh file into hexahedra, prisms and pyramids",
+        description="Merge the tetrahedra of IN into hexahedra, prisms and pyramids and write "
+        "the mixed mesh to OUT. A Tet10 mesh gives quadratic elements that reuse its mid-edge "
+        "nodes. Regions (Gmsh physical groups, Medit refs, Netgen indices, Abaqus element sets) "
+        "are kept and never merged across.",
+        epilog=EXIT_CODES,
+    )
+    rec.add_argument("input", metavar="IN", help="tetrahedral mesh file")
+    rec.add_argument("-o", "--output", metavar="OUT", required=True, help="output mesh file")
+    rec.add_argument("--input-format", metavar="FMT", help="meshio format of IN (default: from the extension)")
+    rec.add_argument(
+        "--output-format",
+        metavar="FMT",
+        help="meshio format of OUT (default: from the extension; e.g. gmsh22 for Gmsh 2.2 .msh)",
+    )
+    rec.add_argument("--ascii", action="store_true", help="write ASCII instead of binary where the format has both")
+    rec.add_argument(
+        "--collapse-pyramids",
+        action="store_true",
+        help="write pyramids as degenerate hexahedra (apex repeated), for formats and solvers "
+        "without pyramids such as Abaqus/CalculiX .inp",
+    )
+    rec.add_argument("--stats", metavar="JSON", help="write the run's report to this JSON file")
+    rec.add_argument(
+        "--progress",
+        action=argparse.BooleanOptionalAction,
+        default=None,
+        help="show progress on stderr (default: when stderr is a terminal)",
+    )
+    rec.add_argument("-q", "--quiet", action="store_true", help="print nothing on success")
+    add_parameter_options(rec)
+
+    chk = sub.add_parser(
+        "check",
+        help="check a mixed mesh against the tet mesh it came from",
+        description="Check MESH: every element positively oriented, faces paired (no cracks, "
+        "quads against quads), every source node used at its exact place, regions kept, volume "
+        "against the source's. Without --source, MESH must be a tet mesh and is checked against "
+        "itself.",
+        epilog=EXIT_CODES,
+    )
+    chk.add_argument("mesh", metavar="MESH", help="mesh file to check")
+    chk.add_argument("--source", metavar="TETMESH", help="the tet mesh MESH was made from")
+    chk.add_argument("--json", action="store_true", help="print the report as JSON")
+
+    par = sub.add_parser("parameters", help="list the engine parameters", description="List the engine parameters.")
+    par.add_argument("--json", action="store_true", help="print the table as JSON")
+    return parser
+
+
+class ProgressPrinter:
+    """Progress on stderr: one updating line on a terminal, a line per phase and 10 % else."""
+
+    def __init__(self, stream: TextIO, tty: bool) -> None:
+        self.stream, self.tty = stream, tty
+        self.phase, self.step, self.dirty = "", -1, False
+
+    def __call__(self, phase: str, fraction: float) -> bool:
+        pct = max(0, min(100, int(fraction * 100)))
+        if self.tty:
+            self.stream.write(f"\r{phase}: {pct:3d} %\x1b[K")
+            self.dirty = True
+        elif phase != self.phase or pct // 10 != self.step:
+            self.stream.write(f"{phase}: {pct} %\n")
+        self.phase, self.step = phase, pct // 10
+        self.stream.flush()
+        return True
+
+    def close(self) -> None:
+        if self.dirty:
+            self.stream.write("\r\x1b[K")
+            self.stream.flush()
+
+
+def _jsonable(value: Any) -> Any:
+    if isinstance(value, dict):
+        return {str(k): _jsonable(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_jsonable(v) for v in value]
+    if isinstance(value, np.generic):
+        value = value.item()
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    return value
+
+
+def _summary(path: str, report: dict[str, Any], out: str) -> str:
+    counts = ", ".join(f"{n} {name}" for name, n in report["output_counts"].items() if n)
+    return (
+        f"{path}: {report['input_tets']} tets -> {report['output_cells']} cells ({counts}); "
+        f"reduction {report['element_reduction_percent']:.1f} %, hex volume "
+        f"{100 * report['volume_fraction'].get('hex', 0.0):.1f} %, "
+        f"{report['nonconforming_quads']} non-conforming quads -> {out}"
+    )
+
+
+def cmd_recombine(args: argparse.Namespace) -> int:
+    options = {row["name"]: getattr(args, row["name"]) for row in _api.parameters()}
+    options = {k: v for k, v in options.items() if v is not None}
+    fmt = _io.format_of(args.output, args.output_format)
+    if args.stats and not Path(args.stats).resolve().parent.is_dir():
+        raise _io.MeshFileError(f"{args.stats}: the folder does not exist")
+    tets = _io.read_tets(args.input, args.input_format)
+    show = args.progress if args.progress is not None else sys.stderr.isatty()
+    printer = ProgressPrinter(sys.stderr, sys.stderr.isatty()) if show else None
+    start = time.perf_counter()
+    try:
+        mesh, report = _api.recombine(tets.points, tets.cells, tets.regions, progress=printer, **options)
+    finally:
+        if printer:
+            printer.close()
+    seconds = time.perf_counter() - start
+    out_mesh = _io.to_meshio(
+        mesh,
+        fmt,
+        region_key=tets.region_key,
+        region_names=tets.region_names,
+        collapse_pyramids=args.collapse_pyramids,
+    )
+    kwargs: dict[str, Any] = {}
+    if args.ascii and fmt in ("gmsh", "gmsh22", "vtu", "vtk"):
+        kwargs["binary"] = False
+    _io.write_atomic(args.output, out_mesh, fmt, **kwargs)
+    if args.stats:
+        stats = {
+            "input": str(args.input),
+            "output": str(args.output),
+            "order": mesh.order,
+            "options": options,
+            "wall_seconds": seconds,
+            "report": report,
+        }
+        Path(args.stats).write_text(json.dumps(_jsonable(stats), indent=2) + "\n")
+    if not args.quiet:
+        print(_summary(args.input, report, args.output))
+        if tets.ignored:
+            left = ", ".join(f"{n} {name}" for name, n in tets.ignored.items())
+            print(f"note: left out the input's lower-dimensional cells ({left})", file=sys.stderr)
+    return EXIT_OK
+
+
+def _print_check(report: dict[str, Any]) -> None:
+    counts = ", ".join(f"{n} {name}" for name, n in report["counts"].items() if n)
+    print(f"{report['nb_cells']} cells ({counts})")
+    worst = report["worst_cell"]
+    print(f"min scaled Jacobian {report['min_scaled_jacobian']:.4g}" + (f" (cell {worst})" if worst is not None else ""))
+    for key in (
+        "inverted_cells",
+        "cracks",
+        "overshared_faces",
+        "nonconforming_quads",
+        "unused_input_nodes",
+        "moved_nodes",
+        "region_mismatches",
+    ):
+        print(f"{key.replace('_', ' ')}: {report[key]}")
+    print(
+        f"volume {report['output_volume']:.9g} against {report['input_volume']:.9g} "
+        f"(relative difference {report['relative_volume_difference']:.3g})"
+    )
+    for line in report["problems"]:
+        print(f"  {line}")
+    print("valid" if report["valid"] else "INVALID")
+
+
+def cmd_check(args: argparse.Namespace) -> int:
+    mesh, raw = _io.read_mixed(args.mesh)
+    if args.source:
+        source = _io.read_tets(args.source)
+        points, cells, regions = source.points, source.cells, source.regions
+    else:
+        if mesh.counts()["tetra"] != mesh.nb_cells:
+            raise _io.MeshFileError(
+                f"{args.mesh}: the mesh has other cells than tetrahedra; give the tet mesh it "
+                "came from with --source TETMESH"
+            )
+        points = mesh.points
+        cells = mesh.cell_vertices.reshape(-1, 4)
+        regions = mesh.regions
+    report = _api.check(mesh, points, cells, regions)
+    if args.json:
+        print(json.dumps(_jsonable(report), indent=2))
+    else:
+        _print_check(report)
+    return EXIT_OK if report["valid"] else EXIT_INVALID
+
+
+def cmd_parameters(args: argparse.Namespace) -> int:
+    rows = _api.parameters()
+    if args.json:
+        print(json.dumps(_jsonable(rows), indent=2))
+        return EXIT_OK
+    for row in rows:
+        print(f"{option_name(row['name'])}: {_help(row).replace('%%', '%')}")
+    return EXIT_OK
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    command = {"recombine": cmd_recombine, "check": cmd_check, "parameters": cmd_parameters}[args.command]
+    try:
+        return command(args)
+    except KeyboardInterrupt:
+        print("hexmerge: interrupted; nothing written", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    except _core.Cancelled:
+        print("hexmerge: cancelled; nothing written", file=sys.stderr)
+        return EXIT_ERROR
+    except (ValueError, OSError) as e:  # InputError and MeshFileError are ValueErrors
+        where = f"{args.input}: " if args.command == "recombine" and isinstance(e, _core.InputError) else ""
+        print(f"hexmerge: error: {where}{e}", file=sys.stderr)
+        return EXIT_ERROR
