@@ -1,0 +1,109 @@
+# SPDX-License-Identifier: LGPL-2.1-or-later
+"""Task-panel base classes: one owns the undo transaction, one runs work off the GUI thread."""
+
+import threading
+import traceback
+
+import FreeCAD
+import FreeCADGui
+from PySide import QtCore
+
+
+class TransactionTaskPanel:
+    """OK commits the document's transaction, Cancel aborts it (undoing what the command and the
+    panel did). Opens a transaction when the panel is opened on an existing object."""
+
+    transaction_name = "Edit"
+
+    def __init__(self, obj):
+        self.obj = obj
+        self.doc = obj.Document
+        if not getattr(self.doc, "HasPendingTransaction", False):
+            self.doc.openTransaction(self.transaction_name)
+
+    def getStandardButtons(self):
+        return int(QtGui_buttons())
+
+    def accept(self):
+        self.doc.commitTransaction()
+        self.close()
+        return True
+
+    def reject(self):
+        self.doc.abortTransaction()
+        self.doc.recompute()
+        self.close()
+        return True
+
+    def close(self):
+        FreeCADGui.Control.closeDialog()
+        gdoc = FreeCADGui.getDocument(self.doc.Name)
+        if gdoc is not None and gdoc.getInEdit() is not None:
+            gdoc.resetEdit()
+
+
+def QtGui_buttons():
+    from PySide import QtGui
+    return QtGui.QDialogButtonBox.Ok | QtGui.QDialogButtonBox.Cancel
+
+
+class BackgroundRun:
+    """Runs work(progress) on a Python thread; the GUI polls it with a QTimer.
+
+    progress(fraction, message) is handed to the work and returns False once stop() was called,
+    which is how the engine is cancelled. on_progress, on_done(result) and on_error(exception)
+    are called on the GUI thread.
+    """
+
+    def __init__(self, work, on_progress, on_done, on_error, interval_ms=100):
+        self.work = work
+        self.on_progress = on_progress
+        self.on_done = on_done
+        self.on_error = on_error
+        self.fraction = 0.0
+        self.message = ""
+        self.result = None
+        self.error = None
+        self.stopped = False
+        self.thread = threading.Thread(target=self._main, daemon=True)
+        self.timer = QtCore.QTimer()
+        self.timer.setInterval(interval_ms)
+        self.timer.timeout.connect(self._poll)
+
+    def start(self):
+        self.thread.start()
+        self.timer.start()
+
+    def stop(self):
+        self.stopped = True
+
+    def running(self):
+        return self.thread.is_alive()
+
+    def progress(self, fraction=None, message=None, *rest):
+        if fraction is not None:
+            try:
+                self.fraction = float(fraction)
+            except (TypeError, ValueError):
+                self.message = str(fraction)
+        if message is not None:
+            self.message = str(message)
+        return not self.stopped
+
+    def _main(self):
+        try:
+            self.result = self.work(self.progress)
+        except BaseException as e:  # reported on the GUI thread
+            self.error = e
+            self.trace = traceback.format_exc()
+
+    def _poll(self):
+        self.on_progress(self.fraction, self.message)
+        if self.thread.is_alive():
+            return
+        self.timer.stop()
+        if self.error is not None:
+            FreeCAD.Console.PrintLog(getattr(self, "trace", ""))
+            self.on_error(self.error)
+        else:
+            self.on_done(self.result)

@@ -1,0 +1,206 @@
+# SPDX-License-Identifier: LGPL-2.1-or-later
+"""Recombination of a FemMesh with no GUI (the role of FEM's femmesh/netgentools.py).
+
+A run has three steps so that a GUI can keep the middle one off its thread:
+    job = RecombineJob.prepare(femmesh, ...)   # FreeCAD thread: FemMesh -> arrays, regions
+    job.run(progress)                          # any thread: numpy and the engine only
+    femmesh, report = job.finish()             # FreeCAD thread: arrays -> new FemMesh
+recombine_femmesh() chains them.
+"""
+
+import os
+import sys
+import time
+
+import numpy as np
+
+from . import femmesh_arrays
+from . import regions as regions_mod
+
+REPO = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+
+# Options of the add-on itself (not engine parameters).
+PYRAMIDS_AS_HEXAHEDRA_DOC = (
+    "FreeCAD 0.20's CalculiX writer leaves pyramids out of the input file. When on, every "
+    "pyramid is stored as a collapsed hexahedron (base, apex four times), which the writer emits "
+    "as C3D8 (C3D20 for quadratic meshes), so the solver sees every element.")
+
+
+class Cancelled(Exception):
+    """The user cancelled the run through the progress callback."""
+
+
+def engine():
+    """The hexmerge Python module, with a clear message when it is not built or not importable."""
+    try:
+        import hexmerge
+    except ImportError:
+        # A checkout linked into FreeCAD's Mod folder: the module is built into src/python.
+        built = os.path.join(REPO, "src", "python")
+        if os.path.isdir(os.path.join(built, "hexmerge")) and built not in sys.path:
+            sys.path.append(built)
+    try:
+        import hexmerge
+    except ImportError as e:
+        raise ImportError(
+            "the HexMerge engine (Python module 'hexmerge') cannot be imported into FreeCAD's "
+            "Python: build it with the README's setup command ({})".format(e)) from e
+    return hexmerge
+
+
+def parameter_table():
+    """The engine's parameter table as a list of dicts (name, type, default, unit, min, max,
+    choices, label, doc), whatever the module returns rows as."""
+    rows = []
+    for r in engine().parameters():
+        get = (lambda k, r=r: r.get(k)) if isinstance(r, dict) else (lambda k, r=r: getattr(r, k, None))
+        rows.append({k: get(k) for k in
+                     ("name", "type", "default", "unit", "min", "max", "choices", "label", "doc")})
+    return rows
+
+
+def engine_options(options):
+    """Keeps the options the engine knows, with their table types; rejects unknown names."""
+    table = {r["name"]: r for r in parameter_table()}
+    out = {}
+    for name, value in options.items():
+        if name not in table:
+            raise ValueError("unknown HexMerge option '{}' (known: {})"
+                             .format(name, ", ".join(table)))
+        kind = table[name]["type"]
+        out[name] = (float(value) if kind == "float" else int(value) if kind == "int"
+                     else bool(value) if kind == "bool" else str(value))
+    return out
+
+
+class RecombineJob:
+    """One recombination of a tetrahedral FemMesh; see the module docstring."""
+
+    def __init__(self, arrays, cell_name, tets, regions, options, pyramids_as_hexahedra):
+        self.arrays = arrays
+        self.cell_name = cell_name
+        self.tets = tets
+        self.regions = regions
+        self.options = options
+        self.pyramids_as_hexahedra = pyramids_as_hexahedra
+        self.result = None
+        self.seconds = {}
+
+    @classmethod
+    def prepare(cls, femmesh, options=None, regions="auto", shape=None, material_solids=None,
+                materials=(), pyramids_as_hexahedra=True):
+        """Reads the FemMesh and finds the regions.
+
+        regions: "auto" (mesh groups, else solids of `shape`), "none", or a Regions object.
+        Raises NotTetrahedralError (with a message for the user) for an empty or mixed mesh.
+        """
+        t = time.perf_counter()
+        arrays = femmesh_arrays.femmesh_to_arrays(femmesh)
+        name, tets, element_ids = femmesh_arrays.tetrahedra(arrays)
+        read = time.perf_counter() - t
+
+        t = time.perf_counter()
+        if regions == "auto":
+            found = regions_mod.from_groups(femmesh, element_ids, materials)
+            if found is None and shape is not None:
+                found = regions_mod.from_solids(shape, arrays.points, tets, material_solids)
+            regions = found
+        elif regions == "none":
+            regions = None
+        job = cls(arrays, name, tets, regions, engine_options(options or {}),
+                  pyramids_as_hexahedra)
+        job.seconds = {"read FemMesh": read, "regions": time.perf_counter() - t}
+        return job
+
+    def run(self, progress=None):
+        """Runs the engine. progress(fraction, message) -> False cancels (raises Cancelled)."""
+        hexmerge = engine()
+        t = time.perf_counter()
+        region_ids = self.regions.ids if self.regions is not None else None
+        if region_ids is not None and "respect_regions" in self.options \
+                and not self.options["respect_regions"]:
+            region_ids = None
+        kwargs = dict(self.options)
+        if progress is not None:
+            kwargs["progress"] = progress
+        try:
+            self.result = hexmerge.recombine(self.arrays.points, self.tets, region_ids, **kwargs)
+        except Exception as e:
+            if type(e).__name__ in ("Cancelled", "CancelledError") or "cancel" in str(e).lower():
+                raise Cancelled(str(e)) from e
+            raise
+        self.seconds["engine"] = time.perf_counter() - t
+
+    def finish(self):
+        """The new FemMesh and the report (the engine's, plus what the add-on did)."""
+        t = time.perf_counter()
+        blocks, block_regions, point_index = result_blocks(self.result)
+        points, point_ids = self.arrays.points, self.arrays.point_ids
+        if point_index is not None:
+            points, point_ids = points[point_index], point_ids[point_index]
+        names = self.regions.names if self.regions is not None else None
+        femmesh, _ = femmesh_arrays.arrays_to_femmesh(
+            points, point_ids, blocks, block_regions, names, self.pyramids_as_hexahedra)
+        self.seconds["write FemMesh"] = time.perf_counter() - t
+
+        report = dict(result_report(self.result))
+        report["freecad"] = {
+            "input_cells": self.cell_name,
+            "regions": (self.regions.source if self.regions is not None else "none"),
+            "region_count": (self.regions.count if self.regions is not None else 0),
+            "material_groups": sorted((names or {}).values()),
+            "pyramids_as_collapsed_hexahedra": bool(self.pyramids_as_hexahedra),
+            "femmesh_volumes": femmesh.VolumeCount,
+            "seconds": self.seconds,
+        }
+        return femmesh, report
+
+
+def recombine_femmesh(femmesh, regions="auto", shape=None, pyramids_as_hexahedra=True,
+                      progress=None, **options):
+    """Recombines a tetrahedral FemMesh into a new hex-dominant FemMesh; returns (femmesh, report).
+
+    The input is not modified. Options are the engine's parameters (hexmerge.parameters()).
+    regions: "auto" (from "Volume" mesh groups, else per solid of `shape`), "none", or a
+    regions.Regions. pyramids_as_hexahedra: see PYRAMIDS_AS_HEXAHEDRA_DOC.
+    """
+    job = RecombineJob.prepare(femmesh, options, regions, shape,
+                               pyramids_as_hexahedra=pyramids_as_hexahedra)
+    job.run(progress)
+    return job.finish()
+
+
+# ---- the engine's result, read in one place ------------------------------------------------
+
+def result_blocks(result):
+    """[(cell name, cells)], [regions per block] and the index of the kept input points (or None)
+    from the engine's result."""
+    cells = _field(result, "cells")
+    if isinstance(cells, dict):
+        blocks = list(cells.items())
+    else:
+        blocks = [(getattr(c, "type", None) or c[0], getattr(c, "data", None) if hasattr(c, "data") else c[1])
+                  for c in cells]
+    blocks = [(str(n), np.asarray(c, dtype=np.int64)) for n, c in blocks]
+    regs = _field(result, "cell_regions", "regions", default=None)
+    if isinstance(regs, dict):
+        regs = [np.asarray(regs[n]) for n, _ in blocks]
+    elif regs is not None:
+        regs = [np.asarray(r) for r in regs]
+    index = _field(result, "point_index", "point_ids", "input_points", default=None)
+    return blocks, regs, (None if index is None else np.asarray(index, dtype=np.int64))
+
+
+def result_report(result):
+    return _field(result, "report", default={}) or {}
+
+
+def _field(obj, *names, default=KeyError):
+    for n in names:
+        if isinstance(obj, dict) and n in obj:
+            return obj[n]
+        if hasattr(obj, n):
+            return getattr(obj, n)
+    if default is KeyError:
+        raise KeyError("the engine's result has none of {}".format(names))
+    return default

@@ -1,0 +1,63 @@
+# SPDX-License-Identifier: LGPL-2.1-or-later
+"""Factories for the add-on's document objects (the role of FEM's ObjectsFem.py)."""
+
+import FreeCAD
+
+from . import femmesh_arrays
+from . import properties
+from .mesh_hexdominant import MeshHexDominant, containing_analysis
+
+
+def check_tetrahedral_source(source):
+    """Raises ValueError with a message for the user unless `source` is a FEM mesh object holding
+    a non-empty, purely tetrahedral mesh."""
+    if source is None:
+        raise ValueError("no mesh selected: select one tetrahedral FEM mesh object")
+    if not hasattr(source, "isDerivedFrom") or not source.isDerivedFrom("Fem::FemMeshObject"):
+        raise ValueError("{} is not a FEM mesh object".format(getattr(source, "Label", source)))
+    femmesh = source.FemMesh
+    if femmesh.VolumeCount == 0:
+        raise ValueError("{} has no volume elements (is it empty, or not meshed yet?)"
+                         .format(source.Label))
+    if femmesh.VolumeCount != femmesh.TetraCount:
+        raise ValueError(
+            "{} is not tetrahedral: {} of its {} volumes are not tetrahedra (HexMerge needs a "
+            "Tet4 or Tet10 mesh)".format(source.Label, femmesh.VolumeCount - femmesh.TetraCount,
+                                         femmesh.VolumeCount))
+    return source
+
+
+def set_options(obj, options):
+    """Sets properties from engine parameter names or property names."""
+    by_param = {s.parameter: s.name for s in properties.engine_specs()}
+    by_param["pyramids_as_hexahedra"] = "PyramidsAsHexahedra"
+    for key, value in options.items():
+        name = by_param.get(key, key)
+        if name not in obj.PropertiesList:
+            raise ValueError("unknown HexMerge option '{}' (known: {})"
+                             .format(key, ", ".join(sorted(by_param))))
+        setattr(obj, name, value)
+
+
+def make_hexdominant_mesh(doc, source, name="HexDominantMesh", recompute=True, **options):
+    check_tetrahedral_source(source)
+    obj = doc.addObject("Fem::FemMeshObjectPython", name)
+    MeshHexDominant(obj)
+    if FreeCAD.GuiUp:
+        from .view_mesh_hexdominant import VPMeshHexDominant
+        VPMeshHexDominant(obj.ViewObject)
+    obj.SourceMesh = source
+    try:
+        set_options(obj, options)
+    except Exception:
+        doc.removeObject(obj.Name)
+        raise
+    analysis = containing_analysis(source)
+    if analysis is not None:
+        # An analysis solves exactly one mesh: the new one takes the source's place.
+        analysis.Group = [obj if o == source else o for o in analysis.Group]
+    if recompute:
+        doc.recompute()
+        if "Invalid" in obj.State or "Error" in obj.State:
+            raise RuntimeError("{}: recompute failed: {}".format(obj.Label, obj.getStatusString()))
+    return obj

@@ -1,0 +1,138 @@
+# SPDX-License-Identifier: LGPL-2.1-or-later
+"""The "hex-dominant mesh" document object (proxy of a Fem::FemMeshObjectPython).
+
+It links a source tetrahedral FEM mesh object; recompute runs the engine on the source's FemMesh
+and stores the result in its own FemMesh property. The source is never modified. Because the link
+is an ordinary App::PropertyLink, a change to the source marks this object for recompute.
+"""
+
+import json
+
+import FreeCAD
+
+from . import hexmergetools
+from . import properties
+from . import regions as regions_mod
+
+TYPE = "HexMerge::MeshHexDominant"
+
+
+class MeshHexDominant:
+    """Stateless proxy: everything lives in the object's properties."""
+
+    Type = TYPE
+
+    def __init__(self, obj):
+        obj.Proxy = self
+        self.add_properties(obj)
+
+    @staticmethod
+    def add_properties(obj):
+        for spec in properties.all_specs():
+            spec.add_to(obj)
+        if "Report" not in obj.PropertiesList:
+            # read-only in the editor, and an output: setting it does not touch the object
+            obj.addProperty("App::PropertyString", "Report", "Report",
+                            "The engine's report of the last recompute (JSON)", 8, True)
+        if "Summary" not in obj.PropertiesList:
+            obj.addProperty("App::PropertyString", "Summary", "Report",
+                            "One-line summary of the last recompute", 8, True)
+
+    def onDocumentRestored(self, obj):
+        # New engine parameters (or add-on options) get their default on old documents.
+        self.add_properties(obj)
+
+    def dumps(self):
+        return None
+
+    def loads(self, state):
+        return None
+
+    def execute(self, obj):
+        femmesh, report = run(obj)
+        store(obj, femmesh, report)
+
+
+def check_source(obj):
+    """The source mesh object, or a ValueError with a message for the user."""
+    source = obj.SourceMesh
+    if source is None:
+        raise ValueError("{}: no source mesh (it was deleted or never set); set SourceMesh to a "
+                         "tetrahedral FEM mesh object".format(obj.Label))
+    if not source.isDerivedFrom("Fem::FemMeshObject"):
+        raise ValueError("{}: the source {} is not a FEM mesh object".format(obj.Label, source.Label))
+    return source
+
+
+def source_shape(source):
+    """The CAD shape a mesh object was made from (Gmsh: Part, Netgen: Shape), or None."""
+    for name in ("Part", "Shape"):
+        linked = getattr(source, name, None)
+        if linked is not None and hasattr(linked, "Shape"):
+            return linked
+    return None
+
+
+def containing_analysis(obj):
+    for o in obj.InList:
+        if o.isDerivedFrom("Fem::FemAnalysis"):
+            return o
+    return None
+
+
+def prepare(obj):
+    """A RecombineJob for the object's current source and properties (FreeCAD thread)."""
+    source = check_source(obj)
+    analysis = containing_analysis(obj) or containing_analysis(source)
+    part = source_shape(source)
+    options = properties.engine_options(obj)
+    regions = "auto" if options.get("respect_regions", True) else "none"
+    return hexmergetools.RecombineJob.prepare(
+        source.FemMesh, options, regions,
+        shape=part.Shape if part is not None else None,
+        material_solids=regions_mod.material_solids(analysis, part),
+        materials=regions_mod.analysis_materials(analysis),
+        pyramids_as_hexahedra=obj.PyramidsAsHexahedra)
+
+
+def run(obj, progress=None):
+    job = prepare(obj)
+    job.run(progress)
+    femmesh, report = job.finish()
+    report["freecad"]["source"] = obj.SourceMesh.Name
+    return femmesh, report
+
+
+def store(obj, femmesh, report):
+    obj.FemMesh = femmesh
+    obj.Report = json.dumps(report, indent=1, sort_keys=True, default=_plain)
+    obj.Summary = summary(report)
+
+
+def summary(report):
+    counts = report.get("output_counts") or report.get("counts") or {}
+    before = report.get("input_tets") or report.get("input_cells")
+    parts = []
+    if isinstance(counts, dict):
+        parts = ["{} {}".format(v, k) for k, v in counts.items() if v]
+    red = report.get("element_reduction_percent")
+    text = "{} tets -> {}".format(before, ", ".join(parts)) if before is not None else ", ".join(parts)
+    if red is not None:
+        text += " ({:.1f} % fewer elements)".format(red)
+    return text
+
+
+def _plain(x):
+    try:
+        import numpy as np
+        if isinstance(x, np.generic):
+            return x.item()
+        if isinstance(x, np.ndarray):
+            return x.tolist()
+    except ImportError:
+        pass
+    return str(x)
+
+
+def report_dict(obj):
+    return json.loads(obj.Report) if obj.Report else {}

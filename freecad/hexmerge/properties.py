@@ -1,0 +1,131 @@
+# SPDX-License-Identifier: LGPL-2.1-or-later
+"""Document-object properties built from the engine's parameter table (and the add-on's own).
+
+Each engine parameter becomes one property: its name in CamelCase, its group from GROUPS, its
+tooltip the table's doc (with the unit and range), its type from the table's type and unit:
+float with unit "deg" -> App::PropertyAngle, other float -> App::PropertyFloatConstraint,
+int -> App::PropertyIntegerConstraint, bool -> App::PropertyBool, choice ->
+App::PropertyEnumeration. A parameter added to the engine appears here with no change.
+"""
+
+from . import hexmergetools
+
+# Property groups, by parameter name; parameters not listed go to "Engine".
+GROUPS = {
+    "min_dihedral_angle": "Tolerances",
+    "max_face_angle": "Tolerances",
+    "min_scaled_jacobian": "Tolerances",
+    "make_hexahedra": "Element types",
+    "make_prisms": "Element types",
+    "make_pyramids": "Element types",
+    "conformity": "Conformity",
+    "respect_regions": "Material boundaries",
+}
+
+
+class PropertySpec:
+    """One data property: FreeCAD type, name, group, doc, default, and the engine parameter it
+    feeds (None for the add-on's own)."""
+
+    def __init__(self, kind, name, group, doc, default, parameter=None, row=None):
+        self.kind = kind
+        self.name = name
+        self.group = group
+        self.doc = doc
+        self.default = default
+        self.parameter = parameter
+        self.row = row
+
+    def add_to(self, obj):
+        if self.name in obj.PropertiesList:
+            return
+        obj.addProperty(self.kind, self.name, self.group, self.doc)
+        self.reset(obj)
+
+    def reset(self, obj):
+        if self.kind == "App::PropertyEnumeration":
+            setattr(obj, self.name, list(self.row["choices"]))
+            setattr(obj, self.name, self.default)
+        elif self.kind == "App::PropertyFloatConstraint":
+            setattr(obj, self.name, (float(self.default), float(self.row["min"]),
+                                     float(self.row["max"]), _step(self.row)))
+        elif self.kind == "App::PropertyIntegerConstraint":
+            setattr(obj, self.name, (int(float(self.default)), int(self.row["min"]),
+                                     int(self.row["max"]), 1))
+        else:
+            setattr(obj, self.name, self.default)
+
+    def value(self, obj):
+        """The property's value as the engine takes it."""
+        v = getattr(obj, self.name)
+        if self.kind == "App::PropertyAngle":
+            return float(v.getValueAs("deg")) if hasattr(v, "getValueAs") else float(v)
+        return v
+
+
+def camel(name):
+    return "".join(part[:1].upper() + part[1:] for part in name.split("_"))
+
+
+def _step(row):
+    span = float(row["max"]) - float(row["min"])
+    return 0.05 if span <= 2 else 1.0
+
+
+def _doc(row):
+    doc = row.get("doc") or ""
+    unit = row.get("unit") or ""
+    if row["type"] in ("float", "int"):
+        doc += " [{} .. {}{}]".format(_num(row["min"]), _num(row["max"]),
+                                      " " + unit if unit else "")
+    elif row["type"] == "choice":
+        doc += " (one of: {})".format(", ".join(row["choices"]))
+    return doc + " Default: {}.".format(row["default"])
+
+
+def _num(x):
+    x = float(x)
+    return str(int(x)) if x == int(x) else str(x)
+
+
+def _default(row):
+    d = row["default"]
+    if row["type"] == "bool":
+        return d if isinstance(d, bool) else str(d).lower() in ("true", "1", "yes", "on")
+    if row["type"] == "float":
+        return float(d)
+    if row["type"] == "int":
+        return int(float(d))
+    return str(d)
+
+
+def engine_specs():
+    specs = []
+    for row in hexmergetools.parameter_table():
+        kind = {
+            "float": "App::PropertyAngle" if row.get("unit") == "deg" else "App::PropertyFloatConstraint",
+            "int": "App::PropertyIntegerConstraint",
+            "bool": "App::PropertyBool",
+            "choice": "App::PropertyEnumeration",
+        }[row["type"]]
+        specs.append(PropertySpec(kind, camel(row["name"]), GROUPS.get(row["name"], "Engine"),
+                                  _doc(row), _default(row), row["name"], row))
+    return specs
+
+
+def addon_specs():
+    return [
+        PropertySpec("App::PropertyLink", "SourceMesh", "Source",
+                     "The tetrahedral FEM mesh object to recombine (never modified)", None),
+        PropertySpec("App::PropertyBool", "PyramidsAsHexahedra", "CalculiX",
+                     hexmergetools.PYRAMIDS_AS_HEXAHEDRA_DOC, True),
+    ]
+
+
+def all_specs():
+    return addon_specs() + engine_specs()
+
+
+def engine_options(obj):
+    """{engine parameter: value} from an object's properties (properties it lacks are skipped)."""
+    return {s.parameter: s.value(obj) for s in engine_specs() if s.name in obj.PropertiesList}
