@@ -50,7 +50,7 @@ def QtGui_buttons():
 class BackgroundRun:
     """Runs work(progress) on a Python thread; the GUI polls it with a QTimer.
 
-    progress(fraction, message) is handed to the work and returns False once stop() was called,
+    progress(message, fraction) is handed to the work and returns False once stop() was called,
     which is how the engine is cancelled. on_progress, on_done(result) and on_error(exception)
     are called on the GUI thread.
     """
@@ -80,14 +80,10 @@ class BackgroundRun:
     def running(self):
         return self.thread.is_alive()
 
-    def progress(self, fraction=None, message=None, *rest):
-        if fraction is not None:
-            try:
-                self.fraction = float(fraction)
-            except (TypeError, ValueError):
-                self.message = str(fraction)
-        if message is not None:
-            self.message = str(message)
+    def progress(self, message, fraction):
+        """The engine's callback: (phase name, fraction done in [0, 1])."""
+        self.message = str(message)
+        self.fraction = float(fraction)
         return not self.stopped
 
     def _main(self):

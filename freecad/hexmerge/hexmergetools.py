@@ -113,7 +113,7 @@ class RecombineJob:
         return job
 
     def run(self, progress=None):
-        """Runs the engine. progress(fraction, message) -> False cancels (raises Cancelled)."""
+        """Runs the engine. progress(phase, fraction) -> False cancels (raises Cancelled)."""
         hexmerge = engine()
         t = time.perf_counter()
         region_ids = self.regions.ids if self.regions is not None else None
@@ -125,10 +125,8 @@ class RecombineJob:
             kwargs["progress"] = progress
         try:
             self.result = hexmerge.recombine(self.arrays.points, self.tets, region_ids, **kwargs)
-        except Exception as e:
-            if type(e).__name__ in ("Cancelled", "CancelledError") or "cancel" in str(e).lower():
-                raise Cancelled(str(e)) from e
-            raise
+        except hexmerge.Cancelled as e:
+            raise Cancelled(str(e) or "cancelled") from e
         self.seconds["engine"] = time.perf_counter() - t
 
     def finish(self):
@@ -173,34 +171,17 @@ def recombine_femmesh(femmesh, regions="auto", shape=None, pyramids_as_hexahedra
 # ---- the engine's result, read in one place ------------------------------------------------
 
 def result_blocks(result):
-    """[(cell name, cells)], [regions per block] and the index of the kept input points (or None)
-    from the engine's result."""
-    cells = _field(result, "cells")
-    if isinstance(cells, dict):
-        blocks = list(cells.items())
-    else:
-        blocks = [(getattr(c, "type", None) or c[0], getattr(c, "data", None) if hasattr(c, "data") else c[1])
-                  for c in cells]
-    blocks = [(str(n), np.asarray(c, dtype=np.int64)) for n, c in blocks]
-    regs = _field(result, "cell_regions", "regions", default=None)
-    if isinstance(regs, dict):
-        regs = [np.asarray(regs[n]) for n, _ in blocks]
-    elif regs is not None:
-        regs = [np.asarray(r) for r in regs]
-    index = _field(result, "point_index", "point_ids", "input_points", default=None)
-    return blocks, regs, (None if index is None else np.asarray(index, dtype=np.int64))
+    """[(cell name, VTK-ordered cells)], [regions per block] (or None) and the index into the
+    input points of each output point, from hexmerge.recombine()'s (MixedMesh, report)."""
+    mesh = result[0]
+    blocks, regs = [], []
+    for block in mesh.cell_blocks():
+        blocks.append((block.type, np.asarray(block.data, dtype=np.int64)))
+        if mesh.regions is not None:
+            regs.append(np.asarray(mesh.regions)[block.cells])
+    index = None if mesh.point_map is None else np.asarray(mesh.point_map, dtype=np.int64)
+    return blocks, (regs if mesh.regions is not None else None), index
 
 
 def result_report(result):
-    return _field(result, "report", default={}) or {}
-
-
-def _field(obj, *names, default=KeyError):
-    for n in names:
-        if isinstance(obj, dict) and n in obj:
-            return obj[n]
-        if hasattr(obj, n):
-            return getattr(obj, n)
-    if default is KeyError:
-        raise KeyError("the engine's result has none of {}".format(names))
-    return default
+    return result[1]
