@@ -15,6 +15,9 @@
 
 namespace hexmerge {
 
+/// Lines of CheckReport::problems kept per kind of fault.
+constexpr std::size_t kMaxProblemsPerKind = 10;
+
 /// What the checker found. A mesh is valid when `valid()` holds.
 struct CheckReport {
   std::size_t nb_cells = 0;
@@ -28,6 +31,11 @@ struct CheckReport {
   std::size_t unused_input_nodes = 0;     ///< corner nodes of the input missing from the output
   std::size_t moved_nodes = 0;            ///< nodes whose coordinates differ from the input's
   std::size_t region_mismatches = 0;      ///< cells whose region differs from a source tet's
+  std::size_t malformed_cells = 0;        ///< wrong vertex count, vertex id out of range, repeated vertex
+  std::size_t mismatched_faces = 0;       ///< shared faces whose two cells disagree (same side, or
+                                          ///< one vertex set on two different quads)
+  std::size_t source_errors = 0;          ///< source tets that are not a partition of the input,
+                                          ///< or a cell whose corners are not its tets' corners
   double input_volume = 0.0;
   double output_volume = 0.0;             ///< with bilinear quad faces
   double relative_volume_difference = 0.0;
@@ -35,7 +43,8 @@ struct CheckReport {
 
   bool valid() const {
     return inverted_cells == 0 && cracks == 0 && overshared_faces == 0 &&
-           unused_input_nodes == 0 && moved_nodes == 0 && region_mismatches == 0;
+           unused_input_nodes == 0 && moved_nodes == 0 && region_mismatches == 0 &&
+           malformed_cells == 0 && mismatched_faces == 0 && source_errors == 0;
   }
 };
 
@@ -44,8 +53,15 @@ struct CheckReport {
 /// Every cell positively oriented (scaled Jacobian > 0); every face of the domain's interior
 /// shared by exactly two cells, a quad with the identical quad or counted as non-conforming when
 /// two triangles cover it, no unpaired interior face (a crack); every corner node of the input
-/// used, at its exact coordinates; regions preserved (via MixedMesh::source_tets when present,
-/// else skipped); total volume compared with the input's.
+/// used, at its exact coordinates (the output's points must equal the input's, same count and
+/// bitwise-equal coordinates); regions preserved and every cell the union of its source tets
+/// (via MixedMesh::source_tets when present, else skipped); total volume compared with the
+/// input's. The domain boundary is the input's boundary triangles: a boundary quad must be
+/// covered by two of them on one of its diagonals. Never throws on a bad `mesh`: every fault is
+/// counted and described in CheckReport::problems (at most kMaxProblemsPerKind lines per kind).
+/// Runs in O(#faces log(faces per vertex)) time.
+/// @param[in] mesh   the mixed mesh to check
+/// @param[in] input  the tet mesh it was made from (assumed valid: see validate_tet_mesh)
 CheckReport check_mesh(const MixedMesh& mesh, const TetMesh& input);
 
 }  // namespace hexmerge

@@ -20,7 +20,9 @@ struct Tet10Mesh {
   index_t nb_tets() const { return static_cast<index_t>(tets10.size() / 10); }
 };
 
-/// The linear mesh on the corner nodes of a Tet10 mesh (same points, same ids).
+/// The linear mesh on the corner nodes of a Tet10 mesh (same points, same ids, same regions;
+/// the mid-edge nodes stay in `points`, unused). Throws InputError when the array sizes do not
+/// match (points not by 3, tets10 not by 10, regions not one per tet).
 TetMesh corner_mesh(const Tet10Mesh& mesh);
 
 /// Quadratic cells of a mixed mesh: cell c has nodes nodes[offsets[c] .. offsets[c+1]): its
@@ -32,8 +34,13 @@ struct QuadraticCells {
 };
 
 /// Rebuilds quadratic cells from the input's mid-edge nodes: every edge of a merged cell is an
-/// edge of one of its tets, so its mid-edge node exists. Throws InputError when the Tet10 mesh
-/// disagrees with itself (one edge with two different mid nodes).
+/// edge of one of its tets, so its mid-edge node exists. Throws InputError (Entity::Element)
+/// when the Tet10 mesh disagrees with itself (one edge with two different mid nodes; names a
+/// tet), when a tet's node is missing (id out of range or NO_VERTEX) or a corner doubles as a
+/// mid node (names the tet), or when a cell of `linear` has an edge that no tet has (names the
+/// cell). Runs in O(#T log #T).
+/// @param[in] linear  mixed mesh on the corner nodes of `input` (e.g. from recombine)
+/// @param[in] input   the Tet10 mesh whose corner mesh `linear` was made from
 QuadraticCells quadratic_cells(const MixedMesh& linear, const Tet10Mesh& input);
 
 }  // namespace hexmerge

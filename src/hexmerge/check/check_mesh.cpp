@@ -1,0 +1,463 @@
+#include "hexmerge/check/check_mesh.h"
+
+#include <algorithm>
+#include <cstring>
+#include <string>
+#include <utility>
+
+#include "hexmerge/geometry/quality.h"
+#include "hexmerge/mesh/cell_type.h"
+
+// The checker deliberately shares nothing with the engine beyond the descriptor tables and the
+// geometric measures: faces are rebuilt here from the cells alone, so a bug in the engine's
+// topology cannot hide itself from the check.
+
+namespace hexmerge {
+namespace {
+
+/// Kinds of fault, each with its own budget of problem lines.
+enum Kind {
+  kMalformed,
+  kInverted,
+  kOvershared,
+  kMismatched,
+  kCrack,
+  kUnused,
+  kMoved,
+  kRegion,
+  kSource,
+  kNbKinds
+};
+
+class ProblemLog {
+ public:
+  explicit ProblemLog(std::vector<std::string>& lines) : lines_(lines) {}
+  void add(Kind kind, const std::string& line) {
+    if (counts_[kind]++ < kMaxProblemsPerKind) lines_.push_back(line);
+  }
+  /// Adds one closing line per kind whose lines were cut.
+  void finish() {
+    for (int k = 0; k < kNbKinds; ++k) {
+      if (counts_[k] > kMaxProblemsPerKind) {
+        lines_.push_back("... and " + std::to_string(counts_[k] - kMaxProblemsPerKind) +
+                         " more of the same kind");
+      }
+    }
+  }
+
+ private:
+  std::vector<std::string>& lines_;
+  std::size_t counts_[kNbKinds] = {};
+};
+
+/// Sorts the 3 or 4 vertex ids of a face (insertion sort: std::sort on a 4-array trips GCC 12's
+/// -Warray-bounds false positive, and this is faster anyway).
+void sort_face(index_t* key, int n) {
+  for (int i = 1; i < n; ++i) {
+    for (int j = i; j > 0 && key[j - 1] > key[j]; --j) std::swap(key[j - 1], key[j]);
+  }
+}
+
+/// One face of one cell, filed under its smallest vertex; the other vertices sorted, d =
+/// NO_VERTEX for a triangle.
+struct FaceRecord {
+  index_t b, c, d;
+  index_t cell;
+  std::uint8_t local_face;
+  bool operator<(const FaceRecord& o) const {
+    if (b != o.b) return b < o.b;
+    if (c != o.c) return c < o.c;
+    if (d != o.d) return d < o.d;
+    return cell < o.cell;
+  }
+  bool same_key(const FaceRecord& o) const { return b == o.b && c == o.c && d == o.d; }
+};
+
+/// All faces of a set of cells, bucketed by smallest vertex (counting sort) and sorted inside
+/// each bucket: linear to build, a binary search within one small bucket to query.
+class FaceTable {
+ public:
+  /// `cell_ok(c)` tells which cells to include; `cell_type(c)`, `cell_vertices(c)` describe them.
+  template <class Ok, class Type, class Verts>
+  FaceTable(index_t nb_vertices, index_t nb_cells, Ok cell_ok, Type cell_type, Verts cell_vertices)
+      : start_(static_cast<std::size_t>(nb_vertices) + 1, 0) {
+    for (int pass = 0; pass < 2; ++pass) {
+      std::vector<index_t> fill;
+      if (pass == 1) {
+        for (index_t v = 0; v < nb_vertices; ++v) start_[v + 1] += start_[v];
+        records_.resize(start_[nb_vertices]);
+        fill.assign(start_.begin(), start_.end() - 1);
+      }
+      for (index_t cell = 0; cell < nb_cells; ++cell) {
+        if (!cell_ok(cell)) continue;
+        const CellDescriptor& desc = descriptor(cell_type(cell));
+        const index_t* verts = cell_vertices(cell);
+        for (int f = 0; f < desc.nb_faces; ++f) {
+          index_t key[4] = {0, 0, 0, NO_VERTEX};
+          const int n = desc.face_size[f];
+          for (int i = 0; i < n; ++i) key[i] = verts[desc.face[f][i]];
+          sort_face(key, n);
+          if (pass == 0) {
+            ++start_[key[0] + 1];
+          } else {
+            records_[fill[key[0]]++] = {key[1], key[2], key[3], cell, static_cast<std::uint8_t>(f)};
+          }
+        }
+      }
+    }
+    for (index_t v = 0; v < nb_vertices; ++v) {
+      std::sort(records_.begin() + start_[v], records_.begin() + start_[v + 1]);
+    }
+  }
+
+  std::size_t size() const { return records_.size(); }
+  const FaceRecord& record(std::size_t i) const { return records_[i]; }
+  std::size_t bucket_begin(index_t v) const { return start_[v]; }
+  std::size_t bucket_end(index_t v) const { return start_[v + 1]; }
+
+  /// Records [first, last) whose face has exactly the vertices of `key` (unsorted, n = 3 or 4).
+  std::pair<std::size_t, std::size_t> find(const index_t* key, int n) const {
+    index_t s[4] = {0, 0, 0, NO_VERTEX};
+    std::copy(key, key + n, s);
+    sort_face(s, n);
+    if (s[0] + 1 >= start_.size()) return {0, 0};
+    const FaceRecord probe{s[1], s[2], s[3], 0, 0};
+    const auto begin = records_.begin() + start_[s[0]];
+    const auto end = records_.begin() + start_[s[0] + 1];
+    const auto lo = std::lower_bound(begin, end, probe);
+    auto hi = lo;
+    while (hi != end && hi->same_key(probe)) ++hi;
+    return {static_cast<std::size_t>(lo - records_.begin()),
+            static_cast<std::size_t>(hi - records_.begin())};
+  }
+
+ private:
+  std::vector<std::size_t> start_;
+  std::vector<FaceRecord> records_;
+};
+
+/// Parity of the permutation that sorts a triangle's vertices: the orientation of a triangle
+/// as a cyclic sequence, independent of where the cycle starts.
+int triangle_parity(const index_t t[3]) {
+  return ((t[0] > t[1]) + (t[0] > t[2]) + (t[1] > t[2])) & 1;
+}
+
+std::string cell_name(const MixedMesh& mesh, index_t c) {
+  return std::string(descriptor(mesh.types[c]).name) + " " + std::to_string(c);
+}
+
+std::string join_cells(const MixedMesh& mesh, const FaceTable& table, std::size_t first,
+                       std::size_t last) {
+  std::string out;
+  for (std::size_t i = first; i < last; ++i) {
+    out += (i == first ? "" : ", ") + cell_name(mesh, table.record(i).cell);
+  }
+  return out;
+}
+
+std::string face_text(const index_t* f, int n) {
+  std::string out = "(";
+  for (int i = 0; i < n; ++i) out += (i ? " " : "") + std::to_string(f[i]);
+  return out + ")";
+}
+
+}  // namespace
+
+CheckReport check_mesh(const MixedMesh& mesh, const TetMesh& input) {
+  CheckReport report;
+  ProblemLog log(report.problems);
+  const index_t nc = mesh.nb_cells();
+  const index_t nv_out = mesh.nb_vertices();
+  const index_t nv_in = input.nb_vertices();
+  const index_t nt = input.nb_tets();
+  report.nb_cells = nc;
+
+  // --- Cell arrays and per-cell geometry -------------------------------------------------------
+  const bool offsets_ok = [&] {
+    if (mesh.offsets.size() != static_cast<std::size_t>(nc) + 1 || mesh.offsets[0] != 0) {
+      return false;
+    }
+    for (index_t c = 0; c < nc; ++c) {
+      if (mesh.offsets[c + 1] < mesh.offsets[c]) return false;
+    }
+    return mesh.offsets[nc] == mesh.cell_vertices.size();
+  }();
+  if (!offsets_ok) {
+    report.malformed_cells = nc;
+    log.add(kMalformed, "the cell offsets do not describe the cell vertex array (" +
+                            std::to_string(mesh.offsets.size()) + " offsets for " +
+                            std::to_string(nc) + " cells): nothing else was checked");
+    log.finish();
+    return report;
+  }
+  std::vector<char> cell_ok(nc, 0);
+  for (index_t c = 0; c < nc; ++c) {
+    const int type = static_cast<int>(mesh.types[c]);
+    if (type < 0 || type >= NB_CELL_TYPES) {
+      ++report.malformed_cells;
+      log.add(kMalformed, "cell " + std::to_string(c) + " has unknown type " + std::to_string(type));
+      continue;
+    }
+    const CellDescriptor& desc = descriptor(mesh.types[c]);
+    const index_t* verts = mesh.cell(c);
+    std::string why;
+    if (mesh.cell_size(c) != static_cast<index_t>(desc.nb_vertices)) {
+      why = "has " + std::to_string(mesh.cell_size(c)) + " vertices instead of " +
+            std::to_string(desc.nb_vertices);
+    } else {
+      for (int i = 0; i < desc.nb_vertices && why.empty(); ++i) {
+        if (verts[i] >= nv_out) {
+          why = "refers to node " + std::to_string(verts[i]) + ", past the " +
+                std::to_string(nv_out) + " nodes";
+        }
+        for (int j = 0; j < i && why.empty(); ++j) {
+          if (verts[i] == verts[j]) why = "uses node " + std::to_string(verts[i]) + " twice";
+        }
+      }
+    }
+    if (!why.empty()) {
+      ++report.malformed_cells;
+      log.add(kMalformed, cell_name(mesh, c) + " " + why);
+      continue;
+    }
+    cell_ok[c] = 1;
+    ++report.counts[type];
+    const double sj = scaled_jacobian(mesh.types[c], mesh.points.data(), verts);
+    if (!(sj > 0.0)) {
+      ++report.inverted_cells;
+      log.add(kInverted, cell_name(mesh, c) + " is inverted or flat (scaled Jacobian " +
+                             std::to_string(sj) + ")");
+    }
+    if (report.worst_cell == NO_INDEX || sj < report.min_scaled_jacobian) {
+      report.min_scaled_jacobian = sj;
+      report.worst_cell = c;
+    }
+    report.output_volume += cell_volume(mesh.types[c], mesh.points.data(), verts);
+  }
+  if (report.worst_cell == NO_INDEX) report.min_scaled_jacobian = 0.0;
+
+  // --- Volumes ---------------------------------------------------------------------------------
+  for (index_t t = 0; t < nt; ++t) {
+    const index_t* q = input.tet(t);
+    if (q[0] < nv_in && q[1] < nv_in && q[2] < nv_in && q[3] < nv_in) {
+      report.input_volume += tet_volume(input.point(q[0]), input.point(q[1]),
+                                        input.point(q[2]), input.point(q[3]));
+    }
+  }
+  if (report.input_volume != 0.0) {
+    report.relative_volume_difference =
+        (report.output_volume - report.input_volume) / report.input_volume;
+  }
+
+  // --- Nodes -----------------------------------------------------------------------------------
+  if (nv_out != nv_in) {
+    const index_t diff = nv_out > nv_in ? nv_out - nv_in : nv_in - nv_out;
+    report.moved_nodes += diff;
+    log.add(kMoved, "the output has " + std::to_string(nv_out) + " nodes, the input " +
+                        std::to_string(nv_in));
+  }
+  for (index_t v = 0; v < std::min(nv_out, nv_in); ++v) {
+    // Bitwise: the output must carry the input's coordinates untouched (even -0.0 vs 0.0).
+    if (std::memcmp(&mesh.points[3 * static_cast<std::size_t>(v)], input.point(v),
+                    3 * sizeof(double)) != 0) {
+      ++report.moved_nodes;
+      log.add(kMoved, "node " + std::to_string(v) + " is not at its input coordinates");
+    }
+  }
+  {
+    std::vector<char> used_in(nv_in, 0), used_out(nv_out, 0);
+    for (index_t t = 0; t < nt; ++t) {
+      for (int i = 0; i < 4; ++i) {
+        if (input.tet(t)[i] < nv_in) used_in[input.tet(t)[i]] = 1;
+      }
+    }
+    for (index_t c = 0; c < nc; ++c) {
+      if (!cell_ok[c]) continue;
+      for (index_t i = 0; i < mesh.cell_size(c); ++i) used_out[mesh.cell(c)[i]] = 1;
+    }
+    for (index_t v = 0; v < nv_in; ++v) {
+      if (used_in[v] && (v >= nv_out || !used_out[v])) {
+        ++report.unused_input_nodes;
+        log.add(kUnused, "input node " + std::to_string(v) + " is used by no output cell");
+      }
+    }
+  }
+
+  // --- Regions and source tets -----------------------------------------------------------------
+  const bool regions_ok = mesh.regions.empty() || mesh.regions.size() == nc;
+  if (!regions_ok) {
+    ++report.region_mismatches;
+    log.add(kRegion, "the region array has " + std::to_string(mesh.regions.size()) +
+                         " entries for " + std::to_string(nc) + " cells");
+  }
+  if (!mesh.source_offsets.empty()) {
+    const bool sources_ok =
+        mesh.source_offsets.size() == static_cast<std::size_t>(nc) + 1 &&
+        mesh.source_offsets[0] == 0 && mesh.source_offsets[nc] == mesh.source_tets.size() &&
+        std::is_sorted(mesh.source_offsets.begin(), mesh.source_offsets.end());
+    if (!sources_ok) {
+      ++report.source_errors;
+      log.add(kSource, "the source offsets do not describe the source tet array");
+    } else {
+      std::vector<index_t> uses(nt, 0);
+      std::vector<index_t> corners;
+      for (index_t c = 0; c < nc; ++c) {
+        corners.clear();
+        bool region_differs = false, ids_ok = true;
+        for (index_t k = mesh.source_offsets[c]; k < mesh.source_offsets[c + 1]; ++k) {
+          const index_t t = mesh.source_tets[k];
+          if (t >= nt) {
+            ids_ok = false;
+            continue;
+          }
+          ++uses[t];
+          corners.insert(corners.end(), input.tet(t), input.tet(t) + 4);
+          if (regions_ok && mesh.region(c) != input.region(t)) region_differs = true;
+        }
+        if (region_differs) {
+          ++report.region_mismatches;
+          log.add(kRegion, "cell " + std::to_string(c) + " (region " +
+                               std::to_string(mesh.region(c)) +
+                               ") is made of tets of another region");
+        }
+        if (!ids_ok) {
+          ++report.source_errors;
+          log.add(kSource, "cell " + std::to_string(c) + " names a source tet past the " +
+                               std::to_string(nt) + " input tets");
+          continue;
+        }
+        if (!cell_ok[c]) continue;
+        std::sort(corners.begin(), corners.end());
+        corners.erase(std::unique(corners.begin(), corners.end()), corners.end());
+        std::vector<index_t> own(mesh.cell(c), mesh.cell(c) + mesh.cell_size(c));
+        std::sort(own.begin(), own.end());
+        if (own != corners) {
+          ++report.source_errors;
+          log.add(kSource, cell_name(mesh, c) + ": its corners are not the corners of its " +
+                               std::to_string(mesh.source_offsets[c + 1] -
+                                              mesh.source_offsets[c]) +
+                               " source tets");
+        }
+      }
+      for (index_t t = 0; t < nt; ++t) {
+        if (uses[t] != 1) {
+          ++report.source_errors;
+          log.add(kSource, "input tet " + std::to_string(t) + " is the source of " +
+                               std::to_string(uses[t]) + " cells (expected 1)");
+        }
+      }
+    }
+  }
+
+  // --- Faces -----------------------------------------------------------------------------------
+  const FaceTable faces(
+      nv_out, nc, [&](index_t c) { return cell_ok[c] != 0; },
+      [&](index_t c) { return mesh.types[c]; }, [&](index_t c) { return mesh.cell(c); });
+  const FaceTable input_faces(
+      nv_in, nt,
+      [&](index_t t) {
+        const index_t* q = input.tet(t);
+        return q[0] < nv_in && q[1] < nv_in && q[2] < nv_in && q[3] < nv_in;
+      },
+      [](index_t) { return CellType::Tet; }, [&](index_t t) { return input.tet(t); });
+  auto on_domain_boundary = [&](const index_t* tri) {
+    if (tri[0] >= nv_in || tri[1] >= nv_in || tri[2] >= nv_in) return false;
+    const auto range = input_faces.find(tri, 3);
+    return range.second - range.first == 1;
+  };
+  // The face's vertices in the cell's outward order.
+  auto face_vertices = [&](const FaceRecord& r, index_t out[4]) {
+    const CellDescriptor& desc = descriptor(mesh.types[r.cell]);
+    for (int i = 0; i < desc.face_size[r.local_face]; ++i) {
+      out[i] = mesh.cell(r.cell)[desc.face[r.local_face][i]];
+    }
+    return desc.face_size[r.local_face];
+  };
+
+  enum State : char { kPaired = 0, kOpen = 1, kCovered = 2 };
+  std::vector<char> state(faces.size(), kPaired);
+  std::vector<std::size_t> open_quads;
+  for (index_t v = 0; v < nv_out; ++v) {
+    for (std::size_t i = faces.bucket_begin(v); i < faces.bucket_end(v);) {
+      std::size_t j = i + 1;
+      while (j < faces.bucket_end(v) && faces.record(j).same_key(faces.record(i))) ++j;
+      const FaceRecord& r = faces.record(i);
+      const bool quad = r.d != NO_VERTEX;
+      if (j - i >= 3) {
+        ++report.overshared_faces;
+        log.add(kOvershared, "a face is shared by " + std::to_string(j - i) + " cells: " +
+                                 join_cells(mesh, faces, i, j));
+      } else if (j - i == 2) {
+        index_t f0[4], f1[4];
+        face_vertices(faces.record(i), f0);
+        face_vertices(faces.record(i + 1), f1);
+        bool opposite;
+        if (quad) {
+          // The second quad, walked backwards, must be the first one up to rotation.
+          const int k = static_cast<int>(std::find(f1, f1 + 4, f0[0]) - f1);
+          opposite = true;
+          for (int m = 0; m < 4; ++m) opposite = opposite && f1[(k - m + 4) % 4] == f0[m];
+        } else {
+          opposite = triangle_parity(f0) != triangle_parity(f1);
+        }
+        if (!opposite) {
+          ++report.mismatched_faces;
+          log.add(kMismatched, (quad ? "quad " + face_text(f0, 4) + " of "
+                                     : "triangle " + face_text(f0, 3) + " of ") +
+                                   join_cells(mesh, faces, i, j) +
+                                   (quad ? ": the two cells disagree on the quad or lie on one side"
+                                         : ": both cells lie on the same side"));
+        }
+      } else {
+        state[i] = kOpen;
+        if (quad) open_quads.push_back(i);
+      }
+      i = j;
+    }
+  }
+  // Unpaired quads: on the domain boundary, against two triangles (non-conforming), or a crack.
+  for (std::size_t i : open_quads) {
+    const FaceRecord& r = faces.record(i);
+    index_t q[4];
+    face_vertices(r, q);
+    bool boundary = false, covered = false;
+    for (int diag = 0; diag < 2 && !boundary && !covered; ++diag) {
+      const index_t t0[3] = {q[diag], q[diag + 1], q[(diag + 2) % 4]};
+      const index_t t1[3] = {q[diag], q[(diag + 2) % 4], q[(diag + 3) % 4]};
+      if (on_domain_boundary(t0) && on_domain_boundary(t1)) {
+        boundary = true;
+        break;
+      }
+      const auto r0 = faces.find(t0, 3), r1 = faces.find(t1, 3);
+      if (r0.second - r0.first == 1 && r1.second - r1.first == 1 && state[r0.first] == kOpen &&
+          state[r1.first] == kOpen && faces.record(r0.first).cell != r.cell &&
+          faces.record(r1.first).cell != r.cell) {
+        covered = true;
+        state[r0.first] = kCovered;
+        state[r1.first] = kCovered;
+      }
+    }
+    if (covered) {
+      ++report.nonconforming_quads;
+    } else if (!boundary) {
+      ++report.cracks;
+      log.add(kCrack, "quad " + face_text(q, 4) + " of " + cell_name(mesh, r.cell) +
+                          " has no neighbour and is not on the domain boundary (crack)");
+    }
+  }
+  for (std::size_t i = 0; i < faces.size(); ++i) {
+    const FaceRecord& r = faces.record(i);
+    if (state[i] != kOpen || r.d != NO_VERTEX) continue;
+    index_t t[4];
+    face_vertices(r, t);
+    if (!on_domain_boundary(t)) {
+      ++report.cracks;
+      log.add(kCrack, "triangle " + face_text(t, 3) + " of " + cell_name(mesh, r.cell) +
+                          " has no neighbour and is not on the domain boundary (crack)");
+    }
+  }
+  log.finish();
+  return report;
+}
+
+}  // namespace hexmerge
