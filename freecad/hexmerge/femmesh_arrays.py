@@ -62,6 +62,82 @@ COLLAPSED_HEXA_FROM_PYRAMID = {
 COLLAPSED_HEXA_NAME = {"pyramid": "hexahedron", "pyramid13": "hexahedron20"}
 
 
+# Faces of each linear type (VTK local order, outward), as in src/hexmerge/mesh/cell_type.h, and
+# VTK's edge order (the k-th mid-edge node of a quadratic cell is node corners + k).
+FACES = {
+    "tetra": ((1, 2, 3), (0, 3, 2), (0, 1, 3), (0, 2, 1)),
+    "pyramid": ((0, 3, 2, 1), (0, 1, 4), (1, 2, 4), (2, 3, 4), (3, 0, 4)),
+    "wedge": ((0, 2, 1), (3, 4, 5), (0, 1, 4, 3), (1, 2, 5, 4), (2, 0, 3, 5)),
+    "hexahedron": ((0, 3, 2, 1), (4, 5, 6, 7), (0, 1, 5, 4), (1, 2, 6, 5), (2, 3, 7, 6),
+                   (3, 0, 4, 7)),
+}
+EDGES = {
+    "tetra": ((0, 1), (1, 2), (2, 0), (0, 3), (1, 3), (2, 3)),
+    "pyramid": ((0, 1), (1, 2), (2, 3), (3, 0), (0, 4), (1, 4), (2, 4), (3, 4)),
+    "wedge": ((0, 1), (1, 2), (2, 0), (3, 4), (4, 5), (5, 3), (0, 3), (1, 4), (2, 5)),
+    "hexahedron": ((0, 1), (1, 2), (2, 3), (3, 0), (4, 5), (5, 6), (6, 7), (7, 4), (0, 4),
+                   (1, 5), (2, 6), (3, 7)),
+}
+LINEAR_OF = dict(zip(QUADRATIC_CELLS, LINEAR_CELLS), **{n: n for n in LINEAR_CELLS})
+
+
+def face_nodes(name, face):
+    """Local nodes of one face of a (linear or quadratic) cell: corners, then for a quadratic
+    cell the mid-edge node of each face edge (SMESH Tria6 / Quad8 order: 01, 12, 20 / 30)."""
+    linear = LINEAR_OF[name]
+    if name == linear:
+        return tuple(face)
+    corners = NODES_PER_CELL[linear]
+    edges = [frozenset(e) for e in EDGES[linear]]
+    mids = [corners + edges.index(frozenset((face[i], face[(i + 1) % len(face)])))
+            for i in range(len(face))]
+    return tuple(face) + tuple(mids)
+
+
+def boundary_faces(blocks):
+    """Faces of a mixed mesh that belong to one cell only: {3 or 4 corners: (F, k) node ids}.
+
+    A quad face whose two triangles (on either diagonal) are faces of other cells is inside the
+    mesh (a quad meeting two triangles), so neither it nor those triangles is on the boundary.
+    """
+    faces = {3: [], 4: []}
+    for name, cells in blocks:
+        cells = np.asarray(cells)
+        if not len(cells):
+            continue
+        for face in FACES[LINEAR_OF[name]]:
+            faces[len(face)].append(cells[:, face_nodes(name, face)])
+    out = {}
+    keys_once = {}
+    for n in (3, 4):
+        if not faces[n]:
+            continue
+        width = max(f.shape[1] for f in faces[n])
+        all_faces = np.concatenate([f for f in faces[n] if f.shape[1] == width])
+        key = np.sort(all_faces[:, :n], axis=1)
+        _, first, inverse, counts = np.unique(key, axis=0, return_index=True,
+                                              return_inverse=True, return_counts=True)
+        once = counts[inverse.ravel()] == 1
+        out[n] = all_faces[once]
+        keys_once[n] = key[once]
+    if 3 in out and 4 in out and len(out[4]):
+        tri_set = {tuple(k) for k in keys_once[3].tolist()}
+        q = out[4][:, :4]
+        drop_quad = np.zeros(len(q), dtype=bool)
+        drop_tri = set()
+        for i, (a, b, c, d) in enumerate(q.tolist()):
+            for t1, t2 in (((a, b, c), (a, c, d)), ((a, b, d), (b, c, d))):
+                k1, k2 = tuple(sorted(t1)), tuple(sorted(t2))
+                if k1 in tri_set and k2 in tri_set:
+                    drop_quad[i] = True
+                    drop_tri.update((k1, k2))
+        out[4] = out[4][~drop_quad]
+        if drop_tri:
+            keep = np.array([tuple(k) not in drop_tri for k in keys_once[3].tolist()])
+            out[3] = out[3][keep]
+    return out
+
+
 class MeshArrays:
     """A volume mesh as arrays, in VTK node order.
 
@@ -143,7 +219,7 @@ def collapse_pyramids(name, cells):
 
 
 def arrays_to_femmesh(points, point_ids, blocks, regions=None, group_names=None,
-                      pyramids_as_hexahedra=False, first_element_id=1):
+                      pyramids_as_hexahedra=False, first_element_id=1, with_faces=True):
     """Builds a new FemMesh from VTK-ordered blocks.
 
     points, point_ids:  the nodes; every point is added with its id (unused ones too, so node ids
@@ -152,6 +228,10 @@ def arrays_to_femmesh(points, point_ids, blocks, regions=None, group_names=None,
     regions:            list of (M,) int arrays per block, or None
     group_names:        {region id: name}: a "Volume" group per region holding its elements
     pyramids_as_hexahedra: store pyramids as collapsed hexahedra (CalculiX-ready)
+    with_faces:         also add the boundary faces as face elements (Tria3/Quad4, Tria6/Quad8).
+                        FreeCAD's CalculiX writer finds the faces of a load through them
+                        (getFacesByFace); without them it falls back to getccxVolumesByFace,
+                        which knows only tetrahedra and misplaces loads on other elements.
 
     Returns (femmesh, element_ids per block).
     """
@@ -179,6 +259,12 @@ def arrays_to_femmesh(points, point_ids, blocks, regions=None, group_names=None,
             for r in np.unique(reg).tolist():
                 if r in group_names:
                     members.setdefault(r, []).append(ids[reg == r])
+
+    if with_faces:
+        for n, faces in sorted(boundary_faces(blocks).items()):
+            for nodes in point_ids[faces].tolist():
+                femmesh.addFace(nodes, eid)
+                eid += 1
 
     if group_names:
         for r, name in sorted(group_names.items()):
