@@ -226,7 +226,7 @@ def arrays_to_femmesh(points, point_ids, blocks, regions=None, group_names=None,
                         stay those of the source mesh)
     blocks:             list of (cell name, (M, k) indices into points), VTK order
     regions:            list of (M,) int arrays per block, or None
-    group_names:        {region id: name}: a "Volume" group per region holding its elements
+    group_names:        {region id: name}: a "Volume" group per name holding its regions' elements
     pyramids_as_hexahedra: store pyramids as collapsed hexahedra (CalculiX-ready)
     with_faces:         also add the boundary faces as face elements (Tria3/Quad4, Tria6/Quad8).
                         FreeCAD's CalculiX writer finds the faces of a load through them
@@ -267,11 +267,13 @@ def arrays_to_femmesh(points, point_ids, blocks, regions=None, group_names=None,
                 eid += 1
 
     if group_names:
+        by_name = {}  # several regions (solids) may share one material group
         for r, name in sorted(group_names.items()):
-            if r not in members:
-                continue
-            gid = femmesh.addGroup(name, "Volume")
-            femmesh.addGroupElements(gid, np.concatenate(members[r]).tolist())
+            by_name.setdefault(name, []).extend(members.get(r, []))
+        for name, parts in by_name.items():
+            if parts:
+                gid = femmesh.addGroup(name, "Volume")
+                femmesh.addGroupElements(gid, np.concatenate(parts).tolist())
     return femmesh, element_ids
 
 

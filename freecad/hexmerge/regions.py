@@ -82,12 +82,13 @@ def from_solids(shape, points, tets, material_names=None, tolerance=1e-7):
 
 
 def material_solids(analysis, part):
-    """{solid index: "<material Name>_Solids"} for the solid materials of an analysis that
-    reference solids of `part`; a material with no references takes the solids left over."""
+    """{solid index of part (1-based): "<material Name>_Solids"} for the solid materials of an
+    analysis. A reference may name a solid of `part` or of any other object (the examples
+    reference the boxes a compound was made of): it is matched to part's solids by geometry.
+    A material with no references takes the solids left over."""
     if analysis is None or part is None:
         return {}
-    shape = part.Shape
-    nsolids = len(shape.Solids)
+    solids = part.Shape.Solids
     names, fallback = {}, None
     for obj in analysis.Group:
         if getattr(obj, "Category", None) != "Solid" or not hasattr(obj, "References"):
@@ -97,12 +98,22 @@ def material_solids(analysis, part):
             continue
         for ref_obj, subs in obj.References:
             for sub in subs:
-                if sub.startswith("Solid"):
-                    names[int(sub[5:])] = obj.Name + "_Solids"
+                if not sub.startswith("Solid"):
+                    continue
+                ref = ref_obj.Shape.Solids[int(sub[5:]) - 1]
+                for s, solid in enumerate(solids, start=1):
+                    if ref.isSame(solid) or _same_solid(ref, solid):
+                        names[s] = obj.Name + "_Solids"
     if fallback:
-        for s in range(1, nsolids + 1):
+        for s in range(1, len(solids) + 1):
             names.setdefault(s, fallback + "_Solids")
     return names
+
+
+def _same_solid(a, b):
+    size = max(a.BoundBox.DiagonalLength, 1e-12)
+    return (abs(a.Volume - b.Volume) <= 1e-6 * abs(b.Volume)
+            and a.CenterOfMass.distanceToPoint(b.CenterOfMass) <= 1e-6 * size)
 
 
 def analysis_materials(analysis):
