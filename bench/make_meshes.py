@@ -17,17 +17,25 @@ Kinds:
             Mesh.Recombine3DAll = 0, i.e. its points tetrahedralised, no recombination.
             Debian's gmsh 4.8.4 is built without ANN and this algorithm crashes
             (SIGSEGV in Frame_field::search, called from Filler::get_metric) on every shape,
-            at every size. The script still tries it and records the failure in the manifest.
+            at every size. The script still tries it and records the failure in the manifest
+            (later runs skip a mesh recorded as failed unless --retry-failed).
+  tetgen-lattice
+            A stand-in for the missing lattice kind: Gmsh's surface mesh (gmsh -2 -clmax h)
+            plus the points of an axis-aligned cubic lattice of spacing h at least 0.6 h inside
+            the shape, tetrahedralised by TetGen (Debian tetgen 1.5, tetgen -pY: the surface
+            mesh is kept, no quality refinement). Regular tets inside, a Delaunay layer near
+            the boundary. Not what Gmsh's algorithm 9 makes (its points follow a frame field
+            aligned with the boundary), but the same idea: points on a lattice.
 
 Usage:
   /usr/bin/python3.11 bench/make_meshes.py                      # 10k and 100k, then 1M
   /usr/bin/python3.11 bench/make_meshes.py --sizes 10k,100k
   /usr/bin/python3.11 bench/make_meshes.py --shapes box,torus --kinds delaunay
   /usr/bin/python3.11 bench/make_meshes.py --find-h box:100000  # search the h of a target count
+  /usr/bin/python3.11 bench/make_meshes.py --kinds tetgen-lattice --find-h box:100000:1.9
 """
 import argparse
 import json
-import math
 import os
 import subprocess
 import sys
@@ -50,14 +58,102 @@ H = {
     "box":      {"10k": 3.94, "100k": 1.78, "1m": 0.82},    # 10,212 / 101,059 / 979,323
     "cylinder": {"10k": 4.04, "100k": 1.81, "1m": 0.835},   #  9,819 /  99,406 / 970,015
     "bracket":  {"10k": 3.07, "100k": 1.35, "1m": 0.613},   # 10,245 /  98,722 / 996,631
-    "sphere":   {"10k": 3.2,  "100k": 1.44, "1m": None},    #  9,831 /  99,995 / ?
-    "torus":    {"10k": 3.84, "100k": 1.74, "1m": None},    # 10,267 /  99,950 / ?
+    "sphere":   {"10k": 3.2,  "100k": 1.44, "1m": 0.665},   #  9,831 /  99,995 / 1,001,791
+    "torus":    {"10k": 3.84, "100k": 1.74, "1m": 0.8},     # 10,267 /  99,950 / 1,000,624
 }
 
 KINDS = {
     "delaunay": ["-setnumber", "Mesh.Algorithm3D", "1"],
     "lattice": ["-setnumber", "Mesh.Algorithm3D", "9", "-setnumber", "Mesh.Recombine3DAll", "0"],
+    "tetgen-lattice": None,  # not a Gmsh 3D algorithm: see make_tetgen_lattice()
 }
+
+# h (surface -clmax and lattice spacing) for tetgen-lattice, found with
+# --kinds tetgen-lattice --find-h SHAPE:COUNT; comments give the measured tet counts.
+H_TETGEN_LATTICE = {
+    "box":      {"10k": 4.16, "100k": None, "1m": None},  # 10,210
+    "cylinder": {"10k": 4.24, "100k": None, "1m": None},  # 10,051
+    "bracket":  {"10k": 3.18, "100k": None, "1m": None},  # 10,232
+    "sphere":   {"10k": 3.45, "100k": None, "1m": None},  #  9,984
+    "torus":    {"10k": 4.14, "100k": None, "1m": None},  #  9,747
+}
+
+
+def signed_distance(shape, p):
+    """Approximate distance to the boundary of each shape (positive inside), p: (n, 3) in mm.
+    Must match the .geo files."""
+    import numpy as np
+    x, y, z = p[:, 0], p[:, 1], p[:, 2]
+    if shape == "box":
+        return np.minimum.reduce([x, 100 - x, y, 40 - y, z, 30 - z])
+    if shape == "cylinder":
+        return np.minimum.reduce([20 - np.hypot(x, y), z, 100 - z])
+    if shape == "bracket":
+        base = np.minimum.reduce([x, 80 - x, y, 40 - y, z, 10 - z, np.hypot(x - 50, y - 20) - 8])
+        flange = np.minimum.reduce([x, 10 - x, y, 40 - y, z, 60 - z])
+        return np.maximum(base, flange)
+    if shape == "sphere":
+        return 25 - np.sqrt(x * x + y * y + z * z)
+    if shape == "torus":
+        return 12 - np.hypot(np.hypot(x, y) - 40, z)
+    raise ValueError(shape)
+
+
+BBOX = {"box": ((0, 0, 0), (100, 40, 30)), "cylinder": ((-20, -20, 0), (20, 20, 100)),
+        "bracket": ((0, 0, 0), (80, 40, 60)), "sphere": ((-25, -25, -25), (25, 25, 25)),
+        "torus": ((-52, -52, -12), (52, 52, 12))}
+
+
+def make_tetgen_lattice(shape, h, out, timeout=3600):
+    """Substitute for Gmsh's lattice-point mesher (which crashes in Debian's build): Gmsh's
+    surface mesh (-clmax h), plus the points of an axis-aligned cubic lattice of spacing h
+    (cell centres of the bounding box grid) lying at least 0.6 h inside, tetrahedralised by
+    TetGen keeping the surface mesh (tetgen -pY). Written as msh 4.1 through meshio."""
+    import numpy as np
+    import meshio
+    log = []
+    t0 = time.perf_counter()
+    with tempfile.TemporaryDirectory() as tmp:
+        surf = os.path.join(tmp, "s.mesh")
+        cmd = ["gmsh", "-2", "-clmax", repr(h), "-nt", "1", "-save_all", "-format", "mesh",
+               os.path.join(GEOMETRY_DIR, shape + ".geo"), "-o", surf]
+        p = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+                           timeout=timeout)
+        log.append(p.stdout)
+        if p.returncode != 0:
+            return False, p.returncode, time.perf_counter() - t0, "\n".join(log), cmd
+        surface = meshio.read(surf)
+        tri = surface.get_cells_type("triangle")
+        used, tri = np.unique(tri, return_inverse=True)
+        tri = tri.reshape(-1, 3)
+        lo, hi = (np.array(v, dtype=float) for v in BBOX[shape])
+        axes = [np.arange(lo[i] + h / 2, hi[i], h) for i in range(3)]
+        g = np.stack(np.meshgrid(*axes, indexing="ij"), -1).reshape(-1, 3)
+        g = g[signed_distance(shape, g) > 0.6 * h]
+        # A PLC whose node list holds the surface nodes and the lattice points: TetGen keeps
+        # isolated nodes as interior vertices. (tetgen -i with an .a.node file crashes here.)
+        pts = np.vstack([surface.points[used], g])
+        with open(os.path.join(tmp, "s.smesh"), "w") as f:
+            f.write(f"{len(pts)} 3 0 0\n")
+            f.writelines(f"{i + 1} {q[0]:.17g} {q[1]:.17g} {q[2]:.17g}\n" for i, q in enumerate(pts))
+            f.write(f"{len(tri)} 0\n")
+            f.writelines(f"3 {a + 1} {b + 1} {c + 1}\n" for a, b, c in tri)
+            f.write("0\n0\n")
+        tcmd = ["tetgen", "-pYQ", "s.smesh"]
+        p = subprocess.run(tcmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+                           timeout=timeout, cwd=tmp)
+        log.append(p.stdout)
+        cmd = cmd + ["&&", "(lattice points)", "&&"] + tcmd
+        if p.returncode != 0 or not os.path.exists(os.path.join(tmp, "s.1.ele")):
+            return False, p.returncode, time.perf_counter() - t0, "\n".join(log), cmd
+        pts = np.loadtxt(os.path.join(tmp, "s.1.node"), skiprows=1, comments="#")[:, 1:4]
+        tets = np.loadtxt(os.path.join(tmp, "s.1.ele"), skiprows=1, comments="#",
+                          dtype=np.int64)[:, 1:5] - 1
+        a, b, c, d = (pts[tets[:, i]] for i in range(4))
+        neg = np.einsum("ij,ij->i", np.cross(b - a, c - a), d - a) < 0
+        tets[neg] = tets[neg][:, [0, 2, 1, 3]]
+        meshio.write(out, meshio.Mesh(pts, [("tetra", tets)]), file_format="gmsh", binary=False)
+    return True, 0, time.perf_counter() - t0, "\n".join(log), cmd
 
 TARGET = {"10k": 10_000, "100k": 100_000, "1m": 1_000_000}
 
@@ -92,6 +188,8 @@ def count_msh41(path):
 
 
 def run_gmsh(shape, kind, h, out, timeout=3600):
+    if kind == "tetgen-lattice":
+        return make_tetgen_lattice(shape, h, out, timeout)
     geo = os.path.join(GEOMETRY_DIR, shape + ".geo")
     cmd = ["gmsh", "-3", "-clmax", repr(h), "-order", "1", "-format", "msh41", "-nt", "1"]
     cmd += KINDS[kind] + [geo, "-o", out]
@@ -134,8 +232,11 @@ def load_manifest():
     return {}
 
 
-def save_manifest(m):
-    tmp = MANIFEST + ".tmp"
+def save_manifest_entry(name, entry):
+    """Re-read the manifest and update one entry (another run may have written meanwhile)."""
+    m = load_manifest()
+    m[name] = entry
+    tmp = MANIFEST + f".{os.getpid()}.tmp"
     with open(tmp, "w") as f:
         json.dump(m, f, indent=1, sort_keys=True)
     os.replace(tmp, MANIFEST)
@@ -150,14 +251,17 @@ def main():
     ap.add_argument("--retry-failed", action="store_true",
                     help="retry kinds recorded as failed in the manifest (by default skipped)")
     ap.add_argument("--find-h", metavar="SHAPE:COUNT[:H0]", action="append",
-                    help="search the -clmax giving about COUNT Delaunay tets (first guess H0), print it and exit")
+                    help="search the -clmax giving about COUNT tets (first guess H0) of the first of --kinds "
+                         "(default delaunay), print it and exit")
     args = ap.parse_args()
+    args.kinds_given = any(a.startswith("--kinds") for a in sys.argv[1:])
 
     if args.find_h:
         for spec in args.find_h:
             shape, count, *h0 = spec.split(":")
             count = int(float(count.lower().replace("k", "e3").replace("m", "e6")))
-            h, n = find_h(shape, count, h0=float(h0[0]) if h0 else 5.0)
+            h, n = find_h(shape, count, kind=args.kinds.split(",")[0] if args.kinds_given else "delaunay",
+                          h0=float(h0[0]) if h0 else 5.0)
             print(f"{shape}: h={h:.4g} -> {n} tets")
         return 0
 
@@ -180,7 +284,7 @@ def main():
             for kind in kinds:
                 name = f"{shape}-{kind}-{size}"
                 out = os.path.join(MESH_DIR, name + ".msh")
-                h = H[shape][size]
+                h = (H_TETGEN_LATTICE if kind == "tetgen-lattice" else H)[shape][size]
                 if h is None:
                     print(f"{name}: no h chosen yet, skipped")
                     continue
@@ -195,7 +299,8 @@ def main():
                 tmp = out + ".part.msh"
                 ok, rc, dt, log, cmd = run_gmsh(shape, kind, h, tmp)
                 entry = {"shape": shape, "kind": kind, "size": size, "h": h,
-                         "command": " ".join(cmd[:-1] + [os.path.relpath(out, HERE)]),
+                         "command": " ".join(cmd[:-1] + [os.path.relpath(out, HERE)])
+                         if kind != "tetgen-lattice" else " ".join(cmd),
                          "seconds": round(dt, 2)}
                 if ok:
                     os.replace(tmp, out)
@@ -212,8 +317,7 @@ def main():
                     last = [l for l in log.splitlines() if l.strip()][-3:]
                     entry.update(status="failed", error=err, log_tail=last)
                     print(f"{name}: FAILED, {err}; last output: {' | '.join(last)}", flush=True)
-                manifest[name] = entry
-                save_manifest(manifest)
+                save_manifest_entry(name, entry)
     return 0
 
 
