@@ -1,0 +1,296 @@
+#include "hexmerge/check/check_mesh.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include "fixtures.h"
+#include "hexmerge/mesh/tet_topology.h"
+
+namespace hexmerge::test {
+namespace {
+
+struct Cell {
+  CellType type;
+  std::vector<index_t> vertices;
+  std::vector<index_t> sources;
+};
+
+MixedMesh make_mixed(const TetMesh& input, const std::vector<Cell>& cells,
+                     const std::vector<std::int32_t>& regions = {}) {
+  MixedMesh mesh;
+  mesh.points = input.points;
+  mesh.offsets = {0};
+  mesh.source_offsets = {0};
+  for (const Cell& c : cells) {
+    mesh.types.push_back(c.type);
+    mesh.cell_vertices.insert(mesh.cell_vertices.end(), c.vertices.begin(), c.vertices.end());
+    mesh.offsets.push_back(static_cast<index_t>(mesh.cell_vertices.size()));
+    mesh.source_tets.insert(mesh.source_tets.end(), c.sources.begin(), c.sources.end());
+    mesh.source_offsets.push_back(static_cast<index_t>(mesh.source_tets.size()));
+  }
+  mesh.regions = regions;
+  return mesh;
+}
+
+/// Every tet of `input` as a cell of its own.
+std::vector<Cell> tets_as_cells(const TetMesh& input) {
+  std::vector<Cell> cells;
+  for (index_t t = 0; t < input.nb_tets(); ++t) {
+    cells.push_back({CellType::Tet, {input.tet(t), input.tet(t) + 4}, {t}});
+  }
+  return cells;
+}
+
+/// A unit cube (corner b at (b & 1, b >> 1 & 1, b >> 2 & 1)) split into Kuhn's 6 tets, a
+/// pyramid of 2 tets on its top, a tet on one side of the pyramid: 9 tets, and the matching
+/// mixed mesh hex (cell 0) + pyramid (cell 1) + tet (cell 2).
+struct HandBuilt {
+  TetMesh input;
+  std::vector<Cell> cells;
+};
+
+HandBuilt hand_built() {
+  HandBuilt h;
+  h.input = kuhn_grid(1);  // grid_node(1, i, j, k) = i + 2j + 4k: the corner bits
+  h.input.points.insert(h.input.points.end(), {0.5, 0.5, 1.5, 1.2, 0.5, 1.3});  // nodes 8, 9
+  h.input.tets.insert(h.input.tets.end(), {4, 5, 7, 8, 4, 7, 6, 8, 5, 7, 8, 9});
+  orient_positively(h.input);
+  h.cells = {{CellType::Hex, {0, 1, 3, 2, 4, 5, 7, 6}, {0, 1, 2, 3, 4, 5}},
+             {CellType::Pyramid, {4, 5, 7, 6, 8}, {6, 7}},
+             {CellType::Tet, {h.input.tet(8), h.input.tet(8) + 4}, {8}}};
+  return h;
+}
+
+bool mentions(const CheckReport& r, const std::string& text) {
+  return std::any_of(r.problems.begin(), r.problems.end(),
+                     [&](const std::string& line) { return line.find(text) != std::string::npos; });
+}
+
+std::string all_problems(const CheckReport& r) {
+  std::string out;
+  for (const auto& line : r.problems) out += line + "\n";
+  return out;
+}
+
+TEST(check_mesh, passes_a_valid_mixed_mesh) {
+  const HandBuilt h = hand_built();
+  ASSERT_NO_THROW(validate_tet_mesh(h.input));
+  const CheckReport r = check_mesh(make_mixed(h.input, h.cells), h.input);
+  EXPECT_TRUE(r.valid()) << all_problems(r);
+  EXPECT_TRUE(r.problems.empty()) << all_problems(r);
+  EXPECT_EQ(r.nb_cells, 3u);
+  EXPECT_EQ(r.counts, (std::array<std::size_t, NB_CELL_TYPES>{1, 1, 0, 1}));
+  EXPECT_EQ(r.nonconforming_quads, 0u);
+  EXPECT_EQ(r.cracks, 0u);
+  EXPECT_GT(r.min_scaled_jacobian, 0.0);
+  EXPECT_LT(r.worst_cell, 3u);
+  EXPECT_NEAR(r.input_volume, total_volume(h.input), 1e-15);
+  // Cube 1, pyramid 1/6, tet (5, 7, 8, 9) 1/24.
+  EXPECT_NEAR(r.input_volume, 1.0 + 1.0 / 6.0 + 1.0 / 24.0, 1e-12);
+  EXPECT_LT(std::abs(r.relative_volume_difference), 1e-14);
+}
+
+TEST(check_mesh, passes_tet_meshes_against_themselves_and_hex_grids) {
+  for (const TetMesh& input : {kuhn_grid(3), five_tet_grid(3)}) {
+    const CheckReport r = check_mesh(make_mixed(input, tets_as_cells(input)), input);
+    EXPECT_TRUE(r.valid()) << all_problems(r);
+    EXPECT_EQ(r.counts[0], input.nb_tets());
+    EXPECT_LT(std::abs(r.relative_volume_difference), 1e-14);
+  }
+  // Every cube of the Kuhn grid as one hex (the grid builds tets cube by cube, 6 each).
+  const int n = 3;
+  const TetMesh input = kuhn_grid(n);
+  std::vector<Cell> hexes;
+  for (int k = 0; k < n; ++k) {
+    for (int j = 0; j < n; ++j) {
+      for (int i = 0; i < n; ++i) {
+        const index_t cube = static_cast<index_t>(i + n * (j + n * k));
+        std::vector<index_t> src;
+        for (index_t t = 6 * cube; t < 6 * cube + 6; ++t) src.push_back(t);
+        hexes.push_back({CellType::Hex,
+                         {grid_node(n, i, j, k), grid_node(n, i + 1, j, k),
+                          grid_node(n, i + 1, j + 1, k), grid_node(n, i, j + 1, k),
+                          grid_node(n, i, j, k + 1), grid_node(n, i + 1, j, k + 1),
+                          grid_node(n, i + 1, j + 1, k + 1), grid_node(n, i, j + 1, k + 1)},
+                         src});
+      }
+    }
+  }
+  const CheckReport r = check_mesh(make_mixed(input, hexes), input);
+  EXPECT_TRUE(r.valid()) << all_problems(r);
+  EXPECT_EQ(r.counts[3], std::size_t(n * n * n));
+  EXPECT_DOUBLE_EQ(r.min_scaled_jacobian, 1.0);
+  EXPECT_LT(std::abs(r.relative_volume_difference), 1e-14);
+}
+
+TEST(check_mesh, finds_a_crack_where_a_cell_was_removed) {
+  const HandBuilt h = hand_built();
+  std::vector<Cell> cells = h.cells;
+  cells.erase(cells.begin() + 1);  // the pyramid
+  const CheckReport r = check_mesh(make_mixed(h.input, cells), h.input);
+  EXPECT_FALSE(r.valid());
+  EXPECT_EQ(r.cracks, 2u) << all_problems(r);  // the hex's top quad, the tet's face
+  EXPECT_TRUE(mentions(r, "hex 0")) << all_problems(r);
+  EXPECT_TRUE(mentions(r, "crack")) << all_problems(r);
+  EXPECT_LT(r.relative_volume_difference, -0.1);
+
+  // In a tet mesh: one crack per face of the removed tet that is not on the boundary.
+  const TetMesh grid = kuhn_grid(2);
+  const TetTopology topo(grid);
+  for (index_t removed : {index_t(0), index_t(17), index_t(47)}) {
+    std::vector<Cell> tets = tets_as_cells(grid);
+    tets.erase(tets.begin() + removed);
+    std::size_t interior = 0;
+    for (int f = 0; f < 4; ++f) interior += !topo.on_boundary(removed, f);
+    const CheckReport g = check_mesh(make_mixed(grid, tets), grid);
+    EXPECT_EQ(g.cracks, interior) << removed;
+    EXPECT_EQ(g.source_errors, 1u) << "input tet " << removed << " belongs to no cell";
+    EXPECT_FALSE(g.valid());
+  }
+}
+
+TEST(check_mesh, finds_an_inverted_cell) {
+  const HandBuilt h = hand_built();
+  std::vector<Cell> cells = h.cells;
+  cells[0].vertices = {4, 5, 7, 6, 0, 1, 3, 2};  // top and bottom swapped: mirrored
+  const CheckReport r = check_mesh(make_mixed(h.input, cells), h.input);
+  EXPECT_FALSE(r.valid());
+  EXPECT_EQ(r.inverted_cells, 1u);
+  EXPECT_EQ(r.worst_cell, 0u);
+  EXPECT_LT(r.min_scaled_jacobian, 0.0);
+  EXPECT_TRUE(mentions(r, "hex 0 is inverted")) << all_problems(r);
+  // Its top now faces the same way as the pyramid's base.
+  EXPECT_EQ(r.mismatched_faces, 1u);
+}
+
+TEST(check_mesh, finds_moved_nodes_and_missing_points) {
+  const HandBuilt h = hand_built();
+  MixedMesh mesh = make_mixed(h.input, h.cells);
+  mesh.points[3 * 5 + 1] += 1e-12;
+  CheckReport r = check_mesh(mesh, h.input);
+  EXPECT_FALSE(r.valid());
+  EXPECT_EQ(r.moved_nodes, 1u);
+  EXPECT_TRUE(mentions(r, "node 5 ")) << all_problems(r);
+
+  mesh = make_mixed(h.input, h.cells);
+  mesh.points[0] = -0.0;  // equal as numbers, not bitwise
+  EXPECT_EQ(check_mesh(mesh, h.input).moved_nodes, 1u);
+
+  mesh = make_mixed(h.input, h.cells);
+  mesh.points.insert(mesh.points.end(), {9, 9, 9});
+  r = check_mesh(mesh, h.input);
+  EXPECT_FALSE(r.valid());
+  EXPECT_TRUE(mentions(r, "11 nodes")) << all_problems(r);
+}
+
+TEST(check_mesh, counts_a_hex_next_to_tets_as_non_conforming) {
+  // Cube (0,0,0) of a 2x2x2 Kuhn grid as a hex, the other seven cubes left as tets: its three
+  // inner quads each meet two triangles.
+  const TetMesh input = kuhn_grid(2);
+  std::vector<Cell> cells = {{CellType::Hex,
+                              {grid_node(2, 0, 0, 0), grid_node(2, 1, 0, 0), grid_node(2, 1, 1, 0),
+                               grid_node(2, 0, 1, 0), grid_node(2, 0, 0, 1), grid_node(2, 1, 0, 1),
+                               grid_node(2, 1, 1, 1), grid_node(2, 0, 1, 1)},
+                              {0, 1, 2, 3, 4, 5}}};
+  const std::vector<Cell> tets = tets_as_cells(input);
+  cells.insert(cells.end(), tets.begin() + 6, tets.end());
+  const CheckReport r = check_mesh(make_mixed(input, cells), input);
+  EXPECT_TRUE(r.valid()) << all_problems(r);
+  EXPECT_EQ(r.nonconforming_quads, 3u);
+  EXPECT_EQ(r.cracks, 0u);
+  EXPECT_LT(std::abs(r.relative_volume_difference), 1e-14);
+
+  // Either diagonal of the quad will do: in the five-tet grid the neighbours' diagonals
+  // alternate.
+  const TetMesh five = five_tet_grid(2);
+  std::vector<Cell> mixed = {cells[0]};
+  mixed[0].sources = {0, 1, 2, 3, 4};
+  const std::vector<Cell> five_tets = tets_as_cells(five);
+  mixed.insert(mixed.end(), five_tets.begin() + 5, five_tets.end());
+  const CheckReport f = check_mesh(make_mixed(five, mixed), five);
+  EXPECT_EQ(f.nonconforming_quads, 3u) << all_problems(f);
+  EXPECT_TRUE(f.valid()) << all_problems(f);
+}
+
+TEST(check_mesh, finds_faces_shared_by_three_cells) {
+  const HandBuilt h = hand_built();
+  std::vector<Cell> cells = h.cells;
+  cells.push_back(cells[2]);  // the tet twice
+  const CheckReport r = check_mesh(make_mixed(h.input, cells), h.input);
+  EXPECT_FALSE(r.valid());
+  EXPECT_EQ(r.overshared_faces, 1u) << all_problems(r);  // its face on the pyramid
+  EXPECT_EQ(r.mismatched_faces, 3u) << all_problems(r);  // its boundary faces, doubled
+  EXPECT_TRUE(mentions(r, "tet 2")) << all_problems(r);
+  EXPECT_TRUE(mentions(r, "tet 3")) << all_problems(r);
+}
+
+TEST(check_mesh, finds_region_mismatches) {
+  HandBuilt h = hand_built();
+  h.input.regions = {1, 1, 1, 1, 1, 1, 2, 2, 2};
+  EXPECT_TRUE(check_mesh(make_mixed(h.input, h.cells, {1, 2, 2}), h.input).valid());
+  const CheckReport r = check_mesh(make_mixed(h.input, h.cells, {1, 2, 1}), h.input);
+  EXPECT_FALSE(r.valid());
+  EXPECT_EQ(r.region_mismatches, 1u);
+  EXPECT_TRUE(mentions(r, "cell 2")) << all_problems(r);
+  // A cell spanning two regions cannot match both.
+  std::vector<Cell> cells = h.cells;
+  cells[1].sources = {6, 8};
+  cells[2].sources = {7};
+  EXPECT_EQ(check_mesh(make_mixed(h.input, cells, {1, 2, 2}), h.input).region_mismatches, 0u);
+  h.input.regions[8] = 3;
+  EXPECT_GE(check_mesh(make_mixed(h.input, cells, {1, 2, 3}), h.input).region_mismatches, 1u);
+}
+
+TEST(check_mesh, finds_unused_nodes_and_foreign_corners) {
+  const HandBuilt h = hand_built();
+  std::vector<Cell> cells = h.cells;
+  cells.pop_back();  // node 9 was used by this tet only
+  CheckReport r = check_mesh(make_mixed(h.input, cells), h.input);
+  EXPECT_EQ(r.unused_input_nodes, 1u);
+  EXPECT_TRUE(mentions(r, "input node 9")) << all_problems(r);
+  EXPECT_EQ(r.cracks, 1u) << all_problems(r);  // the pyramid's face that met the tet
+  EXPECT_FALSE(r.valid());
+
+  // A cell whose corners are not its source tets' corners.
+  cells = h.cells;
+  std::swap(cells[1].sources, cells[2].sources);
+  r = check_mesh(make_mixed(h.input, cells), h.input);
+  EXPECT_EQ(r.source_errors, 2u) << all_problems(r);
+  EXPECT_FALSE(r.valid());
+}
+
+TEST(check_mesh, survives_malformed_cells) {
+  const HandBuilt h = hand_built();
+  std::vector<Cell> cells = h.cells;
+  cells[2].vertices[1] = 99;
+  CheckReport r = check_mesh(make_mixed(h.input, cells), h.input);
+  EXPECT_EQ(r.malformed_cells, 1u);
+  EXPECT_FALSE(r.valid());
+  EXPECT_TRUE(mentions(r, "99")) << all_problems(r);
+  cells = h.cells;
+  cells[0].vertices.pop_back();
+  r = check_mesh(make_mixed(h.input, cells), h.input);
+  EXPECT_EQ(r.malformed_cells, 1u);
+  EXPECT_FALSE(r.valid());
+  MixedMesh broken = make_mixed(h.input, h.cells);
+  broken.offsets.pop_back();
+  EXPECT_FALSE(check_mesh(broken, h.input).valid());
+}
+
+TEST(check_mesh, keeps_problem_lists_short) {
+  const TetMesh grid = kuhn_grid(4);
+  std::vector<Cell> tets = tets_as_cells(grid);
+  std::vector<Cell> half(tets.begin(), tets.begin() + tets.size() / 2);
+  const CheckReport r = check_mesh(make_mixed(grid, half), grid);
+  EXPECT_GT(r.cracks, kMaxProblemsPerKind);
+  std::size_t crack_lines = 0;
+  for (const auto& line : r.problems) crack_lines += line.find("crack") != std::string::npos;
+  EXPECT_EQ(crack_lines, kMaxProblemsPerKind);
+  EXPECT_TRUE(mentions(r, "more of the same kind"));
+}
+
+}  // namespace
+}  // namespace hexmerge::test
