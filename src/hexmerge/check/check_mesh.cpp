@@ -415,7 +415,47 @@ CheckReport check_mesh(const MixedMesh& mesh, const TetMesh& input) {
       i = j;
     }
   }
-  // Unpaired quads: on the domain boundary, against two triangles (non-conforming), or a crack.
+  // Unpaired quads: on the domain boundary, against other cells' faces that cover both of its
+  // halves on one diagonal (non-conforming: two triangles, or a triangle and half of another
+  // quad, or halves of two quads), or a crack.
+  struct Half {
+    std::array<index_t, 3> key;
+    index_t cell;
+    bool operator<(const Half& o) const { return key < o.key; }
+  };
+  auto sorted_triangle = [](index_t a, index_t b, index_t c) {
+    std::array<index_t, 3> k = {a, b, c};
+    sort_face(k.data(), 3);
+    return k;
+  };
+  std::vector<Half> halves;  // both triangulations of every unpaired quad
+  halves.reserve(4 * open_quads.size());
+  for (std::size_t i : open_quads) {
+    index_t q[4];
+    face_vertices(faces.record(i), q);
+    const index_t cell = faces.record(i).cell;
+    halves.push_back({sorted_triangle(q[0], q[1], q[2]), cell});
+    halves.push_back({sorted_triangle(q[0], q[2], q[3]), cell});
+    halves.push_back({sorted_triangle(q[0], q[1], q[3]), cell});
+    halves.push_back({sorted_triangle(q[1], q[2], q[3]), cell});
+  }
+  std::sort(halves.begin(), halves.end());
+  // The record of an unpaired triangle of another cell equal to `tri`, faces.size() when the
+  // triangle is half of another cell's unpaired quad instead, NO_INDEX-like npos when neither.
+  const std::size_t npos = static_cast<std::size_t>(-1);
+  auto cover = [&](const index_t* tri, index_t own_cell) -> std::size_t {
+    const auto range = faces.find(tri, 3);
+    if (range.second - range.first == 1 && state[range.first] != kPaired &&
+        faces.record(range.first).cell != own_cell) {
+      return range.first;
+    }
+    const Half probe{sorted_triangle(tri[0], tri[1], tri[2]), 0};
+    for (auto it = std::lower_bound(halves.begin(), halves.end(), probe);
+         it != halves.end() && it->key == probe.key; ++it) {
+      if (it->cell != own_cell) return faces.size();
+    }
+    return npos;
+  };
   for (std::size_t i : open_quads) {
     const FaceRecord& r = faces.record(i);
     index_t q[4];
@@ -428,13 +468,11 @@ CheckReport check_mesh(const MixedMesh& mesh, const TetMesh& input) {
         boundary = true;
         break;
       }
-      const auto r0 = faces.find(t0, 3), r1 = faces.find(t1, 3);
-      if (r0.second - r0.first == 1 && r1.second - r1.first == 1 && state[r0.first] == kOpen &&
-          state[r1.first] == kOpen && faces.record(r0.first).cell != r.cell &&
-          faces.record(r1.first).cell != r.cell) {
+      const std::size_t c0 = cover(t0, r.cell), c1 = cover(t1, r.cell);
+      if (c0 != npos && c1 != npos) {
         covered = true;
-        state[r0.first] = kCovered;
-        state[r1.first] = kCovered;
+        if (c0 < faces.size()) state[c0] = kCovered;
+        if (c1 < faces.size()) state[c1] = kCovered;
       }
     }
     if (covered) {

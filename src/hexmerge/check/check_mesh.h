@@ -25,7 +25,9 @@ struct CheckReport {
   std::size_t inverted_cells = 0;         ///< scaled Jacobian <= 0
   double min_scaled_jacobian = 0.0;       ///< over all cells
   index_t worst_cell = NO_INDEX;          ///< the cell with the minimum scaled Jacobian
-  std::size_t nonconforming_quads = 0;    ///< quads matched by two triangles, not a quad
+  std::size_t nonconforming_quads = 0;    ///< unpaired quads whose halves on one diagonal are
+                                          ///< faces of other cells: two triangles, or a
+                                          ///< triangle or two halves of other quads
   std::size_t cracks = 0;                 ///< interior faces with no partner at all
   std::size_t overshared_faces = 0;       ///< faces shared by three or more cells
   std::size_t unused_input_nodes = 0;     ///< corner nodes of the input missing from the output

@@ -215,6 +215,35 @@ TEST(check_mesh, counts_a_hex_next_to_tets_as_non_conforming) {
   EXPECT_TRUE(f.valid()) << all_problems(f);
 }
 
+TEST(check_mesh, counts_a_quad_against_a_triangle_and_half_a_quad_as_non_conforming) {
+  // In the plane z = 0: above, a pyramid on the square 0-1-2-3 and a tet on 2-4-3; below, a
+  // pyramid on the parallelogram 0-2-4-3 and a tet on 0-1-2. The square's halves on diagonal
+  // 0-2 are the lower tet's triangle and half of the parallelogram, and vice versa.
+  TetMesh input = make_tet_mesh(
+      {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {1, 2, 0}, {0.5, 0.5, 1}, {0.5, 1, -1}},
+      {{0, 1, 2, 5}, {0, 2, 3, 5}, {2, 4, 3, 5}, {0, 2, 3, 6}, {2, 4, 3, 6}, {0, 1, 2, 6}});
+  orient_positively(input);
+  ASSERT_NO_THROW(validate_tet_mesh(input));
+  const std::vector<Cell> cells = {{CellType::Pyramid, {0, 1, 2, 3, 5}, {0, 1}},
+                                   {CellType::Tet, {input.tet(2), input.tet(2) + 4}, {2}},
+                                   {CellType::Pyramid, {0, 3, 4, 2, 6}, {3, 4}},
+                                   {CellType::Tet, {input.tet(5), input.tet(5) + 4}, {5}}};
+  const CheckReport r = check_mesh(make_mixed(input, cells), input);
+  EXPECT_TRUE(r.valid()) << all_problems(r);
+  EXPECT_EQ(r.inverted_cells, 0u);
+  EXPECT_EQ(r.nonconforming_quads, 2u) << all_problems(r);
+  EXPECT_EQ(r.cracks, 0u) << all_problems(r);
+  EXPECT_LT(std::abs(r.relative_volume_difference), 1e-14);
+  // Without the upper tet, half of the parallelogram is open (a crack), as is the upper
+  // pyramid's face that met the tet; the square is still covered.
+  std::vector<Cell> holed = cells;
+  holed.erase(holed.begin() + 1);
+  const CheckReport h = check_mesh(make_mixed(input, holed), input);
+  EXPECT_EQ(h.nonconforming_quads, 1u) << all_problems(h);
+  EXPECT_EQ(h.cracks, 2u) << all_problems(h);
+  EXPECT_TRUE(mentions(h, "quad (0 2 4 3) of pyramid 1")) << all_problems(h);
+}
+
 TEST(check_mesh, finds_faces_shared_by_three_cells) {
   const HandBuilt h = hand_built();
   std::vector<Cell> cells = h.cells;
