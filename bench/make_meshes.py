@@ -71,11 +71,11 @@ KINDS = {
 # h (surface -clmax and lattice spacing) for tetgen-lattice, found with
 # --kinds tetgen-lattice --find-h SHAPE:COUNT; comments give the measured tet counts.
 H_TETGEN_LATTICE = {
-    "box":      {"10k": 4.16, "100k": None, "1m": None},  # 10,210
-    "cylinder": {"10k": 4.24, "100k": None, "1m": None},  # 10,051
-    "bracket":  {"10k": 3.18, "100k": None, "1m": None},  # 10,232
-    "sphere":   {"10k": 3.45, "100k": None, "1m": None},  #  9,984
-    "torus":    {"10k": 4.14, "100k": None, "1m": None},  #  9,747
+    "box":      {"10k": 4.16, "100k": 1.9,  "1m": 0.88},   # 10,210 / 98,629 / 1,027,223
+    "cylinder": {"10k": 4.24, "100k": 1.97, "1m": 0.915},  # 10,051 / 98,450 / 985,764
+    "bracket":  {"10k": 3.18, "100k": 1.41, "1m": 0.655},  # 10,232 / 96,929 / 1,058,986
+    "sphere":   {"10k": 3.45, "100k": 1.6,  "1m": 0.74},   #  9,984 / 97,588 / 976,520
+    "torus":    {"10k": 4.14, "100k": 1.92, "1m": 0.89},   #  9,747 / 98,512 / 973,221
 }
 
 
@@ -210,6 +210,7 @@ def run_gmsh(shape, kind, h, out, timeout=3600):
 def find_h(shape, target, kind="delaunay", h0=5.0, tol=0.03, maxit=8):
     """Secant search on log(count) = a - 3 log(h) for the h giving about `target` tets."""
     h = h0
+    best = None
     with tempfile.TemporaryDirectory() as tmp:
         out = os.path.join(tmp, "m.msh")
         for _ in range(maxit):
@@ -218,11 +219,12 @@ def find_h(shape, target, kind="delaunay", h0=5.0, tol=0.03, maxit=8):
                 raise RuntimeError(f"gmsh failed for {shape} h={h}: rc={rc}\n{log[-2000:]}")
             n, _ = count_msh41(out)
             print(f"  {shape} h={h:.4g}: {n} tets ({dt:.1f} s)", flush=True)
+            if best is None or abs(n / target - 1) < abs(best[1] / target - 1):
+                best = (h, n)
             if abs(n / target - 1) < tol:
-                return h, n
-            h = h * (n / target) ** (1 / 3)
-            h = float(f"{h:.3g}")
-    return h, n
+                break
+            h = float(f"{h * (n / target) ** (1 / 3):.3g}")
+    return best
 
 
 def load_manifest():
