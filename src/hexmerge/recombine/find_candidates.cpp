@@ -1,0 +1,389 @@
+#include "hexmerge/recombine/find_candidates.h"
+
+#include <algorithm>
+#include <atomic>
+#include <thread>
+
+#include "hexmerge/core/error.h"
+#include "hexmerge/geometry/quality.h"
+#include "hexmerge/recombine/rf_graph.h"
+
+namespace hexmerge {
+namespace {
+
+constexpr int kMaxNodes = 6;
+constexpr int kMaxQuads = 6;
+
+const CellDescriptor& kTet = descriptor(CellType::Tet);
+
+// Outward triangle of face f of tet t.
+std::array<index_t, 3> tet_face(const TetMesh& mesh, index_t t, int f) {
+  const index_t* q = mesh.tet(t);
+  return {q[kTet.face[f][0]], q[kTet.face[f][1]], q[kTet.face[f][2]]};
+}
+
+// The outward quad cycle made of two outward triangles sharing an edge, or false when they do
+// not share exactly one edge. Triangle (x, y, z) and triangle (y, x, w) give quad (x, w, y, z);
+// its diagonal x-y is positions 0 and 2.
+bool quad_from_triangles(const std::array<index_t, 3>& t1, const std::array<index_t, 3>& t2,
+                         std::array<index_t, 4>& quad) {
+  for (int i = 0; i < 3; ++i) {
+    const index_t x = t1[i], y = t1[(i + 1) % 3], z = t1[(i + 2) % 3];
+    for (int j = 0; j < 3; ++j) {
+      // t2 must run along the shared edge in the opposite direction: (y, x, w).
+      if (t2[j] == y && t2[(j + 1) % 3] == x) {
+        const index_t w = t2[(j + 2) % 3];
+        if (w == z) return false;
+        quad = {x, w, y, z};
+        return true;
+      }
+    }
+  }
+  return false;
+}
+
+template <std::size_t N>
+std::array<index_t, N> sorted(std::array<index_t, N> a) {
+  std::sort(a.begin(), a.end());
+  return a;
+}
+
+// The vertex joined to v by an edge of one of the faces, not in `exclude`. NO_VERTEX when there
+// is none or more than one.
+index_t unique_other_neighbor(index_t v, const std::vector<std::array<index_t, 4>>& faces,
+                              const std::vector<int>& sizes, const index_t* exclude, int nex) {
+  index_t found = NO_VERTEX;
+  for (std::size_t f = 0; f < faces.size(); ++f) {
+    const int n = sizes[f];
+    for (int i = 0; i < n; ++i) {
+      if (faces[f][i] != v) continue;
+      for (const index_t u : {faces[f][(i + 1) % n], faces[f][(i + n - 1) % n]}) {
+        if (std::find(exclude, exclude + nex, u) != exclude + nex) continue;
+        if (found != NO_VERTEX && found != u) return NO_VERTEX;
+        found = u;
+      }
+    }
+  }
+  return found;
+}
+
+}  // namespace
+
+bool assemble_cell(const TetMesh& mesh, const TetTopology& topology, CellType type,
+                   const index_t* tets, int nb, const std::vector<std::array<index_t, 2>>& quad_pairs,
+                   std::array<index_t, 8>& vertices) {
+  const CellDescriptor& d = descriptor(type);
+  auto in_group = [&](index_t t) { return std::find(tets, tets + nb, t) != tets + nb; };
+  // The group's boundary triangles, each marked when a quad uses it.
+  std::vector<index_t> boundary;  // 4 * tet + face
+  for (int i = 0; i < nb; ++i) {
+    for (int f = 0; f < 4; ++f) {
+      const index_t n = topology.neighbor(tets[i], f);
+      if (n == NO_CELL || !in_group(n)) boundary.push_back(4 * tets[i] + f);
+    }
+  }
+  const int nb_tris = d.nb_faces - d.nb_quad_faces;
+  if (static_cast<int>(boundary.size()) != 2 * d.nb_quad_faces + nb_tris) return false;
+  if (static_cast<int>(quad_pairs.size()) != d.nb_quad_faces) return false;
+
+  std::vector<std::array<index_t, 4>> faces;  // outward, as cycles
+  std::vector<int> sizes;
+  std::vector<bool> used(boundary.size(), false);
+  auto use = [&](index_t code) {
+    const auto it = std::find(boundary.begin(), boundary.end(), code);
+    if (it == boundary.end() || used[it - boundary.begin()]) return false;
+    used[it - boundary.begin()] = true;
+    return true;
+  };
+  for (const auto& pair : quad_pairs) {
+    if (!use(pair[0]) || !use(pair[1])) return false;
+    std::array<index_t, 4> quad;
+    if (!quad_from_triangles(tet_face(mesh, pair[0] / 4, pair[0] % 4),
+                             tet_face(mesh, pair[1] / 4, pair[1] % 4), quad)) {
+      return false;
+    }
+    faces.push_back(quad);
+    sizes.push_back(4);
+  }
+  for (std::size_t i = 0; i < boundary.size(); ++i) {
+    if (used[i]) continue;
+    const auto tri = tet_face(mesh, boundary[i] / 4, boundary[i] % 4);
+    faces.push_back({tri[0], tri[1], tri[2], NO_VERTEX});
+    sizes.push_back(3);
+  }
+
+  // Base face, reversed so that its normal points into the cell (cell_type.h).
+  vertices.fill(NO_VERTEX);
+  const int base_size = d.face_size[0];
+  const auto base_it = std::find(sizes.begin(), sizes.end(), base_size);
+  if (base_it == sizes.end()) return false;
+  const auto& base = faces[base_it - sizes.begin()];
+  for (int i = 0; i < base_size; ++i) vertices[i] = base[(base_size - i) % base_size];
+  if (type == CellType::Pyramid) {
+    // The apex: the one vertex of the group not on the base.
+    for (const auto& f : faces) {
+      for (int i = 0; i < 3; ++i) {
+        if (std::find(vertices.begin(), vertices.begin() + 4, f[i]) == vertices.begin() + 4) {
+          vertices[4] = f[i];
+        }
+      }
+    }
+  } else {
+    // Prism and hex: the vertex above base vertex i is its only neighbour off the base.
+    for (int i = 0; i < base_size; ++i) {
+      vertices[base_size + i] =
+          unique_other_neighbor(vertices[i], faces, sizes, vertices.data(), base_size);
+      if (vertices[base_size + i] == NO_VERTEX) return false;
+    }
+  }
+  for (int i = 0; i < d.nb_vertices; ++i) {
+    if (vertices[i] == NO_VERTEX) return false;
+    for (int j = 0; j < i; ++j) {
+      if (vertices[i] == vertices[j]) return false;
+    }
+  }
+  // Verification: the cell's faces are exactly the group's boundary faces.
+  std::vector<bool> matched(faces.size(), false);
+  for (int f = 0; f < d.nb_faces; ++f) {
+    std::array<index_t, 4> cf{NO_VERTEX, NO_VERTEX, NO_VERTEX, NO_VERTEX};
+    for (int i = 0; i < d.face_size[f]; ++i) cf[i] = vertices[d.face[f][i]];
+    bool found = false;
+    for (std::size_t g = 0; g < faces.size() && !found; ++g) {
+      if (matched[g] || sizes[g] != d.face_size[f]) continue;
+      if (sorted(cf) == sorted(faces[g])) matched[g] = found = true;
+    }
+    if (!found) return false;
+  }
+  return true;
+}
+
+namespace {
+
+// One search: the interpreter's state while it runs one program from one root tet.
+class Matcher {
+ public:
+  Matcher(const TetMesh& mesh, const TetTopology& topology, const AcceptanceCriteria& criteria,
+          std::vector<Candidate>& out)
+      : mesh_(mesh), topology_(topology), criteria_(criteria), out_(out) {}
+
+  void run_from(index_t root) {
+    root_ = root;
+    const std::size_t first_of_root = out_.size();
+    for (const SearchProgram& program : search_programs()) {
+      if (!criteria_.types[static_cast<int>(program.type)]) continue;
+      program_ = &program;
+      max_vertices_ = descriptor(program.type).nb_vertices;
+      nb_assigned_ = 1;
+      node_[0] = root;
+      used_[0] = 0;
+      const index_t* q = mesh_.tet(root);
+      nb_vertices_ = 4;
+      std::copy(q, q + 4, vertex_.begin());
+      nb_quads_ = 0;
+      step(0, first_of_root);
+    }
+  }
+
+ private:
+  bool in_match(index_t t) const {
+    for (int i = 0; i < nb_assigned_; ++i) {
+      if (node_[i] == t) return true;
+    }
+    return false;
+  }
+
+  void step(std::size_t pc, std::size_t first_of_root) {
+    if (pc == program_->code.size()) {
+      finish(first_of_root);
+      return;
+    }
+    const Instruction& in = program_->code[pc];
+    const index_t ta = node_[in.a];
+    if (in.op == Instruction::Link && in.b == nb_assigned_) {
+      for (int f = 0; f < 4; ++f) {
+        if (used_[in.a] & (1u << f)) continue;
+        const index_t n = topology_.neighbor(ta, f);
+        // The root is the group's smallest tet: each group is found from one root only.
+        if (n == NO_CELL || n < root_ || in_match(n)) continue;
+        if (criteria_.respect_regions && mesh_.region(n) != mesh_.region(root_)) continue;
+        const int fn = topology_.neighbor_face(ta, f);
+        const index_t apex = mesh_.tet(n)[fn];
+        const bool new_vertex =
+            std::find(vertex_.begin(), vertex_.begin() + nb_vertices_, apex) ==
+            vertex_.begin() + nb_vertices_;
+        if (new_vertex && nb_vertices_ == max_vertices_) continue;
+        if (new_vertex) vertex_[nb_vertices_++] = apex;
+        node_[nb_assigned_] = n;
+        used_[nb_assigned_] = static_cast<unsigned char>(1u << fn);
+        ++nb_assigned_;
+        used_[in.a] |= static_cast<unsigned char>(1u << f);
+        step(pc + 1, first_of_root);
+        used_[in.a] &= static_cast<unsigned char>(~(1u << f));
+        --nb_assigned_;
+        if (new_vertex) --nb_vertices_;
+      }
+    } else if (in.op == Instruction::Link) {
+      const index_t tb = node_[in.b];
+      for (int f = 0; f < 4; ++f) {
+        if (topology_.neighbor(ta, f) != tb) continue;
+        const int fb = topology_.neighbor_face(ta, f);
+        if ((used_[in.a] & (1u << f)) || (used_[in.b] & (1u << fb))) return;
+        used_[in.a] |= static_cast<unsigned char>(1u << f);
+        used_[in.b] |= static_cast<unsigned char>(1u << fb);
+        step(pc + 1, first_of_root);
+        used_[in.a] &= static_cast<unsigned char>(~(1u << f));
+        used_[in.b] &= static_cast<unsigned char>(~(1u << fb));
+        return;
+      }
+    } else {
+      const index_t tb = node_[in.b];
+      for (int fa = 0; fa < 4; ++fa) {
+        if ((used_[in.a] & (1u << fa)) || internal(topology_.neighbor(ta, fa))) continue;
+        const auto tri_a = tet_face(mesh_, ta, fa);
+        for (int fb = 0; fb < 4; ++fb) {
+          if ((used_[in.b] & (1u << fb)) || internal(topology_.neighbor(tb, fb))) continue;
+          std::array<index_t, 4> quad;
+          if (!quad_from_triangles(tri_a, tet_face(mesh_, tb, fb), quad)) continue;
+          const double* p[4];
+          for (int i = 0; i < 4; ++i) p[i] = mesh_.point(quad[i]);
+          const double dihedral = quad_dihedral_angle(p[0], p[1], p[2], p[3]);
+          if (dihedral < criteria_.min_dihedral_angle) continue;
+          const double corner = quad_max_corner_angle(p[0], p[1], p[2], p[3]);
+          if (corner > criteria_.max_face_angle) continue;
+          used_[in.a] |= static_cast<unsigned char>(1u << fa);
+          used_[in.b] |= static_cast<unsigned char>(1u << fb);
+          quad_[nb_quads_] = {4 * ta + fa, 4 * tb + fb};
+          dihedral_[nb_quads_] = dihedral;
+          corner_[nb_quads_] = corner;
+          ++nb_quads_;
+          step(pc + 1, first_of_root);
+          --nb_quads_;
+          used_[in.a] &= static_cast<unsigned char>(~(1u << fa));
+          used_[in.b] &= static_cast<unsigned char>(~(1u << fb));
+        }
+      }
+    }
+  }
+
+  // A quad uses external faces only: faces on the domain boundary or towards tets outside the
+  // current match. (A tet joining the match later through such a face is rejected when the
+  // cell is assembled.)
+  bool internal(index_t neighbor) const {
+    return neighbor != NO_CELL && in_match(neighbor);
+  }
+
+  void finish(std::size_t first_of_root) {
+    const SearchProgram& program = *program_;
+    if (nb_vertices_ != max_vertices_) return;
+    Candidate c;
+    c.type = program.type;
+    c.graph = static_cast<std::uint8_t>(program.graph);
+    c.nb_tets = static_cast<std::uint8_t>(program.nb_nodes);
+    c.tets.fill(NO_CELL);
+    std::copy(node_.begin(), node_.begin() + nb_assigned_, c.tets.begin());
+    std::sort(c.tets.begin(), c.tets.begin() + nb_assigned_);
+    std::vector<std::array<index_t, 2>> pairs(quad_.begin(), quad_.begin() + nb_quads_);
+    if (!assemble_cell(mesh_, topology_, program.type, c.tets.data(), nb_assigned_, pairs,
+                       c.vertices)) {
+      return;
+    }
+    // The same group may be matched again through an automorphism that fixes the root.
+    for (std::size_t i = first_of_root; i < out_.size(); ++i) {
+      if (out_[i].type == c.type && out_[i].tets == c.tets &&
+          sorted(out_[i].vertices) == sorted(c.vertices) && same_cell(out_[i], c)) {
+        return;
+      }
+    }
+    const double sj = scaled_jacobian(c.type, mesh_.points.data(), c.vertices.data());
+    if (sj < criteria_.min_scaled_jacobian) return;
+    c.quality = static_cast<float>(sj);
+    c.min_dihedral_angle = 180.0f;
+    c.max_face_angle = 0.0f;
+    for (int i = 0; i < nb_quads_; ++i) {
+      c.min_dihedral_angle = std::min(c.min_dihedral_angle, static_cast<float>(dihedral_[i]));
+      c.max_face_angle = std::max(c.max_face_angle, static_cast<float>(corner_[i]));
+    }
+    out_.push_back(c);
+  }
+
+  // Two cells on the same tets and vertices are the same cell when they have the same faces.
+  static bool same_cell(const Candidate& a, const Candidate& b) {
+    const CellDescriptor& d = descriptor(a.type);
+    for (int f = 0; f < d.nb_faces; ++f) {
+      std::array<index_t, 4> fa{NO_VERTEX, NO_VERTEX, NO_VERTEX, NO_VERTEX};
+      for (int i = 0; i < d.face_size[f]; ++i) fa[i] = a.vertices[d.face[f][i]];
+      bool found = false;
+      for (int g = 0; g < d.nb_faces && !found; ++g) {
+        if (d.face_size[g] != d.face_size[f]) continue;
+        std::array<index_t, 4> fb{NO_VERTEX, NO_VERTEX, NO_VERTEX, NO_VERTEX};
+        for (int i = 0; i < d.face_size[g]; ++i) fb[i] = b.vertices[d.face[g][i]];
+        found = sorted(fa) == sorted(fb);
+      }
+      if (!found) return false;
+    }
+    return true;
+  }
+
+  const TetMesh& mesh_;
+  const TetTopology& topology_;
+  const AcceptanceCriteria& criteria_;
+  std::vector<Candidate>& out_;
+  const SearchProgram* program_ = nullptr;
+  index_t root_ = 0;
+  int max_vertices_ = 0;
+  int nb_assigned_ = 0;
+  std::array<index_t, kMaxNodes> node_{};
+  std::array<unsigned char, kMaxNodes> used_{};  // faces of each node taken by a LINK or QUAD
+  std::array<index_t, 8> vertex_{};
+  int nb_vertices_ = 0;
+  std::array<std::array<index_t, 2>, kMaxQuads> quad_{};
+  std::array<double, kMaxQuads> dihedral_{};
+  std::array<double, kMaxQuads> corner_{};
+  int nb_quads_ = 0;
+};
+
+}  // namespace
+
+std::vector<Candidate> find_candidates(const TetMesh& mesh, const TetTopology& topology,
+                                       const AcceptanceCriteria& criteria, int threads,
+                                       const ProgressCallback& progress) {
+  const index_t nt = mesh.nb_tets();
+  constexpr index_t kChunk = 8192;
+  const index_t nb_chunks = (nt + kChunk - 1) / kChunk;
+  std::vector<std::vector<Candidate>> per_chunk(nb_chunks);
+  std::atomic<index_t> next_chunk{0};
+  std::atomic<bool> cancelled{false};
+  std::atomic<index_t> done{0};
+
+  auto work = [&](bool reports) {
+    for (;;) {
+      if (cancelled.load()) return;
+      const index_t chunk = next_chunk.fetch_add(1);
+      if (chunk >= nb_chunks) return;
+      Matcher matcher(mesh, topology, criteria, per_chunk[chunk]);
+      const index_t end = std::min(nt, (chunk + 1) * kChunk);
+      for (index_t t = chunk * kChunk; t < end; ++t) matcher.run_from(t);
+      const index_t finished = ++done;
+      if (reports && progress && !progress("candidates", double(finished) / nb_chunks)) {
+        cancelled = true;
+      }
+    }
+  };
+  std::vector<std::thread> pool;
+  for (int i = 1; i < std::max(1, threads); ++i) pool.emplace_back(work, false);
+  work(true);  // the calling thread works too, and is the only one that reports
+  for (auto& th : pool) th.join();
+  if (cancelled) throw Cancelled();
+
+  std::size_t total = 0;
+  for (const auto& c : per_chunk) total += c.size();
+  std::vector<Candidate> all;
+  all.reserve(total);
+  for (auto& c : per_chunk) {
+    all.insert(all.end(), c.begin(), c.end());
+    std::vector<Candidate>().swap(c);
+  }
+  return all;
+}
+
+}  // namespace hexmerge

@@ -1,0 +1,59 @@
+#pragma once
+/// @file
+/// Candidate elements: every hex, prism and pyramid that a group of tets forms and that passes
+/// the geometric acceptance, found by running the compiled search programs from every tet.
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "hexmerge/core/index.h"
+#include "hexmerge/core/progress.h"
+#include "hexmerge/mesh/cell_type.h"
+#include "hexmerge/mesh/tet_mesh.h"
+#include "hexmerge/mesh/tet_topology.h"
+
+namespace hexmerge {
+
+/// A possible element: a group of tets and the cell they form.
+struct Candidate {
+  std::array<index_t, 8> vertices;  ///< local order of cell_type.h; unused slots NO_VERTEX
+  std::array<index_t, 6> tets;      ///< sorted; unused slots NO_CELL
+  CellType type;
+  std::uint8_t graph;               ///< index into rf_graphs() of the template that found it
+  std::uint8_t nb_tets;
+  float quality;                    ///< scaled Jacobian
+  float min_dihedral_angle;         ///< degrees, over its quad faces (180 when none)
+  float max_face_angle;             ///< degrees, over its quad faces (0 when none)
+};
+
+/// What a candidate must satisfy.
+struct AcceptanceCriteria {
+  double min_dihedral_angle = 160.0;  ///< degrees
+  double max_face_angle = 160.0;      ///< degrees
+  double min_scaled_jacobian = 0.3;
+  bool respect_regions = true;
+  std::array<bool, NB_CELL_TYPES> types{{false, true, true, true}};  ///< by CellType
+};
+
+/// Runs every search program (rf_graph.h) from every tet.
+///
+/// Each group of tets is reported once (from its smallest tet), per distinct element it forms.
+/// The order of the result does not depend on the number of threads.
+/// @param[in] threads  worker threads (>= 1)
+std::vector<Candidate> find_candidates(const TetMesh& mesh, const TetTopology& topology,
+                                       const AcceptanceCriteria& criteria, int threads,
+                                       const ProgressCallback& progress = {});
+
+/// Builds the cell formed by a group of tets, given which of the group's boundary triangles pair
+/// into quads, and checks it: the group's boundary must be exactly the cell's faces (triangles
+/// as such, quads as two triangles on one diagonal). Returns false when it is not a valid cell
+/// of that type. Exposed for the tests and the other finders.
+/// @param[in]  tets        the group (nb entries)
+/// @param[in]  quad_pairs  pairs of boundary triangles as (4 * tet + face) codes, one per quad
+/// @param[out] vertices    the cell's vertices in local order
+bool assemble_cell(const TetMesh& mesh, const TetTopology& topology, CellType type,
+                   const index_t* tets, int nb, const std::vector<std::array<index_t, 2>>& quad_pairs,
+                   std::array<index_t, 8>& vertices);
+
+}  // namespace hexmerge

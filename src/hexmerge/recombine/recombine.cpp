@@ -1,0 +1,150 @@
+#include "hexmerge/recombine/recombine.h"
+
+#include <algorithm>
+#include <chrono>
+#include <thread>
+
+#include "hexmerge/core/error.h"
+#include "hexmerge/geometry/quality.h"
+#include "hexmerge/mesh/tet_topology.h"
+#include "hexmerge/recombine/find_candidates.h"
+#include "hexmerge/recombine/rf_graph.h"
+#include "hexmerge/recombine/select_candidates.h"
+
+namespace hexmerge {
+namespace {
+
+class PhaseTimer {
+ public:
+  explicit PhaseTimer(RecombineReport& report) : report_(report), start_(Clock::now()) {}
+  void lap(const std::string& phase) {
+    const auto now = Clock::now();
+    report_.phase_seconds.emplace_back(phase, std::chrono::duration<double>(now - start_).count());
+    start_ = now;
+  }
+
+ private:
+  using Clock = std::chrono::steady_clock;
+  RecombineReport& report_;
+  Clock::time_point start_;
+};
+
+int thread_count(int requested) {
+  if (requested > 0) return requested;
+  const unsigned hw = std::thread::hardware_concurrency();
+  return hw == 0 ? 1 : static_cast<int>(hw);
+}
+
+// The output cells: chosen elements by type (hex, prism, pyramid), then the tets left, in input
+// order.
+MixedMesh build_output(const TetMesh& input, const std::vector<Candidate>& candidates,
+                       const Selection& selection) {
+  MixedMesh out;
+  out.points = input.points;
+  out.offsets.push_back(0);
+  out.source_offsets.push_back(0);
+  const bool with_regions = !input.regions.empty();
+  std::vector<char> merged(input.nb_tets(), 0);
+  for (CellType type : {CellType::Hex, CellType::Prism, CellType::Pyramid}) {
+    for (index_t ci : selection.elements) {
+      const Candidate& c = candidates[ci];
+      if (c.type != type) continue;
+      out.types.push_back(type);
+      const int nv = nb_vertices(type);
+      out.cell_vertices.insert(out.cell_vertices.end(), c.vertices.begin(), c.vertices.begin() + nv);
+      out.offsets.push_back(static_cast<index_t>(out.cell_vertices.size()));
+      out.source_tets.insert(out.source_tets.end(), c.tets.begin(), c.tets.begin() + c.nb_tets);
+      out.source_offsets.push_back(static_cast<index_t>(out.source_tets.size()));
+      if (with_regions) out.regions.push_back(input.region(c.tets[0]));
+      for (int i = 0; i < c.nb_tets; ++i) merged[c.tets[i]] = 1;
+    }
+  }
+  for (index_t t = 0; t < input.nb_tets(); ++t) {
+    if (merged[t]) continue;
+    out.types.push_back(CellType::Tet);
+    const index_t* q = input.tet(t);
+    out.cell_vertices.insert(out.cell_vertices.end(), q, q + 4);
+    out.offsets.push_back(static_cast<index_t>(out.cell_vertices.size()));
+    out.source_tets.push_back(t);
+    out.source_offsets.push_back(static_cast<index_t>(out.source_tets.size()));
+    if (with_regions) out.regions.push_back(input.region(t));
+  }
+  return out;
+}
+
+void fill_report(const TetMesh& input, const MixedMesh& out, RecombineReport& report) {
+  report.input_tets = input.nb_tets();
+  report.output_cells = out.nb_cells();
+  report.element_reduction_percent =
+      100.0 * (1.0 - static_cast<double>(out.nb_cells()) / static_cast<double>(input.nb_tets()));
+  std::vector<double> tet_volume_of(input.nb_tets());
+  report.input_volume = 0.0;
+  for (index_t t = 0; t < input.nb_tets(); ++t) {
+    const index_t* q = input.tet(t);
+    tet_volume_of[t] = tet_volume(input.point(q[0]), input.point(q[1]), input.point(q[2]),
+                                  input.point(q[3]));
+    report.input_volume += tet_volume_of[t];
+  }
+  std::array<double, NB_CELL_TYPES> volume{}, sum_sj{};
+  report.output_counts.fill(0);
+  report.min_scaled_jacobian.fill(0.0);
+  for (index_t c = 0; c < out.nb_cells(); ++c) {
+    const int type = static_cast<int>(out.types[c]);
+    for (index_t k = out.source_offsets[c]; k < out.source_offsets[c + 1]; ++k) {
+      volume[type] += tet_volume_of[out.source_tets[k]];
+    }
+    const double sj = scaled_jacobian(out.types[c], out.points.data(), out.cell(c));
+    report.min_scaled_jacobian[type] =
+        report.output_counts[type] == 0 ? sj : std::min(report.min_scaled_jacobian[type], sj);
+    sum_sj[type] += sj;
+    ++report.output_counts[type];
+  }
+  for (int type = 0; type < NB_CELL_TYPES; ++type) {
+    report.volume_fraction[type] = volume[type] / report.input_volume;
+    report.mean_scaled_jacobian[type] =
+        report.output_counts[type] ? sum_sj[type] / report.output_counts[type] : 0.0;
+  }
+}
+
+}  // namespace
+
+MixedMesh recombine(const TetMesh& input, const RecombineParameters& parameters,
+                    RecombineReport& report, const ProgressCallback& progress) {
+  report = RecombineReport{};
+  PhaseTimer timer(report);
+  validate_parameters(parameters);
+  validate_tet_mesh(input);
+  report_progress(progress, "topology", 0.0);
+  const TetTopology topology(input);
+  timer.lap("topology");
+
+  AcceptanceCriteria criteria;
+  criteria.min_dihedral_angle = parameters.min_dihedral_angle;
+  criteria.max_face_angle = parameters.max_face_angle;
+  criteria.min_scaled_jacobian = parameters.min_scaled_jacobian;
+  criteria.respect_regions = parameters.respect_regions;
+  criteria.types[static_cast<int>(CellType::Hex)] = parameters.make_hexahedra;
+  criteria.types[static_cast<int>(CellType::Prism)] = parameters.make_prisms;
+  criteria.types[static_cast<int>(CellType::Pyramid)] = parameters.make_pyramids;
+  const std::vector<Candidate> candidates =
+      find_candidates(input, topology, criteria, thread_count(parameters.threads), progress);
+  timer.lap("candidates");
+  const auto& graphs = rf_graphs();
+  for (const auto& g : graphs) report.candidates_per_template[g.name] = 0;
+  for (const Candidate& c : candidates) ++report.candidates_per_template[graphs[c.graph].name];
+  report.candidates_total = candidates.size();
+
+  const Selection selection = select_candidates(input, topology, candidates, parameters, progress);
+  report.nonconforming_quads = selection.nonconforming_quads;
+  report.closing_pyramids = selection.closing_pyramids;
+  report.released_elements = selection.released_elements;
+  timer.lap("selection");
+
+  MixedMesh out = build_output(input, candidates, selection);
+  fill_report(input, out, report);
+  timer.lap("output");
+  report_progress(progress, "done", 1.0);
+  return out;
+}
+
+}  // namespace hexmerge

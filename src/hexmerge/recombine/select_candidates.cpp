@@ -1,0 +1,552 @@
+#include "hexmerge/recombine/select_candidates.h"
+
+#include <algorithm>
+#include <array>
+#include <deque>
+
+#include "hexmerge/core/error.h"
+
+namespace hexmerge {
+namespace {
+
+using QuadKey = std::array<index_t, 4>;  // sorted vertices of a quad face
+
+const CellDescriptor& kTet = descriptor(CellType::Tet);
+
+int gain(const Candidate& c) { return c.nb_tets - 1; }  // elements saved by merging
+
+// One boundary triangle of a candidate: the tet face it is, the tet across it, and the face of
+// the candidate's cell that it lies in.
+struct Side {
+  std::array<index_t, 3> tri;
+  index_t neighbor;  // NO_CELL on the domain boundary
+  int cell_face;
+};
+
+struct Sides {
+  std::array<Side, 12> side;
+  int count = 0;
+};
+
+// Face of the cell of `c` that contains the three vertices, or -1.
+int cell_face_of(const Candidate& c, const std::array<index_t, 3>& tri) {
+  const CellDescriptor& d = descriptor(c.type);
+  for (int f = 0; f < d.nb_faces; ++f) {
+    int hits = 0;
+    for (int i = 0; i < d.face_size[f]; ++i) {
+      const index_t v = c.vertices[d.face[f][i]];
+      hits += (v == tri[0]) + (v == tri[1]) + (v == tri[2]);
+    }
+    if (hits == 3) return f;
+  }
+  return -1;
+}
+
+QuadKey face_key(const Candidate& c, int f) {
+  const CellDescriptor& d = descriptor(c.type);
+  QuadKey k{NO_VERTEX, NO_VERTEX, NO_VERTEX, NO_VERTEX};
+  for (int i = 0; i < d.face_size[f]; ++i) k[i] = c.vertices[d.face[f][i]];
+  std::sort(k.begin(), k.end());
+  return k;
+}
+
+bool is_quad(const Candidate& c, int f) { return descriptor(c.type).face_size[f] == 4; }
+
+// A stage of a greedy phase: which element type, and whether non-conforming ones may be taken.
+struct Stage {
+  CellType type;
+  bool allow_nonconforming;
+};
+
+class Selector {
+ public:
+  Selector(const TetMesh& mesh, const TetTopology& topology,
+           const std::vector<Candidate>& candidates, const RecombineParameters& parameters)
+      : mesh_(mesh), topo_(topology), cands_(candidates), params_(parameters),
+        owner_(mesh.nb_tets(), NO_INDEX), chosen_(candidates.size(), 0) {
+    // Tet -> candidates, CSR.
+    const index_t nt = mesh.nb_tets();
+    offsets_.assign(static_cast<std::size_t>(nt) + 1, 0);
+    for (const Candidate& c : cands_) {
+      for (int i = 0; i < c.nb_tets; ++i) ++offsets_[c.tets[i] + 1];
+    }
+    for (index_t t = 0; t < nt; ++t) offsets_[t + 1] += offsets_[t];
+    ids_.resize(offsets_[nt]);
+    std::vector<index_t> fill(offsets_.begin(), offsets_.end() - 1);
+    for (index_t ci = 0; ci < cands_.size(); ++ci) {
+      const Candidate& c = cands_[ci];
+      for (int i = 0; i < c.nb_tets; ++i) ids_[fill[c.tets[i]]++] = ci;
+    }
+    is_boundary_.assign(nt, 0);
+    for (index_t t = 0; t < nt; ++t) {
+      for (int f = 0; f < 4; ++f) {
+        const index_t n = topo_.neighbor(t, f);
+        if (n == NO_CELL ||
+            (params_.respect_regions && mesh_.region(n) != mesh_.region(t))) {
+          is_boundary_[t] = 1;
+        }
+      }
+    }
+  }
+
+  Selection run(const ProgressCallback& progress) {
+    std::vector<Stage> conforming, relaxed;
+    const bool allow = params_.conformity == Conformity::Allow;
+    for (CellType type : {CellType::Hex, CellType::Prism, CellType::Pyramid}) {
+      conforming.push_back({type, allow});
+      if (params_.conformity == Conformity::LastResort) relaxed.push_back({type, true});
+    }
+    report_progress(progress, "selection", 0.0);
+    for (const Stage& stage : conforming) boundary_stage(stage);
+    report_progress(progress, "selection", 0.25);
+    if (params_.local_optimisation) local_optimisation();
+    report_progress(progress, "selection", 0.5);
+    const std::vector<index_t> order = breadth_first_order();
+    for (const Stage& stage : conforming) interior_stage(stage, order);
+    for (const Stage& stage : relaxed) interior_stage(stage, order);
+    report_progress(progress, "selection", 0.75);
+    close_quads();
+    report_progress(progress, "selection", 1.0);
+    for (index_t ci = 0; ci < cands_.size(); ++ci) {
+      if (chosen_[ci]) result_.elements.push_back(ci);
+    }
+    result_.nonconforming_quads = 0;
+    for (index_t ci : result_.elements) result_.nonconforming_quads += violations(ci, false);
+    return result_;
+  }
+
+ private:
+  bool is_free(index_t t) const { return owner_[t] == NO_INDEX; }
+
+  bool available(index_t ci) const {
+    const Candidate& c = cands_[ci];
+    for (int i = 0; i < c.nb_tets; ++i) {
+      if (!is_free(c.tets[i])) return false;
+    }
+    return true;
+  }
+
+  bool contains(const Candidate& c, index_t t) const {
+    return std::find(c.tets.begin(), c.tets.begin() + c.nb_tets, t) != c.tets.begin() + c.nb_tets;
+  }
+
+  Sides sides(const Candidate& c) const {
+    Sides s;
+    for (int i = 0; i < c.nb_tets; ++i) {
+      const index_t t = c.tets[i];
+      const index_t* q = mesh_.tet(t);
+      for (int f = 0; f < 4; ++f) {
+        const index_t n = topo_.neighbor(t, f);
+        if (n != NO_CELL && contains(c, n)) continue;
+        Side& side = s.side[s.count++];
+        side.tri = {q[kTet.face[f][0]], q[kTet.face[f][1]], q[kTet.face[f][2]]};
+        side.neighbor = n;
+        side.cell_face = cell_face_of(c, side.tri);
+        HEXMERGE_ASSERT(side.cell_face >= 0, "a candidate's boundary triangle is not on its cell");
+      }
+    }
+    return s;
+  }
+
+  // Quad faces of chosen elements that touch free tet t through one of its faces: their keys
+  // must all be quad faces of whatever element takes t.
+  void required_quads(index_t t, std::vector<QuadKey>& keys) const {
+    const index_t* q = mesh_.tet(t);
+    for (int f = 0; f < 4; ++f) {
+      const index_t n = topo_.neighbor(t, f);
+      if (n == NO_CELL || is_free(n)) continue;
+      const Candidate& e = cands_[owner_[n]];
+      const std::array<index_t, 3> tri{q[kTet.face[f][0]], q[kTet.face[f][1]], q[kTet.face[f][2]]};
+      const int ef = cell_face_of(e, tri);
+      if (ef >= 0 && is_quad(e, ef)) keys.push_back(face_key(e, ef));
+    }
+  }
+
+  bool has_quad(const Candidate& x, const QuadKey& key) const {
+    const CellDescriptor& d = descriptor(x.type);
+    for (int f = 0; f < d.nb_faces; ++f) {
+      if (d.face_size[f] == 4 && face_key(x, f) == key) return true;
+    }
+    return false;
+  }
+
+  // The best available candidate that takes free tets n1 and n2, avoids the tets of `exclude`
+  // (may be null) and has every quad face the chosen elements and `extra` ask of n1 and n2 —
+  // the element that would close a pending quad face. NO_INDEX when there is none.
+  index_t closer(index_t n1, index_t n2, const QuadKey* extra, const Candidate* exclude) const {
+    std::vector<QuadKey> keys;
+    if (extra) keys.push_back(*extra);
+    required_quads(n1, keys);
+    required_quads(n2, keys);
+    index_t best = NO_INDEX;
+    for (index_t k = offsets_[n1]; k < offsets_[n1 + 1]; ++k) {
+      const index_t xi = ids_[k];
+      const Candidate& x = cands_[xi];
+      if (!contains(x, n2) || !available(xi)) continue;
+      if (exclude) {
+        bool overlap = false;
+        for (int i = 0; i < x.nb_tets && !overlap; ++i) overlap = contains(*exclude, x.tets[i]);
+        if (overlap) continue;
+      }
+      bool all = true;
+      for (const QuadKey& key : keys) all = all && has_quad(x, key);
+      if (!all) continue;
+      if (best == NO_INDEX || better(x, 0, cands_[best], 0)) best = xi;
+    }
+    return best;
+  }
+
+  // Quad faces of candidate ci that would not conform if it were (or, when it is, as it is)
+  // chosen now. A quad facing two free tets conforms while some available candidate can close
+  // it; with `pending_ok` false (the final count) it does not.
+  std::size_t violations(index_t ci, bool pending_ok = true) const {
+    const Candidate& c = cands_[ci];
+    const Sides s = sides(c);
+    std::size_t bad = 0;
+    const CellDescriptor& d = descriptor(c.type);
+    for (int f = 0; f < d.nb_faces; ++f) {
+      const Side* half[2] = {nullptr, nullptr};
+      int nh = 0;
+      for (int i = 0; i < s.count; ++i) {
+        if (s.side[i].cell_face == f && nh < 2) half[nh++] = &s.side[i];
+      }
+      if (d.face_size[f] == 3) {
+        // Our triangle must not meet half of a chosen element's quad.
+        const index_t n = half[0]->neighbor;
+        if (n != NO_CELL && !is_free(n)) {
+          const Candidate& e = cands_[owner_[n]];
+          if (is_quad(e, cell_face_of(e, half[0]->tri))) ++bad;
+        }
+        continue;
+      }
+      HEXMERGE_ASSERT(nh == 2, "a quad face of a candidate is not two triangles");
+      const index_t n1 = half[0]->neighbor, n2 = half[1]->neighbor;
+      if (n1 == NO_CELL && n2 == NO_CELL) continue;
+      if (n1 == NO_CELL || n2 == NO_CELL) {
+        ++bad;
+        continue;
+      }
+      if (!is_free(n1) || !is_free(n2)) {
+        if (owner_[n1] != owner_[n2]) {
+          ++bad;
+          continue;
+        }
+        const Candidate& e = cands_[owner_[n1]];
+        const int ef = cell_face_of(e, half[0]->tri);
+        if (!is_quad(e, ef) || face_key(e, ef) != face_key(c, f)) ++bad;
+        continue;
+      }
+      if (!pending_ok) {
+        ++bad;
+        continue;
+      }
+      const QuadKey key = face_key(c, f);
+      if (closer(n1, n2, &key, chosen_[ci] ? nullptr : &c) == NO_INDEX) ++bad;
+    }
+    return bad;
+  }
+
+  // Ranking at one tet: element type, then fewer non-conformities, then quality.
+  static bool better(const Candidate& a, std::size_t va, const Candidate& b, std::size_t vb) {
+    if (a.type != b.type) return static_cast<int>(a.type) > static_cast<int>(b.type);
+    if (va != vb) return va < vb;
+    return a.quality > b.quality;
+  }
+
+  // The best available candidate of `stage` that takes tet t, or NO_INDEX.
+  index_t best_at(index_t t, const Stage& stage) const {
+    index_t best = NO_INDEX;
+    std::size_t best_v = 0;
+    for (index_t k = offsets_[t]; k < offsets_[t + 1]; ++k) {
+      const index_t ci = ids_[k];
+      const Candidate& c = cands_[ci];
+      if (c.type != stage.type || !available(ci)) continue;
+      const std::size_t v = violations(ci);
+      if (v > 0 && !stage.allow_nonconforming) continue;
+      if (best == NO_INDEX || better(c, v, cands_[best], best_v)) {
+        best = ci;
+        best_v = v;
+      }
+    }
+    return best;
+  }
+
+  void set_owner(index_t t, index_t ci) {
+    if (journaling_) journal_.push_back({t, owner_[t]});
+    owner_[t] = ci;
+  }
+
+  void choose(index_t ci) {
+    const Candidate& c = cands_[ci];
+    for (int i = 0; i < c.nb_tets; ++i) set_owner(c.tets[i], ci);
+    if (journaling_) chosen_journal_.push_back({ci, chosen_[ci]});
+    chosen_[ci] = 1;
+  }
+
+  void release(index_t ci) {
+    const Candidate& c = cands_[ci];
+    for (int i = 0; i < c.nb_tets; ++i) set_owner(c.tets[i], NO_INDEX);
+    if (journaling_) chosen_journal_.push_back({ci, chosen_[ci]});
+    chosen_[ci] = 0;
+  }
+
+  void begin_move() {
+    journaling_ = true;
+    journal_.clear();
+    chosen_journal_.clear();
+  }
+
+  void rollback() {
+    for (auto it = journal_.rbegin(); it != journal_.rend(); ++it) owner_[it->first] = it->second;
+    for (auto it = chosen_journal_.rbegin(); it != chosen_journal_.rend(); ++it) {
+      chosen_[it->first] = it->second;
+    }
+    journaling_ = false;
+  }
+
+  void commit() { journaling_ = false; }
+
+  // Exhaustive-greedy over the boundary tets: the tet with the fewest available candidates of
+  // this stage's type goes first (bucket queue; counts only decrease).
+  void boundary_stage(const Stage& stage) {
+    const index_t nt = mesh_.nb_tets();
+    std::vector<index_t> count(nt, 0);
+    std::vector<char> counted(cands_.size(), 0);
+    std::vector<std::vector<index_t>> buckets(1);
+    for (index_t t = 0; t < nt; ++t) {
+      if (!is_boundary_[t] || !is_free(t)) continue;
+      for (index_t k = offsets_[t]; k < offsets_[t + 1]; ++k) {
+        const index_t ci = ids_[k];
+        if (cands_[ci].type == stage.type && available(ci)) ++count[t];
+      }
+      if (count[t] == 0) continue;
+      if (buckets.size() <= count[t]) buckets.resize(count[t] + 1);
+      buckets[count[t]].push_back(t);
+    }
+    for (std::size_t b = 1; b < buckets.size();) {
+      if (buckets[b].empty()) {
+        ++b;
+        continue;
+      }
+      const index_t t = buckets[b].back();
+      buckets[b].pop_back();
+      if (!is_free(t) || count[t] != b) continue;  // stale entry
+      const index_t ci = best_at(t, stage);
+      count[t] = 0;
+      if (ci == NO_INDEX) continue;
+      choose(ci);
+      // Candidates that lost a tet are no longer available: their boundary tets move down.
+      const Candidate& c = cands_[ci];
+      for (int i = 0; i < c.nb_tets; ++i) {
+        const index_t s = c.tets[i];
+        for (index_t k = offsets_[s]; k < offsets_[s + 1]; ++k) {
+          const index_t xi = ids_[k];
+          const Candidate& x = cands_[xi];
+          if (xi == ci || x.type != stage.type || counted[xi]) continue;
+          counted[xi] = 1;
+          for (int j = 0; j < x.nb_tets; ++j) {
+            const index_t u = x.tets[j];
+            if (!is_boundary_[u] || !is_free(u) || count[u] == 0) continue;
+            --count[u];
+            if (count[u] > 0) {
+              buckets[count[u]].push_back(u);
+              b = std::min<std::size_t>(b, count[u]);
+            }
+          }
+        }
+      }
+    }
+  }
+
+  // Section 4.2: at each unmatched boundary tet, try each of its candidates in place of the
+  // elements in its way; refill the freed tets greedily; keep the move only when it saves
+  // elements and leaves every quad face as conforming as before.
+  void local_optimisation() {
+    const index_t nt = mesh_.nb_tets();
+    for (index_t t = 0; t < nt; ++t) {
+      if (!is_boundary_[t] || !is_free(t)) continue;
+      for (index_t k = offsets_[t]; k < offsets_[t + 1] && is_free(t); ++k) {
+        const index_t ci = ids_[k];
+        if (cands_[ci].type == CellType::Pyramid) continue;
+        try_move(ci);
+      }
+    }
+  }
+
+  void try_move(index_t ci) {
+    const Candidate& c = cands_[ci];
+    std::vector<index_t> in_way;
+    for (int i = 0; i < c.nb_tets; ++i) {
+      const index_t o = owner_[c.tets[i]];
+      if (o != NO_INDEX && std::find(in_way.begin(), in_way.end(), o) == in_way.end()) {
+        in_way.push_back(o);
+      }
+    }
+    if (in_way.empty() || in_way.size() > 3) return;
+    int old_gain = 0;
+    for (index_t o : in_way) old_gain += gain(cands_[o]);
+    const bool allow = params_.conformity == Conformity::Allow;
+    begin_move();
+    for (index_t o : in_way) release(o);
+    if (!allow && violations(ci) > 0) {
+      rollback();
+      return;
+    }
+    choose(ci);
+    int new_gain = gain(c);
+    std::vector<index_t> freed;
+    for (index_t o : in_way) {
+      const Candidate& e = cands_[o];
+      for (int i = 0; i < e.nb_tets; ++i) {
+        if (is_free(e.tets[i])) freed.push_back(e.tets[i]);
+      }
+    }
+    for (CellType type : {CellType::Hex, CellType::Prism, CellType::Pyramid}) {
+      for (index_t f : freed) {
+        if (!is_free(f)) continue;
+        const index_t x = best_at(f, {type, allow});
+        if (x != NO_INDEX) {
+          choose(x);
+          new_gain += gain(cands_[x]);
+        }
+      }
+    }
+    if (new_gain <= old_gain || !neighbourhood_conforms(ci, freed)) {
+      rollback();
+      return;
+    }
+    commit();
+    ++result_.local_moves;
+  }
+
+  // After a move: the new element and every chosen element next to the freed tets must have
+  // no quad face that cannot conform.
+  bool neighbourhood_conforms(index_t ci, const std::vector<index_t>& freed) const {
+    if (params_.conformity == Conformity::Allow) return true;
+    std::vector<index_t> check{ci};
+    for (index_t f : freed) {
+      if (!is_free(f)) check.push_back(owner_[f]);
+      for (int k = 0; k < 4; ++k) {
+        const index_t n = topo_.neighbor(f, k);
+        if (n != NO_CELL && !is_free(n)) check.push_back(owner_[n]);
+      }
+    }
+    std::sort(check.begin(), check.end());
+    check.erase(std::unique(check.begin(), check.end()), check.end());
+    for (index_t e : check) {
+      if (violations(e) > 0) return false;
+    }
+    return true;
+  }
+
+  // Tets in breadth-first order from the boundary tets (then any tet not reached, in order).
+  std::vector<index_t> breadth_first_order() const {
+    const index_t nt = mesh_.nb_tets();
+    std::vector<index_t> order;
+    order.reserve(nt);
+    std::vector<char> seen(nt, 0);
+    for (index_t t = 0; t < nt; ++t) {
+      if (is_boundary_[t]) {
+        seen[t] = 1;
+        order.push_back(t);
+      }
+    }
+    for (std::size_t head = 0; head < order.size() || order.size() < nt; ++head) {
+      if (head == order.size()) {  // a part with no boundary tet: start anywhere
+        index_t s = 0;
+        while (seen[s]) ++s;
+        seen[s] = 1;
+        order.push_back(s);
+      }
+      const index_t t = order[head];
+      for (int f = 0; f < 4; ++f) {
+        const index_t n = topo_.neighbor(t, f);
+        if (n != NO_CELL && !seen[n]) {
+          seen[n] = 1;
+          order.push_back(n);
+        }
+      }
+    }
+    return order;
+  }
+
+  void interior_stage(const Stage& stage, const std::vector<index_t>& order) {
+    for (index_t t : order) {
+      if (!is_free(t)) continue;
+      const index_t ci = best_at(t, stage);
+      if (ci != NO_INDEX) choose(ci);
+    }
+  }
+
+  // Step 4: quad faces facing free tets get the element that closes them; in conforming mode
+  // an element whose quad still cannot conform is released (its tets stay tets), and its
+  // neighbours are looked at again.
+  void close_quads() {
+    std::deque<index_t> work;
+    for (index_t ci = 0; ci < cands_.size(); ++ci) {
+      if (chosen_[ci]) work.push_back(ci);
+    }
+    while (!work.empty()) {
+      const index_t ci = work.front();
+      work.pop_front();
+      if (!chosen_[ci]) continue;
+      close_pending(ci);
+      if (params_.conformity != Conformity::Conforming || violations(ci, false) == 0) continue;
+      std::vector<index_t> neighbours;
+      const Candidate& c = cands_[ci];
+      for (int i = 0; i < c.nb_tets; ++i) {
+        for (int f = 0; f < 4; ++f) {
+          const index_t n = topo_.neighbor(c.tets[i], f);
+          if (n != NO_CELL && !is_free(n) && owner_[n] != ci) neighbours.push_back(owner_[n]);
+        }
+      }
+      release(ci);
+      ++result_.released_elements;
+      for (index_t e : neighbours) work.push_back(e);
+    }
+  }
+
+  void close_pending(index_t ci) {
+    const Candidate& c = cands_[ci];
+    const Sides s = sides(c);
+    const CellDescriptor& d = descriptor(c.type);
+    for (int f = 0; f < d.nb_faces; ++f) {
+      if (d.face_size[f] != 4) continue;
+      index_t n[2] = {NO_CELL, NO_CELL};
+      int nh = 0;
+      for (int i = 0; i < s.count; ++i) {
+        if (s.side[i].cell_face == f && nh < 2) n[nh++] = s.side[i].neighbor;
+      }
+      if (n[0] == NO_CELL || n[1] == NO_CELL || !is_free(n[0]) || !is_free(n[1])) continue;
+      const index_t x = closer(n[0], n[1], nullptr, nullptr);
+      if (x == NO_INDEX) continue;
+      choose(x);
+      if (cands_[x].type == CellType::Pyramid) ++result_.closing_pyramids;
+    }
+  }
+
+  const TetMesh& mesh_;
+  const TetTopology& topo_;
+  const std::vector<Candidate>& cands_;
+  const RecombineParameters& params_;
+  std::vector<index_t> owner_;   // per tet: the chosen candidate that holds it, or NO_INDEX
+  std::vector<char> chosen_;     // per candidate
+  std::vector<index_t> offsets_, ids_;  // tet -> candidates
+  std::vector<char> is_boundary_;
+  bool journaling_ = false;
+  std::vector<std::pair<index_t, index_t>> journal_;  // (tet, previous owner)
+  std::vector<std::pair<index_t, char>> chosen_journal_;  // (candidate, previous flag)
+  Selection result_;
+};
+
+}  // namespace
+
+Selection select_candidates(const TetMesh& mesh, const TetTopology& topology,
+                            const std::vector<Candidate>& candidates,
+                            const RecombineParameters& parameters,
+                            const ProgressCallback& progress) {
+  Selector selector(mesh, topology, candidates, parameters);
+  return selector.run(progress);
+}
+
+}  // namespace hexmerge

@@ -1,0 +1,50 @@
+#pragma once
+/// @file
+/// Choosing which candidates become elements: the global strategy of Meshkat & Talmor,
+/// section 4, with conformity of quad faces as a constraint of the choice.
+
+#include <cstddef>
+#include <vector>
+
+#include "hexmerge/core/index.h"
+#include "hexmerge/core/progress.h"
+#include "hexmerge/mesh/tet_mesh.h"
+#include "hexmerge/mesh/tet_topology.h"
+#include "hexmerge/recombine/find_candidates.h"
+#include "hexmerge/recombine/parameters.h"
+
+namespace hexmerge {
+
+/// The chosen elements, as indices into the candidate array, and how the choice went.
+struct Selection {
+  std::vector<index_t> elements;          ///< chosen candidates; their tet sets are disjoint
+  std::size_t nonconforming_quads = 0;    ///< quad faces left meeting two triangles
+  std::size_t closing_pyramids = 0;       ///< pyramids chosen to close a quad face
+  std::size_t released_elements = 0;      ///< elements given up to restore conformity
+  std::size_t local_moves = 0;            ///< accepted local optimisation moves
+};
+
+/// Chooses disjoint candidates.
+///
+/// 1. Exhaustive-greedy over boundary tets (tets with a face on the domain boundary or, when
+///    regions are respected, on a region boundary): hexes, then prisms, then pyramids; each time
+///    the boundary tet with the fewest remaining candidates first, and at that tet the candidate
+///    with the fewest non-conformities, then the best scaled Jacobian.
+/// 2. Local optimisation (section 4.2) at every boundary tet left unmatched: take one of its
+///    candidates in place of the elements in the way, refill the freed tets greedily, keep the
+///    change only when it removes more elements.
+/// 3. Greedy over the interior, in breadth-first order from the boundary: hexes, prisms,
+///    pyramids.
+/// 4. Quad faces of chosen elements that face free tets are closed by the candidate that covers
+///    them (a pyramid, usually); in conforming mode an element whose quad cannot be closed is
+///    released back to tets.
+///
+/// A quad face conforms when it lies on the domain boundary or on the identical quad face of
+/// another element. The Conformity parameter decides whether a candidate that would break that
+/// may be chosen (parameters.h).
+Selection select_candidates(const TetMesh& mesh, const TetTopology& topology,
+                            const std::vector<Candidate>& candidates,
+                            const RecombineParameters& parameters,
+                            const ProgressCallback& progress = {});
+
+}  // namespace hexmerge
