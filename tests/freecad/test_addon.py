@@ -1,0 +1,250 @@
+# SPDX-License-Identifier: LGPL-2.1-or-later
+"""The add-on with the engine, headless (freecadcmd -t test_addon): FreeCAD's examples meshed by
+Gmsh, recombined, solved with CalculiX; save and reopen; Netgen input; bad cases."""
+
+import os
+import subprocess
+import tempfile
+import unittest
+
+import numpy as np
+
+import FreeCAD
+import Fem
+import ObjectsFem
+
+import helpers
+import freecad.hexmerge as hm
+from freecad.hexmerge import femmesh_arrays as fa
+from freecad.hexmerge import mesh_hexdominant
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+
+
+def close_all():
+    for name in list(FreeCAD.listDocuments()):
+        FreeCAD.closeDocument(name)
+
+
+def box_doc(order="1st", size=10.0):
+    doc = FreeCAD.newDocument("HexMergeBox")
+    box = doc.addObject("Part::Box", "Box")
+    box.Length, box.Width, box.Height = 60, 40, 30
+    doc.recompute()
+    mesh = ObjectsFem.makeMeshGmsh(doc, "BoxMesh")
+    mesh.Part = box
+    doc.recompute()
+    helpers.gmsh_mesh(mesh, size, order)
+    return doc, mesh
+
+
+def inp_count(femmesh):
+    path = os.path.join(tempfile.mkdtemp(), "m.inp")
+    femmesh.writeABAQUS(path, 1, False)
+    return sum(helpers.inp_element_count(path).values())
+
+
+class Box(unittest.TestCase):
+
+    def tearDown(self):
+        close_all()
+
+    def check(self, order, cell):
+        doc, mesh = box_doc(order)
+        before = mesh.FemMesh.VolumeCount
+        nodes_before = mesh.FemMesh.NodeCount
+        obj = hm.make_hexdominant_mesh(doc, mesh)
+        report = mesh_hexdominant.report_dict(obj)
+        self.assertEqual(report["input_tets"], before)
+        m = obj.FemMesh
+        self.assertEqual(m.VolumeCount, report["output_cells"])
+        self.assertLess(m.VolumeCount, before)
+        self.assertGreater(m.PrismCount + m.HexaCount, 0)
+        self.assertEqual(inp_count(m), m.VolumeCount)  # no element left out of the .inp
+        self.assertEqual(mesh.FemMesh.VolumeCount, before)  # source untouched
+        self.assertEqual(mesh.FemMesh.NodeCount, nodes_before)
+        blocks = fa.femmesh_to_arrays(m).blocks
+        self.assertTrue(all(name.endswith(cell) or name in cell for name, _ in blocks), blocks)
+        return report
+
+    def test_tet4(self):
+        self.check("1st", ("tetra", "pyramid", "wedge", "hexahedron"))
+
+    def test_tet10_gives_quadratic_output(self):
+        self.check("2nd", ("tetra10", "wedge15", "hexahedron20"))
+
+    def test_recombine_femmesh_macro(self):
+        doc, mesh = box_doc()
+        femmesh, report = hm.recombine_femmesh(mesh.FemMesh, min_scaled_jacobian=0.5)
+        self.assertEqual(femmesh.VolumeCount, report["output_cells"])
+        self.assertEqual(report["freecad"]["pyramids_as_collapsed_hexahedra"], True)
+        self.assertEqual(femmesh.PyramidCount, 0)
+
+
+class Cantilever(unittest.TestCase):
+    """FreeCAD's ccx_cantilever_faceload, Gmsh Tet4 (h = 200 mm), solved with CalculiX."""
+
+    def tearDown(self):
+        close_all()
+
+    def test_recombined_tip_is_closer_to_beam_theory(self):
+        doc = helpers.cantilever("1st", 200.0)
+        src = doc.getObject(helpers.mesh_name(doc))
+        inp, res = helpers.solve(doc)
+        tet_tip = helpers.tip_displacement(res)
+        self.assertEqual(sum(helpers.inp_element_count(inp).values()), src.FemMesh.VolumeCount)
+        for o in list(doc.Analysis.Group):
+            if o.isDerivedFrom("Fem::FemResultObject"):
+                doc.removeObject(o.Name)
+        obj = hm.make_hexdominant_mesh(doc, src)
+        self.assertIn(obj, doc.Analysis.Group)
+        self.assertNotIn(src, doc.Analysis.Group)
+        inp, res = helpers.solve(doc)
+        counts = helpers.inp_element_count(inp)
+        self.assertEqual(sum(counts.values()), obj.FemMesh.VolumeCount)
+        hex_tip = helpers.tip_displacement(res)
+        FreeCAD.Console.PrintMessage(
+            "HexMerge cantilever: Tet4 {:.2f} mm, recombined {:.2f} mm, beam theory {} mm; "
+            ".inp {} ({})\n".format(tet_tip, hex_tip, helpers.BEAM_THEORY_TIP_MM, counts,
+                                    obj.Summary))
+        self.assertLess(abs(hex_tip - helpers.BEAM_THEORY_TIP_MM),
+                        abs(tet_tip - helpers.BEAM_THEORY_TIP_MM))
+
+
+class MultiMaterial(unittest.TestCase):
+    """material_multiple_bendingbeam_fiveboxes: five solids, three materials."""
+
+    def tearDown(self):
+        close_all()
+
+    def test_no_element_spans_two_materials_and_solve_runs(self):
+        from femexamples.material_multiple_bendingbeam_fiveboxes import setup
+        doc = setup()
+        src = doc.getObject(helpers.mesh_name(doc))
+        helpers.gmsh_mesh(src, 4.0, "1st")
+        obj = hm.make_hexdominant_mesh(doc, src)
+        report = mesh_hexdominant.report_dict(obj)
+        self.assertEqual(report["freecad"]["region_count"], 5)
+        m = obj.FemMesh
+        groups = {m.getGroupName(g): m.getGroupElements(g) for g in m.Groups}
+        self.assertEqual(sorted(groups), ["FemMaterial1_Solids", "FemMaterial2_Solids",
+                                          "FemMaterial3_Solids"])
+        self.assertEqual(sum(len(v) for v in groups.values()), m.VolumeCount)
+        # each box is 20 mm long in x: every element lies within one box
+        for eid in m.Volumes:
+            xs = [m.getNodeById(n).x for n in m.getElementNodes(eid)]
+            self.assertEqual(int(min(xs) // 20 + 1e-9), int((max(xs) - 1e-9) // 20), eid)
+        # the material of each box, by group
+        expected = {0: "FemMaterial3", 1: "FemMaterial2", 2: "FemMaterial1", 3: "FemMaterial2",
+                    4: "FemMaterial3"}
+        for name, elements in groups.items():
+            for eid in elements[:50]:
+                xs = [m.getNodeById(n).x for n in m.getElementNodes(eid)]
+                self.assertEqual(expected[int(np.mean(xs) // 20)] + "_Solids", name)
+        inp, res = helpers.solve(doc)
+        self.assertEqual(sum(helpers.inp_element_count(inp).values()), m.VolumeCount)
+        self.assertGreater(helpers.tip_displacement(res), 0)
+
+
+class SaveReopen(unittest.TestCase):
+
+    def tearDown(self):
+        close_all()
+
+    def test_save_reopen_recompute(self):
+        doc, mesh = box_doc()
+        obj = hm.make_hexdominant_mesh(doc, mesh, min_dihedral_angle=150, min_scaled_jacobian=0.4,
+                                       make_pyramids=False)
+        count = obj.FemMesh.VolumeCount
+        path = os.path.join(tempfile.mkdtemp(), "hexmerge.FCStd")
+        doc.saveAs(path)
+        FreeCAD.closeDocument(doc.Name)
+        doc = FreeCAD.openDocument(path)
+        obj = doc.getObject(obj.Name)
+        self.assertEqual(obj.Proxy.Type, mesh_hexdominant.TYPE)
+        self.assertEqual(obj.FemMesh.VolumeCount, count)
+        self.assertAlmostEqual(obj.MinDihedralAngle.getValueAs("deg"), 150)
+        self.assertAlmostEqual(obj.MinScaledJacobian, 0.4)
+        self.assertFalse(obj.MakePyramids)
+        self.assertTrue(mesh_hexdominant.report_dict(obj))
+        self.assertEqual(obj.SourceMesh.Name, mesh.Name)
+        # a new source mesh marks the object for recompute, and recompute uses it
+        helpers.gmsh_mesh(doc.getObject(mesh.Name), 6.0, "1st")
+        doc.recompute()
+        self.assertNotEqual(obj.FemMesh.VolumeCount, count)
+        self.assertEqual(mesh_hexdominant.report_dict(obj)["input_tets"],
+                         doc.getObject(mesh.Name).FemMesh.VolumeCount)
+
+
+class Netgen(unittest.TestCase):
+
+    def tearDown(self):
+        close_all()
+
+    def test_netgen_mesh_imported_and_recombined(self):
+        import meshio
+        vol = os.path.join(tempfile.mkdtemp(), "cyl.vol")
+        subprocess.run(["/usr/bin/python3.11", os.path.join(HERE, "make_netgen_mesh.py"), vol],
+                       check=True, capture_output=True)
+        mio = meshio.read(vol)
+        tets = np.concatenate([c.data for c in mio.cells if c.type == "tetra"])
+        femmesh, _ = fa.arrays_to_femmesh(mio.points, np.arange(1, len(mio.points) + 1),
+                                          [("tetra", tets)], with_faces=False)
+        doc = FreeCAD.newDocument("HexMergeNetgen")
+        src = doc.addObject("Fem::FemMeshObject", "NetgenMesh")
+        src.FemMesh = femmesh
+        obj = hm.make_hexdominant_mesh(doc, src)
+        report = mesh_hexdominant.report_dict(obj)
+        self.assertEqual(report["input_tets"], len(tets))
+        self.assertEqual(inp_count(obj.FemMesh), obj.FemMesh.VolumeCount)
+        self.assertLess(obj.FemMesh.VolumeCount, len(tets))
+
+
+class BadCases(unittest.TestCase):
+
+    def tearDown(self):
+        close_all()
+
+    def test_not_tetrahedral(self):
+        doc, mesh = box_doc()
+        hexmesh = hm.make_hexdominant_mesh(doc, mesh)
+        n = len(doc.Objects)
+        with self.assertRaisesRegex(ValueError, "not tetrahedral"):
+            hm.make_hexdominant_mesh(doc, hexmesh)
+        self.assertEqual(len(doc.Objects), n)
+
+    def test_empty_mesh(self):
+        doc = FreeCAD.newDocument("HexMergeEmpty")
+        src = doc.addObject("Fem::FemMeshObject", "Empty")
+        with self.assertRaisesRegex(ValueError, "no volume elements"):
+            hm.make_hexdominant_mesh(doc, src)
+        self.assertEqual(len(doc.Objects), 1)
+
+    def test_not_a_mesh(self):
+        doc = FreeCAD.newDocument("HexMergeNotMesh")
+        box = doc.addObject("Part::Box", "Box")
+        with self.assertRaisesRegex(ValueError, "not a FEM mesh"):
+            hm.make_hexdominant_mesh(doc, box)
+        with self.assertRaisesRegex(ValueError, "no mesh selected"):
+            hm.make_hexdominant_mesh(doc, None)
+
+    def test_unknown_option(self):
+        doc, mesh = box_doc()
+        with self.assertRaisesRegex(ValueError, "unknown HexMerge option"):
+            hm.make_hexdominant_mesh(doc, mesh, no_such_option=1)
+        self.assertEqual([o.Name for o in doc.Objects if o.Name.startswith("HexDom")], [])
+
+    def test_source_deleted(self):
+        doc, mesh = box_doc()
+        obj = hm.make_hexdominant_mesh(doc, mesh)
+        count = obj.FemMesh.VolumeCount
+        doc.removeObject(mesh.Name)
+        obj.touch()
+        doc.recompute()
+        self.assertIn("Invalid", obj.State)
+        self.assertIn("no source mesh", obj.getStatusString())
+        self.assertEqual(obj.FemMesh.VolumeCount, count)  # last result kept
+
+
+if __name__ == "__main__":
+    unittest.main()
