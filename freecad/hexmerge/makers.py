@@ -46,6 +46,7 @@ def make_hexdominant_mesh(doc, source, name="HexDominantMesh", recompute=True, *
     if FreeCAD.GuiUp:
         from .view_mesh_hexdominant import VPMeshHexDominant
         VPMeshHexDominant(obj.ViewObject)
+        source.ViewObject.Visibility = False  # the new mesh is drawn where the source was
     obj.SourceMesh = source
     try:
         set_options(obj, options)

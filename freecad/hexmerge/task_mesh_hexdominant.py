@@ -25,6 +25,7 @@ class TaskPanelHexDominant(base_taskpanel.TransactionTaskPanel):
 
     def __init__(self, obj):
         super().__init__(obj)
+        TaskPanelHexDominant.current = self  # for macros and the GUI test
         self.form = FreeCADGui.PySideUic.loadUi(UI_FILE)
         self.form.setWindowTitle("Hex-dominant mesh")
         self.run = None

@@ -1,0 +1,109 @@
+# SPDX-License-Identifier: LGPL-2.1-or-later
+"""GUI test in a real FreeCAD window (run by run.sh under Xvfb): select a mesh, run the command,
+set values in the panel, Apply, OK; check the object and its report; take a screenshot."""
+
+import os
+import subprocess
+import sys
+import time
+import traceback
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.dirname(os.path.dirname(HERE))
+sys.path[:0] = [ROOT, HERE]
+SHOT = os.environ.get("HEXMERGE_SCREENSHOT", "/tmp/hexmerge_gui.png")
+
+
+def wait(pred, seconds=60):
+    from PySide import QtGui
+    end = time.time() + seconds
+    while time.time() < end:
+        QtGui.QApplication.processEvents()
+        if pred():
+            return True
+        time.sleep(0.05)
+    return False
+
+
+def main():
+    import FreeCAD
+    import FreeCADGui
+    from PySide import QtGui
+    import ObjectsFem
+    import helpers
+    from freecad.hexmerge import commands, mesh_hexdominant
+    from freecad.hexmerge.task_mesh_hexdominant import TaskPanelHexDominant
+
+    FreeCADGui.activateWorkbench("FemWorkbench")
+    doc = FreeCAD.newDocument("HexMergeGui")
+    box = doc.addObject("Part::Box", "Box")
+    box.Length, box.Width, box.Height = 60, 40, 30
+    doc.recompute()
+    mesh = ObjectsFem.makeMeshGmsh(doc, "BoxMesh")
+    mesh.Part = box
+    doc.recompute()
+    helpers.gmsh_mesh(mesh, 8.0, "1st")
+    box.ViewObject.Visibility = False
+    cmd = FreeCADGui.Command.get("HexMerge_MeshHexDominant")
+    assert cmd is not None, "command not registered"
+
+    # bad case: nothing selected -> inactive, and Activated changes nothing
+    FreeCADGui.Selection.clearSelection()
+    assert commands.selected_tet_mesh()[0] is None
+    assert not commands.HexDominantFromTetrahedra().IsActive(), "active without selection"
+    n = len(doc.Objects)
+    commands.HexDominantFromTetrahedra().Activated()
+    assert len(doc.Objects) == n
+
+    FreeCADGui.Selection.addSelection(mesh)
+    assert commands.HexDominantFromTetrahedra().IsActive(), "inactive with a tet mesh selected"
+    FreeCADGui.runCommand("HexMerge_MeshHexDominant")
+    assert wait(lambda: getattr(TaskPanelHexDominant, "current", None) is not None, 10)
+    panel = TaskPanelHexDominant.current
+    obj = panel.obj
+    panel.widgets["MinScaledJacobian"][1].setValue(0.35)
+    panel.widgets["MakePyramids"][1].setChecked(True)
+    panel.form.ckb_pyramids_as_hexahedra.setChecked(True)
+    panel.apply()
+    assert wait(lambda: panel.run is not None and not panel.run.running()
+                and panel.form.pb_apply.isEnabled(), 60), "apply did not finish"
+    assert obj.Report, "no report after Apply: " + panel.form.l_status.text()
+    assert panel.form.tw_results.rowCount() > 5
+    FreeCADGui.ActiveDocument.activeView().viewIsometric()
+    FreeCADGui.SendMsgToActiveView("ViewFit")
+    wait(lambda: False, 1.5)
+    subprocess.run(["import", "-window", "root", SHOT], check=True)
+    panel.accept()
+    wait(lambda: False, 0.5)
+
+    assert doc.getObject(obj.Name) is not None, "OK did not keep the object"
+    assert abs(obj.MinScaledJacobian - 0.35) < 1e-9
+    report = mesh_hexdominant.report_dict(obj)
+    assert report["output_cells"] == obj.FemMesh.VolumeCount > 0
+    assert report["input_tets"] == mesh.FemMesh.VolumeCount
+    assert obj.ViewObject.ColorByType  # ElementColor is write-only in FreeCAD 0.20
+
+    # Cancel undoes: a second object, cancelled
+    FreeCADGui.Selection.clearSelection()
+    FreeCADGui.Selection.addSelection(mesh)
+    names = {o.Name for o in doc.Objects}
+    FreeCADGui.runCommand("HexMerge_MeshHexDominant")
+    assert wait(lambda: TaskPanelHexDominant.current is not panel, 10)
+    TaskPanelHexDominant.current.reject()
+    wait(lambda: False, 0.5)
+    assert {o.Name for o in doc.Objects} == names, "Cancel left objects behind"
+
+    std = subprocess.run(["convert", SHOT, "-format", "%[fx:standard_deviation]", "info:"],
+                         capture_output=True, text=True, check=True).stdout
+    assert float(std) > 0.02, "screenshot looks blank (std {})".format(std)
+    print("GUI TEST PASSED: {} -> {}; screenshot {}".format(mesh.FemMesh.VolumeCount,
+                                                           obj.Summary, SHOT))
+
+
+try:
+    main()
+except Exception:
+    traceback.print_exc()
+    print("GUI TEST FAILED")
+sys.stdout.flush()
+os._exit(0)
