@@ -66,14 +66,19 @@ def inp_element_count(path):
     """Number of element lines in a CalculiX .inp file, by element type."""
     counts = {}
     kind = None
+    continued = False  # a line ending in "," goes on on the next line (C3D20: 2 lines)
     with open(path) as f:
         for line in f:
             if line.startswith("*"):
                 m = re.match(r"\*ELEMENT\s*,\s*TYPE\s*=\s*(\w+)", line, re.I)
                 kind = m.group(1).upper() if m else None
+                continued = False
                 continue
-            if kind and line.strip() and not line.startswith("**") and re.match(r"\s*\d+,", line):
-                counts[kind] = counts.get(kind, 0) + 1
+            text = line.strip()
+            if kind and text and re.match(r"\d+,", text):
+                if not continued:
+                    counts[kind] = counts.get(kind, 0) + 1
+                continued = text.endswith(",")
     return counts
 
 

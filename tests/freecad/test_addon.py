@@ -156,11 +156,12 @@ class SaveReopen(unittest.TestCase):
         obj = hm.make_hexdominant_mesh(doc, mesh, min_dihedral_angle=150, min_scaled_jacobian=0.4,
                                        make_pyramids=False)
         count = obj.FemMesh.VolumeCount
+        name = obj.Name
         path = os.path.join(tempfile.mkdtemp(), "hexmerge.FCStd")
         doc.saveAs(path)
         FreeCAD.closeDocument(doc.Name)
         doc = FreeCAD.openDocument(path)
-        obj = doc.getObject(obj.Name)
+        obj = doc.getObject(name)
         self.assertEqual(obj.Proxy.Type, mesh_hexdominant.TYPE)
         self.assertEqual(obj.FemMesh.VolumeCount, count)
         self.assertAlmostEqual(obj.MinDihedralAngle.getValueAs("deg"), 150)
