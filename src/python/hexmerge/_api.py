@@ -142,13 +142,15 @@ class MixedMesh:
 
     def to_meshio(self, region_key: str = "region") -> Any:
         """A meshio.Mesh with one block per type (and region), regions as cell data."""
-        import meshio
+        from ._meshio import meshio as _meshio
+
+        meshio = _meshio()
 
         blocks = self.cell_blocks(by_region=self.regions is not None)
         cell_data = {}
         if self.regions is not None:
             cell_data[region_key] = [self.regions[b.cells] for b in blocks]
-        return meshio.Mesh(self.points, [(b.type, b.data) for b in blocks], cell_data=cell_data)
+        return meshio.Mesh(self.points, [(b.type, b.data.astype(np.int64)) for b in blocks], cell_data=cell_data)
 
 
 def _tet_input(points: Any, cells: Any, regions: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:

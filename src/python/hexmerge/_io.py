@@ -16,6 +16,7 @@ import numpy as np
 
 from . import _cells
 from ._api import MixedMesh
+from ._meshio import PREFERRED_FORMAT, meshio as _meshio
 
 #: cell_data keys that carry a region (material, solid) id, by priority.
 REGION_KEYS = (
@@ -47,12 +48,14 @@ class TetFile:
 
 
 def read(path: str | os.PathLike[str], file_format: str | None = None) -> Any:
-    import meshio
+    meshio = _meshio()
 
     if not Path(path).is_file():
         raise MeshFileError(f"{path}: no such file")
     try:
         return meshio.read(path, file_format=file_format)
+    except SystemExit:  # meshio 5.0 prints its error and calls sys.exit(1) when no reader fits
+        raise MeshFileError(f"{path}: cannot read the mesh (see meshio's message above)") from None
     except Exception as e:  # meshio raises ReadError, KeyError, ValueError... for bad files
         raise MeshFileError(f"{path}: cannot read the mesh: {type(e).__name__}: {e}") from None
 
@@ -175,6 +178,10 @@ def format_of(path: str | os.PathLike[str], file_format: str | None) -> str:
     """The meshio format name for writing `path`."""
     if file_format:
         return file_format
+    suffix = Path(path).suffix.lower()
+    if suffix in PREFERRED_FORMAT:
+        return PREFERRED_FORMAT[suffix]
+    _meshio()
     from meshio._helpers import _filetypes_from_path  # meshio's own extension table
 
     try:
@@ -197,6 +204,25 @@ def _collapsed_pyramids(blocks: list[tuple[str, np.ndarray]]) -> list[tuple[str,
     return out
 
 
+def _node_entities(nb_points: int, blocks: list[np.ndarray]) -> np.ndarray:
+    """(dim 3, entity tag) per node for Gmsh 4.1: a node belongs to the first block (entity
+    b + 1) that uses it, and every block keeps at least one node of its own."""
+    owner = np.full(nb_points, -1, dtype=np.int64)
+    for b, data in enumerate(blocks):
+        nodes = np.unique(data)
+        owner[nodes[owner[nodes] < 0]] = b
+    for b, data in enumerate(blocks):
+        if (owner == b).any():
+            continue
+        counts = np.bincount(owner[owner >= 0], minlength=len(blocks))
+        for v in np.unique(data):
+            if counts[owner[v]] > 1:
+                owner[v] = b
+                break
+    owner[owner < 0] = 0
+    return np.column_stack([np.full(nb_points, 3, dtype=np.int64), owner + 1])
+
+
 def to_meshio(
     mesh: MixedMesh,
     fmt: str,
@@ -206,10 +232,10 @@ def to_meshio(
     collapse_pyramids: bool = False,
 ) -> Any:
     """A meshio.Mesh of the mixed mesh, with its regions stored the way `fmt` keeps them."""
-    import meshio
+    meshio = _meshio()
 
     blocks = mesh.cell_blocks(by_region=mesh.regions is not None)
-    cells = [(b.type, b.data) for b in blocks]
+    cells = [(b.type, b.data.astype(np.int64)) for b in blocks]
     if fmt == "abaqus" and not collapse_pyramids and any(b.type.startswith("pyramid") for b in blocks):
         raise MeshFileError(
             "the Abaqus/CalculiX format (.inp) has no pyramid element: add --collapse-pyramids "
@@ -223,11 +249,15 @@ def to_meshio(
     regions = [mesh.regions[b.cells] if mesh.regions is not None else np.zeros(len(b.cells), np.int64) for b in blocks]
     cell_data: dict[str, list[np.ndarray]] = {}
     cell_sets: dict[str, list[np.ndarray]] = {}
+    point_data: dict[str, np.ndarray] = {}
     if fmt.startswith("gmsh"):
-        # Gmsh needs both tags; the entity (geometrical) tag is one per block, blocks are
-        # split by region.
-        cell_data["gmsh:physical"] = [r.astype(np.int64) for r in regions]
-        cell_data["gmsh:geometrical"] = [(r if mesh.regions is not None else r + 1).astype(np.int64) for r in regions]
+        # The physical tag is the region; the entity (geometrical) tag must be one per block
+        # and unique (meshio's Gmsh 4.1 writer), and Gmsh 4.1 also wants every node in an entity.
+        cell_data["gmsh:physical"] = [
+            (r if mesh.regions is not None else np.ones_like(r)).astype(np.int64) for r in regions
+        ]
+        cell_data["gmsh:geometrical"] = [np.full(len(r), b + 1, dtype=np.int64) for b, r in enumerate(regions)]
+        point_data["gmsh:dim_tags"] = _node_entities(len(mesh.points), [c[1] for c in cells])
     elif mesh.regions is not None:
         if fmt == "abaqus":
             names = region_names or {}
@@ -240,13 +270,15 @@ def to_meshio(
         else:
             key = region_key if region_key and not region_key.startswith(("gmsh:", "medit:")) and region_key != "cell_sets" else "region"
             cell_data[key] = regions
-    return meshio.Mesh(mesh.points, cells, cell_data=cell_data, cell_sets=cell_sets or None)
+    return meshio.Mesh(
+        mesh.points, cells, point_data=point_data, cell_data=cell_data, cell_sets=cell_sets or None
+    )
 
 
 def write_atomic(path: str | os.PathLike[str], mesh: Any, fmt: str, **kwargs: Any) -> None:
     """Writes through a temporary file in the same folder, renamed over `path` only on success:
     a failed write never leaves a partial or stale output."""
-    import meshio
+    meshio = _meshio()
 
     path = Path(path)
     folder = path.parent if str(path.parent) else Path(".")
@@ -256,6 +288,9 @@ def write_atomic(path: str | os.PathLike[str], mesh: Any, fmt: str, **kwargs: An
     os.close(fd)
     try:
         meshio.write(tmp, mesh, file_format=fmt, **kwargs)
+        umask = os.umask(0)
+        os.umask(umask)
+        os.chmod(tmp, 0o666 & ~umask)  # mkstemp makes it private; give it a normal file's mode
         os.replace(tmp, path)
     except BaseException as e:
         Path(tmp).unlink(missing_ok=True)

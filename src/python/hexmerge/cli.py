@@ -280,6 +280,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("hexmerge: interrupted; nothing written", file=sys.stderr)
         return EXIT_INTERRUPTED
+    except BrokenPipeError:  # stdout closed early (`hexmerge check --json | head`)
+        sys.stderr.close()
+        return EXIT_OK
     except _core.Cancelled:
         print("hexmerge: cancelled; nothing written", file=sys.stderr)
         return EXIT_ERROR
