@@ -24,5 +24,8 @@ if ! ls "$here"/hexmerge/_core*.so >/dev/null 2>&1; then
   echo "install.sh: note: hexmerge._core is not built yet; build the project before use" >&2
   exit 0
 fi
-# Smoke test from a neutral folder, so the import comes through the .pth file.
-(cd / && "$python" -c "import hexmerge" && "$bindir/hexmerge" --version)
+# Smoke test from a neutral folder, so the import comes through the .pth file (only for the
+# default folders: another site folder is not on the interpreter's path by itself).
+if [ -z "${HEXMERGE_SITE_DIR:-}" ]; then
+  (cd / && "$python" -c "import hexmerge" && "$bindir/hexmerge" --version)
+fi

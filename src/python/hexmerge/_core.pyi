@@ -1,0 +1,42 @@
+"""Types of the compiled module hexmerge._core (src/python/bindings.cpp)."""
+
+from typing import Any, Callable, Mapping
+
+import numpy as np
+import numpy.typing as npt
+
+class InputError(ValueError):
+    """Bad input: names the node or element at fault."""
+
+    entity: str | None  # "node", "element", "parameter" or None
+    index: int | None  # 0-based id of the node or element, or None
+
+class Cancelled(Exception):
+    """The run was cancelled from the progress callback."""
+
+def recombine(
+    points: npt.NDArray[np.float64],
+    cells: npt.NDArray[np.uint32],
+    regions: npt.NDArray[np.int32] | None = None,
+    options: Mapping[str, str] = ...,
+    progress: Callable[[str, float], bool | None] | None = None,
+) -> tuple[dict[str, Any], dict[str, Any]]: ...
+def check_mesh(
+    points: npt.NDArray[np.float64],
+    types: npt.NDArray[np.uint8],
+    offsets: npt.NDArray[np.uint32],
+    cell_vertices: npt.NDArray[np.uint32],
+    regions: npt.NDArray[np.int32] | None,
+    source_offsets: npt.NDArray[np.uint32] | None,
+    source_tets: npt.NDArray[np.uint32] | None,
+    input_points: npt.NDArray[np.float64],
+    input_tets: npt.NDArray[np.uint32],
+    input_regions: npt.NDArray[np.int32] | None,
+) -> dict[str, Any]: ...
+def validate_tet_mesh(
+    points: npt.NDArray[np.float64],
+    cells: npt.NDArray[np.uint32],
+    regions: npt.NDArray[np.int32] | None = None,
+) -> None: ...
+def parameter_table() -> list[dict[str, Any]]: ...
+def cell_types() -> list[dict[str, Any]]: ...
