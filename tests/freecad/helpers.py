@@ -62,24 +62,23 @@ def solve(doc, workdir=None):
     return fea.inp_file_name, results[-1]
 
 
+NODES_PER_CCX_ELEMENT = {"C3D4": 4, "C3D6": 6, "C3D8": 8, "C3D10": 10, "C3D15": 15, "C3D20": 20}
+
+
 def inp_element_count(path):
-    """Number of element lines in a CalculiX .inp file, by element type."""
-    counts = {}
+    """Number of volume elements in a CalculiX .inp file, by element type. An element may take
+    several lines (C3D20), so the numbers are counted: id + nodes per element."""
+    numbers = {}
     kind = None
-    continued = False  # a line ending in "," goes on on the next line (C3D20: 2 lines)
     with open(path) as f:
         for line in f:
             if line.startswith("*"):
                 m = re.match(r"\*ELEMENT\s*,\s*TYPE\s*=\s*(\w+)", line, re.I)
                 kind = m.group(1).upper() if m else None
-                continued = False
                 continue
-            text = line.strip()
-            if kind and text and re.match(r"\d+,", text):
-                if not continued:
-                    counts[kind] = counts.get(kind, 0) + 1
-                continued = text.endswith(",")
-    return counts
+            if kind in NODES_PER_CCX_ELEMENT:
+                numbers[kind] = numbers.get(kind, 0) + len(re.findall(r"\d+", line))
+    return {k: n // (NODES_PER_CCX_ELEMENT[k] + 1) for k, n in numbers.items()}
 
 
 def tip_displacement(result):

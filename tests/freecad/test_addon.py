@@ -153,6 +153,7 @@ class SaveReopen(unittest.TestCase):
 
     def test_save_reopen_recompute(self):
         doc, mesh = box_doc()
+        mesh_name = mesh.Name
         obj = hm.make_hexdominant_mesh(doc, mesh, min_dihedral_angle=150, min_scaled_jacobian=0.4,
                                        make_pyramids=False)
         count = obj.FemMesh.VolumeCount
@@ -168,13 +169,13 @@ class SaveReopen(unittest.TestCase):
         self.assertAlmostEqual(obj.MinScaledJacobian, 0.4)
         self.assertFalse(obj.MakePyramids)
         self.assertTrue(mesh_hexdominant.report_dict(obj))
-        self.assertEqual(obj.SourceMesh.Name, mesh.Name)
+        self.assertEqual(obj.SourceMesh.Name, mesh_name)
         # a new source mesh marks the object for recompute, and recompute uses it
-        helpers.gmsh_mesh(doc.getObject(mesh.Name), 6.0, "1st")
+        helpers.gmsh_mesh(doc.getObject(mesh_name), 6.0, "1st")
         doc.recompute()
         self.assertNotEqual(obj.FemMesh.VolumeCount, count)
         self.assertEqual(mesh_hexdominant.report_dict(obj)["input_tets"],
-                         doc.getObject(mesh.Name).FemMesh.VolumeCount)
+                         doc.getObject(mesh_name).FemMesh.VolumeCount)
 
 
 class Netgen(unittest.TestCase):
