@@ -183,6 +183,12 @@ def worker(args):
     options = dict(args.options)
     result = {"mesh": os.path.basename(args.worker), "options": options,
               "hexmerge_file": getattr(hexmerge, "__file__", None)}
+    core = getattr(getattr(hexmerge, "_core", None), "__file__", None)
+    if core:  # which build ran: other developers rebuild the module in place
+        import hashlib
+        with open(core, "rb") as f:
+            result["core_sha1"] = hashlib.sha1(f.read()).hexdigest()[:12]
+        result["core_mtime"] = datetime.datetime.fromtimestamp(os.path.getmtime(core)).isoformat(timespec="seconds")
     t0 = time.perf_counter()
     m = meshio.read(args.worker)
     tets = [c.data for c in m.cells if c.type == "tetra"]
