@@ -6,6 +6,7 @@
 
 #include "hexmerge/core/error.h"
 #include "hexmerge/geometry/quality.h"
+#include "hexmerge/recombine/quad_pairs.h"
 #include "hexmerge/recombine/rf_graph.h"
 
 namespace hexmerge {
@@ -50,10 +51,10 @@ std::array<index_t, N> sorted(std::array<index_t, N> a) {
 
 // The vertex joined to v by an edge of one of the faces, not in `exclude`. NO_VERTEX when there
 // is none or more than one.
-index_t unique_other_neighbor(index_t v, const std::vector<std::array<index_t, 4>>& faces,
-                              const std::vector<int>& sizes, const index_t* exclude, int nex) {
+index_t unique_other_neighbor(index_t v, const std::array<index_t, 4>* faces, const int* sizes,
+                              int nb_faces, const index_t* exclude, int nex) {
   index_t found = NO_VERTEX;
-  for (std::size_t f = 0; f < faces.size(); ++f) {
+  for (int f = 0; f < nb_faces; ++f) {
     const int n = sizes[f];
     for (int i = 0; i < n; ++i) {
       if (faces[f][i] != v) continue;
@@ -70,69 +71,72 @@ index_t unique_other_neighbor(index_t v, const std::vector<std::array<index_t, 4
 }  // namespace
 
 bool assemble_cell(const TetMesh& mesh, const TetTopology& topology, CellType type,
-                   const index_t* tets, int nb, const std::vector<std::array<index_t, 2>>& quad_pairs,
-                   std::array<index_t, 8>& vertices) {
+                   const index_t* tets, int nb, const std::array<index_t, 2>* quad_pairs,
+                   int nb_quad_pairs, std::array<index_t, 8>& vertices) {
   const CellDescriptor& d = descriptor(type);
   auto in_group = [&](index_t t) { return std::find(tets, tets + nb, t) != tets + nb; };
-  // The group's boundary triangles, each marked when a quad uses it.
-  std::vector<index_t> boundary;  // 4 * tet + face
+  // The group's boundary triangles (4 * tet + face), each marked when a quad uses it.
+  std::array<index_t, 24> boundary;
+  std::array<bool, 24> used{};
+  int nb_boundary = 0;
   for (int i = 0; i < nb; ++i) {
     for (int f = 0; f < 4; ++f) {
       const index_t n = topology.neighbor(tets[i], f);
-      if (n == NO_CELL || !in_group(n)) boundary.push_back(4 * tets[i] + f);
+      if (n == NO_CELL || !in_group(n)) boundary[nb_boundary++] = 4 * tets[i] + f;
     }
   }
   const int nb_tris = d.nb_faces - d.nb_quad_faces;
-  if (static_cast<int>(boundary.size()) != 2 * d.nb_quad_faces + nb_tris) return false;
-  if (static_cast<int>(quad_pairs.size()) != d.nb_quad_faces) return false;
+  if (nb_boundary != 2 * d.nb_quad_faces + nb_tris) return false;
+  if (nb_quad_pairs != d.nb_quad_faces) return false;
 
-  std::vector<std::array<index_t, 4>> faces;  // outward, as cycles
-  std::vector<int> sizes;
-  std::vector<bool> used(boundary.size(), false);
+  // The cell's faces as outward cycles, with their sorted vertex keys.
+  std::array<std::array<index_t, 4>, 6> faces, keys;
+  std::array<int, 6> sizes;
+  int nb_faces = 0;
   auto use = [&](index_t code) {
-    const auto it = std::find(boundary.begin(), boundary.end(), code);
-    if (it == boundary.end() || used[it - boundary.begin()]) return false;
-    used[it - boundary.begin()] = true;
-    return true;
+    for (int i = 0; i < nb_boundary; ++i) {
+      if (boundary[i] == code && !used[i]) return used[i] = true;
+    }
+    return false;
   };
-  for (const auto& pair : quad_pairs) {
+  for (int q = 0; q < nb_quad_pairs; ++q) {
+    const auto& pair = quad_pairs[q];
     if (!use(pair[0]) || !use(pair[1])) return false;
-    std::array<index_t, 4> quad;
     if (!quad_from_triangles(tet_face(mesh, pair[0] / 4, pair[0] % 4),
-                             tet_face(mesh, pair[1] / 4, pair[1] % 4), quad)) {
+                             tet_face(mesh, pair[1] / 4, pair[1] % 4), faces[nb_faces])) {
       return false;
     }
-    faces.push_back(quad);
-    sizes.push_back(4);
+    sizes[nb_faces++] = 4;
   }
-  for (std::size_t i = 0; i < boundary.size(); ++i) {
+  for (int i = 0; i < nb_boundary; ++i) {
     if (used[i]) continue;
     const auto tri = tet_face(mesh, boundary[i] / 4, boundary[i] % 4);
-    faces.push_back({tri[0], tri[1], tri[2], NO_VERTEX});
-    sizes.push_back(3);
+    faces[nb_faces] = {tri[0], tri[1], tri[2], NO_VERTEX};
+    sizes[nb_faces++] = 3;
   }
+  for (int g = 0; g < nb_faces; ++g) keys[g] = sorted(faces[g]);
 
   // Base face, reversed so that its normal points into the cell (cell_type.h).
   vertices.fill(NO_VERTEX);
   const int base_size = d.face_size[0];
-  const auto base_it = std::find(sizes.begin(), sizes.end(), base_size);
-  if (base_it == sizes.end()) return false;
-  const auto& base = faces[base_it - sizes.begin()];
-  for (int i = 0; i < base_size; ++i) vertices[i] = base[(base_size - i) % base_size];
+  int base = 0;
+  while (base < nb_faces && sizes[base] != base_size) ++base;
+  if (base == nb_faces) return false;
+  for (int i = 0; i < base_size; ++i) vertices[i] = faces[base][(base_size - i) % base_size];
   if (type == CellType::Pyramid) {
     // The apex: the one vertex of the group not on the base.
-    for (const auto& f : faces) {
-      for (int i = 0; i < 3; ++i) {
-        if (std::find(vertices.begin(), vertices.begin() + 4, f[i]) == vertices.begin() + 4) {
-          vertices[4] = f[i];
+    for (int g = 0; g < nb_faces; ++g) {
+      for (int i = 0; i < sizes[g]; ++i) {
+        if (std::find(vertices.begin(), vertices.begin() + 4, faces[g][i]) == vertices.begin() + 4) {
+          vertices[4] = faces[g][i];
         }
       }
     }
   } else {
     // Prism and hex: the vertex above base vertex i is its only neighbour off the base.
     for (int i = 0; i < base_size; ++i) {
-      vertices[base_size + i] =
-          unique_other_neighbor(vertices[i], faces, sizes, vertices.data(), base_size);
+      vertices[base_size + i] = unique_other_neighbor(vertices[i], faces.data(), sizes.data(),
+                                                      nb_faces, vertices.data(), base_size);
       if (vertices[base_size + i] == NO_VERTEX) return false;
     }
   }
@@ -143,14 +147,14 @@ bool assemble_cell(const TetMesh& mesh, const TetTopology& topology, CellType ty
     }
   }
   // Verification: the cell's faces are exactly the group's boundary faces.
-  std::vector<bool> matched(faces.size(), false);
+  std::array<bool, 6> matched{};
   for (int f = 0; f < d.nb_faces; ++f) {
     std::array<index_t, 4> cf{NO_VERTEX, NO_VERTEX, NO_VERTEX, NO_VERTEX};
     for (int i = 0; i < d.face_size[f]; ++i) cf[i] = vertices[d.face[f][i]];
+    cf = sorted(cf);
     bool found = false;
-    for (std::size_t g = 0; g < faces.size() && !found; ++g) {
-      if (matched[g] || sizes[g] != d.face_size[f]) continue;
-      if (sorted(cf) == sorted(faces[g])) matched[g] = found = true;
+    for (int g = 0; g < nb_faces && !found; ++g) {
+      if (!matched[g] && sizes[g] == d.face_size[f] && keys[g] == cf) matched[g] = found = true;
     }
     if (!found) return false;
   }
@@ -162,15 +166,16 @@ namespace {
 // One search: the interpreter's state while it runs one program from one root tet.
 class Matcher {
  public:
-  Matcher(const TetMesh& mesh, const TetTopology& topology, const AcceptanceCriteria& criteria,
-          std::vector<Candidate>& out)
-      : mesh_(mesh), topology_(topology), criteria_(criteria), out_(out) {}
+  Matcher(const TetMesh& mesh, const TetTopology& topology, const QuadPairs& quad_pairs,
+          const AcceptanceCriteria& criteria, std::vector<Candidate>& out)
+      : mesh_(mesh), topology_(topology), pairs_(quad_pairs), criteria_(criteria), out_(out) {}
 
   void run_from(index_t root) {
     root_ = root;
     const std::size_t first_of_root = out_.size();
     for (const SearchProgram& program : search_programs()) {
       if (!criteria_.types[static_cast<int>(program.type)]) continue;
+      if (quad_faces(root, -1) < program.quad_degree[0]) continue;
       program_ = &program;
       max_vertices_ = descriptor(program.type).nb_vertices;
       nb_assigned_ = 1;
@@ -212,6 +217,8 @@ class Matcher {
             std::find(vertex_.begin(), vertex_.begin() + nb_vertices_, apex) ==
             vertex_.begin() + nb_vertices_;
         if (new_vertex && nb_vertices_ == max_vertices_) continue;
+        // The node's tet needs as many faces that can pair into quads as the node has quads.
+        if (quad_faces(n, fn) < program_->quad_degree[in.b]) continue;
         if (new_vertex) vertex_[nb_vertices_++] = apex;
         node_[nb_assigned_] = n;
         used_[nb_assigned_] = static_cast<unsigned char>(1u << fn);
@@ -239,22 +246,15 @@ class Matcher {
       const index_t tb = node_[in.b];
       for (int fa = 0; fa < 4; ++fa) {
         if ((used_[in.a] & (1u << fa)) || internal(topology_.neighbor(ta, fa))) continue;
-        const auto tri_a = tet_face(mesh_, ta, fa);
-        for (int fb = 0; fb < 4; ++fb) {
+        for (const QuadPartner* p = pairs_.begin(ta, fa); p != pairs_.end(ta, fa); ++p) {
+          if (p->face / 4 != tb) continue;
+          const int fb = static_cast<int>(p->face % 4);
           if ((used_[in.b] & (1u << fb)) || internal(topology_.neighbor(tb, fb))) continue;
-          std::array<index_t, 4> quad;
-          if (!quad_from_triangles(tri_a, tet_face(mesh_, tb, fb), quad)) continue;
-          const double* p[4];
-          for (int i = 0; i < 4; ++i) p[i] = mesh_.point(quad[i]);
-          const double dihedral = quad_dihedral_angle(p[0], p[1], p[2], p[3]);
-          if (dihedral < criteria_.min_dihedral_angle) continue;
-          const double corner = quad_max_corner_angle(p[0], p[1], p[2], p[3]);
-          if (corner > criteria_.max_face_angle) continue;
           used_[in.a] |= static_cast<unsigned char>(1u << fa);
           used_[in.b] |= static_cast<unsigned char>(1u << fb);
-          quad_[nb_quads_] = {4 * ta + fa, 4 * tb + fb};
-          dihedral_[nb_quads_] = dihedral;
-          corner_[nb_quads_] = corner;
+          quad_[nb_quads_] = {4 * ta + fa, p->face};
+          dihedral_[nb_quads_] = p->dihedral;
+          corner_[nb_quads_] = p->corner;
           ++nb_quads_;
           step(pc + 1, first_of_root);
           --nb_quads_;
@@ -263,6 +263,13 @@ class Matcher {
         }
       }
     }
+  }
+
+  // Faces of tet t, other than `except`, that have at least one quad partner.
+  int quad_faces(index_t t, int except) const {
+    unsigned m = pairs_.mask(t);
+    if (except >= 0) m &= ~(1u << except);
+    return __builtin_popcount(m);
   }
 
   // A quad uses external faces only: faces on the domain boundary or towards tets outside the
@@ -282,9 +289,8 @@ class Matcher {
     c.tets.fill(NO_CELL);
     std::copy(node_.begin(), node_.begin() + nb_assigned_, c.tets.begin());
     std::sort(c.tets.begin(), c.tets.begin() + nb_assigned_);
-    std::vector<std::array<index_t, 2>> pairs(quad_.begin(), quad_.begin() + nb_quads_);
-    if (!assemble_cell(mesh_, topology_, program.type, c.tets.data(), nb_assigned_, pairs,
-                       c.vertices)) {
+    if (!assemble_cell(mesh_, topology_, program.type, c.tets.data(), nb_assigned_, quad_.data(),
+                       nb_quads_, c.vertices)) {
       return;
     }
     // The same group may be matched again through an automorphism that fixes the root.
@@ -300,8 +306,8 @@ class Matcher {
     c.min_dihedral_angle = 180.0f;
     c.max_face_angle = 0.0f;
     for (int i = 0; i < nb_quads_; ++i) {
-      c.min_dihedral_angle = std::min(c.min_dihedral_angle, static_cast<float>(dihedral_[i]));
-      c.max_face_angle = std::max(c.max_face_angle, static_cast<float>(corner_[i]));
+      c.min_dihedral_angle = std::min(c.min_dihedral_angle, dihedral_[i]);
+      c.max_face_angle = std::max(c.max_face_angle, corner_[i]);
     }
     out_.push_back(c);
   }
@@ -326,6 +332,7 @@ class Matcher {
 
   const TetMesh& mesh_;
   const TetTopology& topology_;
+  const QuadPairs& pairs_;
   const AcceptanceCriteria& criteria_;
   std::vector<Candidate>& out_;
   const SearchProgram* program_ = nullptr;
@@ -337,8 +344,8 @@ class Matcher {
   std::array<index_t, 8> vertex_{};
   int nb_vertices_ = 0;
   std::array<std::array<index_t, 2>, kMaxQuads> quad_{};
-  std::array<double, kMaxQuads> dihedral_{};
-  std::array<double, kMaxQuads> corner_{};
+  std::array<float, kMaxQuads> dihedral_{};
+  std::array<float, kMaxQuads> corner_{};
   int nb_quads_ = 0;
 };
 
@@ -348,6 +355,8 @@ std::vector<Candidate> find_candidates(const TetMesh& mesh, const TetTopology& t
                                        const AcceptanceCriteria& criteria, int threads,
                                        const ProgressCallback& progress) {
   const index_t nt = mesh.nb_tets();
+  const QuadPairs quad_pairs(mesh, topology, criteria.min_dihedral_angle, criteria.max_face_angle,
+                             std::max(1, threads));
   constexpr index_t kChunk = 8192;
   const index_t nb_chunks = (nt + kChunk - 1) / kChunk;
   std::vector<std::vector<Candidate>> per_chunk(nb_chunks);
@@ -360,7 +369,7 @@ std::vector<Candidate> find_candidates(const TetMesh& mesh, const TetTopology& t
       if (cancelled.load()) return;
       const index_t chunk = next_chunk.fetch_add(1);
       if (chunk >= nb_chunks) return;
-      Matcher matcher(mesh, topology, criteria, per_chunk[chunk]);
+      Matcher matcher(mesh, topology, quad_pairs, criteria, per_chunk[chunk]);
       const index_t end = std::min(nt, (chunk + 1) * kChunk);
       for (index_t t = chunk * kChunk; t < end; ++t) matcher.run_from(t);
       const index_t finished = ++done;

@@ -50,10 +50,11 @@ std::vector<Candidate> find_candidates(const TetMesh& mesh, const TetTopology& t
 /// as such, quads as two triangles on one diagonal). Returns false when it is not a valid cell
 /// of that type. Exposed for the tests and the other finders.
 /// @param[in]  tets        the group (nb entries)
-/// @param[in]  quad_pairs  pairs of boundary triangles as (4 * tet + face) codes, one per quad
-/// @param[out] vertices    the cell's vertices in local order
+/// @param[in]  quad_pairs     pairs of boundary triangles as (4 * tet + face) codes, one per quad
+/// @param[in]  nb_quad_pairs  their number
+/// @param[out] vertices       the cell's vertices in local order
 bool assemble_cell(const TetMesh& mesh, const TetTopology& topology, CellType type,
-                   const index_t* tets, int nb, const std::vector<std::array<index_t, 2>>& quad_pairs,
-                   std::array<index_t, 8>& vertices);
+                   const index_t* tets, int nb, const std::array<index_t, 2>* quad_pairs,
+                   int nb_quad_pairs, std::array<index_t, 8>& vertices);
 
 }  // namespace hexmerge

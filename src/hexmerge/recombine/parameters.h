@@ -37,7 +37,7 @@ struct RecombineParameters {
   bool make_hexahedra = true;
   bool make_prisms = true;
   bool make_pyramids = true;
-  Conformity conformity = Conformity::LastResort;
+  Conformity conformity = Conformity::Conforming;
   bool respect_regions = true;        ///< never merge tets of different regions
   bool local_optimisation = true;     ///< the paper's section 4.2
   Finder finder = Finder::Programs;

@@ -138,6 +138,8 @@ MixedMesh recombine(const TetMesh& input, const RecombineParameters& parameters,
   report.nonconforming_quads = selection.nonconforming_quads;
   report.closing_pyramids = selection.closing_pyramids;
   report.released_elements = selection.released_elements;
+  report.local_moves = selection.local_moves;
+  report.selection_strategy = selection.strategy;
   timer.lap("selection");
 
   MixedMesh out = build_output(input, candidates, selection);

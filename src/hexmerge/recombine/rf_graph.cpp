@@ -127,6 +127,11 @@ std::vector<SearchProgram> compile_search_programs(const RFGraph& graph, int gra
       }
     }
     HEXMERGE_ASSERT(static_cast<int>(order.size()) == graph.nb_nodes, "RF-graph not connected");
+    program.quad_degree.assign(graph.nb_nodes, 0);
+    for (const auto& [a, b] : graph.quads) {
+      ++program.quad_degree[slot[a]];
+      ++program.quad_degree[slot[b]];
+    }
     programs.push_back(std::move(program));
   }
   return programs;

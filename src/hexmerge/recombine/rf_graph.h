@@ -44,6 +44,9 @@ struct SearchProgram {
   CellType type;
   int nb_nodes;
   std::vector<Instruction> code;
+  /// Per program node: how many of its tet's faces are halves of the element's quad faces (its
+  /// number of dashed edges). A tet with fewer faces that can pair into a quad cannot be there.
+  std::vector<unsigned char> quad_degree;
 };
 
 /// Graph nodes grouped by symmetry: two nodes are in one orbit when an automorphism of the

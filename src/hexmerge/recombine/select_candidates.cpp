@@ -61,8 +61,9 @@ struct Stage {
 class Selector {
  public:
   Selector(const TetMesh& mesh, const TetTopology& topology,
-           const std::vector<Candidate>& candidates, const RecombineParameters& parameters)
-      : mesh_(mesh), topo_(topology), cands_(candidates), params_(parameters),
+           const std::vector<Candidate>& candidates, const RecombineParameters& parameters,
+           bool strict)
+      : mesh_(mesh), topo_(topology), cands_(candidates), params_(parameters), strict_(strict),
         owner_(mesh.nb_tets(), NO_INDEX), chosen_(candidates.size(), 0) {
     // Tet -> candidates, CSR.
     const index_t nt = mesh.nb_tets();
@@ -111,7 +112,9 @@ class Selector {
       if (chosen_[ci]) result_.elements.push_back(ci);
     }
     result_.nonconforming_quads = 0;
-    for (index_t ci : result_.elements) result_.nonconforming_quads += violations(ci, false);
+    for (index_t ci : result_.elements) {
+      result_.nonconforming_quads += violations(ci, false, false);
+    }
     return result_;
   }
 
@@ -174,6 +177,7 @@ class Selector {
   // (may be null) and has every quad face the chosen elements and `extra` ask of n1 and n2 —
   // the element that would close a pending quad face. NO_INDEX when there is none.
   index_t closer(index_t n1, index_t n2, const QuadKey* extra, const Candidate* exclude) const {
+    if (strict_) return closing_pyramid(n1, n2, extra);
     std::vector<QuadKey> keys;
     if (extra) keys.push_back(*extra);
     required_quads(n1, keys);
@@ -196,10 +200,32 @@ class Selector {
     return best;
   }
 
+  // A pending quad face is safe when the two free tets behind it form a pyramid with that quad
+  // as its base and no other chosen quad face touches them: nothing chosen later can take
+  // either tet without matching the quad, so the pyramid is certain to be there at the end.
+  index_t closing_pyramid(index_t n1, index_t n2, const QuadKey* key) const {
+    std::vector<QuadKey> keys;
+    if (key) keys.push_back(*key);
+    required_quads(n1, keys);
+    required_quads(n2, keys);
+    std::sort(keys.begin(), keys.end());
+    keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
+    if (keys.size() != 1) return NO_INDEX;
+    for (index_t k = offsets_[n1]; k < offsets_[n1 + 1]; ++k) {
+      const index_t xi = ids_[k];
+      const Candidate& x = cands_[xi];
+      if (x.type == CellType::Pyramid && contains(x, n2) && available(xi) &&
+          face_key(x, 0) == keys[0]) {
+        return xi;
+      }
+    }
+    return NO_INDEX;
+  }
+
   // Quad faces of candidate ci that would not conform if it were (or, when it is, as it is)
   // chosen now. A quad facing two free tets conforms while some available candidate can close
   // it; with `pending_ok` false (the final count) it does not.
-  std::size_t violations(index_t ci, bool pending_ok = true) const {
+  std::size_t violations(index_t ci, bool pending_ok = true, bool count_triangles = true) const {
     const Candidate& c = cands_[ci];
     const Sides s = sides(c);
     std::size_t bad = 0;
@@ -211,8 +237,10 @@ class Selector {
         if (s.side[i].cell_face == f && nh < 2) half[nh++] = &s.side[i];
       }
       if (d.face_size[f] == 3) {
-        // Our triangle must not meet half of a chosen element's quad.
+        // Our triangle must not meet half of a chosen element's quad (counted once, on the
+        // quad's side, in the final count).
         const index_t n = half[0]->neighbor;
+        if (!count_triangles) continue;
         if (n != NO_CELL && !is_free(n)) {
           const Candidate& e = cands_[owner_[n]];
           if (is_quad(e, cell_face_of(e, half[0]->tri))) ++bad;
@@ -246,7 +274,28 @@ class Selector {
     return bad;
   }
 
-  // Ranking at one tet: element type, then fewer non-conformities, then quality.
+  // Pending quad faces of candidate ci (not chosen) that are not safe (closing_pyramid).
+  std::size_t risky_quads(index_t ci) const {
+    const Candidate& c = cands_[ci];
+    const Sides s = sides(c);
+    const CellDescriptor& d = descriptor(c.type);
+    std::size_t risky = 0;
+    for (int f = 0; f < d.nb_faces; ++f) {
+      if (d.face_size[f] != 4) continue;
+      index_t n[2] = {NO_CELL, NO_CELL};
+      int nh = 0;
+      for (int i = 0; i < s.count; ++i) {
+        if (s.side[i].cell_face == f && nh < 2) n[nh++] = s.side[i].neighbor;
+      }
+      if (n[0] == NO_CELL || n[1] == NO_CELL || !is_free(n[0]) || !is_free(n[1])) continue;
+      const QuadKey key = face_key(c, f);
+      if (closing_pyramid(n[0], n[1], &key) == NO_INDEX) ++risky;
+    }
+    return risky;
+  }
+
+  // Ranking at one tet: element type, then fewer non-conformities (in conforming mode: fewer
+  // pending quads without a safe closing pyramid), then quality.
   static bool better(const Candidate& a, std::size_t va, const Candidate& b, std::size_t vb) {
     if (a.type != b.type) return static_cast<int>(a.type) > static_cast<int>(b.type);
     if (va != vb) return va < vb;
@@ -261,8 +310,9 @@ class Selector {
       const index_t ci = ids_[k];
       const Candidate& c = cands_[ci];
       if (c.type != stage.type || !available(ci)) continue;
-      const std::size_t v = violations(ci);
+      std::size_t v = violations(ci);
       if (v > 0 && !stage.allow_nonconforming) continue;
+      if (v == 0 && params_.conformity == Conformity::Conforming && !strict_) v = risky_quads(ci);
       if (best == NO_INDEX || better(c, v, cands_[best], best_v)) {
         best = ci;
         best_v = v;
@@ -478,35 +528,57 @@ class Selector {
     }
   }
 
-  // Step 4: quad faces facing free tets get the element that closes them; in conforming mode
-  // an element whose quad still cannot conform is released (its tets stay tets), and its
-  // neighbours are looked at again.
+  // Step 4: quad faces facing free tets get the element that closes them. In conforming mode
+  // an element whose quad still cannot conform is then released (its tets stay tets) and its
+  // neighbours get one more chance to close what the release opened. Termination: the queue
+  // holds an element once at a time, and a candidate can be chosen as a closer only once, so
+  // every choice and every release happens a bounded number of times.
   void close_quads() {
-    std::deque<index_t> work;
+    std::vector<index_t> chosen_now;
     for (index_t ci = 0; ci < cands_.size(); ++ci) {
-      if (chosen_[ci]) work.push_back(ci);
+      if (chosen_[ci]) chosen_now.push_back(ci);
     }
-    while (!work.empty()) {
-      const index_t ci = work.front();
-      work.pop_front();
-      if (!chosen_[ci]) continue;
-      close_pending(ci);
-      if (params_.conformity != Conformity::Conforming || violations(ci, false) == 0) continue;
-      std::vector<index_t> neighbours;
+    for (index_t ci : chosen_now) {
+      if (chosen_[ci]) close_pending<void (*)(index_t)>(ci, nullptr);
+    }
+    if (params_.conformity != Conformity::Conforming) return;
+    std::deque<index_t> work;
+    std::vector<char> queued(cands_.size(), 0);
+    auto enqueue = [&](index_t ci) {
+      if (chosen_[ci] && !queued[ci]) {
+        queued[ci] = 1;
+        work.push_back(ci);
+      }
+    };
+    // Whatever owns a tet next to a changed element must be looked at again.
+    auto touch = [&](index_t ci) {
+      enqueue(ci);
       const Candidate& c = cands_[ci];
       for (int i = 0; i < c.nb_tets; ++i) {
         for (int f = 0; f < 4; ++f) {
           const index_t n = topo_.neighbor(c.tets[i], f);
-          if (n != NO_CELL && !is_free(n) && owner_[n] != ci) neighbours.push_back(owner_[n]);
+          if (n != NO_CELL && !is_free(n)) enqueue(owner_[n]);
         }
       }
+    };
+    for (index_t ci = 0; ci < cands_.size(); ++ci) {
+      if (chosen_[ci] && violations(ci, false) > 0) enqueue(ci);
+    }
+    while (!work.empty()) {
+      const index_t ci = work.front();
+      work.pop_front();
+      queued[ci] = 0;
+      if (!chosen_[ci]) continue;
+      close_pending(ci, &touch);
+      if (violations(ci, false) == 0) continue;
       release(ci);
       ++result_.released_elements;
-      for (index_t e : neighbours) work.push_back(e);
+      touch(ci);
     }
   }
 
-  void close_pending(index_t ci) {
+  template <class Touch>
+  void close_pending(index_t ci, Touch* touch) {
     const Candidate& c = cands_[ci];
     const Sides s = sides(c);
     const CellDescriptor& d = descriptor(c.type);
@@ -519,8 +591,10 @@ class Selector {
       }
       if (n[0] == NO_CELL || n[1] == NO_CELL || !is_free(n[0]) || !is_free(n[1])) continue;
       const index_t x = closer(n[0], n[1], nullptr, nullptr);
-      if (x == NO_INDEX) continue;
+      if (x == NO_INDEX || was_closer_[x]) continue;
+      was_closer_[x] = 1;
       choose(x);
+      if (touch) (*touch)(x);
       if (cands_[x].type == CellType::Pyramid) ++result_.closing_pyramids;
     }
   }
@@ -529,10 +603,13 @@ class Selector {
   const TetTopology& topo_;
   const std::vector<Candidate>& cands_;
   const RecombineParameters& params_;
+  const bool strict_;  // pending quads only where a safe closing pyramid waits (closing_pyramid)
   std::vector<index_t> owner_;   // per tet: the chosen candidate that holds it, or NO_INDEX
   std::vector<char> chosen_;     // per candidate
   std::vector<index_t> offsets_, ids_;  // tet -> candidates
   std::vector<char> is_boundary_;
+  std::vector<char> was_closer_ = std::vector<char>(cands_.size(), 0);
+
   bool journaling_ = false;
   std::vector<std::pair<index_t, index_t>> journal_;  // (tet, previous owner)
   std::vector<std::pair<index_t, char>> chosen_journal_;  // (candidate, previous flag)
@@ -545,8 +622,32 @@ Selection select_candidates(const TetMesh& mesh, const TetTopology& topology,
                             const std::vector<Candidate>& candidates,
                             const RecombineParameters& parameters,
                             const ProgressCallback& progress) {
-  Selector selector(mesh, topology, candidates, parameters);
-  return selector.run(progress);
+  // Conforming mode has two ways to keep quads conforming, each best on its own kind of mesh:
+  // "safe pyramids" (every pending quad has a closing pyramid reserved: never releases, best on
+  // unstructured meshes) and "closable" (a pending quad needs only some candidate that could
+  // close it; elements that end up unclosed are released: best where hexes tile, as in
+  // structured regions). Both are run on the same candidates; the one with fewer elements wins,
+  // then the one with more hexahedra. The report names the winner.
+  const bool strict = parameters.conformity == Conformity::Conforming && parameters.make_pyramids;
+  Selection best = Selector(mesh, topology, candidates, parameters, strict).run(progress);
+  best.strategy = strict ? "safe_pyramids" : "closable";
+  if (!strict) return best;
+  Selection other = Selector(mesh, topology, candidates, parameters, false).run(progress);
+  other.strategy = "closable";
+  auto cells = [&](const Selection& s) {
+    std::size_t merged = 0, hex_tets = 0;
+    for (index_t ci : s.elements) {
+      merged += candidates[ci].nb_tets - 1;
+      if (candidates[ci].type == CellType::Hex) hex_tets += candidates[ci].nb_tets;
+    }
+    return std::make_pair(mesh.nb_tets() - merged, hex_tets);
+  };
+  const auto [best_cells, best_hex] = cells(best);
+  const auto [other_cells, other_hex] = cells(other);
+  if (other_cells < best_cells || (other_cells == best_cells && other_hex > best_hex)) {
+    return other;
+  }
+  return best;
 }
 
 }  // namespace hexmerge

@@ -4,6 +4,7 @@
 /// section 4, with conformity of quad faces as a constraint of the choice.
 
 #include <cstddef>
+#include <string>
 #include <vector>
 
 #include "hexmerge/core/index.h"
@@ -22,6 +23,7 @@ struct Selection {
   std::size_t closing_pyramids = 0;       ///< pyramids chosen to close a quad face
   std::size_t released_elements = 0;      ///< elements given up to restore conformity
   std::size_t local_moves = 0;            ///< accepted local optimisation moves
+  std::string strategy;                   ///< conforming mode: "safe_pyramids" or "closable"
 };
 
 /// Chooses disjoint candidates.
@@ -38,6 +40,10 @@ struct Selection {
 /// 4. Quad faces of chosen elements that face free tets are closed by the candidate that covers
 ///    them (a pyramid, usually); in conforming mode an element whose quad cannot be closed is
 ///    released back to tets.
+///
+/// In conforming mode two selections are made and the better kept (see the .cpp): pending quad
+/// faces either only where a closing pyramid is reserved, or wherever some candidate could close
+/// them, with the unclosed ones released at the end.
 ///
 /// A quad face conforms when it lies on the domain boundary or on the identical quad face of
 /// another element. The Conformity parameter decides whether a candidate that would break that

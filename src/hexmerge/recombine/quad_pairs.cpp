@@ -1,0 +1,167 @@
+#include "hexmerge/recombine/quad_pairs.h"
+
+#include <algorithm>
+#include <array>
+#include <atomic>
+#include <cmath>
+#include <thread>
+
+#include "hexmerge/geometry/quality.h"
+#include "hexmerge/geometry/vec3.h"
+#include "hexmerge/mesh/cell_type.h"
+
+namespace hexmerge {
+namespace {
+
+const CellDescriptor& kTet = descriptor(CellType::Tet);
+constexpr double kDegToRad = 0.017453292519943295;
+
+struct Entry {
+  index_t face;  // 4 * t + f
+  QuadPartner partner;
+};
+
+class Builder {
+ public:
+  Builder(const TetMesh& mesh, const TetTopology& topology, double min_dihedral, double max_corner)
+      : mesh_(mesh), topo_(topology), min_dihedral_(min_dihedral), max_corner_(max_corner),
+        // Two outward normals of a flat quad agree; a dihedral angle of at least dangle means
+        // they are at most 180 - dangle apart.
+        min_cos_(std::cos((180.0 - min_dihedral) * kDegToRad) - 1e-12) {}
+
+  void faces_of_tet(index_t t, std::vector<Entry>& out) const {
+    const std::size_t first = out.size();
+    const index_t* q = mesh_.tet(t);
+    for (int i = 0; i < 4; ++i) {
+      for (int j = i + 1; j < 4; ++j) {
+        // The edge q[i]-q[j]; t's two faces holding it are those opposite its other vertices.
+        int others[2], k = 0;
+        for (int l = 0; l < 4; ++l) {
+          if (l != i && l != j) others[k++] = l;
+        }
+        std::array<std::pair<index_t, int>, 64> around;
+        const int n = tets_around_edge(t, q[i], q[j], others, around);
+        for (int side = 0; side < 2; ++side) {
+          const int f = others[side];
+          const Vec3 nt = unit_normal(t, f);
+          for (int a = 0; a < n; ++a) {
+            const auto [s, g] = around[a];
+            if (nt.dot(unit_normal(s, g)) < min_cos_) continue;
+            QuadPartner p;
+            if (accept(t, f, s, g, p)) out.push_back({4 * t + f, p});
+          }
+        }
+      }
+    }
+    // Edges visit the faces out of order; the CSR wants them grouped by face.
+    std::stable_sort(out.begin() + first, out.end(),
+                     [](const Entry& a, const Entry& b) { return a.face < b.face; });
+  }
+
+ private:
+  std::array<index_t, 3> tri(index_t t, int f) const {
+    const index_t* q = mesh_.tet(t);
+    return {q[kTet.face[f][0]], q[kTet.face[f][1]], q[kTet.face[f][2]]};
+  }
+
+  Vec3 unit_normal(index_t t, int f) const {
+    const auto v = tri(t, f);
+    const Vec3 a = Vec3::of(mesh_.point(v[0]));
+    const Vec3 n = (Vec3::of(mesh_.point(v[1])) - a).cross(Vec3::of(mesh_.point(v[2])) - a);
+    const double len = n.norm();
+    return len > 0.0 ? n * (1.0 / len) : n;
+  }
+
+  // Faces (tet, local face) holding edge x-y of the tets around it other than t: walk from t
+  // across each of its two faces on the edge until the walk returns or leaves the domain.
+  int tets_around_edge(index_t t, index_t x, index_t y, const int others[2],
+                       std::array<std::pair<index_t, int>, 64>& out) const {
+    int n = 0;
+    for (int dir = 0; dir < 2; ++dir) {
+      index_t prev = t, cur = topo_.neighbor(t, others[dir]);
+      while (cur != NO_CELL && cur != t && n + 2 <= static_cast<int>(out.size())) {
+        const index_t* q = mesh_.tet(cur);
+        int o[2], k = 0;
+        for (int l = 0; l < 4; ++l) {
+          if (q[l] != x && q[l] != y) o[k++] = l;
+        }
+        out[n++] = {cur, o[0]};
+        out[n++] = {cur, o[1]};
+        const index_t next =
+            topo_.neighbor(cur, o[0]) == prev ? topo_.neighbor(cur, o[1]) : topo_.neighbor(cur, o[0]);
+        prev = cur;
+        cur = next;
+      }
+      if (cur == t) break;  // closed ring: every tet seen from one side
+    }
+    return n;
+  }
+
+  bool accept(index_t t, int f, index_t s, int g, QuadPartner& p) const {
+    const auto t1 = tri(t, f), t2 = tri(s, g);
+    // t2 must run along the shared edge opposite to t1: t1 = (x, y, z), t2 = (y, x, w).
+    for (int i = 0; i < 3; ++i) {
+      const index_t x = t1[i], y = t1[(i + 1) % 3], z = t1[(i + 2) % 3];
+      for (int j = 0; j < 3; ++j) {
+        if (t2[j] != y || t2[(j + 1) % 3] != x) continue;
+        const index_t w = t2[(j + 2) % 3];
+        if (w == z) return false;
+        const double* a = mesh_.point(x);
+        const double* b = mesh_.point(w);
+        const double* c = mesh_.point(y);
+        const double* d = mesh_.point(z);
+        const double dihedral = quad_dihedral_angle(a, b, c, d);
+        if (dihedral < min_dihedral_) return false;
+        const double corner = quad_max_corner_angle(a, b, c, d);
+        if (corner > max_corner_) return false;
+        p = {4 * s + g, static_cast<float>(dihedral), static_cast<float>(corner)};
+        return true;
+      }
+    }
+    return false;
+  }
+
+  const TetMesh& mesh_;
+  const TetTopology& topo_;
+  double min_dihedral_, max_corner_, min_cos_;
+};
+
+}  // namespace
+
+QuadPairs::QuadPairs(const TetMesh& mesh, const TetTopology& topology, double min_dihedral_angle,
+                     double max_face_angle, int threads) {
+  const index_t nt = mesh.nb_tets();
+  const Builder builder(mesh, topology, min_dihedral_angle, max_face_angle);
+  constexpr index_t kChunk = 16384;
+  const index_t nb_chunks = (nt + kChunk - 1) / kChunk;
+  std::vector<std::vector<Entry>> per_chunk(nb_chunks);
+  std::atomic<index_t> next{0};
+  auto work = [&] {
+    for (index_t chunk; (chunk = next.fetch_add(1)) < nb_chunks;) {
+      const index_t end = std::min(nt, (chunk + 1) * kChunk);
+      for (index_t t = chunk * kChunk; t < end; ++t) builder.faces_of_tet(t, per_chunk[chunk]);
+    }
+  };
+  std::vector<std::thread> pool;
+  for (int i = 1; i < std::max(1, threads); ++i) pool.emplace_back(work);
+  work();
+  for (auto& th : pool) th.join();
+
+  offsets_.assign(4 * static_cast<std::size_t>(nt) + 1, 0);
+  masks_.assign(nt, 0);
+  std::size_t total = 0;
+  for (const auto& c : per_chunk) total += c.size();
+  partners_.reserve(total);
+  // Entries come out grouped by tet face, in increasing order: the CSR is a running count.
+  for (auto& chunk : per_chunk) {
+    for (const Entry& e : chunk) {
+      ++offsets_[e.face + 1];
+      masks_[e.face / 4] |= static_cast<unsigned char>(1u << (e.face % 4));
+      partners_.push_back(e.partner);
+    }
+    std::vector<Entry>().swap(chunk);
+  }
+  for (std::size_t i = 0; i + 1 < offsets_.size(); ++i) offsets_[i + 1] += offsets_[i];
+}
+
+}  // namespace hexmerge

@@ -1,0 +1,44 @@
+#pragma once
+/// @file
+/// Pairs of tet faces that can form one quadrilateral face of an element: two outward
+/// triangles of two different tets sharing an edge (run in opposite directions), flat enough
+/// and with corner angles small enough. Computed once, so that the search programs' QUAD
+/// instructions are look-ups.
+
+#include <vector>
+
+#include "hexmerge/core/index.h"
+#include "hexmerge/mesh/tet_mesh.h"
+#include "hexmerge/mesh/tet_topology.h"
+
+namespace hexmerge {
+
+/// One acceptable partner of a tet face.
+struct QuadPartner {
+  index_t face;      ///< the partner as 4 * tet + local face
+  float dihedral;    ///< degrees, 180 when flat
+  float corner;      ///< largest corner angle of the quad, degrees
+};
+
+/// For every face of every tet, its acceptable quad partners (CSR).
+class QuadPairs {
+ public:
+  /// @param[in] min_dihedral_angle  degrees, the paper's dangle
+  /// @param[in] max_face_angle      degrees, the paper's fangle
+  /// @param[in] threads             worker threads (>= 1)
+  QuadPairs(const TetMesh& mesh, const TetTopology& topology, double min_dihedral_angle,
+            double max_face_angle, int threads);
+
+  const QuadPartner* begin(index_t t, int f) const { return &partners_[offsets_[4 * std::size_t(t) + f]]; }
+  const QuadPartner* end(index_t t, int f) const { return &partners_[0] + offsets_[4 * std::size_t(t) + f + 1]; }
+  /// Bit f set when face f of tet t has at least one partner.
+  unsigned char mask(index_t t) const { return masks_[t]; }
+  std::size_t size() const { return partners_.size(); }
+
+ private:
+  std::vector<index_t> offsets_;  // 4 * #T + 1
+  std::vector<QuadPartner> partners_;
+  std::vector<unsigned char> masks_;
+};
+
+}  // namespace hexmerge
