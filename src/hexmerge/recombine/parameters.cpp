@@ -19,6 +19,7 @@ std::string flag(bool value) { return value ? "true" : "false"; }
 
 const std::vector<std::string> kConformityChoices = {"conforming", "last_resort", "allow"};
 const std::vector<std::string> kFinderChoices = {"programs"};
+const std::vector<std::string> kBoundaryOrderChoices = {"quality", "fewest_matches"};
 
 InputError bad_value(const std::string& name, const std::string& value, const std::string& why) {
   return InputError("parameter '" + name + "': " + why + " (got '" + value + "')",
@@ -81,6 +82,10 @@ std::vector<ParameterInfo> make_table() {
       {"local_optimisation", "bool", flag(d.local_optimisation), "", 0, 1, {},
        "Local optimisation",
        "Rearrange elements around unmatched boundary tetrahedra (Meshkat-Talmor 4.2)"},
+      {"boundary_order", "choice", to_string(d.boundary_order), "", 0, 0, kBoundaryOrderChoices,
+       "Boundary order",
+       "Order of the greedy boundary phase: best quality first, or the paper's fewest remaining "
+       "matches first"},
       {"finder", "choice", to_string(d.finder), "", 0, 0, kFinderChoices, "Candidate finder",
        "How candidate elements are found: the paper's RF-graph search programs"},
       {"threads", "int", number(d.threads), "", 0, 1024, {}, "Threads",
@@ -95,6 +100,10 @@ std::string to_string(Conformity conformity) {
 }
 
 std::string to_string(Finder finder) { return kFinderChoices[static_cast<int>(finder)]; }
+
+std::string to_string(BoundaryOrder order) {
+  return kBoundaryOrderChoices[static_cast<int>(order)];
+}
 
 const std::vector<ParameterInfo>& parameter_table() {
   static const std::vector<ParameterInfo> table = make_table();
@@ -126,6 +135,8 @@ void set_parameter(RecombineParameters& p, const std::string& name, const std::s
     p.respect_regions = parse_bool(name, value);
   } else if (name == "local_optimisation") {
     p.local_optimisation = parse_bool(name, value);
+  } else if (name == "boundary_order") {
+    p.boundary_order = static_cast<BoundaryOrder>(parse_choice(name, value, row->choices));
   } else if (name == "finder") {
     p.finder = static_cast<Finder>(parse_choice(name, value, row->choices));
   } else if (name == "threads") {

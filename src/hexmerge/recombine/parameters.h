@@ -22,6 +22,14 @@ enum class Conformity {
   Allow,
 };
 
+/// In which order the exhaustive-greedy boundary phase takes candidates.
+enum class BoundaryOrder {
+  /// Best scaled Jacobian first.
+  Quality,
+  /// The paper's: the boundary tet with the fewest remaining candidates first, its best one.
+  FewestMatches,
+};
+
 /// Which candidate finder produces the elements that the selection chooses from.
 enum class Finder {
   /// The paper's RF-graph search programs (LINK/QUAD), 5- and 6-tet hexahedra.
@@ -40,6 +48,7 @@ struct RecombineParameters {
   Conformity conformity = Conformity::Conforming;
   bool respect_regions = true;        ///< never merge tets of different regions
   bool local_optimisation = true;     ///< the paper's section 4.2
+  BoundaryOrder boundary_order = BoundaryOrder::Quality;
   Finder finder = Finder::Programs;
   int threads = 0;                    ///< candidate search threads; 0: all hardware threads
 };
@@ -72,5 +81,6 @@ void validate_parameters(const RecombineParameters& parameters);
 /// Text of an enum value as used in the table ("conforming", "last_resort", "allow", ...).
 std::string to_string(Conformity conformity);
 std::string to_string(Finder finder);
+std::string to_string(BoundaryOrder order);
 
 }  // namespace hexmerge

@@ -98,7 +98,13 @@ class Selector {
       if (params_.conformity == Conformity::LastResort) relaxed.push_back({type, true});
     }
     report_progress(progress, "selection", 0.0);
-    for (const Stage& stage : conforming) boundary_stage(stage);
+    for (const Stage& stage : conforming) {
+      if (params_.boundary_order == BoundaryOrder::Quality) {
+        boundary_stage_by_quality(stage);
+      } else {
+        boundary_stage(stage);
+      }
+    }
     report_progress(progress, "selection", 0.25);
     if (params_.local_optimisation) local_optimisation();
     report_progress(progress, "selection", 0.5);
@@ -356,7 +362,28 @@ class Selector {
 
   void commit() { journaling_ = false; }
 
-  // Exhaustive-greedy over the boundary tets: the tet with the fewest available candidates of
+  // Exhaustive-greedy over the boundary tets, best candidate first: every candidate of this
+  // stage's type that holds a boundary tet, by decreasing scaled Jacobian.
+  void boundary_stage_by_quality(const Stage& stage) {
+    std::vector<index_t> order;
+    for (index_t ci = 0; ci < cands_.size(); ++ci) {
+      const Candidate& c = cands_[ci];
+      if (c.type != stage.type) continue;
+      bool on_boundary = false;
+      for (int i = 0; i < c.nb_tets; ++i) on_boundary = on_boundary || is_boundary_[c.tets[i]];
+      if (on_boundary) order.push_back(ci);
+    }
+    std::stable_sort(order.begin(), order.end(), [&](index_t a, index_t b) {
+      return cands_[a].quality > cands_[b].quality;
+    });
+    for (index_t ci : order) {
+      if (!available(ci)) continue;
+      if (!stage.allow_nonconforming && violations(ci) > 0) continue;
+      choose(ci);
+    }
+  }
+
+  // Exhaustive-greedy over the boundary tets (the paper's order): the tet with the fewest available candidates of
   // this stage's type goes first (bucket queue; counts only decrease).
   void boundary_stage(const Stage& stage) {
     const index_t nt = mesh_.nb_tets();
