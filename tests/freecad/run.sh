@@ -15,7 +15,7 @@ run_suite() {  # module, per-suite timeout (s)
   local rc=$?
   local ran fails
   ran=$(grep -Eo '^Ran [0-9]+ test' "$out" | grep -Eo '[0-9]+' | tail -1)
-  fails=$(grep -Eo '^FAILED \((failures|errors)=[0-9]+(, (failures|errors)=[0-9]+)?' "$out" | grep -Eo '[0-9]+' | paste -sd+ | bc 2>/dev/null)
+  fails=$(grep -Eo '^FAILED \((failures|errors)=[0-9]+(, (failures|errors)=[0-9]+)?' "$out" | grep -Eo '[0-9]+' | awk '{s += $1} END {print s + 0}')
   ran=${ran:-0}; fails=${fails:-0}
   if [[ $rc -ne 0 && $fails -eq 0 ]]; then fails=1; [[ $ran -eq 0 ]] && ran=1; fi  # crash or timeout
   passed=$((passed + ran - fails)); failed=$((failed + fails))

@@ -1,0 +1,21 @@
+#!/usr/bin/env bash
+# Installs everything the tests need (Debian 12: the build, pytest, FreeCAD, CalculiX, Xvfb),
+# builds, and runs every test: GoogleTest (ctest), pytest, and the FreeCAD add-on's tests
+# (headless freecadcmd suites and a GUI test under Xvfb). Safe to run again.
+#   scripts/test.sh            everything
+#   scripts/test.sh --no-gui   without the FreeCAD GUI test
+set -euo pipefail
+source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
+ensure_packages "${HEXMERGE_BASE_PACKAGES[@]}" python3-pytest
+HEXMERGE_TEST_DEPS=1 bash "$HEXMERGE_ROOT/freecad/install.sh"
+build_hexmerge
+
+status=0
+echo "== C++ tests (ctest)"
+ctest --test-dir "$HEXMERGE_BUILD" --output-on-failure -j"$(nproc)" || status=1
+echo "== Python tests (pytest)"
+(cd "$HEXMERGE_ROOT" && "$HEXMERGE_PYTHON" -m pytest -q -W error --strict-markers tests/python) \
+  || status=1
+echo "== FreeCAD add-on tests"
+bash "$HEXMERGE_ROOT/tests/freecad/run.sh" "$@" || status=1
+exit $status
