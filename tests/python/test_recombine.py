@@ -109,7 +109,6 @@ def test_gmsh_mesh_recombines_soundly(gmsh_tet4) -> None:
     assert result["valid"], result["problems"]
 
 
-@pytest.mark.xfail(reason="engine: quad faces left against two triangles on Gmsh meshes open gaps (issue 3 asks < 1e-5)")
 def test_gmsh_mesh_keeps_its_volume(gmsh_tet4) -> None:
     meshio = pytest.importorskip("meshio")
     m = meshio.read(gmsh_tet4)
