@@ -216,7 +216,7 @@ class Matcher {
         const bool new_vertex =
             std::find(vertex_.begin(), vertex_.begin() + nb_vertices_, apex) ==
             vertex_.begin() + nb_vertices_;
-        if (new_vertex && nb_vertices_ == max_vertices_) continue;
+        if (new_vertex != (program_->adds_vertex[pc] != 0)) continue;
         // The node's tet needs as many faces that can pair into quads as the node has quads.
         if (quad_faces(n, fn) < program_->quad_degree[in.b]) continue;
         if (new_vertex) vertex_[nb_vertices_++] = apex;
@@ -269,7 +269,8 @@ class Matcher {
   int quad_faces(index_t t, int except) const {
     unsigned m = pairs_.mask(t);
     if (except >= 0) m &= ~(1u << except);
-    return __builtin_popcount(m);
+    static constexpr unsigned char kBits[16] = {0, 1, 1, 2, 1, 2, 2, 3, 1, 2, 2, 3, 2, 3, 3, 4};
+    return kBits[m & 15u];
   }
 
   // A quad uses external faces only: faces on the domain boundary or towards tets outside the

@@ -14,33 +14,45 @@ namespace {
 std::vector<RFGraph> make_graphs() {
   return {
       // Figure 1: two tets sharing a face, with one quad pair.
-      {"pyramid", CellType::Pyramid, 2, {{0, 1}}, {{0, 1}}},
+      {"pyramid", CellType::Pyramid, 2, {{0, 1}}, {{0, 1}}, {{{0, 1, 2, 4}}, {{0, 2, 3, 4}}}},
       // Figure 2: a path of three tets (3 2 3); every pair shares a quad.
-      {"prism", CellType::Prism, 3, {{0, 1}, {1, 2}}, {{0, 1}, {0, 2}, {1, 2}}},
+      {"prism", CellType::Prism, 3, {{0, 1}, {1, 2}}, {{0, 1}, {0, 2}, {1, 2}},
+       {{{0, 1, 2, 3}}, {{1, 2, 3, 4}}, {{2, 3, 4, 5}}}},
       // Figure 4: a central tet with no boundary face and four corner tets (3 3 0 3 3).
       {"hex5", CellType::Hex, 5,
        {{0, 1}, {0, 2}, {0, 3}, {0, 4}},
-       {{1, 2}, {1, 3}, {1, 4}, {2, 3}, {2, 4}, {3, 4}}},
+       {{1, 2}, {1, 3}, {1, 4}, {2, 3}, {2, 4}, {3, 4}},
+       {{{0, 2, 5, 7}}, {{0, 1, 2, 5}}, {{0, 2, 3, 7}}, {{0, 4, 5, 7}}, {{2, 5, 6, 7}}}},
       // Figure 5: Kuhn's decomposition, a 6-cycle (2 2 2 2 2 2).
       {"hex6_cycle6", CellType::Hex, 6,
        {{0, 1}, {0, 2}, {1, 3}, {2, 4}, {3, 5}, {4, 5}},
-       {{0, 1}, {0, 2}, {1, 3}, {2, 4}, {3, 5}, {4, 5}}},
+       {{0, 1}, {0, 2}, {1, 3}, {2, 4}, {3, 5}, {4, 5}},
+       {{{0, 1, 2, 4}}, {{0, 2, 3, 4}}, {{1, 2, 4, 5}}, {{2, 3, 4, 7}}, {{2, 4, 5, 6}},
+        {{2, 4, 6, 7}}}},
       // Figure 6: a 5-cycle 0-1-4-5-2 with tet 3 hanging on 0 (1 2 2 3 2 2).
       {"hex6_cycle5", CellType::Hex, 6,
        {{0, 1}, {0, 2}, {0, 3}, {1, 4}, {2, 5}, {4, 5}},
-       {{0, 3}, {1, 3}, {1, 4}, {2, 3}, {2, 5}, {4, 5}}},
+       {{0, 3}, {1, 3}, {1, 4}, {2, 3}, {2, 5}, {4, 5}},
+       {{{0, 1, 2, 4}}, {{0, 2, 3, 4}}, {{1, 2, 4, 5}}, {{2, 3, 4, 6}}, {{2, 4, 5, 6}},
+        {{3, 4, 6, 7}}}},
       // Figure 7: a 4-cycle 0-1-4-2 with tets hanging on two adjacent nodes (1 1 2 3 2 3).
       {"hex6_cycle4a", CellType::Hex, 6,
        {{0, 1}, {0, 2}, {0, 3}, {1, 4}, {1, 5}, {2, 4}},
-       {{0, 3}, {1, 5}, {2, 3}, {2, 4}, {3, 5}, {4, 5}}},
+       {{0, 3}, {1, 5}, {2, 3}, {2, 4}, {3, 5}, {4, 5}},
+       {{{0, 1, 2, 4}}, {{0, 2, 3, 4}}, {{1, 2, 4, 6}}, {{1, 4, 5, 6}}, {{2, 3, 4, 6}},
+        {{3, 4, 6, 7}}}},
       // Figure 8: a 4-cycle 0-1-4-2 with tets hanging on two opposite nodes (1 2 2 3 1 3).
       {"hex6_cycle4b", CellType::Hex, 6,
        {{0, 1}, {0, 2}, {0, 3}, {1, 4}, {2, 4}, {4, 5}},
-       {{0, 3}, {1, 3}, {1, 5}, {2, 3}, {2, 5}, {4, 5}}},
+       {{0, 3}, {1, 3}, {1, 5}, {2, 3}, {2, 5}, {4, 5}},
+       {{{0, 1, 2, 4}}, {{0, 2, 3, 7}}, {{0, 2, 4, 7}}, {{1, 2, 4, 6}}, {{1, 4, 5, 6}},
+        {{2, 4, 6, 7}}}},
       // Figure 9: a 3-cycle 0-1-2, each with a corner tet hanging on it (1 1 1 3 3 3).
       {"hex6_cycle3", CellType::Hex, 6,
        {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 4}, {2, 5}},
-       {{0, 3}, {1, 4}, {2, 5}, {3, 4}, {3, 5}, {4, 5}}},
+       {{0, 3}, {1, 4}, {2, 5}, {3, 4}, {3, 5}, {4, 5}},
+       {{{0, 1, 2, 5}}, {{0, 2, 3, 5}}, {{0, 3, 5, 7}}, {{0, 4, 5, 7}}, {{2, 3, 5, 7}},
+        {{2, 5, 6, 7}}}},
   };
 }
 
@@ -55,6 +67,12 @@ EdgeSet edge_set(const std::vector<std::pair<int, int>>& edges, const std::vecto
   return out;
 }
 
+std::vector<int> identity_of(int n) {
+  std::vector<int> id(n);
+  std::iota(id.begin(), id.end(), 0);
+  return id;
+}
+
 bool has_edge(const std::vector<std::pair<int, int>>& edges, int a, int b) {
   for (const auto& [x, y] : edges) {
     if ((x == a && y == b) || (x == b && y == a)) return true;
@@ -62,10 +80,59 @@ bool has_edge(const std::vector<std::pair<int, int>>& edges, int a, int b) {
   return false;
 }
 
+// The extended RF-graph of a realisation: links between tets sharing three corners, quads
+// between tets with a face in the same quad face of the reference cell.
+std::pair<EdgeSet, EdgeSet> realised_graph(const RFGraph& graph) {
+  const CellDescriptor& d = descriptor(graph.type);
+  const auto& tets = graph.realisation;
+  auto on_quad = [&](const std::array<int, 4>& t, int f) {
+    int hits = 0;
+    for (int v : t) {
+      for (int i = 0; i < 4; ++i) hits += (d.face[f][i] == v);
+    }
+    return hits == 3;
+  };
+  EdgeSet links, quads;
+  for (int a = 0; a < graph.nb_nodes; ++a) {
+    for (int b = a + 1; b < graph.nb_nodes; ++b) {
+      int shared = 0;
+      for (int v : tets[a]) shared += std::count(tets[b].begin(), tets[b].end(), v);
+      if (shared == 3) links.insert({a, b});
+      for (int f = 0; f < d.nb_faces; ++f) {
+        if (d.face_size[f] == 4 && on_quad(tets[a], f) && on_quad(tets[b], f)) quads.insert({a, b});
+      }
+    }
+  }
+  return {links, quads};
+}
+
+// Reorders each graph's realisation so that its tet i is node i: finds the isomorphism between
+// the realisation's graph and the graph data (asserting there is one: this checks the data).
+std::vector<RFGraph> checked_graphs() {
+  std::vector<RFGraph> graphs = make_graphs();
+  for (RFGraph& g : graphs) {
+    const auto [links, quads] = realised_graph(g);
+    std::vector<int> perm(g.nb_nodes);
+    std::iota(perm.begin(), perm.end(), 0);
+    bool found = false;
+    do {  // perm maps realisation tet -> graph node
+      found = edge_set(std::vector<std::pair<int, int>>(links.begin(), links.end()), perm) ==
+                  edge_set(g.links, identity_of(g.nb_nodes)) &&
+              edge_set(std::vector<std::pair<int, int>>(quads.begin(), quads.end()), perm) ==
+                  edge_set(g.quads, identity_of(g.nb_nodes));
+    } while (!found && std::next_permutation(perm.begin(), perm.end()));
+    HEXMERGE_ASSERT(found, "an RF-graph does not match its realisation");
+    std::vector<std::array<int, 4>> ordered(g.nb_nodes);
+    for (int t = 0; t < g.nb_nodes; ++t) ordered[perm[t]] = g.realisation[t];
+    g.realisation = ordered;
+  }
+  return graphs;
+}
+
 }  // namespace
 
 const std::vector<RFGraph>& rf_graphs() {
-  static const std::vector<RFGraph> graphs = make_graphs();
+  static const std::vector<RFGraph> graphs = checked_graphs();
   return graphs;
 }
 
@@ -127,6 +194,17 @@ std::vector<SearchProgram> compile_search_programs(const RFGraph& graph, int gra
       }
     }
     HEXMERGE_ASSERT(static_cast<int>(order.size()) == graph.nb_nodes, "RF-graph not connected");
+    // Which LINKs bring a new vertex, replayed on the realisation in program order.
+    program.adds_vertex.assign(program.code.size(), 0);
+    std::set<int> seen(graph.realisation[root].begin(), graph.realisation[root].end());
+    for (std::size_t pc = 0; pc < program.code.size(); ++pc) {
+      const Instruction& in = program.code[pc];
+      if (in.op != Instruction::Link) continue;
+      const auto& tet = graph.realisation[order[in.b]];
+      const std::size_t before = seen.size();
+      seen.insert(tet.begin(), tet.end());
+      program.adds_vertex[pc] = seen.size() > before ? 1 : 0;
+    }
     program.quad_degree.assign(graph.nb_nodes, 0);
     for (const auto& [a, b] : graph.quads) {
       ++program.quad_degree[slot[a]];

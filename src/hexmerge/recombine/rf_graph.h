@@ -7,6 +7,7 @@
 /// two tets that share an internal face; a dashed edge (a "quad") joins two tets whose external
 /// faces pair up into one quadrilateral face of the element.
 
+#include <array>
 #include <string>
 #include <utility>
 #include <vector>
@@ -22,6 +23,11 @@ struct RFGraph {
   int nb_nodes;          ///< number of tets
   std::vector<std::pair<int, int>> links;  ///< solid edges: shared internal faces
   std::vector<std::pair<int, int>> quads;  ///< dashed edges: quadrilateral pairs
+  /// One decomposition with this graph: tets on the corners of the reference cell (local
+  /// numbering of cell_type.h), node i = tet i. The graph is checked against it at start-up,
+  /// and the search programs take from it at which step a tet brings a new vertex (each class
+  /// is a single orbit of the cell's symmetries, so that step is the same in every member).
+  std::vector<std::array<int, 4>> realisation;
 };
 
 /// The paper's graphs: the pyramid (2 tets), the prism (3 tets, figure 2) and the six hexahedron
@@ -47,6 +53,9 @@ struct SearchProgram {
   /// Per program node: how many of its tet's faces are halves of the element's quad faces (its
   /// number of dashed edges). A tet with fewer faces that can pair into a quad cannot be there.
   std::vector<unsigned char> quad_degree;
+  /// Per instruction: for a LINK to a new node, 1 when its tet brings a vertex not yet in the
+  /// match, 0 when all four of its vertices are already there; unused for other instructions.
+  std::vector<unsigned char> adds_vertex;
 };
 
 /// Graph nodes grouped by symmetry: two nodes are in one orbit when an automorphism of the

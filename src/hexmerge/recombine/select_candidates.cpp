@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <array>
 #include <deque>
+#include <exception>
+#include <thread>
 
 #include "hexmerge/core/error.h"
 
@@ -18,8 +20,8 @@ int gain(const Candidate& c) { return c.nb_tets - 1; }  // elements saved by mer
 // One boundary triangle of a candidate: the tet face it is, the tet across it, and the face of
 // the candidate's cell that it lies in.
 struct Side {
-  std::array<index_t, 3> tri;
   index_t neighbor;  // NO_CELL on the domain boundary
+  int neighbor_face; // local face of the neighbour across it
   int cell_face;
 };
 
@@ -58,37 +60,69 @@ struct Stage {
   bool allow_nonconforming;
 };
 
-class Selector {
- public:
-  Selector(const TetMesh& mesh, const TetTopology& topology,
-           const std::vector<Candidate>& candidates, const RecombineParameters& parameters,
-           bool strict)
-      : mesh_(mesh), topo_(topology), cands_(candidates), params_(parameters), strict_(strict),
-        owner_(mesh.nb_tets(), NO_INDEX), chosen_(candidates.size(), 0) {
-    // Tet -> candidates, CSR.
+// What every selection reads and none changes, built once: tet -> candidates, the cell face
+// each tet face of a candidate lies in, the boundary tets.
+struct CandidateIndex {
+  CandidateIndex(const TetMesh& mesh, const TetTopology& topo,
+                 const std::vector<Candidate>& cands, bool respect_regions) {
     const index_t nt = mesh.nb_tets();
-    offsets_.assign(static_cast<std::size_t>(nt) + 1, 0);
-    for (const Candidate& c : cands_) {
-      for (int i = 0; i < c.nb_tets; ++i) ++offsets_[c.tets[i] + 1];
+    offsets.assign(static_cast<std::size_t>(nt) + 1, 0);
+    first_face.assign(cands.size() + 1, 0);
+    for (index_t ci = 0; ci < cands.size(); ++ci) {
+      const Candidate& c = cands[ci];
+      for (int i = 0; i < c.nb_tets; ++i) ++offsets[c.tets[i] + 1];
+      first_face[ci + 1] = first_face[ci] + 4 * static_cast<std::size_t>(c.nb_tets);
     }
-    for (index_t t = 0; t < nt; ++t) offsets_[t + 1] += offsets_[t];
-    ids_.resize(offsets_[nt]);
-    std::vector<index_t> fill(offsets_.begin(), offsets_.end() - 1);
-    for (index_t ci = 0; ci < cands_.size(); ++ci) {
-      const Candidate& c = cands_[ci];
-      for (int i = 0; i < c.nb_tets; ++i) ids_[fill[c.tets[i]]++] = ci;
+    for (index_t t = 0; t < nt; ++t) offsets[t + 1] += offsets[t];
+    ids.resize(offsets[nt]);
+    std::vector<index_t> fill(offsets.begin(), offsets.end() - 1);
+    cell_face.assign(first_face.back(), -1);
+    for (index_t ci = 0; ci < cands.size(); ++ci) {
+      const Candidate& c = cands[ci];
+      for (int i = 0; i < c.nb_tets; ++i) {
+        const index_t t = c.tets[i];
+        ids[fill[t]++] = ci;
+        const index_t* q = mesh.tet(t);
+        for (int f = 0; f < 4; ++f) {
+          const index_t n = topo.neighbor(t, f);
+          if (n != NO_CELL && std::find(c.tets.begin(), c.tets.begin() + c.nb_tets, n) !=
+                                  c.tets.begin() + c.nb_tets) {
+            continue;  // internal face of the candidate
+          }
+          const std::array<index_t, 3> tri{q[kTet.face[f][0]], q[kTet.face[f][1]],
+                                           q[kTet.face[f][2]]};
+          const int cf = cell_face_of(c, tri);
+          HEXMERGE_ASSERT(cf >= 0, "a candidate's boundary triangle is not on its cell");
+          cell_face[first_face[ci] + 4 * i + f] = static_cast<signed char>(cf);
+        }
+      }
     }
-    is_boundary_.assign(nt, 0);
+    is_boundary.assign(nt, 0);
     for (index_t t = 0; t < nt; ++t) {
       for (int f = 0; f < 4; ++f) {
-        const index_t n = topo_.neighbor(t, f);
-        if (n == NO_CELL ||
-            (params_.respect_regions && mesh_.region(n) != mesh_.region(t))) {
-          is_boundary_[t] = 1;
+        const index_t n = topo.neighbor(t, f);
+        if (n == NO_CELL || (respect_regions && mesh.region(n) != mesh.region(t))) {
+          is_boundary[t] = 1;
         }
       }
     }
   }
+
+  std::vector<index_t> offsets, ids;   // tet -> candidates (CSR)
+  std::vector<std::size_t> first_face; // candidate -> first entry of cell_face
+  std::vector<signed char> cell_face;  // per candidate, tet i, face f: its cell face, or -1
+  std::vector<char> is_boundary;
+};
+
+class Selector {
+ public:
+  Selector(const TetMesh& mesh, const TetTopology& topology,
+           const std::vector<Candidate>& candidates, const CandidateIndex& index,
+           const RecombineParameters& parameters, bool strict)
+      : mesh_(mesh), topo_(topology), cands_(candidates), params_(parameters), strict_(strict),
+        owner_(mesh.nb_tets(), NO_INDEX), chosen_(candidates.size(), 0),
+        offsets_(index.offsets), ids_(index.ids), index_(index),
+        is_boundary_(index.is_boundary) {}
 
   Selection run(const ProgressCallback& progress) {
     std::vector<Stage> conforming, relaxed;
@@ -139,34 +173,36 @@ class Selector {
     return std::find(c.tets.begin(), c.tets.begin() + c.nb_tets, t) != c.tets.begin() + c.nb_tets;
   }
 
-  Sides sides(const Candidate& c) const {
+  Sides sides(index_t ci) const {
+    const Candidate& c = cands_[ci];
     Sides s;
     for (int i = 0; i < c.nb_tets; ++i) {
-      const index_t t = c.tets[i];
-      const index_t* q = mesh_.tet(t);
       for (int f = 0; f < 4; ++f) {
-        const index_t n = topo_.neighbor(t, f);
-        if (n != NO_CELL && contains(c, n)) continue;
-        Side& side = s.side[s.count++];
-        side.tri = {q[kTet.face[f][0]], q[kTet.face[f][1]], q[kTet.face[f][2]]};
-        side.neighbor = n;
-        side.cell_face = cell_face_of(c, side.tri);
-        HEXMERGE_ASSERT(side.cell_face >= 0, "a candidate's boundary triangle is not on its cell");
+        const int cf = index_.cell_face[index_.first_face[ci] + 4 * i + f];
+        if (cf < 0) continue;
+        const index_t n = topo_.neighbor(c.tets[i], f);
+        s.side[s.count++] = {n, n == NO_CELL ? -1 : topo_.neighbor_face(c.tets[i], f), cf};
       }
     }
     return s;
   }
 
+  // The cell face of candidate ei that face f of its tet t lies in (-1: inside the cell).
+  int cell_face_at(index_t ei, index_t t, int f) const {
+    const Candidate& e = cands_[ei];
+    const int i = static_cast<int>(std::find(e.tets.begin(), e.tets.begin() + e.nb_tets, t) -
+                                   e.tets.begin());
+    return index_.cell_face[index_.first_face[ei] + 4 * i + f];
+  }
+
   // Quad faces of chosen elements that touch free tet t through one of its faces: their keys
   // must all be quad faces of whatever element takes t.
   void required_quads(index_t t, std::vector<QuadKey>& keys) const {
-    const index_t* q = mesh_.tet(t);
     for (int f = 0; f < 4; ++f) {
       const index_t n = topo_.neighbor(t, f);
       if (n == NO_CELL || is_free(n)) continue;
       const Candidate& e = cands_[owner_[n]];
-      const std::array<index_t, 3> tri{q[kTet.face[f][0]], q[kTet.face[f][1]], q[kTet.face[f][2]]};
-      const int ef = cell_face_of(e, tri);
+      const int ef = cell_face_at(owner_[n], n, topo_.neighbor_face(t, f));
       if (ef >= 0 && is_quad(e, ef)) keys.push_back(face_key(e, ef));
     }
   }
@@ -233,7 +269,7 @@ class Selector {
   // it; with `pending_ok` false (the final count) it does not.
   std::size_t violations(index_t ci, bool pending_ok = true, bool count_triangles = true) const {
     const Candidate& c = cands_[ci];
-    const Sides s = sides(c);
+    const Sides s = sides(ci);
     std::size_t bad = 0;
     const CellDescriptor& d = descriptor(c.type);
     for (int f = 0; f < d.nb_faces; ++f) {
@@ -249,7 +285,7 @@ class Selector {
         if (!count_triangles) continue;
         if (n != NO_CELL && !is_free(n)) {
           const Candidate& e = cands_[owner_[n]];
-          if (is_quad(e, cell_face_of(e, half[0]->tri))) ++bad;
+          if (is_quad(e, cell_face_at(owner_[n], n, half[0]->neighbor_face))) ++bad;
         }
         continue;
       }
@@ -266,7 +302,7 @@ class Selector {
           continue;
         }
         const Candidate& e = cands_[owner_[n1]];
-        const int ef = cell_face_of(e, half[0]->tri);
+        const int ef = cell_face_at(owner_[n1], n1, half[0]->neighbor_face);
         if (!is_quad(e, ef) || face_key(e, ef) != face_key(c, f)) ++bad;
         continue;
       }
@@ -283,7 +319,7 @@ class Selector {
   // Pending quad faces of candidate ci (not chosen) that are not safe (closing_pyramid).
   std::size_t risky_quads(index_t ci) const {
     const Candidate& c = cands_[ci];
-    const Sides s = sides(c);
+    const Sides s = sides(ci);
     const CellDescriptor& d = descriptor(c.type);
     std::size_t risky = 0;
     for (int f = 0; f < d.nb_faces; ++f) {
@@ -607,7 +643,7 @@ class Selector {
   template <class Touch>
   void close_pending(index_t ci, Touch* touch) {
     const Candidate& c = cands_[ci];
-    const Sides s = sides(c);
+    const Sides s = sides(ci);
     const CellDescriptor& d = descriptor(c.type);
     for (int f = 0; f < d.nb_faces; ++f) {
       if (d.face_size[f] != 4) continue;
@@ -633,8 +669,10 @@ class Selector {
   const bool strict_;  // pending quads only where a safe closing pyramid waits (closing_pyramid)
   std::vector<index_t> owner_;   // per tet: the chosen candidate that holds it, or NO_INDEX
   std::vector<char> chosen_;     // per candidate
-  std::vector<index_t> offsets_, ids_;  // tet -> candidates
-  std::vector<char> is_boundary_;
+  const std::vector<index_t>& offsets_;  // tet -> candidates
+  const std::vector<index_t>& ids_;
+  const CandidateIndex& index_;
+  const std::vector<char>& is_boundary_;
   std::vector<char> was_closer_ = std::vector<char>(cands_.size(), 0);
 
   bool journaling_ = false;
@@ -655,11 +693,33 @@ Selection select_candidates(const TetMesh& mesh, const TetTopology& topology,
   // close it; elements that end up unclosed are released: best where hexes tile, as in
   // structured regions). Both are run on the same candidates; the one with fewer elements wins,
   // then the one with more hexahedra. The report names the winner.
+  const CandidateIndex index(mesh, topology, candidates, parameters.respect_regions);
   const bool strict = parameters.conformity == Conformity::Conforming && parameters.make_pyramids;
-  Selection best = Selector(mesh, topology, candidates, parameters, strict).run(progress);
-  best.strategy = strict ? "safe_pyramids" : "closable";
-  if (!strict) return best;
-  Selection other = Selector(mesh, topology, candidates, parameters, false).run(progress);
+  if (!strict) {
+    Selection only = Selector(mesh, topology, candidates, index, parameters, false).run(progress);
+    only.strategy = parameters.conformity == Conformity::Conforming ? "closable" : "";
+    return only;
+  }
+  // The two selections share only read-only data: the second runs on its own thread.
+  Selection other;
+  std::exception_ptr other_error;
+  std::thread second([&] {
+    try {
+      other = Selector(mesh, topology, candidates, index, parameters, false).run({});
+    } catch (...) {
+      other_error = std::current_exception();
+    }
+  });
+  Selection best;
+  try {
+    best = Selector(mesh, topology, candidates, index, parameters, true).run(progress);
+  } catch (...) {
+    second.join();
+    throw;
+  }
+  second.join();
+  if (other_error) std::rethrow_exception(other_error);
+  best.strategy = "safe_pyramids";
   other.strategy = "closable";
   auto cells = [&](const Selection& s) {
     std::size_t merged = 0, hex_tets = 0;
