@@ -23,11 +23,15 @@ struct Entry {
 
 class Builder {
  public:
-  Builder(const TetMesh& mesh, const TetTopology& topology, double min_dihedral, double max_corner)
-      : mesh_(mesh), topo_(topology), min_dihedral_(min_dihedral), max_corner_(max_corner),
+  Builder(const TetMesh& mesh, const TetTopology& topology, const std::vector<float>& normals,
+          double min_dihedral, double max_corner)
+      : mesh_(mesh), topo_(topology), normals_(normals), min_dihedral_(min_dihedral),
+        max_corner_(max_corner),
         // Two outward normals of a flat quad agree; a dihedral angle of at least dangle means
         // they are at most 180 - dangle apart.
-        min_cos_(std::cos((180.0 - min_dihedral) * kDegToRad) - 1e-12) {}
+        // (Single-precision normals: the filter lets through a little more, the exact test
+        // in accept() decides.)
+        min_cos_(std::cos((180.0 - min_dihedral) * kDegToRad) - 1e-5) {}
 
   void faces_of_tet(index_t t, std::vector<Entry>& out) const {
     const std::size_t first = out.size();
@@ -43,10 +47,11 @@ class Builder {
         const int n = tets_around_edge(t, q[i], q[j], others, around);
         for (int side = 0; side < 2; ++side) {
           const int f = others[side];
-          const Vec3 nt = unit_normal(t, f);
+          const float* nt = &normals_[12 * std::size_t(t) + 3 * f];
           for (int a = 0; a < n; ++a) {
             const auto [s, g] = around[a];
-            if (nt.dot(unit_normal(s, g)) < min_cos_) continue;
+            const float* ns = &normals_[12 * std::size_t(s) + 3 * g];
+            if (nt[0] * ns[0] + nt[1] * ns[1] + nt[2] * ns[2] < min_cos_) continue;
             QuadPartner p;
             if (accept(t, f, s, g, p)) out.push_back({4 * t + f, p});
           }
@@ -62,14 +67,6 @@ class Builder {
   std::array<index_t, 3> tri(index_t t, int f) const {
     const index_t* q = mesh_.tet(t);
     return {q[kTet.face[f][0]], q[kTet.face[f][1]], q[kTet.face[f][2]]};
-  }
-
-  Vec3 unit_normal(index_t t, int f) const {
-    const auto v = tri(t, f);
-    const Vec3 a = Vec3::of(mesh_.point(v[0]));
-    const Vec3 n = (Vec3::of(mesh_.point(v[1])) - a).cross(Vec3::of(mesh_.point(v[2])) - a);
-    const double len = n.norm();
-    return len > 0.0 ? n * (1.0 / len) : n;
   }
 
   // Faces (tet, local face) holding edge x-y of the tets around it other than t: walk from t
@@ -123,29 +120,59 @@ class Builder {
 
   const TetMesh& mesh_;
   const TetTopology& topo_;
+  const std::vector<float>& normals_;  // 4 outward unit normals per tet
   double min_dihedral_, max_corner_, min_cos_;
 };
+
+// Runs work(begin, end) over [0, n) in chunks on `threads` threads (the caller's included).
+template <class Work>
+void parallel_chunks(index_t n, index_t chunk_size, int threads, const Work& work) {
+  const index_t nb_chunks = (n + chunk_size - 1) / chunk_size;
+  std::atomic<index_t> next{0};
+  auto run = [&] {
+    for (index_t chunk; (chunk = next.fetch_add(1)) < nb_chunks;) {
+      work(chunk, chunk * chunk_size, std::min(n, (chunk + 1) * chunk_size));
+    }
+  };
+  std::vector<std::thread> pool;
+  for (int i = 1; i < std::max(1, threads); ++i) pool.emplace_back(run);
+  run();
+  for (auto& th : pool) th.join();
+}
+
+std::vector<float> unit_normals(const TetMesh& mesh, int threads) {
+  std::vector<float> normals(12 * static_cast<std::size_t>(mesh.nb_tets()));
+  parallel_chunks(mesh.nb_tets(), 65536, threads, [&](index_t, index_t begin, index_t end) {
+    for (index_t t = begin; t < end; ++t) {
+      const index_t* q = mesh.tet(t);
+      for (int f = 0; f < 4; ++f) {
+        const Vec3 a = Vec3::of(mesh.point(q[kTet.face[f][0]]));
+        const Vec3 n = (Vec3::of(mesh.point(q[kTet.face[f][1]])) - a)
+                           .cross(Vec3::of(mesh.point(q[kTet.face[f][2]])) - a);
+        const double len = n.norm();
+        const Vec3 u = len > 0.0 ? n * (1.0 / len) : n;
+        float* out = &normals[12 * std::size_t(t) + 3 * f];
+        out[0] = static_cast<float>(u.x);
+        out[1] = static_cast<float>(u.y);
+        out[2] = static_cast<float>(u.z);
+      }
+    }
+  });
+  return normals;
+}
 
 }  // namespace
 
 QuadPairs::QuadPairs(const TetMesh& mesh, const TetTopology& topology, double min_dihedral_angle,
                      double max_face_angle, int threads) {
   const index_t nt = mesh.nb_tets();
-  const Builder builder(mesh, topology, min_dihedral_angle, max_face_angle);
+  const std::vector<float> normals = unit_normals(mesh, threads);
+  const Builder builder(mesh, topology, normals, min_dihedral_angle, max_face_angle);
   constexpr index_t kChunk = 16384;
-  const index_t nb_chunks = (nt + kChunk - 1) / kChunk;
-  std::vector<std::vector<Entry>> per_chunk(nb_chunks);
-  std::atomic<index_t> next{0};
-  auto work = [&] {
-    for (index_t chunk; (chunk = next.fetch_add(1)) < nb_chunks;) {
-      const index_t end = std::min(nt, (chunk + 1) * kChunk);
-      for (index_t t = chunk * kChunk; t < end; ++t) builder.faces_of_tet(t, per_chunk[chunk]);
-    }
-  };
-  std::vector<std::thread> pool;
-  for (int i = 1; i < std::max(1, threads); ++i) pool.emplace_back(work);
-  work();
-  for (auto& th : pool) th.join();
+  std::vector<std::vector<Entry>> per_chunk((nt + kChunk - 1) / kChunk);
+  parallel_chunks(nt, kChunk, threads, [&](index_t chunk, index_t begin, index_t end) {
+    for (index_t t = begin; t < end; ++t) builder.faces_of_tet(t, per_chunk[chunk]);
+  });
 
   offsets_.assign(4 * static_cast<std::size_t>(nt) + 1, 0);
   masks_.assign(nt, 0);
