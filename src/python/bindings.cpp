@@ -23,6 +23,9 @@
 #include "hexmerge/mesh/tet_mesh.h"
 #include "hexmerge/recombine/parameters.h"
 #include "hexmerge/recombine/recombine.h"
+#ifdef HEXMERGE_WITH_OCC
+#include "hexmerge/occ/regions_by_solid.h"
+#endif
 
 namespace py = pybind11;
 using namespace hexmerge;
@@ -286,6 +289,39 @@ void run_validate(const PointsIn& points, const IndexIn& cells, const py::object
   validate_tet_mesh(input);
 }
 
+#ifdef HEXMERGE_WITH_OCC
+py::tuple run_regions_by_solid(const std::string& brep, const PointsIn& points, const IndexIn& cells,
+                               double tolerance, int samples_per_piece, bool classify_every_tet,
+                               int nb_threads) {
+  TetMesh mesh;
+  mesh.points = flat(points, 3, "points");
+  mesh.tets = flat(cells, 4, "cells");
+  RegionsBySolidParameters parameters;
+  parameters.tolerance = tolerance;
+  parameters.samples_per_piece = samples_per_piece;
+  parameters.classify_every_tet = classify_every_tet;
+  parameters.nb_threads = nb_threads;
+  RegionsBySolidReport report;
+  std::vector<std::int32_t> regions;
+  {
+    py::gil_scoped_release released;
+    regions = regions_by_solid(brep, mesh, parameters, report);
+  }
+  py::dict d;
+  d["nb_solids"] = report.nb_solids;
+  d["nb_shared_faces"] = report.nb_shared_faces;
+  d["nb_interface_nodes"] = report.nb_interface_nodes;
+  d["nb_pieces"] = report.nb_pieces;
+  d["nb_split_pieces"] = report.nb_split_pieces;
+  d["nb_classified_points"] = report.nb_classified_points;
+  d["nb_unassigned_tets"] = report.nb_unassigned_tets;
+  py::dict phases;
+  for (const auto& [name, seconds] : report.phase_seconds) phases[name.c_str()] = seconds;
+  d["phase_seconds"] = phases;
+  return py::make_tuple(to_numpy(std::move(regions)), d);
+}
+#endif
+
 py::list table() {
   py::list rows;
   for (const ParameterInfo& p : parameter_table()) {
@@ -394,6 +430,25 @@ Returns the CheckReport as a dict; `valid` is True when the mesh passes.)doc");
         R"doc(Raises InputError naming the first node or element that the engine cannot process.
 
 points float64 (N, 3); cells (M, 4); regions int32 (M,) or None.)doc");
+
+#ifdef HEXMERGE_WITH_OCC
+  m.attr("with_opencascade") = true;
+  m.def("regions_by_solid", &run_regions_by_solid, py::arg("brep"), py::arg("points"),
+        py::arg("cells"), py::arg("tolerance") = 1e-6, py::arg("samples_per_piece") = 5,
+        py::arg("classify_every_tet") = false, py::arg("nb_threads") = 0,
+        R"doc(The solid of a shape (BREP text) holding each tet; OpenCASCADE.
+
+brep      the shape as BREP text (FreeCAD: Shape.exportBrepToString()).
+points    float64 (N, 3).
+cells     (M, 4) linear tets (corners only), uint32-compatible ids.
+tolerance distance to a face shared by two solids, as a fraction of the shape's diagonal.
+samples_per_piece, classify_every_tet, nb_threads: see RegionsBySolidParameters.
+
+Returns (solids, report): solids int32 (M,), 0-based solid index in TopExp::MapShapes order
+(FreeCAD's Shape.Solids) or -1; report a dict of counts and phase_seconds.)doc");
+#else
+  m.attr("with_opencascade") = false;
+#endif
 
   m.def("parameter_table", &table,
         R"doc(The engine's parameters, in display order: a list of dicts with name, type ("float",

@@ -19,6 +19,7 @@ except ImportError as e:  # pragma: no cover - depends on the build
     ) from e
 
 from ._api import CellBlock, MixedMesh, cell_types, check, parameters, recombine, validate
+from ._regions import WITH_OPENCASCADE, regions_by_solid
 
 InputError = _core.InputError
 Cancelled = _core.Cancelled
@@ -30,9 +31,11 @@ __all__ = [
     "CellBlock",
     "InputError",
     "MixedMesh",
+    "WITH_OPENCASCADE",
     "cell_types",
     "check",
     "parameters",
     "recombine",
+    "regions_by_solid",
     "validate",
 ]

@@ -40,3 +40,16 @@ def validate_tet_mesh(
 ) -> None: ...
 def parameter_table() -> list[dict[str, Any]]: ...
 def cell_types() -> list[dict[str, Any]]: ...
+
+# Present only in a module built with OpenCASCADE (with_opencascade is True).
+with_opencascade: bool
+
+def regions_by_solid(
+    brep: str,
+    points: npt.NDArray[np.float64],
+    cells: npt.NDArray[np.uint32],
+    tolerance: float = 1e-6,
+    samples_per_piece: int = 5,
+    classify_every_tet: bool = False,
+    nb_threads: int = 0,
+) -> tuple[npt.NDArray[np.int32], dict[str, Any]]: ...
