@@ -15,12 +15,17 @@
 
 namespace hexmerge {
 
+/// Most tets in one candidate: a hexahedron's subdivisions have 5 to 15 tets (Pellerin,
+/// Verhetsel & Remacle 2018); the exhaustive finder's groups may add flat tets on its faces.
+constexpr int MAX_CANDIDATE_TETS = 16;
+
 /// A possible element: a group of tets and the cell they form.
 struct Candidate {
   std::array<index_t, 8> vertices;  ///< local order of cell_type.h; unused slots NO_VERTEX
-  std::array<index_t, 6> tets;      ///< sorted; unused slots NO_CELL
+  std::array<index_t, MAX_CANDIDATE_TETS> tets;  ///< sorted; first nb_tets used, then NO_CELL
   CellType type;
-  std::uint8_t graph;               ///< index into rf_graphs() of the template that found it
+  std::uint8_t graph;  ///< index into rf_graphs() of the template that found it, or
+                       ///< EXHAUSTIVE_GRAPH (find_candidates_exhaustive.h)
   std::uint8_t nb_tets;
   float quality;                    ///< scaled Jacobian
   float min_dihedral_angle;         ///< degrees, over its quad faces (180 when none)

@@ -18,7 +18,7 @@ std::string number(double value) {
 std::string flag(bool value) { return value ? "true" : "false"; }
 
 const std::vector<std::string> kConformityChoices = {"conforming", "last_resort", "allow"};
-const std::vector<std::string> kFinderChoices = {"programs"};
+const std::vector<std::string> kFinderChoices = {"programs", "exhaustive"};
 const std::vector<std::string> kBoundaryOrderChoices = {"quality", "fewest_matches"};
 
 InputError bad_value(const std::string& name, const std::string& value, const std::string& why) {
@@ -87,7 +87,8 @@ std::vector<ParameterInfo> make_table() {
        "Order of the greedy boundary phase: best quality first, or the paper's fewest remaining "
        "matches first"},
       {"finder", "choice", to_string(d.finder), "", 0, 0, kFinderChoices, "Candidate finder",
-       "How candidate elements are found: the paper's RF-graph search programs"},
+       "How candidate elements are found: the paper's RF-graph search programs (5- and 6-tet "
+       "hexahedra), or exhaustively (every cell its vertices' tets fill, any subdivision)"},
       {"threads", "int", number(d.threads), "", 0, 1024, {}, "Threads",
        "Threads for the candidate search; 0 uses every hardware thread"},
   };

@@ -34,6 +34,8 @@ enum class BoundaryOrder {
 enum class Finder {
   /// The paper's RF-graph search programs (LINK/QUAD), 5- and 6-tet hexahedra.
   Programs,
+  /// Every cell whose vertices' tets fill it, any subdivision (find_candidates_exhaustive.h).
+  Exhaustive,
 };
 
 /// Parameters of hexmerge::recombine. Every field is listed in parameter_table() with its unit,

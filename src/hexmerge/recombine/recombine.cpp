@@ -8,6 +8,7 @@
 #include "hexmerge/geometry/quality.h"
 #include "hexmerge/mesh/tet_topology.h"
 #include "hexmerge/recombine/find_candidates.h"
+#include "hexmerge/recombine/find_candidates_exhaustive.h"
 #include "hexmerge/recombine/rf_graph.h"
 #include "hexmerge/recombine/select_candidates.h"
 
@@ -126,12 +127,26 @@ MixedMesh recombine(const TetMesh& input, const RecombineParameters& parameters,
   criteria.types[static_cast<int>(CellType::Hex)] = parameters.make_hexahedra;
   criteria.types[static_cast<int>(CellType::Prism)] = parameters.make_prisms;
   criteria.types[static_cast<int>(CellType::Pyramid)] = parameters.make_pyramids;
+  const int threads = thread_count(parameters.threads);
   const std::vector<Candidate> candidates =
-      find_candidates(input, topology, criteria, thread_count(parameters.threads), progress);
+      parameters.finder == Finder::Exhaustive
+          ? find_candidates_exhaustive(input, topology, criteria, threads, progress)
+          : find_candidates(input, topology, criteria, threads, progress);
   timer.lap("candidates");
-  const auto& graphs = rf_graphs();
-  for (const auto& g : graphs) report.candidates_per_template[g.name] = 0;
-  for (const Candidate& c : candidates) ++report.candidates_per_template[graphs[c.graph].name];
+  // Templates by name; the exhaustive finder's candidates count as "exhaustive_<type>".
+  std::vector<std::array<std::size_t, NB_CELL_TYPES>> counts(256);
+  for (const Candidate& c : candidates) ++counts[c.graph][static_cast<int>(c.type)];
+  if (parameters.finder == Finder::Exhaustive) {
+    for (CellType type : {CellType::Hex, CellType::Prism, CellType::Pyramid}) {
+      report.candidates_per_template[std::string("exhaustive_") + descriptor(type).name] =
+          counts[EXHAUSTIVE_GRAPH][static_cast<int>(type)];
+    }
+  } else {
+    const auto& graphs = rf_graphs();
+    for (std::size_t g = 0; g < graphs.size(); ++g) {
+      report.candidates_per_template[graphs[g].name] = counts[g][static_cast<int>(graphs[g].type)];
+    }
+  }
   report.candidates_total = candidates.size();
 
   const Selection selection = select_candidates(input, topology, candidates, parameters, progress);
