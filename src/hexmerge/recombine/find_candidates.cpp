@@ -356,7 +356,8 @@ std::vector<Candidate> find_candidates(const TetMesh& mesh, const TetTopology& t
                                        const AcceptanceCriteria& criteria, int threads,
                                        const ProgressCallback& progress) {
   const index_t nt = mesh.nb_tets();
-  const QuadPairs quad_pairs(mesh, topology, criteria.min_dihedral_angle, criteria.max_face_angle,
+  const QuadPairs quad_pairs(mesh, topology, criteria.min_dihedral_angle,
+                             criteria.min_boundary_dihedral_angle, criteria.max_face_angle,
                              std::max(1, threads));
   constexpr index_t kChunk = 8192;
   const index_t nb_chunks = (nt + kChunk - 1) / kChunk;

@@ -513,8 +513,8 @@ std::vector<Candidate> find_candidates_exhaustive(const TetMesh& mesh, const Tet
                                                   const AcceptanceCriteria& criteria, int threads,
                                                   const ProgressCallback& progress) {
   threads = std::max(1, threads);
-  const QuadPairs pairs(mesh, topology, criteria.min_dihedral_angle, criteria.max_face_angle,
-                        threads);
+  const QuadPairs pairs(mesh, topology, criteria.min_dihedral_angle,
+                        criteria.min_boundary_dihedral_angle, criteria.max_face_angle, threads);
   const QuadIndex index(mesh, pairs, threads);
 
   const index_t nq = static_cast<index_t>(index.size());

@@ -61,6 +61,10 @@ std::vector<ParameterInfo> make_table() {
       {"min_dihedral_angle", "float", number(d.min_dihedral_angle), "deg", 90, 180, {},
        "Min. quad dihedral angle",
        "Smallest accepted dihedral angle between the two triangles of a quad face (180 = flat)"},
+      {"min_boundary_dihedral_angle", "float", number(d.min_boundary_dihedral_angle), "deg", 90,
+       180, {}, "Min. boundary dihedral angle",
+       "Smallest accepted dihedral angle of a quad face on the domain boundary (keeps the "
+       "boundary on the geometry)"},
       {"max_face_angle", "float", number(d.max_face_angle), "deg", 90, 180, {},
        "Max. face angle",
        "Largest accepted corner angle of a quad face (90 = rectangle)"},
@@ -120,6 +124,8 @@ void set_parameter(RecombineParameters& p, const std::string& name, const std::s
   }
   if (name == "min_dihedral_angle") {
     p.min_dihedral_angle = parse_number(name, value, row->min, row->max);
+  } else if (name == "min_boundary_dihedral_angle") {
+    p.min_boundary_dihedral_angle = parse_number(name, value, row->min, row->max);
   } else if (name == "max_face_angle") {
     p.max_face_angle = parse_number(name, value, row->min, row->max);
   } else if (name == "min_scaled_jacobian") {
@@ -153,6 +159,7 @@ void validate_parameters(const RecombineParameters& p) {
   // Range checks go through the same parser as text input, so the two can never disagree.
   RecombineParameters scratch;
   set_parameter(scratch, "min_dihedral_angle", number(p.min_dihedral_angle));
+  set_parameter(scratch, "min_boundary_dihedral_angle", number(p.min_boundary_dihedral_angle));
   set_parameter(scratch, "max_face_angle", number(p.max_face_angle));
   set_parameter(scratch, "min_scaled_jacobian", number(p.min_scaled_jacobian));
   set_parameter(scratch, "threads", number(p.threads));

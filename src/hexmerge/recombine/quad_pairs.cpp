@@ -24,14 +24,15 @@ struct Entry {
 class Builder {
  public:
   Builder(const TetMesh& mesh, const TetTopology& topology, const std::vector<float>& normals,
-          double min_dihedral, double max_corner)
+          double min_dihedral, double min_boundary_dihedral, double max_corner)
       : mesh_(mesh), topo_(topology), normals_(normals), min_dihedral_(min_dihedral),
-        max_corner_(max_corner),
+        min_boundary_dihedral_(min_boundary_dihedral), max_corner_(max_corner),
         // Two outward normals of a flat quad agree; a dihedral angle of at least dangle means
         // they are at most 180 - dangle apart.
         // (Single-precision normals: the filter lets through a little more, the exact test
         // in accept() decides.)
-        min_cos_(std::cos((180.0 - min_dihedral) * kDegToRad) - 1e-5) {}
+        min_cos_(std::cos((180.0 - std::min(min_dihedral, min_boundary_dihedral)) * kDegToRad) -
+                 1e-5) {}
 
   void faces_of_tet(index_t t, std::vector<Entry>& out) const {
     const std::size_t first = out.size();
@@ -108,7 +109,8 @@ class Builder {
         const double* c = mesh_.point(y);
         const double* d = mesh_.point(z);
         const double dihedral = quad_dihedral_angle(a, b, c, d);
-        if (dihedral < min_dihedral_) return false;
+        const bool on_boundary = topo_.on_boundary(t, f) && topo_.on_boundary(s, g);
+        if (dihedral < (on_boundary ? min_boundary_dihedral_ : min_dihedral_)) return false;
         const double corner = quad_max_corner_angle(a, b, c, d);
         if (corner > max_corner_) return false;
         p = {4 * s + g, static_cast<float>(dihedral), static_cast<float>(corner)};
@@ -121,7 +123,7 @@ class Builder {
   const TetMesh& mesh_;
   const TetTopology& topo_;
   const std::vector<float>& normals_;  // 4 outward unit normals per tet
-  double min_dihedral_, max_corner_, min_cos_;
+  double min_dihedral_, min_boundary_dihedral_, max_corner_, min_cos_;
 };
 
 // Runs work(begin, end) over [0, n) in chunks on `threads` threads (the caller's included).
@@ -164,10 +166,11 @@ std::vector<float> unit_normals(const TetMesh& mesh, int threads) {
 }  // namespace
 
 QuadPairs::QuadPairs(const TetMesh& mesh, const TetTopology& topology, double min_dihedral_angle,
-                     double max_face_angle, int threads) {
+                     double min_boundary_dihedral_angle, double max_face_angle, int threads) {
   const index_t nt = mesh.nb_tets();
   const std::vector<float> normals = unit_normals(mesh, threads);
-  const Builder builder(mesh, topology, normals, min_dihedral_angle, max_face_angle);
+  const Builder builder(mesh, topology, normals, min_dihedral_angle, min_boundary_dihedral_angle,
+                        max_face_angle);
   constexpr index_t kChunk = 16384;
   std::vector<std::vector<Entry>> per_chunk((nt + kChunk - 1) / kChunk);
   parallel_chunks(nt, kChunk, threads, [&](index_t chunk, index_t begin, index_t end) {

@@ -23,11 +23,13 @@ struct QuadPartner {
 /// For every face of every tet, its acceptable quad partners (CSR).
 class QuadPairs {
  public:
-  /// @param[in] min_dihedral_angle  degrees, the paper's dangle
-  /// @param[in] max_face_angle      degrees, the paper's fangle
-  /// @param[in] threads             worker threads (>= 1)
+  /// @param[in] min_dihedral_angle           degrees, the paper's dangle
+  /// @param[in] min_boundary_dihedral_angle  degrees, dangle when both triangles are on the
+  ///                                         domain boundary
+  /// @param[in] max_face_angle               degrees, the paper's fangle
+  /// @param[in] threads                      worker threads (>= 1)
   QuadPairs(const TetMesh& mesh, const TetTopology& topology, double min_dihedral_angle,
-            double max_face_angle, int threads);
+            double min_boundary_dihedral_angle, double max_face_angle, int threads);
 
   const QuadPartner* begin(index_t t, int f) const { return &partners_[offsets_[4 * std::size_t(t) + f]]; }
   const QuadPartner* end(index_t t, int f) const { return &partners_[0] + offsets_[4 * std::size_t(t) + f + 1]; }

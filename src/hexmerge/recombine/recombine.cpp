@@ -121,6 +121,7 @@ MixedMesh recombine(const TetMesh& input, const RecombineParameters& parameters,
 
   AcceptanceCriteria criteria;
   criteria.min_dihedral_angle = parameters.min_dihedral_angle;
+  criteria.min_boundary_dihedral_angle = parameters.min_boundary_dihedral_angle;
   criteria.max_face_angle = parameters.max_face_angle;
   criteria.min_scaled_jacobian = parameters.min_scaled_jacobian;
   criteria.respect_regions = parameters.respect_regions;

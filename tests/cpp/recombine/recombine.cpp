@@ -21,6 +21,7 @@ RecombineParameters permissive() {
   RecombineParameters p;
   p.min_scaled_jacobian = 0.05;
   p.min_dihedral_angle = 120.0;
+  p.min_boundary_dihedral_angle = 120.0;
   p.max_face_angle = 175.0;
   return p;
 }
