@@ -35,7 +35,7 @@ struct Candidate {
 /// What a candidate must satisfy.
 struct AcceptanceCriteria {
   double min_dihedral_angle = 150.0;           ///< degrees
-  double min_boundary_dihedral_angle = 175.0;  ///< degrees, quads on the domain boundary
+  double min_boundary_dihedral_angle = 179.0;  ///< degrees, quads on the domain boundary
   double max_face_angle = 150.0;               ///< degrees
   double min_scaled_jacobian = 0.3;
   bool respect_regions = true;

@@ -44,7 +44,7 @@ struct RecombineParameters {
   double min_dihedral_angle = 150.0;  ///< degrees, [90, 180]: the paper's dangle
   /// degrees, [90, 180]: dangle for quad faces on the domain boundary, which must follow the
   /// geometry (a fold there changes the domain's volume)
-  double min_boundary_dihedral_angle = 175.0;
+  double min_boundary_dihedral_angle = 179.0;
   double max_face_angle = 150.0;      ///< degrees, [90, 180]: the paper's fangle
   double min_scaled_jacobian = 0.3;   ///< [-1, 1]: Verdict scaled Jacobian of every new element
   bool make_hexahedra = true;
