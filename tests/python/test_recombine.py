@@ -63,7 +63,9 @@ def test_affine_map_and_perturbation_keep_the_hexes() -> None:
     a = np.array([[1.0, 0.2, 0.1], [0.0, 0.9, 0.15], [0.05, 0.0, 1.1]])
     moved = points @ a.T + rng.uniform(-0.003, 0.003, points.shape)
     tets = orient(moved, tets)
-    mesh, _ = hexmerge.recombine(moved, tets)
+    # The perturbed grid's boundary is no longer flat: boundary quads fold by up to a degree or
+    # two, more than the default tolerates on the boundary.
+    mesh, _ = hexmerge.recombine(moved, tets, min_boundary_dihedral_angle=170)
     assert mesh.counts()["hexahedron"] == 27
     total = sum(cell_volumes(moved, b.type, b.data).sum() for b in mesh)
     # Quads are no longer flat: the fan volume differs from the tets' by their bending only.
