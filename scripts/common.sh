@@ -8,9 +8,12 @@ HEXMERGE_BUILD="${HEXMERGE_BUILD:-$HEXMERGE_ROOT/build}"
 HEXMERGE_PYTHON=/usr/bin/python3.11
 
 # The packages every use needs: compiler, CMake, pybind11, numpy, meshio (mesh files), Gmsh and
-# TetGen (test meshes), GoogleTest.
+# TetGen (test meshes), GoogleTest, OpenCASCADE (regions by solid: src/occ; Debian 12 ships one
+# header it needs in libocct-visualization-dev, and OCCT's CMake targets link libtbb-dev's files).
 HEXMERGE_BASE_PACKAGES=(g++ cmake make pybind11-dev python3-dev python3-numpy python3-meshio
-                        gmsh tetgen libgtest-dev)
+                        gmsh tetgen libgtest-dev
+                        libocct-foundation-dev libocct-modeling-data-dev
+                        libocct-modeling-algorithms-dev libocct-visualization-dev libtbb-dev)
 
 # Installs the Debian packages given that are not installed yet (apt-get update first, once).
 ensure_packages() {
