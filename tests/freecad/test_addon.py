@@ -125,6 +125,8 @@ class MultiMaterial(unittest.TestCase):
         obj = hm.make_hexdominant_mesh(doc, src)
         report = mesh_hexdominant.report_dict(obj)
         self.assertEqual(report["freecad"]["region_count"], 5)
+        # no volume groups in the Gmsh mesh: the regions come from the solids, in C++
+        self.assertIn("OpenCASCADE", report["freecad"]["regions"])
         m = obj.FemMesh
         groups = {m.getGroupName(g): m.getGroupElements(g) for g in m.Groups}
         self.assertEqual(sorted(groups), ["FemMaterial1_Solids", "FemMaterial2_Solids",
