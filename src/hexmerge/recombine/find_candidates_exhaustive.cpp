@@ -170,6 +170,8 @@ class QuadIndex {
 };
 
 constexpr int kMaxGroup = MAX_CANDIDATE_TETS;
+// Caps up to which every subset is a candidate (2^3 = 8 candidates at most per cell).
+constexpr int kMaxCapSubsets = 3;
 
 // Verifies cells and turns them into candidates.
 class CellBuilder {
@@ -320,59 +322,69 @@ class CellBuilder {
                                           mesh_.point(q[2]), mesh_.point(q[3]));
     const double cr = quad_max_corner_angle(mesh_.point(q[0]), mesh_.point(q[1]),
                                             mesh_.point(q[2]), mesh_.point(q[3]));
-    if (dh < criteria_.min_dihedral_angle || cr > criteria_.max_face_angle) return false;
+    const bool on_boundary = topo_.on_boundary(t, f1) && topo_.on_boundary(t, f2);
+    const double min_dihedral =
+        on_boundary ? criteria_.min_boundary_dihedral_angle : criteria_.min_dihedral_angle;
+    if (dh < min_dihedral || cr > criteria_.max_face_angle) return false;
     dihedral = static_cast<float>(dh);
     corner = static_cast<float>(cr);
     return true;
   }
 
+  // The group's candidate, and with caps: flat tets lying on its quad faces, outside the group,
+  // that may join it (on a face between two cells, either may take the cap). Every subset of the
+  // caps when there are at most kMaxCapSubsets of them, otherwise none and all.
   void emit() {
     const double sj = scaled_jacobian(type_, mesh_.points.data(), v_.data());
     if (sj < criteria_.min_scaled_jacobian) return;
+    struct FaceAngles {
+      float dihedral, corner;          // the group's own two triangles
+      float cap_dihedral, cap_corner;  // the cap's outer two, when the face has a cap
+      int cap;                         // index into caps, or -1
+    };
+    std::array<FaceAngles, 6> angles;
+    std::array<index_t, 6> caps;
+    int nb_caps = 0, nb_quads = 0;
+    for (int g = 0; g < d_->nb_faces; ++g) {
+      if (d_->face_size[g] != 4) continue;
+      FaceAngles& fa = angles[nb_quads++];
+      fa.cap = -1;
+      const index_t a = face_tris_[g][0], b = face_tris_[g][1];
+      if (!pair_angles(a, b, fa.dihedral, fa.corner)) return;
+      const index_t na = topo_.neighbor(a / 4, a % 4), nb = topo_.neighbor(b / 4, b % 4);
+      if (na != NO_CELL && na == nb && nb_ + nb_caps < kMaxGroup &&
+          (!criteria_.respect_regions || mesh_.region(na) == mesh_.region(group_[0])) &&
+          cap_on_face(na, g) &&
+          cap_angles(na, other_face(a, b, 0), other_face(a, b, 1), fa.cap_dihedral,
+                     fa.cap_corner)) {
+        fa.cap = nb_caps;
+        caps[nb_caps++] = na;
+      }
+    }
     Candidate c;
     c.vertices = v_;
     c.type = type_;
     c.graph = EXHAUSTIVE_GRAPH;
     c.quality = static_cast<float>(sj);
-    c.min_dihedral_angle = 180.0f;
-    c.max_face_angle = 0.0f;
-    // With caps: the flat tets lying on quad faces, outside the group, that may join it.
-    std::array<index_t, 6> caps;
-    float cap_dihedral = 180.0f, cap_corner = 0.0f;
-    int nb_caps = 0;
-    for (int g = 0; g < d_->nb_faces; ++g) {
-      if (d_->face_size[g] != 4) continue;
-      float dihedral, corner;
-      const index_t a = face_tris_[g][0], b = face_tris_[g][1];
-      if (!pair_angles(a, b, dihedral, corner)) return;
-      const index_t na = topo_.neighbor(a / 4, a % 4), nb = topo_.neighbor(b / 4, b % 4);
-      float cd, cc;
-      if (na != NO_CELL && na == nb && nb_ + nb_caps < kMaxGroup &&
-          (!criteria_.respect_regions || mesh_.region(na) == mesh_.region(group_[0])) &&
-          cap_on_face(na, g) &&
-          cap_angles(na, other_face(a, b, 0), other_face(a, b, 1), cd, cc)) {
-        caps[nb_caps++] = na;
-        cap_dihedral = std::min(cap_dihedral, cd);
-        cap_corner = std::max(cap_corner, cc);
-      } else {
-        cap_dihedral = std::min(cap_dihedral, dihedral);
-        cap_corner = std::max(cap_corner, corner);
+    const unsigned all = (1u << nb_caps) - 1;
+    for (unsigned subset = 0; subset <= all; ++subset) {
+      if (nb_caps > kMaxCapSubsets && subset != 0 && subset != all) continue;
+      c.tets.fill(NO_CELL);
+      std::copy(group_, group_ + nb_, c.tets.begin());
+      int n = nb_;
+      c.min_dihedral_angle = 180.0f;
+      c.max_face_angle = 0.0f;
+      for (int q = 0; q < nb_quads; ++q) {
+        const FaceAngles& fa = angles[q];
+        const bool capped = fa.cap >= 0 && (subset & (1u << fa.cap));
+        if (capped) c.tets[n++] = caps[fa.cap];
+        c.min_dihedral_angle = std::min(c.min_dihedral_angle, capped ? fa.cap_dihedral : fa.dihedral);
+        c.max_face_angle = std::max(c.max_face_angle, capped ? fa.cap_corner : fa.corner);
       }
-      c.min_dihedral_angle = std::min(c.min_dihedral_angle, dihedral);
-      c.max_face_angle = std::max(c.max_face_angle, corner);
+      c.nb_tets = static_cast<std::uint8_t>(n);
+      std::sort(c.tets.begin(), c.tets.begin() + n);
+      out_.push_back(c);
     }
-    c.tets.fill(NO_CELL);
-    std::copy(group_, group_ + nb_, c.tets.begin());
-    c.nb_tets = static_cast<std::uint8_t>(nb_);
-    std::sort(c.tets.begin(), c.tets.begin() + nb_);
-    out_.push_back(c);
-    if (nb_caps == 0) return;
-    std::copy(caps.begin(), caps.begin() + nb_caps, c.tets.begin() + nb_);
-    c.nb_tets = static_cast<std::uint8_t>(nb_ + nb_caps);
-    std::sort(c.tets.begin(), c.tets.begin() + c.nb_tets);
-    c.min_dihedral_angle = cap_dihedral;
-    c.max_face_angle = cap_corner;
-    out_.push_back(c);
   }
 
   // Tet t has its four vertices on the cell's face g.
