@@ -13,6 +13,21 @@ namespace {
 
 using QuadKey = std::array<index_t, 4>;  // sorted vertices of a quad face
 
+// The quad faces asked of the element that takes two tets: the open quad itself and at most one
+// per face of each tet.
+struct QuadKeys {
+  std::array<QuadKey, 9> key;
+  int count = 0;
+  void add(const QuadKey& k) {
+    for (int i = 0; i < count; ++i) {
+      if (key[i] == k) return;
+    }
+    key[count++] = k;
+  }
+  const QuadKey* begin() const { return key.data(); }
+  const QuadKey* end() const { return key.data() + count; }
+};
+
 const CellDescriptor& kTet = descriptor(CellType::Tet);
 
 int gain(const Candidate& c) { return c.nb_tets - 1; }  // elements saved by merging
@@ -197,13 +212,13 @@ class Selector {
 
   // Quad faces of chosen elements that touch free tet t through one of its faces: their keys
   // must all be quad faces of whatever element takes t.
-  void required_quads(index_t t, std::vector<QuadKey>& keys) const {
+  void required_quads(index_t t, QuadKeys& keys) const {
     for (int f = 0; f < 4; ++f) {
       const index_t n = topo_.neighbor(t, f);
       if (n == NO_CELL || is_free(n)) continue;
       const Candidate& e = cands_[owner_[n]];
       const int ef = cell_face_at(owner_[n], n, topo_.neighbor_face(t, f));
-      if (ef >= 0 && is_quad(e, ef)) keys.push_back(face_key(e, ef));
+      if (ef >= 0 && is_quad(e, ef)) keys.add(face_key(e, ef));
     }
   }
 
@@ -220,8 +235,8 @@ class Selector {
   // the element that would close a pending quad face. NO_INDEX when there is none.
   index_t closer(index_t n1, index_t n2, const QuadKey* extra, const Candidate* exclude) const {
     if (strict_) return closing_pyramid(n1, n2, extra);
-    std::vector<QuadKey> keys;
-    if (extra) keys.push_back(*extra);
+    QuadKeys keys;
+    if (extra) keys.add(*extra);
     required_quads(n1, keys);
     required_quads(n2, keys);
     index_t best = NO_INDEX;
@@ -246,18 +261,16 @@ class Selector {
   // as its base and no other chosen quad face touches them: nothing chosen later can take
   // either tet without matching the quad, so the pyramid is certain to be there at the end.
   index_t closing_pyramid(index_t n1, index_t n2, const QuadKey* key) const {
-    std::vector<QuadKey> keys;
-    if (key) keys.push_back(*key);
+    QuadKeys keys;
+    if (key) keys.add(*key);
     required_quads(n1, keys);
     required_quads(n2, keys);
-    std::sort(keys.begin(), keys.end());
-    keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
-    if (keys.size() != 1) return NO_INDEX;
+    if (keys.count != 1) return NO_INDEX;
     for (index_t k = offsets_[n1]; k < offsets_[n1 + 1]; ++k) {
       const index_t xi = ids_[k];
       const Candidate& x = cands_[xi];
       if (x.type == CellType::Pyramid && contains(x, n2) && available(xi) &&
-          face_key(x, 0) == keys[0]) {
+          face_key(x, 0) == keys.key[0]) {
         return xi;
       }
     }
