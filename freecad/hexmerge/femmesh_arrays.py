@@ -94,6 +94,32 @@ def face_nodes(name, face):
     return tuple(face) + tuple(mids)
 
 
+def outer_cells(blocks):
+    """Per block, a boolean (M,) array: the cells with a face that no other cell has (the cells
+    FreeCAD's mesh view draws)."""
+    keys = {3: [], 4: []}
+    owners = {3: [], 4: []}
+    for b, (name, cells) in enumerate(blocks):
+        cells = np.asarray(cells)
+        for face in FACES[LINEAR_OF[name]]:
+            n = len(face)
+            keys[n].append(np.sort(cells[:, face_nodes(name, face)[:n]], axis=1))
+            owners[n].append(np.stack([np.full(len(cells), b), np.arange(len(cells))], axis=1))
+    outer = [np.zeros(len(cells), dtype=bool) for _, cells in blocks]
+    for n in (3, 4):
+        if not keys[n]:
+            continue
+        key = np.concatenate(keys[n])
+        owner = np.concatenate(owners[n])
+        if not len(key):
+            continue
+        _, inverse, counts = np.unique(key, axis=0, return_inverse=True, return_counts=True)
+        once = owner[counts[inverse.ravel()] == 1]
+        for b in range(len(blocks)):
+            outer[b][once[once[:, 0] == b, 1]] = True
+    return outer
+
+
 def boundary_faces(blocks):
     """Faces of a mixed mesh that belong to one cell only: {3 or 4 corners: (F, k) node ids}.
 
@@ -219,7 +245,8 @@ def collapse_pyramids(name, cells):
 
 
 def arrays_to_femmesh(points, point_ids, blocks, regions=None, group_names=None,
-                      pyramids_as_hexahedra=False, first_element_id=1, with_faces=True):
+                      pyramids_as_hexahedra=False, first_element_id=1, with_faces=True,
+                      outer_first=True):
     """Builds a new FemMesh from VTK-ordered blocks.
 
     points, point_ids:  the nodes; every point is added with its id (unused ones too, so node ids
@@ -232,6 +259,10 @@ def arrays_to_femmesh(points, point_ids, blocks, regions=None, group_names=None,
                         FreeCAD's CalculiX writer finds the faces of a load through them
                         (getFacesByFace); without them it falls back to getccxVolumesByFace,
                         which knows only tetrahedra and misplaces loads on other elements.
+    outer_first:        number the volumes with a face on the boundary first. FreeCAD 0.20's mesh
+                        view draws only those and keeps element ids in 16 bits when it colours by
+                        element (ids wrap at 65536), so colour by type stays right as long as
+                        fewer than 65536 volumes touch the boundary.
 
     Returns (femmesh, element_ids per block).
     """
@@ -241,7 +272,17 @@ def arrays_to_femmesh(points, point_ids, blocks, regions=None, group_names=None,
     for pid, (x, y, z) in zip(point_ids.tolist(), points.tolist()):
         femmesh.addNode(x, y, z, pid)
 
+    outer = outer_cells(blocks) if outer_first else [np.ones(len(c), dtype=bool) for _, c in blocks]
+    ids_of = []
     eid = first_element_id
+    for first_pass in (True, False):  # the outer cells of every block, then the others
+        for b, (_, cells) in enumerate(blocks):
+            if first_pass:
+                ids_of.append(np.zeros(len(cells), dtype=np.int64))
+            chosen = outer[b] if first_pass else ~outer[b]
+            ids_of[b][chosen] = np.arange(eid, eid + int(chosen.sum()), dtype=np.int64)
+            eid += int(chosen.sum())
+
     element_ids = []
     members = {}
     for b, (name, cells) in enumerate(blocks):
@@ -249,10 +290,9 @@ def arrays_to_femmesh(points, point_ids, blocks, regions=None, group_names=None,
         if pyramids_as_hexahedra and name in COLLAPSED_HEXA_NAME:
             name, cells = collapse_pyramids(name, cells)
         smesh = point_ids[to_smesh_order(name, cells)] if len(cells) else cells
-        ids = np.arange(eid, eid + len(cells), dtype=np.int64)
+        ids = ids_of[b]
         for nodes, i in zip(smesh.tolist(), ids.tolist()):
             femmesh.addVolume(nodes, i)
-        eid += len(cells)
         element_ids.append(ids)
         if regions is not None and group_names:
             reg = np.asarray(regions[b])

@@ -12,11 +12,13 @@ from . import base_taskpanel
 from . import hexmergetools
 from . import mesh_hexdominant
 from . import properties
-from .view_mesh_hexdominant import RESOURCES
+from .view_mesh_hexdominant import RESOURCES, TYPE_COLORS
 
 UI_FILE = os.path.join(RESOURCES, "ui", "MeshHexDominant.ui")
 
 CELL_LABELS = ("tetrahedra", "pyramids", "prisms", "hexahedra")
+# The 3D view's colour of each type (view provider, ColorByType), shown as a legend in the table.
+LABEL_COLORS = dict(zip(CELL_LABELS, (TYPE_COLORS[k] for k in ("tetra", "pyramid", "wedge", "hexahedron"))))
 
 
 class TaskPanelHexDominant(base_taskpanel.TransactionTaskPanel):
@@ -212,7 +214,16 @@ class TaskPanelHexDominant(base_taskpanel.TransactionTaskPanel):
         for i, row in enumerate(rows):
             for j, text in enumerate(row):
                 t.setItem(i, j, QtGui.QTableWidgetItem(text))
+            if row[0] in LABEL_COLORS:
+                t.item(i, 0).setIcon(color_swatch(LABEL_COLORS[row[0]]))
+                t.item(i, 0).setToolTip("Colour of {} in the 3D view".format(row[0]))
         t.resizeColumnsToContents()
+
+
+def color_swatch(rgb):
+    pixmap = QtGui.QPixmap(12, 12)
+    pixmap.fill(QtGui.QColor.fromRgbF(*rgb))
+    return QtGui.QIcon(pixmap)
 
 
 def results_rows(report):

@@ -25,6 +25,41 @@ def wait(pred, seconds=60):
     return False
 
 
+def color_fractions(path):
+    """Fractions of the 3D view's pixels (the screenshot's middle, away from the toolbars and
+    the navigation cube) that are clearly red, green, or FreeCAD's default mesh orange."""
+    from PySide import QtGui
+    image = QtGui.QImage(path)
+    w, h = image.width(), image.height()
+    counts = {"red": 0, "green": 0, "orange": 0}
+    total = 0
+    for y in range(int(0.2 * h), int(0.65 * h), 3):
+        for x in range(int(0.3 * w), int(0.85 * w), 3):
+            c = QtGui.QColor(image.pixel(x, y))
+            r, g, b = c.red(), c.green(), c.blue()
+            total += 1
+            if r > 1.6 * g and r > 1.6 * b and r > 60:
+                counts["red"] += 1
+            elif g > 1.4 * r and g > 1.4 * b and g > 60:
+                counts["green"] += 1
+            elif r > 150 and 0.55 * r < g < 0.85 * r and b < 0.3 * r:
+                counts["orange"] += 1
+    return {k: v / total for k, v in counts.items()}
+
+
+def check_colors(path, report):
+    """Colour by type shows: pyramids red and prisms green where the mesh has them, and no
+    face left in FreeCAD's default orange."""
+    counts = report["output_counts"]
+    shares = color_fractions(path)
+    print("colour shares in the view: {}".format(shares))
+    if counts.get("pyramid", 0):
+        assert shares["red"] > 0.005, "no red (pyramid) faces in the view: {}".format(shares)
+    if counts.get("wedge", 0):
+        assert shares["green"] > 0.005, "no green (prism) faces in the view: {}".format(shares)
+    assert shares["orange"] < 0.002, "faces in the default colour: {}".format(shares)
+
+
 def main():
     import FreeCAD
     import FreeCADGui
@@ -73,6 +108,8 @@ def main():
     FreeCADGui.SendMsgToActiveView("ViewFit")
     wait(lambda: False, 1.5)
     subprocess.run(["import", "-window", "root", SHOT], check=True)
+    check_colors(SHOT, mesh_hexdominant.report_dict(obj))
+    assert panel.form.tw_results.item(1, 0).icon() is not None
     panel.accept()
     wait(lambda: False, 0.5)
 

@@ -152,6 +152,34 @@ class FemMeshRoundTrip(unittest.TestCase):
         self.assertEqual(m.getGroupName(g), "Mat_Solids")
         self.assertEqual(m.getGroupElementType(g), "Volume")
 
+    def test_outer_volumes_numbered_first(self):
+        # 3 x 3 x 3 hexahedra, the middle one in a block of its own: every
+        # volume with a boundary face gets a smaller id than the inner one (FreeCAD 0.20's view
+        # colours only ids below 65536 right, and draws only the outer volumes).
+        n = 3
+        grid = np.array([(i, j, k) for k in range(n + 1) for j in range(n + 1) for i in range(n + 1)],
+                        float)
+        node = lambda i, j, k: i + (n + 1) * (j + (n + 1) * k)  # noqa: E731
+        hexes = []
+        for i in range(n):
+            for j in range(n):
+                for k in range(n):
+                    hexes.append([node(i + a, j + b, k + c) for a, b, c in
+                                  ((0, 0, 0), (1, 0, 0), (1, 1, 0), (0, 1, 0),
+                                   (0, 0, 1), (1, 0, 1), (1, 1, 1), (0, 1, 1))])
+        hexes = np.array(hexes)
+        middle = 13  # (1, 1, 1)
+        blocks = [("hexahedron", hexes[[middle]]), ("hexahedron", np.delete(hexes, middle, axis=0))]
+        outer = fa.outer_cells(blocks)
+        self.assertEqual([o.tolist() for o in outer], [[False], [True] * 26])
+        m, ids = fa.arrays_to_femmesh(grid, np.arange(1, len(grid) + 1), blocks, with_faces=False)
+        self.assertEqual(ids[0].tolist(), [27])
+        self.assertEqual(sorted(ids[1].tolist()), list(range(1, 27)))
+        self.assertEqual(sorted(m.Volumes), list(range(1, 28)))
+        m, ids = fa.arrays_to_femmesh(grid, np.arange(1, len(grid) + 1), blocks, with_faces=False,
+                                      outer_first=False)
+        self.assertEqual(ids[0].tolist(), [1])
+
     def test_not_tetrahedral_and_empty(self):
         with self.assertRaises(fa.NotTetrahedralError):
             fa.tetrahedra(fa.femmesh_to_arrays(Fem.FemMesh()))
