@@ -82,7 +82,9 @@ bool assemble_cell(const TetMesh& mesh, const TetTopology& topology, CellType ty
   for (int i = 0; i < nb; ++i) {
     for (int f = 0; f < 4; ++f) {
       const index_t n = topology.neighbor(tets[i], f);
-      if (n == NO_CELL || !in_group(n)) boundary[nb_boundary++] = 4 * tets[i] + f;
+      if (n != NO_CELL && in_group(n)) continue;
+      if (nb_boundary == static_cast<int>(boundary.size())) return false;  // too many for any cell
+      boundary[nb_boundary++] = 4 * tets[i] + f;
     }
   }
   const int nb_tris = d.nb_faces - d.nb_quad_faces;
