@@ -27,18 +27,21 @@ def wait(pred, seconds=60):
 
 def color_fractions(path):
     """Fractions of the 3D view's pixels (the screenshot's middle, away from the toolbars and
-    the navigation cube) that are clearly red, green, or FreeCAD's default mesh orange."""
+    the navigation cube) that are clearly red, green, FreeCAD's default mesh orange, or the pure
+    green FreeCAD 0.20 gives a face whose element has no colour."""
     from PySide import QtGui
     image = QtGui.QImage(path)
     w, h = image.width(), image.height()
-    counts = {"red": 0, "green": 0, "orange": 0}
+    counts = {"red": 0, "green": 0, "orange": 0, "uncoloured": 0}
     total = 0
     for y in range(int(0.2 * h), int(0.65 * h), 3):
         for x in range(int(0.3 * w), int(0.85 * w), 3):
             c = QtGui.QColor(image.pixel(x, y))
             r, g, b = c.red(), c.green(), c.blue()
             total += 1
-            if r > 1.6 * g and r > 1.6 * b and r > 60:
+            if g > 2.8 * max(r, b, 1) and g > 60:
+                counts["uncoloured"] += 1
+            elif r > 1.6 * g and r > 1.6 * b and r > 60:
                 counts["red"] += 1
             elif g > 1.4 * r and g > 1.4 * b and g > 60:
                 counts["green"] += 1
@@ -58,6 +61,7 @@ def check_colors(path, report):
     if counts.get("wedge", 0):
         assert shares["green"] > 0.005, "no green (prism) faces in the view: {}".format(shares)
     assert shares["orange"] < 0.002, "faces in the default colour: {}".format(shares)
+    assert shares["uncoloured"] < 0.002, "faces of elements without colour: {}".format(shares)
 
 
 def main():
