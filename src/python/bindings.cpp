@@ -155,6 +155,8 @@ py::dict report_to_dict(const RecombineReport& r) {
   d["nonconforming_quads"] = r.nonconforming_quads;
   d["closing_pyramids"] = r.closing_pyramids;
   d["released_elements"] = r.released_elements;
+  d["local_moves"] = r.local_moves;
+  d["selection_strategy"] = r.selection_strategy;
   d["min_scaled_jacobian"] = per_type(r.min_scaled_jacobian);
   d["mean_scaled_jacobian"] = per_type(r.mean_scaled_jacobian);
   py::dict templates;
