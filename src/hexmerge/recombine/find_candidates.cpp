@@ -1,10 +1,9 @@
 #include "hexmerge/recombine/find_candidates.h"
 
 #include <algorithm>
-#include <atomic>
-#include <thread>
 
 #include "hexmerge/core/error.h"
+#include "hexmerge/core/parallel.h"
 #include "hexmerge/geometry/quality.h"
 #include "hexmerge/recombine/quad_pairs.h"
 #include "hexmerge/recombine/rf_graph.h"
@@ -362,41 +361,15 @@ std::vector<Candidate> find_candidates(const TetMesh& mesh, const TetTopology& t
                              criteria.min_boundary_dihedral_angle, criteria.max_face_angle,
                              std::max(1, threads));
   constexpr index_t kChunk = 8192;
-  const index_t nb_chunks = (nt + kChunk - 1) / kChunk;
-  std::vector<std::vector<Candidate>> per_chunk(nb_chunks);
-  std::atomic<index_t> next_chunk{0};
-  std::atomic<bool> cancelled{false};
-  std::atomic<index_t> done{0};
-
-  auto work = [&](bool reports) {
-    for (;;) {
-      if (cancelled.load()) return;
-      const index_t chunk = next_chunk.fetch_add(1);
-      if (chunk >= nb_chunks) return;
-      Matcher matcher(mesh, topology, quad_pairs, criteria, per_chunk[chunk]);
-      const index_t end = std::min(nt, (chunk + 1) * kChunk);
-      for (index_t t = chunk * kChunk; t < end; ++t) matcher.run_from(t);
-      const index_t finished = ++done;
-      if (reports && progress && !progress("candidates", double(finished) / nb_chunks)) {
-        cancelled = true;
-      }
-    }
-  };
-  std::vector<std::thread> pool;
-  for (int i = 1; i < std::max(1, threads); ++i) pool.emplace_back(work, false);
-  work(true);  // the calling thread works too, and is the only one that reports
-  for (auto& th : pool) th.join();
-  if (cancelled) throw Cancelled();
-
-  std::size_t total = 0;
-  for (const auto& c : per_chunk) total += c.size();
-  std::vector<Candidate> all;
-  all.reserve(total);
-  for (auto& c : per_chunk) {
-    all.insert(all.end(), c.begin(), c.end());
-    std::vector<Candidate>().swap(c);
-  }
-  return all;
+  std::vector<std::vector<Candidate>> per_chunk((nt + kChunk - 1) / kChunk);
+  parallel_chunks(
+      nt, kChunk, std::max(1, threads),
+      [&](index_t chunk, index_t begin, index_t end) {
+        Matcher matcher(mesh, topology, quad_pairs, criteria, per_chunk[chunk]);
+        for (index_t t = begin; t < end; ++t) matcher.run_from(t);
+      },
+      [&](double fraction) { return !progress || progress("candidates", fraction); });
+  return concatenate(per_chunk);
 }
 
 }  // namespace hexmerge

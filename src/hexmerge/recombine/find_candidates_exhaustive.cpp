@@ -6,6 +6,7 @@
 #include <thread>
 
 #include "hexmerge/core/error.h"
+#include "hexmerge/core/parallel.h"
 #include "hexmerge/geometry/quality.h"
 #include "hexmerge/mesh/cell_type.h"
 #include "hexmerge/recombine/quad_pairs.h"
@@ -531,41 +532,16 @@ std::vector<Candidate> find_candidates_exhaustive(const TetMesh& mesh, const Tet
 
   const index_t nq = static_cast<index_t>(index.size());
   constexpr index_t kChunk = 8192;
-  const index_t nb_chunks = (nq + kChunk - 1) / kChunk;
-  std::vector<std::vector<Candidate>> per_chunk(nb_chunks);
-  std::atomic<index_t> next_chunk{0};
-  std::atomic<bool> cancelled{false};
-  std::atomic<index_t> done{0};
-  auto work = [&](bool reports) {
-    for (;;) {
-      if (cancelled.load()) return;
-      const index_t chunk = next_chunk.fetch_add(1);
-      if (chunk >= nb_chunks) return;
-      CellBuilder builder(mesh, topology, pairs, criteria, per_chunk[chunk]);
-      Searcher searcher(mesh, index, criteria, builder);
-      const index_t end = std::min(nq, (chunk + 1) * kChunk);
-      for (index_t k = chunk * kChunk; k < end; ++k) searcher.run(index.quad(k));
-      const index_t finished = ++done;
-      if (reports && progress && !progress("candidates", double(finished) / nb_chunks)) {
-        cancelled = true;
-      }
-    }
-  };
-  std::vector<std::thread> pool;
-  for (int i = 1; i < threads; ++i) pool.emplace_back(work, false);
-  work(true);  // the calling thread works too, and is the only one that reports
-  for (auto& th : pool) th.join();
-  if (cancelled) throw Cancelled();
-
-  std::size_t total = 0;
-  for (const auto& c : per_chunk) total += c.size();
-  std::vector<Candidate> all;
-  all.reserve(total);
-  for (auto& c : per_chunk) {
-    all.insert(all.end(), c.begin(), c.end());
-    std::vector<Candidate>().swap(c);
-  }
-  return all;
+  std::vector<std::vector<Candidate>> per_chunk((nq + kChunk - 1) / kChunk);
+  parallel_chunks(
+      nq, kChunk, threads,
+      [&](index_t chunk, index_t begin, index_t end) {
+        CellBuilder builder(mesh, topology, pairs, criteria, per_chunk[chunk]);
+        Searcher searcher(mesh, index, criteria, builder);
+        for (index_t k = begin; k < end; ++k) searcher.run(index.quad(k));
+      },
+      [&](double fraction) { return !progress || progress("candidates", fraction); });
+  return concatenate(per_chunk);
 }
 
 }  // namespace hexmerge

@@ -2,10 +2,9 @@
 
 #include <algorithm>
 #include <array>
-#include <atomic>
 #include <cmath>
-#include <thread>
 
+#include "hexmerge/core/parallel.h"
 #include "hexmerge/geometry/quality.h"
 #include "hexmerge/geometry/vec3.h"
 #include "hexmerge/mesh/cell_type.h"
@@ -125,22 +124,6 @@ class Builder {
   const std::vector<float>& normals_;  // 4 outward unit normals per tet
   double min_dihedral_, min_boundary_dihedral_, max_corner_, min_cos_;
 };
-
-// Runs work(begin, end) over [0, n) in chunks on `threads` threads (the caller's included).
-template <class Work>
-void parallel_chunks(index_t n, index_t chunk_size, int threads, const Work& work) {
-  const index_t nb_chunks = (n + chunk_size - 1) / chunk_size;
-  std::atomic<index_t> next{0};
-  auto run = [&] {
-    for (index_t chunk; (chunk = next.fetch_add(1)) < nb_chunks;) {
-      work(chunk, chunk * chunk_size, std::min(n, (chunk + 1) * chunk_size));
-    }
-  };
-  std::vector<std::thread> pool;
-  for (int i = 1; i < std::max(1, threads); ++i) pool.emplace_back(run);
-  run();
-  for (auto& th : pool) th.join();
-}
 
 std::vector<float> unit_normals(const TetMesh& mesh, int threads) {
   std::vector<float> normals(12 * static_cast<std::size_t>(mesh.nb_tets()));

@@ -202,6 +202,16 @@ class Selector {
     return s;
   }
 
+  // The tets across the two triangles of quad face f (NO_CELL on the domain boundary).
+  static std::array<index_t, 2> tets_behind(const Sides& s, int f) {
+    std::array<index_t, 2> n{NO_CELL, NO_CELL};
+    int nh = 0;
+    for (int i = 0; i < s.count; ++i) {
+      if (s.side[i].cell_face == f && nh < 2) n[nh++] = s.side[i].neighbor;
+    }
+    return n;
+  }
+
   // The cell face of candidate ei that face f of its tet t lies in (-1: inside the cell).
   int cell_face_at(index_t ei, index_t t, int f) const {
     const Candidate& e = cands_[ei];
@@ -337,11 +347,7 @@ class Selector {
     std::size_t risky = 0;
     for (int f = 0; f < d.nb_faces; ++f) {
       if (d.face_size[f] != 4) continue;
-      index_t n[2] = {NO_CELL, NO_CELL};
-      int nh = 0;
-      for (int i = 0; i < s.count; ++i) {
-        if (s.side[i].cell_face == f && nh < 2) n[nh++] = s.side[i].neighbor;
-      }
+      const auto n = tets_behind(s, f);
       if (n[0] == NO_CELL || n[1] == NO_CELL || !is_free(n[0]) || !is_free(n[1])) continue;
       const QuadKey key = face_key(c, f);
       if (closing_pyramid(n[0], n[1], &key) == NO_INDEX) ++risky;
@@ -660,11 +666,7 @@ class Selector {
     const CellDescriptor& d = descriptor(c.type);
     for (int f = 0; f < d.nb_faces; ++f) {
       if (d.face_size[f] != 4) continue;
-      index_t n[2] = {NO_CELL, NO_CELL};
-      int nh = 0;
-      for (int i = 0; i < s.count; ++i) {
-        if (s.side[i].cell_face == f && nh < 2) n[nh++] = s.side[i].neighbor;
-      }
+      const auto n = tets_behind(s, f);
       if (n[0] == NO_CELL || n[1] == NO_CELL || !is_free(n[0]) || !is_free(n[1])) continue;
       const index_t x = closer(n[0], n[1], nullptr, nullptr);
       if (x == NO_INDEX || was_closer_[x]) continue;
