@@ -69,9 +69,39 @@ index_t unique_other_neighbor(index_t v, const std::array<index_t, 4>* faces, co
 
 }  // namespace
 
+// Two tets sharing a face, whose base triangles leave out the same vertex, are the pyramid with
+// that apex: each tet's other two faces through the apex are the four sides. (The same answer as
+// the general assembly, without its search: pyramids are most of the matches.)
+bool assemble_pyramid(const TetMesh& mesh, const TetTopology& topology, const index_t* tets,
+                      int nb, const std::array<index_t, 2>* quad_pairs, int nb_quad_pairs,
+                      std::array<index_t, 8>& vertices) {
+  if (nb != 2 || nb_quad_pairs != 1) return false;
+  const index_t t0 = quad_pairs[0][0] / 4, t1 = quad_pairs[0][1] / 4;
+  const int f0 = static_cast<int>(quad_pairs[0][0] % 4), f1 = static_cast<int>(quad_pairs[0][1] % 4);
+  if (t0 == t1 || !((t0 == tets[0] && t1 == tets[1]) || (t0 == tets[1] && t1 == tets[0]))) {
+    return false;
+  }
+  const index_t apex = mesh.tet(t0)[f0];
+  if (mesh.tet(t1)[f1] != apex) return false;
+  // The shared face holds the apex and the base's diagonal: it is the face of t0 opposite the
+  // vertex that t1 lacks.
+  bool shares_face = false;
+  for (int f = 0; f < 4; ++f) shares_face = shares_face || topology.neighbor(t0, f) == t1;
+  if (!shares_face) return false;
+  std::array<index_t, 4> base;
+  if (!quad_from_triangles(tet_face(mesh, t0, f0), tet_face(mesh, t1, f1), base)) return false;
+  vertices.fill(NO_VERTEX);
+  for (int i = 0; i < 4; ++i) vertices[i] = base[(4 - i) % 4];  // reversed: normal into the cell
+  vertices[4] = apex;
+  return true;
+}
+
 bool assemble_cell(const TetMesh& mesh, const TetTopology& topology, CellType type,
                    const index_t* tets, int nb, const std::array<index_t, 2>* quad_pairs,
                    int nb_quad_pairs, std::array<index_t, 8>& vertices) {
+  if (type == CellType::Pyramid) {
+    return assemble_pyramid(mesh, topology, tets, nb, quad_pairs, nb_quad_pairs, vertices);
+  }
   const CellDescriptor& d = descriptor(type);
   auto in_group = [&](index_t t) { return std::find(tets, tets + nb, t) != tets + nb; };
   // The group's boundary triangles (4 * tet + face), each marked when a quad uses it.
