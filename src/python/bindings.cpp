@@ -166,6 +166,14 @@ py::dict report_to_dict(const RecombineReport& r) {
   py::dict phases;
   for (const auto& [name, seconds] : r.phase_seconds) phases[name.c_str()] = seconds;
   d["phase_seconds"] = phases;
+  // None unless the optimality bound ran (parameter optimality_bound).
+  const auto bound_field = [&](auto value) {
+    return r.bound_computed ? py::cast(value) : py::object(py::none());
+  };
+  d["bound_elements"] = bound_field(r.bound_elements);
+  d["bound_best_elements"] = bound_field(r.bound_best_elements);
+  d["bound_proved"] = bound_field(r.bound_proved);
+  d["gap_percent"] = bound_field(r.gap_percent);
   return d;
 }
 

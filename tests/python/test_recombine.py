@@ -210,3 +210,40 @@ def test_runs_in_threads() -> None:
         w.join()
     for r in results:
         assert r is not None and r.counts()["hexahedron"] == 64
+
+
+def _recombine_with_bound(points, tets, **options):
+    """Runs with the optimality bound; skips when the module was built without GLPK."""
+    try:
+        return hexmerge.recombine(points, tets, optimality_bound=True, **options)
+    except hexmerge.InputError as error:
+        if "GLPK" in str(error):
+            pytest.skip("built without GLPK")
+        raise
+
+
+def test_bound_fields_are_none_unless_asked() -> None:
+    points, tets, _ = grid(2, "kuhn")
+    _, report = hexmerge.recombine(points, tets)
+    for key in ("bound_elements", "bound_best_elements", "bound_proved", "gap_percent"):
+        assert report[key] is None
+
+
+def test_bound_on_a_structured_grid_is_reached() -> None:
+    points, tets, _ = grid(3, "kuhn")
+    _, report = _recombine_with_bound(points, tets, bound_time_limit=5)
+    assert report["bound_elements"] == report["bound_best_elements"] == report["output_cells"] == 27
+    assert report["bound_proved"] is True
+    assert report["gap_percent"] == 0.0
+    assert "bound" in report["phase_seconds"]
+
+
+def test_bound_on_a_gmsh_mesh_is_below_our_count(gmsh_tet4) -> None:
+    meshio = pytest.importorskip("meshio")
+    m = meshio.read(gmsh_tet4)
+    _, report = _recombine_with_bound(m.points, m.cells_dict["tetra"], bound_time_limit=5)
+    assert isinstance(report["bound_proved"], bool)
+    assert 0 < report["bound_elements"] <= report["bound_best_elements"] <= report["output_cells"]
+    assert report["gap_percent"] >= 0.0
+    expected = 100.0 * (report["output_cells"] - report["bound_elements"]) / report["bound_elements"]
+    assert report["gap_percent"] == pytest.approx(expected)

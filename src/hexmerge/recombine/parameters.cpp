@@ -95,6 +95,13 @@ std::vector<ParameterInfo> make_table() {
        "hexahedra), or exhaustively (every cell its vertices' tets fill, any subdivision)"},
       {"threads", "int", number(d.threads), "", 0, 1024, {}, "Threads",
        "Threads for the candidate search; 0 uses every hardware thread"},
+      {"optimality_bound", "bool", flag(d.optimality_bound), "", 0, 1, {}, "Optimality bound",
+       "Also solve the selection as an integer program (GLPK) for a bound; meshes up to about "
+       "20k tets. The program leaves conformity out, so its bound holds for every mode"},
+      {"bound_time_limit", "float", number(d.bound_time_limit), "s", 1, 3600, {},
+       "Bound time limit",
+       "Time limit of the optimality bound's integer program; past it the best bound so far "
+       "is reported"},
   };
 }
 
@@ -150,6 +157,10 @@ void set_parameter(RecombineParameters& p, const std::string& name, const std::s
     const double x = parse_number(name, value, row->min, row->max);
     if (x != static_cast<int>(x)) throw bad_value(name, value, "must be a whole number");
     p.threads = static_cast<int>(x);
+  } else if (name == "optimality_bound") {
+    p.optimality_bound = parse_bool(name, value);
+  } else if (name == "bound_time_limit") {
+    p.bound_time_limit = parse_number(name, value, row->min, row->max);
   } else {
     HEXMERGE_ASSERT(false, "parameter in the table without a setter");
   }
@@ -163,6 +174,7 @@ void validate_parameters(const RecombineParameters& p) {
   set_parameter(scratch, "max_face_angle", number(p.max_face_angle));
   set_parameter(scratch, "min_scaled_jacobian", number(p.min_scaled_jacobian));
   set_parameter(scratch, "threads", number(p.threads));
+  set_parameter(scratch, "bound_time_limit", number(p.bound_time_limit));
   if (!p.make_hexahedra && !p.make_prisms && !p.make_pyramids) {
     throw InputError("no element type is enabled: enable hexahedra, prisms or pyramids",
                      Entity::Parameter);

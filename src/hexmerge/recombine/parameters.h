@@ -56,6 +56,9 @@ struct RecombineParameters {
   BoundaryOrder boundary_order = BoundaryOrder::Quality;
   Finder finder = Finder::Programs;
   int threads = 0;                    ///< candidate search threads; 0: all hardware threads
+  /// also solve the selection as an integer program (bound_selection.h) and report the gap
+  bool optimality_bound = false;
+  double bound_time_limit = 30.0;     ///< seconds, [1, 3600]: time limit of that solve
 };
 
 /// One row of the parameter table.

@@ -7,6 +7,7 @@
 #include "hexmerge/core/error.h"
 #include "hexmerge/geometry/quality.h"
 #include "hexmerge/mesh/tet_topology.h"
+#include "hexmerge/recombine/bound_selection.h"
 #include "hexmerge/recombine/find_candidates.h"
 #include "hexmerge/recombine/find_candidates_exhaustive.h"
 #include "hexmerge/recombine/rf_graph.h"
@@ -114,6 +115,11 @@ MixedMesh recombine(const TetMesh& input, const RecombineParameters& parameters,
   report = RecombineReport{};
   PhaseTimer timer(report);
   validate_parameters(parameters);
+  if (parameters.optimality_bound && !selection_bound_available()) {
+    throw InputError("parameter 'optimality_bound': this build of HexMerge has no GLPK (install "
+                     "libglpk-dev and rebuild with HEXMERGE_WITH_GLPK=ON)",
+                     Entity::Parameter);
+  }
   validate_tet_mesh(input);
   report_progress(progress, "topology", 0.0);
   const TetTopology topology(input);
@@ -161,6 +167,21 @@ MixedMesh recombine(const TetMesh& input, const RecombineParameters& parameters,
   MixedMesh out = build_output(input, candidates, selection);
   fill_report(input, out, report);
   timer.lap("output");
+
+  if (parameters.optimality_bound) {
+    report_progress(progress, "bound", 0.0);
+    const SelectionBound bound = bound_selection(input.nb_tets(), candidates, selection.elements,
+                                                 parameters.bound_time_limit);
+    report.bound_computed = true;
+    report.bound_elements = bound.bound_elements;
+    report.bound_best_elements = bound.best_elements;
+    report.bound_proved = bound.proved;
+    report.gap_percent = 100.0 *
+                         (static_cast<double>(report.output_cells) -
+                          static_cast<double>(bound.bound_elements)) /
+                         static_cast<double>(bound.bound_elements);
+    timer.lap("bound");
+  }
   report_progress(progress, "done", 1.0);
   return out;
 }

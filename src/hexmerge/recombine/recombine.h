@@ -33,6 +33,13 @@ struct RecombineReport {
   std::map<std::string, std::size_t> candidates_per_template;  ///< accepted candidates
   std::size_t candidates_total = 0;
   std::vector<std::pair<std::string, double>> phase_seconds;  ///< wall time per phase, in order
+  /// The optimality bound (parameter optimality_bound, bound_selection.h); the fields below are
+  /// set only when it ran. The bound ignores conformity: it holds for every conformity mode.
+  bool bound_computed = false;
+  std::size_t bound_elements = 0;       ///< fewest elements any selection of the candidates reaches
+  std::size_t bound_best_elements = 0;  ///< elements of the best selection the solver found
+  bool bound_proved = false;            ///< the solver proved bound_best_elements optimal
+  double gap_percent = 0.0;  ///< 100 * (output_cells - bound_elements) / bound_elements
 };
 
 /// Merges groups of tetrahedra into hexahedra, prisms and pyramids.

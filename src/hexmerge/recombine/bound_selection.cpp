@@ -1,0 +1,217 @@
+#include "hexmerge/recombine/bound_selection.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <memory>
+
+#include "hexmerge/core/error.h"
+
+#ifdef HEXMERGE_WITH_GLPK
+#include <glpk.h>
+#endif
+
+namespace hexmerge {
+#ifdef HEXMERGE_WITH_GLPK
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double seconds_since(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+int saving(const Candidate& c) { return static_cast<int>(c.nb_tets) - 1; }
+
+// A bound that needs no solver: every tet gives at most the best share (n - 1) / n of a
+// candidate covering it, so the savings are at most the sum of those shares (a feasible point
+// of the LP's dual). Used only when the LP relaxation does not finish in time.
+double share_bound(index_t nb_tets, const std::vector<Candidate>& candidates) {
+  std::vector<double> share(nb_tets, 0.0);
+  for (const Candidate& c : candidates) {
+    const double s = static_cast<double>(saving(c)) / c.nb_tets;
+    for (int i = 0; i < c.nb_tets; ++i) share[c.tets[i]] = std::max(share[c.tets[i]], s);
+  }
+  double sum = 0.0;
+  for (double s : share) sum += s;
+  return sum;
+}
+
+std::size_t elements_saved(const std::vector<Candidate>& candidates,
+                           const std::vector<index_t>& chosen) {
+  std::size_t saved = 0;
+  for (index_t c : chosen) saved += saving(candidates[c]);
+  return saved;
+}
+
+// Objective values are whole numbers: a bound b on the savings allows at most floor(b) of them.
+// The small tolerance absorbs the simplex's rounding.
+std::size_t whole_savings(double bound) {
+  return bound <= 0.0 ? 0 : static_cast<std::size_t>(std::floor(bound + 1e-6));
+}
+
+// What the branch-and-cut callback needs: the incumbent to offer once, and the best bound seen.
+struct SearchState {
+  const std::vector<double>* initial = nullptr;  // 1-based column values, or null
+  bool offered = false;
+  double best_bound = HUGE_VAL;  // on the savings; the global bound only decreases
+};
+
+void on_search_event(glp_tree* tree, void* info) {
+  auto& state = *static_cast<SearchState*>(info);
+  if (glp_ios_reason(tree) == GLP_IHEUR && state.initial != nullptr && !state.offered) {
+    state.offered = true;
+    glp_ios_heur_sol(tree, state.initial->data());
+  }
+  // Every open node's bound bounds the savings of the solutions below it; the best open node's
+  // bounds them all (GLPK's own relative gap is built on the same value).
+  const int node = glp_ios_best_node(tree);
+  if (node != 0) state.best_bound = std::min(state.best_bound, glp_ios_node_bound(tree, node));
+}
+
+// GLPK's cut generators print even at GLP_MSG_OFF; the core never prints, so terminal output is
+// off for the solve (GLPK's switch is per thread) and restored after.
+class QuietTerminal {
+ public:
+  QuietTerminal() : previous_(glp_term_out(GLP_OFF)) {}
+  ~QuietTerminal() { glp_term_out(previous_); }
+  QuietTerminal(const QuietTerminal&) = delete;
+  QuietTerminal& operator=(const QuietTerminal&) = delete;
+
+ private:
+  int previous_;
+};
+
+struct ProblemDeleter {
+  void operator()(glp_prob* p) const { glp_delete_prob(p); }
+};
+
+}  // namespace
+#endif
+
+bool selection_bound_available() {
+#ifdef HEXMERGE_WITH_GLPK
+  return true;
+#else
+  return false;
+#endif
+}
+
+SelectionBound bound_selection(index_t nb_tets, const std::vector<Candidate>& candidates,
+                               const std::vector<index_t>& initial, double time_limit) {
+  HEXMERGE_ASSERT(time_limit > 0.0, "bound_selection: the time limit must be positive");
+  std::vector<char> used(nb_tets, 0);
+  for (index_t ci : initial) {
+    const Candidate& c = candidates[ci];
+    for (int i = 0; i < c.nb_tets; ++i) {
+      HEXMERGE_ASSERT(!used[c.tets[i]], "bound_selection: the initial selection overlaps");
+      used[c.tets[i]] = 1;
+    }
+  }
+#ifndef HEXMERGE_WITH_GLPK
+  throw InputError(
+      "parameter 'optimality_bound': this build of HexMerge has no GLPK (install libglpk-dev "
+      "and rebuild with HEXMERGE_WITH_GLPK=ON)",
+      Entity::Parameter);
+#else
+  const auto start = Clock::now();
+  const QuietTerminal quiet;
+  SelectionBound result;
+  result.best = initial;
+
+  // Rows: tets that two or more candidates share (a tet of one candidate constrains nothing).
+  std::vector<int> covering(nb_tets, 0);
+  for (const Candidate& c : candidates) {
+    for (int i = 0; i < c.nb_tets; ++i) ++covering[c.tets[i]];
+  }
+  std::vector<int> row_of(nb_tets, 0);
+  int nb_rows = 0;
+  for (index_t t = 0; t < nb_tets; ++t) {
+    if (covering[t] >= 2) row_of[t] = ++nb_rows;
+  }
+  const int nb_cols = static_cast<int>(candidates.size());
+
+  std::unique_ptr<glp_prob, ProblemDeleter> problem(glp_create_prob());
+  glp_prob* lp = problem.get();
+  glp_set_obj_dir(lp, GLP_MAX);
+  if (nb_rows > 0) glp_add_rows(lp, nb_rows);
+  for (int r = 1; r <= nb_rows; ++r) glp_set_row_bnds(lp, r, GLP_UP, 0.0, 1.0);
+  // GLPK's arrays are 1-based: entry 0 is unused.
+  std::vector<int> ia(1, 0), ja(1, 0);
+  std::vector<double> ar(1, 0.0);
+  if (nb_cols > 0) glp_add_cols(lp, nb_cols);
+  for (int j = 1; j <= nb_cols; ++j) {
+    const Candidate& c = candidates[j - 1];
+    glp_set_col_kind(lp, j, GLP_BV);
+    glp_set_obj_coef(lp, j, saving(c));
+    for (int i = 0; i < c.nb_tets; ++i) {
+      if (row_of[c.tets[i]] == 0) continue;
+      ia.push_back(row_of[c.tets[i]]);
+      ja.push_back(j);
+      ar.push_back(1.0);
+    }
+  }
+  glp_load_matrix(lp, static_cast<int>(ia.size()) - 1, ia.data(), ja.data(), ar.data());
+
+  const auto milliseconds_left = [&] {
+    return std::max(1, static_cast<int>(1000.0 * (time_limit - seconds_since(start))));
+  };
+  const std::size_t initial_saved = elements_saved(candidates, initial);
+  const auto finish = [&](double saved_bound, std::size_t best_saved) {
+    result.bound_elements = nb_tets - std::min<std::size_t>(whole_savings(saved_bound), nb_tets);
+    result.best_elements = nb_tets - best_saved;
+    result.seconds = seconds_since(start);
+    return result;
+  };
+
+  glp_smcp simplex;
+  glp_init_smcp(&simplex);
+  simplex.msg_lev = GLP_MSG_OFF;  // the core never prints
+  simplex.tm_lim = milliseconds_left();
+  if (nb_cols == 0) {
+    result.proved = true;
+    return finish(0.0, 0);
+  }
+  if (glp_simplex(lp, &simplex) != 0 || glp_get_status(lp) != GLP_OPT) {
+    return finish(share_bound(nb_tets, candidates), initial_saved);
+  }
+  const double lp_bound = glp_get_obj_val(lp);
+
+  std::vector<double> start_values;
+  SearchState state;
+  if (!initial.empty()) {
+    start_values.assign(nb_cols + 1, 0.0);
+    for (index_t ci : initial) start_values[ci + 1] = 1.0;
+    state.initial = &start_values;
+  }
+  glp_iocp search;
+  glp_init_iocp(&search);
+  search.msg_lev = GLP_MSG_OFF;
+  search.tm_lim = milliseconds_left();
+  search.presolve = GLP_OFF;    // the LP relaxation is already solved
+  search.clq_cuts = GLP_ON;     // tets shared by many candidates are cliques of conflicts
+  search.cb_func = on_search_event;
+  search.cb_info = &state;
+  const int status = glp_intopt(lp, &search);
+  const int mip = glp_mip_status(lp);
+
+  std::size_t best_saved = initial_saved;
+  if (mip == GLP_OPT || mip == GLP_FEAS) {
+    const std::size_t found = whole_savings(glp_mip_obj_val(lp) + 0.5);
+    if (found > best_saved) {
+      best_saved = found;
+      result.best.clear();
+      for (int j = 1; j <= nb_cols; ++j) {
+        if (glp_mip_col_val(lp, j) > 0.5) result.best.push_back(static_cast<index_t>(j - 1));
+      }
+    }
+  }
+  if (status == 0 && mip == GLP_OPT) {
+    result.proved = true;
+    return finish(static_cast<double>(best_saved), best_saved);
+  }
+  return finish(std::min(lp_bound, state.best_bound), best_saved);
+#endif
+}
+
+}  // namespace hexmerge

@@ -1,0 +1,141 @@
+// The selection's optimality bound: the integer program against hand-made conflicts whose optimum
+// is known, and against the engine's selection on grids.
+#include "hexmerge/recombine/bound_selection.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <random>
+#include <set>
+
+#include "fixtures.h"
+#include "hexmerge/core/error.h"
+#include "hexmerge/recombine/recombine.h"
+
+namespace hexmerge::test {
+namespace {
+
+/// A candidate made of the given tets only (the program looks at nothing else).
+Candidate group(std::vector<index_t> tets, CellType type = CellType::Hex) {
+  Candidate c{};
+  c.vertices.fill(NO_VERTEX);
+  c.tets.fill(NO_CELL);
+  std::sort(tets.begin(), tets.end());
+  std::copy(tets.begin(), tets.end(), c.tets.begin());
+  c.nb_tets = static_cast<std::uint8_t>(tets.size());
+  c.type = type;
+  c.quality = 1.0f;
+  return c;
+}
+
+#define SKIP_WITHOUT_GLPK()                                               \
+  if (!selection_bound_available()) GTEST_SKIP() << "built without GLPK"
+
+TEST(bound_selection, two_disjoint_hexes_beat_the_one_that_overlaps_both) {
+  SKIP_WITHOUT_GLPK();
+  // A takes tets 0-5; B and C each share three of them with A and are disjoint from each other.
+  const std::vector<Candidate> candidates = {group({0, 1, 2, 3, 4, 5}),
+                                             group({0, 1, 2, 10, 11, 12}),
+                                             group({3, 4, 5, 13, 14, 15})};
+  // Started from the greedy-looking choice {A}: the solver must still find {B, C}.
+  for (const std::vector<index_t>& initial : {std::vector<index_t>{}, std::vector<index_t>{0}}) {
+    const SelectionBound bound = bound_selection(16, candidates, initial, 10.0);
+    EXPECT_TRUE(bound.proved);
+    EXPECT_EQ(bound.bound_elements, 6u);  // 16 tets - 2 x 5 saved
+    EXPECT_EQ(bound.best_elements, 6u);
+    EXPECT_EQ(std::set<index_t>(bound.best.begin(), bound.best.end()),
+              (std::set<index_t>{1, 2}));
+  }
+}
+
+TEST(bound_selection, an_odd_cycle_of_conflicts_is_solved_past_its_fractional_relaxation) {
+  SKIP_WITHOUT_GLPK();
+  // Three pyramids pairwise sharing one tet: the LP relaxation saves 1.5, any selection 1.
+  const std::vector<Candidate> candidates = {group({0, 1}, CellType::Pyramid),
+                                             group({1, 2}, CellType::Pyramid),
+                                             group({0, 2}, CellType::Pyramid)};
+  const SelectionBound bound = bound_selection(3, candidates, {}, 10.0);
+  EXPECT_TRUE(bound.proved);
+  EXPECT_EQ(bound.bound_elements, 2u);
+  EXPECT_EQ(bound.best_elements, 2u);
+  EXPECT_EQ(bound.best.size(), 1u);
+}
+
+TEST(bound_selection, no_candidates_bound_is_the_tets) {
+  SKIP_WITHOUT_GLPK();
+  const SelectionBound bound = bound_selection(7, {}, {}, 1.0);
+  EXPECT_TRUE(bound.proved);
+  EXPECT_EQ(bound.bound_elements, 7u);
+  EXPECT_EQ(bound.best_elements, 7u);
+}
+
+TEST(bound_selection, kuhn_grid_bound_is_one_element_per_cube_and_the_gap_is_zero) {
+  SKIP_WITHOUT_GLPK();
+  for (int n : {2, 3}) {
+    SCOPED_TRACE("n = " + std::to_string(n));
+    RecombineParameters p;
+    p.optimality_bound = true;
+    RecombineReport report;
+    recombine(kuhn_grid(n), p, report);
+    const std::size_t cubes = std::size_t(n) * n * n;
+    ASSERT_TRUE(report.bound_computed);
+    EXPECT_TRUE(report.bound_proved);
+    EXPECT_EQ(report.bound_elements, cubes);
+    EXPECT_EQ(report.bound_best_elements, cubes);
+    EXPECT_EQ(report.output_cells, cubes);
+    EXPECT_DOUBLE_EQ(report.gap_percent, 0.0);
+  }
+}
+
+TEST(bound_selection, gap_is_never_negative_on_jittered_grids) {
+  SKIP_WITHOUT_GLPK();
+  std::mt19937 rng(5);
+  for (bool five : {false, true}) {
+    for (const char* conformity : {"conforming", "allow"}) {
+      SCOPED_TRACE(std::string(five ? "five-tet" : "Kuhn") + " grid, " + conformity);
+      TetMesh mesh = five ? five_tet_grid(4) : kuhn_grid(4);
+      random_perturbation(mesh, rng, 0.12);
+      RecombineParameters p;
+      set_parameter(p, "conformity", conformity);
+      p.optimality_bound = true;
+      RecombineReport report;
+      recombine(mesh, p, report);
+      ASSERT_TRUE(report.bound_computed);
+      EXPECT_LE(report.bound_elements, report.bound_best_elements);
+      EXPECT_LE(report.bound_best_elements, report.output_cells);  // ours is its first incumbent
+      EXPECT_GE(report.gap_percent, 0.0);
+      if (report.bound_proved) {
+        EXPECT_EQ(report.bound_elements, report.bound_best_elements);
+      }
+    }
+  }
+}
+
+TEST(bound_selection, without_glpk_the_parameter_is_refused_by_name) {
+  if (selection_bound_available()) GTEST_SKIP() << "built with GLPK";
+  RecombineParameters p;
+  p.optimality_bound = true;
+  RecombineReport report;
+  try {
+    recombine(kuhn_grid(1), p, report);
+    FAIL() << "no InputError";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.entity(), Entity::Parameter);
+    EXPECT_NE(std::string(e.what()).find("optimality_bound"), std::string::npos);
+  }
+}
+
+TEST(bound_selection, parameters_are_in_the_table_with_their_ranges) {
+  RecombineParameters p;
+  EXPECT_FALSE(p.optimality_bound);
+  EXPECT_DOUBLE_EQ(p.bound_time_limit, 30.0);
+  set_parameter(p, "optimality_bound", "true");
+  set_parameter(p, "bound_time_limit", "5");
+  EXPECT_TRUE(p.optimality_bound);
+  EXPECT_DOUBLE_EQ(p.bound_time_limit, 5.0);
+  EXPECT_THROW(set_parameter(p, "bound_time_limit", "0.5"), InputError);
+  EXPECT_THROW(set_parameter(p, "bound_time_limit", "4000"), InputError);
+}
+
+}  // namespace
+}  // namespace hexmerge::test
