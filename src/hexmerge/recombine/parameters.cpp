@@ -76,7 +76,9 @@ std::vector<ParameterInfo> make_table() {
       {"make_prisms", "bool", flag(d.make_prisms), "", 0, 1, {}, "Prisms",
        "Merge tetrahedra into prisms (pentahedra)"},
       {"make_pyramids", "bool", flag(d.make_pyramids), "", 0, 1, {}, "Pyramids",
-       "Merge tetrahedra into pyramids (also used to close quad faces)"},
+       "Merge tetrahedra into pyramids. In conforming mode pyramids close the quad faces of "
+       "hexes and prisms: without them almost nothing merges on unstructured meshes (for "
+       "CalculiX, keep them and write them as collapsed hexahedra)"},
       {"conformity", "choice", to_string(d.conformity), "", 0, 0, kConformityChoices,
        "Conformity",
        "Quad faces meeting two triangles: never (conforming), only where nothing else is "
