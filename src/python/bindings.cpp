@@ -173,6 +173,7 @@ py::dict report_to_dict(const RecombineReport& r) {
   d["bound_elements"] = bound_field(r.bound_elements);
   d["bound_best_elements"] = bound_field(r.bound_best_elements);
   d["bound_proved"] = bound_field(r.bound_proved);
+  d["bound_conforming"] = bound_field(r.bound_conforming);
   d["gap_percent"] = bound_field(r.gap_percent);
   return d;
 }

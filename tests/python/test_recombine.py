@@ -225,7 +225,7 @@ def _recombine_with_bound(points, tets, **options):
 def test_bound_fields_are_none_unless_asked() -> None:
     points, tets, _ = grid(2, "kuhn")
     _, report = hexmerge.recombine(points, tets)
-    for key in ("bound_elements", "bound_best_elements", "bound_proved", "gap_percent"):
+    for key in ("bound_elements", "bound_best_elements", "bound_proved", "bound_conforming", "gap_percent"):
         assert report[key] is None
 
 
@@ -233,7 +233,7 @@ def test_bound_on_a_structured_grid_is_reached() -> None:
     points, tets, _ = grid(3, "kuhn")
     _, report = _recombine_with_bound(points, tets, bound_time_limit=5)
     assert report["bound_elements"] == report["bound_best_elements"] == report["output_cells"] == 27
-    assert report["bound_proved"] is True
+    assert report["bound_proved"] is True and report["bound_conforming"] is True
     assert report["gap_percent"] == 0.0
     assert "bound" in report["phase_seconds"]
 
@@ -241,8 +241,8 @@ def test_bound_on_a_structured_grid_is_reached() -> None:
 def test_bound_on_a_gmsh_mesh_is_below_our_count(gmsh_tet4) -> None:
     meshio = pytest.importorskip("meshio")
     m = meshio.read(gmsh_tet4)
-    _, report = _recombine_with_bound(m.points, m.cells_dict["tetra"], bound_time_limit=5)
-    assert isinstance(report["bound_proved"], bool)
+    _, report = _recombine_with_bound(m.points, m.cells_dict["tetra"], bound_time_limit=2, conformity="allow")
+    assert isinstance(report["bound_proved"], bool) and report["bound_conforming"] is False
     assert 0 < report["bound_elements"] <= report["bound_best_elements"] <= report["output_cells"]
     assert report["gap_percent"] >= 0.0
     expected = 100.0 * (report["output_cells"] - report["bound_elements"]) / report["bound_elements"]

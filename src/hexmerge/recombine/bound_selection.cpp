@@ -1,6 +1,7 @@
 #include "hexmerge/recombine/bound_selection.h"
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <memory>
@@ -89,6 +90,62 @@ struct ProblemDeleter {
 }  // namespace
 #endif
 
+std::vector<ConformityRow> conformity_rows(const TetMesh& mesh, const TetTopology& topology,
+                                           const std::vector<Candidate>& candidates) {
+  // Every quad face of every candidate, keyed by its sorted vertices.
+  struct Quad {
+    std::array<index_t, 4> key;
+    index_t candidate;
+    bool constrained;
+  };
+  std::vector<Quad> quads;
+  for (index_t ci = 0; ci < candidates.size(); ++ci) {
+    const Candidate& c = candidates[ci];
+    const CellDescriptor& d = descriptor(c.type);
+    for (int f = 0; f < d.nb_faces; ++f) {
+      if (d.face_size[f] != 4) continue;
+      Quad q{{}, ci, false};
+      for (int i = 0; i < 4; ++i) q.key[i] = c.vertices[d.face[f][i]];
+      std::sort(q.key.begin(), q.key.end());
+      // The candidate's tet faces lying on the quad, and whether each has a tet beyond it.
+      int on_quad = 0, beyond = 0;
+      for (int k = 0; k < c.nb_tets; ++k) {
+        const index_t* v = mesh.tet(c.tets[k]);
+        for (int tf = 0; tf < 4; ++tf) {
+          bool inside = true;
+          for (int i = 0; i < 4 && inside; ++i) {
+            if (i != tf) inside = std::binary_search(q.key.begin(), q.key.end(), v[i]);
+          }
+          if (!inside) continue;
+          ++on_quad;
+          if (topology.neighbor(c.tets[k], tf) != NO_CELL) ++beyond;
+        }
+      }
+      q.constrained = on_quad == 2 && beyond == 2;
+      quads.push_back(q);
+    }
+  }
+  std::sort(quads.begin(), quads.end(), [](const Quad& a, const Quad& b) {
+    return a.key != b.key ? a.key < b.key : a.candidate < b.candidate;
+  });
+  std::vector<ConformityRow> rows;
+  for (std::size_t begin = 0, end; begin < quads.size(); begin = end) {
+    end = begin + 1;
+    while (end < quads.size() && quads[end].key == quads[begin].key) ++end;
+    for (std::size_t i = begin; i < end; ++i) {
+      if (!quads[i].constrained) continue;
+      ConformityRow row{quads[i].candidate, {}};
+      for (std::size_t j = begin; j < end; ++j) {
+        if (quads[j].candidate != row.candidate) row.partners.push_back(quads[j].candidate);
+      }
+      row.partners.erase(std::unique(row.partners.begin(), row.partners.end()),
+                         row.partners.end());
+      rows.push_back(std::move(row));
+    }
+  }
+  return rows;
+}
+
 bool selection_bound_available() {
 #ifdef HEXMERGE_WITH_GLPK
   return true;
@@ -98,7 +155,8 @@ bool selection_bound_available() {
 }
 
 SelectionBound bound_selection(index_t nb_tets, const std::vector<Candidate>& candidates,
-                               const std::vector<index_t>& initial, double time_limit) {
+                               const std::vector<index_t>& initial, double time_limit,
+                               const std::vector<ConformityRow>& conformity) {
   HEXMERGE_ASSERT(time_limit > 0.0, "bound_selection: the time limit must be positive");
   std::vector<char> used(nb_tets, 0);
   for (index_t ci : initial) {
@@ -130,15 +188,43 @@ SelectionBound bound_selection(index_t nb_tets, const std::vector<Candidate>& ca
     if (covering[t] >= 2) row_of[t] = ++nb_rows;
   }
   const int nb_cols = static_cast<int>(candidates.size());
+  // Conformity rows the initial selection keeps (x_c - sum x_partners <= 0).
+  std::vector<char> chosen(candidates.size(), 0);
+  for (index_t ci : initial) chosen[ci] = 1;
+  std::vector<const ConformityRow*> kept;
+  for (const ConformityRow& row : conformity) {
+    const bool broken = chosen[row.candidate] &&
+                        std::none_of(row.partners.begin(), row.partners.end(),
+                                     [&](index_t p) { return chosen[p] != 0; });
+    if (broken) {
+      ++result.dropped_rows;
+    } else {
+      kept.push_back(&row);
+    }
+  }
+  result.conformity_rows = kept.size();
 
   std::unique_ptr<glp_prob, ProblemDeleter> problem(glp_create_prob());
   glp_prob* lp = problem.get();
   glp_set_obj_dir(lp, GLP_MAX);
-  if (nb_rows > 0) glp_add_rows(lp, nb_rows);
+  const int nb_all_rows = nb_rows + static_cast<int>(kept.size());
+  if (nb_all_rows > 0) glp_add_rows(lp, nb_all_rows);
   for (int r = 1; r <= nb_rows; ++r) glp_set_row_bnds(lp, r, GLP_UP, 0.0, 1.0);
   // GLPK's arrays are 1-based: entry 0 is unused.
   std::vector<int> ia(1, 0), ja(1, 0);
   std::vector<double> ar(1, 0.0);
+  for (std::size_t k = 0; k < kept.size(); ++k) {
+    const int r = nb_rows + 1 + static_cast<int>(k);
+    glp_set_row_bnds(lp, r, GLP_UP, 0.0, 0.0);
+    ia.push_back(r);
+    ja.push_back(static_cast<int>(kept[k]->candidate) + 1);
+    ar.push_back(1.0);
+    for (index_t p : kept[k]->partners) {
+      ia.push_back(r);
+      ja.push_back(static_cast<int>(p) + 1);
+      ar.push_back(-1.0);
+    }
+  }
   if (nb_cols > 0) glp_add_cols(lp, nb_cols);
   for (int j = 1; j <= nb_cols; ++j) {
     const Candidate& c = candidates[j - 1];

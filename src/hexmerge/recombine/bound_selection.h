@@ -5,14 +5,17 @@
 /// candidates can reach.
 ///
 /// The program: maximise the elements saved, sum over chosen candidates c of (nb_tets(c) - 1),
-/// subject to every tet lying in at most one chosen candidate. Conformity of quad faces is not a
-/// constraint of it, so its optimum is a bound for every conformity mode: no selection of these
-/// candidates, conforming or not, has fewer elements than `bound_elements`.
+/// subject to every tet lying in at most one chosen candidate (set packing). Without conformity
+/// rows its optimum is a bound for every conformity mode: no selection of these candidates,
+/// conforming or not, has fewer elements than `bound_elements`. With the conformity rows of
+/// conformity_rows() it bounds the conforming selections only (a tighter bound).
 
 #include <cstddef>
 #include <vector>
 
 #include "hexmerge/core/index.h"
+#include "hexmerge/mesh/tet_mesh.h"
+#include "hexmerge/mesh/tet_topology.h"
 #include "hexmerge/recombine/find_candidates.h"
 
 namespace hexmerge {
@@ -27,8 +30,25 @@ struct SelectionBound {
   std::size_t best_elements = 0;
   std::vector<index_t> best;     ///< that selection, as candidate indices; tet sets disjoint
   bool proved = false;           ///< the solver finished: best_elements == bound_elements
+  std::size_t conformity_rows = 0;   ///< conformity rows in the program
+  std::size_t dropped_rows = 0;      ///< conformity rows left out because `initial` breaks them
   double seconds = 0.0;          ///< wall time of the solve
 };
+
+/// One conformity row: choosing `candidate` needs one of `partners` chosen as well
+/// (x_candidate <= sum of x_partners).
+struct ConformityRow {
+  index_t candidate;
+  std::vector<index_t> partners;
+};
+
+/// The conformity rows of conforming mode: for every quad face of a candidate whose two triangles
+/// both have a tet on their far side, the candidates with a quad face on the same four vertices
+/// (an element chosen on the far side must close it: select_candidates.h). A quad face on the
+/// domain boundary, or one the rule cannot read plainly (not exactly two of the candidate's tet
+/// faces on it), gets no row: leaving a row out only loosens the bound, never breaks it.
+std::vector<ConformityRow> conformity_rows(const TetMesh& mesh, const TetTopology& topology,
+                                           const std::vector<Candidate>& candidates);
 
 /// True when HexMerge was built with GLPK (CMake option HEXMERGE_WITH_GLPK and libglpk-dev).
 bool selection_bound_available();
@@ -41,8 +61,11 @@ bool selection_bound_available();
 /// @param[in] initial       a feasible selection (disjoint candidates) handed to the solver as its
 ///                          first incumbent; may be empty
 /// @param[in] time_limit    seconds (> 0); past it, the best bound and solution so far are returned
+/// @param[in] conformity    rows added to the packing (conformity_rows()); empty: none. Rows that
+///                          `initial` breaks are left out, so that it stays a solution.
 /// Throws InputError (Entity::Parameter, naming optimality_bound) when GLPK is not compiled in.
 SelectionBound bound_selection(index_t nb_tets, const std::vector<Candidate>& candidates,
-                               const std::vector<index_t>& initial, double time_limit);
+                               const std::vector<index_t>& initial, double time_limit,
+                               const std::vector<ConformityRow>& conformity = {});
 
 }  // namespace hexmerge

@@ -99,7 +99,7 @@ std::vector<ParameterInfo> make_table() {
        "Threads for the candidate search; 0 uses every hardware thread"},
       {"optimality_bound", "bool", flag(d.optimality_bound), "", 0, 1, {}, "Optimality bound",
        "Also solve the selection as an integer program (GLPK) for a bound; meshes up to about "
-       "20k tets. The program leaves conformity out, so its bound holds for every mode"},
+       "20k tets (no cap: larger ones stop at the time limit with a looser bound)"},
       {"bound_time_limit", "float", number(d.bound_time_limit), "s", 1, 3600, {},
        "Bound time limit",
        "Time limit of the optimality bound's integer program; past it the best bound so far "

@@ -170,9 +170,14 @@ MixedMesh recombine(const TetMesh& input, const RecombineParameters& parameters,
 
   if (parameters.optimality_bound) {
     report_progress(progress, "bound", 0.0);
-    const SelectionBound bound = bound_selection(input.nb_tets(), candidates, selection.elements,
-                                                 parameters.bound_time_limit);
+    // In conforming mode the program gets the conformity rows too: a bound on the conforming
+    // selections, which is what this mode's output is measured against.
+    const bool conforming = parameters.conformity == Conformity::Conforming;
+    const SelectionBound bound = bound_selection(
+        input.nb_tets(), candidates, selection.elements, parameters.bound_time_limit,
+        conforming ? conformity_rows(input, topology, candidates) : std::vector<ConformityRow>{});
     report.bound_computed = true;
+    report.bound_conforming = conforming;
     report.bound_elements = bound.bound_elements;
     report.bound_best_elements = bound.best_elements;
     report.bound_proved = bound.proved;

@@ -34,8 +34,10 @@ struct RecombineReport {
   std::size_t candidates_total = 0;
   std::vector<std::pair<std::string, double>> phase_seconds;  ///< wall time per phase, in order
   /// The optimality bound (parameter optimality_bound, bound_selection.h); the fields below are
-  /// set only when it ran. The bound ignores conformity: it holds for every conformity mode.
+  /// set only when it ran. In conforming mode the program has the conformity rows and bounds the
+  /// conforming selections; in the other modes it is plain set packing and bounds every selection.
   bool bound_computed = false;
+  bool bound_conforming = false;        ///< the program had the conformity rows
   std::size_t bound_elements = 0;       ///< fewest elements any selection of the candidates reaches
   std::size_t bound_best_elements = 0;  ///< elements of the best selection the solver found
   bool bound_proved = false;            ///< the solver proved bound_best_elements optimal

@@ -10,7 +10,9 @@
 
 #include "fixtures.h"
 #include "hexmerge/core/error.h"
+#include "hexmerge/mesh/tet_topology.h"
 #include "hexmerge/recombine/recombine.h"
+#include "hexmerge/recombine/select_candidates.h"
 
 namespace hexmerge::test {
 namespace {
@@ -61,6 +63,54 @@ TEST(bound_selection, an_odd_cycle_of_conflicts_is_solved_past_its_fractional_re
   EXPECT_EQ(bound.best.size(), 1u);
 }
 
+TEST(bound_selection, a_conformity_row_forbids_a_quad_face_left_open) {
+  SKIP_WITHOUT_GLPK();
+  // Hexes A and C, and pyramid B that closes A's quad face but overlaps C.
+  const std::vector<Candidate> candidates = {group({0, 1, 2, 3, 4, 5}),
+                                             group({6, 7}, CellType::Pyramid),
+                                             group({7, 8, 9, 10, 11, 12})};
+  const SelectionBound packing = bound_selection(13, candidates, {}, 10.0);
+  EXPECT_EQ(packing.bound_elements, 3u);  // A and C
+  const std::vector<ConformityRow> rows = {{0, {1}}};
+  const SelectionBound conforming = bound_selection(13, candidates, {}, 10.0, rows);
+  EXPECT_TRUE(conforming.proved);
+  EXPECT_EQ(conforming.conformity_rows, 1u);
+  EXPECT_EQ(conforming.bound_elements, 7u);  // A and B
+  EXPECT_EQ(std::set<index_t>(conforming.best.begin(), conforming.best.end()),
+            (std::set<index_t>{0, 1}));
+  // An initial selection breaking the row keeps its place: the row is left out.
+  const SelectionBound from_broken = bound_selection(13, candidates, {0}, 10.0, rows);
+  EXPECT_EQ(from_broken.dropped_rows, 1u);
+  EXPECT_EQ(from_broken.bound_elements, 3u);
+}
+
+TEST(bound_selection, conforming_selections_keep_every_conformity_row) {
+  SKIP_WITHOUT_GLPK();
+  std::mt19937 rng(11);
+  for (bool five : {false, true}) {
+    SCOPED_TRACE(five ? "five-tet grid" : "Kuhn grid");
+    TetMesh mesh = five ? five_tet_grid(3) : kuhn_grid(3);
+    random_perturbation(mesh, rng, 0.12);
+    const TetTopology topology(mesh);
+    const RecombineParameters p;  // conforming
+    AcceptanceCriteria criteria;
+    const std::vector<Candidate> candidates = find_candidates(mesh, topology, criteria, 1);
+    const Selection selection = select_candidates(mesh, topology, candidates, p);
+    const std::vector<ConformityRow> rows = conformity_rows(mesh, topology, candidates);
+    EXPECT_FALSE(rows.empty());
+    const SelectionBound packing = bound_selection(mesh.nb_tets(), candidates, selection.elements, 2.0);
+    const SelectionBound conforming =
+        bound_selection(mesh.nb_tets(), candidates, selection.elements, 2.0, rows);
+    EXPECT_EQ(conforming.dropped_rows, 0u);
+    EXPECT_EQ(conforming.conformity_rows, rows.size());
+    EXPECT_GE(conforming.bound_elements, packing.bound_elements);
+    std::size_t ours = mesh.nb_tets();
+    for (index_t c : selection.elements) ours -= candidates[c].nb_tets - 1u;
+    EXPECT_LE(conforming.best_elements, ours);
+    EXPECT_LE(conforming.bound_elements, conforming.best_elements);
+  }
+}
+
 TEST(bound_selection, no_candidates_bound_is_the_tets) {
   SKIP_WITHOUT_GLPK();
   const SelectionBound bound = bound_selection(7, {}, {}, 1.0);
@@ -79,6 +129,7 @@ TEST(bound_selection, kuhn_grid_bound_is_one_element_per_cube_and_the_gap_is_zer
     recombine(kuhn_grid(n), p, report);
     const std::size_t cubes = std::size_t(n) * n * n;
     ASSERT_TRUE(report.bound_computed);
+    EXPECT_TRUE(report.bound_conforming);
     EXPECT_TRUE(report.bound_proved);
     EXPECT_EQ(report.bound_elements, cubes);
     EXPECT_EQ(report.bound_best_elements, cubes);
@@ -93,14 +144,16 @@ TEST(bound_selection, gap_is_never_negative_on_jittered_grids) {
   for (bool five : {false, true}) {
     for (const char* conformity : {"conforming", "allow"}) {
       SCOPED_TRACE(std::string(five ? "five-tet" : "Kuhn") + " grid, " + conformity);
-      TetMesh mesh = five ? five_tet_grid(4) : kuhn_grid(4);
+      TetMesh mesh = five ? five_tet_grid(3) : kuhn_grid(3);
       random_perturbation(mesh, rng, 0.12);
       RecombineParameters p;
       set_parameter(p, "conformity", conformity);
       p.optimality_bound = true;
+      p.bound_time_limit = 2.0;  // a bound that stops early must hold as well
       RecombineReport report;
       recombine(mesh, p, report);
       ASSERT_TRUE(report.bound_computed);
+      EXPECT_EQ(report.bound_conforming, std::string(conformity) == "conforming");
       EXPECT_LE(report.bound_elements, report.bound_best_elements);
       EXPECT_LE(report.bound_best_elements, report.output_cells);  // ours is its first incumbent
       EXPECT_GE(report.gap_percent, 0.0);
