@@ -207,24 +207,11 @@ SelectionBound bound_selection(index_t nb_tets, const std::vector<Candidate>& ca
   std::unique_ptr<glp_prob, ProblemDeleter> problem(glp_create_prob());
   glp_prob* lp = problem.get();
   glp_set_obj_dir(lp, GLP_MAX);
-  const int nb_all_rows = nb_rows + static_cast<int>(kept.size());
-  if (nb_all_rows > 0) glp_add_rows(lp, nb_all_rows);
+  if (nb_rows > 0) glp_add_rows(lp, nb_rows);
   for (int r = 1; r <= nb_rows; ++r) glp_set_row_bnds(lp, r, GLP_UP, 0.0, 1.0);
   // GLPK's arrays are 1-based: entry 0 is unused.
   std::vector<int> ia(1, 0), ja(1, 0);
   std::vector<double> ar(1, 0.0);
-  for (std::size_t k = 0; k < kept.size(); ++k) {
-    const int r = nb_rows + 1 + static_cast<int>(k);
-    glp_set_row_bnds(lp, r, GLP_UP, 0.0, 0.0);
-    ia.push_back(r);
-    ja.push_back(static_cast<int>(kept[k]->candidate) + 1);
-    ar.push_back(1.0);
-    for (index_t p : kept[k]->partners) {
-      ia.push_back(r);
-      ja.push_back(static_cast<int>(p) + 1);
-      ar.push_back(-1.0);
-    }
-  }
   if (nb_cols > 0) glp_add_cols(lp, nb_cols);
   for (int j = 1; j <= nb_cols; ++j) {
     const Candidate& c = candidates[j - 1];
@@ -258,10 +245,37 @@ SelectionBound bound_selection(index_t nb_tets, const std::vector<Candidate>& ca
     result.proved = true;
     return finish(0.0, 0);
   }
+  // The packing LP first: quick, and its bound holds whatever happens next.
   if (glp_simplex(lp, &simplex) != 0 || glp_get_status(lp) != GLP_OPT) {
     return finish(share_bound(nb_tets, candidates), initial_saved);
   }
-  const double lp_bound = glp_get_obj_val(lp);
+  double lp_bound = glp_get_obj_val(lp);
+  if (!kept.empty()) {
+    // Then the conformity rows (x_c - sum x_partners <= 0), re-solved from the packing basis by
+    // the dual simplex: cold, this LP is far slower (degenerate).
+    const int first = glp_add_rows(lp, static_cast<int>(kept.size()));
+    std::vector<int> index(1, 0);
+    std::vector<double> value(1, 0.0);
+    for (std::size_t k = 0; k < kept.size(); ++k) {
+      index.assign(1, 0);
+      value.assign(1, 0.0);
+      index.push_back(static_cast<int>(kept[k]->candidate) + 1);
+      value.push_back(1.0);
+      for (index_t p : kept[k]->partners) {
+        index.push_back(static_cast<int>(p) + 1);
+        value.push_back(-1.0);
+      }
+      const int r = first + static_cast<int>(k);
+      glp_set_row_bnds(lp, r, GLP_UP, 0.0, 0.0);
+      glp_set_mat_row(lp, r, static_cast<int>(index.size()) - 1, index.data(), value.data());
+    }
+    simplex.meth = GLP_DUALP;
+    simplex.tm_lim = milliseconds_left();
+    if (glp_simplex(lp, &simplex) != 0 || glp_get_status(lp) != GLP_OPT) {
+      return finish(lp_bound, initial_saved);
+    }
+    lp_bound = glp_get_obj_val(lp);
+  }
 
   std::vector<double> start_values;
   SearchState state;
