@@ -167,6 +167,7 @@ SelectionBound bound_selection(index_t nb_tets, const std::vector<Candidate>& ca
     }
   }
 #ifndef HEXMERGE_WITH_GLPK
+  static_cast<void>(conformity);
   throw InputError(
       "parameter 'optimality_bound': this build of HexMerge has no GLPK (install libglpk-dev "
       "and rebuild with HEXMERGE_WITH_GLPK=ON)",
