@@ -16,32 +16,6 @@ constexpr int kMaxQuads = 6;
 
 const CellDescriptor& kTet = descriptor(CellType::Tet);
 
-// Outward triangle of face f of tet t.
-std::array<index_t, 3> tet_face(const TetMesh& mesh, index_t t, int f) {
-  const index_t* q = mesh.tet(t);
-  return {q[kTet.face[f][0]], q[kTet.face[f][1]], q[kTet.face[f][2]]};
-}
-
-// The outward quad cycle made of two outward triangles sharing an edge, or false when they do
-// not share exactly one edge. Triangle (x, y, z) and triangle (y, x, w) give quad (x, w, y, z);
-// its diagonal x-y is positions 0 and 2.
-bool quad_from_triangles(const std::array<index_t, 3>& t1, const std::array<index_t, 3>& t2,
-                         std::array<index_t, 4>& quad) {
-  for (int i = 0; i < 3; ++i) {
-    const index_t x = t1[i], y = t1[(i + 1) % 3], z = t1[(i + 2) % 3];
-    for (int j = 0; j < 3; ++j) {
-      // t2 must run along the shared edge in the opposite direction: (y, x, w).
-      if (t2[j] == y && t2[(j + 1) % 3] == x) {
-        const index_t w = t2[(j + 2) % 3];
-        if (w == z) return false;
-        quad = {x, w, y, z};
-        return true;
-      }
-    }
-  }
-  return false;
-}
-
 template <std::size_t N>
 std::array<index_t, N> sorted(std::array<index_t, N> a) {
   std::sort(a.begin(), a.end());

@@ -16,11 +16,6 @@ namespace {
 
 const CellDescriptor& kTet = descriptor(CellType::Tet);
 
-std::array<index_t, 3> tet_face(const TetMesh& mesh, index_t t, int f) {
-  const index_t* q = mesh.tet(t);
-  return {q[kTet.face[f][0]], q[kTet.face[f][1]], q[kTet.face[f][2]]};
-}
-
 // An oriented quad: its vertex cycle, outward from the tets behind it, rotated to start at its
 // smallest vertex; and, per diagonal (0: positions 0-2, 1: positions 1-3), one tet face behind
 // it as 4 * tet + face (NO_INDEX when that diagonal's triangles are not an accepted pair).
@@ -35,24 +30,6 @@ struct PairRecord {
   index_t seed;
   std::uint8_t diagonal;
 };
-
-// Quad (x, w, y, z) made of outward triangles (x, y, z) and (y, x, w); false when they do not
-// share exactly one edge run in opposite directions. Its diagonal x-y is positions 0 and 2.
-bool quad_from_triangles(const std::array<index_t, 3>& t1, const std::array<index_t, 3>& t2,
-                         std::array<index_t, 4>& quad) {
-  for (int i = 0; i < 3; ++i) {
-    const index_t x = t1[i], y = t1[(i + 1) % 3], z = t1[(i + 2) % 3];
-    for (int j = 0; j < 3; ++j) {
-      if (t2[j] == y && t2[(j + 1) % 3] == x) {
-        const index_t w = t2[(j + 2) % 3];
-        if (w == z) return false;
-        quad = {x, w, y, z};
-        return true;
-      }
-    }
-  }
-  return false;
-}
 
 // Every oriented quad with at least one accepted triangulation, and an index of them by directed
 // edge: for vertex a, the (b, quad * 4 + rotation) of every quad whose cycle runs a -> b, sorted

@@ -10,6 +10,30 @@
 #include "hexmerge/mesh/cell_type.h"
 
 namespace hexmerge {
+
+std::array<index_t, 3> tet_face(const TetMesh& mesh, index_t t, int f) {
+  const CellDescriptor& tet = descriptor(CellType::Tet);
+  const index_t* q = mesh.tet(t);
+  return {q[tet.face[f][0]], q[tet.face[f][1]], q[tet.face[f][2]]};
+}
+
+bool quad_from_triangles(const std::array<index_t, 3>& t1, const std::array<index_t, 3>& t2,
+                         std::array<index_t, 4>& quad) {
+  for (int i = 0; i < 3; ++i) {
+    const index_t x = t1[i], y = t1[(i + 1) % 3], z = t1[(i + 2) % 3];
+    for (int j = 0; j < 3; ++j) {
+      // t2 must run along the shared edge in the opposite direction: (y, x, w).
+      if (t2[j] == y && t2[(j + 1) % 3] == x) {
+        const index_t w = t2[(j + 2) % 3];
+        if (w == z) return false;
+        quad = {x, w, y, z};
+        return true;
+      }
+    }
+  }
+  return false;
+}
+
 namespace {
 
 const CellDescriptor& kTet = descriptor(CellType::Tet);
@@ -64,11 +88,6 @@ class Builder {
   }
 
  private:
-  std::array<index_t, 3> tri(index_t t, int f) const {
-    const index_t* q = mesh_.tet(t);
-    return {q[kTet.face[f][0]], q[kTet.face[f][1]], q[kTet.face[f][2]]};
-  }
-
   // Faces (tet, local face) holding edge x-y of the tets around it other than t: walk from t
   // across each of its two faces on the edge until the walk returns or leaves the domain.
   int tets_around_edge(index_t t, index_t x, index_t y, const int others[2],
@@ -95,28 +114,19 @@ class Builder {
   }
 
   bool accept(index_t t, int f, index_t s, int g, QuadPartner& p) const {
-    const auto t1 = tri(t, f), t2 = tri(s, g);
-    // t2 must run along the shared edge opposite to t1: t1 = (x, y, z), t2 = (y, x, w).
-    for (int i = 0; i < 3; ++i) {
-      const index_t x = t1[i], y = t1[(i + 1) % 3], z = t1[(i + 2) % 3];
-      for (int j = 0; j < 3; ++j) {
-        if (t2[j] != y || t2[(j + 1) % 3] != x) continue;
-        const index_t w = t2[(j + 2) % 3];
-        if (w == z) return false;
-        const double* a = mesh_.point(x);
-        const double* b = mesh_.point(w);
-        const double* c = mesh_.point(y);
-        const double* d = mesh_.point(z);
-        const double dihedral = quad_dihedral_angle(a, b, c, d);
-        const bool on_boundary = topo_.on_boundary(t, f) && topo_.on_boundary(s, g);
-        if (dihedral < (on_boundary ? min_boundary_dihedral_ : min_dihedral_)) return false;
-        const double corner = quad_max_corner_angle(a, b, c, d);
-        if (corner > max_corner_) return false;
-        p = {4 * s + g, static_cast<float>(dihedral), static_cast<float>(corner)};
-        return true;
-      }
-    }
-    return false;
+    std::array<index_t, 4> q;
+    if (!quad_from_triangles(tet_face(mesh_, t, f), tet_face(mesh_, s, g), q)) return false;
+    const double* a = mesh_.point(q[0]);
+    const double* b = mesh_.point(q[1]);
+    const double* c = mesh_.point(q[2]);
+    const double* d = mesh_.point(q[3]);
+    const double dihedral = quad_dihedral_angle(a, b, c, d);
+    const bool on_boundary = topo_.on_boundary(t, f) && topo_.on_boundary(s, g);
+    if (dihedral < (on_boundary ? min_boundary_dihedral_ : min_dihedral_)) return false;
+    const double corner = quad_max_corner_angle(a, b, c, d);
+    if (corner > max_corner_) return false;
+    p = {4 * s + g, static_cast<float>(dihedral), static_cast<float>(corner)};
+    return true;
   }
 
   const TetMesh& mesh_;

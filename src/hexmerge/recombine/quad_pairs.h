@@ -5,6 +5,7 @@
 /// and with corner angles small enough. Computed once, so that the search programs' QUAD
 /// instructions are look-ups.
 
+#include <array>
 #include <vector>
 
 #include "hexmerge/core/index.h"
@@ -12,6 +13,15 @@
 #include "hexmerge/mesh/tet_topology.h"
 
 namespace hexmerge {
+
+/// Outward triangle of face f of tet t (the face opposite its local vertex f, cell_type.h).
+std::array<index_t, 3> tet_face(const TetMesh& mesh, index_t t, int f);
+
+/// The quad (x, w, y, z) made of outward triangles (x, y, z) and (y, x, w): its diagonal x-y is
+/// positions 0 and 2, and it is outward like them. False when the triangles do not share exactly
+/// one edge run in opposite directions.
+bool quad_from_triangles(const std::array<index_t, 3>& t1, const std::array<index_t, 3>& t2,
+                         std::array<index_t, 4>& quad);
 
 /// One acceptable partner of a tet face.
 struct QuadPartner {
