@@ -258,8 +258,6 @@ class Matcher {
           used_[in.a] |= static_cast<unsigned char>(1u << fa);
           used_[in.b] |= static_cast<unsigned char>(1u << fb);
           quad_[nb_quads_] = {4 * ta + fa, p->face};
-          dihedral_[nb_quads_] = p->dihedral;
-          corner_[nb_quads_] = p->corner;
           ++nb_quads_;
           step(pc + 1, first_of_root);
           --nb_quads_;
@@ -309,12 +307,6 @@ class Matcher {
     const double sj = scaled_jacobian(c.type, mesh_.points.data(), c.vertices.data());
     if (sj < criteria_.min_scaled_jacobian) return;
     c.quality = static_cast<float>(sj);
-    c.min_dihedral_angle = 180.0f;
-    c.max_face_angle = 0.0f;
-    for (int i = 0; i < nb_quads_; ++i) {
-      c.min_dihedral_angle = std::min(c.min_dihedral_angle, dihedral_[i]);
-      c.max_face_angle = std::max(c.max_face_angle, corner_[i]);
-    }
     out_.push_back(c);
   }
 
@@ -350,8 +342,6 @@ class Matcher {
   std::array<index_t, 8> vertex_{};
   int nb_vertices_ = 0;
   std::array<std::array<index_t, 2>, kMaxQuads> quad_{};
-  std::array<float, kMaxQuads> dihedral_{};
-  std::array<float, kMaxQuads> corner_{};
   int nb_quads_ = 0;
 };
 

@@ -28,8 +28,6 @@ struct Candidate {
                        ///< EXHAUSTIVE_GRAPH (find_candidates_exhaustive.h)
   std::uint8_t nb_tets;
   float quality;                    ///< scaled Jacobian
-  float min_dihedral_angle;         ///< degrees, over its quad faces (180 when none)
-  float max_face_angle;             ///< degrees, over its quad faces (0 when none)
 };
 
 /// What a candidate must satisfy.

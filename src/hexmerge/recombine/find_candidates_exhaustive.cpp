@@ -277,23 +277,19 @@ class CellBuilder {
     return true;
   }
 
-  // The accepted pair (a, b) of tet faces, from either side; false when it is not one.
-  bool pair_angles(index_t a, index_t b, float& dihedral, float& corner) const {
+  // Whether (a, b) is an accepted pair of tet faces, from either side.
+  bool accepted_pair(index_t a, index_t b) const {
     for (int side = 0; side < 2; ++side) {
       for (const QuadPartner* p = pairs_.begin(a / 4, a % 4); p != pairs_.end(a / 4, a % 4); ++p) {
-        if (p->face == b) {
-          dihedral = p->dihedral;
-          corner = p->corner;
-          return true;
-        }
+        if (p->face == b) return true;
       }
       std::swap(a, b);
     }
     return false;
   }
 
-  // Angles of the quad made of two outward faces of one tet (a flat cap), checked directly.
-  bool cap_angles(index_t t, int f1, int f2, float& dihedral, float& corner) const {
+  // Whether the quad made of two outward faces of one tet (a flat cap) passes the angles.
+  bool cap_accepted(index_t t, int f1, int f2) const {
     std::array<index_t, 4> q;
     if (!quad_from_triangles(tet_face(mesh_, t, f1), tet_face(mesh_, t, f2), q)) return false;
     const double dh = quad_dihedral_angle(mesh_.point(q[0]), mesh_.point(q[1]),
@@ -303,10 +299,7 @@ class CellBuilder {
     const bool on_boundary = topo_.on_boundary(t, f1) && topo_.on_boundary(t, f2);
     const double min_dihedral =
         on_boundary ? criteria_.min_boundary_dihedral_angle : criteria_.min_dihedral_angle;
-    if (dh < min_dihedral || cr > criteria_.max_face_angle) return false;
-    dihedral = static_cast<float>(dh);
-    corner = static_cast<float>(cr);
-    return true;
+    return dh >= min_dihedral && cr <= criteria_.max_face_angle;
   }
 
   // The group's candidate, and with caps: flat tets lying on its quad faces, outside the group,
@@ -315,27 +308,21 @@ class CellBuilder {
   void emit() {
     const double sj = scaled_jacobian(type_, mesh_.points.data(), v_.data());
     if (sj < criteria_.min_scaled_jacobian) return;
-    struct FaceAngles {
-      float dihedral, corner;          // the group's own two triangles
-      float cap_dihedral, cap_corner;  // the cap's outer two, when the face has a cap
-      int cap;                         // index into caps, or -1
-    };
-    std::array<FaceAngles, 6> angles;
+    std::array<int, 6> cap_of_quad;  // per quad face: index into caps, or -1
     std::array<index_t, 6> caps;
     int nb_caps = 0, nb_quads = 0;
     for (int g = 0; g < d_->nb_faces; ++g) {
       if (d_->face_size[g] != 4) continue;
-      FaceAngles& fa = angles[nb_quads++];
-      fa.cap = -1;
+      int& cap = cap_of_quad[nb_quads++];
+      cap = -1;
       const index_t a = face_tris_[g][0], b = face_tris_[g][1];
-      if (!pair_angles(a, b, fa.dihedral, fa.corner)) return;
+      if (!accepted_pair(a, b)) return;
       const index_t na = topo_.neighbor(a / 4, a % 4), nb = topo_.neighbor(b / 4, b % 4);
       if (na != NO_CELL && na == nb && nb_ + nb_caps < kMaxGroup &&
           (!criteria_.respect_regions || mesh_.region(na) == mesh_.region(group_[0])) &&
           cap_on_face(na, g) &&
-          cap_angles(na, other_face(a, b, 0), other_face(a, b, 1), fa.cap_dihedral,
-                     fa.cap_corner)) {
-        fa.cap = nb_caps;
+          cap_accepted(na, other_face(a, b, 0), other_face(a, b, 1))) {
+        cap = nb_caps;
         caps[nb_caps++] = na;
       }
     }
@@ -350,14 +337,9 @@ class CellBuilder {
       c.tets.fill(NO_CELL);
       std::copy(group_, group_ + nb_, c.tets.begin());
       int n = nb_;
-      c.min_dihedral_angle = 180.0f;
-      c.max_face_angle = 0.0f;
       for (int q = 0; q < nb_quads; ++q) {
-        const FaceAngles& fa = angles[q];
-        const bool capped = fa.cap >= 0 && (subset & (1u << fa.cap));
-        if (capped) c.tets[n++] = caps[fa.cap];
-        c.min_dihedral_angle = std::min(c.min_dihedral_angle, capped ? fa.cap_dihedral : fa.dihedral);
-        c.max_face_angle = std::max(c.max_face_angle, capped ? fa.cap_corner : fa.corner);
+        const int cap = cap_of_quad[q];
+        if (cap >= 0 && (subset & (1u << cap))) c.tets[n++] = caps[cap];
       }
       c.nb_tets = static_cast<std::uint8_t>(n);
       std::sort(c.tets.begin(), c.tets.begin() + n);

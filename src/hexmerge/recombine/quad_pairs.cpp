@@ -125,7 +125,7 @@ class Builder {
     if (dihedral < (on_boundary ? min_boundary_dihedral_ : min_dihedral_)) return false;
     const double corner = quad_max_corner_angle(a, b, c, d);
     if (corner > max_corner_) return false;
-    p = {4 * s + g, static_cast<float>(dihedral), static_cast<float>(corner)};
+    p = {4 * s + g};
     return true;
   }
 

@@ -25,9 +25,7 @@ bool quad_from_triangles(const std::array<index_t, 3>& t1, const std::array<inde
 
 /// One acceptable partner of a tet face.
 struct QuadPartner {
-  index_t face;      ///< the partner as 4 * tet + local face
-  float dihedral;    ///< degrees, 180 when flat
-  float corner;      ///< largest corner angle of the quad, degrees
+  index_t face;  ///< the partner as 4 * tet + local face
 };
 
 /// For every face of every tet, its acceptable quad partners (CSR).
