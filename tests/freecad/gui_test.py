@@ -68,21 +68,13 @@ def main():
     import FreeCAD
     import FreeCADGui
     from PySide import QtGui
-    import ObjectsFem
     import helpers
     from freecad.hexmerge import commands, mesh_hexdominant
     from freecad.hexmerge.task_mesh_hexdominant import TaskPanelHexDominant
 
     FreeCADGui.activateWorkbench("FemWorkbench")
-    doc = FreeCAD.newDocument("HexMergeGui")
-    box = doc.addObject("Part::Box", "Box")
-    box.Length, box.Width, box.Height = 60, 40, 30
-    doc.recompute()
-    mesh = ObjectsFem.makeMeshGmsh(doc, "BoxMesh")
-    mesh.Part = box
-    doc.recompute()
-    helpers.gmsh_mesh(mesh, 8.0, "1st")
-    box.ViewObject.Visibility = False
+    doc, mesh = helpers.box_doc("1st", 8.0, name="HexMergeGui")
+    doc.getObject("Box").ViewObject.Visibility = False
     cmd = FreeCADGui.Command.get("HexMerge_MeshHexDominant")
     assert cmd is not None, "command not registered"
 

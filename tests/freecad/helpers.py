@@ -84,3 +84,17 @@ def inp_element_count(path):
 def tip_displacement(result):
     """Largest displacement magnitude of a result (the cantilever's tip), mm."""
     return max(result.DisplacementLengths)
+
+
+def box_doc(order="1st", size=10.0, name="HexMergeBox"):
+    """A new document with a 60 x 40 x 30 box meshed by Gmsh (tets of the given order and size):
+    returns the document and its mesh object."""
+    doc = FreeCAD.newDocument(name)
+    box = doc.addObject("Part::Box", "Box")
+    box.Length, box.Width, box.Height = 60, 40, 30
+    doc.recompute()
+    mesh = ObjectsFem.makeMeshGmsh(doc, "BoxMesh")
+    mesh.Part = box
+    doc.recompute()
+    gmsh_mesh(mesh, size, order)
+    return doc, mesh

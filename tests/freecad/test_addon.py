@@ -11,7 +11,6 @@ import numpy as np
 
 import FreeCAD
 import Fem
-import ObjectsFem
 
 import helpers
 import freecad.hexmerge as hm
@@ -26,16 +25,7 @@ def close_all():
         FreeCAD.closeDocument(name)
 
 
-def box_doc(order="1st", size=10.0):
-    doc = FreeCAD.newDocument("HexMergeBox")
-    box = doc.addObject("Part::Box", "Box")
-    box.Length, box.Width, box.Height = 60, 40, 30
-    doc.recompute()
-    mesh = ObjectsFem.makeMeshGmsh(doc, "BoxMesh")
-    mesh.Part = box
-    doc.recompute()
-    helpers.gmsh_mesh(mesh, size, order)
-    return doc, mesh
+box_doc = helpers.box_doc
 
 
 def inp_count(femmesh):
