@@ -13,7 +13,8 @@ HEXMERGE_PYTHON=/usr/bin/python3.11
 HEXMERGE_BASE_PACKAGES=(g++ cmake make pybind11-dev python3-dev python3-numpy python3-meshio
                         gmsh tetgen libgtest-dev
                         libocct-foundation-dev libocct-modeling-data-dev
-                        libocct-modeling-algorithms-dev libocct-visualization-dev libtbb-dev libglpk-dev)
+                        libocct-modeling-algorithms-dev libocct-data-exchange-dev
+                        libocct-visualization-dev libtbb-dev libglpk-dev)
 
 # Installs the Debian packages given that are not installed yet (apt-get update first, once).
 ensure_packages() {

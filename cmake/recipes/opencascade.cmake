@@ -11,10 +11,11 @@ endif()
 # module (Visualization, Draw...), whose -dev packages need not be installed.
 find_package(OpenCASCADE CONFIG QUIET
   COMPONENTS FoundationClasses ModelingData ModelingAlgorithms)
-if(NOT OpenCASCADE_FOUND OR NOT TARGET TKTopAlgo OR NOT TARGET TKShHealing)
+if(NOT OpenCASCADE_FOUND OR NOT TARGET TKTopAlgo OR NOT TARGET TKShHealing OR NOT TARGET TKMesh)
   message(STATUS "OpenCASCADE not found: hexmerge_occ (regions by solid) is not built "
                  "(Debian: libocct-foundation-dev libocct-modeling-data-dev "
-                 "libocct-modeling-algorithms-dev libocct-visualization-dev libtbb-dev)")
+                 "libocct-modeling-algorithms-dev libocct-data-exchange-dev libocct-visualization-dev "
+                 "libtbb-dev)")
   return()
 endif()
 
@@ -40,9 +41,24 @@ if(NOT EXISTS "${OpenCASCADE_INCLUDE_DIR}/NCollection_AliasedArray.hxx"
   return()
 endif()
 
+# STEP and IGES readers (libocct-data-exchange-dev). Linked by file, not through OCCT's
+# DataExchange component: that component's config also needs the OCAF and visualization -dev
+# packages, for toolkits HexMerge does not use.
+set(_hexmerge_occ_exchange)
+foreach(_tk TKXSBase TKSTEP TKIGES)
+  find_library(HEXMERGE_OCC_${_tk} ${_tk} HINTS ${OpenCASCADE_LIBRARY_DIR} NO_DEFAULT_PATH)
+  if(NOT HEXMERGE_OCC_${_tk} OR NOT EXISTS "${OpenCASCADE_INCLUDE_DIR}/STEPControl_Reader.hxx")
+    message(WARNING "OpenCASCADE ${OpenCASCADE_VERSION} found but not its STEP/IGES readers "
+                    "(Debian: libocct-data-exchange-dev): hexmerge_occ is not built")
+    return()
+  endif()
+  list(APPEND _hexmerge_occ_exchange ${HEXMERGE_OCC_${_tk}})
+endforeach()
+
 add_library(OpenCASCADE::OpenCASCADE INTERFACE IMPORTED GLOBAL)
 # OCCT's exported targets carry no include directory.
 target_include_directories(OpenCASCADE::OpenCASCADE SYSTEM INTERFACE ${OpenCASCADE_INCLUDE_DIR})
 target_link_libraries(OpenCASCADE::OpenCASCADE INTERFACE
-  TKernel TKMath TKG2d TKG3d TKGeomBase TKBRep TKGeomAlgo TKTopAlgo TKShHealing)
+  TKernel TKMath TKG2d TKG3d TKGeomBase TKBRep TKGeomAlgo TKTopAlgo TKShHealing TKMesh
+  ${_hexmerge_occ_exchange})
 message(STATUS "OpenCASCADE ${OpenCASCADE_VERSION}: building hexmerge_occ")

@@ -24,6 +24,7 @@
 #include "hexmerge/recombine/parameters.h"
 #include "hexmerge/recombine/recombine.h"
 #ifdef HEXMERGE_WITH_OCC
+#include "hexmerge/occ/mesh_shape.h"
 #include "hexmerge/occ/regions_by_solid.h"
 #endif
 
@@ -331,6 +332,52 @@ py::tuple run_regions_by_solid(const std::string& brep, const PointsIn& points, 
   d["phase_seconds"] = phases;
   return py::make_tuple(to_numpy(std::move(regions)), d);
 }
+
+py::tuple run_mesh_shape(const std::string& brep, double size, int boundary_layers,
+                         double layer_thickness, double lattice_margin, double surface_deflection,
+                         const std::string& frame, const std::string& tetgen,
+                         const std::string& work_directory) {
+  MeshShapeParameters parameters;
+  parameters.size = size;
+  parameters.boundary_layers = boundary_layers;
+  parameters.layer_thickness = layer_thickness;
+  parameters.lattice_margin = lattice_margin;
+  parameters.surface_deflection = surface_deflection;
+  parameters.frame = frame;
+  parameters.tetgen = tetgen;
+  parameters.work_directory = work_directory;
+  MeshShapeReport report;
+  TetMesh mesh;
+  {
+    py::gil_scoped_release released;
+    mesh = mesh_shape(brep, parameters, report);
+  }
+  py::dict d;
+  d["nb_solids"] = report.nb_solids;
+  d["nb_faces"] = report.nb_faces;
+  d["nb_lattice_faces"] = report.nb_lattice_faces;
+  d["nb_surface_nodes"] = report.nb_surface_nodes;
+  d["nb_surface_triangles"] = report.nb_surface_triangles;
+  d["nb_lattice_points"] = report.nb_lattice_points;
+  d["nb_core_cells"] = report.nb_core_cells;
+  d["nb_apex_points"] = report.nb_apex_points;
+  d["nb_layer_points"] = report.nb_layer_points;
+  d["nb_steiner_points"] = report.nb_steiner_points;
+  py::list axes;
+  for (const auto& axis : report.frame) axes.append(py::make_tuple(axis[0], axis[1], axis[2]));
+  d["frame"] = axes;
+  d["spacing"] = py::make_tuple(report.spacing[0], report.spacing[1], report.spacing[2]);
+  d["max_boundary_distance"] = report.max_boundary_distance;
+  d["tetgen_command"] = report.tetgen_command;
+  py::dict phases;
+  for (const auto& [name, seconds] : report.phase_seconds) phases[name.c_str()] = seconds;
+  d["phase_seconds"] = phases;
+  const auto nb_points = static_cast<py::ssize_t>(mesh.points.size() / 3);
+  const auto nb_tets = static_cast<py::ssize_t>(mesh.tets.size() / 4);
+  return py::make_tuple(to_numpy(std::move(mesh.points), {nb_points, 3}),
+                        to_numpy(std::move(mesh.tets), {nb_tets, 4}),
+                        to_numpy(std::move(mesh.regions)), d);
+}
 #endif
 
 py::list table() {
@@ -457,6 +504,16 @@ samples_per_piece, classify_every_tet, nb_threads: see RegionsBySolidParameters.
 
 Returns (solids, report): solids int32 (M,), 0-based solid index in TopExp::MapShapes order
 (FreeCAD's Shape.Solids) or -1; report a dict of counts and phase_seconds.)doc");
+  m.def("mesh_shape", &run_mesh_shape, py::arg("brep"), py::arg("size"),
+        py::arg("boundary_layers") = 1, py::arg("layer_thickness") = 0.5,
+        py::arg("lattice_margin") = 0.5, py::arg("surface_deflection") = 0.02,
+        py::arg("frame") = "auto", py::arg("tetgen") = "tetgen", py::arg("work_directory") = "",
+        R"doc(Lattice-seeded tets of a solid shape (BREP text) with OpenCASCADE and TetGen.
+
+See MeshShapeParameters (src/occ/hexmerge/occ/mesh_shape.h) for the options.
+Returns (points float64 (N, 3), tets (M, 4), regions int32 (M,), report dict).)doc");
+  m.def("read_shape_file", &read_shape_file, py::arg("path"),
+        R"doc(The shape in a STEP, BREP or IGES file, as BREP text.)doc");
 #else
   m.attr("with_opencascade") = false;
 #endif

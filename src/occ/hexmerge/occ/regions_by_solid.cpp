@@ -29,6 +29,7 @@
 #include <thread>
 
 #include "hexmerge/core/error.h"
+#include "hexmerge/occ/brep_text.h"
 #include "hexmerge/mesh/tet_topology.h"
 
 namespace hexmerge {
@@ -76,19 +77,6 @@ Bnd_Box bounding_box(const TopoDS_Shape& shape, double enlarge) {
   BRepBndLib::Add(shape, box, false);
   box.Enlarge(enlarge);
   return box;
-}
-
-TopoDS_Shape read_brep(const std::string& text) {
-  TopoDS_Shape shape;
-  try {
-    std::istringstream in(text);
-    BRep_Builder builder;
-    BRepTools::Read(shape, in, builder);
-  } catch (const Standard_Failure& e) {
-    throw InputError(std::string("the shape's BREP text cannot be read: ") + e.GetMessageString());
-  }
-  if (shape.IsNull()) throw InputError("the shape's BREP text cannot be read (no shape in it)");
-  return shape;
 }
 
 // A face of the shape lying between two solids, with what finding mesh nodes on it needs.

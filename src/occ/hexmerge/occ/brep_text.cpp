@@ -1,0 +1,84 @@
+#include "hexmerge/occ/brep_text.h"
+
+#include <BRepTools.hxx>
+#include <BRep_Builder.hxx>
+#include <IGESControl_Reader.hxx>
+#include <STEPControl_Reader.hxx>
+#include <Standard_Failure.hxx>
+
+#include <algorithm>
+#include <cctype>
+#include <fstream>
+#include <sstream>
+
+#include "hexmerge/core/error.h"
+#include "hexmerge/occ/mesh_shape.h"
+
+namespace hexmerge {
+
+TopoDS_Shape read_brep(const std::string& text) {
+  TopoDS_Shape shape;
+  try {
+    std::istringstream in(text);
+    BRep_Builder builder;
+    BRepTools::Read(shape, in, builder);
+  } catch (const Standard_Failure& e) {
+    throw InputError(std::string("the shape's BREP text cannot be read: ") + e.GetMessageString());
+  }
+  if (shape.IsNull()) throw InputError("the shape's BREP text cannot be read (no shape in it)");
+  return shape;
+}
+
+std::string write_brep(const TopoDS_Shape& shape) {
+  std::ostringstream out;
+  BRepTools::Write(shape, out);
+  return out.str();
+}
+
+namespace {
+
+std::string lower_extension(const std::string& path) {
+  const auto dot = path.find_last_of('.');
+  const auto slash = path.find_last_of("/\\");
+  if (dot == std::string::npos || (slash != std::string::npos && dot < slash)) return "";
+  std::string ext = path.substr(dot + 1);
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return ext;
+}
+
+// Reads a STEP or IGES file with an XSControl reader; every root becomes one shape.
+template <typename Reader>
+TopoDS_Shape read_with(const std::string& path, const char* kind) {
+  Reader reader;
+  if (reader.ReadFile(path.c_str()) != IFSelect_RetDone)
+    throw InputError("cannot read " + path + " as a " + kind + " file");
+  if (reader.TransferRoots() == 0) throw InputError(path + ": the " + kind + " file holds no shape");
+  TopoDS_Shape shape = reader.OneShape();
+  if (shape.IsNull()) throw InputError(path + ": the " + kind + " file holds no shape");
+  return shape;
+}
+
+}  // namespace
+
+std::string read_shape_file(const std::string& path) {
+  if (!std::ifstream(path).good()) throw InputError("cannot open the shape file " + path);
+  const std::string ext = lower_extension(path);
+  try {
+    if (ext == "brep" || ext == "brp") {
+      std::ifstream in(path, std::ios::binary);
+      std::ostringstream text;
+      text << in.rdbuf();
+      read_brep(text.str());  // fails here, naming the file's problem, rather than later
+      return text.str();
+    }
+    if (ext == "step" || ext == "stp") return write_brep(read_with<STEPControl_Reader>(path, "STEP"));
+    if (ext == "iges" || ext == "igs") return write_brep(read_with<IGESControl_Reader>(path, "IGES"));
+  } catch (const Standard_Failure& e) {
+    throw InputError("cannot read " + path + ": " + e.GetMessageString());
+  }
+  throw InputError("cannot read " + path + ": the file name must end in .step, .stp, .brep, .brp, "
+                   ".iges or .igs");
+}
+
+}  // namespace hexmerge

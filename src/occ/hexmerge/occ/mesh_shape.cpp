@@ -1,0 +1,1257 @@
+#include "hexmerge/occ/mesh_shape.h"
+
+#include <BRepAdaptor_Curve.hxx>
+#include <BRepAdaptor_Surface.hxx>
+#include <BRepGProp.hxx>
+#include <BRepMesh_IncrementalMesh.hxx>
+#include <BRep_Tool.hxx>
+#include <GProp_GProps.hxx>
+#include <GProp_PrincipalProps.hxx>
+#include <Geom2d_Curve.hxx>
+#include <Poly_PolygonOnTriangulation.hxx>
+#include <Poly_Triangulation.hxx>
+#include <ShapeAnalysis_Surface.hxx>
+#include <Standard_Failure.hxx>
+#include <TopExp.hxx>
+#include <TopExp_Explorer.hxx>
+#include <TopTools_IndexedDataMapOfShapeListOfShape.hxx>
+#include <TopTools_IndexedMapOfShape.hxx>
+#include <TopTools_ListOfShape.hxx>
+#include <TopoDS.hxx>
+#include <TopoDS_Edge.hxx>
+#include <TopoDS_Face.hxx>
+#include <gp_Pln.hxx>
+
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <map>
+#include <memory>
+#include <optional>
+#include <sstream>
+#include <unordered_map>
+#include <unordered_set>
+#include <vector>
+
+#include "hexmerge/core/error.h"
+#include "hexmerge/geometry/vec3.h"
+#include "hexmerge/occ/brep_text.h"
+#include "hexmerge/occ/regions_by_solid.h"
+
+namespace hexmerge {
+namespace {
+
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+
+// Wall time of consecutive phases, written into the report.
+class PhaseClock {
+ public:
+  explicit PhaseClock(std::map<std::string, double>& out) : out_(out), start_(Clock::now()) {}
+  void lap(const char* phase) {
+    const auto now = Clock::now();
+    out_[phase] = std::chrono::duration<double>(now - start_).count();
+    start_ = now;
+  }
+
+ private:
+  std::map<std::string, double>& out_;
+  Clock::time_point start_;
+};
+
+std::uint64_t pair_key(int a, int b) {
+  if (a > b) std::swap(a, b);
+  return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(a)) << 32) |
+         static_cast<std::uint32_t>(b);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Spatial queries: points and triangles in a uniform grid of cubic buckets.
+
+class BucketGrid {
+ public:
+  BucketGrid(const Vec3& lo, const Vec3& hi, double cell) : lo_(lo), cell_(cell) {
+    for (int a = 0; a < 3; ++a) {
+      const double extent = (a == 0 ? hi.x - lo.x : a == 1 ? hi.y - lo.y : hi.z - lo.z);
+      n_[a] = std::max(1, static_cast<int>(std::ceil(extent / cell)) + 1);
+    }
+    buckets_.resize(static_cast<std::size_t>(n_[0]) * n_[1] * n_[2]);
+  }
+  // Adds item to every bucket the box [a, b] overlaps.
+  void add(int item, const Vec3& a, const Vec3& b) {
+    std::array<int, 3> i0 = coords(a), i1 = coords(b);
+    for (int i = i0[0]; i <= i1[0]; ++i)
+      for (int j = i0[1]; j <= i1[1]; ++j)
+        for (int k = i0[2]; k <= i1[2]; ++k) buckets_[index(i, j, k)].push_back(item);
+  }
+  // Calls f(item) for the items of the buckets the box [a, b] overlaps (an item may come twice);
+  // stops when f returns true, and returns whether it did.
+  template <typename F>
+  bool any_in(const Vec3& a, const Vec3& b, F&& f) const {
+    std::array<int, 3> i0 = coords(a), i1 = coords(b);
+    for (int i = i0[0]; i <= i1[0]; ++i)
+      for (int j = i0[1]; j <= i1[1]; ++j)
+        for (int k = i0[2]; k <= i1[2]; ++k)
+          for (int item : buckets_[index(i, j, k)])
+            if (f(item)) return true;
+    return false;
+  }
+
+ private:
+  std::array<int, 3> coords(const Vec3& p) const {
+    const double c[3] = {(p.x - lo_.x) / cell_, (p.y - lo_.y) / cell_, (p.z - lo_.z) / cell_};
+    std::array<int, 3> out{};
+    for (int a = 0; a < 3; ++a)
+      out[a] = std::clamp(static_cast<int>(std::floor(c[a])), 0, n_[a] - 1);
+    return out;
+  }
+  std::size_t index(int i, int j, int k) const {
+    return (static_cast<std::size_t>(i) * n_[1] + j) * n_[2] + k;
+  }
+  Vec3 lo_;
+  double cell_;
+  std::array<int, 3> n_{};
+  std::vector<std::vector<int>> buckets_;
+};
+
+// Squared distance from p to triangle abc (Ericson, Real-Time Collision Detection, 5.1.5).
+double squared_distance_to_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c) {
+  const Vec3 ab = b - a, ac = c - a, ap = p - a;
+  const double d1 = ab.dot(ap), d2 = ac.dot(ap);
+  auto sq = [](const Vec3& v) { return v.dot(v); };
+  if (d1 <= 0 && d2 <= 0) return sq(ap);
+  const Vec3 bp = p - b;
+  const double d3 = ab.dot(bp), d4 = ac.dot(bp);
+  if (d3 >= 0 && d4 <= d3) return sq(bp);
+  const double vc = d1 * d4 - d3 * d2;
+  if (vc <= 0 && d1 >= 0 && d3 <= 0) return sq(p - (a + ab * (d1 / (d1 - d3))));
+  const Vec3 cp = p - c;
+  const double d5 = ab.dot(cp), d6 = ac.dot(cp);
+  if (d6 >= 0 && d5 <= d6) return sq(cp);
+  const double vb = d5 * d2 - d1 * d6;
+  if (vb <= 0 && d2 >= 0 && d6 <= 0) return sq(p - (a + ac * (d2 / (d2 - d6))));
+  const double va = d3 * d6 - d5 * d4;
+  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0)
+    return sq(p - (b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)))));
+  const double denom = 1.0 / (va + vb + vc);
+  return sq(p - (a + ab * (vb * denom) + ac * (vc * denom)));
+}
+
+Vec3 vmin(const Vec3& a, const Vec3& b) {
+  return {std::min(a.x, b.x), std::min(a.y, b.y), std::min(a.z, b.z)};
+}
+Vec3 vmax(const Vec3& a, const Vec3& b) {
+  return {std::max(a.x, b.x), std::max(a.y, b.y), std::max(a.z, b.z)};
+}
+double coord(const Vec3& v, int axis) { return axis == 0 ? v.x : axis == 1 ? v.y : v.z; }
+void set_coord(Vec3& v, int axis, double value) { (axis == 0 ? v.x : axis == 1 ? v.y : v.z) = value; }
+
+// Points, with "is there one within r of q" queries.
+class PointSet {
+ public:
+  PointSet(const Vec3& lo, const Vec3& hi, double cell) : grid_(lo, hi, cell) {}
+  void add(const Vec3& p) {
+    grid_.add(static_cast<int>(points_.size()), p, p);
+    points_.push_back(p);
+  }
+  bool any_within(const Vec3& q, double r) const {
+    const Vec3 d{r, r, r};
+    return grid_.any_in(q - d, q + d, [&](int i) { return (points_[i] - q).norm() < r; });
+  }
+
+ private:
+  BucketGrid grid_;
+  std::vector<Vec3> points_;
+};
+
+// Triangles, with "is one nearer than r to q" queries.
+class TriangleSet {
+ public:
+  TriangleSet(const std::vector<Vec3>& nodes, const Vec3& lo, const Vec3& hi, double cell)
+      : nodes_(nodes), grid_(lo, hi, cell) {}
+  void add(const std::array<int, 3>& t) {
+    const Vec3 &a = nodes_[t[0]], &b = nodes_[t[1]], &c = nodes_[t[2]];
+    grid_.add(static_cast<int>(tris_.size()), vmin(a, vmin(b, c)), vmax(a, vmax(b, c)));
+    tris_.push_back(t);
+  }
+  bool any_within(const Vec3& q, double r) const {
+    const Vec3 d{r, r, r};
+    return grid_.any_in(q - d, q + d, [&](int i) {
+      const auto& t = tris_[i];
+      return squared_distance_to_triangle(q, nodes_[t[0]], nodes_[t[1]], nodes_[t[2]]) < r * r;
+    });
+  }
+
+ private:
+  const std::vector<Vec3>& nodes_;
+  BucketGrid grid_;
+  std::vector<std::array<int, 3>> tris_;
+};
+
+// ---------------------------------------------------------------------------------------------
+// The shape: its solids, faces, edges, checked.
+
+struct Shape {
+  TopoDS_Shape shape;
+  TopTools_IndexedMapOfShape solids, faces, edges;
+  std::vector<int> face_solid_count;  // solids each face bounds (2: shared by two solids)
+  std::vector<std::vector<int>> edge_faces;
+};
+
+Shape load_shape(const std::string& brep) {
+  Shape s;
+  s.shape = read_brep(brep);
+  TopExp::MapShapes(s.shape, TopAbs_SOLID, s.solids);
+  if (s.solids.IsEmpty())
+    throw InputError("the shape holds no solid (a face, a shell or a wire cannot be meshed "
+                     "into tets): give a closed solid");
+  TopExp::MapShapes(s.shape, TopAbs_FACE, s.faces);
+  TopExp::MapShapes(s.shape, TopAbs_EDGE, s.edges);
+  s.face_solid_count.assign(static_cast<std::size_t>(s.faces.Extent()), 0);
+  for (int i = 1; i <= s.solids.Extent(); ++i) {
+    TopTools_IndexedMapOfShape solid_faces;
+    TopExp::MapShapes(s.solids(i), TopAbs_FACE, solid_faces);
+    for (int f = 1; f <= solid_faces.Extent(); ++f) {
+      const int index = s.faces.FindIndex(solid_faces(f));
+      if (index > 0) ++s.face_solid_count[index - 1];
+    }
+    // A closed shell: every edge of the solid bounds two faces, or one face twice (a seam).
+    TopTools_IndexedDataMapOfShapeListOfShape edge_faces;
+    TopExp::MapShapesAndAncestors(s.solids(i), TopAbs_EDGE, TopAbs_FACE, edge_faces);
+    for (int e = 1; e <= edge_faces.Extent(); ++e) {
+      const TopoDS_Edge& edge = TopoDS::Edge(edge_faces.FindKey(e));
+      if (BRep_Tool::Degenerated(edge)) continue;
+      const TopTools_ListOfShape& around = edge_faces.FindFromIndex(e);
+      if (around.Extent() >= 2) continue;
+      if (around.Extent() == 1 && BRep_Tool::IsClosed(edge, TopoDS::Face(around.First()))) continue;
+      throw InputError("solid " + std::to_string(i - 1) + " is not closed: edge " +
+                       std::to_string(s.edges.FindIndex(edge) - 1) +
+                       " bounds a single face (an open shell); give a closed solid");
+    }
+  }
+  s.edge_faces.resize(static_cast<std::size_t>(s.edges.Extent()));
+  TopTools_IndexedDataMapOfShapeListOfShape edge_faces;
+  TopExp::MapShapesAndAncestors(s.shape, TopAbs_EDGE, TopAbs_FACE, edge_faces);
+  for (int e = 1; e <= edge_faces.Extent(); ++e) {
+    const int edge = s.edges.FindIndex(edge_faces.FindKey(e)) - 1;
+    for (const TopoDS_Shape& f : edge_faces.FindFromIndex(e)) {
+      const int face = s.faces.FindIndex(f) - 1;
+      auto& list = s.edge_faces[edge];
+      if (std::find(list.begin(), list.end(), face) == list.end()) list.push_back(face);
+    }
+  }
+  return s;
+}
+
+// ---------------------------------------------------------------------------------------------
+// The lattice frame.
+
+struct Frame {
+  Vec3 axis[3];
+  Vec3 origin{0, 0, 0};
+  Vec3 to_frame(const Vec3& p) const {
+    const Vec3 d = p - origin;
+    return {d.dot(axis[0]), d.dot(axis[1]), d.dot(axis[2])};
+  }
+  Vec3 to_world(const Vec3& q) const {
+    return origin + axis[0] * q.x + axis[1] * q.y + axis[2] * q.z;
+  }
+};
+
+Vec3 unit(const Vec3& v) { return v * (1.0 / v.norm()); }
+Vec3 of(const gp_Dir& d) { return {d.X(), d.Y(), d.Z()}; }
+Vec3 of(const gp_Pnt& p) { return {p.X(), p.Y(), p.Z()}; }
+
+// Completes e3 (and e1 when given) into a right-handed orthonormal frame.
+Frame make_frame(const Vec3& e3, const Vec3* e1_hint, const Vec3 (&fallback)[3]) {
+  Frame f;
+  f.axis[2] = unit(e3);
+  Vec3 e1{0, 0, 0};
+  if (e1_hint) e1 = *e1_hint;
+  if (e1.norm() < 0.5) {
+    // The fallback axis least aligned with e3.
+    double best = 2;
+    for (const Vec3& a : fallback)
+      if (std::abs(a.dot(f.axis[2])) < best) best = std::abs(a.dot(f.axis[2])), e1 = a;
+  }
+  e1 = e1 - f.axis[2] * e1.dot(f.axis[2]);
+  f.axis[0] = unit(e1);
+  f.axis[1] = f.axis[2].cross(f.axis[0]);
+  return f;
+}
+
+Frame choose_frame(const Shape& s, const std::string& kind) {
+  const Vec3 global[3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  if (kind == "global") return make_frame(global[2], &global[0], global);
+  GProp_GProps volume;
+  BRepGProp::VolumeProperties(s.shape, volume);
+  const GProp_PrincipalProps principal = volume.PrincipalProperties();
+  const Vec3 principal_axes[3] = {of(gp_Dir(principal.FirstAxisOfInertia())),
+                                  of(gp_Dir(principal.SecondAxisOfInertia())),
+                                  of(gp_Dir(principal.ThirdAxisOfInertia()))};
+  if (kind == "principal") return make_frame(principal_axes[2], &principal_axes[0], principal_axes);
+  // "auto": planar face normals, grouped by direction (up to sign), weighted by area.
+  std::vector<std::pair<Vec3, double>> directions;
+  for (int i = 1; i <= s.faces.Extent(); ++i) {
+    const TopoDS_Face& face = TopoDS::Face(s.faces(i));
+    BRepAdaptor_Surface surface(face, false);
+    if (surface.GetType() != GeomAbs_Plane) continue;
+    GProp_GProps area;
+    BRepGProp::SurfaceProperties(face, area);
+    const Vec3 n = of(surface.Plane().Axis().Direction());
+    bool merged = false;
+    for (auto& [d, a] : directions)
+      if (std::abs(std::abs(d.dot(n)) - 1) < 1e-9) a += area.Mass(), merged = true;
+    if (!merged) directions.emplace_back(n, area.Mass());
+  }
+  if (directions.empty()) return make_frame(principal_axes[2], &principal_axes[0], principal_axes);
+  std::stable_sort(directions.begin(), directions.end(),
+                   [](const auto& a, const auto& b) { return a.second > b.second; });
+  const Vec3 e3 = directions[0].first;
+  for (std::size_t i = 1; i < directions.size(); ++i)
+    if (std::abs(directions[i].first.dot(e3)) < 1e-9)
+      return make_frame(e3, &directions[i].first, principal_axes);
+  return make_frame(e3, nullptr, principal_axes);
+}
+
+// ---------------------------------------------------------------------------------------------
+// The surface: BRepMesh's triangulation, nodes merged across faces, refined by bisection with
+// every new node on the CAD surface or edge.
+
+struct SurfaceTriangle {
+  std::array<int, 3> node;
+  std::array<gp_Pnt2d, 3> uv;  // the nodes' parameters on the triangle's face
+  int face;
+};
+
+// A segment of the surface triangulation on a CAD edge: the edge and its parameters at the
+// segment's smaller and larger node id.
+struct EdgeSegment {
+  int edge;
+  double t_lo, t_hi;
+};
+
+struct Surface {
+  std::vector<Vec3> nodes;       // world coordinates
+  std::vector<int> node_face;    // a face the node lies on
+  std::vector<SurfaceTriangle> triangles;  // oriented outward (as the face is in its solid)
+  std::unordered_map<std::uint64_t, EdgeSegment> segments;
+};
+
+// Merges points closer than a tolerance into one node.
+class NodeMerger {
+ public:
+  NodeMerger(Surface& s, double tolerance) : s_(s), tol_(tolerance) {}
+  int id(const Vec3& p, int face) {
+    const std::array<long long, 3> c = cell(p);
+    for (long long i = c[0] - 1; i <= c[0] + 1; ++i)
+      for (long long j = c[1] - 1; j <= c[1] + 1; ++j)
+        for (long long k = c[2] - 1; k <= c[2] + 1; ++k) {
+          auto it = cells_.find(hash(i, j, k));
+          if (it == cells_.end()) continue;
+          for (int n : it->second)
+            if ((s_.nodes[n] - p).norm() <= tol_) return n;
+        }
+    const int n = static_cast<int>(s_.nodes.size());
+    s_.nodes.push_back(p);
+    s_.node_face.push_back(face);
+    cells_[hash(c[0], c[1], c[2])].push_back(n);
+    return n;
+  }
+
+ private:
+  std::array<long long, 3> cell(const Vec3& p) const {
+    const double w = 4 * tol_;
+    return {static_cast<long long>(std::floor(p.x / w)), static_cast<long long>(std::floor(p.y / w)),
+            static_cast<long long>(std::floor(p.z / w))};
+  }
+  static std::uint64_t hash(long long i, long long j, long long k) {
+    return static_cast<std::uint64_t>(i) * 73856093ULL ^ static_cast<std::uint64_t>(j) * 19349663ULL ^
+           static_cast<std::uint64_t>(k) * 83492791ULL;
+  }
+  Surface& s_;
+  double tol_;
+  std::unordered_map<std::uint64_t, std::vector<int>> cells_;
+};
+
+Surface triangulate(const Shape& s, double deflection, double tolerance) {
+  try {
+    BRepMesh_IncrementalMesh mesher(s.shape, deflection, false, 0.35, true);
+    if (!mesher.IsDone()) throw InputError("OpenCASCADE could not triangulate the shape's faces");
+  } catch (const Standard_Failure& e) {
+    throw InputError(std::string("OpenCASCADE could not triangulate the shape's faces: ") +
+                     e.GetMessageString());
+  }
+  Surface surface;
+  NodeMerger merger(surface, tolerance);
+  for (int fi = 1; fi <= s.faces.Extent(); ++fi) {
+    const int face_index = fi - 1;
+    const TopoDS_Face& face = TopoDS::Face(s.faces(fi));
+    TopLoc_Location loc;
+    const Handle(Poly_Triangulation)& tri = BRep_Tool::Triangulation(face, loc);
+    if (tri.IsNull() || tri->NbTriangles() == 0)
+      throw InputError("OpenCASCADE could not triangulate face " + std::to_string(face_index) +
+                       " of the shape", Entity::None);
+    const gp_Trsf trsf = loc.Transformation();
+    std::vector<int> global(static_cast<std::size_t>(tri->NbNodes()) + 1);
+    for (int i = 1; i <= tri->NbNodes(); ++i)
+      global[i] = merger.id(of(tri->Node(i).Transformed(trsf)), face_index);
+    const bool reversed = face.Orientation() == TopAbs_REVERSED;
+    for (int k = 1; k <= tri->NbTriangles(); ++k) {
+      int n[3];
+      tri->Triangle(k).Get(n[0], n[1], n[2]);
+      if (reversed) std::swap(n[1], n[2]);
+      SurfaceTriangle t;
+      t.face = face_index;
+      for (int c = 0; c < 3; ++c) {
+        t.node[c] = global[n[c]];
+        t.uv[c] = tri->HasUVNodes() ? tri->UVNode(n[c]) : gp_Pnt2d(0, 0);
+      }
+      if (t.node[0] == t.node[1] || t.node[1] == t.node[2] || t.node[0] == t.node[2]) continue;
+      surface.triangles.push_back(t);
+    }
+    for (TopExp_Explorer ex(face, TopAbs_EDGE); ex.More(); ex.Next()) {
+      const TopoDS_Edge& edge = TopoDS::Edge(ex.Current());
+      if (BRep_Tool::Degenerated(edge)) continue;
+      const Handle(Poly_PolygonOnTriangulation)& poly =
+          BRep_Tool::PolygonOnTriangulation(edge, tri, loc);
+      if (poly.IsNull()) continue;
+      const int edge_index = s.edges.FindIndex(edge) - 1;
+      BRepAdaptor_Curve curve(edge);
+      for (int k = 1; k < poly->NbNodes(); ++k) {
+        const int a = global[poly->Node(k)], b = global[poly->Node(k + 1)];
+        if (a == b) continue;
+        double ta, tb;
+        if (poly->HasParameters()) {
+          ta = poly->Parameter(k), tb = poly->Parameter(k + 1);
+        } else {  // spread evenly over the edge's range
+          const double f = curve.FirstParameter(), l = curve.LastParameter();
+          ta = f + (l - f) * (k - 1) / (poly->NbNodes() - 1);
+          tb = f + (l - f) * k / (poly->NbNodes() - 1);
+        }
+        surface.segments[pair_key(a, b)] = a < b ? EdgeSegment{edge_index, ta, tb}
+                                                 : EdgeSegment{edge_index, tb, ta};
+      }
+    }
+  }
+  return surface;
+}
+
+// Splits, round after round, every segment longer than `target` that `may_split` allows, with
+// red-green refinement of the triangles (1, 2 or 3 split sides) so that the triangulation stays
+// conforming. New nodes lie on the CAD edge (segments on an edge) or on the face's surface.
+void refine(const Shape& s, Surface& surface, double target,
+            const std::vector<bool>& lattice_face, const std::vector<bool>& lattice_edge) {
+  std::vector<std::unique_ptr<BRepAdaptor_Surface>> surfaces(s.faces.Extent());
+  std::vector<std::unique_ptr<BRepAdaptor_Curve>> curves(s.edges.Extent());
+  // Per face, the pcurves of its edges (a seam has two: one per orientation).
+  struct PCurve {
+    int edge;
+    Handle(Geom2d_Curve) curve;
+  };
+  std::vector<std::vector<PCurve>> pcurves(s.faces.Extent());
+  for (int fi = 1; fi <= s.faces.Extent(); ++fi) {
+    const TopoDS_Face& face = TopoDS::Face(s.faces(fi));
+    for (TopExp_Explorer ex(face, TopAbs_EDGE); ex.More(); ex.Next()) {
+      const TopoDS_Edge& edge = TopoDS::Edge(ex.Current());
+      if (BRep_Tool::Degenerated(edge)) continue;
+      double f, l;
+      Handle(Geom2d_Curve) pc = BRep_Tool::CurveOnSurface(edge, face, f, l);
+      if (!pc.IsNull()) pcurves[fi - 1].push_back({s.edges.FindIndex(edge) - 1, pc});
+    }
+  }
+  auto face_surface = [&](int f) -> const BRepAdaptor_Surface& {
+    if (!surfaces[f]) surfaces[f] = std::make_unique<BRepAdaptor_Surface>(TopoDS::Face(s.faces(f + 1)));
+    return *surfaces[f];
+  };
+  auto edge_curve = [&](int e) -> const BRepAdaptor_Curve& {
+    if (!curves[e]) curves[e] = std::make_unique<BRepAdaptor_Curve>(TopoDS::Edge(s.edges(e + 1)));
+    return *curves[e];
+  };
+
+  for (;;) {
+    // Segments to split this round.
+    std::unordered_set<std::uint64_t> marked;
+    for (const SurfaceTriangle& t : surface.triangles)
+      for (int c = 0; c < 3; ++c) {
+        const int a = t.node[c], b = t.node[(c + 1) % 3];
+        const std::uint64_t key = pair_key(a, b);
+        auto seg = surface.segments.find(key);
+        const bool on_edge = seg != surface.segments.end();
+        if (on_edge ? lattice_edge[seg->second.edge] : lattice_face[t.face]) continue;
+        if ((surface.nodes[a] - surface.nodes[b]).norm() > target) marked.insert(key);
+      }
+    if (marked.empty()) return;
+
+    struct Mid {
+      int node;
+      EdgeSegment seg;  // valid when on an edge (seg.edge >= 0)
+      double t;
+    };
+    std::unordered_map<std::uint64_t, Mid> mids;
+    std::vector<SurfaceTriangle> out;
+    out.reserve(surface.triangles.size() * 2);
+    for (const SurfaceTriangle& t : surface.triangles) {
+      int m[3] = {-1, -1, -1};
+      gp_Pnt2d muv[3];
+      for (int c = 0; c < 3; ++c) {
+        const int a = t.node[c], b = t.node[(c + 1) % 3];
+        const std::uint64_t key = pair_key(a, b);
+        if (!marked.count(key)) continue;
+        auto seg = surface.segments.find(key);
+        auto it = mids.find(key);
+        if (seg != surface.segments.end()) {
+          const EdgeSegment e = seg->second;
+          const double tm = 0.5 * (e.t_lo + e.t_hi);
+          if (it == mids.end()) {
+            const int id = static_cast<int>(surface.nodes.size());
+            surface.nodes.push_back(of(edge_curve(e.edge).Value(tm)));
+            surface.node_face.push_back(t.face);
+            it = mids.emplace(key, Mid{id, e, tm}).first;
+          }
+          // The new node's parameters on this face: the pcurve that passes through node a.
+          const double ta = a < b ? e.t_lo : e.t_hi;
+          double best = std::numeric_limits<double>::max();
+          gp_Pnt2d uv = gp_Pnt2d(0.5 * (t.uv[c].X() + t.uv[(c + 1) % 3].X()),
+                                 0.5 * (t.uv[c].Y() + t.uv[(c + 1) % 3].Y()));
+          for (const PCurve& pc : pcurves[t.face]) {
+            if (pc.edge != e.edge) continue;
+            const double d = pc.curve->Value(ta).Distance(t.uv[c]);
+            if (d < best) best = d, uv = pc.curve->Value(tm);
+          }
+          m[c] = it->second.node;
+          muv[c] = uv;
+        } else {
+          muv[c] = gp_Pnt2d(0.5 * (t.uv[c].X() + t.uv[(c + 1) % 3].X()),
+                            0.5 * (t.uv[c].Y() + t.uv[(c + 1) % 3].Y()));
+          if (it == mids.end()) {
+            const int id = static_cast<int>(surface.nodes.size());
+            surface.nodes.push_back(of(face_surface(t.face).Value(muv[c].X(), muv[c].Y())));
+            surface.node_face.push_back(t.face);
+            it = mids.emplace(key, Mid{id, EdgeSegment{-1, 0, 0}, 0}).first;
+          }
+          m[c] = it->second.node;
+        }
+      }
+      const int nb = (m[0] >= 0) + (m[1] >= 0) + (m[2] >= 0);
+      auto emit = [&](int a, const gp_Pnt2d& ua, int b, const gp_Pnt2d& ub, int c,
+                      const gp_Pnt2d& uc) {
+        out.push_back(SurfaceTriangle{{a, b, c}, {ua, ub, uc}, t.face});
+      };
+      const auto& n = t.node;
+      const auto& uv = t.uv;
+      if (nb == 0) {
+        out.push_back(t);
+      } else if (nb == 3) {
+        emit(n[0], uv[0], m[0], muv[0], m[2], muv[2]);
+        emit(m[0], muv[0], n[1], uv[1], m[1], muv[1]);
+        emit(m[2], muv[2], m[1], muv[1], n[2], uv[2]);
+        emit(m[0], muv[0], m[1], muv[1], m[2], muv[2]);
+      } else if (nb == 1) {
+        const int c = m[0] >= 0 ? 0 : m[1] >= 0 ? 1 : 2;
+        const int c1 = (c + 1) % 3, c2 = (c + 2) % 3;
+        emit(n[c], uv[c], m[c], muv[c], n[c2], uv[c2]);
+        emit(m[c], muv[c], n[c1], uv[c1], n[c2], uv[c2]);
+      } else {
+        // Sides c and c+1 split, side c+2 (from n[c+2] to n[c]) not.
+        const int c = m[0] < 0 ? 1 : m[1] < 0 ? 2 : 0;
+        const int c1 = (c + 1) % 3, c2 = (c + 2) % 3;
+        emit(m[c], muv[c], n[c1], uv[c1], m[c1], muv[c1]);
+        // The quad n[c], m[c], m[c1], n[c2], cut along its shorter diagonal.
+        const double d1 = (surface.nodes[n[c]] - surface.nodes[m[c1]]).norm();
+        const double d2 = (surface.nodes[m[c]] - surface.nodes[n[c2]]).norm();
+        if (d1 <= d2) {
+          emit(n[c], uv[c], m[c], muv[c], m[c1], muv[c1]);
+          emit(n[c], uv[c], m[c1], muv[c1], n[c2], uv[c2]);
+        } else {
+          emit(n[c], uv[c], m[c], muv[c], n[c2], uv[c2]);
+          emit(m[c], muv[c], m[c1], muv[c1], n[c2], uv[c2]);
+        }
+      }
+    }
+    // The halves of split edge segments are edge segments.
+    for (const auto& [key, mid] : mids) {
+      if (mid.seg.edge < 0) continue;
+      const int lo = static_cast<int>(key >> 32), hi = static_cast<int>(key & 0xffffffffu);
+      surface.segments.erase(key);
+      surface.segments[pair_key(lo, mid.node)] =
+          lo < mid.node ? EdgeSegment{mid.seg.edge, mid.seg.t_lo, mid.t}
+                        : EdgeSegment{mid.seg.edge, mid.t, mid.seg.t_lo};
+      surface.segments[pair_key(mid.node, hi)] =
+          mid.node < hi ? EdgeSegment{mid.seg.edge, mid.t, mid.seg.t_hi}
+                        : EdgeSegment{mid.seg.edge, mid.seg.t_hi, mid.t};
+    }
+    surface.triangles.swap(out);
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// TetGen through its files.
+
+struct AxisPlane {
+  int axis;
+  double offset;
+};
+
+// A TetGen facet: polygons (a face's outer and inner boundary loops, or one triangle), points
+// inside its holes, its boundary marker (face index + 1).
+struct Facet {
+  std::vector<std::vector<int>> polygons;
+  std::vector<Vec3> holes;
+  int marker;
+};
+
+// The facets for TetGen: every triangle of the other faces as it is (TetGen keeps them, -Y);
+// a lattice face as its boundary loops only, so that nothing but the inserted lattice points
+// decides how it is cut into triangles (a triangle's edges would be segments TetGen must keep).
+std::vector<Facet> make_facets(const Surface& surface, const std::vector<Vec3>& nodes,
+                               const std::vector<bool>& lattice_face,
+                               const std::vector<std::optional<AxisPlane>>& face_plane) {
+  std::vector<Facet> facets;
+  std::map<int, std::vector<const SurfaceTriangle*>> by_face;
+  for (const SurfaceTriangle& t : surface.triangles) {
+    if (lattice_face[t.face]) by_face[t.face].push_back(&t);
+    else facets.push_back(Facet{{{t.node[0], t.node[1], t.node[2]}}, {}, t.face + 1});
+  }
+  for (const auto& [face, triangles] : by_face) {
+    std::unordered_map<std::uint64_t, int> uses;
+    for (const SurfaceTriangle* t : triangles)
+      for (int c = 0; c < 3; ++c) ++uses[pair_key(t->node[c], t->node[(c + 1) % 3])];
+    std::unordered_map<int, int> next;  // directed boundary edges, as the triangles run
+    bool simple = true;
+    for (const SurfaceTriangle* t : triangles)
+      for (int c = 0; c < 3; ++c) {
+        const int a = t->node[c], b = t->node[(c + 1) % 3];
+        if (uses[pair_key(a, b)] == 1) simple &= next.emplace(a, b).second;
+      }
+    if (!simple) {  // a loop touching itself: keep the triangles
+      for (const SurfaceTriangle* t : triangles)
+        facets.push_back(Facet{{{t->node[0], t->node[1], t->node[2]}}, {}, face + 1});
+      continue;
+    }
+    const int axis = face_plane[face]->axis, u = (axis + 1) % 3, v = (axis + 2) % 3;
+    const SurfaceTriangle* t0 = triangles.front();
+    const Vec3 normal = (nodes[t0->node[1]] - nodes[t0->node[0]]).cross(nodes[t0->node[2]] - nodes[t0->node[0]]);
+    const double side = coord(normal, axis) > 0 ? 1 : -1;
+    Facet facet{{}, {}, face + 1};
+    while (!next.empty()) {
+      std::vector<int> loop;
+      int a = next.begin()->first;
+      while (next.count(a)) {
+        loop.push_back(a);
+        const int b = next[a];
+        next.erase(a);
+        a = b;
+      }
+      double area = 0;
+      for (std::size_t i = 0; i < loop.size(); ++i) {
+        const Vec3 &p = nodes[loop[i]], &q = nodes[loop[(i + 1) % loop.size()]];
+        area += coord(p, u) * coord(q, v) - coord(q, u) * coord(p, v);
+      }
+      if (area * side < 0) {
+        // An inner loop: a point just beside its first edge, away from the face's triangles.
+        const Vec3 &p = nodes[loop[0]], &q = nodes[loop[1]];
+        Vec3 axis_normal{0, 0, 0};
+        set_coord(axis_normal, axis, side);
+        const Vec3 left = axis_normal.cross(q - p);
+        facet.holes.push_back((p + q) * 0.5 - left * 1e-3);
+      }
+      facet.polygons.push_back(std::move(loop));
+    }
+    facets.push_back(std::move(facet));
+  }
+  return facets;
+}
+
+std::string shell_quote(const std::string& s) {
+  std::string out = "'";
+  for (char c : s) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return out + "'";
+}
+
+std::string find_program(const std::string& name) {
+  if (name.find('/') != std::string::npos)
+    return fs::exists(name) ? name : std::string();
+  const char* path = std::getenv("PATH");
+  std::stringstream dirs(path ? path : "");
+  std::string dir;
+  while (std::getline(dirs, dir, ':')) {
+    if (dir.empty()) continue;
+    const fs::path candidate = fs::path(dir) / name;
+    std::error_code ec;
+    if (fs::is_regular_file(candidate, ec)) return candidate.string();
+  }
+  return std::string();
+}
+
+std::string tail_of_file(const fs::path& path, std::size_t max_chars) {
+  std::ifstream in(path);
+  std::ostringstream text;
+  text << in.rdbuf();
+  std::string s = text.str();
+  return s.size() > max_chars ? "..." + s.substr(s.size() - max_chars) : s;
+}
+
+// Reads TetGen's .node (0-based with -z) into points.
+std::vector<double> read_tetgen_nodes(const fs::path& path) {
+  std::ifstream in(path);
+  if (!in) throw InputError("TetGen wrote no " + path.filename().string());
+  std::string line;
+  long long n = -1, dim = 0, attributes = 0, markers = 0;
+  std::vector<double> points;
+  while (std::getline(in, line)) {
+    const auto hash = line.find('#');
+    if (hash != std::string::npos) line.resize(hash);
+    std::istringstream ls(line);
+    if (n < 0) {
+      if (!(ls >> n >> dim >> attributes >> markers)) continue;
+      points.reserve(static_cast<std::size_t>(n) * 3);
+      continue;
+    }
+    long long id;
+    double x, y, z;
+    if (!(ls >> id >> x >> y >> z)) continue;
+    points.insert(points.end(), {x, y, z});
+  }
+  if (n < 0 || static_cast<long long>(points.size()) != 3 * n)
+    throw InputError("TetGen's " + path.filename().string() + " is truncated");
+  return points;
+}
+
+std::vector<index_t> read_tetgen_tets(const fs::path& path, index_t nb_points) {
+  std::ifstream in(path);
+  if (!in) throw InputError("TetGen wrote no " + path.filename().string());
+  std::string line;
+  long long n = -1, corners = 0;
+  std::vector<index_t> tets;
+  while (std::getline(in, line)) {
+    const auto hash = line.find('#');
+    if (hash != std::string::npos) line.resize(hash);
+    std::istringstream ls(line);
+    if (n < 0) {
+      if (!(ls >> n >> corners)) continue;
+      if (corners != 4) throw InputError("TetGen's .ele has " + std::to_string(corners) + " nodes per tet");
+      tets.reserve(static_cast<std::size_t>(n) * 4);
+      continue;
+    }
+    long long id, v[4];
+    if (!(ls >> id >> v[0] >> v[1] >> v[2] >> v[3])) continue;
+    for (long long x : v) {
+      if (x < 0 || x >= nb_points) throw InputError("TetGen's .ele refers to a missing node");
+      tets.push_back(static_cast<index_t>(x));
+    }
+  }
+  if (n < 0 || static_cast<long long>(tets.size()) != 4 * n)
+    throw InputError("TetGen's " + path.filename().string() + " is truncated");
+  return tets;
+}
+
+// A temporary directory removed on destruction (unless kept).
+class WorkDirectory {
+ public:
+  explicit WorkDirectory(const std::string& requested) {
+    if (!requested.empty()) {
+      path_ = requested;
+      fs::create_directories(path_);
+      keep_ = true;
+      return;
+    }
+    std::string pattern = (fs::temp_directory_path() / "hexmerge-mesh-XXXXXX").string();
+    if (!mkdtemp(pattern.data())) throw InputError("cannot create a temporary directory for TetGen");
+    path_ = pattern;
+  }
+  ~WorkDirectory() {
+    std::error_code ec;
+    if (!keep_) fs::remove_all(path_, ec);
+  }
+  const fs::path& path() const { return path_; }
+
+ private:
+  fs::path path_;
+  bool keep_ = false;
+};
+
+void check_parameters(const MeshShapeParameters& p) {
+  auto bad = [](const std::string& what) { throw InputError("mesh_shape: " + what, Entity::Parameter); };
+  if (!(p.size > 0) || !std::isfinite(p.size)) bad("size must be a positive length");
+  if (p.boundary_layers < 0 || p.boundary_layers > 3) bad("boundary_layers must be in [0, 3]");
+  if (!(p.layer_thickness >= 0.1 && p.layer_thickness <= 1)) bad("layer_thickness must be in [0.1, 1]");
+  if (!(p.lattice_margin >= 0.1 && p.lattice_margin <= 2)) bad("lattice_margin must be in [0.1, 2]");
+  if (!(p.surface_deflection > 0 && p.surface_deflection <= 0.5))
+    bad("surface_deflection must be in (0, 0.5]");
+  if (p.frame != "auto" && p.frame != "principal" && p.frame != "global")
+    bad("frame must be \"auto\", \"principal\" or \"global\"");
+  if (p.tetgen.empty()) bad("tetgen must name the TetGen program");
+}
+
+}  // namespace
+
+TetMesh mesh_shape(const std::string& brep, const MeshShapeParameters& parameters,
+                   MeshShapeReport& report) {
+  check_parameters(parameters);
+  report = MeshShapeReport{};
+  PhaseClock clock(report.phase_seconds);
+  const double h = parameters.size;
+  const std::string tetgen = find_program(parameters.tetgen);
+  if (tetgen.empty())
+    throw InputError("mesh_shape needs TetGen: \"" + parameters.tetgen +
+                     "\" is not found (Debian: apt install tetgen)", Entity::Parameter);
+
+  // The shape and its frame.
+  const Shape shape = load_shape(brep);
+  report.nb_solids = static_cast<std::size_t>(shape.solids.Extent());
+  report.nb_faces = static_cast<std::size_t>(shape.faces.Extent());
+  Frame frame = choose_frame(shape, parameters.frame);
+  clock.lap("shape");
+
+  // The surface in frame coordinates; the lattice through its bounding box.
+  // The bounding box in the frame, from the triangulation's nodes (on the CAD surface).
+  const double deflection = parameters.surface_deflection * h;
+  Surface surface = triangulate(shape, deflection, 1e-9 * h + 1e-12);
+  Vec3 lo{std::numeric_limits<double>::max(), std::numeric_limits<double>::max(),
+          std::numeric_limits<double>::max()};
+  Vec3 hi = lo * -1.0;
+  for (const Vec3& p : surface.nodes) lo = vmin(lo, frame.to_frame(p)), hi = vmax(hi, frame.to_frame(p));
+  const double extent[3] = {hi.x - lo.x, hi.y - lo.y, hi.z - lo.z};
+  const double largest = std::max({extent[0], extent[1], extent[2]});
+  if (h > largest)
+    throw InputError("mesh_shape: size " + std::to_string(h) + " is larger than the shape (" +
+                     std::to_string(largest) + " across)", Entity::Parameter);
+  frame.origin = frame.to_world(lo);  // lattice planes through the box's lower corner
+  const double plane_tolerance = 1e-7 * h;
+
+  // Planar faces normal to a frame axis, and their offsets along it.
+  std::vector<std::optional<AxisPlane>> face_plane(shape.faces.Extent());
+  std::vector<double> offsets[3];
+  for (int fi = 1; fi <= shape.faces.Extent(); ++fi) {
+    BRepAdaptor_Surface s(TopoDS::Face(shape.faces(fi)), false);
+    if (s.GetType() != GeomAbs_Plane) continue;
+    const Vec3 n = of(s.Plane().Axis().Direction());
+    for (int a = 0; a < 3; ++a) {
+      if (std::abs(std::abs(n.dot(frame.axis[a])) - 1) > 1e-9) continue;
+      const double offset = frame.to_frame(of(s.Plane().Location())).dot(Vec3{a == 0 ? 1.0 : 0, a == 1 ? 1.0 : 0, a == 2 ? 1.0 : 0});
+      face_plane[fi - 1] = AxisPlane{a, offset};
+      offsets[a].push_back(offset);
+    }
+  }
+  // Cells per axis: about h wide, chosen so that as many axis-normal planar faces as possible
+  // lie on lattice planes (the box's own faces always do).
+  int cells[3];
+  for (int a = 0; a < 3; ++a) {
+    const double L = extent[a];
+    const int guess = std::max(1, static_cast<int>(std::lround(L / h)));
+    int best = guess, best_hits = -1;
+    const int lo_n = std::max(1, static_cast<int>(std::floor(L / (1.5 * h))));
+    const int hi_n = std::max(lo_n, static_cast<int>(std::ceil(L / (0.75 * h))));
+    for (int n = lo_n; n <= hi_n; ++n) {
+      const double spacing = L / n;
+      int hits = 0;
+      for (double o : offsets[a]) {
+        const double k = o / spacing;
+        hits += std::abs(k - std::round(k)) * spacing < plane_tolerance;
+      }
+      if (hits > best_hits || (hits == best_hits && std::abs(n - L / h) < std::abs(best - L / h)))
+        best = n, best_hits = hits;
+    }
+    cells[a] = best;
+    report.spacing[a] = L / best;
+  }
+  for (int a = 0; a < 3; ++a)
+    report.frame[a] = {frame.axis[a].x, frame.axis[a].y, frame.axis[a].z};
+
+  std::vector<bool> lattice_face(shape.faces.Extent(), false);
+  for (int f = 0; f < shape.faces.Extent(); ++f) {
+    if (!face_plane[f]) continue;
+    const double k = face_plane[f]->offset / report.spacing[face_plane[f]->axis];
+    lattice_face[f] = std::abs(k - std::round(k)) * report.spacing[face_plane[f]->axis] < plane_tolerance;
+    report.nb_lattice_faces += lattice_face[f];
+  }
+  std::vector<bool> lattice_edge(shape.edges.Extent(), false);
+  for (int e = 0; e < shape.edges.Extent(); ++e) {
+    const auto& around = shape.edge_faces[e];
+    lattice_edge[e] = !around.empty() &&
+        std::all_of(around.begin(), around.end(), [&](int f) { return lattice_face[f]; });
+  }
+  refine(shape, surface, h, lattice_face, lattice_edge);
+  clock.lap("surface");
+
+  // Everything below in frame coordinates; nodes of lattice faces exactly on their planes.
+  std::vector<Vec3> nodes(surface.nodes.size());
+  for (std::size_t i = 0; i < nodes.size(); ++i) nodes[i] = frame.to_frame(surface.nodes[i]);
+  for (const SurfaceTriangle& t : surface.triangles)
+    if (lattice_face[t.face])
+      for (int n : t.node) {
+        const AxisPlane& plane = *face_plane[t.face];
+        const double k = std::round(coord(nodes[n], plane.axis) / report.spacing[plane.axis]);
+        set_coord(nodes[n], plane.axis, k * report.spacing[plane.axis]);
+      }
+  report.nb_surface_nodes = nodes.size();
+  report.nb_surface_triangles = surface.triangles.size();
+
+  const Vec3 box_lo = Vec3{0, 0, 0} - Vec3{2 * h, 2 * h, 2 * h};
+  const Vec3 box_hi = Vec3{extent[0], extent[1], extent[2]} + Vec3{2 * h, 2 * h, 2 * h};
+  TriangleSet curved(nodes, box_lo, box_hi, h);  // faces that are not lattice faces
+  PointSet surface_points(box_lo, box_hi, h);
+  for (const SurfaceTriangle& t : surface.triangles)
+    if (!lattice_face[t.face]) curved.add(t.node);
+  for (const Vec3& p : nodes) surface_points.add(p);
+
+  // Boundary layers: surface nodes of the other faces where the surface is smooth, moved along
+  // the inward normal, where there is room.
+  std::vector<Vec3> normal(nodes.size(), Vec3{0, 0, 0});
+  std::vector<bool> smooth(nodes.size(), true);
+  for (const SurfaceTriangle& t : surface.triangles) {
+    const Vec3 n = (nodes[t.node[1]] - nodes[t.node[0]]).cross(nodes[t.node[2]] - nodes[t.node[0]]);
+    for (int c : t.node) {
+      normal[c] = normal[c] + n;
+      if (lattice_face[t.face] || shape.face_solid_count[t.face] > 1) smooth[c] = false;
+    }
+  }
+  for (auto& n : normal)
+    if (n.norm() > 0) n = unit(n);
+  for (const SurfaceTriangle& t : surface.triangles) {
+    const Vec3 n = (nodes[t.node[1]] - nodes[t.node[0]]).cross(nodes[t.node[2]] - nodes[t.node[0]]);
+    if (n.norm() == 0) continue;
+    for (int c : t.node)
+      if (unit(n).dot(normal[c]) < std::cos(25.0 * M_PI / 180)) smooth[c] = false;
+  }
+  const double layer = parameters.layer_thickness * h;
+  std::vector<Vec3> inserted;  // points for TetGen's -i, in frame coordinates
+  std::vector<int> inserted_face;  // the lattice face an inserted point lies on, or -1
+  PointSet layer_points(box_lo, box_hi, h);
+  for (int k = 1; k <= parameters.boundary_layers; ++k)
+    for (std::size_t i = 0; i < nodes.size(); ++i) {
+      if (!smooth[i] || normal[i].norm() == 0) continue;
+      const double depth = k * layer;
+      const Vec3 q = nodes[i] - normal[i] * depth;
+      // Room: no other part of the surface nearer than the depth, no other point too near.
+      if (curved.any_within(q, 0.9 * depth)) continue;
+      if (layer_points.any_within(q, 0.3 * layer) || surface_points.any_within(q, 0.5 * depth))
+        continue;
+      layer_points.add(q);
+      inserted.push_back(q);
+      inserted_face.push_back(-1);
+      ++report.nb_layer_points;
+    }
+  clock.lap("layers");
+
+  // Inside/outside by ray parity along frame x lines (faces between two solids do not count).
+  std::vector<std::array<int, 3>> parity_tris;
+  for (const SurfaceTriangle& t : surface.triangles)
+    if (shape.face_solid_count[t.face] <= 1) parity_tris.push_back(t.node);
+  BucketGrid yz(Vec3{box_lo.y, box_lo.z, 0}, Vec3{box_hi.y, box_hi.z, 0}, h);
+  for (std::size_t i = 0; i < parity_tris.size(); ++i) {
+    const auto& t = parity_tris[i];
+    Vec3 a{nodes[t[0]].y, nodes[t[0]].z, 0}, b{nodes[t[1]].y, nodes[t[1]].z, 0},
+        c{nodes[t[2]].y, nodes[t[2]].z, 0};
+    yz.add(static_cast<int>(i), vmin(a, vmin(b, c)), vmax(a, vmax(b, c)));
+  }
+  // Crossings of the line {y, z} (nudged off lattice lines) with the surface, sorted by x.
+  auto crossings = [&](double y, double z) {
+    y += 1.234567e-7 * h, z += 2.345678e-7 * h;
+    std::vector<double> xs;
+    std::unordered_set<int> seen;
+    yz.any_in(Vec3{y, z, 0}, Vec3{y, z, 0}, [&](int i) {
+      if (!seen.insert(i).second) return false;
+      const auto& t = parity_tris[i];
+      const Vec3 &p0 = nodes[t[0]], &p1 = nodes[t[1]], &p2 = nodes[t[2]];
+      const double d = (p1.y - p0.y) * (p2.z - p0.z) - (p2.y - p0.y) * (p1.z - p0.z);
+      if (d == 0) return false;
+      const double u = ((y - p0.y) * (p2.z - p0.z) - (p2.y - p0.y) * (z - p0.z)) / d;
+      const double v = ((p1.y - p0.y) * (z - p0.z) - (y - p0.y) * (p1.z - p0.z)) / d;
+      if (u < 0 || v < 0 || u + v > 1) return false;
+      xs.push_back(p0.x + u * (p1.x - p0.x) + v * (p2.x - p0.x));
+      return false;
+    });
+    std::sort(xs.begin(), xs.end());
+    return xs;
+  };
+  auto inside_given = [](const std::vector<double>& xs, double x) {
+    return (std::lower_bound(xs.begin(), xs.end(), x) - xs.begin()) % 2 == 1;
+  };
+  auto inside = [&](const Vec3& q) { return inside_given(crossings(q.y, q.z), q.x); };
+
+  // Lattice faces' triangles per lattice plane, for "does this lattice point lie on a face".
+  std::map<std::pair<int, long>, std::vector<const SurfaceTriangle*>> plane_triangles;
+  for (const SurfaceTriangle& t : surface.triangles)
+    if (lattice_face[t.face]) {
+      const AxisPlane& plane = *face_plane[t.face];
+      plane_triangles[{plane.axis, std::lround(plane.offset / report.spacing[plane.axis])}].push_back(&t);
+    }
+  auto on_lattice_face = [&](const Vec3& q, const int (&index)[3]) -> int {
+    for (int a = 0; a < 3; ++a) {
+      auto it = plane_triangles.find({a, index[a]});
+      if (it == plane_triangles.end()) continue;
+      const int u = (a + 1) % 3, v = (a + 2) % 3;
+      const double qu = coord(q, u), qv = coord(q, v);
+      for (const SurfaceTriangle* t : it->second) {
+        const Vec3 &p0 = nodes[t->node[0]], &p1 = nodes[t->node[1]], &p2 = nodes[t->node[2]];
+        const double x0 = coord(p0, u), y0 = coord(p0, v);
+        const double d = (coord(p1, u) - x0) * (coord(p2, v) - y0) - (coord(p2, u) - x0) * (coord(p1, v) - y0);
+        if (d == 0) continue;
+        const double s = ((qu - x0) * (coord(p2, v) - y0) - (coord(p2, u) - x0) * (qv - y0)) / d;
+        const double r = ((coord(p1, u) - x0) * (qv - y0) - (qu - x0) * (coord(p1, v) - y0)) / d;
+        const double eps = 1e-9;
+        if (s >= -eps && r >= -eps && s + r <= 1 + eps) return t->face;
+      }
+    }
+    return -1;
+  };
+
+  // Lattice points: kept when inside (or on a lattice face) and far enough from the other faces.
+  const int n0 = cells[0] + 1, n1 = cells[1] + 1, n2 = cells[2] + 1;
+  auto point_index = [&](int i, int j, int k) {
+    return (static_cast<std::size_t>(k) * n1 + j) * n0 + i;
+  };
+  auto lattice_point = [&](int i, int j, int k) {
+    return Vec3{i * report.spacing[0], j * report.spacing[1], k * report.spacing[2]};
+  };
+  const double keep_distance =
+      (parameters.boundary_layers * parameters.layer_thickness + parameters.lattice_margin) * h;
+  std::vector<char> kept(static_cast<std::size_t>(n0) * n1 * n2, 0);
+  std::vector<int> kept_face(kept.size(), -1);
+  for (int k = 0; k < n2; ++k)
+    for (int j = 0; j < n1; ++j) {
+      const std::vector<double> xs = crossings(j * report.spacing[1], k * report.spacing[2]);
+      for (int i = 0; i < n0; ++i) {
+        const Vec3 q = lattice_point(i, j, k);
+        const int index[3] = {i, j, k};
+        const int face = on_lattice_face(q, index);
+        if (face < 0 && !inside_given(xs, q.x)) continue;
+        if (curved.any_within(q, keep_distance)) continue;
+        if (layer_points.any_within(q, parameters.lattice_margin * h)) continue;
+        kept[point_index(i, j, k)] = 1;
+        kept_face[point_index(i, j, k)] = face;
+      }
+    }
+  clock.lap("lattice");
+
+  // The hexahedral core: cells with 8 kept corners whose circumsphere holds nothing else; then
+  // every quad face between the core and another cell inside needs a closing pyramid whose apex
+  // is that cell's centre and whose circumsphere holds nothing else, or the core cell goes.
+  const int c0 = cells[0], c1 = cells[1], c2 = cells[2];
+  auto cell_index = [&](int i, int j, int k) { return (static_cast<std::size_t>(k) * c1 + j) * c0 + i; };
+  auto cell_centre = [&](int i, int j, int k) {
+    return Vec3{(i + 0.5) * report.spacing[0], (j + 0.5) * report.spacing[1], (k + 0.5) * report.spacing[2]};
+  };
+  const double half_diagonal =
+      0.5 * std::sqrt(report.spacing[0] * report.spacing[0] + report.spacing[1] * report.spacing[1] +
+                      report.spacing[2] * report.spacing[2]);
+  auto ball_is_empty = [&](const Vec3& centre, double r) {
+    const double inner = r * (1 - 1e-9);
+    return !curved.any_within(centre, inner) && !surface_points.any_within(centre, inner) &&
+           !layer_points.any_within(centre, inner);
+  };
+  std::vector<char> core(static_cast<std::size_t>(c0) * c1 * c2, 0);
+  for (int k = 0; k < c2; ++k)
+    for (int j = 0; j < c1; ++j)
+      for (int i = 0; i < c0; ++i) {
+        bool all = true;
+        for (int corner = 0; corner < 8 && all; ++corner)
+          all = kept[point_index(i + (corner & 1), j + ((corner >> 1) & 1), k + ((corner >> 2) & 1))];
+        if (!all) continue;
+        const Vec3 centre = cell_centre(i, j, k);
+        if (!inside(centre) || !ball_is_empty(centre, half_diagonal)) continue;
+        core[cell_index(i, j, k)] = 1;
+      }
+  // Per directed face (cell, direction 0..5): 0 unknown, 1 boundary (no pyramid needed),
+  // 2 pyramid possible, 3 impossible.
+  std::vector<std::uint8_t> face_state(core.size() * 6, 0);
+  auto face_kind = [&](int i, int j, int k, int dir) -> std::uint8_t {
+    std::uint8_t& state = face_state[cell_index(i, j, k) * 6 + dir];
+    if (state) return state;
+    const int axis = dir / 2, side = dir % 2 ? 1 : -1;
+    int n[3] = {i, j, k};
+    n[axis] += side;
+    const Vec3 face_centre = cell_centre(i, j, k) +
+        Vec3{axis == 0 ? side * 0.5 * report.spacing[0] : 0, axis == 1 ? side * 0.5 * report.spacing[1] : 0,
+             axis == 2 ? side * 0.5 * report.spacing[2] : 0};
+    const bool in_range = n[0] >= 0 && n[0] < c0 && n[1] >= 0 && n[1] < c1 && n[2] >= 0 && n[2] < c2;
+    const Vec3 apex = in_range ? cell_centre(n[0], n[1], n[2]) : face_centre;
+    if (!in_range || !inside(apex)) return state = 1;
+    // The sphere through the face's corners and the apex.
+    const double a = 0.5 * report.spacing[axis];
+    double rho2 = 0;
+    for (int b = 0; b < 3; ++b)
+      if (b != axis) rho2 += 0.25 * report.spacing[b] * report.spacing[b];
+    const double c = (a * a - rho2) / (2 * a);
+    const Vec3 towards = apex - face_centre;
+    const Vec3 centre = face_centre + towards * (c / a);
+    const double r = a - c;
+    const bool ok = ball_is_empty(centre, r) && !surface_points.any_within(apex, 0.25 * h) &&
+                    !layer_points.any_within(apex, 0.25 * h);
+    return state = ok ? 2 : 3;
+  };
+  for (bool changed = true; changed;) {
+    changed = false;
+    for (int k = 0; k < c2; ++k)
+      for (int j = 0; j < c1; ++j)
+        for (int i = 0; i < c0; ++i) {
+          if (!core[cell_index(i, j, k)]) continue;
+          for (int dir = 0; dir < 6; ++dir) {
+            int n[3] = {i, j, k};
+            n[dir / 2] += dir % 2 ? 1 : -1;
+            const bool in_range = n[0] >= 0 && n[0] < c0 && n[1] >= 0 && n[1] < c1 && n[2] >= 0 && n[2] < c2;
+            if (in_range && core[cell_index(n[0], n[1], n[2])]) continue;
+            if (face_kind(i, j, k, dir) == 3) {
+              core[cell_index(i, j, k)] = 0;
+              changed = true;
+              break;
+            }
+          }
+        }
+  }
+  std::vector<char> apex_cell(core.size(), 0);
+  for (int k = 0; k < c2; ++k)
+    for (int j = 0; j < c1; ++j)
+      for (int i = 0; i < c0; ++i) {
+        if (!core[cell_index(i, j, k)]) continue;
+        ++report.nb_core_cells;
+        for (int dir = 0; dir < 6; ++dir) {
+          int n[3] = {i, j, k};
+          n[dir / 2] += dir % 2 ? 1 : -1;
+          const bool in_range = n[0] >= 0 && n[0] < c0 && n[1] >= 0 && n[1] < c1 && n[2] >= 0 && n[2] < c2;
+          if (!in_range || core[cell_index(n[0], n[1], n[2])]) continue;
+          if (face_kind(i, j, k, dir) == 2) apex_cell[cell_index(n[0], n[1], n[2])] = 1;
+        }
+      }
+  for (int k = 0; k < n2; ++k)
+    for (int j = 0; j < n1; ++j)
+      for (int i = 0; i < n0; ++i) {
+        if (!kept[point_index(i, j, k)]) continue;
+        const Vec3 q = lattice_point(i, j, k);
+        if (surface_points.any_within(q, 1e-6 * h)) continue;  // already a surface node
+        inserted.push_back(q);
+        inserted_face.push_back(kept_face[point_index(i, j, k)]);
+        ++report.nb_lattice_points;
+      }
+  for (int k = 0; k < c2; ++k)
+    for (int j = 0; j < c1; ++j)
+      for (int i = 0; i < c0; ++i)
+        if (apex_cell[cell_index(i, j, k)]) {
+          inserted.push_back(cell_centre(i, j, k));
+          inserted_face.push_back(-1);
+          ++report.nb_apex_points;
+        }
+  clock.lap("core");
+
+  // TetGen: the surface kept as it is (-pY), the points inserted (-i), 0-based (-z), quiet (-Q).
+  WorkDirectory work(parameters.work_directory);
+  const fs::path poly = work.path() / "shape.poly";
+  {
+    std::ofstream out(poly);
+    out.precision(17);
+    out << nodes.size() << " 3 0 0\n";
+    for (std::size_t i = 0; i < nodes.size(); ++i)
+      out << i << ' ' << nodes[i].x << ' ' << nodes[i].y << ' ' << nodes[i].z << '\n';
+    const std::vector<Facet> facets = make_facets(surface, nodes, lattice_face, face_plane);
+    out << facets.size() << " 1\n";
+    for (const Facet& f : facets) {
+      out << f.polygons.size() << ' ' << f.holes.size() << ' ' << f.marker << '\n';
+      for (const auto& polygon : f.polygons) {
+        out << polygon.size();
+        for (int v : polygon) out << ' ' << v;
+        out << '\n';
+      }
+      for (std::size_t i = 0; i < f.holes.size(); ++i)
+        out << i + 1 << ' ' << f.holes[i].x << ' ' << f.holes[i].y << ' ' << f.holes[i].z << '\n';
+    }
+    out << "0\n0\n";
+    std::ofstream extra(work.path() / "shape.a.node");
+    extra.precision(17);
+    extra << inserted.size() << " 3 0 0\n";
+    for (std::size_t i = 0; i < inserted.size(); ++i)
+      extra << i << ' ' << inserted[i].x << ' ' << inserted[i].y << ' ' << inserted[i].z << '\n';
+    if (!out || !extra) throw InputError("cannot write TetGen's input in " + work.path().string());
+  }
+  const fs::path log = work.path() / "tetgen.log";
+  report.tetgen_command = shell_quote(tetgen) + " -pYizQ " + shell_quote(poly.string());
+  const int status = std::system((report.tetgen_command + " > " + shell_quote(log.string()) + " 2>&1").c_str());
+  clock.lap("tetgen");
+  if (status != 0 || !fs::exists(work.path() / "shape.1.ele"))
+    throw InputError("TetGen failed (exit status " + std::to_string(status) + ") on the shape's surface "
+                     "and points; its output:\n" + tail_of_file(log, 2000) +
+                     "\n(command: " + report.tetgen_command + ")");
+
+  TetMesh mesh;
+  const std::vector<double> frame_points = read_tetgen_nodes(work.path() / "shape.1.node");
+  mesh.tets = read_tetgen_tets(work.path() / "shape.1.ele",
+                               static_cast<index_t>(frame_points.size() / 3));
+  const std::size_t given = nodes.size() + inserted.size();
+  const std::size_t made = frame_points.size() / 3;
+  report.nb_steiner_points = made > given ? made - given : 0;
+  // Orientation: positive volume in frame coordinates is positive in the world (proper frame).
+  for (std::size_t t = 0; t < mesh.tets.size() / 4; ++t) {
+    index_t* v = &mesh.tets[4 * t];
+    const Vec3 p0 = Vec3::of(&frame_points[3 * v[0]]);
+    const double d = det3(Vec3::of(&frame_points[3 * v[1]]) - p0, Vec3::of(&frame_points[3 * v[2]]) - p0,
+                          Vec3::of(&frame_points[3 * v[3]]) - p0);
+    if (d < 0) std::swap(v[1], v[2]);
+  }
+  mesh.points.resize(frame_points.size());
+  for (std::size_t i = 0; i < made; ++i) {
+    const Vec3 p = frame.to_world(Vec3::of(&frame_points[3 * i]));
+    mesh.points[3 * i] = p.x, mesh.points[3 * i + 1] = p.y, mesh.points[3 * i + 2] = p.z;
+  }
+  // The surface nodes keep their exact CAD positions.
+  for (std::size_t i = 0; i < nodes.size() && i < made; ++i) {
+    mesh.points[3 * i] = surface.nodes[i].x, mesh.points[3 * i + 1] = surface.nodes[i].y,
+    mesh.points[3 * i + 2] = surface.nodes[i].z;
+  }
+  validate_tet_mesh(mesh);
+
+  // How far the boundary nodes are from the CAD faces they lie on.
+  {
+    static const int faces_of_tet[4][3] = {{1, 2, 3}, {0, 2, 3}, {0, 1, 3}, {0, 1, 2}};
+    std::vector<char> boundary(made, 0);
+    std::map<std::array<index_t, 3>, int> count;
+    for (std::size_t t = 0; t < mesh.tets.size() / 4; ++t)
+      for (const auto& f : faces_of_tet) {
+        std::array<index_t, 3> key{mesh.tets[4 * t + f[0]], mesh.tets[4 * t + f[1]], mesh.tets[4 * t + f[2]]};
+        std::sort(key.begin(), key.end());
+        ++count[key];
+      }
+    for (const auto& [key, n] : count)
+      if (n == 1)
+        for (index_t v : key) boundary[v] = 1;
+    std::vector<std::unique_ptr<ShapeAnalysis_Surface>> analysis(shape.faces.Extent());
+    double worst = 0;
+    for (std::size_t v = 0; v < made; ++v) {
+      if (!boundary[v]) continue;
+      int face = -1;
+      if (v < nodes.size()) face = surface.node_face[v];
+      else if (v < given) face = inserted_face[v - nodes.size()];
+      const gp_Pnt p(mesh.points[3 * v], mesh.points[3 * v + 1], mesh.points[3 * v + 2]);
+      if (face < 0) {
+        throw InputError("TetGen put node " + std::to_string(v) +
+                         " on the boundary, which is on no face of the shape", Entity::Node,
+                         static_cast<index_t>(v));
+      }
+      if (!analysis[face]) {
+        const TopoDS_Face& f = TopoDS::Face(shape.faces(face + 1));
+        analysis[face] = std::make_unique<ShapeAnalysis_Surface>(BRep_Tool::Surface(f));
+      }
+      TopLoc_Location loc;
+      BRep_Tool::Surface(TopoDS::Face(shape.faces(face + 1)), loc);
+      const gp_Pnt local = p.Transformed(loc.Transformation().Inverted());
+      analysis[face]->ValueOfUV(local, 1e-3 * h * 1e-3);
+      worst = std::max(worst, analysis[face]->Gap());
+    }
+    report.max_boundary_distance = worst;
+  }
+  clock.lap("check");
+
+  if (shape.solids.Extent() > 1) mesh.regions = regions_by_solid(brep, mesh);
+  else mesh.regions.assign(mesh.tets.size() / 4, 0);
+  clock.lap("regions");
+  return mesh;
+}
+
+}  // namespace hexmerge

@@ -1,0 +1,100 @@
+#pragma once
+/// @file
+/// Hex-friendly tetrahedral meshing of a CAD shape: lattice-seeded tets (OpenCASCADE + TetGen)
+/// that the recombination engine merges into mostly hexahedra.
+///
+/// After Baudouin, Remacle, Marchandise, Henrotte & Geuzaine, "A frontal approach to
+/// hex-dominant mesh generation" (AMSES 2014): where a mesh's vertices sit on a cubic lattice,
+/// its tets fill the lattice cells and recombine into hexahedra. The steps:
+///  1. the shape's faces are triangulated with OpenCASCADE (BRepMesh), then refined by edge
+///     bisection to the target size; every new node is evaluated on the CAD surface or edge;
+///  2. a frame is chosen (the normals of the largest planar faces, else the principal axes of
+///     inertia) and a cubic lattice of spacing about h laid in it, its planes through the shape's
+///     bounding box, so that planar faces on those planes carry lattice points of their own
+///     ("lattice faces"; they are not refined but get the lattice points);
+///  3. lattice points inside the shape and far enough from the other faces are kept; the cells
+///     with all eight corners kept form the hexahedral core; every quad face on the core's
+///     boundary gets the centre of the cell beyond it as the apex of a closing pyramid, and core
+///     cells whose pyramid would be crowded by the surface are given up (this is what lets the
+///     core recombine conformingly);
+///  4. layers of points offset from the surface nodes along the inward normal, where the surface
+///     is smooth and there is room, so that the boundary becomes prisms;
+///  5. TetGen tetrahedralises the surface (kept as it is, `-pY`) with the points inserted
+///     (`-i`), through its files; the tets are read back, oriented, and given the solid that
+///     holds them as region.
+///
+/// The header needs no OpenCASCADE include: shapes come in as BREP text.
+
+#include <array>
+#include <cstddef>
+#include <map>
+#include <string>
+
+#include "hexmerge/mesh/tet_mesh.h"
+
+namespace hexmerge {
+
+/// How mesh_shape() works. Lengths are in the shape's units.
+struct MeshShapeParameters {
+  /// Target element size h: the lattice spacing and the surface's longest edge. > 0 and smaller
+  /// than the shape's bounding box (every side of the box holds at least one lattice cell).
+  double size = 0.0;
+  /// Layers of points offset from the curved and unaligned faces along the inward normal
+  /// (0 to 3). Each layer is `layer_thickness` h thick.
+  int boundary_layers = 1;
+  /// Thickness of one boundary layer, as a fraction of h, in [0.1, 1].
+  double layer_thickness = 0.5;
+  /// Lattice points nearer than this fraction of h to a face that is not a lattice face (or to
+  /// the outermost boundary layer) are dropped. In [0.1, 2].
+  double lattice_margin = 0.5;
+  /// Chord deflection of the surface triangulation on curved faces, as a fraction of h.
+  /// In (0, 0.5].
+  double surface_deflection = 0.02;
+  /// Lattice orientation: "auto" (normals of the largest planar faces, else principal axes of
+  /// inertia), "principal" (principal axes of inertia), "global" (x, y, z).
+  std::string frame = "auto";
+  /// The TetGen program: a name looked up on PATH, or a path.
+  std::string tetgen = "tetgen";
+  /// A directory for TetGen's files, kept afterwards; empty: a temporary one, removed.
+  std::string work_directory;
+};
+
+/// What mesh_shape() did.
+struct MeshShapeReport {
+  std::size_t nb_solids = 0;
+  std::size_t nb_faces = 0;
+  std::size_t nb_lattice_faces = 0;       ///< planar faces on lattice planes
+  std::size_t nb_surface_nodes = 0;       ///< nodes of the refined surface triangulation
+  std::size_t nb_surface_triangles = 0;   ///< its triangles (lattice faces: BRepMesh's own)
+  std::size_t nb_lattice_points = 0;      ///< lattice points inserted (inside and on lattice faces)
+  std::size_t nb_core_cells = 0;          ///< lattice cells with all corners kept (hex core)
+  std::size_t nb_apex_points = 0;         ///< closing-pyramid apexes inserted
+  std::size_t nb_layer_points = 0;        ///< boundary-layer points inserted
+  std::size_t nb_steiner_points = 0;      ///< points TetGen added
+  std::array<std::array<double, 3>, 3> frame{};  ///< lattice axes (rows), unit vectors
+  std::array<double, 3> spacing{};               ///< lattice spacing along each axis
+  double max_boundary_distance = 0.0;     ///< largest distance of a boundary node to the shape
+  std::string tetgen_command;             ///< the command line run
+  std::map<std::string, double> phase_seconds;  ///< wall time per phase
+};
+
+/// Tetrahedralises a solid shape with lattice-seeded points, ready for recombine().
+///
+/// @param[in]  brep        the shape as BREP text (one or more solids; FreeCAD:
+///                         `Shape.exportBrepToString()`, files: read_shape_file())
+/// @param[in]  parameters  see MeshShapeParameters
+/// @param[out] report      counts, the frame, timings
+/// @return a valid tet mesh (validate_tet_mesh), regions = the index of the solid holding each
+///         tet, in the order TopExp::MapShapes(shape, TopAbs_SOLID) gives (FreeCAD's
+///         `Shape.Solids`)
+/// @throws InputError for BREP text that cannot be read, a shape without solids, an open shell
+///         (naming the free edge), a size that is not positive or does not fit the shape, bad
+///         parameters, or TetGen missing or failing (with its output)
+TetMesh mesh_shape(const std::string& brep, const MeshShapeParameters& parameters,
+                   MeshShapeReport& report);
+
+/// The shape in a STEP (.step, .stp), BREP (.brep, .brp) or IGES (.iges, .igs) file, as BREP text.
+/// @throws InputError when the file is missing, of another kind, or unreadable
+std::string read_shape_file(const std::string& path);
+
+}  // namespace hexmerge
