@@ -20,6 +20,7 @@ std::string flag(bool value) { return value ? "true" : "false"; }
 const std::vector<std::string> kConformityChoices = {"conforming", "last_resort", "allow"};
 const std::vector<std::string> kFinderChoices = {"programs", "exhaustive"};
 const std::vector<std::string> kBoundaryOrderChoices = {"quality", "fewest_matches"};
+const std::vector<std::string> kLocalSearchSeedsChoices = {"unmatched", "all"};
 
 InputError bad_value(const std::string& name, const std::string& value, const std::string& why) {
   return InputError("parameter '" + name + "': " + why + " (got '" + value + "')",
@@ -34,6 +35,12 @@ double parse_number(const std::string& name, const std::string& value, double lo
     throw bad_value(name, value, "must be between " + number(lo) + " and " + number(hi));
   }
   return x;
+}
+
+int parse_int(const std::string& name, const std::string& value, double lo, double hi) {
+  const double x = parse_number(name, value, lo, hi);
+  if (x != static_cast<int>(x)) throw bad_value(name, value, "must be a whole number");
+  return static_cast<int>(x);
 }
 
 bool parse_bool(const std::string& name, const std::string& value) {
@@ -88,6 +95,22 @@ std::vector<ParameterInfo> make_table() {
       {"local_optimisation", "bool", flag(d.local_optimisation), "", 0, 1, {},
        "Local optimisation",
        "Rearrange elements around unmatched boundary tetrahedra (Meshkat-Talmor 4.2)"},
+      {"local_search", "bool", flag(d.local_search), "", 0, 1, {}, "Local search",
+       "After the selection, swap elements for more elements that merge more tetrahedra and "
+       "re-select exactly around unmatched tetrahedra, whenever that lowers the element count "
+       "(conformity mode kept)"},
+      {"local_search_radius", "int", number(d.local_search_radius), "", 1, 4, {},
+       "Local search radius",
+       "Face hops from an unmatched tetrahedron within which the local search releases the "
+       "elements and re-selects them exactly"},
+      {"local_search_nodes", "int", number(d.local_search_nodes), "", 1, 1000000, {},
+       "Local search effort",
+       "Branch-and-bound nodes the local search may spend on one neighbourhood (bounds its "
+       "time; past it the best re-selection found so far is kept)"},
+      {"local_search_seeds", "choice", to_string(d.local_search_seeds), "", 0, 0,
+       kLocalSearchSeedsChoices, "Local search seeds",
+       "Where the local search re-selects: around unmatched tetrahedra, or around every "
+       "tetrahedron (also merges elements into fewer; slower)"},
       {"boundary_order", "choice", to_string(d.boundary_order), "", 0, 0, kBoundaryOrderChoices,
        "Boundary order",
        "Order of the greedy boundary phase: best quality first, or the paper's fewest remaining "
@@ -117,6 +140,10 @@ std::string to_string(Finder finder) { return kFinderChoices[static_cast<int>(fi
 
 std::string to_string(BoundaryOrder order) {
   return kBoundaryOrderChoices[static_cast<int>(order)];
+}
+
+std::string to_string(LocalSearchSeeds seeds) {
+  return kLocalSearchSeedsChoices[static_cast<int>(seeds)];
 }
 
 const std::vector<ParameterInfo>& parameter_table() {
@@ -151,14 +178,20 @@ void set_parameter(RecombineParameters& p, const std::string& name, const std::s
     p.respect_regions = parse_bool(name, value);
   } else if (name == "local_optimisation") {
     p.local_optimisation = parse_bool(name, value);
+  } else if (name == "local_search") {
+    p.local_search = parse_bool(name, value);
+  } else if (name == "local_search_radius") {
+    p.local_search_radius = parse_int(name, value, row->min, row->max);
+  } else if (name == "local_search_nodes") {
+    p.local_search_nodes = parse_int(name, value, row->min, row->max);
+  } else if (name == "local_search_seeds") {
+    p.local_search_seeds = static_cast<LocalSearchSeeds>(parse_choice(name, value, row->choices));
   } else if (name == "boundary_order") {
     p.boundary_order = static_cast<BoundaryOrder>(parse_choice(name, value, row->choices));
   } else if (name == "finder") {
     p.finder = static_cast<Finder>(parse_choice(name, value, row->choices));
   } else if (name == "threads") {
-    const double x = parse_number(name, value, row->min, row->max);
-    if (x != static_cast<int>(x)) throw bad_value(name, value, "must be a whole number");
-    p.threads = static_cast<int>(x);
+    p.threads = parse_int(name, value, row->min, row->max);
   } else if (name == "optimality_bound") {
     p.optimality_bound = parse_bool(name, value);
   } else if (name == "bound_time_limit") {
@@ -176,6 +209,8 @@ void validate_parameters(const RecombineParameters& p) {
   set_parameter(scratch, "max_face_angle", number(p.max_face_angle));
   set_parameter(scratch, "min_scaled_jacobian", number(p.min_scaled_jacobian));
   set_parameter(scratch, "threads", number(p.threads));
+  set_parameter(scratch, "local_search_radius", number(p.local_search_radius));
+  set_parameter(scratch, "local_search_nodes", number(p.local_search_nodes));
   set_parameter(scratch, "bound_time_limit", number(p.bound_time_limit));
   if (!p.make_hexahedra && !p.make_prisms && !p.make_pyramids) {
     throw InputError("no element type is enabled: enable hexahedra, prisms or pyramids",

@@ -38,6 +38,14 @@ enum class Finder {
   Exhaustive,
 };
 
+/// Where the local search's re-selection is tried (select_candidates.h).
+enum class LocalSearchSeeds {
+  /// Around every tet left unmatched.
+  Unmatched,
+  /// Around every tet: also merges of elements into fewer where no tet is left (slower).
+  All,
+};
+
 /// Parameters of hexmerge::recombine. Every field is listed in parameter_table() with its unit,
 /// range and documentation.
 struct RecombineParameters {
@@ -53,6 +61,11 @@ struct RecombineParameters {
   Conformity conformity = Conformity::Conforming;
   bool respect_regions = true;        ///< never merge tets of different regions
   bool local_optimisation = true;     ///< the paper's section 4.2
+  /// after the selection: swaps and exact re-selection around unmatched tets (select_candidates.h)
+  bool local_search = true;
+  int local_search_radius = 1;        ///< [1, 4]: face hops from an unmatched tet released
+  int local_search_nodes = 2000;      ///< [1, 1e6]: branch-and-bound nodes per neighbourhood
+  LocalSearchSeeds local_search_seeds = LocalSearchSeeds::Unmatched;
   BoundaryOrder boundary_order = BoundaryOrder::Quality;
   Finder finder = Finder::Programs;
   int threads = 0;                    ///< candidate search threads; 0: all hardware threads
@@ -90,5 +103,6 @@ void validate_parameters(const RecombineParameters& parameters);
 std::string to_string(Conformity conformity);
 std::string to_string(Finder finder);
 std::string to_string(BoundaryOrder order);
+std::string to_string(LocalSearchSeeds seeds);
 
 }  // namespace hexmerge

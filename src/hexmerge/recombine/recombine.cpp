@@ -161,6 +161,9 @@ MixedMesh recombine(const TetMesh& input, const RecombineParameters& parameters,
   report.closing_pyramids = selection.closing_pyramids;
   report.released_elements = selection.released_elements;
   report.local_moves = selection.local_moves;
+  report.swap_moves = selection.swap_moves;
+  report.reselection_moves = selection.reselection_moves;
+  report.local_search_saved = selection.local_search_saved;
   report.selection_strategy = selection.strategy;
   timer.lap("selection");
 

@@ -26,7 +26,10 @@ struct RecombineReport {
   std::size_t nonconforming_quads = 0;     ///< quad faces meeting two triangles in the output
   std::size_t closing_pyramids = 0;        ///< pyramids made to close a quad face
   std::size_t released_elements = 0;       ///< elements split back to tets to restore conformity
-  std::size_t local_moves = 0;             ///< accepted local optimisation moves
+  std::size_t local_moves = 0;             ///< accepted local optimisation moves (section 4.2)
+  std::size_t swap_moves = 0;              ///< local search: accepted swaps of one element
+  std::size_t reselection_moves = 0;       ///< local search: accepted neighbourhood re-selections
+  std::size_t local_search_saved = 0;      ///< elements the local search removed (both moves)
   std::string selection_strategy;          ///< conforming mode: which selection was kept
   std::array<double, NB_CELL_TYPES> min_scaled_jacobian{};   ///< per type (0 when none)
   std::array<double, NB_CELL_TYPES> mean_scaled_jacobian{};  ///< per type (0 when none)

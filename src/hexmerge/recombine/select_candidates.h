@@ -22,7 +22,11 @@ struct Selection {
   std::size_t nonconforming_quads = 0;    ///< quad faces left meeting two triangles
   std::size_t closing_pyramids = 0;       ///< pyramids chosen to close a quad face
   std::size_t released_elements = 0;      ///< elements given up to restore conformity
-  std::size_t local_moves = 0;            ///< accepted local optimisation moves
+  std::size_t local_moves = 0;            ///< accepted local optimisation moves (section 4.2)
+  std::size_t swap_moves = 0;             ///< local search: accepted swaps of one element
+  std::size_t reselection_moves = 0;      ///< local search: accepted neighbourhood re-selections
+  std::size_t local_search_saved = 0;     ///< elements the local search removed
+  std::size_t local_search_nodes = 0;     ///< local search: branch-and-bound nodes in all
   std::string strategy;                   ///< conforming mode: "safe_pyramids" or "closable"
 };
 
@@ -40,6 +44,19 @@ struct Selection {
 /// 4. Quad faces of chosen elements that face free tets are closed by the candidate that covers
 ///    them (a pyramid, usually); in conforming mode an element whose quad cannot be closed is
 ///    released back to tets.
+/// 5. Local search (parameter local_search), on the finished selection, kept only when it lowers
+///    the element count:
+///    - swaps: one element next to free tets is released, and its tets with the free tets next
+///      to them re-selected exactly (one element for two or more, or for a bigger one);
+///    - re-selection: around each free tet, every element within local_search_radius face hops
+///      is released, and the released and free tets re-selected exactly.
+///    "Exactly": a branch and bound over the candidates lying wholly in the neighbourhood, at
+///    most local_search_nodes nodes per neighbourhood (past that, the best re-selection found
+///    so far). In conforming and last_resort modes every face inside or around the
+///    neighbourhood must conform afterwards (a move never adds a non-conforming quad); in allow
+///    mode only the count matters. Neighbourhoods are visited in tet order, then again around
+///    each accepted move, so the result is deterministic and the work is bounded by
+///    (tets + moves) x nodes.
 ///
 /// In conforming mode two selections are made and the better kept (see the .cpp): pending quad
 /// faces either only where a closing pyramid is reserved, or wherever some candidate could close
