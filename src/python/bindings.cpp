@@ -164,6 +164,7 @@ py::dict report_to_dict(const RecombineReport& r) {
   for (const auto& [name, count] : r.candidates_per_template) templates[name.c_str()] = count;
   d["candidates_per_template"] = templates;
   d["candidates_total"] = r.candidates_total;
+  d["candidates_unclosable"] = r.candidates_unclosable;
   py::dict phases;
   for (const auto& [name, seconds] : r.phase_seconds) phases[name.c_str()] = seconds;
   d["phase_seconds"] = phases;

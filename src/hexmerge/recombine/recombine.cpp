@@ -11,6 +11,7 @@
 #include "hexmerge/recombine/find_candidates.h"
 #include "hexmerge/recombine/find_candidates_exhaustive.h"
 #include "hexmerge/recombine/rf_graph.h"
+#include "hexmerge/recombine/prune_candidates.h"
 #include "hexmerge/recombine/select_candidates.h"
 
 namespace hexmerge {
@@ -135,7 +136,7 @@ MixedMesh recombine(const TetMesh& input, const RecombineParameters& parameters,
   criteria.types[static_cast<int>(CellType::Prism)] = parameters.make_prisms;
   criteria.types[static_cast<int>(CellType::Pyramid)] = parameters.make_pyramids;
   const int threads = thread_count(parameters.threads);
-  const std::vector<Candidate> candidates =
+  std::vector<Candidate> candidates =
       parameters.finder == Finder::Exhaustive
           ? find_candidates_exhaustive(input, topology, criteria, threads, progress)
           : find_candidates(input, topology, criteria, threads, progress);
@@ -155,6 +156,10 @@ MixedMesh recombine(const TetMesh& input, const RecombineParameters& parameters,
     }
   }
   report.candidates_total = candidates.size();
+  if (parameters.conformity == Conformity::Conforming) {
+    candidates = prune_unclosable(input, topology, candidates, report.candidates_unclosable);
+    timer.lap("pruning");
+  }
 
   const Selection selection = select_candidates(input, topology, candidates, parameters, progress);
   report.nonconforming_quads = selection.nonconforming_quads;

@@ -35,6 +35,9 @@ struct RecombineReport {
   std::array<double, NB_CELL_TYPES> mean_scaled_jacobian{};  ///< per type (0 when none)
   std::map<std::string, std::size_t> candidates_per_template;  ///< accepted candidates
   std::size_t candidates_total = 0;
+  /// Conforming mode: candidates no conforming selection can hold, removed before the selection
+  /// (prune_unclosable).
+  std::size_t candidates_unclosable = 0;
   std::vector<std::pair<std::string, double>> phase_seconds;  ///< wall time per phase, in order
   /// The optimality bound (parameter optimality_bound, bound_selection.h); the fields below are
   /// set only when it ran. In conforming mode the program has the conformity rows and bounds the
