@@ -2,6 +2,7 @@
 
 >>> mesh, report = hexmerge.recombine(points, tets)          # numpy arrays in
 >>> mesh.cells("hexahedron"), report["element_reduction_percent"]
+>>> mesh, report = hexmerge.mesh_shape("part.step", 2.0)  # from CAD: OpenCASCADE + TetGen
 
 The engine is the compiled module ``hexmerge._core``; this package validates input, converts
 Tet10 meshes and offers the command line (``python -m hexmerge``, or ``hexmerge``).
@@ -20,6 +21,7 @@ except ImportError as e:  # pragma: no cover - depends on the build
 
 from ._api import CellBlock, MixedMesh, cell_types, check, parameters, recombine, validate
 from ._regions import WITH_OPENCASCADE, regions_by_solid
+from ._shape import mesh_parameters, mesh_shape
 
 InputError = _core.InputError
 Cancelled = _core.Cancelled
@@ -34,6 +36,8 @@ __all__ = [
     "WITH_OPENCASCADE",
     "cell_types",
     "check",
+    "mesh_parameters",
+    "mesh_shape",
     "parameters",
     "recombine",
     "regions_by_solid",
