@@ -99,10 +99,11 @@ std::vector<ParameterInfo> make_table() {
        "After the selection, swap elements for more elements that merge more tetrahedra and "
        "re-select exactly around unmatched tetrahedra, whenever that lowers the element count "
        "(conformity mode kept)"},
-      {"local_search_radius", "int", number(d.local_search_radius), "", 1, 4, {},
+      {"local_search_radius", "int", number(d.local_search_radius), "", 0, 4, {},
        "Local search radius",
-       "Face hops from an unmatched tetrahedron within which the local search releases the "
-       "elements and re-selects them exactly"},
+       "Face hops around a tetrahedron within which the local search releases the elements and "
+       "re-selects them exactly; 0: swaps only (cheap). 3 with local_search_seeds = all comes "
+       "within about 2 % of the optimum in allow mode, at about 1.5 s per 10k tetrahedra"},
       {"local_search_nodes", "int", number(d.local_search_nodes), "", 1, 1000000, {},
        "Local search effort",
        "Branch-and-bound nodes the local search may spend on one neighbourhood (bounds its "

@@ -63,7 +63,9 @@ struct RecombineParameters {
   bool local_optimisation = true;     ///< the paper's section 4.2
   /// after the selection: swaps and exact re-selection around unmatched tets (select_candidates.h)
   bool local_search = true;
-  int local_search_radius = 1;        ///< [1, 4]: face hops from an unmatched tet released
+  /// [0, 4]: face hops around a tet within which the elements are released and re-selected;
+  /// 0: swaps only
+  int local_search_radius = 0;
   int local_search_nodes = 2000;      ///< [1, 1e6]: branch-and-bound nodes per neighbourhood
   LocalSearchSeeds local_search_seeds = LocalSearchSeeds::Unmatched;
   BoundaryOrder boundary_order = BoundaryOrder::Quality;

@@ -1015,8 +1015,23 @@ class Selector {
         }
       }
     }
+    // Only a candidate that takes a free tet can do better than e itself (two or more
+    // candidates within e's tets save fewer elements): look for one before anything else.
+    bool useful = false;
+    if (any_free) {
+      for (index_t t : h.tets) local_[t] = 0;
+      for (std::size_t k = c.nb_tets; k < h.tets.size() && !useful; ++k) {
+        const index_t t = h.tets[k];
+        for (index_t j = offsets_[t]; j < offsets_[t + 1] && !useful; ++j) {
+          const Candidate& x = cands_[ids_[j]];
+          bool inside = true;
+          for (int i = 0; i < x.nb_tets && inside; ++i) inside = local_[x.tets[i]] >= 0;
+          useful = inside;
+        }
+      }
+    }
     hood_clear_marks(h);
-    if (!any_free) return false;
+    if (!useful) return false;
     std::sort(h.tets.begin(), h.tets.end());
     return reselect(h);
   }
@@ -1092,7 +1107,9 @@ class Selector {
         seeds.push_back(t);
       }
     };
-    for (index_t t = 0; t < nt; ++t) seed(t);
+    if (params_.local_search_radius > 0) {
+      for (index_t t = 0; t < nt; ++t) seed(t);
+    }
     while (!seeds.empty()) {
       const index_t s = seeds.front();
       seeds.pop_front();

@@ -48,15 +48,18 @@ struct Selection {
 ///    the element count:
 ///    - swaps: one element next to free tets is released, and its tets with the free tets next
 ///      to them re-selected exactly (one element for two or more, or for a bigger one);
-///    - re-selection: around each free tet, every element within local_search_radius face hops
-///      is released, and the released and free tets re-selected exactly.
+///    - re-selection (local_search_radius > 0): around each free tet (every tet with
+///      local_search_seeds = all), every element within local_search_radius face hops is
+///      released, and the released and free tets re-selected exactly.
 ///    "Exactly": a branch and bound over the candidates lying wholly in the neighbourhood, at
 ///    most local_search_nodes nodes per neighbourhood (past that, the best re-selection found
 ///    so far). In conforming and last_resort modes every face inside or around the
 ///    neighbourhood must conform afterwards (a move never adds a non-conforming quad); in allow
-///    mode only the count matters. Neighbourhoods are visited in tet order, then again around
-///    each accepted move, so the result is deterministic and the work is bounded by
-///    (tets + moves) x nodes.
+///    mode only the count matters. Neighbourhoods are visited in candidate or tet order, then
+///    again around each accepted move, so the result is deterministic and the work is bounded
+///    by (tets + moves) x nodes (every accepted move lowers the count).
+///    The bound of the branch and bound: each undecided tet saves at most (n - 1) / n, n the
+///    size of the largest pool candidate that takes it and has no decided tet.
 ///
 /// In conforming mode two selections are made and the better kept (see the .cpp): pending quad
 /// faces either only where a closing pyramid is reserved, or wherever some candidate could close
