@@ -1,8 +1,9 @@
-"""The command line: ``hexmerge recombine``, ``hexmerge check``, ``hexmerge parameters``.
+"""The command line: ``hexmerge recombine``, ``hexmerge mesh``, ``hexmerge check``,
+``hexmerge parameters``.
 
-Every engine option is generated from the parameter table, so ``--help`` shows the same names,
-units and defaults as the Python API and the FreeCAD add-on. main() only parses, loads, calls
-the library and saves.
+Every engine option is generated from the parameter table (and the mesher's options from
+mesh_parameters()), so ``--help`` shows the same names, units and defaults as the Python API and
+the FreeCAD add-on. main() only parses, loads, calls the library and saves.
 """
 
 from __future__ import annotations
@@ -17,7 +18,7 @@ from typing import Any, Sequence, TextIO
 
 import numpy as np
 
-from . import __version__, _api, _core, _io
+from . import __version__, _api, _core, _io, _shape
 
 EXIT_OK = 0
 EXIT_ERROR = 1  # bad input, unreadable or unwritable file, failed run
@@ -27,6 +28,10 @@ EXIT_INTERRUPTED = 130
 
 EXIT_CODES = """exit codes: 0 success, 1 error (bad input, unreadable file, failed run; nothing is
 written), 2 bad command line, 3 `check` found the mesh invalid, 130 interrupted"""
+
+
+class UsageError(Exception):
+    """Options that do not go together (exit code 2, like argparse's own errors)."""
 
 
 def option_name(name: str) -> str:
@@ -45,11 +50,21 @@ def _help(row: dict[str, Any]) -> str:
     return f"{row['doc']} ({extra})".replace("%", "%%")
 
 
-def add_parameter_options(parser: argparse.ArgumentParser) -> None:
-    """One option per row of the parameter table; unset options keep the engine's default."""
-    group = parser.add_argument_group("engine parameters (from hexmerge.parameters())")
-    for row in _api.parameters():
-        flag = option_name(row["name"])
+#: CLI names of mesher options that differ from the Python keyword.
+MESH_OPTION_NAMES = {"boundary_layers": "--layers"}
+
+
+def add_parameter_options(
+    parser: argparse.ArgumentParser,
+    rows: list[dict[str, Any]] | None = None,
+    title: str = "engine parameters (from hexmerge.parameters())",
+    names: dict[str, str] | None = None,
+) -> None:
+    """One option per row of a parameter table (the engine's by default); unset options keep
+    the default."""
+    group = parser.add_argument_group(title)
+    for row in _api.parameters() if rows is None else rows:
+        flag = (names or {}).get(row["name"], option_name(row["name"]))
         common = dict(dest=row["name"], default=None, help=_help(row))
         if row["type"] == "bool":
             group.add_argument(flag, action=argparse.BooleanOptionalAction, **common)
@@ -82,29 +97,42 @@ def build_parser() -> argparse.ArgumentParser:
         epilog=EXIT_CODES,
     )
     rec.add_argument("input", metavar="IN", help="tetrahedral mesh file")
-    rec.add_argument("-o", "--output", metavar="OUT", required=True, help="output mesh file")
     rec.add_argument("--input-format", metavar="FMT", help="meshio format of IN (default: from the extension)")
-    rec.add_argument(
-        "--output-format",
-        metavar="FMT",
-        help="meshio format of OUT (default: from the extension; e.g. gmsh22 for Gmsh 2.2 .msh)",
-    )
-    rec.add_argument("--ascii", action="store_true", help="write ASCII instead of binary where the format has both")
-    rec.add_argument(
-        "--collapse-pyramids",
-        action="store_true",
-        help="write pyramids as degenerate hexahedra (apex repeated), for formats and solvers "
-        "without pyramids such as Abaqus/CalculiX .inp",
-    )
-    rec.add_argument("--stats", metavar="JSON", help="write the run's report to this JSON file")
-    rec.add_argument(
-        "--progress",
-        action=argparse.BooleanOptionalAction,
-        default=None,
-        help="show progress on stderr (default: when stderr is a terminal)",
-    )
-    rec.add_argument("-q", "--quiet", action="store_true", help="print nothing on success")
+    add_output_options(rec)
     add_parameter_options(rec)
+
+    msh = sub.add_parser(
+        "mesh",
+        add_help=False,  # -h is the size, as for Gmsh's -clmax
+        help="mesh a CAD shape (STEP, BREP, IGES) into a hex-dominant mesh",
+        description="Mesh the solid(s) of SHAPE with lattice-seeded tetrahedra (OpenCASCADE "
+        "surface, a cubic lattice of spacing H in the shape's frame, boundary layers; TetGen "
+        "tetrahedralises), then merge them into hexahedra, prisms and pyramids like "
+        "`hexmerge recombine` (same engine options), and write the mesh to OUT. Regions: the "
+        "solid holding each element. Needs the `tetgen` program (Debian: apt install tetgen).",
+        epilog=EXIT_CODES,
+    )
+    msh.add_argument("--help", action="help", help="show this help message and exit")
+    msh.add_argument("shape", metavar="SHAPE", help="CAD file: .step/.stp, .brep/.brp or .iges/.igs")
+    msh.add_argument(
+        "-h", "--size", metavar="H", required=True, type=_positive_length,
+        help="target element size (lattice spacing, longest surface edge), in the shape's units",
+    )
+    msh.add_argument("--tets-only", action="store_true", help="write the tet mesh, without merging")
+    msh.add_argument(
+        "--second-order",
+        action="store_true",
+        help="quadratic elements: a node at the midpoint of every tet edge (straight edges), so "
+        "the output is Tet10 / Pyramid13 / Wedge15 / Hexa20",
+    )
+    msh.add_argument("--tetgen", metavar="PROGRAM", default="tetgen", help="the TetGen program (default: tetgen on PATH)")
+    msh.add_argument("--work-directory", metavar="DIR", help="keep TetGen's files in DIR (default: a temporary folder)")
+    add_output_options(msh)
+    add_parameter_options(
+        msh, _shape.mesh_parameters(), "mesher options (from hexmerge.mesh_parameters(); h: the size H)",
+        MESH_OPTION_NAMES,
+    )
+    add_parameter_options(msh)
 
     chk = sub.add_parser(
         "check",
@@ -119,9 +147,50 @@ def build_parser() -> argparse.ArgumentParser:
     chk.add_argument("--source", metavar="TETMESH", help="the tet mesh MESH was made from")
     chk.add_argument("--json", action="store_true", help="print the report as JSON")
 
-    par = sub.add_parser("parameters", help="list the engine parameters", description="List the engine parameters.")
+    par = sub.add_parser(
+        "parameters",
+        help="list the engine parameters",
+        description="List the engine parameters (options of `recombine` and `mesh`), or with "
+        "--mesh the mesher's options (of `mesh` only).",
+    )
     par.add_argument("--json", action="store_true", help="print the table as JSON")
+    par.add_argument("--mesh", action="store_true", help="the mesher's options (hexmerge.mesh_parameters())")
     return parser
+
+
+def add_output_options(parser: argparse.ArgumentParser) -> None:
+    """The options of a command that writes a mesh (recombine, mesh)."""
+    parser.add_argument("-o", "--output", metavar="OUT", required=True, help="output mesh file")
+    parser.add_argument(
+        "--output-format",
+        metavar="FMT",
+        help="meshio format of OUT (default: from the extension; e.g. gmsh22 for Gmsh 2.2 .msh)",
+    )
+    parser.add_argument("--ascii", action="store_true", help="write ASCII instead of binary where the format has both")
+    parser.add_argument(
+        "--collapse-pyramids",
+        action="store_true",
+        help="write pyramids as degenerate hexahedra (apex repeated), for formats and solvers "
+        "without pyramids such as Abaqus/CalculiX .inp",
+    )
+    parser.add_argument("--stats", metavar="JSON", help="write the run's report to this JSON file")
+    parser.add_argument(
+        "--progress",
+        action=argparse.BooleanOptionalAction,
+        default=None,
+        help="show progress on stderr (default: when stderr is a terminal)",
+    )
+    parser.add_argument("-q", "--quiet", action="store_true", help="print nothing on success")
+
+
+def _positive_length(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+    if not math.isfinite(value) or value <= 0:
+        raise argparse.ArgumentTypeError(f"the size must be a positive length, got {text}")
+    return value
 
 
 class ProgressPrinter:
@@ -170,15 +239,43 @@ def _summary(path: str, report: dict[str, Any], out: str) -> str:
     )
 
 
-def cmd_recombine(args: argparse.Namespace) -> int:
-    options = {row["name"]: getattr(args, row["name"]) for row in _api.parameters()}
-    options = {k: v for k, v in options.items() if v is not None}
+def _given(args: argparse.Namespace, rows: list[dict[str, Any]]) -> dict[str, Any]:
+    """The options of a table that were given on the command line."""
+    options = {row["name"]: getattr(args, row["name"]) for row in rows}
+    return {k: v for k, v in options.items() if v is not None}
+
+
+def _output_format(args: argparse.Namespace) -> str:
+    """OUT's format, and the --stats folder checked, before any work."""
     fmt = _io.format_of(args.output, args.output_format)
     if args.stats and not Path(args.stats).resolve().parent.is_dir():
         raise _io.MeshFileError(f"{args.stats}: the folder does not exist")
-    tets = _io.read_tets(args.input, args.input_format)
+    return fmt
+
+
+def _progress_printer(args: argparse.Namespace) -> ProgressPrinter | None:
     show = args.progress if args.progress is not None else sys.stderr.isatty()
-    printer = ProgressPrinter(sys.stderr, sys.stderr.isatty()) if show else None
+    return ProgressPrinter(sys.stderr, sys.stderr.isatty()) if show else None
+
+
+def _write_output(
+    args: argparse.Namespace, fmt: str, mesh: _api.MixedMesh, stats: dict[str, Any], **to_meshio: Any
+) -> None:
+    """Writes OUT (atomically) and the --stats file."""
+    out_mesh = _io.to_meshio(mesh, fmt, collapse_pyramids=args.collapse_pyramids, **to_meshio)
+    kwargs: dict[str, Any] = {}
+    if args.ascii and fmt in ("gmsh", "gmsh22", "vtu", "vtk"):
+        kwargs["binary"] = False
+    _io.write_atomic(args.output, out_mesh, fmt, **kwargs)
+    if args.stats:
+        Path(args.stats).write_text(json.dumps(_jsonable(stats), indent=2) + "\n")
+
+
+def cmd_recombine(args: argparse.Namespace) -> int:
+    options = _given(args, _api.parameters())
+    fmt = _output_format(args)
+    tets = _io.read_tets(args.input, args.input_format)
+    printer = _progress_printer(args)
     start = time.perf_counter()
     try:
         mesh, report = _api.recombine(tets.points, tets.cells, tets.regions, progress=printer, **options)
@@ -186,32 +283,80 @@ def cmd_recombine(args: argparse.Namespace) -> int:
         if printer:
             printer.close()
     seconds = time.perf_counter() - start
-    out_mesh = _io.to_meshio(
-        mesh,
-        fmt,
-        region_key=tets.region_key,
-        region_names=tets.region_names,
-        collapse_pyramids=args.collapse_pyramids,
-    )
-    kwargs: dict[str, Any] = {}
-    if args.ascii and fmt in ("gmsh", "gmsh22", "vtu", "vtk"):
-        kwargs["binary"] = False
-    _io.write_atomic(args.output, out_mesh, fmt, **kwargs)
-    if args.stats:
-        stats = {
-            "input": str(args.input),
-            "output": str(args.output),
-            "order": mesh.order,
-            "options": options,
-            "wall_seconds": seconds,
-            "report": report,
-        }
-        Path(args.stats).write_text(json.dumps(_jsonable(stats), indent=2) + "\n")
+    stats = {
+        "input": str(args.input),
+        "output": str(args.output),
+        "order": mesh.order,
+        "options": options,
+        "wall_seconds": seconds,
+        "report": report,
+    }
+    _write_output(args, fmt, mesh, stats, region_key=tets.region_key, region_names=tets.region_names)
     if not args.quiet:
         print(_summary(args.input, report, args.output))
         if tets.ignored:
             left = ", ".join(f"{n} {name}" for name, n in tets.ignored.items())
             print(f"note: left out the input's lower-dimensional cells ({left})", file=sys.stderr)
+    return EXIT_OK
+
+
+def _mesh_summary(args: argparse.Namespace, mesh: _api.MixedMesh, report: dict[str, Any], seconds: float) -> str:
+    meshing = report["meshing"]
+    head = (
+        f"{args.shape}: h {args.size:g}: {meshing['tets']} tets, max boundary distance "
+        f"{meshing['max_boundary_distance']:.2g}"
+    )
+    if "output_counts" not in report:
+        return f"{head}; {seconds:.2f} s -> {args.output}"
+    counts = ", ".join(f"{n} {name}" for name, n in report["output_counts"].items() if n)
+    mins = [v for k, v in report["min_scaled_jacobian"].items() if report["output_counts"].get(k)]
+    return (
+        f"{head} -> {report['output_cells']} cells ({counts}); hex volume "
+        f"{100 * report['volume_fraction'].get('hex', 0.0):.1f} %, reduction "
+        f"{report['element_reduction_percent']:.1f} %, {report['nonconforming_quads']} "
+        f"non-conforming quads, min scaled Jacobian {min(mins):.3f}; {seconds:.2f} s -> {args.output}"
+    )
+
+
+def cmd_mesh(args: argparse.Namespace) -> int:
+    mesher = _given(args, _shape.mesh_parameters())
+    options = _given(args, _api.parameters())
+    if args.tets_only and options:
+        raise UsageError(
+            "--tets-only writes the tets without merging them: leave out the engine options "
+            f"({', '.join(option_name(n) for n in options)})"
+        )
+    fmt = _output_format(args)
+    printer = _progress_printer(args)
+    start = time.perf_counter()
+    try:
+        mesh, report = _shape.mesh_shape(
+            args.shape, args.size, tetgen=args.tetgen, work_directory=args.work_directory,
+            second_order=args.second_order, recombine=not args.tets_only, progress=printer,
+            **mesher, **options,
+        )
+    finally:
+        if printer:
+            printer.close()
+    seconds = time.perf_counter() - start
+    stats = {
+        "input": str(args.shape),
+        "output": str(args.output),
+        "order": mesh.order,
+        "size": args.size,
+        "mesh_options": mesher,
+        "options": options,
+        "wall_seconds": seconds,
+        "report": report,
+    }
+    # Regions are solid indices from 0; files get solid numbers from 1 (Gmsh physical tags
+    # must be positive), named Solid1, Solid2... in Abaqus element sets.
+    if mesh.regions is not None:
+        mesh.regions = mesh.regions + 1
+    names = {int(r): f"Solid{int(r)}" for r in np.unique(mesh.regions)} if mesh.regions is not None else {}
+    _write_output(args, fmt, mesh, stats, region_key="region", region_names=names)
+    if not args.quiet:
+        print(_mesh_summary(args, mesh, report, seconds))
     return EXIT_OK
 
 
@@ -262,19 +407,25 @@ def cmd_check(args: argparse.Namespace) -> int:
 
 
 def cmd_parameters(args: argparse.Namespace) -> int:
-    rows = _api.parameters()
+    rows = _shape.mesh_parameters() if args.mesh else _api.parameters()
     if args.json:
         print(json.dumps(_jsonable(rows), indent=2))
         return EXIT_OK
     for row in rows:
-        print(f"{option_name(row['name'])}: {_help(row).replace('%%', '%')}")
+        flag = MESH_OPTION_NAMES.get(row["name"], option_name(row["name"])) if args.mesh else option_name(row["name"])
+        print(f"{flag}: {_help(row).replace('%%', '%')}")
     return EXIT_OK
 
 
 def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
-    command = {"recombine": cmd_recombine, "check": cmd_check, "parameters": cmd_parameters}[args.command]
+    command = {
+        "recombine": cmd_recombine,
+        "mesh": cmd_mesh,
+        "check": cmd_check,
+        "parameters": cmd_parameters,
+    }[args.command]
     try:
         return command(args)
     except KeyboardInterrupt:
@@ -283,10 +434,16 @@ def main(argv: Sequence[str] | None = None) -> int:
     except BrokenPipeError:  # stdout closed early (`hexmerge check --json | head`)
         sys.stderr.close()
         return EXIT_OK
+    except UsageError as e:
+        print(f"hexmerge {args.command}: error: {e}", file=sys.stderr)
+        return EXIT_USAGE
     except _core.Cancelled:
         print("hexmerge: cancelled; nothing written", file=sys.stderr)
         return EXIT_ERROR
     except (ValueError, OSError) as e:  # InputError and MeshFileError are ValueErrors
-        where = f"{args.input}: " if args.command == "recombine" and isinstance(e, _core.InputError) else ""
+        where = ""
+        if isinstance(e, _core.InputError) and args.command in ("recombine", "mesh"):
+            source = str(args.input if args.command == "recombine" else args.shape)
+            where = "" if source in str(e) else f"{source}: "
         print(f"hexmerge: error: {where}{e}", file=sys.stderr)
         return EXIT_ERROR

@@ -1,0 +1,363 @@
+"""hexmerge.mesh_shape() and `hexmerge mesh`: CAD shape -> lattice-seeded tets -> hex-dominant.
+
+Shapes: bench/geometry's box, cylinder and bracket as BREP files made by Gmsh's OpenCASCADE
+kernel, and the solid of FreeCAD's FEM example material_nl_platewithhole
+(resources/examples). Every output goes through the independent checker against the tet mesh
+it came from. The hex-volume floors sit a little below what was measured when they were set
+(the measured values are in the comments); they guard the mesher and engine together.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+import shutil
+import subprocess
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import hexmerge
+from hexmerge import _core, cli
+from conftest import ROOT
+from meshes import EDGES
+
+pytestmark = pytest.mark.skipif(
+    not hexmerge.WITH_OPENCASCADE or not hasattr(_core, "mesh_shape"),
+    reason="hexmerge built without OpenCASCADE",
+)
+needs_tetgen = pytest.mark.skipif(shutil.which("tetgen") is None, reason="tetgen is not installed")
+
+GEOMETRY = ROOT / "bench" / "geometry"
+PLATE = ROOT / "resources" / "examples" / "material_nl_platewithhole.brep"
+
+# Gmsh .geo texts for the bad shapes: one face; a solid whose shell lacks a face.
+FACE_GEO = 'SetFactory("OpenCASCADE");\nRectangle(1) = {0, 0, 0, 10, 10};\n'
+OPEN_SOLID_GEO = """SetFactory("OpenCASCADE");
+Box(1) = {0, 0, 0, 10, 10, 10};
+Delete { Volume{1}; }
+Surface Loop(10) = {1, 2, 3, 4, 5};
+Volume(2) = {10};
+Delete { Surface{6}; }
+"""
+
+
+def gmsh_brep(folder: Path, name: str, geo: Path | str) -> Path:
+    """A .geo (file or text) written out as BREP by Gmsh's OpenCASCADE kernel (gmsh -0)."""
+    if shutil.which("gmsh") is None:
+        pytest.skip("gmsh is not installed")
+    if isinstance(geo, str):
+        path = folder / f"{name}.geo"
+        path.write_text(geo)
+        geo = path
+    out = folder / f"{name}.brep"
+    subprocess.run(["gmsh", "-0", str(geo), "-o", str(out)], check=True, capture_output=True)
+    return out
+
+
+@pytest.fixture(scope="module")
+def shapes(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
+    folder = tmp_path_factory.mktemp("shapes")
+    out = {name: gmsh_brep(folder, name, GEOMETRY / f"{name}.geo") for name in ("box", "cylinder", "bracket")}
+    out["face"] = gmsh_brep(folder, "face", FACE_GEO)
+    out["open_solid"] = gmsh_brep(folder, "open_solid", OPEN_SOLID_GEO)
+    out["plate"] = PLATE
+    return out
+
+
+def assert_checked(mesh: hexmerge.MixedMesh, tets: hexmerge.MixedMesh, report: dict, h: float) -> dict:
+    """The checker's verdict on `mesh` against the tet mesh `tets`, and the mesher's accuracy."""
+    cells = tets.cell_vertices.reshape(-1, 4)
+    result = hexmerge.check(mesh, tets.points, cells, tets.regions)
+    assert result["valid"], result["problems"]
+    assert result["nonconforming_quads"] == 0
+    assert result["cracks"] == 0
+    assert result["inverted_cells"] == 0
+    assert result["moved_nodes"] == 0 and result["unused_input_nodes"] == 0
+    # Same nodes as the tets; boundary quads folding less than 1 degree (the engine's default
+    # min_boundary_dihedral_angle = 179) may shave a curved boundary a little.
+    assert abs(result["relative_volume_difference"]) < 1e-4
+    assert report["input_tets"] == len(cells)
+    return result
+
+
+def boundary_nodes(tets: hexmerge.MixedMesh) -> np.ndarray:
+    """Coordinates of the nodes on the tet mesh's boundary (faces of one tet)."""
+    t = tets.cell_vertices.reshape(-1, 4).astype(np.int64)
+    faces = np.sort(np.concatenate([t[:, [1, 2, 3]], t[:, [0, 3, 2]], t[:, [0, 1, 3]], t[:, [0, 2, 1]]]), axis=1)
+    unique, count = np.unique(faces, axis=0, return_counts=True)
+    return tets.points[np.unique(unique[count == 1])]
+
+
+# The surfaces of each shape, as distance functions (bench/geometry, resources/examples).
+SURFACES = {
+    "box": lambda p: np.minimum.reduce([np.abs(p[:, 0]), np.abs(p[:, 0] - 100), np.abs(p[:, 1]),
+                                        np.abs(p[:, 1] - 40), np.abs(p[:, 2]), np.abs(p[:, 2] - 30)]),
+    "cylinder": lambda p: np.minimum.reduce([np.abs(np.hypot(p[:, 0], p[:, 1]) - 20), np.abs(p[:, 2]),
+                                             np.abs(p[:, 2] - 100)]),
+    "bracket": lambda p: np.minimum.reduce([np.abs(p[:, 0]), np.abs(p[:, 0] - 80), np.abs(p[:, 0] - 10),
+                                            np.abs(p[:, 1]), np.abs(p[:, 1] - 40), np.abs(p[:, 2]),
+                                            np.abs(p[:, 2] - 10), np.abs(p[:, 2] - 60),
+                                            np.abs(np.hypot(p[:, 0] - 50, p[:, 1] - 20) - 8)]),
+    "plate": lambda p: np.minimum.reduce([np.abs(np.abs(p[:, 0]) - 200), np.abs(np.abs(p[:, 1]) - 100),
+                                          np.abs(p[:, 2]), np.abs(p[:, 2] - 10),
+                                          np.abs(np.hypot(p[:, 0], p[:, 1]) - 50)]),
+}
+
+
+# (shape, h, hex volume floor). Measured when set (this commit's mesher and engine):
+# box h 10: 1.000 hex volume; cylinder h 8: 0.051; bracket h 4: 0.848; plate h 10: 0.173.
+CASES = [("box", 10.0, 0.99), ("cylinder", 8.0, 0.04), ("bracket", 4.0, 0.75), ("plate", 10.0, 0.14)]
+
+
+@needs_tetgen
+@pytest.mark.parametrize(("name", "h", "floor"), CASES, ids=[c[0] for c in CASES])
+def test_shapes_recombine_and_check(shapes, name: str, h: float, floor: float) -> None:
+    tets, tet_report = hexmerge.mesh_shape(shapes[name], h, recombine=False)
+    assert tets.counts()["tetra"] == tets.nb_cells == tet_report["meshing"]["tets"]
+    assert len(tets.cell_vertices) // 4 <= 30000  # keeps the suite fast
+    assert np.array_equal(np.unique(tets.regions), [0])  # one solid
+    hexmerge.validate(tets.points, tets.cell_vertices.reshape(-1, 4), tets.regions)
+
+    mesh, report = hexmerge.mesh_shape(shapes[name], h)
+    assert_checked(mesh, tets, report, h)
+    hex_volume = report["volume_fraction"]["hex"]
+    print(f"{name} h {h}: {report['input_tets']} tets, hex volume {hex_volume:.3f}, reduction "
+          f"{report['element_reduction_percent']:.1f} %, meshing {report['meshing']['seconds']:.2f} s, "
+          f"engine {sum(report['phase_seconds'].values()):.2f} s")
+    assert hex_volume >= floor
+    assert report["element_reduction_percent"] > 0
+    # The mesher's report rides along with the engine's.
+    meshing = report["meshing"]
+    assert meshing["tets"] == report["input_tets"]
+    assert meshing["parameters"]["size"] == h and meshing["nb_solids"] == 1
+    assert np.allclose(np.abs(np.linalg.det(np.array(meshing["frame"]))), 1.0)
+
+
+# The mesher's own max_boundary_distance reports 10.0 (the plate's thickness) on the plate,
+# whose boundary nodes all lie on its surfaces (test_boundary_nodes_on_the_surfaces): a bug of
+# the report in src/occ, to be fixed there (then this xfail fails, and goes).
+REPORT_BUG = pytest.mark.xfail(strict=True, reason="mesh_shape's max_boundary_distance is 10.0 on the plate")
+
+
+@needs_tetgen
+@pytest.mark.parametrize(
+    ("name", "h"),
+    [pytest.param(name, h, marks=REPORT_BUG if name == "plate" else ()) for name, h, _ in CASES],
+    ids=[c[0] for c in CASES],
+)
+def test_reported_boundary_distance(shapes, name: str, h: float) -> None:
+    _, report = hexmerge.mesh_shape(shapes[name], h, recombine=False)
+    assert report["meshing"]["max_boundary_distance"] <= 1e-3 * h
+
+
+@needs_tetgen
+@pytest.mark.parametrize(("name", "h"), [(name, h) for name, h, _ in CASES], ids=[c[0] for c in CASES])
+def test_boundary_nodes_on_the_surfaces(shapes, name: str, h: float) -> None:
+    tets, _ = hexmerge.mesh_shape(shapes[name], h, recombine=False)
+    assert SURFACES[name](boundary_nodes(tets)).max() <= 1e-3 * h
+
+
+@needs_tetgen
+def test_box_is_all_hexahedra(shapes) -> None:
+    mesh, report = hexmerge.mesh_shape(shapes["box"], 10.0)
+    # 100 x 40 x 30 mm at h = 10: a 10 x 4 x 3 lattice, every cell one hexahedron.
+    assert report["output_counts"] == {"tet": 0, "pyramid": 0, "prism": 0, "hex": 120}
+    assert report["volume_fraction"]["hex"] >= 0.99
+
+
+@needs_tetgen
+def test_shape_as_text_bytes_and_paths(shapes) -> None:
+    path = shapes["box"]
+    text = path.read_text()
+    runs = [hexmerge.mesh_shape(s, 10.0, recombine=False)[0] for s in (text, text.encode(), path, str(path))]
+    for mesh in runs[1:]:
+        assert np.array_equal(mesh.points, runs[0].points)
+        assert np.array_equal(mesh.cell_vertices, runs[0].cell_vertices)
+    assert _core.read_shape_file(str(path)).startswith("DBRep_DrawableShape")
+
+
+@needs_tetgen
+def test_second_order(shapes) -> None:
+    h = 8.0
+    tets10, _ = hexmerge.mesh_shape(shapes["bracket"], h, recombine=False, second_order=True)
+    assert tets10.order == 2 and [b.type for b in tets10] == ["tetra10"]
+    cells10 = tets10.cells("tetra10")
+    mesh, report = hexmerge.mesh_shape(shapes["bracket"], h, second_order=True)
+    assert mesh.order == 2
+    assert {b.type for b in mesh} <= {"tetra10", "pyramid13", "wedge15", "hexahedron20"}
+    assert "hexahedron20" in {b.type for b in mesh}
+    # Straight edges: every mid-edge node is the midpoint of its edge (VTK order).
+    for m in (mesh, tets10):
+        for block in m:
+            n = block.data.shape[1] - len(EDGES[block.type])
+            for k, (a, b) in enumerate(EDGES[block.type]):
+                ends = 0.5 * (m.points[block.data[:, a]] + m.points[block.data[:, b]])
+                assert np.allclose(m.points[block.data[:, n + k]], ends, atol=1e-12)
+    # One node per edge, shared by the tets around it.
+    corners = len(np.unique(cells10[:, :4]))
+    edges = {tuple(sorted(e)) for t in cells10[:, :4] for e in t[[[0, 1], [1, 2], [2, 0], [0, 3], [1, 3], [2, 3]]]}
+    assert tets10.nb_points == corners + len(edges)
+    result = hexmerge.check(mesh, tets10.points, cells10, tets10.regions)
+    assert result["valid"], result["problems"]
+    assert result["nonconforming_quads"] == 0 and result["cracks"] == 0
+    linear, _ = hexmerge.mesh_shape(shapes["bracket"], h)
+    assert report["output_counts"] == linear_counts(linear)
+
+
+def linear_counts(mesh: hexmerge.MixedMesh) -> dict[str, int]:
+    names = {"tetra": "tet", "pyramid": "pyramid", "wedge": "prism", "hexahedron": "hex"}
+    return {names[k]: v for k, v in mesh.counts().items()}
+
+
+@needs_tetgen
+def test_engine_options_and_progress(shapes) -> None:
+    phases = []
+    mesh, report = hexmerge.mesh_shape(
+        shapes["bracket"], 8.0, boundary_layers=0, frame="global", make_pyramids=False,
+        progress=lambda phase, fraction: phases.append((phase, fraction)),
+    )
+    assert report["output_counts"]["pyramid"] == 0
+    assert report["meshing"]["nb_layer_points"] == 0
+    assert report["meshing"]["parameters"]["frame"] == "global"
+    assert phases[0] == ("mesh shape", 0.0) and ("mesh shape", 1.0) in phases
+    with pytest.raises(hexmerge.Cancelled):
+        hexmerge.mesh_shape(shapes["box"], 10.0, progress=lambda phase, fraction: False)
+
+
+def test_mesh_parameters_are_the_compiled_defaults() -> None:
+    doc = _core.mesh_shape.__doc__.splitlines()[0]
+    defaults = dict(re.findall(r"(\w+): \w+ = ('[^']*'|[-\d.e]+)", doc))
+    for row in hexmerge.mesh_parameters():
+        compiled = defaults[row["name"]]
+        assert (compiled.strip("'") if row["type"] == "choice" else float(compiled)) == row["default"], row["name"]
+    assert [r["name"] for r in hexmerge.mesh_parameters()] == [
+        "boundary_layers", "layer_thickness", "lattice_margin", "surface_deflection", "frame"]
+
+
+@pytest.mark.parametrize(
+    ("shape", "kwargs", "message"),
+    [
+        ("open_solid", {"size": 2.0}, "not closed.*open shell"),
+        ("face", {"size": 2.0}, "holds no solid"),
+        ("box", {"size": 0.0}, "size must be a positive length"),
+        ("box", {"size": -1.0}, "size must be a positive length"),
+        ("box", {"size": 500.0}, "larger than the shape"),
+        ("box", {"size": "ten"}, "size must be a number"),
+        ("box", {"size": 10.0, "tetgen": "/nonexistent/tetgen"}, "TetGen.*/nonexistent/tetgen.*not found"),
+        ("box", {"size": 10.0, "boundary_layers": 7}, "boundary_layers must be in"),
+        ("box", {"size": 10.0, "boundary_layers": 1.5}, "boundary_layers must be a whole number"),
+        ("box", {"size": 10.0, "frame": "diagonal"}, "frame must be one of"),
+        ("box", {"size": 10.0, "layer_thickness": 5.0}, "layer_thickness"),
+        ("missing", {"size": 10.0}, "no such file"),
+        ("not brep", {"size": 10.0}, "file name must end in"),
+        ("garbage", {"size": 10.0}, "neither BREP text"),
+    ],
+)
+def test_bad_input(shapes, tmp_path, shape, kwargs, message) -> None:
+    if shape == "missing":
+        shape = tmp_path / "missing.step"
+    elif shape == "not brep":
+        shape = tmp_path / "part.txt"
+        shape.write_text("hello")
+    elif shape == "garbage":
+        shape = "not\na shape"
+    else:
+        shape = shapes[shape]
+    with pytest.raises(hexmerge.InputError, match=message):
+        hexmerge.mesh_shape(shape, **kwargs)
+
+
+def test_bad_flags(shapes) -> None:
+    with pytest.raises(ValueError, match="unknown option 'no_such_option'"):
+        hexmerge.mesh_shape(shapes["box"], 10.0, no_such_option=1)
+    with pytest.raises(ValueError, match="need recombine=True"):
+        hexmerge.mesh_shape(shapes["box"], 10.0, recombine=False, min_dihedral_angle=140)
+    with pytest.raises(ValueError, match="second_order must be True or False"):
+        hexmerge.mesh_shape(shapes["box"], 10.0, second_order="yes")
+
+
+# ---- the command line -------------------------------------------------------------------------
+
+meshio = pytest.importorskip("meshio")
+
+
+def main(argv: list[str]) -> int:
+    """cli.main's exit code, argparse's own errors (SystemExit) included."""
+    try:
+        return cli.main(argv)
+    except SystemExit as e:
+        return int(e.code)
+
+
+@needs_tetgen
+def test_cli_mesh(shapes, tmp_path, capsys) -> None:
+    out, tets, stats = tmp_path / "bracket.msh", tmp_path / "bracket-tets.vtu", tmp_path / "r.json"
+    assert cli.main(["mesh", str(shapes["bracket"]), "-h", "4", "-o", str(out), "--stats", str(stats)]) == 0
+    line = capsys.readouterr().out
+    for text in ("tets", "hex volume", "reduction", "non-conforming quads",
+                 "min scaled Jacobian", "max boundary distance", " s -> "):
+        assert text in line, line
+    report = json.loads(stats.read_text())
+    assert report["size"] == 4.0 and report["report"]["meshing"]["tets"] == report["report"]["input_tets"]
+    assert cli.main(["mesh", str(shapes["bracket"]), "-h", "4", "-o", str(tets), "--tets-only"]) == 0
+    capsys.readouterr()
+    # The independent checker on the files: the mixed mesh against the tets.
+    assert cli.main(["check", str(out), "--source", str(tets)]) == cli.EXIT_OK
+    assert "valid" in capsys.readouterr().out
+    written = meshio.read(out)
+    assert {c.type for c in written.cells} <= {"tetra", "pyramid", "wedge", "hexahedron"}
+    assert (np.concatenate(written.cell_data["gmsh:physical"]) == 1).all()  # solid 1
+
+
+@needs_tetgen
+def test_cli_mesh_options(shapes, tmp_path, capsys) -> None:
+    out, stats = tmp_path / "plate.vtu", tmp_path / "r.json"
+    args = ["mesh", str(shapes["plate"]), "-h", "10", "-o", str(out), "--second-order", "--layers", "0",
+            "--frame", "global", "--min-scaled-jacobian", "0.2", "--stats",
+            str(stats), "-q"]
+    assert cli.main(args) == 0
+    assert capsys.readouterr().out == ""
+    report = json.loads(stats.read_text())
+    assert report["mesh_options"] == {"boundary_layers": 0, "frame": "global"}
+    assert report["options"] == {"min_scaled_jacobian": 0.2}
+    assert report["order"] == 2
+    types = {c.type for c in meshio.read(out).cells}
+    assert types <= {"tetra10", "pyramid13", "wedge15", "hexahedron20"} and "hexahedron20" in types
+
+
+@pytest.mark.parametrize(
+    ("args", "code", "message"),
+    [
+        (["-h", "0"], cli.EXIT_USAGE, "the size must be a positive length"),
+        (["-h", "ten"], cli.EXIT_USAGE, "not a number"),
+        (["-h", "4", "--tets-only", "--min-dihedral-angle", "140"], cli.EXIT_USAGE, "--tets-only"),
+        (["-h", "500"], cli.EXIT_ERROR, "larger than the shape"),
+        (["-h", "4", "--tetgen", "/nonexistent/tetgen"], cli.EXIT_ERROR, "not found"),
+        (["-h", "4", "--layers", "9"], cli.EXIT_ERROR, "boundary_layers must be in"),
+    ],
+)
+def test_cli_mesh_errors(shapes, tmp_path, capsys, args, code, message) -> None:
+    out = tmp_path / "out.msh"
+    assert main(["mesh", str(shapes["bracket"]), "-o", str(out), *args]) == code
+    err = capsys.readouterr().err
+    assert message in err and err.strip().splitlines()[-1].startswith("hexmerge")
+    assert not out.exists()
+
+
+@pytest.mark.parametrize(("shape", "message"), [("open_solid", "open shell"), ("face", "holds no solid")])
+def test_cli_mesh_bad_shapes(shapes, tmp_path, capsys, shape, message) -> None:
+    out = tmp_path / "out.msh"
+    assert main(["mesh", str(shapes[shape]), "-h", "2", "-o", str(out)]) == cli.EXIT_ERROR
+    err = capsys.readouterr().err
+    assert len(err.strip().splitlines()) == 1 and message in err and str(shapes[shape]) in err
+    assert not out.exists()
+
+
+def test_cli_parameters_mesh(capsys) -> None:
+    assert cli.main(["parameters", "--mesh", "--json"]) == 0
+    rows = json.loads(capsys.readouterr().out)
+    assert [r["name"] for r in rows] == [r["name"] for r in hexmerge.mesh_parameters()]
+    assert cli.main(["parameters", "--mesh"]) == 0
+    assert "--layers:" in capsys.readouterr().out
