@@ -4,6 +4,7 @@
 Macro API:
     import freecad.hexmerge as hm
     obj = hm.make_hexdominant_mesh(doc, doc.FEMMeshGmsh, min_scaled_jacobian=0.4)
+    obj = hm.make_hexdominant_mesh(doc, doc.Box, target_size=250, analysis=doc.Analysis)
     femmesh, report = hm.recombine_femmesh(doc.FEMMeshGmsh.FemMesh)
 """
 
@@ -12,18 +13,24 @@ __version__ = "0.1.0"
 __all__ = ["make_hexdominant_mesh", "recombine_femmesh", "__version__"]
 
 
-def make_hexdominant_mesh(doc, source, name="HexDominantMesh", **options):
+def make_hexdominant_mesh(doc, source, name="HexDominantMesh", analysis=None, **options):
     """Adds a hex-dominant mesh object linked to `source`, recomputes it and returns it.
 
+    source: a tetrahedral FEM mesh object (recombined), or a solid -- a Part feature or any
+    object with a solid Shape -- meshed with HexMerge's mesher (hexmerge.mesh_shape) at
+    target_size, then recombined.
     options: engine parameters by name (min_dihedral_angle=150, conformity="conforming", ...;
-    see hexmerge.parameters()) or property name, and pyramids_as_hexahedra (default True).
-    If the source is a member of an analysis, the new object takes its place there (an analysis
-    solves exactly one mesh); the source itself is never modified. Raises ValueError (nothing
-    created) when the source is not a non-empty tetrahedral FEM mesh, RuntimeError when the
-    engine fails.
+    see hexmerge.parameters()) or property name, pyramids_as_hexahedra (default True); for a
+    shape also target_size (default: a quarter of the shape's thinnest side), second_order
+    (default True) and the mesher's options (boundary_layers=1, ...; hexmerge.mesh_parameters()).
+    If a source mesh is a member of an analysis, the new object takes its place there (an
+    analysis solves exactly one mesh); a shape's mesh replaces the meshes of `analysis`, if
+    given. The source itself is never modified. Raises ValueError (nothing created) when the
+    source is neither a non-empty tetrahedral FEM mesh nor a solid, RuntimeError when the
+    mesher or engine fails.
     """
     from .makers import make_hexdominant_mesh as make
-    return make(doc, source, name, **options)
+    return make(doc, source, name, analysis=analysis, **options)
 
 
 def recombine_femmesh(femmesh, **options):

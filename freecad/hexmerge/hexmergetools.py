@@ -59,6 +59,13 @@ def parameter_table():
     return rows
 
 
+def mesh_parameter_table():
+    """The mesher's options (hexmerge.mesh_parameters()), in parameter_table()'s row format."""
+    return [{k: r.get(k) for k in ("name", "type", "default", "unit", "min", "max", "choices",
+                                   "label", "doc")}
+            for r in engine().mesh_parameters()]
+
+
 def engine_options(options):
     """Keeps the options the engine knows, with their table types; rejects unknown names."""
     table = {r["name"]: r for r in parameter_table()}
@@ -146,6 +153,84 @@ class RecombineJob:
             "input_cells": self.cell_name,
             "regions": (self.regions.source if self.regions is not None else "none"),
             "region_count": (self.regions.count if self.regions is not None else 0),
+            "material_groups": sorted((names or {}).values()),
+            "pyramids_as_collapsed_hexahedra": bool(self.pyramids_as_hexahedra),
+            "femmesh_volumes": femmesh.VolumeCount,
+            "seconds": self.seconds,
+        }
+        return femmesh, report
+
+
+class ShapeJob:
+    """Meshing of a solid shape with hexmerge.mesh_shape() and recombination, in the same three
+    steps as RecombineJob (prepare on FreeCAD's thread, run on any, finish on FreeCAD's)."""
+
+    def __init__(self, brep, nb_solids, mesher, options, material_names, pyramids_as_hexahedra):
+        self.brep = brep
+        self.nb_solids = nb_solids
+        self.mesher = mesher
+        self.options = options
+        self.material_names = material_names
+        self.pyramids_as_hexahedra = pyramids_as_hexahedra
+        self.result = None
+        self.seconds = {}
+
+    @classmethod
+    def prepare(cls, shape, mesher, options=None, material_names=None, pyramids_as_hexahedra=True):
+        """shape: a Part shape with at least one solid; mesher: {size, boundary_layers, ...,
+        second_order} (mesh_shape()'s keywords); options: engine parameters.
+        Raises ValueError with a message for the user."""
+        solids = list(getattr(shape, "Solids", []) or [])
+        if not solids:
+            raise ValueError("the shape has no solid: HexMerge meshes closed solids")
+        size = float(mesher.get("size") or 0.0)
+        if size <= 0:
+            raise ValueError("set the target size (TargetSize) to a positive length")
+        t = time.perf_counter()
+        brep = shape.exportBrepToString()
+        job = cls(brep, len(solids), dict(mesher, size=size), engine_options(options or {}),
+                  dict(material_names or {}), pyramids_as_hexahedra)
+        job.seconds = {"export shape": time.perf_counter() - t}
+        return job
+
+    def run(self, progress=None):
+        """Meshes and recombines. progress(phase, fraction) -> False cancels (raises Cancelled)."""
+        hexmerge = engine()
+        t = time.perf_counter()
+        kwargs = dict(self.mesher)
+        kwargs.update(self.options)
+        size = kwargs.pop("size")
+        try:
+            self.result = hexmerge.mesh_shape(self.brep, size, progress=progress, **kwargs)
+        except hexmerge.Cancelled as e:
+            raise Cancelled(str(e) or "cancelled") from e
+        self.seconds["mesh and recombine"] = time.perf_counter() - t
+
+    def finish(self):
+        """The new FemMesh and the report (the engine's with the mesher's under "meshing", plus
+        what the add-on did)."""
+        t = time.perf_counter()
+        mesh = self.result[0]
+        blocks, block_regions, _ = result_blocks(self.result)
+        # Regions are the solids (0-based): tets of different solids were never merged. With one
+        # solid there is nothing to tell apart, as for a tet mesh of one solid.
+        names, count = None, 1
+        if self.nb_solids > 1 and block_regions is not None and self.options.get("respect_regions", True):
+            block_regions = [r + 1 for r in block_regions]
+            names = self.material_names
+            count = len(np.unique(mesh.regions))
+        else:
+            block_regions = None
+        femmesh, _ = femmesh_arrays.arrays_to_femmesh(
+            mesh.points, np.arange(1, mesh.nb_points + 1), blocks, block_regions, names,
+            self.pyramids_as_hexahedra)
+        self.seconds["write FemMesh"] = time.perf_counter() - t
+        report = dict(result_report(self.result))
+        report["freecad"] = {
+            "input_cells": "shape",
+            "regions": ("solids of the shape ({} solids, mesher)".format(self.nb_solids)
+                        if block_regions is not None else "none"),
+            "region_count": count if block_regions is not None else 0,
             "material_groups": sorted((names or {}).values()),
             "pyramids_as_collapsed_hexahedra": bool(self.pyramids_as_hexahedra),
             "femmesh_volumes": femmesh.VolumeCount,

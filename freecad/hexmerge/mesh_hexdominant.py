@@ -1,9 +1,12 @@
 # SPDX-License-Identifier: LGPL-2.1-or-later
 """The "hex-dominant mesh" document object (proxy of a Fem::FemMeshObjectPython).
 
-It links a source tetrahedral FEM mesh object; recompute runs the engine on the source's FemMesh
-and stores the result in its own FemMesh property. The source is never modified. Because the link
-is an ordinary App::PropertyLink, a change to the source marks this object for recompute.
+It links a source: a tetrahedral FEM mesh object, whose FemMesh recompute recombines, or a
+solid (a Part feature, any object with a solid Shape), which recompute meshes with HexMerge's
+mesher (hexmerge.mesh_shape: lattice-seeded tets, OpenCASCADE and TetGen) at TargetSize and then
+recombines ("shape mode"). The result goes into the object's own FemMesh property; the source
+is never modified. Because the link is an ordinary App::PropertyLink, a change to the source
+(a new mesh, a new shape) marks this object for recompute.
 """
 
 import json
@@ -53,14 +56,23 @@ class MeshHexDominant:
         store(obj, femmesh, report)
 
 
+def is_shape_source(source):
+    """True for a source meshed from its shape: not a FEM mesh, and a Shape with a solid."""
+    if source is None or source.isDerivedFrom("Fem::FemMeshObject"):
+        return False
+    shape = getattr(source, "Shape", None)
+    return shape is not None and not shape.isNull() and len(shape.Solids) > 0
+
+
 def check_source(obj):
-    """The source mesh object, or a ValueError with a message for the user."""
+    """The source object (FEM mesh or solid shape), or a ValueError with a message for the user."""
     source = obj.SourceMesh
     if source is None:
         raise ValueError("{}: no source mesh (it was deleted or never set); set SourceMesh to a "
-                         "tetrahedral FEM mesh object".format(obj.Label))
-    if not source.isDerivedFrom("Fem::FemMeshObject"):
-        raise ValueError("{}: the source {} is not a FEM mesh object".format(obj.Label, source.Label))
+                         "tetrahedral FEM mesh object or a solid".format(obj.Label))
+    if not source.isDerivedFrom("Fem::FemMeshObject") and not is_shape_source(source):
+        raise ValueError("{}: the source {} is not a FEM mesh object, and its shape has no solid"
+                         .format(obj.Label, source.Label))
     return source
 
 
@@ -81,9 +93,15 @@ def containing_analysis(obj):
 
 
 def prepare(obj):
-    """A RecombineJob for the object's current source and properties (FreeCAD thread)."""
+    """A RecombineJob (or a ShapeJob for a shape source) for the object's current source and
+    properties (FreeCAD thread)."""
     source = check_source(obj)
     analysis = containing_analysis(obj) or containing_analysis(source)
+    if is_shape_source(source):
+        return hexmergetools.ShapeJob.prepare(
+            source.Shape, properties.mesher_options(obj), properties.engine_options(obj),
+            material_names=regions_mod.material_solids(analysis, source),
+            pyramids_as_hexahedra=obj.PyramidsAsHexahedra)
     part = source_shape(source)
     options = properties.engine_options(obj)
     regions = "auto" if options.get("respect_regions", True) else "none"
@@ -117,6 +135,9 @@ def summary(report):
         parts = ["{} {}".format(v, k) for k, v in counts.items() if v]
     red = report.get("element_reduction_percent")
     text = "{} tets -> {}".format(before, ", ".join(parts)) if before is not None else ", ".join(parts)
+    meshing = report.get("meshing")
+    if meshing:
+        text = "shape at h {:g}: ".format(meshing["parameters"]["size"]) + text
     if red is not None:
         text += " ({:.1f} % fewer elements)".format(red)
     return text

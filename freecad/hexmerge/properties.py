@@ -6,6 +6,9 @@ tooltip the table's doc (with the unit and range), its type from the table's typ
 float with unit "deg" -> App::PropertyAngle, other float -> App::PropertyFloatConstraint,
 int -> App::PropertyIntegerConstraint, bool -> App::PropertyBool, choice ->
 App::PropertyEnumeration. A parameter added to the engine appears here with no change.
+
+The mesher's options (hexmerge.mesh_parameters(): used when the source is a shape) are built
+the same way into the group "Shape meshing", with the target size (a length) and SecondOrder.
 """
 
 from . import hexmergetools
@@ -60,6 +63,8 @@ class PropertySpec:
         v = getattr(obj, self.name)
         if self.kind == "App::PropertyAngle":
             return float(v.getValueAs("deg")) if hasattr(v, "getValueAs") else float(v)
+        if self.kind == "App::PropertyLength":  # in the document's length unit, mm
+            return float(v.Value) if hasattr(v, "Value") else float(v)
         return v
 
 
@@ -113,19 +118,50 @@ def engine_specs():
     return specs
 
 
+SHAPE_GROUP = "Shape meshing"
+# Property names of mesher options where camel(name) would be unclear on a mesh object.
+MESHER_NAMES = {"frame": "LatticeFrame"}
+
+
+def mesher_specs():
+    """The target size, the mesher's table (hexmerge.mesh_parameters()) and SecondOrder: the
+    options of the shape mode."""
+    specs = [PropertySpec("App::PropertyLength", "TargetSize", SHAPE_GROUP,
+                          "Target element size h when the source is a shape: the lattice spacing "
+                          "and the surface's longest edge (must be smaller than the shape)", 0.0,
+                          "size")]
+    for row in hexmergetools.mesh_parameter_table():
+        kind = {"float": "App::PropertyFloatConstraint", "int": "App::PropertyIntegerConstraint",
+                "bool": "App::PropertyBool", "choice": "App::PropertyEnumeration"}[row["type"]]
+        specs.append(PropertySpec(kind, MESHER_NAMES.get(row["name"], camel(row["name"])),
+                                  SHAPE_GROUP, _doc(row), _default(row), row["name"], row))
+    specs.append(PropertySpec("App::PropertyBool", "SecondOrder", SHAPE_GROUP,
+                              "When the source is a shape: quadratic elements (a node at the "
+                              "midpoint of every tet edge, so hexahedra become Hexa20)", True,
+                              "second_order"))
+    return specs
+
+
 def addon_specs():
     return [
         PropertySpec("App::PropertyLink", "SourceMesh", "Source",
-                     "The tetrahedral FEM mesh object to recombine (never modified)", None),
+                     "The tetrahedral FEM mesh object to recombine, or a solid (Part feature or "
+                     "any object with a solid Shape) to mesh with HexMerge's mesher and "
+                     "recombine (never modified)", None),
         PropertySpec("App::PropertyBool", "PyramidsAsHexahedra", "CalculiX",
                      hexmergetools.PYRAMIDS_AS_HEXAHEDRA_DOC, True),
     ]
 
 
 def all_specs():
-    return addon_specs() + engine_specs()
+    return addon_specs() + mesher_specs() + engine_specs()
 
 
 def engine_options(obj):
     """{engine parameter: value} from an object's properties (properties it lacks are skipped)."""
     return {s.parameter: s.value(obj) for s in engine_specs() if s.name in obj.PropertiesList}
+
+
+def mesher_options(obj):
+    """{mesh_shape() keyword: value} (size, the mesher's options, second_order)."""
+    return {s.parameter: s.value(obj) for s in mesher_specs() if s.name in obj.PropertiesList}

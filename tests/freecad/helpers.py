@@ -33,6 +33,18 @@ def cantilever(order="1st", size=200.0):
     return doc
 
 
+def cantilever_from_shape(size=250.0, second_order=True):
+    """FreeCAD's ccx_cantilever_faceload with its Gmsh mesh replaced by a hex-dominant mesh made
+    from the box itself (shape mode); returns the document."""
+    from femexamples.ccx_cantilever_faceload import setup
+    import freecad.hexmerge as hm
+    doc = setup()
+    hm.make_hexdominant_mesh(doc, doc.Box, target_size=size, second_order=second_order,
+                             analysis=doc.Analysis)
+    doc.recompute()
+    return doc
+
+
 def mesh_name(doc):
     for o in doc.Analysis.Group:
         if o.isDerivedFrom("Fem::FemMeshObject"):

@@ -101,6 +101,110 @@ class Cantilever(unittest.TestCase):
                         abs(tet_tip - helpers.BEAM_THEORY_TIP_MM))
 
 
+class CantileverFromShape(unittest.TestCase):
+    """The same cantilever, meshed from its box (shape mode, second order) instead of Gmsh's
+    tets, solved with CalculiX through FreeCAD's FEM workflow."""
+
+    def tearDown(self):
+        close_all()
+
+    def test_tip_within_3_percent_of_beam_theory(self):
+        doc = helpers.cantilever_from_shape()
+        obj = doc.getObject("HexDominantMesh")
+        self.assertIn(obj, doc.Analysis.Group)
+        self.assertEqual([o for o in doc.Analysis.Group if o.isDerivedFrom("Fem::FemMeshObject")],
+                         [obj])
+        report = mesh_hexdominant.report_dict(obj)
+        self.assertLessEqual(report["meshing"]["max_boundary_distance"], 1e-3 * obj.TargetSize.Value)
+        inp, res = helpers.solve(doc)
+        counts = helpers.inp_element_count(inp)
+        self.assertEqual(sum(counts.values()), obj.FemMesh.VolumeCount)
+        self.assertIn("C3D20", counts)  # second order: Hexa20
+        tip = helpers.tip_displacement(res)
+        FreeCAD.Console.PrintMessage(
+            "HexMerge cantilever from shape (h {} mm, second order): tip {:.2f} mm, beam theory "
+            "{} mm ({:+.2f} %); .inp {} ({})\n".format(
+                obj.TargetSize.Value, tip, helpers.BEAM_THEORY_TIP_MM,
+                100 * (tip / helpers.BEAM_THEORY_TIP_MM - 1), counts, obj.Summary))
+        self.assertLess(abs(tip - helpers.BEAM_THEORY_TIP_MM), 0.03 * helpers.BEAM_THEORY_TIP_MM)
+
+
+class ShapeMode(unittest.TestCase):
+    """A hex-dominant mesh whose source is a solid: made, recomputed on a shape change, saved."""
+
+    def tearDown(self):
+        close_all()
+
+    def box(self):
+        doc = FreeCAD.newDocument("HexMergeShape")
+        box = doc.addObject("Part::Box", "Box")
+        box.Length, box.Width, box.Height = 60, 40, 30
+        doc.recompute()
+        return doc, box
+
+    def test_box_is_hexahedra_and_follows_the_shape(self):
+        doc, box = self.box()
+        obj = hm.make_hexdominant_mesh(doc, box, target_size=10, second_order=False)
+        self.assertTrue(mesh_hexdominant.is_shape_source(box))
+        report = mesh_hexdominant.report_dict(obj)
+        self.assertEqual(report["output_counts"], {"tet": 0, "pyramid": 0, "prism": 0, "hex": 72})
+        self.assertEqual(obj.FemMesh.HexaCount, 72)
+        self.assertEqual(report["meshing"]["parameters"]["size"], 10.0)
+        self.assertIn("shape at h 10", obj.Summary)
+        # A new shape marks the mesh for recompute, and recompute meshes it.
+        box.Height = 50
+        doc.recompute()
+        self.assertNotIn("Touched", obj.State)
+        self.assertEqual(obj.FemMesh.HexaCount, 6 * 4 * 5)
+        zs = [obj.FemMesh.getNodeById(n).z for n in obj.FemMesh.Nodes]
+        self.assertAlmostEqual(max(zs), 50.0)
+        # So does a new target size.
+        obj.TargetSize = 5
+        doc.recompute()
+        self.assertEqual(obj.FemMesh.HexaCount, 12 * 8 * 10)
+
+    def test_second_order_default_and_options(self):
+        doc, box = self.box()
+        obj = hm.make_hexdominant_mesh(doc, box, boundary_layers=0, min_scaled_jacobian=0.4)
+        self.assertTrue(obj.SecondOrder)
+        self.assertAlmostEqual(obj.TargetSize.Value, 7.5)  # a quarter of the 30 mm side
+        self.assertEqual(obj.BoundaryLayers, 0)
+        report = mesh_hexdominant.report_dict(obj)
+        self.assertEqual(report["meshing"]["parameters"]["boundary_layers"], 0)
+        self.assertTrue(report["meshing"]["parameters"]["second_order"])
+        self.assertEqual(obj.FemMesh.VolumeCount, report["output_cells"])
+        self.assertEqual(inp_count(obj.FemMesh), obj.FemMesh.VolumeCount)
+        blocks = fa.femmesh_to_arrays(obj.FemMesh).blocks
+        self.assertTrue(all(name in ("tetra10", "wedge15", "hexahedron20") for name, _ in blocks), blocks)
+
+    def test_save_reopen(self):
+        doc, box = self.box()
+        name = hm.make_hexdominant_mesh(doc, box, target_size=10, second_order=False).Name
+        path = os.path.join(tempfile.mkdtemp(), "shape.FCStd")
+        doc.saveAs(path)
+        FreeCAD.closeDocument(doc.Name)
+        doc = FreeCAD.openDocument(path)
+        obj = doc.getObject(name)
+        self.assertEqual(obj.FemMesh.HexaCount, 72)
+        self.assertAlmostEqual(obj.TargetSize.Value, 10.0)
+        doc.getObject("Box").Length = 70
+        doc.recompute()
+        self.assertEqual(obj.FemMesh.HexaCount, 84)
+
+    def test_bad_shapes(self):
+        doc, box = self.box()
+        with self.assertRaisesRegex(RuntimeError, "larger than the shape"):
+            hm.make_hexdominant_mesh(doc, box, target_size=500)
+        face = doc.addObject("Part::Plane", "Plane")
+        doc.recompute()
+        n = len(doc.Objects)
+        with self.assertRaisesRegex(ValueError, "has no solid"):
+            hm.make_hexdominant_mesh(doc, face)
+        self.assertEqual(len(doc.Objects), n)
+        with self.assertRaisesRegex(ValueError, "unknown HexMerge option"):
+            hm.make_hexdominant_mesh(doc, box, no_such_option=1)
+
+
 class MultiMaterial(unittest.TestCase):
     """material_multiple_bendingbeam_fiveboxes: five solids, three materials."""
 
