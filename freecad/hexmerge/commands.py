@@ -26,6 +26,25 @@ def selected_tet_mesh():
     return obj, ""
 
 
+def selected_solid():
+    """The single selected object with a solid Shape (not a FEM mesh), or (None, reason)."""
+    from .mesh_hexdominant import is_shape_source
+    sel = FreeCADGui.Selection.getSelection()
+    if len(sel) != 1:
+        return None, "select exactly one solid (a Part feature or any object with a solid)"
+    if not is_shape_source(sel[0]):
+        return None, "{} has no solid".format(sel[0].Label)
+    return sel[0], ""
+
+
+def active_analysis():
+    try:
+        import FemGui
+        return FemGui.getActiveAnalysis()
+    except Exception:
+        return None
+
+
 class CommandBase:
     """Declarative base: subclasses set resources and is_active ("with_tet_mesh" or "with_document")."""
 
@@ -42,6 +61,8 @@ class CommandBase:
             return False
         if self.is_active == "with_tet_mesh":
             return selected_tet_mesh()[0] is not None
+        if self.is_active == "with_solid":
+            return selected_solid()[0] is not None
         return True
 
 
@@ -71,7 +92,38 @@ class HexDominantFromTetrahedra(CommandBase):
         FreeCADGui.doCommand("Gui.getDocument('{}').setEdit(hexmesh.Name)".format(doc.Name))
 
 
-COMMANDS = {"HexMerge_MeshHexDominant": HexDominantFromTetrahedra}
+class HexDominantFromShape(CommandBase):
+    resources = {
+        "Pixmap": os.path.join(RESOURCES, "icons", "HexMerge_MeshHexDominant.svg"),
+        "MenuText": "Hex-dominant mesh from shape",
+        "ToolTip": "Mesh the selected solid with tetrahedra on a lattice (OpenCASCADE, TetGen) at a "
+                   "target size and merge them into hexahedra, prisms and pyramids: a new FEM mesh "
+                   "object linked to the shape, recomputed when the shape changes. In the active "
+                   "analysis it takes the place of the analysis's mesh",
+    }
+    is_active = "with_solid"
+
+    def Activated(self):
+        source, reason = selected_solid()
+        if source is None:
+            FreeCAD.Console.PrintError("HexMerge: {}\n".format(reason))
+            return
+        doc = source.Document
+        analysis = active_analysis()
+        doc.openTransaction("Hex-dominant mesh from shape")
+        FreeCADGui.addModule("freecad.hexmerge")
+        FreeCADGui.doCommand(
+            "hexmesh = freecad.hexmerge.make_hexdominant_mesh("
+            "App.getDocument('{0}'), App.getDocument('{0}').getObject('{1}'), recompute=False{2})"
+            .format(doc.Name, source.Name,
+                    "" if analysis is None or analysis.Document != doc else
+                    ", analysis=App.getDocument('{}').getObject('{}')".format(doc.Name, analysis.Name)))
+        FreeCADGui.Selection.clearSelection()
+        FreeCADGui.doCommand("Gui.getDocument('{}').setEdit(hexmesh.Name)".format(doc.Name))
+
+
+COMMANDS = {"HexMerge_MeshHexDominant": HexDominantFromTetrahedra,
+            "HexMerge_MeshHexDominantFromShape": HexDominantFromShape}
 
 
 def register():

@@ -7,13 +7,13 @@ from freecad import app, gui
 
 ICON = os.path.join(os.path.dirname(os.path.dirname(os.path.dirname(__file__))),
                     "resources", "icons", "HexMerge_Workbench.svg")
-COMMANDS = ["HexMerge_MeshHexDominant"]
+COMMANDS = ["HexMerge_MeshHexDominant", "HexMerge_MeshHexDominantFromShape"]
 FEM_TOOLBAR_NAME = "HexMerge"
 
 
 class HexMergeWorkbench(gui.Workbench):
     MenuText = "HexMerge"
-    ToolTip = "Hex-dominant FEM meshes from tetrahedral meshes"
+    ToolTip = "Hex-dominant FEM meshes from tetrahedral meshes or solids"
     Icon = ICON
 
     def GetClassName(self):

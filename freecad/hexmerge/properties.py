@@ -129,7 +129,7 @@ def mesher_specs():
     specs = [PropertySpec("App::PropertyLength", "TargetSize", SHAPE_GROUP,
                           "Target element size h when the source is a shape: the lattice spacing "
                           "and the surface's longest edge (must be smaller than the shape)", 0.0,
-                          "size")]
+                          "size", {"name": "size", "label": "Target size"})]
     for row in hexmergetools.mesh_parameter_table():
         kind = {"float": "App::PropertyFloatConstraint", "int": "App::PropertyIntegerConstraint",
                 "bool": "App::PropertyBool", "choice": "App::PropertyEnumeration"}[row["type"]]
@@ -138,7 +138,7 @@ def mesher_specs():
     specs.append(PropertySpec("App::PropertyBool", "SecondOrder", SHAPE_GROUP,
                               "When the source is a shape: quadratic elements (a node at the "
                               "midpoint of every tet edge, so hexahedra become Hexa20)", True,
-                              "second_order"))
+                              "second_order", {"name": "second_order", "label": "Second order"}))
     return specs
 
 

@@ -43,47 +43,65 @@ class TaskPanelHexDominant(base_taskpanel.TransactionTaskPanel):
 
     # -- widgets <-> properties ---------------------------------------------------------------
     def build_parameter_widgets(self):
+        # The mesher's options, shown when the source is a shape, in a group under the source.
+        self.gb_shape = QtGui.QGroupBox(properties.SHAPE_GROUP)
+        self.gb_shape.setObjectName("gb_shape_meshing")
+        self.fl_shape = QtGui.QFormLayout(self.gb_shape)
+        self.form.layout().insertWidget(1, self.gb_shape)
+        for spec in properties.mesher_specs():
+            self.add_widget(spec, self.fl_shape)
         for spec in properties.engine_specs():
             layout = getattr(self.form, "fl_" + spec.group.lower().replace(" ", "_"),
                              self.form.fl_engine)
-            row = spec.row
-            label = row.get("label") or spec.name
-            if spec.kind == "App::PropertyAngle":
-                w = FreeCADGui.UiLoader().createWidget("Gui::QuantitySpinBox")
-                w.setObjectName("qsb_" + row["name"])
-                w.setProperty("unit", "deg")
-                w.setProperty("minimum", float(row["min"]))
-                w.setProperty("maximum", float(row["max"]))
-                w.setProperty("rawValue", spec.value(self.obj))
-            elif spec.kind == "App::PropertyFloatConstraint":
-                w = QtGui.QDoubleSpinBox()
-                w.setObjectName("dsb_" + row["name"])
-                w.setRange(float(row["min"]), float(row["max"]))
-                w.setSingleStep(0.05)
-                w.setDecimals(3)
-                w.setValue(float(getattr(self.obj, spec.name)))
-            elif spec.kind == "App::PropertyIntegerConstraint":
-                w = QtGui.QSpinBox()
-                w.setObjectName("sb_" + row["name"])
-                w.setRange(int(row["min"]), int(row["max"]))
-                w.setValue(int(getattr(self.obj, spec.name)))
-            elif spec.kind == "App::PropertyBool":
-                w = QtGui.QCheckBox()
-                w.setObjectName("ckb_" + row["name"])
-                w.setChecked(bool(getattr(self.obj, spec.name)))
-            else:
-                w = QtGui.QComboBox()
-                w.setObjectName("cb_" + row["name"])
-                w.addItems(list(row["choices"]))
-                w.setCurrentIndex(list(row["choices"]).index(getattr(self.obj, spec.name)))
-            w.setToolTip(spec.doc)
-            l = QtGui.QLabel(label)
-            l.setToolTip(spec.doc)
-            layout.addRow(l, w)
-            self.widgets[spec.name] = (spec, w)
-            self.bind_expression(spec.name, w)
+            self.add_widget(spec, layout)
         if not self.form.fl_engine.rowCount():
             self.form.gb_engine.hide()
+
+    def add_widget(self, spec, layout):
+        """One widget for a property, in a form layout, kept in self.widgets."""
+        row = spec.row
+        label = row.get("label") or spec.name
+        if spec.kind == "App::PropertyLength":
+            w = FreeCADGui.UiLoader().createWidget("Gui::QuantitySpinBox")
+            w.setObjectName("qsb_" + row["name"])
+            w.setProperty("unit", "mm")
+            w.setProperty("minimum", 0.0)
+            w.setProperty("maximum", 1e9)
+            w.setProperty("rawValue", spec.value(self.obj))
+        elif spec.kind == "App::PropertyAngle":
+            w = FreeCADGui.UiLoader().createWidget("Gui::QuantitySpinBox")
+            w.setObjectName("qsb_" + row["name"])
+            w.setProperty("unit", "deg")
+            w.setProperty("minimum", float(row["min"]))
+            w.setProperty("maximum", float(row["max"]))
+            w.setProperty("rawValue", spec.value(self.obj))
+        elif spec.kind == "App::PropertyFloatConstraint":
+            w = QtGui.QDoubleSpinBox()
+            w.setObjectName("dsb_" + row["name"])
+            w.setRange(float(row["min"]), float(row["max"]))
+            w.setSingleStep(0.05)
+            w.setDecimals(3)
+            w.setValue(float(getattr(self.obj, spec.name)))
+        elif spec.kind == "App::PropertyIntegerConstraint":
+            w = QtGui.QSpinBox()
+            w.setObjectName("sb_" + row["name"])
+            w.setRange(int(row["min"]), int(row["max"]))
+            w.setValue(int(getattr(self.obj, spec.name)))
+        elif spec.kind == "App::PropertyBool":
+            w = QtGui.QCheckBox()
+            w.setObjectName("ckb_" + row["name"])
+            w.setChecked(bool(getattr(self.obj, spec.name)))
+        else:
+            w = QtGui.QComboBox()
+            w.setObjectName("cb_" + row["name"])
+            w.addItems(list(row["choices"]))
+            w.setCurrentIndex(list(row["choices"]).index(getattr(self.obj, spec.name)))
+        w.setToolTip(spec.doc)
+        l = QtGui.QLabel(label)
+        l.setToolTip(spec.doc)
+        layout.addRow(l, w)
+        self.widgets[spec.name] = (spec, w)
+        self.bind_expression(spec.name, w)
 
     def bind_expression(self, name, widget):
         if widget.objectName().startswith("qsb_"):
@@ -100,6 +118,11 @@ class TaskPanelHexDominant(base_taskpanel.TransactionTaskPanel):
                 value = w.currentText()
             elif isinstance(w, (QtGui.QDoubleSpinBox, QtGui.QSpinBox)):
                 value = w.value()
+            elif spec.kind == "App::PropertyLength":
+                value = float(w.property("rawValue"))
+                if abs(spec.value(self.obj) - value) > 1e-12 * max(1.0, abs(value)):
+                    setattr(self.obj, name, value)
+                continue
             else:
                 value = FreeCAD.Units.Quantity(w.property("rawValue"), FreeCAD.Units.Unit("deg"))
             if getattr(self.obj, name) != value:
@@ -110,9 +133,25 @@ class TaskPanelHexDominant(base_taskpanel.TransactionTaskPanel):
     # -- source and regions -------------------------------------------------------------------
     def show_source(self):
         src = self.obj.SourceMesh
+        shape_mode = mesh_hexdominant.is_shape_source(src)
+        self.gb_shape.setVisible(shape_mode)
         if src is None:
             self.form.l_source.setText("No source mesh (deleted?)")
             self.form.l_regions.setText("-")
+            return
+        if shape_mode:
+            self.form.gb_source.setTitle("Source shape")
+            box = src.Shape.BoundBox
+            nsolids = len(src.Shape.Solids)
+            self.form.l_source.setText(
+                "{}: {} solid{}, {:g} x {:g} x {:g}. Meshed with tetrahedra on a lattice "
+                "(OpenCASCADE, TetGen) at the target size, then recombined.".format(
+                    src.Label, nsolids, "s" if nsolids > 1 else "", box.XLength, box.YLength,
+                    box.ZLength))
+            text = ("Regions per solid of {} ({} solids).".format(src.Label, nsolids)
+                    if nsolids > 1 else "One region (a single solid).")
+            self.form.l_regions.setText(text + " Elements never span two solids unless "
+                                        "'Respect regions' is off.")
             return
         m = src.FemMesh
         kind = "Tet10" if m.VolumeCount and m.getElementNodes(m.Volumes[0]).__len__() == 10 else "Tet4"
@@ -148,7 +187,9 @@ class TaskPanelHexDominant(base_taskpanel.TransactionTaskPanel):
             return job
 
         self.set_running(True)
-        self.form.l_status.setText("Recombining...")
+        shape_mode = mesh_hexdominant.is_shape_source(self.obj.SourceMesh)
+        self.form.l_status.setText("Meshing the shape and recombining..." if shape_mode
+                                   else "Recombining...")
         self.run = base_taskpanel.BackgroundRun(work, self.on_progress, self.on_done, self.fail)
         self.run.start()
 
@@ -254,6 +295,11 @@ def results_rows(report):
     present = [v for k, v in mins.items() if counts.get(_label(k))]
     if present:
         rows.append(("min. scaled Jacobian", "", "{:.3f}".format(min(present))))
+    meshing = report.get("meshing")
+    if meshing:
+        rows.append(("target size", "", "{:g}".format(meshing["parameters"]["size"])))
+        rows.append(("max. boundary distance", "", "{:.2g}".format(meshing["max_boundary_distance"])))
+        rows.append(("meshing time", "", "{:.2f} s".format(meshing["seconds"])))
     fc = report.get("freecad", {})
     if fc:
         rows.append(("regions", "", "{} ({})".format(fc.get("region_count", 0), fc.get("regions"))))

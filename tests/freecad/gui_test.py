@@ -92,6 +92,7 @@ def main():
     assert wait(lambda: getattr(TaskPanelHexDominant, "current", None) is not None, 10)
     panel = TaskPanelHexDominant.current
     obj = panel.obj
+    assert panel.gb_shape.isHidden(), "shape options shown for a tet mesh source"
     panel.widgets["MinScaledJacobian"][1].setValue(0.35)
     panel.widgets["MakePyramids"][1].setChecked(True)
     panel.form.ckb_pyramids_as_hexahedra.setChecked(True)
@@ -126,11 +127,38 @@ def main():
     wait(lambda: False, 0.5)
     assert {o.Name for o in doc.Objects} == names, "Cancel left objects behind"
 
+    # Shape mode: the box itself, meshed at a target size set in the panel
+    box = doc.getObject("Box")
+    FreeCADGui.Selection.clearSelection()
+    FreeCADGui.Selection.addSelection(box)
+    assert commands.HexDominantFromShape().IsActive(), "inactive with a solid selected"
+    assert not commands.HexDominantFromTetrahedra().IsActive()
+    previous = TaskPanelHexDominant.current
+    FreeCADGui.runCommand("HexMerge_MeshHexDominantFromShape")
+    assert wait(lambda: TaskPanelHexDominant.current is not previous, 10)
+    panel = TaskPanelHexDominant.current
+    shape_obj = panel.obj
+    assert not panel.gb_shape.isHidden(), "no shape options for a shape source"
+    assert "TargetSize" in panel.widgets and "BoundaryLayers" in panel.widgets
+    panel.widgets["TargetSize"][1].setProperty("rawValue", 10.0)
+    panel.widgets["SecondOrder"][1].setChecked(False)
+    panel.apply()
+    assert wait(lambda: panel.run is not None and not panel.run.running()
+                and panel.form.pb_apply.isEnabled(), 60), "apply (shape) did not finish"
+    shape_report = mesh_hexdominant.report_dict(shape_obj)
+    assert shape_report.get("meshing"), "no meshing report: " + panel.form.l_status.text()
+    rows = [panel.form.tw_results.item(i, 0).text() for i in range(panel.form.tw_results.rowCount())]
+    assert "target size" in rows, rows
+    panel.accept()
+    wait(lambda: False, 0.5)
+    assert abs(shape_obj.TargetSize.Value - 10.0) < 1e-9 and not shape_obj.SecondOrder
+    assert shape_report["output_counts"]["hex"] == 72, shape_report["output_counts"]
+
     std = subprocess.run(["convert", SHOT, "-format", "%[fx:standard_deviation]", "info:"],
                          capture_output=True, text=True, check=True).stdout
     assert float(std) > 0.02, "screenshot looks blank (std {})".format(std)
-    print("GUI TEST PASSED: {} -> {}; screenshot {}".format(mesh.FemMesh.VolumeCount,
-                                                           obj.Summary, SHOT))
+    print("GUI TEST PASSED: {} -> {}; shape: {}; screenshot {}".format(
+        mesh.FemMesh.VolumeCount, obj.Summary, shape_obj.Summary, SHOT))
 
 
 try:
