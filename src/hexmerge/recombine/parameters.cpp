@@ -96,9 +96,9 @@ std::vector<ParameterInfo> make_table() {
        "Local optimisation",
        "Rearrange elements around unmatched boundary tetrahedra (Meshkat-Talmor 4.2)"},
       {"local_search", "bool", flag(d.local_search), "", 0, 1, {}, "Local search",
-       "After the selection, swap elements for more elements that merge more tetrahedra and "
-       "re-select exactly around unmatched tetrahedra, whenever that lowers the element count "
-       "(conformity mode kept)"},
+       "After the selection, re-select exactly each element next to free tetrahedra with them "
+       "(swaps) and, with a local search radius above 0, every neighbourhood of that radius, "
+       "whenever that lowers the element count (conformity mode kept)"},
       {"local_search_radius", "int", number(d.local_search_radius), "", 0, 4, {},
        "Local search radius",
        "Face hops around a tetrahedron within which the local search releases the elements and "
