@@ -10,8 +10,8 @@ root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 if [[ "${1:-}" != "--no-apt" ]]; then
   # The OpenCASCADE -dev packages build the engine's regions by solid (hexmerge.regions_by_solid);
   # Debian 12 puts one header they need in libocct-visualization-dev, and their CMake targets
-  # link libtbb-dev's libraries.
-  pkgs=(freecad calculix-ccx gmsh python3-numpy
+  # link libtbb-dev's libraries. TetGen: the mesher of the shape mode (hexmerge.mesh_shape).
+  pkgs=(freecad calculix-ccx gmsh tetgen python3-numpy
         libocct-foundation-dev libocct-modeling-data-dev libocct-modeling-algorithms-dev
         libocct-visualization-dev libtbb-dev)
   if [[ "${HEXMERGE_TEST_DEPS:-0}" == 1 ]]; then
