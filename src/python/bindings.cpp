@@ -157,6 +157,9 @@ py::dict report_to_dict(const RecombineReport& r) {
   d["closing_pyramids"] = r.closing_pyramids;
   d["released_elements"] = r.released_elements;
   d["local_moves"] = r.local_moves;
+  d["swap_moves"] = r.swap_moves;
+  d["reselection_moves"] = r.reselection_moves;
+  d["local_search_saved"] = r.local_search_saved;
   d["selection_strategy"] = r.selection_strategy;
   d["min_scaled_jacobian"] = per_type(r.min_scaled_jacobian);
   d["mean_scaled_jacobian"] = per_type(r.mean_scaled_jacobian);

@@ -30,6 +30,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <functional>
 #include <fstream>
 #include <limits>
 #include <map>
@@ -444,9 +445,10 @@ Surface triangulate(const Shape& s, double deflection, double tolerance) {
   return surface;
 }
 
-// Splits, round after round, every segment longer than `target` that `may_split` allows, with
-// red-green refinement of the triangles (1, 2 or 3 split sides) so that the triangulation stays
-// conforming. New nodes lie on the CAD edge (segments on an edge) or on the face's surface.
+// Splits the triangles of the faces that are not lattice faces until no side is longer than
+// `target` (sides on edges between lattice faces excepted); lattice-face triangles are split
+// only where a neighbour's side must be. New nodes lie on the CAD edge (sides on an edge) or on
+// the face's surface.
 void refine(const Shape& s, Surface& surface, double target,
             const std::vector<bool>& lattice_face, const std::vector<bool>& lattice_edge) {
   std::vector<std::unique_ptr<BRepAdaptor_Surface>> surfaces(s.faces.Extent());
@@ -476,120 +478,166 @@ void refine(const Shape& s, Surface& surface, double target,
     return *curves[e];
   };
 
-  for (;;) {
-    // Segments to split this round.
-    std::unordered_set<std::uint64_t> marked;
-    for (const SurfaceTriangle& t : surface.triangles)
-      for (int c = 0; c < 3; ++c) {
-        const int a = t.node[c], b = t.node[(c + 1) % 3];
-        const std::uint64_t key = pair_key(a, b);
-        auto seg = surface.segments.find(key);
-        const bool on_edge = seg != surface.segments.end();
-        if (on_edge ? lattice_edge[seg->second.edge] : lattice_face[t.face]) continue;
-        if ((surface.nodes[a] - surface.nodes[b]).norm() > target) marked.insert(key);
-      }
-    if (marked.empty()) return;
-
-    struct Mid {
-      int node;
-      EdgeSegment seg;  // valid when on an edge (seg.edge >= 0)
-      double t;
-    };
-    std::unordered_map<std::uint64_t, Mid> mids;
-    std::vector<SurfaceTriangle> out;
-    out.reserve(surface.triangles.size() * 2);
-    for (const SurfaceTriangle& t : surface.triangles) {
-      int m[3] = {-1, -1, -1};
-      gp_Pnt2d muv[3];
-      for (int c = 0; c < 3; ++c) {
-        const int a = t.node[c], b = t.node[(c + 1) % 3];
-        const std::uint64_t key = pair_key(a, b);
-        if (!marked.count(key)) continue;
-        auto seg = surface.segments.find(key);
-        auto it = mids.find(key);
-        if (seg != surface.segments.end()) {
-          const EdgeSegment e = seg->second;
-          const double tm = 0.5 * (e.t_lo + e.t_hi);
-          if (it == mids.end()) {
-            const int id = static_cast<int>(surface.nodes.size());
-            surface.nodes.push_back(of(edge_curve(e.edge).Value(tm)));
-            surface.node_face.push_back(t.face);
-            it = mids.emplace(key, Mid{id, e, tm}).first;
-          }
-          // The new node's parameters on this face: the pcurve that passes through node a.
-          const double ta = a < b ? e.t_lo : e.t_hi;
-          double best = std::numeric_limits<double>::max();
-          gp_Pnt2d uv = gp_Pnt2d(0.5 * (t.uv[c].X() + t.uv[(c + 1) % 3].X()),
-                                 0.5 * (t.uv[c].Y() + t.uv[(c + 1) % 3].Y()));
-          for (const PCurve& pc : pcurves[t.face]) {
-            if (pc.edge != e.edge) continue;
-            const double d = pc.curve->Value(ta).Distance(t.uv[c]);
-            if (d < best) best = d, uv = pc.curve->Value(tm);
-          }
-          m[c] = it->second.node;
-          muv[c] = uv;
-        } else {
-          muv[c] = gp_Pnt2d(0.5 * (t.uv[c].X() + t.uv[(c + 1) % 3].X()),
-                            0.5 * (t.uv[c].Y() + t.uv[(c + 1) % 3].Y()));
-          if (it == mids.end()) {
-            const int id = static_cast<int>(surface.nodes.size());
-            surface.nodes.push_back(of(face_surface(t.face).Value(muv[c].X(), muv[c].Y())));
-            surface.node_face.push_back(t.face);
-            it = mids.emplace(key, Mid{id, EdgeSegment{-1, 0, 0}, 0}).first;
-          }
-          m[c] = it->second.node;
-        }
-      }
-      const int nb = (m[0] >= 0) + (m[1] >= 0) + (m[2] >= 0);
-      auto emit = [&](int a, const gp_Pnt2d& ua, int b, const gp_Pnt2d& ub, int c,
-                      const gp_Pnt2d& uc) {
-        out.push_back(SurfaceTriangle{{a, b, c}, {ua, ub, uc}, t.face});
-      };
-      const auto& n = t.node;
-      const auto& uv = t.uv;
-      if (nb == 0) {
-        out.push_back(t);
-      } else if (nb == 3) {
-        emit(n[0], uv[0], m[0], muv[0], m[2], muv[2]);
-        emit(m[0], muv[0], n[1], uv[1], m[1], muv[1]);
-        emit(m[2], muv[2], m[1], muv[1], n[2], uv[2]);
-        emit(m[0], muv[0], m[1], muv[1], m[2], muv[2]);
-      } else if (nb == 1) {
-        const int c = m[0] >= 0 ? 0 : m[1] >= 0 ? 1 : 2;
-        const int c1 = (c + 1) % 3, c2 = (c + 2) % 3;
-        emit(n[c], uv[c], m[c], muv[c], n[c2], uv[c2]);
-        emit(m[c], muv[c], n[c1], uv[c1], n[c2], uv[c2]);
-      } else {
-        // Sides c and c+1 split, side c+2 (from n[c+2] to n[c]) not.
-        const int c = m[0] < 0 ? 1 : m[1] < 0 ? 2 : 0;
-        const int c1 = (c + 1) % 3, c2 = (c + 2) % 3;
-        emit(m[c], muv[c], n[c1], uv[c1], m[c1], muv[c1]);
-        // The quad n[c], m[c], m[c1], n[c2], cut along its shorter diagonal.
-        const double d1 = (surface.nodes[n[c]] - surface.nodes[m[c1]]).norm();
-        const double d2 = (surface.nodes[m[c]] - surface.nodes[n[c2]]).norm();
-        if (d1 <= d2) {
-          emit(n[c], uv[c], m[c], muv[c], m[c1], muv[c1]);
-          emit(n[c], uv[c], m[c1], muv[c1], n[c2], uv[c2]);
-        } else {
-          emit(n[c], uv[c], m[c], muv[c], n[c2], uv[c2]);
-          emit(m[c], muv[c], m[c1], muv[c1], n[c2], uv[c2]);
-        }
-      }
+  // Longest-side bisection with Delaunay flips after each insertion: the triangles across a
+  // split side are split along (the triangulation stays conforming) and the flips take back the
+  // poor shapes that this and BRepMesh's own needles make.
+  std::vector<SurfaceTriangle>& tris = surface.triangles;
+  std::vector<char> alive(tris.size(), 1);
+  std::unordered_map<std::uint64_t, std::vector<int>> at_edge;  // triangles per side
+  auto link = [&](int ti) {
+    for (int c = 0; c < 3; ++c)
+      at_edge[pair_key(tris[ti].node[c], tris[ti].node[(c + 1) % 3])].push_back(ti);
+  };
+  auto unlink = [&](int ti) {
+    for (int c = 0; c < 3; ++c) {
+      auto& v = at_edge[pair_key(tris[ti].node[c], tris[ti].node[(c + 1) % 3])];
+      v.erase(std::remove(v.begin(), v.end(), ti), v.end());
     }
-    // The halves of split edge segments are edge segments.
-    for (const auto& [key, mid] : mids) {
-      if (mid.seg.edge < 0) continue;
-      const int lo = static_cast<int>(key >> 32), hi = static_cast<int>(key & 0xffffffffu);
-      surface.segments.erase(key);
-      surface.segments[pair_key(lo, mid.node)] =
-          lo < mid.node ? EdgeSegment{mid.seg.edge, mid.seg.t_lo, mid.t}
-                        : EdgeSegment{mid.seg.edge, mid.t, mid.seg.t_lo};
-      surface.segments[pair_key(mid.node, hi)] =
-          mid.node < hi ? EdgeSegment{mid.seg.edge, mid.t, mid.seg.t_hi}
-                        : EdgeSegment{mid.seg.edge, mid.seg.t_hi, mid.t};
+  };
+  for (int ti = 0; ti < static_cast<int>(tris.size()); ++ti) link(ti);
+  auto length = [&](int a, int b) { return (surface.nodes[a] - surface.nodes[b]).norm(); };
+  // The side of triangle ti to split, or -1: the longest, when longer than the target and the
+  // triangle is not on a lattice face (those are cut only along with their neighbours).
+  auto longest = [&](int ti) {
+    const SurfaceTriangle& t = tris[ti];
+    int best = 0;
+    for (int c = 1; c < 3; ++c)
+      if (length(t.node[c], t.node[(c + 1) % 3]) > length(t.node[best], t.node[(best + 1) % 3])) best = c;
+    return best;
+  };
+  std::unordered_map<std::uint64_t, int> split_node;  // side -> its midpoint node
+  // The midpoint of side c of triangle ti: its node (made once per side) and parameters there.
+  auto midpoint = [&](int ti, int c, gp_Pnt2d& uv) {
+    const SurfaceTriangle& t = tris[ti];
+    const int a = t.node[c], b = t.node[(c + 1) % 3];
+    const std::uint64_t key = pair_key(a, b);
+    uv = gp_Pnt2d(0.5 * (t.uv[c].X() + t.uv[(c + 1) % 3].X()), 0.5 * (t.uv[c].Y() + t.uv[(c + 1) % 3].Y()));
+    auto seg = surface.segments.find(key);
+    auto known = split_node.find(key);
+    if (seg == surface.segments.end()) {
+      if (known != split_node.end()) return known->second;
+      const int id = static_cast<int>(surface.nodes.size());
+      surface.nodes.push_back(of(face_surface(t.face).Value(uv.X(), uv.Y())));
+      surface.node_face.push_back(t.face);
+      split_node.emplace(key, id);
+      return id;
     }
-    surface.triangles.swap(out);
-  }
+    const EdgeSegment e = seg->second;
+    const double tm = 0.5 * (e.t_lo + e.t_hi), ta = a < b ? e.t_lo : e.t_hi;
+    double best = std::numeric_limits<double>::max();
+    for (const PCurve& pc : pcurves[t.face]) {  // the pcurve through node a (seams have two)
+      if (pc.edge != e.edge) continue;
+      const double d = pc.curve->Value(ta).Distance(t.uv[c]);
+      if (d < best) best = d, uv = pc.curve->Value(tm);
+    }
+    if (known != split_node.end()) return known->second;
+    const int id = static_cast<int>(surface.nodes.size());
+    surface.nodes.push_back(of(edge_curve(e.edge).Value(tm)));
+    surface.node_face.push_back(t.face);
+    split_node.emplace(key, id);
+    return id;
+  };
+  // Splits side (a, b) in every triangle that has it; the halves of an edge segment stay one.
+  auto split_side = [&](int a, int b) {
+    const std::uint64_t key = pair_key(a, b);
+    const std::vector<int> around = at_edge[key];
+    int m = -1;
+    for (int ti : around) {
+      const SurfaceTriangle t = tris[ti];
+      int c = 0;
+      while (pair_key(t.node[c], t.node[(c + 1) % 3]) != key) ++c;
+      gp_Pnt2d uv;
+      m = midpoint(ti, c, uv);
+      const int c1 = (c + 1) % 3, c2 = (c + 2) % 3;
+      unlink(ti);
+      tris[ti] = SurfaceTriangle{{t.node[c], m, t.node[c2]}, {t.uv[c], uv, t.uv[c2]}, t.face};
+      link(ti);
+      tris.push_back(SurfaceTriangle{{m, t.node[c1], t.node[c2]}, {uv, t.uv[c1], t.uv[c2]}, t.face});
+      alive.push_back(1);
+      link(static_cast<int>(tris.size()) - 1);
+    }
+    auto seg = surface.segments.find(key);
+    if (seg != surface.segments.end()) {
+      const EdgeSegment e = seg->second;
+      const double tm = 0.5 * (e.t_lo + e.t_hi);
+      const int lo = std::min(a, b), hi = std::max(a, b);
+      surface.segments.erase(seg);
+      surface.segments[pair_key(lo, m)] = lo < m ? EdgeSegment{e.edge, e.t_lo, tm} : EdgeSegment{e.edge, tm, e.t_lo};
+      surface.segments[pair_key(m, hi)] = m < hi ? EdgeSegment{e.edge, tm, e.t_hi} : EdgeSegment{e.edge, e.t_hi, tm};
+    }
+    at_edge.erase(key);
+    std::vector<std::uint64_t> stack;
+    for (int ti : at_edge[pair_key(m, a)])
+      for (int c = 0; c < 3; ++c)
+        stack.push_back(pair_key(tris[ti].node[c], tris[ti].node[(c + 1) % 3]));
+    for (int ti : at_edge[pair_key(m, b)])
+      for (int c = 0; c < 3; ++c)
+        stack.push_back(pair_key(tris[ti].node[c], tris[ti].node[(c + 1) % 3]));
+    return stack;
+  };
+  // Lawson's flips after an insertion: sides that fail the Delaunay test (opposite angles
+  // summing past pi, in 3D) between two triangles of one face, off the CAD edges, are flipped
+  // unless that folds the surface. Bisection alone keeps the needles BRepMesh makes on ruled
+  // faces (a cylinder is strips from cap to cap); the flips give them up.
+  auto angle_at = [&](int v, int a, int b) {
+    const Vec3 x = surface.nodes[a] - surface.nodes[v], y = surface.nodes[b] - surface.nodes[v];
+    return std::atan2(x.cross(y).norm(), x.dot(y));
+  };
+  auto normal_of = [&](int a, int b, int c) {
+    return (surface.nodes[b] - surface.nodes[a]).cross(surface.nodes[c] - surface.nodes[a]);
+  };
+  std::function<void(std::vector<std::uint64_t>)> restore_delaunay = [&](std::vector<std::uint64_t> stack) {
+    std::size_t flips = 0;
+    while (!stack.empty() && flips < 10000) {
+      const std::uint64_t key = stack.back();
+      stack.pop_back();
+      auto it = at_edge.find(key);
+      if (it == at_edge.end() || it->second.size() != 2 || surface.segments.count(key)) continue;
+      const int t1 = it->second[0], t2 = it->second[1];
+      if (tris[t1].face != tris[t2].face || lattice_face[tris[t1].face]) continue;
+      // t1 = (p, q, m), t2 = (q, p, x).
+      int c1 = 0, c2 = 0;
+      while (pair_key(tris[t1].node[c1], tris[t1].node[(c1 + 1) % 3]) != key) ++c1;
+      while (pair_key(tris[t2].node[c2], tris[t2].node[(c2 + 1) % 3]) != key) ++c2;
+      const SurfaceTriangle a = tris[t1], b = tris[t2];
+      const int p = a.node[c1], q = a.node[(c1 + 1) % 3], m = a.node[(c1 + 2) % 3];
+      const int x = b.node[(c2 + 2) % 3];
+      if (b.node[c2] != q || m == x) continue;
+      // Off the plane the test can fail both ways: flip only to a strictly better pair.
+      const double now = angle_at(m, p, q) + angle_at(x, q, p);
+      if (now <= M_PI * (1 + 1e-9) || angle_at(p, x, m) + angle_at(q, m, x) >= now - 1e-9) continue;
+      const Vec3 before = normal_of(p, q, m) + normal_of(q, p, x);
+      if (normal_of(m, p, x).dot(before) <= 0 || normal_of(x, q, m).dot(before) <= 0) continue;
+      const gp_Pnt2d up = a.uv[c1], uq = a.uv[(c1 + 1) % 3], um = a.uv[(c1 + 2) % 3];
+      const gp_Pnt2d ux = b.uv[(c2 + 2) % 3];
+      unlink(t1);
+      unlink(t2);
+      at_edge.erase(key);
+      tris[t1] = SurfaceTriangle{{m, p, x}, {um, up, ux}, a.face};
+      tris[t2] = SurfaceTriangle{{x, q, m}, {ux, uq, um}, a.face};
+      link(t1);
+      link(t2);
+      ++flips;
+      for (std::uint64_t k : {pair_key(m, p), pair_key(p, x), pair_key(x, q), pair_key(q, m)})
+        stack.push_back(k);
+    }
+  };
+  auto needs_split = [&](int ti) {
+    if (lattice_face[tris[ti].face]) return false;
+    const int c = longest(ti);
+    const int a = tris[ti].node[c], b = tris[ti].node[(c + 1) % 3];
+    auto seg = surface.segments.find(pair_key(a, b));
+    if (seg != surface.segments.end() && lattice_edge[seg->second.edge]) return false;
+    return length(a, b) > target;
+  };
+  // Splits the longest side of triangle ti (in every triangle that has it), then restores the
+  // Delaunay property around the new node.
+  auto split_longest = [&](int ti) {
+    const int c = longest(ti);
+    restore_delaunay(split_side(tris[ti].node[c], tris[ti].node[(c + 1) % 3]));
+  };
+  for (int ti = 0; ti < static_cast<int>(tris.size()); ++ti)
+    while (needs_split(ti)) split_longest(ti);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -1238,10 +1286,8 @@ TetMesh mesh_shape(const std::string& brep, const MeshShapeParameters& parameter
         const TopoDS_Face& f = TopoDS::Face(shape.faces(face + 1));
         analysis[face] = std::make_unique<ShapeAnalysis_Surface>(BRep_Tool::Surface(f));
       }
-      TopLoc_Location loc;
-      BRep_Tool::Surface(TopoDS::Face(shape.faces(face + 1)), loc);
-      const gp_Pnt local = p.Transformed(loc.Transformation().Inverted());
-      analysis[face]->ValueOfUV(local, 1e-3 * h * 1e-3);
+      // BRep_Tool::Surface(face) is the face's surface with its location applied.
+      analysis[face]->ValueOfUV(p, 1e-6 * h);
       worst = std::max(worst, analysis[face]->Gap());
     }
     report.max_boundary_distance = worst;
