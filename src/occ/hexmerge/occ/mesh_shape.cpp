@@ -636,8 +636,22 @@ void refine(const Shape& s, Surface& surface, double target,
     const int c = longest(ti);
     restore_delaunay(split_side(tris[ti].node[c], tris[ti].node[(c + 1) % 3]));
   };
+  // Sides end at about target / 2 or more: more nodes than ten times the surface's area over
+  // such triangles' area (plus BRepMesh's own) means the refinement is not converging, which is
+  // reported rather than run without end.
+  double area = 0;
+  for (const SurfaceTriangle& t : tris) area += 0.5 * normal_of(t.node[0], t.node[1], t.node[2]).norm();
+  const std::size_t node_budget =
+      surface.nodes.size() + static_cast<std::size_t>(10 * area / (0.1 * target * target)) + 1000;
   for (int ti = 0; ti < static_cast<int>(tris.size()); ++ti)
-    while (needs_split(ti)) split_longest(ti);
+    while (needs_split(ti)) {
+      if (surface.nodes.size() > node_budget)
+        throw InputError("the surface triangulation of face " + std::to_string(tris[ti].face) +
+                         " does not converge to size " + std::to_string(target) + " (over " +
+                         std::to_string(node_budget) + " nodes); try another size",
+                         Entity::Parameter);
+      split_longest(ti);
+    }
 }
 
 // ---------------------------------------------------------------------------------------------
