@@ -607,7 +607,12 @@ void refine(const Shape& s, Surface& surface, double target,
       const double now = angle_at(m, p, q) + angle_at(x, q, p);
       if (now <= M_PI * (1 + 1e-9) || angle_at(p, x, m) + angle_at(q, m, x) >= now - 1e-9) continue;
       const Vec3 before = normal_of(p, q, m) + normal_of(q, p, x);
-      if (normal_of(m, p, x).dot(before) <= 0 || normal_of(x, q, m).dot(before) <= 0) continue;
+      // Nor across the surface's curvature: both new triangles within 20 degrees of the old.
+      const Vec3 n1 = normal_of(m, p, x), n2 = normal_of(x, q, m);
+      const double c20 = std::cos(20.0 * M_PI / 180);
+      if (n1.dot(before) <= c20 * n1.norm() * before.norm() ||
+          n2.dot(before) <= c20 * n2.norm() * before.norm())
+        continue;
       const gp_Pnt2d up = a.uv[c1], uq = a.uv[(c1 + 1) % 3], um = a.uv[(c1 + 2) % 3];
       const gp_Pnt2d ux = b.uv[(c2 + 2) % 3];
       unlink(t1);
