@@ -6,8 +6,9 @@
 /// After Baudouin, Remacle, Marchandise, Henrotte & Geuzaine, "A frontal approach to
 /// hex-dominant mesh generation" (AMSES 2014): where a mesh's vertices sit on a cubic lattice,
 /// its tets fill the lattice cells and recombine into hexahedra. The steps:
-///  1. the shape's faces are triangulated with OpenCASCADE (BRepMesh), then refined by edge
-///     bisection to the target size; every new node is evaluated on the CAD surface or edge;
+///  1. the shape's faces are triangulated with OpenCASCADE (BRepMesh), then refined by
+///     longest-side bisection with Delaunay flips to the target size; every new node is
+///     evaluated on the CAD surface or edge;
 ///  2. a frame is chosen (the normals of the largest planar faces, else the principal axes of
 ///     inertia) and a cubic lattice of spacing about h laid in it, its planes through the shape's
 ///     bounding box, so that planar faces on those planes carry lattice points of their own
@@ -36,8 +37,9 @@ namespace hexmerge {
 
 /// How mesh_shape() works. Lengths are in the shape's units.
 struct MeshShapeParameters {
-  /// Target element size h: the lattice spacing and the surface's longest edge. > 0 and smaller
-  /// than the shape's bounding box (every side of the box holds at least one lattice cell).
+  /// Target element size h: the lattice spacing (adjusted per axis so that the bounding box holds
+  /// a whole number of cells, at least one) and the surface's longest edge. > 0 and not larger
+  /// than the shape's largest extent.
   double size = 0.0;
   /// Layers of points offset from the curved and unaligned faces along the inward normal
   /// (0 to 3). Each layer is `layer_thickness` h thick.
@@ -88,8 +90,9 @@ struct MeshShapeReport {
 ///         tet, in the order TopExp::MapShapes(shape, TopAbs_SOLID) gives (FreeCAD's
 ///         `Shape.Solids`)
 /// @throws InputError for BREP text that cannot be read, a shape without solids, an open shell
-///         (naming the free edge), a size that is not positive or does not fit the shape, bad
-///         parameters, or TetGen missing or failing (with its output)
+///         (naming the free edge), a size that is not positive or larger than the shape, a
+///         surface refinement that does not converge, bad parameters, or TetGen missing or
+///         failing (with its output)
 TetMesh mesh_shape(const std::string& brep, const MeshShapeParameters& parameters,
                    MeshShapeReport& report);
 
