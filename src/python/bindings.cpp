@@ -145,6 +145,14 @@ class Progress {
   std::exception_ptr error_;
 };
 
+// Wall time per phase (name, seconds pairs: a map or an ordered vector) as a dict.
+template <typename Phases>
+py::dict phases_dict(const Phases& phases) {
+  py::dict d;
+  for (const auto& [name, seconds] : phases) d[name.c_str()] = seconds;
+  return d;
+}
+
 py::dict report_to_dict(const RecombineReport& r) {
   py::dict d;
   d["input_tets"] = r.input_tets;
@@ -168,9 +176,7 @@ py::dict report_to_dict(const RecombineReport& r) {
   d["candidates_per_template"] = templates;
   d["candidates_total"] = r.candidates_total;
   d["candidates_unclosable"] = r.candidates_unclosable;
-  py::dict phases;
-  for (const auto& [name, seconds] : r.phase_seconds) phases[name.c_str()] = seconds;
-  d["phase_seconds"] = phases;
+  d["phase_seconds"] = phases_dict(r.phase_seconds);
   // None unless the optimality bound ran (parameter optimality_bound).
   const auto bound_field = [&](auto value) {
     return r.bound_computed ? py::cast(value) : py::object(py::none());
@@ -331,9 +337,7 @@ py::tuple run_regions_by_solid(const std::string& brep, const PointsIn& points, 
   d["nb_split_pieces"] = report.nb_split_pieces;
   d["nb_classified_points"] = report.nb_classified_points;
   d["nb_unassigned_tets"] = report.nb_unassigned_tets;
-  py::dict phases;
-  for (const auto& [name, seconds] : report.phase_seconds) phases[name.c_str()] = seconds;
-  d["phase_seconds"] = phases;
+  d["phase_seconds"] = phases_dict(report.phase_seconds);
   return py::make_tuple(to_numpy(std::move(regions)), d);
 }
 
@@ -373,9 +377,7 @@ py::tuple run_mesh_shape(const std::string& brep, double size, int boundary_laye
   d["spacing"] = py::make_tuple(report.spacing[0], report.spacing[1], report.spacing[2]);
   d["max_boundary_distance"] = report.max_boundary_distance;
   d["tetgen_command"] = report.tetgen_command;
-  py::dict phases;
-  for (const auto& [name, seconds] : report.phase_seconds) phases[name.c_str()] = seconds;
-  d["phase_seconds"] = phases;
+  d["phase_seconds"] = phases_dict(report.phase_seconds);
   const auto nb_points = static_cast<py::ssize_t>(mesh.points.size() / 3);
   const auto nb_tets = static_cast<py::ssize_t>(mesh.tets.size() / 4);
   return py::make_tuple(to_numpy(std::move(mesh.points), {nb_points, 3}),

@@ -366,4 +366,12 @@ std::vector<Candidate> find_candidates(const TetMesh& mesh, const TetTopology& t
   return concatenate(per_chunk);
 }
 
+FaceKey face_key(const Candidate& c, int f) {
+  const CellDescriptor& d = descriptor(c.type);
+  FaceKey k{NO_VERTEX, NO_VERTEX, NO_VERTEX, NO_VERTEX};
+  for (int i = 0; i < d.face_size[f]; ++i) k[i] = c.vertices[d.face[f][i]];
+  std::sort(k.begin(), k.end());
+  return k;
+}
+
 }  // namespace hexmerge

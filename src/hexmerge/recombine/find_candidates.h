@@ -30,6 +30,11 @@ struct Candidate {
   float quality;                    ///< scaled Jacobian
 };
 
+/// The sorted vertices of a face of a candidate's cell (NO_VERTEX past a triangle's three): equal
+/// for two cells exactly when they share that face.
+using FaceKey = std::array<index_t, 4>;
+FaceKey face_key(const Candidate& c, int f);
+
 /// What a candidate must satisfy.
 struct AcceptanceCriteria {
   double min_dihedral_angle = 150.0;           ///< degrees

@@ -11,7 +11,7 @@
 namespace hexmerge {
 namespace {
 
-using QuadKey = std::array<index_t, 4>;
+using QuadKey = FaceKey;
 
 struct QuadKeyHash {
   std::size_t operator()(const QuadKey& k) const {
@@ -20,14 +20,6 @@ struct QuadKeyHash {
     return static_cast<std::size_t>(h);
   }
 };
-
-QuadKey quad_key(const Candidate& c, int f) {
-  const CellDescriptor& d = descriptor(c.type);
-  QuadKey k{};
-  for (int i = 0; i < 4; ++i) k[i] = c.vertices[d.face[f][i]];
-  std::sort(k.begin(), k.end());
-  return k;
-}
 
 bool holds(const Candidate& c, index_t t) {
   return std::binary_search(c.tets.begin(), c.tets.begin() + c.nb_tets, t);
@@ -44,7 +36,7 @@ struct Quad {
 
 Quad quad_of(const TetMesh& mesh, const TetTopology& topology, const Candidate& c, int f) {
   Quad q;
-  q.key = quad_key(c, f);
+  q.key = face_key(c, f);
   for (int i = 0; i < c.nb_tets; ++i) {
     const index_t t = c.tets[i];
     const index_t* v = mesh.tet(t);

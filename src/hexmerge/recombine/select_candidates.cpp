@@ -12,7 +12,7 @@
 namespace hexmerge {
 namespace {
 
-using QuadKey = std::array<index_t, 4>;  // sorted vertices of a quad face
+using QuadKey = FaceKey;  // sorted vertices of a quad face
 
 // The quad faces asked of the element that takes two tets: the open quad itself and at most one
 // per face of each tet.
@@ -58,14 +58,6 @@ int cell_face_of(const Candidate& c, const std::array<index_t, 3>& tri) {
     if (hits == 3) return f;
   }
   return -1;
-}
-
-QuadKey face_key(const Candidate& c, int f) {
-  const CellDescriptor& d = descriptor(c.type);
-  QuadKey k{NO_VERTEX, NO_VERTEX, NO_VERTEX, NO_VERTEX};
-  for (int i = 0; i < d.face_size[f]; ++i) k[i] = c.vertices[d.face[f][i]];
-  std::sort(k.begin(), k.end());
-  return k;
 }
 
 bool is_quad(const Candidate& c, int f) { return descriptor(c.type).face_size[f] == 4; }

@@ -30,7 +30,6 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
-#include <functional>
 #include <fstream>
 #include <limits>
 #include <map>
@@ -43,6 +42,7 @@
 
 #include "hexmerge/core/error.h"
 #include "hexmerge/geometry/vec3.h"
+#include "hexmerge/mesh/tet_topology.h"
 #include "hexmerge/occ/brep_text.h"
 #include "hexmerge/occ/regions_by_solid.h"
 
@@ -332,6 +332,14 @@ struct SurfaceTriangle {
   int face;
 };
 
+// The key of side c of a triangle (from node c to node c + 1), and the side with a given key.
+std::uint64_t side_key(const SurfaceTriangle& t, int c) { return pair_key(t.node[c], t.node[(c + 1) % 3]); }
+int side_with_key(const SurfaceTriangle& t, std::uint64_t key) {
+  int c = 0;
+  while (side_key(t, c) != key) ++c;
+  return c;
+}
+
 // A segment of the surface triangulation on a CAD edge: the edge and its parameters at the
 // segment's smaller and larger node id.
 struct EdgeSegment {
@@ -482,22 +490,19 @@ void refine(const Shape& s, Surface& surface, double target,
   // split side are split along (the triangulation stays conforming) and the flips take back the
   // poor shapes that this and BRepMesh's own needles make.
   std::vector<SurfaceTriangle>& tris = surface.triangles;
-  std::vector<char> alive(tris.size(), 1);
   std::unordered_map<std::uint64_t, std::vector<int>> at_edge;  // triangles per side
   auto link = [&](int ti) {
-    for (int c = 0; c < 3; ++c)
-      at_edge[pair_key(tris[ti].node[c], tris[ti].node[(c + 1) % 3])].push_back(ti);
+    for (int c = 0; c < 3; ++c) at_edge[side_key(tris[ti], c)].push_back(ti);
   };
   auto unlink = [&](int ti) {
     for (int c = 0; c < 3; ++c) {
-      auto& v = at_edge[pair_key(tris[ti].node[c], tris[ti].node[(c + 1) % 3])];
+      auto& v = at_edge[side_key(tris[ti], c)];
       v.erase(std::remove(v.begin(), v.end(), ti), v.end());
     }
   };
   for (int ti = 0; ti < static_cast<int>(tris.size()); ++ti) link(ti);
   auto length = [&](int a, int b) { return (surface.nodes[a] - surface.nodes[b]).norm(); };
-  // The side of triangle ti to split, or -1: the longest, when longer than the target and the
-  // triangle is not on a lattice face (those are cut only along with their neighbours).
+  // The longest side of triangle ti.
   auto longest = [&](int ti) {
     const SurfaceTriangle& t = tris[ti];
     int best = 0;
@@ -505,37 +510,30 @@ void refine(const Shape& s, Surface& surface, double target,
       if (length(t.node[c], t.node[(c + 1) % 3]) > length(t.node[best], t.node[(best + 1) % 3])) best = c;
     return best;
   };
-  std::unordered_map<std::uint64_t, int> split_node;  // side -> its midpoint node
-  // The midpoint of side c of triangle ti: its node (made once per side) and parameters there.
-  auto midpoint = [&](int ti, int c, gp_Pnt2d& uv) {
+  // The midpoint of side c of triangle ti: its parameters on the triangle's face, and its node,
+  // made when `node` is -1 (on the CAD edge for a side on one, else on the face's surface).
+  auto midpoint = [&](int ti, int c, int node, gp_Pnt2d& uv) {
     const SurfaceTriangle& t = tris[ti];
     const int a = t.node[c], b = t.node[(c + 1) % 3];
-    const std::uint64_t key = pair_key(a, b);
     uv = gp_Pnt2d(0.5 * (t.uv[c].X() + t.uv[(c + 1) % 3].X()), 0.5 * (t.uv[c].Y() + t.uv[(c + 1) % 3].Y()));
-    auto seg = surface.segments.find(key);
-    auto known = split_node.find(key);
-    if (seg == surface.segments.end()) {
-      if (known != split_node.end()) return known->second;
-      const int id = static_cast<int>(surface.nodes.size());
-      surface.nodes.push_back(of(face_surface(t.face).Value(uv.X(), uv.Y())));
-      surface.node_face.push_back(t.face);
-      split_node.emplace(key, id);
-      return id;
+    auto seg = surface.segments.find(pair_key(a, b));
+    const bool on_edge = seg != surface.segments.end();
+    const double tm = on_edge ? 0.5 * (seg->second.t_lo + seg->second.t_hi) : 0.0;
+    if (on_edge) {
+      const EdgeSegment& e = seg->second;
+      const double ta = a < b ? e.t_lo : e.t_hi;
+      double best = std::numeric_limits<double>::max();
+      for (const PCurve& pc : pcurves[t.face]) {  // the pcurve through node a (seams have two)
+        if (pc.edge != e.edge) continue;
+        const double d = pc.curve->Value(ta).Distance(t.uv[c]);
+        if (d < best) best = d, uv = pc.curve->Value(tm);
+      }
     }
-    const EdgeSegment e = seg->second;
-    const double tm = 0.5 * (e.t_lo + e.t_hi), ta = a < b ? e.t_lo : e.t_hi;
-    double best = std::numeric_limits<double>::max();
-    for (const PCurve& pc : pcurves[t.face]) {  // the pcurve through node a (seams have two)
-      if (pc.edge != e.edge) continue;
-      const double d = pc.curve->Value(ta).Distance(t.uv[c]);
-      if (d < best) best = d, uv = pc.curve->Value(tm);
-    }
-    if (known != split_node.end()) return known->second;
-    const int id = static_cast<int>(surface.nodes.size());
-    surface.nodes.push_back(of(edge_curve(e.edge).Value(tm)));
+    if (node >= 0) return node;
+    surface.nodes.push_back(on_edge ? of(edge_curve(seg->second.edge).Value(tm))
+                                    : of(face_surface(t.face).Value(uv.X(), uv.Y())));
     surface.node_face.push_back(t.face);
-    split_node.emplace(key, id);
-    return id;
+    return static_cast<int>(surface.nodes.size()) - 1;
   };
   // Splits side (a, b) in every triangle that has it; the halves of an edge segment stay one.
   auto split_side = [&](int a, int b) {
@@ -544,16 +542,14 @@ void refine(const Shape& s, Surface& surface, double target,
     int m = -1;
     for (int ti : around) {
       const SurfaceTriangle t = tris[ti];
-      int c = 0;
-      while (pair_key(t.node[c], t.node[(c + 1) % 3]) != key) ++c;
+      const int c = side_with_key(t, key);
       gp_Pnt2d uv;
-      m = midpoint(ti, c, uv);
+      m = midpoint(ti, c, m, uv);
       const int c1 = (c + 1) % 3, c2 = (c + 2) % 3;
       unlink(ti);
       tris[ti] = SurfaceTriangle{{t.node[c], m, t.node[c2]}, {t.uv[c], uv, t.uv[c2]}, t.face};
       link(ti);
       tris.push_back(SurfaceTriangle{{m, t.node[c1], t.node[c2]}, {uv, t.uv[c1], t.uv[c2]}, t.face});
-      alive.push_back(1);
       link(static_cast<int>(tris.size()) - 1);
     }
     auto seg = surface.segments.find(key);
@@ -566,13 +562,10 @@ void refine(const Shape& s, Surface& surface, double target,
       surface.segments[pair_key(m, hi)] = m < hi ? EdgeSegment{e.edge, tm, e.t_hi} : EdgeSegment{e.edge, e.t_hi, tm};
     }
     at_edge.erase(key);
-    std::vector<std::uint64_t> stack;
-    for (int ti : at_edge[pair_key(m, a)])
-      for (int c = 0; c < 3; ++c)
-        stack.push_back(pair_key(tris[ti].node[c], tris[ti].node[(c + 1) % 3]));
-    for (int ti : at_edge[pair_key(m, b)])
-      for (int c = 0; c < 3; ++c)
-        stack.push_back(pair_key(tris[ti].node[c], tris[ti].node[(c + 1) % 3]));
+    std::vector<std::uint64_t> stack;  // the sides of the triangles around the new node
+    for (int end : {a, b})
+      for (int ti : at_edge[pair_key(m, end)])
+        for (int c = 0; c < 3; ++c) stack.push_back(side_key(tris[ti], c));
     return stack;
   };
   // Lawson's flips after an insertion: sides that fail the Delaunay test (opposite angles
@@ -586,7 +579,7 @@ void refine(const Shape& s, Surface& surface, double target,
   auto normal_of = [&](int a, int b, int c) {
     return (surface.nodes[b] - surface.nodes[a]).cross(surface.nodes[c] - surface.nodes[a]);
   };
-  std::function<void(std::vector<std::uint64_t>)> restore_delaunay = [&](std::vector<std::uint64_t> stack) {
+  auto restore_delaunay = [&](std::vector<std::uint64_t> stack) {
     std::size_t flips = 0;
     while (!stack.empty() && flips < 10000) {
       const std::uint64_t key = stack.back();
@@ -596,9 +589,7 @@ void refine(const Shape& s, Surface& surface, double target,
       const int t1 = it->second[0], t2 = it->second[1];
       if (tris[t1].face != tris[t2].face || lattice_face[tris[t1].face]) continue;
       // t1 = (p, q, m), t2 = (q, p, x).
-      int c1 = 0, c2 = 0;
-      while (pair_key(tris[t1].node[c1], tris[t1].node[(c1 + 1) % 3]) != key) ++c1;
-      while (pair_key(tris[t2].node[c2], tris[t2].node[(c2 + 1) % 3]) != key) ++c2;
+      const int c1 = side_with_key(tris[t1], key), c2 = side_with_key(tris[t2], key);
       const SurfaceTriangle a = tris[t1], b = tris[t2];
       const int p = a.node[c1], q = a.node[(c1 + 1) % 3], m = a.node[(c1 + 2) % 3];
       const int x = b.node[(c2 + 2) % 3];
@@ -766,58 +757,39 @@ std::string tail_of_file(const fs::path& path, std::size_t max_chars) {
   return s.size() > max_chars ? "..." + s.substr(s.size() - max_chars) : s;
 }
 
-// Reads TetGen's .node (0-based with -z) into points.
-std::vector<double> read_tetgen_nodes(const fs::path& path) {
+// Reads a TetGen output table (.node or .ele, 0-based with -z): a header "count columns ...",
+// then per line an id and `columns` values; '#' starts a comment. Returns count * columns values.
+template <typename T>
+std::vector<T> read_tetgen_table(const fs::path& path, int columns) {
   std::ifstream in(path);
-  if (!in) throw InputError("TetGen wrote no " + path.filename().string());
+  const std::string name = path.filename().string();
+  if (!in) throw InputError("TetGen wrote no " + name);
   std::string line;
-  long long n = -1, dim = 0, attributes = 0, markers = 0;
-  std::vector<double> points;
+  long long n = -1, width = 0;
+  std::vector<T> values;
   while (std::getline(in, line)) {
     const auto hash = line.find('#');
     if (hash != std::string::npos) line.resize(hash);
     std::istringstream ls(line);
     if (n < 0) {
-      if (!(ls >> n >> dim >> attributes >> markers)) continue;
-      points.reserve(static_cast<std::size_t>(n) * 3);
+      if (!(ls >> n >> width)) continue;
+      if (width != columns)
+        throw InputError("TetGen's " + name + " has " + std::to_string(width) + " values per row, not " +
+                         std::to_string(columns));
+      values.reserve(static_cast<std::size_t>(n) * columns);
       continue;
     }
     long long id;
-    double x, y, z;
-    if (!(ls >> id >> x >> y >> z)) continue;
-    points.insert(points.end(), {x, y, z});
-  }
-  if (n < 0 || static_cast<long long>(points.size()) != 3 * n)
-    throw InputError("TetGen's " + path.filename().string() + " is truncated");
-  return points;
-}
-
-std::vector<index_t> read_tetgen_tets(const fs::path& path, index_t nb_points) {
-  std::ifstream in(path);
-  if (!in) throw InputError("TetGen wrote no " + path.filename().string());
-  std::string line;
-  long long n = -1, corners = 0;
-  std::vector<index_t> tets;
-  while (std::getline(in, line)) {
-    const auto hash = line.find('#');
-    if (hash != std::string::npos) line.resize(hash);
-    std::istringstream ls(line);
-    if (n < 0) {
-      if (!(ls >> n >> corners)) continue;
-      if (corners != 4) throw InputError("TetGen's .ele has " + std::to_string(corners) + " nodes per tet");
-      tets.reserve(static_cast<std::size_t>(n) * 4);
-      continue;
-    }
-    long long id, v[4];
-    if (!(ls >> id >> v[0] >> v[1] >> v[2] >> v[3])) continue;
-    for (long long x : v) {
-      if (x < 0 || x >= nb_points) throw InputError("TetGen's .ele refers to a missing node");
-      tets.push_back(static_cast<index_t>(x));
+    if (!(ls >> id)) continue;
+    for (int k = 0; k < columns; ++k) {
+      T x;
+      if (!(ls >> x)) throw InputError("TetGen's " + name + " has a short row: " + line);
+      values.push_back(x);
     }
   }
-  if (n < 0 || static_cast<long long>(tets.size()) != 4 * n)
-    throw InputError("TetGen's " + path.filename().string() + " is truncated");
-  return tets;
+  if (n < 0 || static_cast<long long>(values.size()) != columns * n)
+    throw InputError("TetGen's " + name + " is truncated");
+  return values;
 }
 
 // A temporary directory removed on destruction (unless kept).
@@ -878,21 +850,27 @@ TetMesh mesh_shape(const std::string& brep, const MeshShapeParameters& parameter
   Frame frame = choose_frame(shape, parameters.frame);
   clock.lap("shape");
 
-  // The surface in frame coordinates; the lattice through its bounding box.
-  // The bounding box in the frame, from the triangulation's nodes (on the CAD surface).
+  // The lattice through the bounding box in the frame, from the triangulation's nodes (on the CAD).
   const double deflection = parameters.surface_deflection * h;
   Surface surface = triangulate(shape, deflection, 1e-9 * h + 1e-12);
   Vec3 lo{std::numeric_limits<double>::max(), std::numeric_limits<double>::max(),
           std::numeric_limits<double>::max()};
   Vec3 hi = lo * -1.0;
-  for (const Vec3& p : surface.nodes) lo = vmin(lo, frame.to_frame(p)), hi = vmax(hi, frame.to_frame(p));
+  for (const Vec3& p : surface.nodes) {
+    const Vec3 q = frame.to_frame(p);
+    lo = vmin(lo, q), hi = vmax(hi, q);
+  }
   const double extent[3] = {hi.x - lo.x, hi.y - lo.y, hi.z - lo.z};
   const double largest = std::max({extent[0], extent[1], extent[2]});
   if (h > largest)
     throw InputError("mesh_shape: size " + std::to_string(h) + " is larger than the shape (" +
                      std::to_string(largest) + " across)", Entity::Parameter);
   frame.origin = frame.to_world(lo);  // lattice planes through the box's lower corner
-  const double plane_tolerance = 1e-7 * h;
+  // Whether an offset along an axis falls on a lattice plane of the given spacing.
+  const auto on_lattice_plane = [plane_tolerance = 1e-7 * h](double offset, double spacing) {
+    const double k = offset / spacing;
+    return std::abs(k - std::round(k)) * spacing < plane_tolerance;
+  };
 
   // Planar faces normal to a frame axis, and their offsets along it.
   std::vector<std::optional<AxisPlane>> face_plane(shape.faces.Extent());
@@ -903,7 +881,7 @@ TetMesh mesh_shape(const std::string& brep, const MeshShapeParameters& parameter
     const Vec3 n = of(s.Plane().Axis().Direction());
     for (int a = 0; a < 3; ++a) {
       if (std::abs(std::abs(n.dot(frame.axis[a])) - 1) > 1e-9) continue;
-      const double offset = frame.to_frame(of(s.Plane().Location())).dot(Vec3{a == 0 ? 1.0 : 0, a == 1 ? 1.0 : 0, a == 2 ? 1.0 : 0});
+      const double offset = coord(frame.to_frame(of(s.Plane().Location())), a);
       face_plane[fi - 1] = AxisPlane{a, offset};
       offsets[a].push_back(offset);
     }
@@ -920,10 +898,7 @@ TetMesh mesh_shape(const std::string& brep, const MeshShapeParameters& parameter
     for (int n = lo_n; n <= hi_n; ++n) {
       const double spacing = L / n;
       int hits = 0;
-      for (double o : offsets[a]) {
-        const double k = o / spacing;
-        hits += std::abs(k - std::round(k)) * spacing < plane_tolerance;
-      }
+      for (double o : offsets[a]) hits += on_lattice_plane(o, spacing);
       if (hits > best_hits || (hits == best_hits && std::abs(n - L / h) < std::abs(best - L / h)))
         best = n, best_hits = hits;
     }
@@ -936,8 +911,7 @@ TetMesh mesh_shape(const std::string& brep, const MeshShapeParameters& parameter
   std::vector<bool> lattice_face(shape.faces.Extent(), false);
   for (int f = 0; f < shape.faces.Extent(); ++f) {
     if (!face_plane[f]) continue;
-    const double k = face_plane[f]->offset / report.spacing[face_plane[f]->axis];
-    lattice_face[f] = std::abs(k - std::round(k)) * report.spacing[face_plane[f]->axis] < plane_tolerance;
+    lattice_face[f] = on_lattice_plane(face_plane[f]->offset, report.spacing[face_plane[f]->axis]);
     report.nb_lattice_faces += lattice_face[f];
   }
   std::vector<bool> lattice_edge(shape.edges.Extent(), false);
@@ -974,8 +948,11 @@ TetMesh mesh_shape(const std::string& brep, const MeshShapeParameters& parameter
   // the inward normal, where there is room.
   std::vector<Vec3> normal(nodes.size(), Vec3{0, 0, 0});
   std::vector<bool> smooth(nodes.size(), true);
+  auto triangle_normal = [&](const SurfaceTriangle& t) {
+    return (nodes[t.node[1]] - nodes[t.node[0]]).cross(nodes[t.node[2]] - nodes[t.node[0]]);
+  };
   for (const SurfaceTriangle& t : surface.triangles) {
-    const Vec3 n = (nodes[t.node[1]] - nodes[t.node[0]]).cross(nodes[t.node[2]] - nodes[t.node[0]]);
+    const Vec3 n = triangle_normal(t);
     for (int c : t.node) {
       normal[c] = normal[c] + n;
       if (lattice_face[t.face] || shape.face_solid_count[t.face] > 1) smooth[c] = false;
@@ -984,7 +961,7 @@ TetMesh mesh_shape(const std::string& brep, const MeshShapeParameters& parameter
   for (auto& n : normal)
     if (n.norm() > 0) n = unit(n);
   for (const SurfaceTriangle& t : surface.triangles) {
-    const Vec3 n = (nodes[t.node[1]] - nodes[t.node[0]]).cross(nodes[t.node[2]] - nodes[t.node[0]]);
+    const Vec3 n = triangle_normal(t);
     if (n.norm() == 0) continue;
     for (int c : t.node)
       if (unit(n).dot(normal[c]) < std::cos(25.0 * M_PI / 180)) smooth[c] = false;
@@ -1105,6 +1082,13 @@ TetMesh mesh_shape(const std::string& brep, const MeshShapeParameters& parameter
   // is that cell's centre and whose circumsphere holds nothing else, or the core cell goes.
   const int c0 = cells[0], c1 = cells[1], c2 = cells[2];
   auto cell_index = [&](int i, int j, int k) { return (static_cast<std::size_t>(k) * c1 + j) * c0 + i; };
+  // The cell across face dir (0..5: -x, +x, -y, +y, -z, +z) of cell (i, j, k), in n; whether it
+  // is in the lattice.
+  auto across = [&](int i, int j, int k, int dir, int (&n)[3]) {
+    n[0] = i, n[1] = j, n[2] = k;
+    n[dir / 2] += dir % 2 ? 1 : -1;
+    return n[0] >= 0 && n[0] < c0 && n[1] >= 0 && n[1] < c1 && n[2] >= 0 && n[2] < c2;
+  };
   auto cell_centre = [&](int i, int j, int k) {
     return Vec3{(i + 0.5) * report.spacing[0], (j + 0.5) * report.spacing[1], (k + 0.5) * report.spacing[2]};
   };
@@ -1135,12 +1119,11 @@ TetMesh mesh_shape(const std::string& brep, const MeshShapeParameters& parameter
     std::uint8_t& state = face_state[cell_index(i, j, k) * 6 + dir];
     if (state) return state;
     const int axis = dir / 2, side = dir % 2 ? 1 : -1;
-    int n[3] = {i, j, k};
-    n[axis] += side;
+    int n[3];
+    const bool in_range = across(i, j, k, dir, n);
     const Vec3 face_centre = cell_centre(i, j, k) +
         Vec3{axis == 0 ? side * 0.5 * report.spacing[0] : 0, axis == 1 ? side * 0.5 * report.spacing[1] : 0,
              axis == 2 ? side * 0.5 * report.spacing[2] : 0};
-    const bool in_range = n[0] >= 0 && n[0] < c0 && n[1] >= 0 && n[1] < c1 && n[2] >= 0 && n[2] < c2;
     const Vec3 apex = in_range ? cell_centre(n[0], n[1], n[2]) : face_centre;
     if (!in_range || !inside(apex)) return state = 1;
     // The sphere through the face's corners and the apex.
@@ -1163,10 +1146,8 @@ TetMesh mesh_shape(const std::string& brep, const MeshShapeParameters& parameter
         for (int i = 0; i < c0; ++i) {
           if (!core[cell_index(i, j, k)]) continue;
           for (int dir = 0; dir < 6; ++dir) {
-            int n[3] = {i, j, k};
-            n[dir / 2] += dir % 2 ? 1 : -1;
-            const bool in_range = n[0] >= 0 && n[0] < c0 && n[1] >= 0 && n[1] < c1 && n[2] >= 0 && n[2] < c2;
-            if (in_range && core[cell_index(n[0], n[1], n[2])]) continue;
+            int n[3];
+            if (across(i, j, k, dir, n) && core[cell_index(n[0], n[1], n[2])]) continue;
             if (face_kind(i, j, k, dir) == 3) {
               core[cell_index(i, j, k)] = 0;
               changed = true;
@@ -1182,10 +1163,8 @@ TetMesh mesh_shape(const std::string& brep, const MeshShapeParameters& parameter
         if (!core[cell_index(i, j, k)]) continue;
         ++report.nb_core_cells;
         for (int dir = 0; dir < 6; ++dir) {
-          int n[3] = {i, j, k};
-          n[dir / 2] += dir % 2 ? 1 : -1;
-          const bool in_range = n[0] >= 0 && n[0] < c0 && n[1] >= 0 && n[1] < c1 && n[2] >= 0 && n[2] < c2;
-          if (!in_range || core[cell_index(n[0], n[1], n[2])]) continue;
+          int n[3];
+          if (!across(i, j, k, dir, n) || core[cell_index(n[0], n[1], n[2])]) continue;
           if (face_kind(i, j, k, dir) == 2) apex_cell[cell_index(n[0], n[1], n[2])] = 1;
         }
       }
@@ -1248,9 +1227,12 @@ TetMesh mesh_shape(const std::string& brep, const MeshShapeParameters& parameter
                      "\n(command: " + report.tetgen_command + ")");
 
   TetMesh mesh;
-  const std::vector<double> frame_points = read_tetgen_nodes(work.path() / "shape.1.node");
-  mesh.tets = read_tetgen_tets(work.path() / "shape.1.ele",
-                               static_cast<index_t>(frame_points.size() / 3));
+  const std::vector<double> frame_points = read_tetgen_table<double>(work.path() / "shape.1.node", 3);
+  for (long long v : read_tetgen_table<long long>(work.path() / "shape.1.ele", 4)) {
+    if (v < 0 || v >= static_cast<long long>(frame_points.size() / 3))
+      throw InputError("TetGen's shape.1.ele refers to a missing node");
+    mesh.tets.push_back(static_cast<index_t>(v));
+  }
   const std::size_t given = nodes.size() + inserted.size();
   const std::size_t made = frame_points.size() / 3;
   report.nb_steiner_points = made > given ? made - given : 0;
@@ -1276,18 +1258,14 @@ TetMesh mesh_shape(const std::string& brep, const MeshShapeParameters& parameter
 
   // How far the boundary nodes are from the CAD faces they lie on.
   {
-    static const int faces_of_tet[4][3] = {{1, 2, 3}, {0, 2, 3}, {0, 1, 3}, {0, 1, 2}};
+    // Face f of a tet is the one opposite its vertex f (TetTopology).
+    const TetTopology topology(mesh);
     std::vector<char> boundary(made, 0);
-    std::map<std::array<index_t, 3>, int> count;
-    for (std::size_t t = 0; t < mesh.tets.size() / 4; ++t)
-      for (const auto& f : faces_of_tet) {
-        std::array<index_t, 3> key{mesh.tets[4 * t + f[0]], mesh.tets[4 * t + f[1]], mesh.tets[4 * t + f[2]]};
-        std::sort(key.begin(), key.end());
-        ++count[key];
-      }
-    for (const auto& [key, n] : count)
-      if (n == 1)
-        for (index_t v : key) boundary[v] = 1;
+    for (index_t t = 0; t < mesh.nb_tets(); ++t)
+      for (int f = 0; f < 4; ++f)
+        if (topology.on_boundary(t, f))
+          for (int k = 0; k < 4; ++k)
+            if (k != f) boundary[mesh.tet(t)[k]] = 1;
     std::vector<std::unique_ptr<ShapeAnalysis_Surface>> analysis(shape.faces.Extent());
     double worst = 0;
     for (std::size_t v = 0; v < made; ++v) {
