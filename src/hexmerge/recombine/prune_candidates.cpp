@@ -47,7 +47,8 @@ Quad quad_of(const TetMesh& mesh, const TetTopology& topology, const Candidate& 
       if (!in_quad) continue;
       const index_t n = topology.neighbor(t, lf);
       if (n != NO_CELL && holds(c, n)) continue;  // a face inside the cell (flat tets)
-      if (n == NO_CELL) q.open = true;
+      if (n == NO_CELL)
+        q.open = true;
       else {
         q.inner = true;
         if (q.nb_behind < 2) q.behind[q.nb_behind] = n;
@@ -87,7 +88,8 @@ std::vector<Candidate> prune_unclosable(const TetMesh& mesh, const TetTopology& 
       if (p == ci || !viable[p]) continue;
       const Candidate& other = candidates[p];
       bool across = true;  // the partner holds the tets behind: it is on the other side
-      for (int i = 0; i < std::min(q.nb_behind, 2) && across; ++i) across = holds(other, q.behind[i]);
+      for (int i = 0; i < std::min(q.nb_behind, 2) && across; ++i)
+        across = holds(other, q.behind[i]);
       if (across) return true;
     }
     return false;

@@ -5,7 +5,6 @@
 #include <IGESControl_Reader.hxx>
 #include <STEPControl_Reader.hxx>
 #include <Standard_Failure.hxx>
-
 #include <algorithm>
 #include <cctype>
 #include <fstream>
@@ -53,7 +52,8 @@ TopoDS_Shape read_with(const std::string& path, const char* kind) {
   Reader reader;
   if (reader.ReadFile(path.c_str()) != IFSelect_RetDone)
     throw InputError("cannot read " + path + " as a " + kind + " file");
-  if (reader.TransferRoots() == 0) throw InputError(path + ": the " + kind + " file holds no shape");
+  if (reader.TransferRoots() == 0)
+    throw InputError(path + ": the " + kind + " file holds no shape");
   TopoDS_Shape shape = reader.OneShape();
   if (shape.IsNull()) throw InputError(path + ": the " + kind + " file holds no shape");
   return shape;
@@ -72,12 +72,15 @@ std::string read_shape_file(const std::string& path) {
       read_brep(text.str());  // fails here, naming the file's problem, rather than later
       return text.str();
     }
-    if (ext == "step" || ext == "stp") return write_brep(read_with<STEPControl_Reader>(path, "STEP"));
-    if (ext == "iges" || ext == "igs") return write_brep(read_with<IGESControl_Reader>(path, "IGES"));
+    if (ext == "step" || ext == "stp")
+      return write_brep(read_with<STEPControl_Reader>(path, "STEP"));
+    if (ext == "iges" || ext == "igs")
+      return write_brep(read_with<IGESControl_Reader>(path, "IGES"));
   } catch (const Standard_Failure& e) {
     throw InputError("cannot read " + path + ": " + e.GetMessageString());
   }
-  throw InputError("cannot read " + path + ": the file name must end in .step, .stp, .brep, .brp, "
+  throw InputError("cannot read " + path +
+                   ": the file name must end in .step, .stp, .brep, .brp, "
                    ".iges or .igs");
 }
 

@@ -4,7 +4,6 @@
 /// it includes OpenCASCADE).
 
 #include <TopoDS_Shape.hxx>
-
 #include <string>
 
 namespace hexmerge {

@@ -20,8 +20,6 @@
 #include <TopoDS.hxx>
 #include <TopoDS_Edge.hxx>
 #include <TopoDS_Face.hxx>
-#include <gp_Pln.hxx>
-
 #include <algorithm>
 #include <array>
 #include <chrono>
@@ -31,6 +29,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <gp_Pln.hxx>
 #include <limits>
 #include <map>
 #include <memory>
@@ -152,7 +151,9 @@ Vec3 vmax(const Vec3& a, const Vec3& b) {
   return {std::max(a.x, b.x), std::max(a.y, b.y), std::max(a.z, b.z)};
 }
 double coord(const Vec3& v, int axis) { return axis == 0 ? v.x : axis == 1 ? v.y : v.z; }
-void set_coord(Vec3& v, int axis, double value) { (axis == 0 ? v.x : axis == 1 ? v.y : v.z) = value; }
+void set_coord(Vec3& v, int axis, double value) {
+  (axis == 0 ? v.x : axis == 1 ? v.y : v.z) = value;
+}
 
 // Points, with "is there one within r of q" queries.
 class PointSet {
@@ -211,8 +212,9 @@ Shape load_shape(const std::string& brep) {
   s.shape = read_brep(brep);
   TopExp::MapShapes(s.shape, TopAbs_SOLID, s.solids);
   if (s.solids.IsEmpty())
-    throw InputError("the shape holds no solid (a face, a shell or a wire cannot be meshed "
-                     "into tets): give a closed solid");
+    throw InputError(
+        "the shape holds no solid (a face, a shell or a wire cannot be meshed "
+        "into tets): give a closed solid");
   TopExp::MapShapes(s.shape, TopAbs_FACE, s.faces);
   TopExp::MapShapes(s.shape, TopAbs_EDGE, s.edges);
   s.face_solid_count.assign(static_cast<std::size_t>(s.faces.Extent()), 0);
@@ -333,7 +335,9 @@ struct SurfaceTriangle {
 };
 
 // The key of side c of a triangle (from node c to node c + 1), and the side with a given key.
-std::uint64_t side_key(const SurfaceTriangle& t, int c) { return pair_key(t.node[c], t.node[(c + 1) % 3]); }
+std::uint64_t side_key(const SurfaceTriangle& t, int c) {
+  return pair_key(t.node[c], t.node[(c + 1) % 3]);
+}
 int side_with_key(const SurfaceTriangle& t, std::uint64_t key) {
   int c = 0;
   while (side_key(t, c) != key) ++c;
@@ -348,8 +352,8 @@ struct EdgeSegment {
 };
 
 struct Surface {
-  std::vector<Vec3> nodes;       // world coordinates
-  std::vector<int> node_face;    // a face the node lies on
+  std::vector<Vec3> nodes;                 // world coordinates
+  std::vector<int> node_face;              // a face the node lies on
   std::vector<SurfaceTriangle> triangles;  // oriented outward (as the face is in its solid)
   std::unordered_map<std::uint64_t, EdgeSegment> segments;
 };
@@ -378,11 +382,13 @@ class NodeMerger {
  private:
   std::array<long long, 3> cell(const Vec3& p) const {
     const double w = 4 * tol_;
-    return {static_cast<long long>(std::floor(p.x / w)), static_cast<long long>(std::floor(p.y / w)),
+    return {static_cast<long long>(std::floor(p.x / w)),
+            static_cast<long long>(std::floor(p.y / w)),
             static_cast<long long>(std::floor(p.z / w))};
   }
   static std::uint64_t hash(long long i, long long j, long long k) {
-    return static_cast<std::uint64_t>(i) * 73856093ULL ^ static_cast<std::uint64_t>(j) * 19349663ULL ^
+    return static_cast<std::uint64_t>(i) * 73856093ULL ^
+           static_cast<std::uint64_t>(j) * 19349663ULL ^
            static_cast<std::uint64_t>(k) * 83492791ULL;
   }
   Surface& s_;
@@ -406,8 +412,9 @@ Surface triangulate(const Shape& s, double deflection, double tolerance) {
     TopLoc_Location loc;
     const Handle(Poly_Triangulation)& tri = BRep_Tool::Triangulation(face, loc);
     if (tri.IsNull() || tri->NbTriangles() == 0)
-      throw InputError("OpenCASCADE could not triangulate face " + std::to_string(face_index) +
-                       " of the shape", Entity::None);
+      throw InputError(
+          "OpenCASCADE could not triangulate face " + std::to_string(face_index) + " of the shape",
+          Entity::None);
     const gp_Trsf trsf = loc.Transformation();
     std::vector<int> global(static_cast<std::size_t>(tri->NbNodes()) + 1);
     for (int i = 1; i <= tri->NbNodes(); ++i)
@@ -445,8 +452,8 @@ Surface triangulate(const Shape& s, double deflection, double tolerance) {
           ta = f + (l - f) * (k - 1) / (poly->NbNodes() - 1);
           tb = f + (l - f) * k / (poly->NbNodes() - 1);
         }
-        surface.segments[pair_key(a, b)] = a < b ? EdgeSegment{edge_index, ta, tb}
-                                                 : EdgeSegment{edge_index, tb, ta};
+        surface.segments[pair_key(a, b)] =
+            a < b ? EdgeSegment{edge_index, ta, tb} : EdgeSegment{edge_index, tb, ta};
       }
     }
   }
@@ -457,8 +464,8 @@ Surface triangulate(const Shape& s, double deflection, double tolerance) {
 // `target` (sides on edges between lattice faces excepted); lattice-face triangles are split
 // only where a neighbour's side must be. New nodes lie on the CAD edge (sides on an edge) or on
 // the face's surface.
-void refine(const Shape& s, Surface& surface, double target,
-            const std::vector<bool>& lattice_face, const std::vector<bool>& lattice_edge) {
+void refine(const Shape& s, Surface& surface, double target, const std::vector<bool>& lattice_face,
+            const std::vector<bool>& lattice_edge) {
   std::vector<std::unique_ptr<BRepAdaptor_Surface>> surfaces(s.faces.Extent());
   std::vector<std::unique_ptr<BRepAdaptor_Curve>> curves(s.edges.Extent());
   // Per face, the pcurves of its edges (a seam has two: one per orientation).
@@ -478,7 +485,8 @@ void refine(const Shape& s, Surface& surface, double target,
     }
   }
   auto face_surface = [&](int f) -> const BRepAdaptor_Surface& {
-    if (!surfaces[f]) surfaces[f] = std::make_unique<BRepAdaptor_Surface>(TopoDS::Face(s.faces(f + 1)));
+    if (!surfaces[f])
+      surfaces[f] = std::make_unique<BRepAdaptor_Surface>(TopoDS::Face(s.faces(f + 1)));
     return *surfaces[f];
   };
   auto edge_curve = [&](int e) -> const BRepAdaptor_Curve& {
@@ -507,7 +515,8 @@ void refine(const Shape& s, Surface& surface, double target,
     const SurfaceTriangle& t = tris[ti];
     int best = 0;
     for (int c = 1; c < 3; ++c)
-      if (length(t.node[c], t.node[(c + 1) % 3]) > length(t.node[best], t.node[(best + 1) % 3])) best = c;
+      if (length(t.node[c], t.node[(c + 1) % 3]) > length(t.node[best], t.node[(best + 1) % 3]))
+        best = c;
     return best;
   };
   // The midpoint of side c of triangle ti: its parameters on the triangle's face, and its node,
@@ -515,7 +524,8 @@ void refine(const Shape& s, Surface& surface, double target,
   auto midpoint = [&](int ti, int c, int node, gp_Pnt2d& uv) {
     const SurfaceTriangle& t = tris[ti];
     const int a = t.node[c], b = t.node[(c + 1) % 3];
-    uv = gp_Pnt2d(0.5 * (t.uv[c].X() + t.uv[(c + 1) % 3].X()), 0.5 * (t.uv[c].Y() + t.uv[(c + 1) % 3].Y()));
+    uv = gp_Pnt2d(0.5 * (t.uv[c].X() + t.uv[(c + 1) % 3].X()),
+                  0.5 * (t.uv[c].Y() + t.uv[(c + 1) % 3].Y()));
     auto seg = surface.segments.find(pair_key(a, b));
     const bool on_edge = seg != surface.segments.end();
     const double tm = on_edge ? 0.5 * (seg->second.t_lo + seg->second.t_hi) : 0.0;
@@ -549,7 +559,8 @@ void refine(const Shape& s, Surface& surface, double target,
       unlink(ti);
       tris[ti] = SurfaceTriangle{{t.node[c], m, t.node[c2]}, {t.uv[c], uv, t.uv[c2]}, t.face};
       link(ti);
-      tris.push_back(SurfaceTriangle{{m, t.node[c1], t.node[c2]}, {uv, t.uv[c1], t.uv[c2]}, t.face});
+      tris.push_back(
+          SurfaceTriangle{{m, t.node[c1], t.node[c2]}, {uv, t.uv[c1], t.uv[c2]}, t.face});
       link(static_cast<int>(tris.size()) - 1);
     }
     auto seg = surface.segments.find(key);
@@ -558,8 +569,10 @@ void refine(const Shape& s, Surface& surface, double target,
       const double tm = 0.5 * (e.t_lo + e.t_hi);
       const int lo = std::min(a, b), hi = std::max(a, b);
       surface.segments.erase(seg);
-      surface.segments[pair_key(lo, m)] = lo < m ? EdgeSegment{e.edge, e.t_lo, tm} : EdgeSegment{e.edge, tm, e.t_lo};
-      surface.segments[pair_key(m, hi)] = m < hi ? EdgeSegment{e.edge, tm, e.t_hi} : EdgeSegment{e.edge, e.t_hi, tm};
+      surface.segments[pair_key(lo, m)] =
+          lo < m ? EdgeSegment{e.edge, e.t_lo, tm} : EdgeSegment{e.edge, tm, e.t_lo};
+      surface.segments[pair_key(m, hi)] =
+          m < hi ? EdgeSegment{e.edge, tm, e.t_hi} : EdgeSegment{e.edge, e.t_hi, tm};
     }
     at_edge.erase(key);
     std::vector<std::uint64_t> stack;  // the sides of the triangles around the new node
@@ -636,15 +649,16 @@ void refine(const Shape& s, Surface& surface, double target,
   // such triangles' area (plus BRepMesh's own) means the refinement is not converging, which is
   // reported rather than run without end.
   double area = 0;
-  for (const SurfaceTriangle& t : tris) area += 0.5 * normal_of(t.node[0], t.node[1], t.node[2]).norm();
+  for (const SurfaceTriangle& t : tris)
+    area += 0.5 * normal_of(t.node[0], t.node[1], t.node[2]).norm();
   const std::size_t node_budget =
       surface.nodes.size() + static_cast<std::size_t>(10 * area / (0.1 * target * target)) + 1000;
   for (int ti = 0; ti < static_cast<int>(tris.size()); ++ti)
     while (needs_split(ti)) {
       if (surface.nodes.size() > node_budget)
         throw InputError("the surface triangulation of face " + std::to_string(tris[ti].face) +
-                         " does not converge to size " + std::to_string(target) + " (over " +
-                         std::to_string(node_budget) + " nodes); try another size",
+                             " does not converge to size " + std::to_string(target) + " (over " +
+                             std::to_string(node_budget) + " nodes); try another size",
                          Entity::Parameter);
       split_longest(ti);
     }
@@ -675,8 +689,10 @@ std::vector<Facet> make_facets(const Surface& surface, const std::vector<Vec3>& 
   std::vector<Facet> facets;
   std::map<int, std::vector<const SurfaceTriangle*>> by_face;
   for (const SurfaceTriangle& t : surface.triangles) {
-    if (lattice_face[t.face]) by_face[t.face].push_back(&t);
-    else facets.push_back(Facet{{{t.node[0], t.node[1], t.node[2]}}, {}, t.face + 1});
+    if (lattice_face[t.face])
+      by_face[t.face].push_back(&t);
+    else
+      facets.push_back(Facet{{{t.node[0], t.node[1], t.node[2]}}, {}, t.face + 1});
   }
   for (const auto& [face, triangles] : by_face) {
     std::unordered_map<std::uint64_t, int> uses;
@@ -696,7 +712,8 @@ std::vector<Facet> make_facets(const Surface& surface, const std::vector<Vec3>& 
     }
     const int axis = face_plane[face]->axis, u = (axis + 1) % 3, v = (axis + 2) % 3;
     const SurfaceTriangle* t0 = triangles.front();
-    const Vec3 normal = (nodes[t0->node[1]] - nodes[t0->node[0]]).cross(nodes[t0->node[2]] - nodes[t0->node[0]]);
+    const Vec3 normal =
+        (nodes[t0->node[1]] - nodes[t0->node[0]]).cross(nodes[t0->node[2]] - nodes[t0->node[0]]);
     const double side = coord(normal, axis) > 0 ? 1 : -1;
     Facet facet{{}, {}, face + 1};
     while (!next.empty()) {
@@ -735,8 +752,7 @@ std::string shell_quote(const std::string& s) {
 }
 
 std::string find_program(const std::string& name) {
-  if (name.find('/') != std::string::npos)
-    return fs::exists(name) ? name : std::string();
+  if (name.find('/') != std::string::npos) return fs::exists(name) ? name : std::string();
   const char* path = std::getenv("PATH");
   std::stringstream dirs(path ? path : "");
   std::string dir;
@@ -774,8 +790,8 @@ std::vector<T> read_tetgen_table(const fs::path& path, int columns) {
     if (n < 0) {
       if (!(ls >> n >> width)) continue;
       if (width != columns)
-        throw InputError("TetGen's " + name + " has " + std::to_string(width) + " values per row, not " +
-                         std::to_string(columns));
+        throw InputError("TetGen's " + name + " has " + std::to_string(width) +
+                         " values per row, not " + std::to_string(columns));
       values.reserve(static_cast<std::size_t>(n) * columns);
       continue;
     }
@@ -803,7 +819,8 @@ class WorkDirectory {
       return;
     }
     std::string pattern = (fs::temp_directory_path() / "hexmerge-mesh-XXXXXX").string();
-    if (!mkdtemp(pattern.data())) throw InputError("cannot create a temporary directory for TetGen");
+    if (!mkdtemp(pattern.data()))
+      throw InputError("cannot create a temporary directory for TetGen");
     path_ = pattern;
   }
   ~WorkDirectory() {
@@ -818,11 +835,15 @@ class WorkDirectory {
 };
 
 void check_parameters(const MeshShapeParameters& p) {
-  auto bad = [](const std::string& what) { throw InputError("mesh_shape: " + what, Entity::Parameter); };
+  auto bad = [](const std::string& what) {
+    throw InputError("mesh_shape: " + what, Entity::Parameter);
+  };
   if (!(p.size > 0) || !std::isfinite(p.size)) bad("size must be a positive length");
   if (p.boundary_layers < 0 || p.boundary_layers > 3) bad("boundary_layers must be in [0, 3]");
-  if (!(p.layer_thickness >= 0.1 && p.layer_thickness <= 1)) bad("layer_thickness must be in [0.1, 1]");
-  if (!(p.lattice_margin >= 0.1 && p.lattice_margin <= 2)) bad("lattice_margin must be in [0.1, 2]");
+  if (!(p.layer_thickness >= 0.1 && p.layer_thickness <= 1))
+    bad("layer_thickness must be in [0.1, 1]");
+  if (!(p.lattice_margin >= 0.1 && p.lattice_margin <= 2))
+    bad("lattice_margin must be in [0.1, 2]");
   if (!(p.surface_deflection > 0 && p.surface_deflection <= 0.5))
     bad("surface_deflection must be in (0, 0.5]");
   if (p.frame != "auto" && p.frame != "principal" && p.frame != "global")
@@ -841,7 +862,8 @@ TetMesh mesh_shape(const std::string& brep, const MeshShapeParameters& parameter
   const std::string tetgen = find_program(parameters.tetgen);
   if (tetgen.empty())
     throw InputError("mesh_shape needs TetGen: \"" + parameters.tetgen +
-                     "\" is not found (Debian: apt install tetgen)", Entity::Parameter);
+                         "\" is not found (Debian: apt install tetgen)",
+                     Entity::Parameter);
 
   // The shape and its frame.
   const Shape shape = load_shape(brep);
@@ -864,7 +886,8 @@ TetMesh mesh_shape(const std::string& brep, const MeshShapeParameters& parameter
   const double largest = std::max({extent[0], extent[1], extent[2]});
   if (h > largest)
     throw InputError("mesh_shape: size " + std::to_string(h) + " is larger than the shape (" +
-                     std::to_string(largest) + " across)", Entity::Parameter);
+                         std::to_string(largest) + " across)",
+                     Entity::Parameter);
   frame.origin = frame.to_world(lo);  // lattice planes through the box's lower corner
   // Whether an offset along an axis falls on a lattice plane of the given spacing.
   const auto on_lattice_plane = [plane_tolerance = 1e-7 * h](double offset, double spacing) {
@@ -905,8 +928,7 @@ TetMesh mesh_shape(const std::string& brep, const MeshShapeParameters& parameter
     cells[a] = best;
     report.spacing[a] = L / best;
   }
-  for (int a = 0; a < 3; ++a)
-    report.frame[a] = {frame.axis[a].x, frame.axis[a].y, frame.axis[a].z};
+  for (int a = 0; a < 3; ++a) report.frame[a] = {frame.axis[a].x, frame.axis[a].y, frame.axis[a].z};
 
   std::vector<bool> lattice_face(shape.faces.Extent(), false);
   for (int f = 0; f < shape.faces.Extent(); ++f) {
@@ -917,8 +939,8 @@ TetMesh mesh_shape(const std::string& brep, const MeshShapeParameters& parameter
   std::vector<bool> lattice_edge(shape.edges.Extent(), false);
   for (int e = 0; e < shape.edges.Extent(); ++e) {
     const auto& around = shape.edge_faces[e];
-    lattice_edge[e] = !around.empty() &&
-        std::all_of(around.begin(), around.end(), [&](int f) { return lattice_face[f]; });
+    lattice_edge[e] = !around.empty() && std::all_of(around.begin(), around.end(),
+                                                     [&](int f) { return lattice_face[f]; });
   }
   refine(shape, surface, h, lattice_face, lattice_edge);
   clock.lap("surface");
@@ -967,7 +989,7 @@ TetMesh mesh_shape(const std::string& brep, const MeshShapeParameters& parameter
       if (unit(n).dot(normal[c]) < std::cos(25.0 * M_PI / 180)) smooth[c] = false;
   }
   const double layer = parameters.layer_thickness * h;
-  std::vector<Vec3> inserted;  // points for TetGen's -i, in frame coordinates
+  std::vector<Vec3> inserted;      // points for TetGen's -i, in frame coordinates
   std::vector<int> inserted_face;  // the lattice face an inserted point lies on, or -1
   PointSet layer_points(box_lo, box_hi, h);
   for (int k = 1; k <= parameters.boundary_layers; ++k)
@@ -1027,9 +1049,10 @@ TetMesh mesh_shape(const std::string& brep, const MeshShapeParameters& parameter
   for (const SurfaceTriangle& t : surface.triangles)
     if (lattice_face[t.face]) {
       const AxisPlane& plane = *face_plane[t.face];
-      plane_triangles[{plane.axis, std::lround(plane.offset / report.spacing[plane.axis])}].push_back(&t);
+      plane_triangles[{plane.axis, std::lround(plane.offset / report.spacing[plane.axis])}]
+          .push_back(&t);
     }
-  auto on_lattice_face = [&](const Vec3& q, const int (&index)[3]) -> int {
+  auto on_lattice_face = [&](const Vec3& q, const int(&index)[3]) -> int {
     for (int a = 0; a < 3; ++a) {
       auto it = plane_triangles.find({a, index[a]});
       if (it == plane_triangles.end()) continue;
@@ -1038,7 +1061,8 @@ TetMesh mesh_shape(const std::string& brep, const MeshShapeParameters& parameter
       for (const SurfaceTriangle* t : it->second) {
         const Vec3 &p0 = nodes[t->node[0]], &p1 = nodes[t->node[1]], &p2 = nodes[t->node[2]];
         const double x0 = coord(p0, u), y0 = coord(p0, v);
-        const double d = (coord(p1, u) - x0) * (coord(p2, v) - y0) - (coord(p2, u) - x0) * (coord(p1, v) - y0);
+        const double d =
+            (coord(p1, u) - x0) * (coord(p2, v) - y0) - (coord(p2, u) - x0) * (coord(p1, v) - y0);
         if (d == 0) continue;
         const double s = ((qu - x0) * (coord(p2, v) - y0) - (coord(p2, u) - x0) * (qv - y0)) / d;
         const double r = ((coord(p1, u) - x0) * (qv - y0) - (qu - x0) * (coord(p1, v) - y0)) / d;
@@ -1081,20 +1105,23 @@ TetMesh mesh_shape(const std::string& brep, const MeshShapeParameters& parameter
   // every quad face between the core and another cell inside needs a closing pyramid whose apex
   // is that cell's centre and whose circumsphere holds nothing else, or the core cell goes.
   const int c0 = cells[0], c1 = cells[1], c2 = cells[2];
-  auto cell_index = [&](int i, int j, int k) { return (static_cast<std::size_t>(k) * c1 + j) * c0 + i; };
+  auto cell_index = [&](int i, int j, int k) {
+    return (static_cast<std::size_t>(k) * c1 + j) * c0 + i;
+  };
   // The cell across face dir (0..5: -x, +x, -y, +y, -z, +z) of cell (i, j, k), in n; whether it
   // is in the lattice.
-  auto across = [&](int i, int j, int k, int dir, int (&n)[3]) {
+  auto across = [&](int i, int j, int k, int dir, int(&n)[3]) {
     n[0] = i, n[1] = j, n[2] = k;
     n[dir / 2] += dir % 2 ? 1 : -1;
     return n[0] >= 0 && n[0] < c0 && n[1] >= 0 && n[1] < c1 && n[2] >= 0 && n[2] < c2;
   };
   auto cell_centre = [&](int i, int j, int k) {
-    return Vec3{(i + 0.5) * report.spacing[0], (j + 0.5) * report.spacing[1], (k + 0.5) * report.spacing[2]};
+    return Vec3{(i + 0.5) * report.spacing[0], (j + 0.5) * report.spacing[1],
+                (k + 0.5) * report.spacing[2]};
   };
-  const double half_diagonal =
-      0.5 * std::sqrt(report.spacing[0] * report.spacing[0] + report.spacing[1] * report.spacing[1] +
-                      report.spacing[2] * report.spacing[2]);
+  const double half_diagonal = 0.5 * std::sqrt(report.spacing[0] * report.spacing[0] +
+                                               report.spacing[1] * report.spacing[1] +
+                                               report.spacing[2] * report.spacing[2]);
   auto ball_is_empty = [&](const Vec3& centre, double r) {
     const double inner = r * (1 - 1e-9);
     return !curved.any_within(centre, inner) && !surface_points.any_within(centre, inner) &&
@@ -1106,7 +1133,8 @@ TetMesh mesh_shape(const std::string& brep, const MeshShapeParameters& parameter
       for (int i = 0; i < c0; ++i) {
         bool all = true;
         for (int corner = 0; corner < 8 && all; ++corner)
-          all = kept[point_index(i + (corner & 1), j + ((corner >> 1) & 1), k + ((corner >> 2) & 1))];
+          all =
+              kept[point_index(i + (corner & 1), j + ((corner >> 1) & 1), k + ((corner >> 2) & 1))];
         if (!all) continue;
         const Vec3 centre = cell_centre(i, j, k);
         if (!inside(centre) || !ball_is_empty(centre, half_diagonal)) continue;
@@ -1121,9 +1149,10 @@ TetMesh mesh_shape(const std::string& brep, const MeshShapeParameters& parameter
     const int axis = dir / 2, side = dir % 2 ? 1 : -1;
     int n[3];
     const bool in_range = across(i, j, k, dir, n);
-    const Vec3 face_centre = cell_centre(i, j, k) +
-        Vec3{axis == 0 ? side * 0.5 * report.spacing[0] : 0, axis == 1 ? side * 0.5 * report.spacing[1] : 0,
-             axis == 2 ? side * 0.5 * report.spacing[2] : 0};
+    const Vec3 face_centre =
+        cell_centre(i, j, k) + Vec3{axis == 0 ? side * 0.5 * report.spacing[0] : 0,
+                                    axis == 1 ? side * 0.5 * report.spacing[1] : 0,
+                                    axis == 2 ? side * 0.5 * report.spacing[2] : 0};
     const Vec3 apex = in_range ? cell_centre(n[0], n[1], n[2]) : face_centre;
     if (!in_range || !inside(apex)) return state = 1;
     // The sphere through the face's corners and the apex.
@@ -1219,15 +1248,18 @@ TetMesh mesh_shape(const std::string& brep, const MeshShapeParameters& parameter
   }
   const fs::path log = work.path() / "tetgen.log";
   report.tetgen_command = shell_quote(tetgen) + " -pYizQ " + shell_quote(poly.string());
-  const int status = std::system((report.tetgen_command + " > " + shell_quote(log.string()) + " 2>&1").c_str());
+  const int status =
+      std::system((report.tetgen_command + " > " + shell_quote(log.string()) + " 2>&1").c_str());
   clock.lap("tetgen");
   if (status != 0 || !fs::exists(work.path() / "shape.1.ele"))
-    throw InputError("TetGen failed (exit status " + std::to_string(status) + ") on the shape's surface "
-                     "and points; its output:\n" + tail_of_file(log, 2000) +
-                     "\n(command: " + report.tetgen_command + ")");
+    throw InputError("TetGen failed (exit status " + std::to_string(status) +
+                     ") on the shape's surface "
+                     "and points; its output:\n" +
+                     tail_of_file(log, 2000) + "\n(command: " + report.tetgen_command + ")");
 
   TetMesh mesh;
-  const std::vector<double> frame_points = read_tetgen_table<double>(work.path() / "shape.1.node", 3);
+  const std::vector<double> frame_points =
+      read_tetgen_table<double>(work.path() / "shape.1.node", 3);
   for (long long v : read_tetgen_table<long long>(work.path() / "shape.1.ele", 4)) {
     if (v < 0 || v >= static_cast<long long>(frame_points.size() / 3))
       throw InputError("TetGen's shape.1.ele refers to a missing node");
@@ -1240,8 +1272,9 @@ TetMesh mesh_shape(const std::string& brep, const MeshShapeParameters& parameter
   for (std::size_t t = 0; t < mesh.tets.size() / 4; ++t) {
     index_t* v = &mesh.tets[4 * t];
     const Vec3 p0 = Vec3::of(&frame_points[3 * v[0]]);
-    const double d = det3(Vec3::of(&frame_points[3 * v[1]]) - p0, Vec3::of(&frame_points[3 * v[2]]) - p0,
-                          Vec3::of(&frame_points[3 * v[3]]) - p0);
+    const double d =
+        det3(Vec3::of(&frame_points[3 * v[1]]) - p0, Vec3::of(&frame_points[3 * v[2]]) - p0,
+             Vec3::of(&frame_points[3 * v[3]]) - p0);
     if (d < 0) std::swap(v[1], v[2]);
   }
   mesh.points.resize(frame_points.size());
@@ -1252,7 +1285,7 @@ TetMesh mesh_shape(const std::string& brep, const MeshShapeParameters& parameter
   // The surface nodes keep their exact CAD positions.
   for (std::size_t i = 0; i < nodes.size() && i < made; ++i) {
     mesh.points[3 * i] = surface.nodes[i].x, mesh.points[3 * i + 1] = surface.nodes[i].y,
-    mesh.points[3 * i + 2] = surface.nodes[i].z;
+                    mesh.points[3 * i + 2] = surface.nodes[i].z;
   }
   validate_tet_mesh(mesh);
 
@@ -1271,13 +1304,15 @@ TetMesh mesh_shape(const std::string& brep, const MeshShapeParameters& parameter
     for (std::size_t v = 0; v < made; ++v) {
       if (!boundary[v]) continue;
       int face = -1;
-      if (v < nodes.size()) face = surface.node_face[v];
-      else if (v < given) face = inserted_face[v - nodes.size()];
+      if (v < nodes.size())
+        face = surface.node_face[v];
+      else if (v < given)
+        face = inserted_face[v - nodes.size()];
       const gp_Pnt p(mesh.points[3 * v], mesh.points[3 * v + 1], mesh.points[3 * v + 2]);
       if (face < 0) {
         throw InputError("TetGen put node " + std::to_string(v) +
-                         " on the boundary, which is on no face of the shape", Entity::Node,
-                         static_cast<index_t>(v));
+                             " on the boundary, which is on no face of the shape",
+                         Entity::Node, static_cast<index_t>(v));
       }
       if (!analysis[face]) {
         const TopoDS_Face& f = TopoDS::Face(shape.faces(face + 1));
@@ -1291,8 +1326,10 @@ TetMesh mesh_shape(const std::string& brep, const MeshShapeParameters& parameter
   }
   clock.lap("check");
 
-  if (shape.solids.Extent() > 1) mesh.regions = regions_by_solid(brep, mesh);
-  else mesh.regions.assign(mesh.tets.size() / 4, 0);
+  if (shape.solids.Extent() > 1)
+    mesh.regions = regions_by_solid(brep, mesh);
+  else
+    mesh.regions.assign(mesh.tets.size() / 4, 0);
   clock.lap("regions");
   return mesh;
 }

@@ -65,18 +65,18 @@ struct MeshShapeParameters {
 struct MeshShapeReport {
   std::size_t nb_solids = 0;
   std::size_t nb_faces = 0;
-  std::size_t nb_lattice_faces = 0;       ///< planar faces on lattice planes
-  std::size_t nb_surface_nodes = 0;       ///< nodes of the refined surface triangulation
-  std::size_t nb_surface_triangles = 0;   ///< its triangles (lattice faces: BRepMesh's own)
-  std::size_t nb_lattice_points = 0;      ///< lattice points inserted (inside and on lattice faces)
-  std::size_t nb_core_cells = 0;          ///< lattice cells with all corners kept (hex core)
-  std::size_t nb_apex_points = 0;         ///< closing-pyramid apexes inserted
-  std::size_t nb_layer_points = 0;        ///< boundary-layer points inserted
-  std::size_t nb_steiner_points = 0;      ///< points TetGen added
+  std::size_t nb_lattice_faces = 0;      ///< planar faces on lattice planes
+  std::size_t nb_surface_nodes = 0;      ///< nodes of the refined surface triangulation
+  std::size_t nb_surface_triangles = 0;  ///< its triangles (lattice faces: BRepMesh's own)
+  std::size_t nb_lattice_points = 0;     ///< lattice points inserted (inside and on lattice faces)
+  std::size_t nb_core_cells = 0;         ///< lattice cells with all corners kept (hex core)
+  std::size_t nb_apex_points = 0;        ///< closing-pyramid apexes inserted
+  std::size_t nb_layer_points = 0;       ///< boundary-layer points inserted
+  std::size_t nb_steiner_points = 0;     ///< points TetGen added
   std::array<std::array<double, 3>, 3> frame{};  ///< lattice axes (rows), unit vectors
   std::array<double, 3> spacing{};               ///< lattice spacing along each axis
-  double max_boundary_distance = 0.0;     ///< largest distance of a boundary node to the shape
-  std::string tetgen_command;             ///< the command line run
+  double max_boundary_distance = 0.0;  ///< largest distance of a boundary node to the shape
+  std::string tetgen_command;          ///< the command line run
   std::map<std::string, double> phase_seconds;  ///< wall time per phase
 };
 
