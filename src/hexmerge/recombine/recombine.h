@@ -20,19 +20,19 @@ struct RecombineReport {
   std::size_t input_tets = 0;
   std::array<std::size_t, NB_CELL_TYPES> output_counts{};  ///< cells of each type
   std::size_t output_cells = 0;
-  double element_reduction_percent = 0.0;  ///< 100 * (1 - output_cells / input_tets)
-  double input_volume = 0.0;               ///< sum of the input tets' volumes
+  double element_reduction_percent = 0.0;               ///< 100 * (1 - output_cells / input_tets)
+  double input_volume = 0.0;                            ///< sum of the input tets' volumes
   std::array<double, NB_CELL_TYPES> volume_fraction{};  ///< share of input volume per type
-  std::size_t nonconforming_quads = 0;     ///< quad faces meeting two triangles in the output
-  std::size_t closing_pyramids = 0;        ///< pyramids made to close a quad face
-  std::size_t released_elements = 0;       ///< elements split back to tets to restore conformity
-  std::size_t local_moves = 0;             ///< accepted local optimisation moves (section 4.2)
-  std::size_t swap_moves = 0;              ///< local search: accepted swaps of one element
-  std::size_t reselection_moves = 0;       ///< local search: accepted neighbourhood re-selections
-  std::size_t local_search_saved = 0;      ///< elements the local search removed (both moves)
-  std::string selection_strategy;          ///< conforming mode: which selection was kept
-  std::array<double, NB_CELL_TYPES> min_scaled_jacobian{};   ///< per type (0 when none)
-  std::array<double, NB_CELL_TYPES> mean_scaled_jacobian{};  ///< per type (0 when none)
+  std::size_t nonconforming_quads = 0;  ///< quad faces meeting two triangles in the output
+  std::size_t closing_pyramids = 0;     ///< pyramids made to close a quad face
+  std::size_t released_elements = 0;    ///< elements split back to tets to restore conformity
+  std::size_t local_moves = 0;          ///< accepted local optimisation moves (section 4.2)
+  std::size_t swap_moves = 0;           ///< local search: accepted swaps of one element
+  std::size_t reselection_moves = 0;    ///< local search: accepted neighbourhood re-selections
+  std::size_t local_search_saved = 0;   ///< elements the local search removed (both moves)
+  std::string selection_strategy;       ///< conforming mode: which selection was kept
+  std::array<double, NB_CELL_TYPES> min_scaled_jacobian{};     ///< per type (0 when none)
+  std::array<double, NB_CELL_TYPES> mean_scaled_jacobian{};    ///< per type (0 when none)
   std::map<std::string, std::size_t> candidates_per_template;  ///< accepted candidates
   std::size_t candidates_total = 0;
   /// Conforming mode: candidates no conforming selection can hold, removed before the selection
@@ -47,7 +47,7 @@ struct RecombineReport {
   std::size_t bound_elements = 0;       ///< fewest elements any selection of the candidates reaches
   std::size_t bound_best_elements = 0;  ///< elements of the best selection the solver found
   bool bound_proved = false;            ///< the solver proved bound_best_elements optimal
-  double gap_percent = 0.0;  ///< 100 * (output_cells - bound_elements) / bound_elements
+  double gap_percent = 0.0;             ///< 100 * (output_cells - bound_elements) / bound_elements
 };
 
 /// Merges groups of tetrahedra into hexahedra, prisms and pyramids.

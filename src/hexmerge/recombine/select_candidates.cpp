@@ -36,8 +36,8 @@ int gain(const Candidate& c) { return c.nb_tets - 1; }  // elements saved by mer
 // One boundary triangle of a candidate: the tet face it is, the tet across it, and the face of
 // the candidate's cell that it lies in.
 struct Side {
-  index_t neighbor;  // NO_CELL on the domain boundary
-  int neighbor_face; // local face of the neighbour across it
+  index_t neighbor;   // NO_CELL on the domain boundary
+  int neighbor_face;  // local face of the neighbour across it
   int cell_face;
 };
 
@@ -71,8 +71,8 @@ struct Stage {
 // What every selection reads and none changes, built once: tet -> candidates, the cell face
 // each tet face of a candidate lies in, the boundary tets.
 struct CandidateIndex {
-  CandidateIndex(const TetMesh& mesh, const TetTopology& topo,
-                 const std::vector<Candidate>& cands, bool respect_regions) {
+  CandidateIndex(const TetMesh& mesh, const TetTopology& topo, const std::vector<Candidate>& cands,
+                 bool respect_regions) {
     const index_t nt = mesh.nb_tets();
     offsets.assign(static_cast<std::size_t>(nt) + 1, 0);
     first_face.assign(cands.size() + 1, 0);
@@ -116,9 +116,9 @@ struct CandidateIndex {
     }
   }
 
-  std::vector<index_t> offsets, ids;   // tet -> candidates (CSR)
-  std::vector<std::size_t> first_face; // candidate -> first entry of cell_face
-  std::vector<signed char> cell_face;  // per candidate, tet i, face f: its cell face, or -1
+  std::vector<index_t> offsets, ids;    // tet -> candidates (CSR)
+  std::vector<std::size_t> first_face;  // candidate -> first entry of cell_face
+  std::vector<signed char> cell_face;   // per candidate, tet i, face f: its cell face, or -1
   std::vector<char> is_boundary;
 };
 
@@ -127,9 +127,16 @@ class Selector {
   Selector(const TetMesh& mesh, const TetTopology& topology,
            const std::vector<Candidate>& candidates, const CandidateIndex& index,
            const RecombineParameters& parameters, bool strict)
-      : mesh_(mesh), topo_(topology), cands_(candidates), params_(parameters), strict_(strict),
-        owner_(mesh.nb_tets(), NO_INDEX), chosen_(candidates.size(), 0),
-        offsets_(index.offsets), ids_(index.ids), index_(index),
+      : mesh_(mesh),
+        topo_(topology),
+        cands_(candidates),
+        params_(parameters),
+        strict_(strict),
+        owner_(mesh.nb_tets(), NO_INDEX),
+        chosen_(candidates.size(), 0),
+        offsets_(index.offsets),
+        ids_(index.ids),
+        index_(index),
         is_boundary_(index.is_boundary) {}
 
   Selection run(const ProgressCallback& progress) {
@@ -209,8 +216,8 @@ class Selector {
   // The cell face of candidate ei that face f of its tet t lies in (-1: inside the cell).
   int cell_face_at(index_t ei, index_t t, int f) const {
     const Candidate& e = cands_[ei];
-    const int i = static_cast<int>(std::find(e.tets.begin(), e.tets.begin() + e.nb_tets, t) -
-                                   e.tets.begin());
+    const int i =
+        static_cast<int>(std::find(e.tets.begin(), e.tets.begin() + e.nb_tets, t) - e.tets.begin());
     return index_.cell_face[index_.first_face[ei] + 4 * i + f];
   }
 
@@ -422,9 +429,8 @@ class Selector {
       for (int i = 0; i < c.nb_tets; ++i) on_boundary = on_boundary || is_boundary_[c.tets[i]];
       if (on_boundary) order.push_back(ci);
     }
-    std::stable_sort(order.begin(), order.end(), [&](index_t a, index_t b) {
-      return cands_[a].quality > cands_[b].quality;
-    });
+    std::stable_sort(order.begin(), order.end(),
+                     [&](index_t a, index_t b) { return cands_[a].quality > cands_[b].quality; });
     for (index_t ci : order) {
       if (!available(ci)) continue;
       if (!stage.allow_nonconforming && violations(ci) > 0) continue;
@@ -432,8 +438,8 @@ class Selector {
     }
   }
 
-  // Exhaustive-greedy over the boundary tets (the paper's order): the tet with the fewest available candidates of
-  // this stage's type goes first (bucket queue; counts only decrease).
+  // Exhaustive-greedy over the boundary tets (the paper's order): the tet with the fewest available
+  // candidates of this stage's type goes first (bucket queue; counts only decrease).
   void boundary_stage(const Stage& stage) {
     const index_t nt = mesh_.nb_tets();
     std::vector<index_t> count(nt, 0);
@@ -692,7 +698,7 @@ class Selector {
     std::vector<int> closed;
     std::vector<std::uint16_t> open_sizes;
     std::vector<std::uint32_t> sizes;
-    std::vector<int> current, best;   // pool entries chosen
+    std::vector<int> current, best;  // pool entries chosen
     int best_saved = 0;
     long long nodes = 0;
     bool stopped = false;
@@ -833,7 +839,8 @@ class Selector {
           const index_t n = topo_.neighbor(t, f);
           if (n == NO_CELL || local_[n] >= 0 || is_free(n)) continue;
           const index_t o = owner_[n];
-          if (is_quad(cands_[o], cell_face_at(o, n, topo_.neighbor_face(t, f)))) h.must_cover[l] = 1;
+          if (is_quad(cands_[o], cell_face_at(o, n, topo_.neighbor_face(t, f))))
+            h.must_cover[l] = 1;
         }
       }
     }
@@ -1129,7 +1136,6 @@ class Selector {
         seed(t);
       }
     }
-
   }
 
   const TetMesh& mesh_;
@@ -1137,8 +1143,8 @@ class Selector {
   const std::vector<Candidate>& cands_;
   const RecombineParameters& params_;
   const bool strict_;  // pending quads only where a safe closing pyramid waits (closing_pyramid)
-  std::vector<index_t> owner_;   // per tet: the chosen candidate that holds it, or NO_INDEX
-  std::vector<char> chosen_;     // per candidate
+  std::vector<index_t> owner_;           // per tet: the chosen candidate that holds it, or NO_INDEX
+  std::vector<char> chosen_;             // per candidate
   const std::vector<index_t>& offsets_;  // tet -> candidates
   const std::vector<index_t>& ids_;
   const CandidateIndex& index_;
@@ -1146,10 +1152,10 @@ class Selector {
   std::vector<char> was_closer_ = std::vector<char>(cands_.size(), 0);
 
   bool journaling_ = false;
-  std::vector<std::pair<index_t, index_t>> journal_;  // (tet, previous owner)
+  std::vector<std::pair<index_t, index_t>> journal_;      // (tet, previous owner)
   std::vector<std::pair<index_t, char>> chosen_journal_;  // (candidate, previous flag)
-  std::vector<int> local_;            // local search: per tet, its number in the neighbourhood
-  std::vector<unsigned> stamp_of_;    // local search: per candidate, last neighbourhood seen
+  std::vector<int> local_;          // local search: per tet, its number in the neighbourhood
+  std::vector<unsigned> stamp_of_;  // local search: per candidate, last neighbourhood seen
   unsigned stamp_ = 0;
   Selection result_;
 };

@@ -18,16 +18,16 @@ namespace hexmerge {
 
 /// The chosen elements, as indices into the candidate array, and how the choice went.
 struct Selection {
-  std::vector<index_t> elements;          ///< chosen candidates; their tet sets are disjoint
-  std::size_t nonconforming_quads = 0;    ///< quad faces left meeting two triangles
-  std::size_t closing_pyramids = 0;       ///< pyramids chosen to close a quad face
-  std::size_t released_elements = 0;      ///< elements given up to restore conformity
-  std::size_t local_moves = 0;            ///< accepted local optimisation moves (section 4.2)
-  std::size_t swap_moves = 0;             ///< local search: accepted swaps of one element
-  std::size_t reselection_moves = 0;      ///< local search: accepted neighbourhood re-selections
-  std::size_t local_search_saved = 0;     ///< elements the local search removed
-  std::size_t local_search_nodes = 0;     ///< local search: branch-and-bound nodes in all
-  std::string strategy;                   ///< conforming mode: "safe_pyramids" or "closable"
+  std::vector<index_t> elements;        ///< chosen candidates; their tet sets are disjoint
+  std::size_t nonconforming_quads = 0;  ///< quad faces left meeting two triangles
+  std::size_t closing_pyramids = 0;     ///< pyramids chosen to close a quad face
+  std::size_t released_elements = 0;    ///< elements given up to restore conformity
+  std::size_t local_moves = 0;          ///< accepted local optimisation moves (section 4.2)
+  std::size_t swap_moves = 0;           ///< local search: accepted swaps of one element
+  std::size_t reselection_moves = 0;    ///< local search: accepted neighbourhood re-selections
+  std::size_t local_search_saved = 0;   ///< elements the local search removed
+  std::size_t local_search_nodes = 0;   ///< local search: branch-and-bound nodes in all
+  std::string strategy;                 ///< conforming mode: "safe_pyramids" or "closable"
 };
 
 /// Chooses disjoint candidates.

@@ -50,7 +50,9 @@ double quad_volume_bound(const MixedMesh& mesh) {
     const CellDescriptor& d = descriptor(mesh.types[c]);
     for (int f = 0; f < d.nb_faces; ++f) {
       if (d.face_size[f] != 4) continue;
-      const auto p = [&](int i) { return &mesh.points[3 * std::size_t(mesh.cell(c)[d.face[f][i]])]; };
+      const auto p = [&](int i) {
+        return &mesh.points[3 * std::size_t(mesh.cell(c)[d.face[f][i]])];
+      };
       bound += 0.5 * std::abs(tet_volume(p(0), p(1), p(2), p(3)));
     }
   }
@@ -67,7 +69,7 @@ struct Outcome {
 /// face is planar, so that the volume must be kept to round-off; `conforming` when no quad may
 /// meet two triangles; `regions_kept` unless cells may span regions.
 Outcome recombine_and_check(const TetMesh& input, const RecombineParameters& parameters,
-                        bool flat = true, bool conforming = true, bool regions_kept = true) {
+                            bool flat = true, bool conforming = true, bool regions_kept = true) {
   Outcome run;
   run.mesh = recombine(input, parameters, run.report);
   run.check = check_mesh(run.mesh, input);
@@ -89,7 +91,8 @@ Outcome recombine_and_check(const TetMesh& input, const RecombineParameters& par
   }
   // The report and the checker agree on what was made.
   EXPECT_EQ(run.report.output_cells, run.mesh.nb_cells());
-  for (int t = 0; t < NB_CELL_TYPES; ++t) EXPECT_EQ(run.report.output_counts[t], run.check.counts[t]);
+  for (int t = 0; t < NB_CELL_TYPES; ++t)
+    EXPECT_EQ(run.report.output_counts[t], run.check.counts[t]);
   EXPECT_EQ(run.report.input_tets, input.nb_tets());
   return run;
 }
@@ -182,7 +185,8 @@ TEST(recombine, cube_triangulations_after_small_perturbations) {
   const auto cases = cube_cases();
   for (std::size_t i = 0; i < cases.size(); ++i) {
     for (int k = 0; k < 3; ++k) {
-      SCOPED_TRACE("cube triangulation " + std::to_string(i) + ", perturbation " + std::to_string(k));
+      SCOPED_TRACE("cube triangulation " + std::to_string(i) + ", perturbation " +
+                   std::to_string(k));
       TetMesh mesh = polytope_mesh(unit_cube(), cases[i].tets);
       if (k == 2) random_affine_map(mesh, rng, 0.2);
       random_perturbation(mesh, rng, 0.03);
@@ -354,7 +358,8 @@ std::vector<Candidate> kuhn_cube_candidates(const TetMesh& cube,
 TEST(local_search, a_swap_undoes_the_greedys_trap_one_element_for_two) {
   const TetMesh cube = kuhn_grid(1);
   const TetTopology topology(cube);
-  const std::vector<Candidate> candidates = kuhn_cube_candidates(cube, {{0, 1, 2}, {0, 2, 3}, {1, 4}});
+  const std::vector<Candidate> candidates =
+      kuhn_cube_candidates(cube, {{0, 1, 2}, {0, 2, 3}, {1, 4}});
   ASSERT_EQ(candidates.size(), 3u);
   RecombineParameters p;
   p.conformity = Conformity::Allow;
@@ -383,7 +388,8 @@ TEST(local_search, a_swap_undoes_the_greedys_trap_one_element_for_two) {
 TEST(local_search, a_reselection_reaches_what_a_swap_cannot) {
   const TetMesh cube = kuhn_grid(1);
   const TetTopology topology(cube);
-  const std::vector<Candidate> candidates = kuhn_cube_candidates(cube, {{0, 1, 2}, {2, 3, 5}, {0, 1}});
+  const std::vector<Candidate> candidates =
+      kuhn_cube_candidates(cube, {{0, 1, 2}, {2, 3, 5}, {0, 1}});
   ASSERT_EQ(candidates.size(), 3u);
   RecombineParameters p;
   p.conformity = Conformity::Allow;
@@ -498,8 +504,8 @@ TEST(local_search, parameters_are_in_the_table_with_their_ranges) {
   EXPECT_THROW(validate_parameters(bad), InputError);
   std::set<std::string> names;
   for (const ParameterInfo& row : parameter_table()) names.insert(row.name);
-  for (const char* name : {"local_search", "local_search_radius", "local_search_nodes",
-                           "local_search_seeds"}) {
+  for (const char* name :
+       {"local_search", "local_search_radius", "local_search_nodes", "local_search_seeds"}) {
     EXPECT_TRUE(names.count(name)) << name;
   }
 }
