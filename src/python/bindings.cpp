@@ -162,6 +162,7 @@ py::dict report_to_dict(const RecombineReport& r) {
   d["input_volume"] = r.input_volume;
   d["volume_fraction"] = per_type(r.volume_fraction);
   d["nonconforming_quads"] = r.nonconforming_quads;
+  d["block_hexahedra"] = r.block_hexahedra;
   d["closing_pyramids"] = r.closing_pyramids;
   d["released_elements"] = r.released_elements;
   d["local_moves"] = r.local_moves;

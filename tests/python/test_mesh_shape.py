@@ -106,13 +106,12 @@ SURFACES = {
 }
 
 
-# (shape, h, hex volume floor). Measured when set (this commit's mesher and engine):
-# box h 10: 1.000 hex volume; cylinder h 5: 0.131 (mesher of this commit; h 8 makes TetGen abort,
-# reported as an InputError); bracket h 4: 0.176 with this commit, 0.848 before: the engine's
-# conforming selection keeps the lattice core whole or loses most of it on small changes in the
-# transition zone (open defect, README "Known limitations"); earlier: 0.848 (0.858
-# with 8d3011e); plate h 10: 0.175 (0.177 with 8d3011e).
-CASES = [("box", 10.0, 0.99), ("cylinder", 5.0, 0.10), ("bracket", 4.0, 0.15), ("plate", 10.0, 0.14)]
+# (shape, h, hex volume floor). Measured when set (the selection's block of near-perfect
+# hexahedra, taken before the greedy stages): box h 10: 1.000; cylinder h 5: 0.319 (h 8 makes
+# TetGen abort, reported as an InputError); bracket h 4: 0.372; plate h 10: 0.909. Before the
+# block the greedy kept the lattice core whole or lost most of it on small changes (cylinder
+# 0.131, bracket 0.176, plate 0.175).
+CASES = [("box", 10.0, 0.99), ("cylinder", 5.0, 0.29), ("bracket", 4.0, 0.33), ("plate", 10.0, 0.85)]
 
 
 @needs_tetgen

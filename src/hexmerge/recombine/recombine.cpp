@@ -163,6 +163,7 @@ MixedMesh recombine(const TetMesh& input, const RecombineParameters& parameters,
 
   const Selection selection = select_candidates(input, topology, candidates, parameters, progress);
   report.nonconforming_quads = selection.nonconforming_quads;
+  report.block_hexahedra = selection.block_hexahedra;
   report.closing_pyramids = selection.closing_pyramids;
   report.released_elements = selection.released_elements;
   report.local_moves = selection.local_moves;

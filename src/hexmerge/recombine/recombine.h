@@ -24,6 +24,7 @@ struct RecombineReport {
   double input_volume = 0.0;                            ///< sum of the input tets' volumes
   std::array<double, NB_CELL_TYPES> volume_fraction{};  ///< share of input volume per type
   std::size_t nonconforming_quads = 0;  ///< quad faces meeting two triangles in the output
+  std::size_t block_hexahedra = 0;      ///< hexahedra kept as a block (structured regions)
   std::size_t closing_pyramids = 0;     ///< pyramids made to close a quad face
   std::size_t released_elements = 0;    ///< elements split back to tets to restore conformity
   std::size_t local_moves = 0;          ///< accepted local optimisation moves (section 4.2)

@@ -309,6 +309,75 @@ TEST(recombine, a_region_cut_through_cubes_gives_hexes_and_half_cube_prisms) {
   EXPECT_EQ(run.check.counts[static_cast<int>(CellType::Prism)], std::size_t(2 * n * n));
 }
 
+/// A Kuhn grid capped on its x = n side: over each boundary square, the two tets from its
+/// triangles to an apex half a cube out (a closing pyramid), except over square (j, k) = `open`,
+/// whose two tets get apexes of their own over their triangles' centroids (no pyramid).
+TetMesh capped_kuhn_grid(int n, std::array<int, 2> open = {-1, -1}) {
+  TetMesh mesh = kuhn_grid(n);
+  const index_t nt = mesh.nb_tets();
+  for (index_t t = 0; t < nt; ++t) {
+    for (int f = 0; f < 4; ++f) {
+      std::array<index_t, 3> tri;
+      int m = 0;
+      for (int i = 0; i < 4; ++i) {
+        if (i != f) tri[m++] = mesh.tet(t)[i];
+      }
+      bool on_cap = true;
+      double c[3] = {0, 0, 0};
+      for (index_t v : tri) {
+        on_cap = on_cap && mesh.point(v)[0] == n;
+        for (int a = 0; a < 3; ++a) c[a] += mesh.point(v)[a] / 3;
+      }
+      if (!on_cap) continue;
+      const int j = int(std::floor(c[1])), k = int(std::floor(c[2]));
+      const bool own_apex = j == open[0] && k == open[1];
+      const double apex[3] = {n + 0.5, own_apex ? c[1] : j + 0.5, own_apex ? c[2] : k + 0.5};
+      index_t a = NO_INDEX;
+      for (index_t v = 0; v < mesh.nb_vertices() && a == NO_INDEX; ++v) {
+        const double* p = mesh.point(v);
+        if (p[0] == apex[0] && p[1] == apex[1] && p[2] == apex[2]) a = v;
+      }
+      if (a == NO_INDEX) {
+        a = mesh.nb_vertices();
+        mesh.points.insert(mesh.points.end(), apex, apex + 3);
+      }
+      mesh.tets.insert(mesh.tets.end(), {tri[0], tri[1], tri[2], a});
+    }
+  }
+  orient_positively(mesh);
+  return mesh;
+}
+
+TEST(recombine, a_grid_capped_by_pyramids_is_kept_whole_with_its_pyramids) {
+  const int n = 4;
+  const Outcome run = recombine_and_check(capped_kuhn_grid(n), {});
+  EXPECT_EQ(hexes(run), std::size_t(n * n * n));
+  EXPECT_EQ(run.check.counts[static_cast<int>(CellType::Pyramid)], std::size_t(n * n));
+  EXPECT_EQ(run.mesh.nb_cells(), std::size_t(n * n * n + n * n));
+  EXPECT_EQ(run.report.block_hexahedra, std::size_t(n * n * n));
+}
+
+TEST(recombine, a_cube_whose_face_nothing_closes_leaves_the_block_and_the_rest_conforms) {
+  // Square (1, 2) of the cap has no pyramid: the cube behind it cannot be a hex, and neither
+  // can every cube whose face would then meet two of its tets; the rest stays hexes.
+  const int n = 4;
+  const Outcome run = recombine_and_check(capped_kuhn_grid(n, {1, 2}), {});
+  EXPECT_LT(hexes(run), std::size_t(n * n * n));
+  EXPECT_LT(run.report.block_hexahedra, std::size_t(n * n * n));
+  EXPECT_GE(hexes(run), std::size_t(n * n * n / 2));
+  for (index_t c = 0; c < run.mesh.nb_cells(); ++c) {
+    if (run.mesh.types[c] != CellType::Hex) continue;
+    double x_max = 0, y_min = n, z_min = n;
+    for (index_t i = 0; i < run.mesh.cell_size(c); ++i) {
+      const double* p = &run.mesh.points[3 * std::size_t(run.mesh.cell(c)[i])];
+      x_max = std::max(x_max, p[0]);
+      y_min = std::min(y_min, p[1]);
+      z_min = std::min(z_min, p[2]);
+    }
+    EXPECT_FALSE(x_max == n && y_min == 1 && z_min == 2) << "the cube behind the open square";
+  }
+}
+
 TEST(recombine, invalid_input_is_an_input_error) {
   TetMesh mesh = kuhn_grid(1);
   std::swap(mesh.tets[4 * 3 + 1], mesh.tets[4 * 3 + 2]);
