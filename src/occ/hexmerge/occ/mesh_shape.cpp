@@ -40,6 +40,7 @@
 #include <vector>
 
 #include "hexmerge/core/error.h"
+#include "hexmerge/geometry/remove_slivers.h"
 #include "hexmerge/geometry/vec3.h"
 #include "hexmerge/mesh/tet_topology.h"
 #include "hexmerge/occ/brep_text.h"
@@ -1287,6 +1288,45 @@ TetMesh mesh_shape(const std::string& brep, const MeshShapeParameters& parameter
     mesh.points[3 * i] = surface.nodes[i].x, mesh.points[3 * i + 1] = surface.nodes[i].y,
                     mesh.points[3 * i + 2] = surface.nodes[i].z;
   }
+  if (shape.solids.Extent() > 1)
+    mesh.regions = regions_by_solid(brep, mesh);
+  else
+    mesh.regions.assign(mesh.tets.size() / 4, 0);
+  clock.lap("regions");
+
+  // TetGen leaves slivers where the lattice meets the boundary layers and the surface (four
+  // nearly cocircular points, as the sides of the layers' prisms are): flips take them out. The
+  // lattice's own tets, in one cell or one closing pyramid, stay for the hexahedra.
+  {
+    // Whether vertex v is a lattice point or a cell centre; its coordinates in cells.
+    auto on_half_lattice = [&](index_t v, double(&cell)[3]) {
+      for (int a = 0; a < 3; ++a) {
+        cell[a] = frame_points[3 * v + a] / report.spacing[a];
+        if (std::abs(2 * cell[a] - std::round(2 * cell[a])) > 1e-6) return false;
+      }
+      return true;
+    };
+    std::vector<char> fixed(mesh.nb_tets(), 0);
+    for (index_t t = 0; t < mesh.nb_tets(); ++t) {
+      double cell[3] = {0, 0, 0}, least[3] = {1e300, 1e300, 1e300},
+             most[3] = {-1e300, -1e300, -1e300};
+      bool in_one_cell = true;
+      for (int k = 0; k < 4 && in_one_cell; ++k) {
+        in_one_cell = on_half_lattice(mesh.tet(t)[k], cell);
+        for (int a = 0; a < 3; ++a) {
+          least[a] = std::min(least[a], cell[a]), most[a] = std::max(most[a], cell[a]);
+          in_one_cell &= most[a] - least[a] < 1 + 1e-6;
+        }
+      }
+      fixed[t] = in_one_cell;
+    }
+    RemoveSliversReport flips;
+    remove_slivers(mesh, fixed, RemoveSliversParameters{}, flips);
+    report.min_tet_quality_before = flips.min_before;
+    report.nb_face_flips = flips.face_removals;
+    report.nb_edge_flips = flips.edge_removals;
+  }
+  clock.lap("slivers");
   validate_tet_mesh(mesh);
 
   // How far the boundary nodes are from the CAD faces they lie on.
@@ -1325,12 +1365,6 @@ TetMesh mesh_shape(const std::string& brep, const MeshShapeParameters& parameter
     report.max_boundary_distance = worst;
   }
   clock.lap("check");
-
-  if (shape.solids.Extent() > 1)
-    mesh.regions = regions_by_solid(brep, mesh);
-  else
-    mesh.regions.assign(mesh.tets.size() / 4, 0);
-  clock.lap("regions");
   return mesh;
 }
 
