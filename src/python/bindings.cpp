@@ -374,6 +374,7 @@ py::tuple run_mesh_shape(const std::string& brep, double size, int boundary_laye
   d["min_tet_quality_before"] = report.min_tet_quality_before;
   d["nb_face_flips"] = report.nb_face_flips;
   d["nb_edge_flips"] = report.nb_edge_flips;
+  d["nb_boundary_swaps"] = report.nb_boundary_swaps;
   py::list axes;
   for (const auto& axis : report.frame) axes.append(py::make_tuple(axis[0], axis[1], axis[2]));
   d["frame"] = axes;

@@ -4,15 +4,32 @@
 #include <array>
 #include <cstdint>
 #include <limits>
+#include <unordered_map>
 
 #include "hexmerge/core/error.h"
 #include "hexmerge/geometry/quality.h"
+#include "hexmerge/geometry/vec3.h"
 
 namespace hexmerge {
 namespace {
 
 using Tet = std::array<index_t, 4>;
 constexpr double kInfinity = std::numeric_limits<double>::infinity();
+
+// A face by its sorted vertices.
+using FaceKey = std::array<index_t, 3>;
+FaceKey face_key(index_t a, index_t b, index_t c) {
+  FaceKey k{a, b, c};
+  std::sort(k.begin(), k.end());
+  return k;
+}
+struct FaceKeyHash {
+  std::size_t operator()(const FaceKey& k) const {
+    return (static_cast<std::size_t>(k[0]) * 73856093u) ^
+           (static_cast<std::size_t>(k[1]) * 19349663u) ^
+           (static_cast<std::size_t>(k[2]) * 83492791u);
+  }
+};
 
 // Whether (w, x, y, z), four distinct vertices of t, run in t's own (positive) order up to an
 // even permutation.
@@ -30,12 +47,22 @@ bool same_orientation(const Tet& t, index_t w, index_t x, index_t y, index_t z) 
 // The mesh while it is flipped: tets by slot (dead slots stay), the tets at each vertex.
 class FlipMesh {
  public:
-  FlipMesh(const TetMesh& mesh, const std::vector<char>& fixed) : points_(mesh.points) {
+  FlipMesh(const TetMesh& mesh, const std::vector<char>& fixed,
+           const std::vector<std::int32_t>& boundary_patch)
+      : points_(mesh.points) {
     at_vertex_.resize(mesh.nb_vertices());
     for (index_t t = 0; t < mesh.nb_tets(); ++t) {
       const index_t* v = mesh.tet(t);
       add(Tet{v[0], v[1], v[2], v[3]}, mesh.region(t), !fixed.empty() && fixed[t]);
     }
+    if (boundary_patch.empty()) return;
+    for (index_t t = 0; t < mesh.nb_tets(); ++t)
+      for (int f = 0; f < 4; ++f)
+        if (across(t, f) == NO_CELL) {
+          const index_t* v = mesh.tet(t);
+          patch_[face_key(v[(f + 1) % 4], v[(f + 2) % 4], v[(f + 3) % 4])] =
+              boundary_patch[4 * static_cast<std::size_t>(t) + f];
+        }
   }
 
   double quality(const Tet& t) const {
@@ -70,10 +97,11 @@ class FlipMesh {
   }
 
   // The tets around edge (a, b), in `around`, and their other vertices in `ring`, so that tet i
-  // is (a, b, ring[i], ring[i + 1 mod n]) in positive order. False when the ring is open (a
-  // boundary edge) or longer than max_ring.
+  // is (a, b, ring[i], ring[i + 1]) in positive order (ring[n] = ring[0] for a closed ring, an
+  // interior edge; an open ring, a boundary edge, has n + 1 vertices). False when the tets do not
+  // make one ring or there are more than max_ring.
   bool edge_ring(index_t a, index_t b, int max_ring, std::vector<index_t>& around,
-                 std::vector<index_t>& ring) const {
+                 std::vector<index_t>& ring, bool& closed) const {
     around.clear();
     for (index_t t : at_vertex_[a])
       if (std::find(tets_[t].begin(), tets_[t].end(), b) != tets_[t].end()) {
@@ -81,7 +109,7 @@ class FlipMesh {
         around.push_back(t);
       }
     const std::size_t n = around.size();
-    if (n < 3) return false;
+    if (n == 0) return false;
     // Per tet, its two other vertices (x, y) with (a, b, x, y) positive.
     std::vector<std::pair<index_t, index_t>> sides(n);
     for (std::size_t i = 0; i < n; ++i) {
@@ -92,21 +120,39 @@ class FlipMesh {
       sides[i] = same_orientation(t, a, b, other[0], other[1]) ? std::make_pair(other[0], other[1])
                                                                : std::make_pair(other[1], other[0]);
     }
+    // An open ring starts at the vertex no tet ends at.
+    index_t x = sides[0].first;
+    closed = true;
+    for (const auto& side : sides)
+      if (std::none_of(sides.begin(), sides.end(),
+                       [&](const auto& s) { return s.second == side.first; }))
+        x = side.first, closed = false;
     ring.clear();
     std::vector<index_t> ordered;
-    index_t x = sides[0].first;
     for (std::size_t step = 0; step < n; ++step) {
       std::size_t i = 0;
       while (i < n && sides[i].first != x) ++i;
-      if (i == n) return false;  // open ring
+      if (i == n) return false;
       ring.push_back(x);
       ordered.push_back(around[i]);
       x = sides[i].second;
     }
-    if (x != ring.front()) return false;
+    if (closed && x != ring.front()) return false;
+    if (!closed) ring.push_back(x);
     around = ordered;
-    return true;
+    return closed ? n >= 3 : n >= 2;
   }
+
+  // The patch of boundary face (a, b, c), or -1 (no patch given, or not a boundary face).
+  std::int32_t patch(index_t a, index_t b, index_t c) const {
+    const auto it = patch_.find(face_key(a, b, c));
+    return it == patch_.end() ? -1 : it->second;
+  }
+  void set_patch(index_t a, index_t b, index_t c, std::int32_t patch) {
+    patch_[face_key(a, b, c)] = patch;
+  }
+  void clear_patch(index_t a, index_t b, index_t c) { patch_.erase(face_key(a, b, c)); }
+  const double* point(index_t v) const { return &points_[3 * static_cast<std::size_t>(v)]; }
 
   // The tet across face `opposite` (local index of the vertex not on it) of t, or NO_CELL.
   index_t across(index_t t, int opposite) const {
@@ -142,6 +188,7 @@ class FlipMesh {
   std::vector<char> fixed_, alive_;
   std::vector<double> quality_;
   std::vector<std::vector<index_t>> at_vertex_;
+  std::unordered_map<FaceKey, std::int32_t, FaceKeyHash> patch_;
 };
 
 // A flip: the tets it replaces, the tets it makes and the smallest quality among these.
@@ -149,10 +196,13 @@ struct Flip {
   std::vector<index_t> old_tets;
   std::vector<Tet> new_tets;
   double quality = -kInfinity;
+  // A boundary edge (a, b) between boundary faces (a, b, c) and (a, b, d) becomes (c, d).
+  std::array<index_t, 4> boundary_swap{NO_VERTEX, NO_VERTEX, NO_VERTEX, NO_VERTEX};
 };
 
-// Edge removal of (a, b): the best triangulation of the ring, each triangle joined to a and to
-// b (Klincsek's dynamic programming over the ring polygon, maximising the smallest quality).
+// Edge removal of (a, b): the best triangulation of the ring polygon, each triangle joined to
+// a and to b (Klincsek's dynamic programming, maximising the smallest quality). For a boundary
+// edge the polygon is closed by the new boundary edge (ring.front(), ring.back()).
 void best_edge_removal(const FlipMesh& m, index_t a, index_t b, const std::vector<index_t>& around,
                        const std::vector<index_t>& ring, Flip& best) {
   const int n = static_cast<int>(ring.size());
@@ -176,6 +226,7 @@ void best_edge_removal(const FlipMesh& m, index_t a, index_t b, const std::vecto
   best.quality = value[n - 1];
   best.old_tets = around;
   best.new_tets.clear();
+  best.boundary_swap = {NO_VERTEX, NO_VERTEX, NO_VERTEX, NO_VERTEX};
   std::vector<std::pair<int, int>> stack{{0, n - 1}};
   while (!stack.empty()) {
     const auto [i, j] = stack.back();
@@ -187,6 +238,16 @@ void best_edge_removal(const FlipMesh& m, index_t a, index_t b, const std::vecto
     stack.push_back({i, k});
     stack.push_back({k, j});
   }
+}
+
+// Whether boundary edge (a, b) may be swapped to (c, d), its boundary faces being (a, b, c) and
+// (a, b, d): both on one patch and in one plane, so that the boundary stays where it is.
+bool swappable(const FlipMesh& m, index_t a, index_t b, index_t c, index_t d) {
+  const std::int32_t patch = m.patch(a, b, c);
+  if (patch < 0 || m.patch(a, b, d) != patch) return false;
+  const Vec3 pa = Vec3::of(m.point(a)), ab = Vec3::of(m.point(b)) - pa;
+  const Vec3 ac = Vec3::of(m.point(c)) - pa, ad = Vec3::of(m.point(d)) - pa;
+  return std::abs(det3(ab, ac, ad)) <= 1e-9 * ab.norm() * ac.norm() * ad.norm();
 }
 
 // Face removal across face `opposite` of t: t = (f, p) and its neighbour (f, q) become three
@@ -214,6 +275,7 @@ void best_face_removal(const FlipMesh& m, index_t t, int opposite, Flip& best) {
 }  // namespace
 
 void remove_slivers(TetMesh& mesh, const std::vector<char>& fixed,
+                    const std::vector<std::int32_t>& boundary_patch,
                     const RemoveSliversParameters& parameters, RemoveSliversReport& report) {
   if (!(parameters.target > 0 && parameters.target <= 1) || parameters.max_passes < 1 ||
       parameters.max_ring < 3 || parameters.max_ring > 10)
@@ -222,8 +284,10 @@ void remove_slivers(TetMesh& mesh, const std::vector<char>& fixed,
         Entity::Parameter);
   if (!fixed.empty() && fixed.size() != mesh.nb_tets())
     throw InputError("remove_slivers: one fixed flag per tet", Entity::Parameter);
+  if (!boundary_patch.empty() && boundary_patch.size() != 4 * std::size_t{mesh.nb_tets()})
+    throw InputError("remove_slivers: four boundary patches per tet", Entity::Parameter);
   report = RemoveSliversReport{};
-  FlipMesh m(mesh, fixed);
+  FlipMesh m(mesh, fixed, boundary_patch);
   auto summarise = [&](double& min, std::size_t& below) {
     min = kInfinity;
     for (index_t t = 0; t < m.nb_slots(); ++t)
@@ -232,6 +296,7 @@ void remove_slivers(TetMesh& mesh, const std::vector<char>& fixed,
   summarise(report.min_before, report.below_before);
 
   std::vector<index_t> around, ring, work;
+  bool closed = false;
   for (int pass = 0; pass < parameters.max_passes; ++pass) {
     work.clear();
     for (index_t t = 0; t < m.nb_slots(); ++t)
@@ -247,11 +312,15 @@ void remove_slivers(TetMesh& mesh, const std::vector<char>& fixed,
       for (int i = 0; i < 4; ++i)
         for (int j = i + 1; j < 4; ++j) {
           const index_t a = m.tet(t)[i], b = m.tet(t)[j];
-          if (!m.edge_ring(a, b, parameters.max_ring, around, ring)) continue;
+          if (!m.edge_ring(a, b, parameters.max_ring, around, ring, closed)) continue;
           if (!std::all_of(around.begin(), around.end(),
                            [&](index_t u) { return m.movable(u, m.region(t)); }))
             continue;
+          if (!closed && !swappable(m, a, b, ring.front(), ring.back())) continue;
+          const double before = best.quality;
           best_edge_removal(m, a, b, around, ring, best);
+          if (!closed && best.quality > before)
+            best.boundary_swap = {a, b, ring.front(), ring.back()};
         }
       double replaced = kInfinity;
       for (index_t u : best.old_tets) replaced = std::min(replaced, m.quality(u));
@@ -259,8 +328,18 @@ void remove_slivers(TetMesh& mesh, const std::vector<char>& fixed,
       const std::int32_t region = m.region(t);
       for (index_t u : best.old_tets) m.remove(u);
       for (const Tet& n : best.new_tets) m.add(n, region);
-      // Face removal replaces two tets, edge removal three or more.
-      ++(best.old_tets.size() == 2 ? report.face_removals : report.edge_removals);
+      const auto [a, b, c, d] = best.boundary_swap;
+      if (a != NO_VERTEX) {
+        const std::int32_t patch = m.patch(a, b, c);
+        m.clear_patch(a, b, c);
+        m.clear_patch(a, b, d);
+        m.set_patch(c, d, a, patch);
+        m.set_patch(c, d, b, patch);
+        ++report.boundary_swaps;
+      }
+      // Face removal replaces two tets by three; edge removal n by 2n - 4 (2n - 2 on the boundary).
+      ++(best.new_tets.size() == 3 && best.old_tets.size() == 2 ? report.face_removals
+                                                                : report.edge_removals);
       ++flips;
     }
     if (flips == 0) break;
