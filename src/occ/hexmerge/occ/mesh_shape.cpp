@@ -40,6 +40,7 @@
 #include <vector>
 
 #include "hexmerge/core/error.h"
+#include "hexmerge/geometry/remove_slivers.h"
 #include "hexmerge/geometry/vec3.h"
 #include "hexmerge/mesh/tet_topology.h"
 #include "hexmerge/occ/brep_text.h"
@@ -672,8 +673,8 @@ struct AxisPlane {
   double offset;
 };
 
-// A TetGen facet: polygons (a face's outer and inner boundary loops, or one triangle), points
-// inside its holes, its boundary marker (face index + 1).
+// A TetGen facet: polygons (a face's outer and inner boundary loops, or one triangle, and single
+// points inside it), points inside its holes, its boundary marker (face index + 1).
 struct Facet {
   std::vector<std::vector<int>> polygons;
   std::vector<Vec3> holes;
@@ -745,6 +746,66 @@ std::vector<Facet> make_facets(const Surface& surface, const std::vector<Vec3>& 
   return facets;
 }
 
+// Puts the lattice points lying on lattice faces, points[first..], into the facets of those
+// faces: into a boundary loop where they lie on one of its sides, else as a polygon of one point
+// where they lie inside. TetGen then triangulates each lattice face with its lattice points from
+// the start; left to -i, they came into two large triangles per face, which left long and flat
+// tets along the face.
+void add_face_points(std::vector<Facet>& facets, const std::vector<Vec3>& points, std::size_t first,
+                     const std::vector<bool>& lattice_face,
+                     const std::vector<std::optional<AxisPlane>>& face_plane, double tolerance) {
+  // Per axis, the points by their coordinate along it.
+  std::vector<std::pair<double, int>> by_axis[3];
+  for (int a = 0; a < 3; ++a) {
+    for (std::size_t i = first; i < points.size(); ++i)
+      by_axis[a].emplace_back(coord(points[i], a), static_cast<int>(i));
+    std::sort(by_axis[a].begin(), by_axis[a].end());
+  }
+  for (Facet& facet : facets) {
+    if (!lattice_face[facet.marker - 1]) continue;
+    const int axis = face_plane[facet.marker - 1]->axis, u = (axis + 1) % 3, v = (axis + 2) % 3;
+    const double offset = coord(points[facet.polygons[0][0]], axis);
+    const auto& list = by_axis[axis];
+    auto it = std::lower_bound(list.begin(), list.end(), std::make_pair(offset - tolerance, -1));
+    // Points on each side of each polygon, by their parameter along it.
+    std::map<std::pair<std::size_t, std::size_t>, std::vector<std::pair<double, int>>> on_side;
+    std::vector<std::vector<int>> singles;
+    for (; it != list.end() && it->first <= offset + tolerance; ++it) {
+      const Vec3& q = points[it->second];
+      const double qu = coord(q, u), qv = coord(q, v);
+      bool on_boundary = false, inside = false;
+      for (std::size_t p = 0; p < facet.polygons.size() && !on_boundary; ++p) {
+        const auto& polygon = facet.polygons[p];
+        for (std::size_t k = 0; k < polygon.size() && !on_boundary; ++k) {
+          const Vec3 &a = points[polygon[k]], &b = points[polygon[(k + 1) % polygon.size()]];
+          const double du = coord(b, u) - coord(a, u), dv = coord(b, v) - coord(a, v);
+          const double wu = qu - coord(a, u), wv = qv - coord(a, v);
+          const double length2 = du * du + dv * dv, t = (wu * du + wv * dv) / length2;
+          if (std::abs(wu * dv - wv * du) <= tolerance * std::sqrt(length2) && t > 0 && t < 1) {
+            on_side[{p, k}].emplace_back(t, it->second);
+            on_boundary = true;
+          }
+          // Even-odd rule along +u.
+          if ((coord(a, v) > qv) != (coord(b, v) > qv) &&
+              qu < coord(a, u) + (qv - coord(a, v)) * du / dv)
+            inside = !inside;
+        }
+      }
+      if (!on_boundary && inside) singles.push_back({it->second});
+    }
+    // From the last side back, so that the sides' indices hold.
+    for (auto entry = on_side.rbegin(); entry != on_side.rend(); ++entry) {
+      auto& polygon = facet.polygons[entry->first.first];
+      std::sort(entry->second.begin(), entry->second.end());
+      std::vector<int> between;
+      for (const auto& along : entry->second) between.push_back(along.second);
+      polygon.insert(polygon.begin() + static_cast<std::ptrdiff_t>(entry->first.second) + 1,
+                     between.begin(), between.end());
+    }
+    facet.polygons.insert(facet.polygons.end(), singles.begin(), singles.end());
+  }
+}
+
 std::string shell_quote(const std::string& s) {
   std::string out = "'";
   for (char c : s) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
@@ -773,10 +834,12 @@ std::string tail_of_file(const fs::path& path, std::size_t max_chars) {
   return s.size() > max_chars ? "..." + s.substr(s.size() - max_chars) : s;
 }
 
-// Reads a TetGen output table (.node or .ele, 0-based with -z): a header "count columns ...",
-// then per line an id and `columns` values; '#' starts a comment. Returns count * columns values.
+// Reads a TetGen output table (.node, .ele or .face, 0-based with -z): a header "count header
+// ...", then per line an id and `columns` values; '#' starts a comment. The header's second
+// number is `header`: the values per row of .node (3) and .ele (4), the marker flag of .face
+// (1: three vertices and a marker per row). Returns count * columns values.
 template <typename T>
-std::vector<T> read_tetgen_table(const fs::path& path, int columns) {
+std::vector<T> read_tetgen_table(const fs::path& path, int header, int columns) {
   std::ifstream in(path);
   const std::string name = path.filename().string();
   if (!in) throw InputError("TetGen wrote no " + name);
@@ -789,9 +852,9 @@ std::vector<T> read_tetgen_table(const fs::path& path, int columns) {
     std::istringstream ls(line);
     if (n < 0) {
       if (!(ls >> n >> width)) continue;
-      if (width != columns)
+      if (width != header)
         throw InputError("TetGen's " + name + " has " + std::to_string(width) +
-                         " values per row, not " + std::to_string(columns));
+                         " in its header, not " + std::to_string(header));
       values.reserve(static_cast<std::size_t>(n) * columns);
       continue;
     }
@@ -1215,18 +1278,38 @@ TetMesh mesh_shape(const std::string& brep, const MeshShapeParameters& parameter
           inserted_face.push_back(-1);
           ++report.nb_apex_points;
         }
+  // The points on lattice faces first: they go to TetGen with the surface, in its facets.
+  {
+    std::vector<std::size_t> order(inserted.size());
+    for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+    std::stable_partition(order.begin(), order.end(),
+                          [&](std::size_t i) { return inserted_face[i] >= 0; });
+    std::vector<Vec3> points(order.size());
+    std::vector<int> faces(order.size());
+    for (std::size_t i = 0; i < order.size(); ++i)
+      points[i] = inserted[order[i]], faces[i] = inserted_face[order[i]];
+    inserted.swap(points);
+    inserted_face.swap(faces);
+  }
+  const auto nb_on_faces = static_cast<std::size_t>(
+      std::count_if(inserted_face.begin(), inserted_face.end(), [](int f) { return f >= 0; }));
   clock.lap("core");
 
-  // TetGen: the surface kept as it is (-pY), the points inserted (-i), 0-based (-z), quiet (-Q).
+  // TetGen: the surface kept as it is (-pY), the lattice faces with their lattice points, the
+  // other points inserted (-i), 0-based (-z), quiet (-Q).
   WorkDirectory work(parameters.work_directory);
   const fs::path poly = work.path() / "shape.poly";
   {
+    std::vector<Vec3> poly_points = nodes;
+    poly_points.insert(poly_points.end(), inserted.begin(), inserted.begin() + nb_on_faces);
     std::ofstream out(poly);
     out.precision(17);
-    out << nodes.size() << " 3 0 0\n";
-    for (std::size_t i = 0; i < nodes.size(); ++i)
-      out << i << ' ' << nodes[i].x << ' ' << nodes[i].y << ' ' << nodes[i].z << '\n';
-    const std::vector<Facet> facets = make_facets(surface, nodes, lattice_face, face_plane);
+    out << poly_points.size() << " 3 0 0\n";
+    for (std::size_t i = 0; i < poly_points.size(); ++i)
+      out << i << ' ' << poly_points[i].x << ' ' << poly_points[i].y << ' ' << poly_points[i].z
+          << '\n';
+    std::vector<Facet> facets = make_facets(surface, nodes, lattice_face, face_plane);
+    add_face_points(facets, poly_points, nodes.size(), lattice_face, face_plane, 1e-7 * h);
     out << facets.size() << " 1\n";
     for (const Facet& f : facets) {
       out << f.polygons.size() << ' ' << f.holes.size() << ' ' << f.marker << '\n';
@@ -1241,9 +1324,10 @@ TetMesh mesh_shape(const std::string& brep, const MeshShapeParameters& parameter
     out << "0\n0\n";
     std::ofstream extra(work.path() / "shape.a.node");
     extra.precision(17);
-    extra << inserted.size() << " 3 0 0\n";
-    for (std::size_t i = 0; i < inserted.size(); ++i)
-      extra << i << ' ' << inserted[i].x << ' ' << inserted[i].y << ' ' << inserted[i].z << '\n';
+    extra << inserted.size() - nb_on_faces << " 3 0 0\n";
+    for (std::size_t i = nb_on_faces; i < inserted.size(); ++i)
+      extra << i - nb_on_faces << ' ' << inserted[i].x << ' ' << inserted[i].y << ' '
+            << inserted[i].z << '\n';
     if (!out || !extra) throw InputError("cannot write TetGen's input in " + work.path().string());
   }
   const fs::path log = work.path() / "tetgen.log";
@@ -1259,8 +1343,8 @@ TetMesh mesh_shape(const std::string& brep, const MeshShapeParameters& parameter
 
   TetMesh mesh;
   const std::vector<double> frame_points =
-      read_tetgen_table<double>(work.path() / "shape.1.node", 3);
-  for (long long v : read_tetgen_table<long long>(work.path() / "shape.1.ele", 4)) {
+      read_tetgen_table<double>(work.path() / "shape.1.node", 3, 3);
+  for (long long v : read_tetgen_table<long long>(work.path() / "shape.1.ele", 4, 4)) {
     if (v < 0 || v >= static_cast<long long>(frame_points.size() / 3))
       throw InputError("TetGen's shape.1.ele refers to a missing node");
     mesh.tets.push_back(static_cast<index_t>(v));
@@ -1287,6 +1371,67 @@ TetMesh mesh_shape(const std::string& brep, const MeshShapeParameters& parameter
     mesh.points[3 * i] = surface.nodes[i].x, mesh.points[3 * i + 1] = surface.nodes[i].y,
                     mesh.points[3 * i + 2] = surface.nodes[i].z;
   }
+  if (shape.solids.Extent() > 1)
+    mesh.regions = regions_by_solid(brep, mesh);
+  else
+    mesh.regions.assign(mesh.tets.size() / 4, 0);
+  clock.lap("regions");
+
+  // TetGen leaves slivers where the lattice meets the boundary layers and the surface (four
+  // nearly cocircular points, as the sides of the layers' prisms are): flips take them out. The
+  // lattice's own tets, in one cell or one closing pyramid, stay for the hexahedra.
+  {
+    // Whether vertex v is a lattice point or a cell centre; its coordinates in cells.
+    auto on_half_lattice = [&](index_t v, double(&cell)[3]) {
+      for (int a = 0; a < 3; ++a) {
+        cell[a] = frame_points[3 * v + a] / report.spacing[a];
+        if (std::abs(2 * cell[a] - std::round(2 * cell[a])) > 1e-6) return false;
+      }
+      return true;
+    };
+    std::vector<char> fixed(mesh.nb_tets(), 0);
+    for (index_t t = 0; t < mesh.nb_tets(); ++t) {
+      double cell[3] = {0, 0, 0}, least[3] = {1e300, 1e300, 1e300},
+             most[3] = {-1e300, -1e300, -1e300};
+      bool in_one_cell = true;
+      for (int k = 0; k < 4 && in_one_cell; ++k) {
+        in_one_cell = on_half_lattice(mesh.tet(t)[k], cell);
+        for (int a = 0; a < 3; ++a) {
+          least[a] = std::min(least[a], cell[a]), most[a] = std::max(most[a], cell[a]);
+          in_one_cell &= most[a] - least[a] < 1 + 1e-6;
+        }
+      }
+      fixed[t] = in_one_cell;
+    }
+    // The CAD face of each boundary face, from TetGen's markers (face index + 1), so that
+    // triangles of one planar face may swap their shared sides.
+    std::map<std::array<index_t, 3>, std::int32_t> face_marker;
+    const std::vector<long long> faces =
+        read_tetgen_table<long long>(work.path() / "shape.1.face", 1, 4);
+    for (std::size_t i = 0; i + 3 < faces.size(); i += 4) {
+      std::array<index_t, 3> key{static_cast<index_t>(faces[i]), static_cast<index_t>(faces[i + 1]),
+                                 static_cast<index_t>(faces[i + 2])};
+      std::sort(key.begin(), key.end());
+      face_marker[key] = static_cast<std::int32_t>(faces[i + 3]) - 1;
+    }
+    std::vector<std::int32_t> boundary_patch(4 * static_cast<std::size_t>(mesh.nb_tets()), -1);
+    for (index_t t = 0; t < mesh.nb_tets(); ++t)
+      for (int f = 0; f < 4; ++f) {
+        const index_t* v = mesh.tet(t);
+        std::array<index_t, 3> key{v[(f + 1) % 4], v[(f + 2) % 4], v[(f + 3) % 4]};
+        std::sort(key.begin(), key.end());
+        const auto it = face_marker.find(key);
+        if (it != face_marker.end())
+          boundary_patch[4 * static_cast<std::size_t>(t) + f] = it->second;
+      }
+    RemoveSliversReport flips;
+    remove_slivers(mesh, fixed, boundary_patch, RemoveSliversParameters{}, flips);
+    report.min_tet_quality_before = flips.min_before;
+    report.nb_face_flips = flips.face_removals;
+    report.nb_edge_flips = flips.edge_removals;
+    report.nb_boundary_swaps = flips.boundary_swaps;
+  }
+  clock.lap("slivers");
   validate_tet_mesh(mesh);
 
   // How far the boundary nodes are from the CAD faces they lie on.
@@ -1325,12 +1470,6 @@ TetMesh mesh_shape(const std::string& brep, const MeshShapeParameters& parameter
     report.max_boundary_distance = worst;
   }
   clock.lap("check");
-
-  if (shape.solids.Extent() > 1)
-    mesh.regions = regions_by_solid(brep, mesh);
-  else
-    mesh.regions.assign(mesh.tets.size() / 4, 0);
-  clock.lap("regions");
   return mesh;
 }
 

@@ -1,0 +1,351 @@
+#include "hexmerge/geometry/remove_slivers.h"
+
+#include <algorithm>
+#include <array>
+#include <cstdint>
+#include <limits>
+#include <unordered_map>
+
+#include "hexmerge/core/error.h"
+#include "hexmerge/geometry/quality.h"
+#include "hexmerge/geometry/vec3.h"
+
+namespace hexmerge {
+namespace {
+
+using Tet = std::array<index_t, 4>;
+constexpr double kInfinity = std::numeric_limits<double>::infinity();
+
+// A face by its sorted vertices.
+using FaceKey = std::array<index_t, 3>;
+FaceKey face_key(index_t a, index_t b, index_t c) {
+  FaceKey k{a, b, c};
+  std::sort(k.begin(), k.end());
+  return k;
+}
+struct FaceKeyHash {
+  std::size_t operator()(const FaceKey& k) const {
+    return (static_cast<std::size_t>(k[0]) * 73856093u) ^
+           (static_cast<std::size_t>(k[1]) * 19349663u) ^
+           (static_cast<std::size_t>(k[2]) * 83492791u);
+  }
+};
+
+// Whether (w, x, y, z), four distinct vertices of t, run in t's own (positive) order up to an
+// even permutation.
+bool same_orientation(const Tet& t, index_t w, index_t x, index_t y, index_t z) {
+  auto at = [&](index_t v) {
+    return static_cast<int>(std::find(t.begin(), t.end(), v) - t.begin());
+  };
+  const int p[4] = {at(w), at(x), at(y), at(z)};
+  int inversions = 0;
+  for (int i = 0; i < 4; ++i)
+    for (int j = i + 1; j < 4; ++j) inversions += p[i] > p[j];
+  return inversions % 2 == 0;
+}
+
+// The mesh while it is flipped: tets by slot (dead slots stay), the tets at each vertex.
+class FlipMesh {
+ public:
+  FlipMesh(const TetMesh& mesh, const std::vector<char>& fixed,
+           const std::vector<std::int32_t>& boundary_patch)
+      : points_(mesh.points) {
+    at_vertex_.resize(mesh.nb_vertices());
+    for (index_t t = 0; t < mesh.nb_tets(); ++t) {
+      const index_t* v = mesh.tet(t);
+      add(Tet{v[0], v[1], v[2], v[3]}, mesh.region(t), !fixed.empty() && fixed[t]);
+    }
+    if (boundary_patch.empty()) return;
+    for (index_t t = 0; t < mesh.nb_tets(); ++t)
+      for (int f = 0; f < 4; ++f)
+        if (across(t, f) == NO_CELL) {
+          const index_t* v = mesh.tet(t);
+          patch_[face_key(v[(f + 1) % 4], v[(f + 2) % 4], v[(f + 3) % 4])] =
+              boundary_patch[4 * static_cast<std::size_t>(t) + f];
+        }
+  }
+
+  double quality(const Tet& t) const {
+    return scaled_jacobian(CellType::Tet, points_.data(), t.data());
+  }
+  std::size_t nb_slots() const { return tets_.size(); }
+  bool alive(index_t t) const { return alive_[t]; }
+  bool fixed(index_t t) const { return fixed_[t]; }
+  const Tet& tet(index_t t) const { return tets_[t]; }
+  double quality(index_t t) const { return quality_[t]; }
+  std::int32_t region(index_t t) const { return region_[t]; }
+  // Whether t may be replaced in a flip within region r.
+  bool movable(index_t t, std::int32_t r) const {
+    return alive_[t] && !fixed_[t] && region_[t] == r;
+  }
+
+  void add(const Tet& t, std::int32_t region, bool fixed = false) {
+    const auto id = static_cast<index_t>(tets_.size());
+    tets_.push_back(t);
+    region_.push_back(region);
+    fixed_.push_back(fixed);
+    alive_.push_back(1);
+    quality_.push_back(quality(t));
+    for (index_t v : t) at_vertex_[v].push_back(id);
+  }
+  void remove(index_t t) {
+    alive_[t] = 0;
+    for (index_t v : tets_[t]) {
+      auto& list = at_vertex_[v];
+      list.erase(std::find(list.begin(), list.end(), t));
+    }
+  }
+
+  // The tets around edge (a, b), in `around`, and their other vertices in `ring`, so that tet i
+  // is (a, b, ring[i], ring[i + 1]) in positive order (ring[n] = ring[0] for a closed ring, an
+  // interior edge; an open ring, a boundary edge, has n + 1 vertices). False when the tets do not
+  // make one ring or there are more than max_ring.
+  bool edge_ring(index_t a, index_t b, int max_ring, std::vector<index_t>& around,
+                 std::vector<index_t>& ring, bool& closed) const {
+    around.clear();
+    for (index_t t : at_vertex_[a])
+      if (std::find(tets_[t].begin(), tets_[t].end(), b) != tets_[t].end()) {
+        if (static_cast<int>(around.size()) == max_ring) return false;
+        around.push_back(t);
+      }
+    const std::size_t n = around.size();
+    if (n == 0) return false;
+    // Per tet, its two other vertices (x, y) with (a, b, x, y) positive.
+    std::vector<std::pair<index_t, index_t>> sides(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      const Tet& t = tets_[around[i]];
+      index_t other[2], k = 0;
+      for (index_t v : t)
+        if (v != a && v != b) other[k++] = v;
+      sides[i] = same_orientation(t, a, b, other[0], other[1]) ? std::make_pair(other[0], other[1])
+                                                               : std::make_pair(other[1], other[0]);
+    }
+    // An open ring starts at the vertex no tet ends at.
+    index_t x = sides[0].first;
+    closed = true;
+    for (const auto& side : sides)
+      if (std::none_of(sides.begin(), sides.end(),
+                       [&](const auto& s) { return s.second == side.first; }))
+        x = side.first, closed = false;
+    ring.clear();
+    std::vector<index_t> ordered;
+    for (std::size_t step = 0; step < n; ++step) {
+      std::size_t i = 0;
+      while (i < n && sides[i].first != x) ++i;
+      if (i == n) return false;
+      ring.push_back(x);
+      ordered.push_back(around[i]);
+      x = sides[i].second;
+    }
+    if (closed && x != ring.front()) return false;
+    if (!closed) ring.push_back(x);
+    around = ordered;
+    return closed ? n >= 3 : n >= 2;
+  }
+
+  // The patch of boundary face (a, b, c), or -1 (no patch given, or not a boundary face).
+  std::int32_t patch(index_t a, index_t b, index_t c) const {
+    const auto it = patch_.find(face_key(a, b, c));
+    return it == patch_.end() ? -1 : it->second;
+  }
+  void set_patch(index_t a, index_t b, index_t c, std::int32_t patch) {
+    patch_[face_key(a, b, c)] = patch;
+  }
+  void clear_patch(index_t a, index_t b, index_t c) { patch_.erase(face_key(a, b, c)); }
+  const double* point(index_t v) const { return &points_[3 * static_cast<std::size_t>(v)]; }
+
+  // The tet across face `opposite` (local index of the vertex not on it) of t, or NO_CELL.
+  index_t across(index_t t, int opposite) const {
+    const Tet& v = tets_[t];
+    const index_t f0 = v[(opposite + 1) % 4], f1 = v[(opposite + 2) % 4],
+                  f2 = v[(opposite + 3) % 4];
+    for (index_t u : at_vertex_[f0]) {
+      if (u == t) continue;
+      const Tet& w = tets_[u];
+      if (std::find(w.begin(), w.end(), f1) != w.end() &&
+          std::find(w.begin(), w.end(), f2) != w.end())
+        return u;
+    }
+    return NO_CELL;
+  }
+
+  // The live tets, renumbered; regions when the input had them.
+  void write(TetMesh& mesh) const {
+    const bool with_regions = !mesh.regions.empty();
+    mesh.tets.clear();
+    mesh.regions.clear();
+    for (std::size_t t = 0; t < tets_.size(); ++t) {
+      if (!alive_[t]) continue;
+      mesh.tets.insert(mesh.tets.end(), tets_[t].begin(), tets_[t].end());
+      if (with_regions) mesh.regions.push_back(region_[t]);
+    }
+  }
+
+ private:
+  const std::vector<double>& points_;
+  std::vector<Tet> tets_;
+  std::vector<std::int32_t> region_;
+  std::vector<char> fixed_, alive_;
+  std::vector<double> quality_;
+  std::vector<std::vector<index_t>> at_vertex_;
+  std::unordered_map<FaceKey, std::int32_t, FaceKeyHash> patch_;
+};
+
+// A flip: the tets it replaces, the tets it makes and the smallest quality among these.
+struct Flip {
+  std::vector<index_t> old_tets;
+  std::vector<Tet> new_tets;
+  double quality = -kInfinity;
+  // A boundary edge (a, b) between boundary faces (a, b, c) and (a, b, d) becomes (c, d).
+  std::array<index_t, 4> boundary_swap{NO_VERTEX, NO_VERTEX, NO_VERTEX, NO_VERTEX};
+};
+
+// Edge removal of (a, b): the best triangulation of the ring polygon, each triangle joined to
+// a and to b (Klincsek's dynamic programming, maximising the smallest quality). For a boundary
+// edge the polygon is closed by the new boundary edge (ring.front(), ring.back()).
+void best_edge_removal(const FlipMesh& m, index_t a, index_t b, const std::vector<index_t>& around,
+                       const std::vector<index_t>& ring, Flip& best) {
+  const int n = static_cast<int>(ring.size());
+  std::vector<double> value(n * n, kInfinity);
+  std::vector<int> split(n * n, -1);
+  for (int gap = 2; gap < n; ++gap)
+    for (int i = 0; i + gap < n; ++i) {
+      const int j = i + gap;
+      double& v = value[i * n + j];
+      v = -kInfinity;
+      for (int k = i + 1; k < j; ++k) {
+        double q = std::min(value[i * n + k], value[k * n + j]);
+        if (q <= v) continue;
+        q = std::min(q, m.quality(Tet{ring[i], ring[k], ring[j], b}));
+        if (q <= v) continue;
+        q = std::min(q, m.quality(Tet{ring[i], ring[j], ring[k], a}));
+        if (q > v) v = q, split[i * n + j] = k;
+      }
+    }
+  if (value[n - 1] <= best.quality) return;
+  best.quality = value[n - 1];
+  best.old_tets = around;
+  best.new_tets.clear();
+  best.boundary_swap = {NO_VERTEX, NO_VERTEX, NO_VERTEX, NO_VERTEX};
+  std::vector<std::pair<int, int>> stack{{0, n - 1}};
+  while (!stack.empty()) {
+    const auto [i, j] = stack.back();
+    stack.pop_back();
+    if (j - i < 2) continue;
+    const int k = split[i * n + j];
+    best.new_tets.push_back(Tet{ring[i], ring[k], ring[j], b});
+    best.new_tets.push_back(Tet{ring[i], ring[j], ring[k], a});
+    stack.push_back({i, k});
+    stack.push_back({k, j});
+  }
+}
+
+// Whether boundary edge (a, b) may be swapped to (c, d), its boundary faces being (a, b, c) and
+// (a, b, d): both on one patch and in one plane, so that the boundary stays where it is.
+bool swappable(const FlipMesh& m, index_t a, index_t b, index_t c, index_t d) {
+  const std::int32_t patch = m.patch(a, b, c);
+  if (patch < 0 || m.patch(a, b, d) != patch) return false;
+  const Vec3 pa = Vec3::of(m.point(a)), ab = Vec3::of(m.point(b)) - pa;
+  const Vec3 ac = Vec3::of(m.point(c)) - pa, ad = Vec3::of(m.point(d)) - pa;
+  return std::abs(det3(ab, ac, ad)) <= 1e-9 * ab.norm() * ac.norm() * ad.norm();
+}
+
+// Face removal across face `opposite` of t: t = (f, p) and its neighbour (f, q) become three
+// tets around the edge (q, p).
+void best_face_removal(const FlipMesh& m, index_t t, int opposite, Flip& best) {
+  const index_t u = m.across(t, opposite);
+  if (u == NO_CELL || !m.movable(u, m.region(t))) return;
+  const Tet& v = m.tet(t);
+  const index_t p = v[opposite];
+  index_t f[3] = {v[(opposite + 1) % 4], v[(opposite + 2) % 4], v[(opposite + 3) % 4]};
+  if (!same_orientation(v, f[0], f[1], f[2], p)) std::swap(f[1], f[2]);
+  index_t q = NO_VERTEX;
+  for (index_t w : m.tet(u))
+    if (w != f[0] && w != f[1] && w != f[2]) q = w;
+  Flip flip;
+  flip.old_tets = {t, u};
+  flip.quality = kInfinity;
+  for (int i = 0; i < 3; ++i) {
+    flip.new_tets.push_back(Tet{q, p, f[i], f[(i + 1) % 3]});
+    flip.quality = std::min(flip.quality, m.quality(flip.new_tets.back()));
+  }
+  if (flip.quality > best.quality) best = std::move(flip);
+}
+
+}  // namespace
+
+void remove_slivers(TetMesh& mesh, const std::vector<char>& fixed,
+                    const std::vector<std::int32_t>& boundary_patch,
+                    const RemoveSliversParameters& parameters, RemoveSliversReport& report) {
+  if (!(parameters.target > 0 && parameters.target <= 1) || parameters.max_passes < 1 ||
+      parameters.max_ring < 3 || parameters.max_ring > 10)
+    throw InputError(
+        "remove_slivers: target must be in (0, 1], max_passes >= 1, max_ring in [3, 10]",
+        Entity::Parameter);
+  if (!fixed.empty() && fixed.size() != mesh.nb_tets())
+    throw InputError("remove_slivers: one fixed flag per tet", Entity::Parameter);
+  if (!boundary_patch.empty() && boundary_patch.size() != 4 * std::size_t{mesh.nb_tets()})
+    throw InputError("remove_slivers: four boundary patches per tet", Entity::Parameter);
+  report = RemoveSliversReport{};
+  FlipMesh m(mesh, fixed, boundary_patch);
+  auto summarise = [&](double& min, std::size_t& below) {
+    min = kInfinity;
+    for (index_t t = 0; t < m.nb_slots(); ++t)
+      if (m.alive(t)) min = std::min(min, m.quality(t)), below += m.quality(t) < parameters.target;
+  };
+  summarise(report.min_before, report.below_before);
+
+  std::vector<index_t> around, ring, work;
+  bool closed = false;
+  for (int pass = 0; pass < parameters.max_passes; ++pass) {
+    work.clear();
+    for (index_t t = 0; t < m.nb_slots(); ++t)
+      if (m.alive(t) && !m.fixed(t) && m.quality(t) < parameters.target) work.push_back(t);
+    std::sort(work.begin(), work.end(),
+              [&](index_t a, index_t b) { return m.quality(a) < m.quality(b); });
+    std::size_t flips = 0;
+    for (index_t t : work) {
+      if (!m.alive(t)) continue;
+      // The best flip that replaces t, better than the tets it replaces.
+      Flip best;
+      for (int i = 0; i < 4; ++i) best_face_removal(m, t, i, best);
+      for (int i = 0; i < 4; ++i)
+        for (int j = i + 1; j < 4; ++j) {
+          const index_t a = m.tet(t)[i], b = m.tet(t)[j];
+          if (!m.edge_ring(a, b, parameters.max_ring, around, ring, closed)) continue;
+          if (!std::all_of(around.begin(), around.end(),
+                           [&](index_t u) { return m.movable(u, m.region(t)); }))
+            continue;
+          if (!closed && !swappable(m, a, b, ring.front(), ring.back())) continue;
+          const double before = best.quality;
+          best_edge_removal(m, a, b, around, ring, best);
+          if (!closed && best.quality > before)
+            best.boundary_swap = {a, b, ring.front(), ring.back()};
+        }
+      double replaced = kInfinity;
+      for (index_t u : best.old_tets) replaced = std::min(replaced, m.quality(u));
+      if (best.old_tets.empty() || !(best.quality > replaced + 1e-12)) continue;
+      const std::int32_t region = m.region(t);
+      for (index_t u : best.old_tets) m.remove(u);
+      for (const Tet& n : best.new_tets) m.add(n, region);
+      const auto [a, b, c, d] = best.boundary_swap;
+      if (a != NO_VERTEX) {
+        const std::int32_t patch = m.patch(a, b, c);
+        m.clear_patch(a, b, c);
+        m.clear_patch(a, b, d);
+        m.set_patch(c, d, a, patch);
+        m.set_patch(c, d, b, patch);
+        ++report.boundary_swaps;
+      }
+      // Face removal replaces two tets by three; edge removal n by 2n - 4 (2n - 2 on the boundary).
+      ++(best.new_tets.size() == 3 && best.old_tets.size() == 2 ? report.face_removals
+                                                                : report.edge_removals);
+      ++flips;
+    }
+    if (flips == 0) break;
+  }
+  summarise(report.min_after, report.below_after);
+  m.write(mesh);
+}
+
+}  // namespace hexmerge

@@ -1,0 +1,56 @@
+#pragma once
+/// @file
+/// Removal of badly shaped tets by flips: the points stay, the tets around them change.
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "hexmerge/mesh/tet_mesh.h"
+
+namespace hexmerge {
+
+/// How remove_slivers() works.
+struct RemoveSliversParameters {
+  /// Tets whose scaled Jacobian is below this are worked on, in (0, 1].
+  double target = 0.3;
+  /// Passes over the tets below target, at least 1; a pass that flips nothing ends the run.
+  int max_passes = 10;
+  /// Largest number of tets around an edge that edge removal replaces, in [3, 10].
+  int max_ring = 7;
+};
+
+/// What remove_slivers() did.
+struct RemoveSliversReport {
+  double min_before = 0.0;         ///< smallest scaled Jacobian of a tet, before
+  double min_after = 0.0;          ///< and after
+  std::size_t below_before = 0;    ///< tets below the target, before
+  std::size_t below_after = 0;     ///< and after
+  std::size_t face_removals = 0;   ///< 2-3 flips done
+  std::size_t edge_removals = 0;   ///< n-to-(2n-4) flips done (3-2, 4-4, ...), boundary included
+  std::size_t boundary_swaps = 0;  ///< of which on a boundary edge between two coplanar faces
+};
+
+/// Raises the smallest scaled Jacobian (quality.h) of a tet mesh by flips, Shewchuk's "face
+/// removal" (two tets across a face become three around the edge joining their apexes) and
+/// "edge removal" (the n tets around an interior edge become 2n - 4, the best triangulation of
+/// the ring of their other vertices, found by dynamic programming). A flip is done only when the
+/// smallest scaled Jacobian of the tets it makes is larger than that of the tets it replaces, so
+/// the mesh's minimum never decreases. Points never move or appear; faces between tets of two
+/// regions and the tets marked `fixed` never change, nor does the boundary of the domain as a
+/// surface: its triangles change only where two of them on one patch and in one plane swap their
+/// shared side (edge removal on a boundary edge, the ring closed by the new side).
+///
+/// @param[in,out] mesh            a valid tet mesh (validate_tet_mesh); tets are renumbered,
+///                                regions follow their tets
+/// @param[in]     fixed           #T flags (or empty: none): tets kept as they are
+/// @param[in]     boundary_patch  #T by 4 (or empty: no boundary triangle changes): the patch
+///                                (say, the CAD face) of face f (opposite vertex f) of tet t when
+///                                it is on the boundary, >= 0; -1: never changed
+/// @param[in]     parameters      see RemoveSliversParameters
+/// @param[out]    report      the minimum and the flips done
+void remove_slivers(TetMesh& mesh, const std::vector<char>& fixed,
+                    const std::vector<std::int32_t>& boundary_patch,
+                    const RemoveSliversParameters& parameters, RemoveSliversReport& report);
+
+}  // namespace hexmerge
