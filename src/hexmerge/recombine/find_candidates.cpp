@@ -46,12 +46,13 @@ index_t unique_other_neighbor(index_t v, const std::array<index_t, 4>* faces, co
 // Two tets sharing a face, whose base triangles leave out the same vertex, are the pyramid with
 // that apex: each tet's other two faces through the apex are the four sides. (The same answer as
 // the general assembly, without its search: pyramids are most of the matches.)
-bool assemble_pyramid(const TetMesh& mesh, const TetTopology& topology, const index_t* tets,
-                      int nb, const std::array<index_t, 2>* quad_pairs, int nb_quad_pairs,
+bool assemble_pyramid(const TetMesh& mesh, const TetTopology& topology, const index_t* tets, int nb,
+                      const std::array<index_t, 2>* quad_pairs, int nb_quad_pairs,
                       std::array<index_t, 8>& vertices) {
   if (nb != 2 || nb_quad_pairs != 1) return false;
   const index_t t0 = quad_pairs[0][0] / 4, t1 = quad_pairs[0][1] / 4;
-  const int f0 = static_cast<int>(quad_pairs[0][0] % 4), f1 = static_cast<int>(quad_pairs[0][1] % 4);
+  const int f0 = static_cast<int>(quad_pairs[0][0] % 4),
+            f1 = static_cast<int>(quad_pairs[0][1] % 4);
   if (t0 == t1 || !((t0 == tets[0] && t1 == tets[1]) || (t0 == tets[1] && t1 == tets[0]))) {
     return false;
   }
@@ -132,7 +133,8 @@ bool assemble_cell(const TetMesh& mesh, const TetTopology& topology, CellType ty
     // The apex: the one vertex of the group not on the base.
     for (int g = 0; g < nb_faces; ++g) {
       for (int i = 0; i < sizes[g]; ++i) {
-        if (std::find(vertices.begin(), vertices.begin() + 4, faces[g][i]) == vertices.begin() + 4) {
+        if (std::find(vertices.begin(), vertices.begin() + 4, faces[g][i]) ==
+            vertices.begin() + 4) {
           vertices[4] = faces[g][i];
         }
       }
@@ -168,21 +170,77 @@ bool assemble_cell(const TetMesh& mesh, const TetTopology& topology, CellType ty
 
 namespace {
 
-// One search: the interpreter's state while it runs one program from one root tet.
+// The enabled search programs merged into one tree: programs that begin with the same steps
+// (the same instruction with the same filters) run those steps once for all of them. Node 0 is
+// the root; each other node is one instruction, and lists the programs whose code ends there.
+class SearchTree {
+ public:
+  struct Node {
+    Instruction in{};
+    unsigned char adds_vertex = 0;  // a LINK to a new node: SearchProgram::adds_vertex
+    unsigned char quad_degree = 0;  // the new node's SearchProgram::quad_degree (root: node 0's)
+    std::vector<int> children;
+    std::vector<int> programs;  // indices into search_programs()
+  };
+
+  explicit SearchTree(const std::array<bool, NB_CELL_TYPES>& types) {
+    const auto& programs = search_programs();
+    for (int p = 0; p < static_cast<int>(programs.size()); ++p) {
+      const SearchProgram& program = programs[p];
+      if (!types[static_cast<int>(program.type)]) continue;
+      Node root_gate;
+      root_gate.quad_degree = program.quad_degree[0];
+      int at = child(0, root_gate);
+      for (std::size_t pc = 0; pc < program.code.size(); ++pc) {
+        Node step;
+        step.in = program.code[pc];
+        step.adds_vertex = program.adds_vertex[pc];
+        if (step.in.op == Instruction::Link) step.quad_degree = program.quad_degree[step.in.b];
+        at = child(at, step);
+      }
+      nodes_[at].programs.push_back(p);
+    }
+  }
+
+  const Node& node(int i) const { return nodes_[i]; }
+  int nb_programs() const { return static_cast<int>(search_programs().size()); }
+
+ private:
+  // The child of `parent` that runs `step`, made when missing.
+  int child(int parent, const Node& step) {
+    for (const int c : nodes_[parent].children) {
+      const Node& n = nodes_[c];
+      if (n.in.op == step.in.op && n.in.a == step.in.a && n.in.b == step.in.b &&
+          n.adds_vertex == step.adds_vertex && n.quad_degree == step.quad_degree) {
+        return c;
+      }
+    }
+    nodes_.push_back(step);
+    nodes_[parent].children.push_back(static_cast<int>(nodes_.size()) - 1);
+    return static_cast<int>(nodes_.size()) - 1;
+  }
+
+  std::vector<Node> nodes_{1};
+};
+
+// One search: the interpreter's state while it runs the search tree from one root tet.
 class Matcher {
  public:
   Matcher(const TetMesh& mesh, const TetTopology& topology, const QuadPairs& quad_pairs,
-          const AcceptanceCriteria& criteria, std::vector<Candidate>& out)
-      : mesh_(mesh), topology_(topology), pairs_(quad_pairs), criteria_(criteria), out_(out) {}
+          const AcceptanceCriteria& criteria, const SearchTree& tree, std::vector<Candidate>& out)
+      : mesh_(mesh),
+        topology_(topology),
+        pairs_(quad_pairs),
+        criteria_(criteria),
+        tree_(tree),
+        found_(tree.nb_programs()),
+        out_(out) {}
 
   void run_from(index_t root) {
     root_ = root;
-    const std::size_t first_of_root = out_.size();
-    for (const SearchProgram& program : search_programs()) {
-      if (!criteria_.types[static_cast<int>(program.type)]) continue;
-      if (quad_faces(root, -1) < program.quad_degree[0]) continue;
-      program_ = &program;
-      max_vertices_ = descriptor(program.type).nb_vertices;
+    const int root_quad_faces = quad_faces(root, -1);
+    for (const int gate : tree_.node(0).children) {
+      if (root_quad_faces < tree_.node(gate).quad_degree) continue;
       nb_assigned_ = 1;
       node_[0] = root;
       used_[0] = 0;
@@ -190,7 +248,16 @@ class Matcher {
       nb_vertices_ = 4;
       std::copy(q, q + 4, vertex_.begin());
       nb_quads_ = 0;
-      step(0, first_of_root);
+      descend(tree_.node(gate));
+    }
+    // Program by program, as if each ran alone in turn: the same group may be matched again
+    // through an automorphism that fixes the root, and the first match is kept.
+    const std::size_t first_of_root = out_.size();
+    for (std::vector<Candidate>& found : found_) {
+      for (const Candidate& c : found) {
+        if (!seen(c, first_of_root)) out_.push_back(c);
+      }
+      found.clear();
     }
   }
 
@@ -202,34 +269,35 @@ class Matcher {
     return false;
   }
 
-  void step(std::size_t pc, std::size_t first_of_root) {
-    if (pc == program_->code.size()) {
-      finish(first_of_root);
-      return;
-    }
-    const Instruction& in = program_->code[pc];
+  // The programs ending at `n` have a match; its children continue the others.
+  void descend(const SearchTree::Node& n) {
+    for (const int p : n.programs) finish(search_programs()[p], found_[p]);
+    for (const int c : n.children) step(tree_.node(c));
+  }
+
+  void step(const SearchTree::Node& n) {
+    const Instruction& in = n.in;
     const index_t ta = node_[in.a];
     if (in.op == Instruction::Link && in.b == nb_assigned_) {
       for (int f = 0; f < 4; ++f) {
         if (used_[in.a] & (1u << f)) continue;
-        const index_t n = topology_.neighbor(ta, f);
+        const index_t nb = topology_.neighbor(ta, f);
         // The root is the group's smallest tet: each group is found from one root only.
-        if (n == NO_CELL || n < root_ || in_match(n)) continue;
-        if (criteria_.respect_regions && mesh_.region(n) != mesh_.region(root_)) continue;
+        if (nb == NO_CELL || nb < root_ || in_match(nb)) continue;
+        if (criteria_.respect_regions && mesh_.region(nb) != mesh_.region(root_)) continue;
         const int fn = topology_.neighbor_face(ta, f);
-        const index_t apex = mesh_.tet(n)[fn];
-        const bool new_vertex =
-            std::find(vertex_.begin(), vertex_.begin() + nb_vertices_, apex) ==
-            vertex_.begin() + nb_vertices_;
-        if (new_vertex != (program_->adds_vertex[pc] != 0)) continue;
         // The node's tet needs as many faces that can pair into quads as the node has quads.
-        if (quad_faces(n, fn) < program_->quad_degree[in.b]) continue;
+        if (quad_faces(nb, fn) < n.quad_degree) continue;
+        const index_t apex = mesh_.tet(nb)[fn];
+        const bool new_vertex = std::find(vertex_.begin(), vertex_.begin() + nb_vertices_, apex) ==
+                                vertex_.begin() + nb_vertices_;
+        if (new_vertex != (n.adds_vertex != 0)) continue;
         if (new_vertex) vertex_[nb_vertices_++] = apex;
-        node_[nb_assigned_] = n;
+        node_[nb_assigned_] = nb;
         used_[nb_assigned_] = static_cast<unsigned char>(1u << fn);
         ++nb_assigned_;
         used_[in.a] |= static_cast<unsigned char>(1u << f);
-        step(pc + 1, first_of_root);
+        descend(n);
         used_[in.a] &= static_cast<unsigned char>(~(1u << f));
         --nb_assigned_;
         if (new_vertex) --nb_vertices_;
@@ -242,7 +310,7 @@ class Matcher {
         if ((used_[in.a] & (1u << f)) || (used_[in.b] & (1u << fb))) return;
         used_[in.a] |= static_cast<unsigned char>(1u << f);
         used_[in.b] |= static_cast<unsigned char>(1u << fb);
-        step(pc + 1, first_of_root);
+        descend(n);
         used_[in.a] &= static_cast<unsigned char>(~(1u << f));
         used_[in.b] &= static_cast<unsigned char>(~(1u << fb));
         return;
@@ -259,7 +327,7 @@ class Matcher {
           used_[in.b] |= static_cast<unsigned char>(1u << fb);
           quad_[nb_quads_] = {4 * ta + fa, p->face};
           ++nb_quads_;
-          step(pc + 1, first_of_root);
+          descend(n);
           --nb_quads_;
           used_[in.a] &= static_cast<unsigned char>(~(1u << fa));
           used_[in.b] &= static_cast<unsigned char>(~(1u << fb));
@@ -279,13 +347,10 @@ class Matcher {
   // A quad uses external faces only: faces on the domain boundary or towards tets outside the
   // current match. (A tet joining the match later through such a face is rejected when the
   // cell is assembled.)
-  bool internal(index_t neighbor) const {
-    return neighbor != NO_CELL && in_match(neighbor);
-  }
+  bool internal(index_t neighbor) const { return neighbor != NO_CELL && in_match(neighbor); }
 
-  void finish(std::size_t first_of_root) {
-    const SearchProgram& program = *program_;
-    if (nb_vertices_ != max_vertices_) return;
+  void finish(const SearchProgram& program, std::vector<Candidate>& found) {
+    if (nb_vertices_ != descriptor(program.type).nb_vertices) return;
     Candidate c;
     c.type = program.type;
     c.graph = static_cast<std::uint8_t>(program.graph);
@@ -297,17 +362,21 @@ class Matcher {
                        nb_quads_, c.vertices)) {
       return;
     }
-    // The same group may be matched again through an automorphism that fixes the root.
-    for (std::size_t i = first_of_root; i < out_.size(); ++i) {
-      if (out_[i].type == c.type && out_[i].tets == c.tets &&
-          sorted(out_[i].vertices) == sorted(c.vertices) && same_cell(out_[i], c)) {
-        return;
-      }
-    }
     const double sj = scaled_jacobian(c.type, mesh_.points.data(), c.vertices.data());
     if (sj < criteria_.min_scaled_jacobian) return;
     c.quality = static_cast<float>(sj);
-    out_.push_back(c);
+    found.push_back(c);
+  }
+
+  // True when a candidate kept from this root (from out_[first_of_root]) is the same cell.
+  bool seen(const Candidate& c, std::size_t first_of_root) const {
+    for (std::size_t i = first_of_root; i < out_.size(); ++i) {
+      if (out_[i].type == c.type && out_[i].tets == c.tets &&
+          sorted(out_[i].vertices) == sorted(c.vertices) && same_cell(out_[i], c)) {
+        return true;
+      }
+    }
+    return false;
   }
 
   // Two cells on the same tets and vertices are the same cell when they have the same faces.
@@ -332,10 +401,10 @@ class Matcher {
   const TetTopology& topology_;
   const QuadPairs& pairs_;
   const AcceptanceCriteria& criteria_;
+  const SearchTree& tree_;
+  std::vector<std::vector<Candidate>> found_;  // this root's matches, per program
   std::vector<Candidate>& out_;
-  const SearchProgram* program_ = nullptr;
   index_t root_ = 0;
-  int max_vertices_ = 0;
   int nb_assigned_ = 0;
   std::array<index_t, kMaxNodes> node_{};
   std::array<unsigned char, kMaxNodes> used_{};  // faces of each node taken by a LINK or QUAD
@@ -355,11 +424,12 @@ std::vector<Candidate> find_candidates(const TetMesh& mesh, const TetTopology& t
                              criteria.min_boundary_dihedral_angle, criteria.max_face_angle,
                              std::max(1, threads));
   constexpr index_t kChunk = 8192;
+  const SearchTree tree(criteria.types);
   std::vector<std::vector<Candidate>> per_chunk((nt + kChunk - 1) / kChunk);
   parallel_chunks(
       nt, kChunk, std::max(1, threads),
       [&](index_t chunk, index_t begin, index_t end) {
-        Matcher matcher(mesh, topology, quad_pairs, criteria, per_chunk[chunk]);
+        Matcher matcher(mesh, topology, quad_pairs, criteria, tree, per_chunk[chunk]);
         for (index_t t = begin; t < end; ++t) matcher.run_from(t);
       },
       [&](double fraction) { return !progress || progress("candidates", fraction); });

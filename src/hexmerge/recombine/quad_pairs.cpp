@@ -48,8 +48,12 @@ class Builder {
  public:
   Builder(const TetMesh& mesh, const TetTopology& topology, const std::vector<float>& normals,
           double min_dihedral, double min_boundary_dihedral, double max_corner)
-      : mesh_(mesh), topo_(topology), normals_(normals), min_dihedral_(min_dihedral),
-        min_boundary_dihedral_(min_boundary_dihedral), max_corner_(max_corner),
+      : mesh_(mesh),
+        topo_(topology),
+        normals_(normals),
+        min_dihedral_(min_dihedral),
+        min_boundary_dihedral_(min_boundary_dihedral),
+        max_corner_(max_corner),
         // Two outward normals of a flat quad agree; a dihedral angle of at least dangle means
         // they are at most 180 - dangle apart.
         // (Single-precision normals: the filter lets through a little more, the exact test
@@ -58,33 +62,39 @@ class Builder {
                  1e-5) {}
 
   void faces_of_tet(index_t t, std::vector<Entry>& out) const {
-    const std::size_t first = out.size();
+    // The faces around each of t's edges q[i]-q[j] (i < j), walked once per edge. t's two faces
+    // holding the edge are those opposite its other two vertices.
+    struct Ring {
+      int others[2];
+      int n;
+      std::array<std::pair<index_t, int>, 64> faces;
+    };
+    std::array<Ring, 6> rings;
     const index_t* q = mesh_.tet(t);
-    for (int i = 0; i < 4; ++i) {
-      for (int j = i + 1; j < 4; ++j) {
-        // The edge q[i]-q[j]; t's two faces holding it are those opposite its other vertices.
-        int others[2], k = 0;
+    for (int i = 0, e = 0; i < 4; ++i) {
+      for (int j = i + 1; j < 4; ++j, ++e) {
+        Ring& r = rings[e];
+        int k = 0;
         for (int l = 0; l < 4; ++l) {
-          if (l != i && l != j) others[k++] = l;
+          if (l != i && l != j) r.others[k++] = l;
         }
-        std::array<std::pair<index_t, int>, 64> around;
-        const int n = tets_around_edge(t, q[i], q[j], others, around);
-        for (int side = 0; side < 2; ++side) {
-          const int f = others[side];
-          const float* nt = &normals_[12 * std::size_t(t) + 3 * f];
-          for (int a = 0; a < n; ++a) {
-            const auto [s, g] = around[a];
-            const float* ns = &normals_[12 * std::size_t(s) + 3 * g];
-            if (nt[0] * ns[0] + nt[1] * ns[1] + nt[2] * ns[2] < min_cos_) continue;
-            QuadPartner p;
-            if (accept(t, f, s, g, p)) out.push_back({4 * t + f, p});
-          }
+        r.n = tets_around_edge(t, q[i], q[j], r.others, r.faces);
+      }
+    }
+    // Grouped by face for the CSR; per face, in edge order then walk order.
+    for (int f = 0; f < 4; ++f) {
+      const float* nt = &normals_[12 * std::size_t(t) + 3 * f];
+      for (const Ring& r : rings) {
+        if (r.others[0] != f && r.others[1] != f) continue;
+        for (int a = 0; a < r.n; ++a) {
+          const auto [s, g] = r.faces[a];
+          const float* ns = &normals_[12 * std::size_t(s) + 3 * g];
+          if (nt[0] * ns[0] + nt[1] * ns[1] + nt[2] * ns[2] < min_cos_) continue;
+          QuadPartner p;
+          if (accept(t, f, s, g, p)) out.push_back({4 * t + f, p});
         }
       }
     }
-    // Edges visit the faces out of order; the CSR wants them grouped by face.
-    std::stable_sort(out.begin() + first, out.end(),
-                     [](const Entry& a, const Entry& b) { return a.face < b.face; });
   }
 
  private:
@@ -103,8 +113,8 @@ class Builder {
         }
         out[n++] = {cur, o[0]};
         out[n++] = {cur, o[1]};
-        const index_t next =
-            topo_.neighbor(cur, o[0]) == prev ? topo_.neighbor(cur, o[1]) : topo_.neighbor(cur, o[0]);
+        const index_t next = topo_.neighbor(cur, o[0]) == prev ? topo_.neighbor(cur, o[1])
+                                                               : topo_.neighbor(cur, o[0]);
         prev = cur;
         cur = next;
       }
