@@ -1,10 +1,12 @@
 #include "hexmerge/recombine/find_candidates.h"
 
 #include <algorithm>
+#include <utility>
 
 #include "hexmerge/core/error.h"
 #include "hexmerge/core/parallel.h"
 #include "hexmerge/geometry/quality.h"
+#include "hexmerge/mesh/spatial_order.h"
 #include "hexmerge/recombine/quad_pairs.h"
 #include "hexmerge/recombine/rf_graph.h"
 
@@ -170,6 +172,23 @@ bool assemble_cell(const TetMesh& mesh, const TetTopology& topology, CellType ty
 
 namespace {
 
+// The candidates of every chunk, in the order of their roots' input ids (a counting sort on the
+// root, each group's smallest tet), each root's own in the order they were found; frees each
+// chunk as it goes.
+std::vector<Candidate> in_root_order(std::vector<std::vector<Candidate>>& per_chunk, index_t nt) {
+  std::vector<std::size_t> start(static_cast<std::size_t>(nt) + 1, 0);
+  for (const auto& chunk : per_chunk) {
+    for (const Candidate& c : chunk) ++start[c.tets[0] + 1];
+  }
+  for (index_t t = 0; t < nt; ++t) start[t + 1] += start[t];
+  std::vector<Candidate> all(start[nt]);
+  for (auto& chunk : per_chunk) {
+    for (const Candidate& c : chunk) all[start[c.tets[0]]++] = c;
+    std::vector<Candidate>().swap(chunk);
+  }
+  return all;
+}
+
 // The enabled search programs merged into one tree: programs that begin with the same steps
 // (the same instruction with the same filters) run those steps once for all of them. Node 0 is
 // the root; each other node is one instruction, and lists the programs whose code ends there.
@@ -224,13 +243,20 @@ class SearchTree {
 };
 
 // One search: the interpreter's state while it runs the search tree from one root tet.
+//
+// It works on the renumbered mesh (spatial_order.h); its candidates name the input's tets, and
+// every choice that depends on tet ids (which tet is the root, the order of a group's tets) is
+// made on the input's ids, so the result is the same as a search on the input itself.
 class Matcher {
  public:
+  /// @param[in] input_id  the input's id of each tet of `mesh`
   Matcher(const TetMesh& mesh, const TetTopology& topology, const QuadPairs& quad_pairs,
-          const AcceptanceCriteria& criteria, const SearchTree& tree, std::vector<Candidate>& out)
+          const std::vector<index_t>& input_id, const AcceptanceCriteria& criteria,
+          const SearchTree& tree, std::vector<Candidate>& out)
       : mesh_(mesh),
         topology_(topology),
         pairs_(quad_pairs),
+        input_id_(input_id),
         criteria_(criteria),
         tree_(tree),
         found_(tree.nb_programs()),
@@ -238,6 +264,7 @@ class Matcher {
 
   void run_from(index_t root) {
     root_ = root;
+    root_input_id_ = input_id_[root];
     const int root_quad_faces = quad_faces(root, -1);
     for (const int gate : tree_.node(0).children) {
       if (root_quad_faces < tree_.node(gate).quad_degree) continue;
@@ -283,7 +310,7 @@ class Matcher {
         if (used_[in.a] & (1u << f)) continue;
         const index_t nb = topology_.neighbor(ta, f);
         // The root is the group's smallest tet: each group is found from one root only.
-        if (nb == NO_CELL || nb < root_ || in_match(nb)) continue;
+        if (nb == NO_CELL || input_id_[nb] < root_input_id_ || in_match(nb)) continue;
         if (criteria_.respect_regions && mesh_.region(nb) != mesh_.region(root_)) continue;
         const int fn = topology_.neighbor_face(ta, f);
         // The node's tet needs as many faces that can pair into quads as the node has quads.
@@ -355,10 +382,21 @@ class Matcher {
     c.type = program.type;
     c.graph = static_cast<std::uint8_t>(program.graph);
     c.nb_tets = static_cast<std::uint8_t>(program.nb_nodes);
+    // The group in the input's id order, as the input's ids (c.tets) and as ours (group).
+    // (Insertion sort: at most six entries.)
+    std::array<index_t, kMaxNodes> group;
     c.tets.fill(NO_CELL);
-    std::copy(node_.begin(), node_.begin() + nb_assigned_, c.tets.begin());
-    std::sort(c.tets.begin(), c.tets.begin() + nb_assigned_);
-    if (!assemble_cell(mesh_, topology_, program.type, c.tets.data(), nb_assigned_, quad_.data(),
+    for (int i = 0; i < nb_assigned_; ++i) {
+      const index_t id = input_id_[node_[i]];
+      int j = i;
+      for (; j > 0 && c.tets[j - 1] > id; --j) {
+        c.tets[j] = c.tets[j - 1];
+        group[j] = group[j - 1];
+      }
+      c.tets[j] = id;
+      group[j] = node_[i];
+    }
+    if (!assemble_cell(mesh_, topology_, program.type, group.data(), nb_assigned_, quad_.data(),
                        nb_quads_, c.vertices)) {
       return;
     }
@@ -400,11 +438,13 @@ class Matcher {
   const TetMesh& mesh_;
   const TetTopology& topology_;
   const QuadPairs& pairs_;
+  const std::vector<index_t>& input_id_;
   const AcceptanceCriteria& criteria_;
   const SearchTree& tree_;
   std::vector<std::vector<Candidate>> found_;  // this root's matches, per program
   std::vector<Candidate>& out_;
   index_t root_ = 0;
+  index_t root_input_id_ = 0;
   int nb_assigned_ = 0;
   std::array<index_t, kMaxNodes> node_{};
   std::array<unsigned char, kMaxNodes> used_{};  // faces of each node taken by a LINK or QUAD
@@ -420,7 +460,12 @@ std::vector<Candidate> find_candidates(const TetMesh& mesh, const TetTopology& t
                                        const AcceptanceCriteria& criteria, int threads,
                                        const ProgressCallback& progress) {
   const index_t nt = mesh.nb_tets();
-  const QuadPairs quad_pairs(mesh, topology, criteria.min_dihedral_angle,
+  // The search runs on a copy in space-filling-curve order (spatial_order.h), where the tets it
+  // walks are mostly in cache; root i there is the input's tet input_id[i].
+  const std::vector<index_t> input_id = spatial_order(mesh);
+  const TetMesh local = reorder_tets(mesh, input_id);
+  const TetTopology local_topology = topology.reordered(input_id);
+  const QuadPairs quad_pairs(local, local_topology, criteria.min_dihedral_angle,
                              criteria.min_boundary_dihedral_angle, criteria.max_face_angle,
                              std::max(1, threads));
   constexpr index_t kChunk = 8192;
@@ -429,11 +474,12 @@ std::vector<Candidate> find_candidates(const TetMesh& mesh, const TetTopology& t
   parallel_chunks(
       nt, kChunk, std::max(1, threads),
       [&](index_t chunk, index_t begin, index_t end) {
-        Matcher matcher(mesh, topology, quad_pairs, criteria, tree, per_chunk[chunk]);
+        Matcher matcher(local, local_topology, quad_pairs, input_id, criteria, tree,
+                        per_chunk[chunk]);
         for (index_t t = begin; t < end; ++t) matcher.run_from(t);
       },
       [&](double fraction) { return !progress || progress("candidates", fraction); });
-  return concatenate(per_chunk);
+  return in_root_order(per_chunk, nt);
 }
 
 FaceKey face_key(const Candidate& c, int f) {
