@@ -130,11 +130,12 @@ class Builder {
     const double* b = mesh_.point(q[1]);
     const double* c = mesh_.point(q[2]);
     const double* d = mesh_.point(q[3]);
-    const double dihedral = quad_dihedral_angle(a, b, c, d);
     const bool on_boundary = topo_.on_boundary(t, f) && topo_.on_boundary(s, g);
-    if (dihedral < (on_boundary ? min_boundary_dihedral_ : min_dihedral_)) return false;
-    const double corner = quad_max_corner_angle(a, b, c, d);
-    if (corner > max_corner_) return false;
+    if (quad_dihedral_angle_below(a, b, c, d,
+                                  on_boundary ? min_boundary_dihedral_ : min_dihedral_)) {
+      return false;
+    }
+    if (quad_max_corner_angle_above(a, b, c, d, max_corner_)) return false;
     p = {4 * s + g};
     return true;
   }
@@ -142,7 +143,8 @@ class Builder {
   const TetMesh& mesh_;
   const TetTopology& topo_;
   const std::vector<float>& normals_;  // 4 outward unit normals per tet
-  double min_dihedral_, min_boundary_dihedral_, max_corner_, min_cos_;
+  AngleBound min_dihedral_, min_boundary_dihedral_, max_corner_;
+  double min_cos_;
 };
 
 std::vector<float> unit_normals(const TetMesh& mesh, int threads) {
