@@ -344,10 +344,15 @@ class Matcher {
       }
     } else {
       const index_t tb = node_[in.b];
+      const unsigned free_a = pairs_.mask(ta) & ~used_[in.a];
       for (int fa = 0; fa < 4; ++fa) {
-        if ((used_[in.a] & (1u << fa)) || internal(topology_.neighbor(ta, fa))) continue;
+        if (!(free_a & (1u << fa))) continue;
+        // Whether face fa is internal is asked only once a partner on tb is found.
+        int external = -1;
         for (const QuadPartner* p = pairs_.begin(ta, fa); p != pairs_.end(ta, fa); ++p) {
           if (p->face / 4 != tb) continue;
+          if (external < 0) external = !internal(topology_.neighbor(ta, fa));
+          if (!external) break;
           const int fb = static_cast<int>(p->face % 4);
           if ((used_[in.b] & (1u << fb)) || internal(topology_.neighbor(tb, fb))) continue;
           used_[in.a] |= static_cast<unsigned char>(1u << fa);
