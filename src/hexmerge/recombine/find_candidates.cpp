@@ -172,19 +172,24 @@ bool assemble_cell(const TetMesh& mesh, const TetTopology& topology, CellType ty
 
 namespace {
 
-// The candidates of every chunk, in the order of their roots' input ids (a counting sort on the
-// root, each group's smallest tet), each root's own in the order they were found; frees each
-// chunk as it goes.
+// The candidates of every chunk, in the order of their roots' input ids (a stable counting sort
+// on the root, each group's smallest tet), each root's own in the order they were found. The
+// permutation is applied in place: no second copy of the candidates.
 std::vector<Candidate> in_root_order(std::vector<std::vector<Candidate>>& per_chunk, index_t nt) {
-  std::vector<std::size_t> start(static_cast<std::size_t>(nt) + 1, 0);
-  for (const auto& chunk : per_chunk) {
-    for (const Candidate& c : chunk) ++start[c.tets[0] + 1];
+  std::vector<Candidate> all = concatenate(per_chunk);
+  std::vector<std::size_t> destination(all.size());
+  {
+    std::vector<std::size_t> start(static_cast<std::size_t>(nt) + 1, 0);
+    for (const Candidate& c : all) ++start[c.tets[0] + 1];
+    for (index_t t = 0; t < nt; ++t) start[t + 1] += start[t];
+    for (std::size_t i = 0; i < all.size(); ++i) destination[i] = start[all[i].tets[0]]++;
   }
-  for (index_t t = 0; t < nt; ++t) start[t + 1] += start[t];
-  std::vector<Candidate> all(start[nt]);
-  for (auto& chunk : per_chunk) {
-    for (const Candidate& c : chunk) all[start[c.tets[0]]++] = c;
-    std::vector<Candidate>().swap(chunk);
+  for (std::size_t i = 0; i < all.size(); ++i) {
+    while (destination[i] != i) {
+      const std::size_t j = destination[i];
+      std::swap(all[i], all[j]);
+      std::swap(destination[i], destination[j]);
+    }
   }
   return all;
 }
