@@ -274,10 +274,12 @@ class Matcher {
     for (const int gate : tree_.node(0).children) {
       if (root_quad_faces < tree_.node(gate).quad_degree) continue;
       nb_assigned_ = 1;
+      node_.fill(NO_CELL);
       node_[0] = root;
       used_[0] = 0;
       const index_t* q = mesh_.tet(root);
       nb_vertices_ = 4;
+      vertex_.fill(NO_VERTEX);
       std::copy(q, q + 4, vertex_.begin());
       nb_quads_ = 0;
       descend(tree_.node(gate));
@@ -294,11 +296,16 @@ class Matcher {
   }
 
  private:
+  // Unassigned node_ and vertex_ slots hold NO_INDEX, so these look-ups need no branch.
   bool in_match(index_t t) const {
-    for (int i = 0; i < nb_assigned_; ++i) {
-      if (node_[i] == t) return true;
-    }
-    return false;
+    bool found = false;
+    for (const index_t n : node_) found |= n == t;
+    return found;
+  }
+  bool has_vertex(index_t v) const {
+    bool found = false;
+    for (const index_t u : vertex_) found |= u == v;
+    return found;
   }
 
   // The programs ending at `n` have a match; its children continue the others.
@@ -311,8 +318,8 @@ class Matcher {
     const Instruction& in = n.in;
     const index_t ta = node_[in.a];
     if (in.op == Instruction::Link && in.b == nb_assigned_) {
-      for (int f = 0; f < 4; ++f) {
-        if (used_[in.a] & (1u << f)) continue;
+      for (unsigned free = ~used_[in.a] & 15u; free != 0; free &= free - 1) {
+        const int f = lowest_bit(free);
         const index_t nb = topology_.neighbor(ta, f);
         // The root is the group's smallest tet: each group is found from one root only.
         if (nb == NO_CELL || input_id_[nb] < root_input_id_ || in_match(nb)) continue;
@@ -321,8 +328,7 @@ class Matcher {
         // The node's tet needs as many faces that can pair into quads as the node has quads.
         if (quad_faces(nb, fn) < n.quad_degree) continue;
         const index_t apex = mesh_.tet(nb)[fn];
-        const bool new_vertex = std::find(vertex_.begin(), vertex_.begin() + nb_vertices_, apex) ==
-                                vertex_.begin() + nb_vertices_;
+        const bool new_vertex = !has_vertex(apex);
         if (new_vertex != (n.adds_vertex != 0)) continue;
         if (new_vertex) vertex_[nb_vertices_++] = apex;
         node_[nb_assigned_] = nb;
@@ -331,8 +337,8 @@ class Matcher {
         used_[in.a] |= static_cast<unsigned char>(1u << f);
         descend(n);
         used_[in.a] &= static_cast<unsigned char>(~(1u << f));
-        --nb_assigned_;
-        if (new_vertex) --nb_vertices_;
+        node_[--nb_assigned_] = NO_CELL;
+        if (new_vertex) vertex_[--nb_vertices_] = NO_VERTEX;
       }
     } else if (in.op == Instruction::Link) {
       const index_t tb = node_[in.b];
@@ -349,9 +355,8 @@ class Matcher {
       }
     } else {
       const index_t tb = node_[in.b];
-      const unsigned free_a = pairs_.mask(ta) & ~used_[in.a];
-      for (int fa = 0; fa < 4; ++fa) {
-        if (!(free_a & (1u << fa))) continue;
+      for (unsigned free = pairs_.mask(ta) & ~used_[in.a] & 15u; free != 0; free &= free - 1) {
+        const int fa = lowest_bit(free);
         // Whether face fa is internal is asked only once a partner on tb is found.
         int external = -1;
         for (const QuadPartner* p = pairs_.begin(ta, fa); p != pairs_.end(ta, fa); ++p) {
@@ -371,6 +376,12 @@ class Matcher {
         }
       }
     }
+  }
+
+  // The lowest set bit of a nonzero 4-bit mask.
+  static int lowest_bit(unsigned m) {
+    static constexpr signed char kLowest[16] = {-1, 0, 1, 0, 2, 0, 1, 0, 3, 0, 1, 0, 2, 0, 1, 0};
+    return kLowest[m];
   }
 
   // Faces of tet t, other than `except`, that have at least one quad partner.
