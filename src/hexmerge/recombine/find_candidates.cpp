@@ -18,10 +18,45 @@ constexpr int kMaxQuads = 6;
 
 const CellDescriptor& kTet = descriptor(CellType::Tet);
 
-template <std::size_t N>
-std::array<index_t, N> sorted(std::array<index_t, N> a) {
-  std::sort(a.begin(), a.end());
+// Sorting networks: branch-free compare-exchanges, for the small sorts every match makes.
+template <std::size_t N, std::size_t M>
+std::array<index_t, N> sorted_by(std::array<index_t, N> a,
+                                 const std::array<std::pair<int, int>, M>& network) {
+  for (const auto& [i, j] : network) {
+    const index_t lo = std::min(a[i], a[j]);
+    a[j] = std::max(a[i], a[j]);
+    a[i] = lo;
+  }
   return a;
+}
+
+std::array<index_t, 4> sorted(const std::array<index_t, 4>& a) {
+  static constexpr std::array<std::pair<int, int>, 5> kNetwork{
+      {{0, 1}, {2, 3}, {0, 2}, {1, 3}, {1, 2}}};
+  return sorted_by(a, kNetwork);
+}
+
+std::array<index_t, 8> sorted(const std::array<index_t, 8>& a) {
+  static constexpr std::array<std::pair<int, int>, 19> kNetwork{{{0, 2},
+                                                                 {1, 3},
+                                                                 {4, 6},
+                                                                 {5, 7},
+                                                                 {0, 4},
+                                                                 {1, 5},
+                                                                 {2, 6},
+                                                                 {3, 7},
+                                                                 {0, 1},
+                                                                 {2, 3},
+                                                                 {4, 5},
+                                                                 {6, 7},
+                                                                 {2, 4},
+                                                                 {3, 5},
+                                                                 {1, 4},
+                                                                 {3, 6},
+                                                                 {1, 2},
+                                                                 {3, 4},
+                                                                 {5, 6}}};
+  return sorted_by(a, kNetwork);
 }
 
 // The vertex joined to v by an edge of one of the faces, not in `exclude`. NO_VERTEX when there
@@ -507,8 +542,7 @@ FaceKey face_key(const Candidate& c, int f) {
   const CellDescriptor& d = descriptor(c.type);
   FaceKey k{NO_VERTEX, NO_VERTEX, NO_VERTEX, NO_VERTEX};
   for (int i = 0; i < d.face_size[f]; ++i) k[i] = c.vertices[d.face[f][i]];
-  std::sort(k.begin(), k.end());
-  return k;
+  return sorted(k);
 }
 
 }  // namespace hexmerge

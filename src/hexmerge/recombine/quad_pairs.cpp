@@ -107,10 +107,12 @@ class Builder {
       index_t prev = t, cur = topo_.neighbor(t, others[dir]);
       while (cur != NO_CELL && cur != t && n + 2 <= static_cast<int>(out.size())) {
         const index_t* q = mesh_.tet(cur);
-        int o[2], k = 0;
-        for (int l = 0; l < 4; ++l) {
-          if (q[l] != x && q[l] != y) o[k++] = l;
-        }
+        // Its two local vertices off the edge (a bit mask, then its lowest and highest bit).
+        unsigned off = 0;
+        for (int l = 0; l < 4; ++l) off |= static_cast<unsigned>((q[l] != x) & (q[l] != y)) << l;
+        static constexpr signed char kLow[16] = {-1, 0, 1, 0, 2, 0, 1, 0, 3, 0, 1, 0, 2, 0, 1, 0};
+        static constexpr signed char kHigh[16] = {-1, 0, 1, 1, 2, 2, 2, 2, 3, 3, 3, 3, 3, 3, 3, 3};
+        const int o[2] = {kLow[off], kHigh[off]};
         out[n++] = {cur, o[0]};
         out[n++] = {cur, o[1]};
         const index_t next = topo_.neighbor(cur, o[0]) == prev ? topo_.neighbor(cur, o[1])
