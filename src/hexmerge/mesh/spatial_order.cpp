@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cstdint>
-#include <utility>
 
 namespace hexmerge {
 namespace {
@@ -30,25 +29,31 @@ std::vector<index_t> spatial_order(const TetMesh& mesh) {
       hi[k] = std::max(hi[k], mesh.point(v)[k]);
     }
   }
+  // Cells of the curve: about four tets per cell, so that one counting sort on the cell is
+  // enough (tets within a cell stay in id order; a cell is small enough to be in cache).
+  int bits = 1;
+  while (bits < 21 && (std::uint64_t{1} << (3 * bits)) < nt / 4) ++bits;
+  const double cells = static_cast<double>((1 << bits) - 1);
   // Centroids are compared as sums of four corners: the box scales by four too.
-  constexpr double kCells = (1 << 21) - 1;
   double scale[3];
-  for (int k = 0; k < 3; ++k) scale[k] = hi[k] > lo[k] ? kCells / (4.0 * (hi[k] - lo[k])) : 0.0;
-  std::vector<std::pair<std::uint64_t, index_t>> keyed(nt);
+  for (int k = 0; k < 3; ++k) scale[k] = hi[k] > lo[k] ? cells / (4.0 * (hi[k] - lo[k])) : 0.0;
+  std::vector<std::uint64_t> cell_of(nt);
   for (index_t t = 0; t < nt; ++t) {
     const index_t* q = mesh.tet(t);
     std::uint64_t key = 0;
     for (int k = 0; k < 3; ++k) {
       const double sum =
           mesh.point(q[0])[k] + mesh.point(q[1])[k] + mesh.point(q[2])[k] + mesh.point(q[3])[k];
-      const double cell = std::clamp((sum - 4.0 * lo[k]) * scale[k], 0.0, kCells);
+      const double cell = std::clamp((sum - 4.0 * lo[k]) * scale[k], 0.0, cells);
       key |= spread_bits(static_cast<std::uint64_t>(cell)) << k;
     }
-    keyed[t] = {key, t};
+    cell_of[t] = key;
   }
-  std::sort(keyed.begin(), keyed.end());
+  std::vector<index_t> start((std::size_t{1} << (3 * bits)) + 1, 0);
+  for (index_t t = 0; t < nt; ++t) ++start[cell_of[t] + 1];
+  for (std::size_t c = 1; c < start.size(); ++c) start[c] += start[c - 1];
   std::vector<index_t> order(nt);
-  for (index_t i = 0; i < nt; ++i) order[i] = keyed[i].second;
+  for (index_t t = 0; t < nt; ++t) order[start[cell_of[t]]++] = t;
   return order;
 }
 

@@ -14,8 +14,8 @@
 
 namespace hexmerge {
 
-/// The tets in Morton (Z-curve) order of their centroids in the mesh's bounding box, ties in id
-/// order. Deterministic.
+/// The tets in Morton (Z-curve) order of their centroids in the mesh's bounding box, on a grid
+/// of about #T / 4 cells; tets in one cell in id order. Deterministic.
 /// @return #T ids: position i holds the tet that goes to position i
 std::vector<index_t> spatial_order(const TetMesh& mesh);
 

@@ -24,8 +24,12 @@ TetTopology::TetTopology(const TetMesh& mesh) {
   std::vector<index_t> bucket_start(static_cast<std::size_t>(nv) + 1, 0);
   auto sorted_face = [&](index_t t, int f, index_t out[3]) {
     const index_t* q = mesh.tet(t);
-    for (int i = 0; i < 3; ++i) out[i] = q[tet.face[f][i]];
-    std::sort(out, out + 3);
+    const index_t a = q[tet.face[f][0]], b = q[tet.face[f][1]], c = q[tet.face[f][2]];
+    // Branch-free: which vertex is smallest is a coin toss.
+    const index_t lo = std::min(a, b), hi = std::max(a, b);
+    out[0] = std::min(lo, c);
+    out[2] = std::max(hi, c);
+    out[1] = std::max(lo, std::min(hi, c));
   };
   for (index_t t = 0; t < nt; ++t) {
     for (int f = 0; f < 4; ++f) {
