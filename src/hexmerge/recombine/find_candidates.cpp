@@ -524,7 +524,8 @@ std::vector<Candidate> find_candidates(const TetMesh& mesh, const TetTopology& t
   const QuadPairs quad_pairs(local, local_topology, criteria.min_dihedral_angle,
                              criteria.min_boundary_dihedral_angle, criteria.max_face_angle,
                              std::max(1, threads));
-  constexpr index_t kChunk = 8192;
+  // Small chunks: the threads finish together (the search time per root varies a lot).
+  constexpr index_t kChunk = 2048;
   const SearchTree tree(criteria.types);
   std::vector<std::vector<Candidate>> per_chunk((nt + kChunk - 1) / kChunk);
   parallel_chunks(

@@ -178,7 +178,7 @@ QuadPairs::QuadPairs(const TetMesh& mesh, const TetTopology& topology, double mi
   const std::vector<float> normals = unit_normals(mesh, threads);
   const Builder builder(mesh, topology, normals, min_dihedral_angle, min_boundary_dihedral_angle,
                         max_face_angle);
-  constexpr index_t kChunk = 16384;
+  constexpr index_t kChunk = 4096;  // small enough for the threads to finish together
   std::vector<std::vector<Entry>> per_chunk((nt + kChunk - 1) / kChunk);
   parallel_chunks(nt, kChunk, threads, [&](index_t chunk, index_t begin, index_t end) {
     for (index_t t = begin; t < end; ++t) builder.faces_of_tet(t, per_chunk[chunk]);
