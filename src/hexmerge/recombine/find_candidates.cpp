@@ -390,6 +390,7 @@ class Matcher {
       }
     } else {
       const index_t tb = node_[in.b];
+      if (!pairs_.may_pair(ta, tb)) return;
       for (unsigned free = pairs_.mask(ta) & ~used_[in.a] & 15u; free != 0; free &= free - 1) {
         const int fa = lowest_bit(free);
         // Whether face fa is internal is asked only once a partner on tb is found.

@@ -186,6 +186,7 @@ QuadPairs::QuadPairs(const TetMesh& mesh, const TetTopology& topology, double mi
 
   offsets_.assign(4 * static_cast<std::size_t>(nt) + 1, 0);
   masks_.assign(nt, 0);
+  partner_bits_.assign(nt, 0);
   std::size_t total = 0;
   for (const auto& c : per_chunk) total += c.size();
   partners_.reserve(total);
@@ -194,6 +195,7 @@ QuadPairs::QuadPairs(const TetMesh& mesh, const TetTopology& topology, double mi
     for (const Entry& e : chunk) {
       ++offsets_[e.face + 1];
       masks_[e.face / 4] |= static_cast<unsigned char>(1u << (e.face % 4));
+      partner_bits_[e.face / 4] |= std::uint64_t{1} << (e.partner.face / 4 & 63u);
       partners_.push_back(e.partner);
     }
     std::vector<Entry>().swap(chunk);
