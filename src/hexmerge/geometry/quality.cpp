@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "hexmerge/geometry/vec3.h"
 
@@ -9,12 +10,33 @@ namespace hexmerge {
 namespace {
 
 constexpr double kRadToDeg = 57.29577951308232;
+constexpr double kDegToRad = 0.017453292519943295;
+// A cosine this far from a bound's cosine decides the comparison of its angle with the bound:
+// |d acos / dc| >= 1, so the angles differ by at least 1e-9 rad, far more than the rounding of
+// the cosine, of the bound's cosine and of the angle computed from the cosine.
+constexpr double kCosineMargin = 1e-9;
+
+// The cosine of the angle between u and v; false when one of them is zero (the angle is then
+// taken as 180 degrees).
+bool cosine(const Vec3& u, const Vec3& v, double& c) {
+  const double nu = u.norm(), nv = v.norm();
+  if (nu == 0.0 || nv == 0.0) return false;
+  c = std::clamp(u.dot(v) / (nu * nv), -1.0, 1.0);
+  return true;
+}
 
 double angle_deg(const Vec3& u, const Vec3& v) {
-  const double nu = u.norm(), nv = v.norm();
-  if (nu == 0.0 || nv == 0.0) return 180.0;
-  const double c = std::clamp(u.dot(v) / (nu * nv), -1.0, 1.0);
-  return std::acos(c) * kRadToDeg;
+  double c;
+  return cosine(u, v, c) ? std::acos(c) * kRadToDeg : 180.0;
+}
+
+// angle_deg(u, v) > bound.degrees, the same answer.
+bool angle_above(const Vec3& u, const Vec3& v, const AngleBound& bound) {
+  double c;
+  if (!cosine(u, v, c)) return 180.0 > bound.degrees;
+  if (c < bound.cosine - kCosineMargin) return true;
+  if (c > bound.cosine + kCosineMargin) return false;
+  return std::acos(c) * kRadToDeg > bound.degrees;
 }
 
 }  // namespace
@@ -26,7 +48,9 @@ double tet_volume(const double* a, const double* b, const double* c, const doubl
 
 double cell_volume(CellType type, const double* points, const index_t* vertices) {
   const CellDescriptor& d = descriptor(type);
-  auto p = [&](int local) { return Vec3::of(points + 3 * static_cast<std::size_t>(vertices[local])); };
+  auto p = [&](int local) {
+    return Vec3::of(points + 3 * static_cast<std::size_t>(vertices[local]));
+  };
   // Volumes of the cones from a reference point to the outward faces; the reference is the
   // first vertex, which keeps the arithmetic well conditioned.
   const Vec3 o = p(0);
@@ -46,7 +70,9 @@ double cell_volume(CellType type, const double* points, const index_t* vertices)
 
 double scaled_jacobian(CellType type, const double* points, const index_t* vertices) {
   const CellDescriptor& d = descriptor(type);
-  auto p = [&](int local) { return Vec3::of(points + 3 * static_cast<std::size_t>(vertices[local])); };
+  auto p = [&](int local) {
+    return Vec3::of(points + 3 * static_cast<std::size_t>(vertices[local]));
+  };
   double worst = 1e300;
   for (int k = 0; k < d.nb_corners; ++k) {
     const auto& c = d.corner[k];
@@ -65,6 +91,36 @@ double quad_dihedral_angle(const double* a, const double* b, const double* c, co
   const Vec3 n2 = (pc - pa).cross(pd - pa);
   // Flat quad: both normals agree, the angle between them is 0 and the dihedral angle 180.
   return 180.0 - angle_deg(n1, n2);
+}
+
+// Outside [0, 180] degrees the cosine is no monotone image of the angle: NaN then fails both
+// shortcut comparisons, and every comparison takes the arccosine.
+AngleBound::AngleBound(double bound)
+    : degrees(bound),
+      cosine(bound >= 0.0 && bound <= 180.0 ? std::cos(bound * kDegToRad)
+                                            : std::numeric_limits<double>::quiet_NaN()) {}
+
+bool quad_dihedral_angle_below(const double* a, const double* b, const double* c, const double* d,
+                               const AngleBound& min_angle) {
+  const Vec3 pa = Vec3::of(a), pb = Vec3::of(b), pc = Vec3::of(c), pd = Vec3::of(d);
+  const Vec3 n1 = (pb - pa).cross(pc - pa);
+  const Vec3 n2 = (pc - pa).cross(pd - pa);
+  // 180 - angle(n1, n2) < min: the normals' angle is above 180 - min, whose cosine is -cos(min).
+  double cn;
+  if (!cosine(n1, n2, cn)) return 180.0 - 180.0 < min_angle.degrees;
+  if (cn < -min_angle.cosine - kCosineMargin) return true;
+  if (cn > -min_angle.cosine + kCosineMargin) return false;
+  return 180.0 - std::acos(cn) * kRadToDeg < min_angle.degrees;
+}
+
+bool quad_max_corner_angle_above(const double* a, const double* b, const double* c, const double* d,
+                                 const AngleBound& max_angle) {
+  const Vec3 q[4] = {Vec3::of(a), Vec3::of(b), Vec3::of(c), Vec3::of(d)};
+  if (0.0 > max_angle.degrees) return true;  // quad_max_corner_angle starts from 0
+  for (int i = 0; i < 4; ++i) {
+    if (angle_above(q[(i + 3) % 4] - q[i], q[(i + 1) % 4] - q[i], max_angle)) return true;
+  }
+  return false;
 }
 
 double quad_max_corner_angle(const double* a, const double* b, const double* c, const double* d) {

@@ -30,4 +30,21 @@ double quad_dihedral_angle(const double* a, const double* b, const double* c, co
 /// between the two edges meeting at the corner). 90 for a rectangle.
 double quad_max_corner_angle(const double* a, const double* b, const double* c, const double* d);
 
+/// A bound on an angle, in degrees, with its cosine: the predicates below compare cosines and
+/// take an arccosine only when the angle is within about 1e-7 degrees of the bound (or the bound
+/// is outside [0, 180]).
+struct AngleBound {
+  explicit AngleBound(double bound);
+  double degrees;
+  double cosine;
+};
+
+/// quad_dihedral_angle(a, b, c, d) < min_angle.degrees: the same answer, faster.
+bool quad_dihedral_angle_below(const double* a, const double* b, const double* c, const double* d,
+                               const AngleBound& min_angle);
+
+/// quad_max_corner_angle(a, b, c, d) > max_angle.degrees: the same answer, faster.
+bool quad_max_corner_angle_above(const double* a, const double* b, const double* c, const double* d,
+                                 const AngleBound& max_angle);
+
 }  // namespace hexmerge

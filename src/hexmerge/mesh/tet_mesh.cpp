@@ -42,14 +42,14 @@ void validate_tet_mesh(const TetMesh& mesh) {
       }
       for (int j = 0; j < i; ++j) {
         if (q[i] == q[j]) {
-          throw InputError("tetrahedron " + std::to_string(t) + " uses node " +
-                               std::to_string(q[i]) + " twice",
-                           Entity::Element, t);
+          throw InputError(
+              "tetrahedron " + std::to_string(t) + " uses node " + std::to_string(q[i]) + " twice",
+              Entity::Element, t);
         }
       }
     }
-    const double v = tet_volume(mesh.point(q[0]), mesh.point(q[1]), mesh.point(q[2]),
-                                mesh.point(q[3]));
+    const double v =
+        tet_volume(mesh.point(q[0]), mesh.point(q[1]), mesh.point(q[2]), mesh.point(q[3]));
     if (!(v > 0.0)) {
       throw InputError("tetrahedron " + std::to_string(t) +
                            (v < 0.0 ? " is inverted (negative volume " : " has zero volume (") +
@@ -57,21 +57,35 @@ void validate_tet_mesh(const TetMesh& mesh) {
                        Entity::Element, t);
     }
   }
-  // Duplicate tets: sort the sorted vertex quadruples and compare neighbours.
-  std::vector<std::array<index_t, 5>> keys(nt);
+  // Duplicate tets: the sorted vertex quadruples, bucketed by their smallest vertex (a counting
+  // sort) and sorted within each bucket; a duplicate is equal to the next one. The first pair in
+  // the lexicographic order of the quadruples is reported.
+  std::vector<index_t> bucket_start(static_cast<std::size_t>(nv) + 1, 0);
+  std::vector<std::array<index_t, 4>> sorted_tets(nt);
   for (index_t t = 0; t < nt; ++t) {
-    const index_t* q = mesh.tet(t);
-    std::array<index_t, 5>& k = keys[t];
-    std::copy(q, q + 4, k.begin());
-    std::sort(k.begin(), k.begin() + 4);
-    k[4] = t;
+    std::array<index_t, 4>& k = sorted_tets[t];
+    std::copy_n(mesh.tet(t), 4, k.begin());
+    std::sort(k.begin(), k.end());
+    ++bucket_start[k[0] + 1];
   }
-  std::sort(keys.begin(), keys.end());
-  for (index_t i = 1; i < nt; ++i) {
-    if (std::equal(keys[i].begin(), keys[i].begin() + 4, keys[i - 1].begin())) {
-      throw InputError("tetrahedra " + std::to_string(keys[i - 1][4]) + " and " +
-                           std::to_string(keys[i][4]) + " are duplicates (same four nodes)",
-                       Entity::Element, keys[i][4]);
+  for (index_t v = 0; v < nv; ++v) bucket_start[v + 1] += bucket_start[v];
+  std::vector<std::array<index_t, 4>> keys(nt);  // the three larger vertices, then the tet
+  {
+    std::vector<index_t> fill(bucket_start.begin(), bucket_start.end() - 1);
+    for (index_t t = 0; t < nt; ++t) {
+      const auto& k = sorted_tets[t];
+      keys[fill[k[0]]++] = {k[1], k[2], k[3], t};
+    }
+  }
+  for (index_t v = 0; v < nv; ++v) {
+    const auto begin = keys.begin() + bucket_start[v], end = keys.begin() + bucket_start[v + 1];
+    std::sort(begin, end);
+    for (auto it = begin; it != end && it + 1 != end; ++it) {
+      if (std::equal(it->begin(), it->begin() + 3, (it + 1)->begin())) {
+        throw InputError("tetrahedra " + std::to_string((*it)[3]) + " and " +
+                             std::to_string((*(it + 1))[3]) + " are duplicates (same four nodes)",
+                         Entity::Element, (*(it + 1))[3]);
+      }
     }
   }
 }

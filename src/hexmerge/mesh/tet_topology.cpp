@@ -24,8 +24,12 @@ TetTopology::TetTopology(const TetMesh& mesh) {
   std::vector<index_t> bucket_start(static_cast<std::size_t>(nv) + 1, 0);
   auto sorted_face = [&](index_t t, int f, index_t out[3]) {
     const index_t* q = mesh.tet(t);
-    for (int i = 0; i < 3; ++i) out[i] = q[tet.face[f][i]];
-    std::sort(out, out + 3);
+    const index_t a = q[tet.face[f][0]], b = q[tet.face[f][1]], c = q[tet.face[f][2]];
+    // Branch-free: which vertex is smallest is a coin toss.
+    const index_t lo = std::min(a, b), hi = std::max(a, b);
+    out[0] = std::min(lo, c);
+    out[2] = std::max(hi, c);
+    out[1] = std::max(lo, std::min(hi, c));
   };
   for (index_t t = 0; t < nt; ++t) {
     for (int f = 0; f < 4; ++f) {
@@ -55,7 +59,8 @@ TetTopology::TetTopology(const TetMesh& mesh) {
       while (next != end && next->rest == it->rest) ++next;
       const auto count = next - it;
       if (count > 2) {
-        const index_t t0 = it->tet_face / 4, t1 = (it + 1)->tet_face / 4, t2 = (it + 2)->tet_face / 4;
+        const index_t t0 = it->tet_face / 4, t1 = (it + 1)->tet_face / 4,
+                      t2 = (it + 2)->tet_face / 4;
         throw InputError("a face is shared by " + std::to_string(count) + " tetrahedra (" +
                              std::to_string(t0) + ", " + std::to_string(t1) + ", " +
                              std::to_string(t2) + (count > 3 ? ", ..." : "") +
@@ -74,6 +79,23 @@ TetTopology::TetTopology(const TetMesh& mesh) {
       it = next;
     }
   }
+}
+
+TetTopology TetTopology::reordered(const std::vector<index_t>& order) const {
+  std::vector<index_t> position(order.size());
+  for (std::size_t i = 0; i < order.size(); ++i) position[order[i]] = static_cast<index_t>(i);
+  TetTopology out;
+  out.neighbors_.resize(neighbors_.size());
+  out.neighbor_faces_.resize(neighbor_faces_.size());
+  out.nb_boundary_faces_ = nb_boundary_faces_;
+  for (std::size_t i = 0; i < order.size(); ++i) {
+    for (int f = 0; f < 4; ++f) {
+      const index_t n = neighbor(order[i], f);
+      out.neighbors_[4 * i + f] = n == NO_CELL ? NO_CELL : position[n];
+      out.neighbor_faces_[4 * i + f] = neighbor_faces_[4 * std::size_t(order[i]) + f];
+    }
+  }
+  return out;
 }
 
 bool TetTopology::is_boundary_tet(index_t t) const {

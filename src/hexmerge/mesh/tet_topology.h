@@ -19,10 +19,18 @@ class TetTopology {
   /// (naming one of them). Linear in the number of tets.
   explicit TetTopology(const TetMesh& mesh);
 
-  index_t neighbor(index_t t, int f) const { return neighbors_[4 * static_cast<std::size_t>(t) + f]; }
+  /// The adjacency of reorder_tets(mesh, order) (spatial_order.h), from this one without a
+  /// search: tet i of the result is tet order[i] here.
+  TetTopology reordered(const std::vector<index_t>& order) const;
+
+  index_t neighbor(index_t t, int f) const {
+    return neighbors_[4 * static_cast<std::size_t>(t) + f];
+  }
   /// Local index, in the neighbour, of the face shared with t through face f (valid only when
   /// neighbor(t, f) != NO_CELL).
-  int neighbor_face(index_t t, int f) const { return neighbor_faces_[4 * static_cast<std::size_t>(t) + f]; }
+  int neighbor_face(index_t t, int f) const {
+    return neighbor_faces_[4 * static_cast<std::size_t>(t) + f];
+  }
   bool on_boundary(index_t t, int f) const { return neighbor(t, f) == NO_CELL; }
   /// True when at least one face of t is on the boundary of the domain.
   bool is_boundary_tet(index_t t) const;
@@ -30,6 +38,8 @@ class TetTopology {
   std::size_t nb_boundary_faces() const { return nb_boundary_faces_; }
 
  private:
+  TetTopology() = default;
+
   std::vector<index_t> neighbors_;
   std::vector<signed char> neighbor_faces_;
   std::size_t nb_boundary_faces_ = 0;

@@ -1,10 +1,12 @@
 #include "hexmerge/recombine/find_candidates.h"
 
 #include <algorithm>
+#include <utility>
 
 #include "hexmerge/core/error.h"
 #include "hexmerge/core/parallel.h"
 #include "hexmerge/geometry/quality.h"
+#include "hexmerge/mesh/spatial_order.h"
 #include "hexmerge/recombine/quad_pairs.h"
 #include "hexmerge/recombine/rf_graph.h"
 
@@ -16,10 +18,45 @@ constexpr int kMaxQuads = 6;
 
 const CellDescriptor& kTet = descriptor(CellType::Tet);
 
-template <std::size_t N>
-std::array<index_t, N> sorted(std::array<index_t, N> a) {
-  std::sort(a.begin(), a.end());
+// Sorting networks: branch-free compare-exchanges, for the small sorts every match makes.
+template <std::size_t N, std::size_t M>
+std::array<index_t, N> sorted_by(std::array<index_t, N> a,
+                                 const std::array<std::pair<int, int>, M>& network) {
+  for (const auto& [i, j] : network) {
+    const index_t lo = std::min(a[i], a[j]);
+    a[j] = std::max(a[i], a[j]);
+    a[i] = lo;
+  }
   return a;
+}
+
+std::array<index_t, 4> sorted(const std::array<index_t, 4>& a) {
+  static constexpr std::array<std::pair<int, int>, 5> kNetwork{
+      {{0, 1}, {2, 3}, {0, 2}, {1, 3}, {1, 2}}};
+  return sorted_by(a, kNetwork);
+}
+
+std::array<index_t, 8> sorted(const std::array<index_t, 8>& a) {
+  static constexpr std::array<std::pair<int, int>, 19> kNetwork{{{0, 2},
+                                                                 {1, 3},
+                                                                 {4, 6},
+                                                                 {5, 7},
+                                                                 {0, 4},
+                                                                 {1, 5},
+                                                                 {2, 6},
+                                                                 {3, 7},
+                                                                 {0, 1},
+                                                                 {2, 3},
+                                                                 {4, 5},
+                                                                 {6, 7},
+                                                                 {2, 4},
+                                                                 {3, 5},
+                                                                 {1, 4},
+                                                                 {3, 6},
+                                                                 {1, 2},
+                                                                 {3, 4},
+                                                                 {5, 6}}};
+  return sorted_by(a, kNetwork);
 }
 
 // The vertex joined to v by an edge of one of the faces, not in `exclude`. NO_VERTEX when there
@@ -46,12 +83,13 @@ index_t unique_other_neighbor(index_t v, const std::array<index_t, 4>* faces, co
 // Two tets sharing a face, whose base triangles leave out the same vertex, are the pyramid with
 // that apex: each tet's other two faces through the apex are the four sides. (The same answer as
 // the general assembly, without its search: pyramids are most of the matches.)
-bool assemble_pyramid(const TetMesh& mesh, const TetTopology& topology, const index_t* tets,
-                      int nb, const std::array<index_t, 2>* quad_pairs, int nb_quad_pairs,
+bool assemble_pyramid(const TetMesh& mesh, const TetTopology& topology, const index_t* tets, int nb,
+                      const std::array<index_t, 2>* quad_pairs, int nb_quad_pairs,
                       std::array<index_t, 8>& vertices) {
   if (nb != 2 || nb_quad_pairs != 1) return false;
   const index_t t0 = quad_pairs[0][0] / 4, t1 = quad_pairs[0][1] / 4;
-  const int f0 = static_cast<int>(quad_pairs[0][0] % 4), f1 = static_cast<int>(quad_pairs[0][1] % 4);
+  const int f0 = static_cast<int>(quad_pairs[0][0] % 4),
+            f1 = static_cast<int>(quad_pairs[0][1] % 4);
   if (t0 == t1 || !((t0 == tets[0] && t1 == tets[1]) || (t0 == tets[1] && t1 == tets[0]))) {
     return false;
   }
@@ -132,7 +170,8 @@ bool assemble_cell(const TetMesh& mesh, const TetTopology& topology, CellType ty
     // The apex: the one vertex of the group not on the base.
     for (int g = 0; g < nb_faces; ++g) {
       for (int i = 0; i < sizes[g]; ++i) {
-        if (std::find(vertices.begin(), vertices.begin() + 4, faces[g][i]) == vertices.begin() + 4) {
+        if (std::find(vertices.begin(), vertices.begin() + 4, faces[g][i]) ==
+            vertices.begin() + 4) {
           vertices[4] = faces[g][i];
         }
       }
@@ -168,71 +207,173 @@ bool assemble_cell(const TetMesh& mesh, const TetTopology& topology, CellType ty
 
 namespace {
 
-// One search: the interpreter's state while it runs one program from one root tet.
+// The candidates of every chunk, in the order of their roots' input ids (a stable counting sort
+// on the root, each group's smallest tet), each root's own in the order they were found. The
+// permutation is applied in place: no second copy of the candidates.
+std::vector<Candidate> in_root_order(std::vector<std::vector<Candidate>>& per_chunk, index_t nt) {
+  std::vector<Candidate> all = concatenate(per_chunk);
+  std::vector<std::size_t> destination(all.size());
+  {
+    std::vector<std::size_t> start(static_cast<std::size_t>(nt) + 1, 0);
+    for (const Candidate& c : all) ++start[c.tets[0] + 1];
+    for (index_t t = 0; t < nt; ++t) start[t + 1] += start[t];
+    for (std::size_t i = 0; i < all.size(); ++i) destination[i] = start[all[i].tets[0]]++;
+  }
+  for (std::size_t i = 0; i < all.size(); ++i) {
+    while (destination[i] != i) {
+      const std::size_t j = destination[i];
+      std::swap(all[i], all[j]);
+      std::swap(destination[i], destination[j]);
+    }
+  }
+  return all;
+}
+
+// The enabled search programs merged into one tree: programs that begin with the same steps
+// (the same instruction with the same filters) run those steps once for all of them. Node 0 is
+// the root; each other node is one instruction, and lists the programs whose code ends there.
+class SearchTree {
+ public:
+  struct Node {
+    Instruction in{};
+    unsigned char adds_vertex = 0;  // a LINK to a new node: SearchProgram::adds_vertex
+    unsigned char quad_degree = 0;  // the new node's SearchProgram::quad_degree (root: node 0's)
+    std::vector<int> children;
+    std::vector<int> programs;  // indices into search_programs()
+  };
+
+  explicit SearchTree(const std::array<bool, NB_CELL_TYPES>& types) {
+    const auto& programs = search_programs();
+    for (int p = 0; p < static_cast<int>(programs.size()); ++p) {
+      const SearchProgram& program = programs[p];
+      if (!types[static_cast<int>(program.type)]) continue;
+      Node root_gate;
+      root_gate.quad_degree = program.quad_degree[0];
+      int at = child(0, root_gate);
+      for (std::size_t pc = 0; pc < program.code.size(); ++pc) {
+        Node step;
+        step.in = program.code[pc];
+        step.adds_vertex = program.adds_vertex[pc];
+        if (step.in.op == Instruction::Link) step.quad_degree = program.quad_degree[step.in.b];
+        at = child(at, step);
+      }
+      nodes_[at].programs.push_back(p);
+    }
+  }
+
+  const Node& node(int i) const { return nodes_[i]; }
+  int nb_programs() const { return static_cast<int>(search_programs().size()); }
+
+ private:
+  // The child of `parent` that runs `step`, made when missing.
+  int child(int parent, const Node& step) {
+    for (const int c : nodes_[parent].children) {
+      const Node& n = nodes_[c];
+      if (n.in.op == step.in.op && n.in.a == step.in.a && n.in.b == step.in.b &&
+          n.adds_vertex == step.adds_vertex && n.quad_degree == step.quad_degree) {
+        return c;
+      }
+    }
+    nodes_.push_back(step);
+    nodes_[parent].children.push_back(static_cast<int>(nodes_.size()) - 1);
+    return static_cast<int>(nodes_.size()) - 1;
+  }
+
+  std::vector<Node> nodes_{1};
+};
+
+// One search: the interpreter's state while it runs the search tree from one root tet.
+//
+// It works on the renumbered mesh (spatial_order.h); its candidates name the input's tets, and
+// every choice that depends on tet ids (which tet is the root, the order of a group's tets) is
+// made on the input's ids, so the result is the same as a search on the input itself.
 class Matcher {
  public:
+  /// @param[in] input_id  the input's id of each tet of `mesh`
   Matcher(const TetMesh& mesh, const TetTopology& topology, const QuadPairs& quad_pairs,
-          const AcceptanceCriteria& criteria, std::vector<Candidate>& out)
-      : mesh_(mesh), topology_(topology), pairs_(quad_pairs), criteria_(criteria), out_(out) {}
+          const std::vector<index_t>& input_id, const AcceptanceCriteria& criteria,
+          const SearchTree& tree, std::vector<Candidate>& out)
+      : mesh_(mesh),
+        topology_(topology),
+        pairs_(quad_pairs),
+        input_id_(input_id),
+        criteria_(criteria),
+        tree_(tree),
+        found_(tree.nb_programs()),
+        out_(out) {}
 
   void run_from(index_t root) {
     root_ = root;
-    const std::size_t first_of_root = out_.size();
-    for (const SearchProgram& program : search_programs()) {
-      if (!criteria_.types[static_cast<int>(program.type)]) continue;
-      if (quad_faces(root, -1) < program.quad_degree[0]) continue;
-      program_ = &program;
-      max_vertices_ = descriptor(program.type).nb_vertices;
+    root_input_id_ = input_id_[root];
+    const int root_quad_faces = quad_faces(root, -1);
+    for (const int gate : tree_.node(0).children) {
+      if (root_quad_faces < tree_.node(gate).quad_degree) continue;
       nb_assigned_ = 1;
+      node_.fill(NO_CELL);
       node_[0] = root;
       used_[0] = 0;
       const index_t* q = mesh_.tet(root);
       nb_vertices_ = 4;
+      vertex_.fill(NO_VERTEX);
       std::copy(q, q + 4, vertex_.begin());
       nb_quads_ = 0;
-      step(0, first_of_root);
+      descend(tree_.node(gate));
+    }
+    // Program by program, as if each ran alone in turn: the same group may be matched again
+    // through an automorphism that fixes the root, and the first match is kept.
+    const std::size_t first_of_root = out_.size();
+    for (std::vector<Candidate>& found : found_) {
+      for (const Candidate& c : found) {
+        if (!seen(c, first_of_root)) out_.push_back(c);
+      }
+      found.clear();
     }
   }
 
  private:
+  // Unassigned node_ and vertex_ slots hold NO_INDEX, so these look-ups need no branch.
   bool in_match(index_t t) const {
-    for (int i = 0; i < nb_assigned_; ++i) {
-      if (node_[i] == t) return true;
-    }
-    return false;
+    bool found = false;
+    for (const index_t n : node_) found |= n == t;
+    return found;
+  }
+  bool has_vertex(index_t v) const {
+    bool found = false;
+    for (const index_t u : vertex_) found |= u == v;
+    return found;
   }
 
-  void step(std::size_t pc, std::size_t first_of_root) {
-    if (pc == program_->code.size()) {
-      finish(first_of_root);
-      return;
-    }
-    const Instruction& in = program_->code[pc];
+  // The programs ending at `n` have a match; its children continue the others.
+  void descend(const SearchTree::Node& n) {
+    for (const int p : n.programs) finish(search_programs()[p], found_[p]);
+    for (const int c : n.children) step(tree_.node(c));
+  }
+
+  void step(const SearchTree::Node& n) {
+    const Instruction& in = n.in;
     const index_t ta = node_[in.a];
     if (in.op == Instruction::Link && in.b == nb_assigned_) {
-      for (int f = 0; f < 4; ++f) {
-        if (used_[in.a] & (1u << f)) continue;
-        const index_t n = topology_.neighbor(ta, f);
+      for (unsigned free = ~used_[in.a] & 15u; free != 0; free &= free - 1) {
+        const int f = lowest_bit(free);
+        const index_t nb = topology_.neighbor(ta, f);
         // The root is the group's smallest tet: each group is found from one root only.
-        if (n == NO_CELL || n < root_ || in_match(n)) continue;
-        if (criteria_.respect_regions && mesh_.region(n) != mesh_.region(root_)) continue;
+        if (nb == NO_CELL || input_id_[nb] < root_input_id_ || in_match(nb)) continue;
+        if (criteria_.respect_regions && mesh_.region(nb) != mesh_.region(root_)) continue;
         const int fn = topology_.neighbor_face(ta, f);
-        const index_t apex = mesh_.tet(n)[fn];
-        const bool new_vertex =
-            std::find(vertex_.begin(), vertex_.begin() + nb_vertices_, apex) ==
-            vertex_.begin() + nb_vertices_;
-        if (new_vertex != (program_->adds_vertex[pc] != 0)) continue;
         // The node's tet needs as many faces that can pair into quads as the node has quads.
-        if (quad_faces(n, fn) < program_->quad_degree[in.b]) continue;
+        if (quad_faces(nb, fn) < n.quad_degree) continue;
+        const index_t apex = mesh_.tet(nb)[fn];
+        const bool new_vertex = !has_vertex(apex);
+        if (new_vertex != (n.adds_vertex != 0)) continue;
         if (new_vertex) vertex_[nb_vertices_++] = apex;
-        node_[nb_assigned_] = n;
+        node_[nb_assigned_] = nb;
         used_[nb_assigned_] = static_cast<unsigned char>(1u << fn);
         ++nb_assigned_;
         used_[in.a] |= static_cast<unsigned char>(1u << f);
-        step(pc + 1, first_of_root);
+        descend(n);
         used_[in.a] &= static_cast<unsigned char>(~(1u << f));
-        --nb_assigned_;
-        if (new_vertex) --nb_vertices_;
+        node_[--nb_assigned_] = NO_CELL;
+        if (new_vertex) vertex_[--nb_vertices_] = NO_VERTEX;
       }
     } else if (in.op == Instruction::Link) {
       const index_t tb = node_[in.b];
@@ -242,30 +383,41 @@ class Matcher {
         if ((used_[in.a] & (1u << f)) || (used_[in.b] & (1u << fb))) return;
         used_[in.a] |= static_cast<unsigned char>(1u << f);
         used_[in.b] |= static_cast<unsigned char>(1u << fb);
-        step(pc + 1, first_of_root);
+        descend(n);
         used_[in.a] &= static_cast<unsigned char>(~(1u << f));
         used_[in.b] &= static_cast<unsigned char>(~(1u << fb));
         return;
       }
     } else {
       const index_t tb = node_[in.b];
-      for (int fa = 0; fa < 4; ++fa) {
-        if ((used_[in.a] & (1u << fa)) || internal(topology_.neighbor(ta, fa))) continue;
+      if (!pairs_.may_pair(ta, tb)) return;
+      for (unsigned free = pairs_.mask(ta) & ~used_[in.a] & 15u; free != 0; free &= free - 1) {
+        const int fa = lowest_bit(free);
+        // Whether face fa is internal is asked only once a partner on tb is found.
+        int external = -1;
         for (const QuadPartner* p = pairs_.begin(ta, fa); p != pairs_.end(ta, fa); ++p) {
           if (p->face / 4 != tb) continue;
+          if (external < 0) external = !internal(topology_.neighbor(ta, fa));
+          if (!external) break;
           const int fb = static_cast<int>(p->face % 4);
           if ((used_[in.b] & (1u << fb)) || internal(topology_.neighbor(tb, fb))) continue;
           used_[in.a] |= static_cast<unsigned char>(1u << fa);
           used_[in.b] |= static_cast<unsigned char>(1u << fb);
           quad_[nb_quads_] = {4 * ta + fa, p->face};
           ++nb_quads_;
-          step(pc + 1, first_of_root);
+          descend(n);
           --nb_quads_;
           used_[in.a] &= static_cast<unsigned char>(~(1u << fa));
           used_[in.b] &= static_cast<unsigned char>(~(1u << fb));
         }
       }
     }
+  }
+
+  // The lowest set bit of a nonzero 4-bit mask.
+  static int lowest_bit(unsigned m) {
+    static constexpr signed char kLowest[16] = {-1, 0, 1, 0, 2, 0, 1, 0, 3, 0, 1, 0, 2, 0, 1, 0};
+    return kLowest[m];
   }
 
   // Faces of tet t, other than `except`, that have at least one quad partner.
@@ -279,35 +431,47 @@ class Matcher {
   // A quad uses external faces only: faces on the domain boundary or towards tets outside the
   // current match. (A tet joining the match later through such a face is rejected when the
   // cell is assembled.)
-  bool internal(index_t neighbor) const {
-    return neighbor != NO_CELL && in_match(neighbor);
-  }
+  bool internal(index_t neighbor) const { return neighbor != NO_CELL && in_match(neighbor); }
 
-  void finish(std::size_t first_of_root) {
-    const SearchProgram& program = *program_;
-    if (nb_vertices_ != max_vertices_) return;
+  void finish(const SearchProgram& program, std::vector<Candidate>& found) {
+    if (nb_vertices_ != descriptor(program.type).nb_vertices) return;
     Candidate c;
     c.type = program.type;
     c.graph = static_cast<std::uint8_t>(program.graph);
     c.nb_tets = static_cast<std::uint8_t>(program.nb_nodes);
+    // The group in the input's id order, as the input's ids (c.tets) and as ours (group).
+    // (Insertion sort: at most six entries.)
+    std::array<index_t, kMaxNodes> group;
     c.tets.fill(NO_CELL);
-    std::copy(node_.begin(), node_.begin() + nb_assigned_, c.tets.begin());
-    std::sort(c.tets.begin(), c.tets.begin() + nb_assigned_);
-    if (!assemble_cell(mesh_, topology_, program.type, c.tets.data(), nb_assigned_, quad_.data(),
+    for (int i = 0; i < nb_assigned_; ++i) {
+      const index_t id = input_id_[node_[i]];
+      int j = i;
+      for (; j > 0 && c.tets[j - 1] > id; --j) {
+        c.tets[j] = c.tets[j - 1];
+        group[j] = group[j - 1];
+      }
+      c.tets[j] = id;
+      group[j] = node_[i];
+    }
+    if (!assemble_cell(mesh_, topology_, program.type, group.data(), nb_assigned_, quad_.data(),
                        nb_quads_, c.vertices)) {
       return;
-    }
-    // The same group may be matched again through an automorphism that fixes the root.
-    for (std::size_t i = first_of_root; i < out_.size(); ++i) {
-      if (out_[i].type == c.type && out_[i].tets == c.tets &&
-          sorted(out_[i].vertices) == sorted(c.vertices) && same_cell(out_[i], c)) {
-        return;
-      }
     }
     const double sj = scaled_jacobian(c.type, mesh_.points.data(), c.vertices.data());
     if (sj < criteria_.min_scaled_jacobian) return;
     c.quality = static_cast<float>(sj);
-    out_.push_back(c);
+    found.push_back(c);
+  }
+
+  // True when a candidate kept from this root (from out_[first_of_root]) is the same cell.
+  bool seen(const Candidate& c, std::size_t first_of_root) const {
+    for (std::size_t i = first_of_root; i < out_.size(); ++i) {
+      if (out_[i].type == c.type && out_[i].tets == c.tets &&
+          sorted(out_[i].vertices) == sorted(c.vertices) && same_cell(out_[i], c)) {
+        return true;
+      }
+    }
+    return false;
   }
 
   // Two cells on the same tets and vertices are the same cell when they have the same faces.
@@ -331,11 +495,13 @@ class Matcher {
   const TetMesh& mesh_;
   const TetTopology& topology_;
   const QuadPairs& pairs_;
+  const std::vector<index_t>& input_id_;
   const AcceptanceCriteria& criteria_;
+  const SearchTree& tree_;
+  std::vector<std::vector<Candidate>> found_;  // this root's matches, per program
   std::vector<Candidate>& out_;
-  const SearchProgram* program_ = nullptr;
   index_t root_ = 0;
-  int max_vertices_ = 0;
+  index_t root_input_id_ = 0;
   int nb_assigned_ = 0;
   std::array<index_t, kMaxNodes> node_{};
   std::array<unsigned char, kMaxNodes> used_{};  // faces of each node taken by a LINK or QUAD
@@ -351,27 +517,34 @@ std::vector<Candidate> find_candidates(const TetMesh& mesh, const TetTopology& t
                                        const AcceptanceCriteria& criteria, int threads,
                                        const ProgressCallback& progress) {
   const index_t nt = mesh.nb_tets();
-  const QuadPairs quad_pairs(mesh, topology, criteria.min_dihedral_angle,
+  // The search runs on a copy in space-filling-curve order (spatial_order.h), where the tets it
+  // walks are mostly in cache; root i there is the input's tet input_id[i].
+  const std::vector<index_t> input_id = spatial_order(mesh);
+  const TetMesh local = reorder_tets(mesh, input_id);
+  const TetTopology local_topology = topology.reordered(input_id);
+  const QuadPairs quad_pairs(local, local_topology, criteria.min_dihedral_angle,
                              criteria.min_boundary_dihedral_angle, criteria.max_face_angle,
                              std::max(1, threads));
-  constexpr index_t kChunk = 8192;
+  // Small chunks: the threads finish together (the search time per root varies a lot).
+  constexpr index_t kChunk = 2048;
+  const SearchTree tree(criteria.types);
   std::vector<std::vector<Candidate>> per_chunk((nt + kChunk - 1) / kChunk);
   parallel_chunks(
       nt, kChunk, std::max(1, threads),
       [&](index_t chunk, index_t begin, index_t end) {
-        Matcher matcher(mesh, topology, quad_pairs, criteria, per_chunk[chunk]);
+        Matcher matcher(local, local_topology, quad_pairs, input_id, criteria, tree,
+                        per_chunk[chunk]);
         for (index_t t = begin; t < end; ++t) matcher.run_from(t);
       },
       [&](double fraction) { return !progress || progress("candidates", fraction); });
-  return concatenate(per_chunk);
+  return in_root_order(per_chunk, nt);
 }
 
 FaceKey face_key(const Candidate& c, int f) {
   const CellDescriptor& d = descriptor(c.type);
   FaceKey k{NO_VERTEX, NO_VERTEX, NO_VERTEX, NO_VERTEX};
   for (int i = 0; i < d.face_size[f]; ++i) k[i] = c.vertices[d.face[f][i]];
-  std::sort(k.begin(), k.end());
-  return k;
+  return sorted(k);
 }
 
 }  // namespace hexmerge

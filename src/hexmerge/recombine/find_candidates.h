@@ -48,7 +48,9 @@ struct AcceptanceCriteria {
 /// Runs every search program (rf_graph.h) from every tet.
 ///
 /// Each group of tets is reported once (from its smallest tet), per distinct element it forms.
-/// The order of the result does not depend on the number of threads.
+/// The order of the result does not depend on the number of threads. (The search runs on a copy
+/// of the mesh renumbered along a space-filling curve, spatial_order.h, for the cache; the
+/// result names the input's tets, in the order a search on the input itself gives.)
 /// @param[in] threads  worker threads (>= 1)
 std::vector<Candidate> find_candidates(const TetMesh& mesh, const TetTopology& topology,
                                        const AcceptanceCriteria& criteria, int threads,

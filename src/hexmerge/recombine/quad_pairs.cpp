@@ -48,8 +48,12 @@ class Builder {
  public:
   Builder(const TetMesh& mesh, const TetTopology& topology, const std::vector<float>& normals,
           double min_dihedral, double min_boundary_dihedral, double max_corner)
-      : mesh_(mesh), topo_(topology), normals_(normals), min_dihedral_(min_dihedral),
-        min_boundary_dihedral_(min_boundary_dihedral), max_corner_(max_corner),
+      : mesh_(mesh),
+        topo_(topology),
+        normals_(normals),
+        min_dihedral_(min_dihedral),
+        min_boundary_dihedral_(min_boundary_dihedral),
+        max_corner_(max_corner),
         // Two outward normals of a flat quad agree; a dihedral angle of at least dangle means
         // they are at most 180 - dangle apart.
         // (Single-precision normals: the filter lets through a little more, the exact test
@@ -58,33 +62,39 @@ class Builder {
                  1e-5) {}
 
   void faces_of_tet(index_t t, std::vector<Entry>& out) const {
-    const std::size_t first = out.size();
+    // The faces around each of t's edges q[i]-q[j] (i < j), walked once per edge. t's two faces
+    // holding the edge are those opposite its other two vertices.
+    struct Ring {
+      int others[2];
+      int n;
+      std::array<std::pair<index_t, int>, 64> faces;
+    };
+    std::array<Ring, 6> rings;
     const index_t* q = mesh_.tet(t);
-    for (int i = 0; i < 4; ++i) {
-      for (int j = i + 1; j < 4; ++j) {
-        // The edge q[i]-q[j]; t's two faces holding it are those opposite its other vertices.
-        int others[2], k = 0;
+    for (int i = 0, e = 0; i < 4; ++i) {
+      for (int j = i + 1; j < 4; ++j, ++e) {
+        Ring& r = rings[e];
+        int k = 0;
         for (int l = 0; l < 4; ++l) {
-          if (l != i && l != j) others[k++] = l;
+          if (l != i && l != j) r.others[k++] = l;
         }
-        std::array<std::pair<index_t, int>, 64> around;
-        const int n = tets_around_edge(t, q[i], q[j], others, around);
-        for (int side = 0; side < 2; ++side) {
-          const int f = others[side];
-          const float* nt = &normals_[12 * std::size_t(t) + 3 * f];
-          for (int a = 0; a < n; ++a) {
-            const auto [s, g] = around[a];
-            const float* ns = &normals_[12 * std::size_t(s) + 3 * g];
-            if (nt[0] * ns[0] + nt[1] * ns[1] + nt[2] * ns[2] < min_cos_) continue;
-            QuadPartner p;
-            if (accept(t, f, s, g, p)) out.push_back({4 * t + f, p});
-          }
+        r.n = tets_around_edge(t, q[i], q[j], r.others, r.faces);
+      }
+    }
+    // Grouped by face for the CSR; per face, in edge order then walk order.
+    for (int f = 0; f < 4; ++f) {
+      const float* nt = &normals_[12 * std::size_t(t) + 3 * f];
+      for (const Ring& r : rings) {
+        if (r.others[0] != f && r.others[1] != f) continue;
+        for (int a = 0; a < r.n; ++a) {
+          const auto [s, g] = r.faces[a];
+          const float* ns = &normals_[12 * std::size_t(s) + 3 * g];
+          if (nt[0] * ns[0] + nt[1] * ns[1] + nt[2] * ns[2] < min_cos_) continue;
+          QuadPartner p;
+          if (accept(t, f, s, g, p)) out.push_back({4 * t + f, p});
         }
       }
     }
-    // Edges visit the faces out of order; the CSR wants them grouped by face.
-    std::stable_sort(out.begin() + first, out.end(),
-                     [](const Entry& a, const Entry& b) { return a.face < b.face; });
   }
 
  private:
@@ -97,14 +107,16 @@ class Builder {
       index_t prev = t, cur = topo_.neighbor(t, others[dir]);
       while (cur != NO_CELL && cur != t && n + 2 <= static_cast<int>(out.size())) {
         const index_t* q = mesh_.tet(cur);
-        int o[2], k = 0;
-        for (int l = 0; l < 4; ++l) {
-          if (q[l] != x && q[l] != y) o[k++] = l;
-        }
+        // Its two local vertices off the edge (a bit mask, then its lowest and highest bit).
+        unsigned off = 0;
+        for (int l = 0; l < 4; ++l) off |= static_cast<unsigned>((q[l] != x) & (q[l] != y)) << l;
+        static constexpr signed char kLow[16] = {-1, 0, 1, 0, 2, 0, 1, 0, 3, 0, 1, 0, 2, 0, 1, 0};
+        static constexpr signed char kHigh[16] = {-1, 0, 1, 1, 2, 2, 2, 2, 3, 3, 3, 3, 3, 3, 3, 3};
+        const int o[2] = {kLow[off], kHigh[off]};
         out[n++] = {cur, o[0]};
         out[n++] = {cur, o[1]};
-        const index_t next =
-            topo_.neighbor(cur, o[0]) == prev ? topo_.neighbor(cur, o[1]) : topo_.neighbor(cur, o[0]);
+        const index_t next = topo_.neighbor(cur, o[0]) == prev ? topo_.neighbor(cur, o[1])
+                                                               : topo_.neighbor(cur, o[0]);
         prev = cur;
         cur = next;
       }
@@ -120,11 +132,12 @@ class Builder {
     const double* b = mesh_.point(q[1]);
     const double* c = mesh_.point(q[2]);
     const double* d = mesh_.point(q[3]);
-    const double dihedral = quad_dihedral_angle(a, b, c, d);
     const bool on_boundary = topo_.on_boundary(t, f) && topo_.on_boundary(s, g);
-    if (dihedral < (on_boundary ? min_boundary_dihedral_ : min_dihedral_)) return false;
-    const double corner = quad_max_corner_angle(a, b, c, d);
-    if (corner > max_corner_) return false;
+    if (quad_dihedral_angle_below(a, b, c, d,
+                                  on_boundary ? min_boundary_dihedral_ : min_dihedral_)) {
+      return false;
+    }
+    if (quad_max_corner_angle_above(a, b, c, d, max_corner_)) return false;
     p = {4 * s + g};
     return true;
   }
@@ -132,7 +145,8 @@ class Builder {
   const TetMesh& mesh_;
   const TetTopology& topo_;
   const std::vector<float>& normals_;  // 4 outward unit normals per tet
-  double min_dihedral_, min_boundary_dihedral_, max_corner_, min_cos_;
+  AngleBound min_dihedral_, min_boundary_dihedral_, max_corner_;
+  double min_cos_;
 };
 
 std::vector<float> unit_normals(const TetMesh& mesh, int threads) {
@@ -164,7 +178,7 @@ QuadPairs::QuadPairs(const TetMesh& mesh, const TetTopology& topology, double mi
   const std::vector<float> normals = unit_normals(mesh, threads);
   const Builder builder(mesh, topology, normals, min_dihedral_angle, min_boundary_dihedral_angle,
                         max_face_angle);
-  constexpr index_t kChunk = 16384;
+  constexpr index_t kChunk = 4096;  // small enough for the threads to finish together
   std::vector<std::vector<Entry>> per_chunk((nt + kChunk - 1) / kChunk);
   parallel_chunks(nt, kChunk, threads, [&](index_t chunk, index_t begin, index_t end) {
     for (index_t t = begin; t < end; ++t) builder.faces_of_tet(t, per_chunk[chunk]);
@@ -172,6 +186,7 @@ QuadPairs::QuadPairs(const TetMesh& mesh, const TetTopology& topology, double mi
 
   offsets_.assign(4 * static_cast<std::size_t>(nt) + 1, 0);
   masks_.assign(nt, 0);
+  partner_bits_.assign(nt, 0);
   std::size_t total = 0;
   for (const auto& c : per_chunk) total += c.size();
   partners_.reserve(total);
@@ -180,6 +195,7 @@ QuadPairs::QuadPairs(const TetMesh& mesh, const TetTopology& topology, double mi
     for (const Entry& e : chunk) {
       ++offsets_[e.face + 1];
       masks_[e.face / 4] |= static_cast<unsigned char>(1u << (e.face % 4));
+      partner_bits_[e.face / 4] |= std::uint64_t{1} << (e.partner.face / 4 & 63u);
       partners_.push_back(e.partner);
     }
     std::vector<Entry>().swap(chunk);

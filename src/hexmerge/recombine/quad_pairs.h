@@ -6,6 +6,7 @@
 /// instructions are look-ups.
 
 #include <array>
+#include <cstdint>
 #include <vector>
 
 #include "hexmerge/core/index.h"
@@ -39,16 +40,24 @@ class QuadPairs {
   QuadPairs(const TetMesh& mesh, const TetTopology& topology, double min_dihedral_angle,
             double min_boundary_dihedral_angle, double max_face_angle, int threads);
 
-  const QuadPartner* begin(index_t t, int f) const { return &partners_[offsets_[4 * std::size_t(t) + f]]; }
-  const QuadPartner* end(index_t t, int f) const { return &partners_[0] + offsets_[4 * std::size_t(t) + f + 1]; }
+  const QuadPartner* begin(index_t t, int f) const {
+    return &partners_[offsets_[4 * std::size_t(t) + f]];
+  }
+  const QuadPartner* end(index_t t, int f) const {
+    return &partners_[0] + offsets_[4 * std::size_t(t) + f + 1];
+  }
   /// Bit f set when face f of tet t has at least one partner.
   unsigned char mask(index_t t) const { return masks_[t]; }
+  /// False when no face of tet t has a partner on tet s; true when one may (a 64-bit filter on
+  /// the partners' ids modulo 64: exact for tets with ids close to each other).
+  bool may_pair(index_t t, index_t s) const { return (partner_bits_[t] >> (s & 63u)) & 1u; }
   std::size_t size() const { return partners_.size(); }
 
  private:
   std::vector<index_t> offsets_;  // 4 * #T + 1
   std::vector<QuadPartner> partners_;
   std::vector<unsigned char> masks_;
+  std::vector<std::uint64_t> partner_bits_;
 };
 
 }  // namespace hexmerge

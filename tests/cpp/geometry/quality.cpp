@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <random>
 #include <vector>
 
 #include "fixtures.h"
@@ -51,7 +52,8 @@ TEST(cell_volume, non_planar_hex_is_the_trilinear_volume) {
   // Unit cube with corner 6 (1,1,1) lifted by h: the trilinear map z = w + h u v w has
   // det J = 1 + h u v, so the volume is 1 + h / 4. Its bilinear faces enclose exactly that.
   for (double h : {0.0, 0.2, 0.4, -0.3}) {
-    std::vector<double> p = {0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0, 0, 0, 1, 1, 0, 1, 1, 1, 1 + h, 0, 1, 1};
+    std::vector<double> p = {0, 0, 0, 1, 0, 0, 1, 1, 0,     0, 1, 0,
+                             0, 0, 1, 1, 0, 1, 1, 1, 1 + h, 0, 1, 1};
     const index_t ids[8] = {0, 1, 2, 3, 4, 5, 6, 7};
     EXPECT_NEAR(cell_volume(CellType::Hex, p.data(), ids), 1.0 + h / 4.0, 1e-14) << h;
   }
@@ -67,7 +69,8 @@ TEST(cell_volume, matches_tet_sums_for_flat_faces) {
                             test::grid_node(1, 1, 1, 0), test::grid_node(1, 0, 1, 0),
                             test::grid_node(1, 0, 0, 1), test::grid_node(1, 1, 0, 1),
                             test::grid_node(1, 1, 1, 1), test::grid_node(1, 0, 1, 1)};
-    EXPECT_NEAR(cell_volume(CellType::Hex, mesh.points.data(), hex), test::total_volume(mesh), 1e-12);
+    EXPECT_NEAR(cell_volume(CellType::Hex, mesh.points.data(), hex), test::total_volume(mesh),
+                1e-12);
   }
   // Pyramid and prism against their tets.
   const std::vector<double> pyr = {0, 0, 0, 2, 0, 0, 2, 2, 0, 0, 2, 0, 1, 1, 1};
@@ -77,7 +80,8 @@ TEST(cell_volume, matches_tet_sums_for_flat_faces) {
   const index_t pr[6] = {0, 1, 2, 3, 4, 5};
   EXPECT_NEAR(cell_volume(CellType::Prism, pri.data(), pr), 0.5, 1e-14);
   const index_t tet[4] = {0, 1, 3, 4};
-  EXPECT_NEAR(cell_volume(CellType::Tet, pyr.data(), tet), tet_volume(&pyr[0], &pyr[3], &pyr[9], &pyr[12]), 1e-15);
+  EXPECT_NEAR(cell_volume(CellType::Tet, pyr.data(), tet),
+              tet_volume(&pyr[0], &pyr[3], &pyr[9], &pyr[12]), 1e-15);
 }
 
 TEST(scaled_jacobian, known_cells) {
@@ -86,14 +90,46 @@ TEST(scaled_jacobian, known_cells) {
   const index_t ids[8] = {0, 1, 2, 3, 4, 5, 6, 7};
   EXPECT_NEAR(scaled_jacobian(CellType::Hex, p.data(), ids), 1.0 / std::sqrt(3.0), 1e-12);
   // Push corner 6 through the opposite faces: that corner inverts.
-  std::vector<double> bad = {0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0, 0, 0, 1, 1, 0, 1, -0.5, -0.5, -0.5, 0, 1, 1};
+  std::vector<double> bad = {0, 0, 0, 1, 0, 0, 1,    1,    0,    0, 1, 0,
+                             0, 0, 1, 1, 0, 1, -0.5, -0.5, -0.5, 0, 1, 1};
   EXPECT_LT(scaled_jacobian(CellType::Hex, bad.data(), ids), 0.0);
   // Right-triangle prism: the 45 degree corners score sin(45) * 2 / sqrt(3).
   const std::vector<double> pri = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, 1, 0, 1, 0, 1, 1};
-  EXPECT_NEAR(scaled_jacobian(CellType::Prism, pri.data(), ids), std::sqrt(0.5) * 2 / std::sqrt(3.0), 1e-12);
+  EXPECT_NEAR(scaled_jacobian(CellType::Prism, pri.data(), ids),
+              std::sqrt(0.5) * 2 / std::sqrt(3.0), 1e-12);
   // Flattened tet: zero.
   const std::vector<double> flat = {0, 0, 0, 1, 0, 0, 0, 1, 0, 1, 1, 0};
   EXPECT_NEAR(scaled_jacobian(CellType::Tet, flat.data(), ids), 0.0, 1e-15);
+}
+
+TEST(AngleBound, predicates_answer_as_the_angles_do) {
+  // Random quads, from flat to folded, against bounds far from, near and at their angles.
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  int checked = 0;
+  for (int k = 0; k < 2000; ++k) {
+    const double fold = k % 4 == 0 ? 1e-3 : 0.5;
+    const double a[3] = {0, 0, 0}, c[3] = {2, u(rng) * 0.1, 0};
+    const double b[3] = {1 + u(rng) * 0.5, -1 + u(rng) * 0.5, u(rng) * fold};
+    const double d[3] = {1 + u(rng) * 0.5, 1 + u(rng) * 0.5, u(rng) * fold};
+    const double dihedral = quad_dihedral_angle(a, b, c, d);
+    const double corner = quad_max_corner_angle(a, b, c, d);
+    for (const double delta : {0.0, 1e-13, -1e-13, 1e-6, -1e-6, 5.0, -5.0}) {
+      const AngleBound on_dihedral(dihedral + delta), on_corner(corner + delta);
+      EXPECT_EQ(quad_dihedral_angle_below(a, b, c, d, on_dihedral), dihedral < on_dihedral.degrees);
+      EXPECT_EQ(quad_max_corner_angle_above(a, b, c, d, on_corner), corner > on_corner.degrees);
+      for (const double bound : {150.0, 179.0, 170.0, 120.0}) {
+        EXPECT_EQ(quad_dihedral_angle_below(a, b, c, d, AngleBound(bound)), dihedral < bound);
+        EXPECT_EQ(quad_max_corner_angle_above(a, b, c, d, AngleBound(bound)), corner > bound);
+      }
+      ++checked;
+    }
+  }
+  // A degenerate quad (b on the diagonal): dihedral 0, corner 180.
+  const double a[3] = {0, 0, 0}, b[3] = {1, 0, 0}, c[3] = {2, 0, 0}, d[3] = {1, 1, 0};
+  EXPECT_TRUE(quad_dihedral_angle_below(a, b, c, d, AngleBound(10.0)));
+  EXPECT_TRUE(quad_max_corner_angle_above(a, a, c, d, AngleBound(170.0)));
+  EXPECT_EQ(checked, 14000);
 }
 
 }  // namespace
