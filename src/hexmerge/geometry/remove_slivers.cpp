@@ -247,7 +247,11 @@ bool swappable(const FlipMesh& m, index_t a, index_t b, index_t c, index_t d) {
   if (patch < 0 || m.patch(a, b, d) != patch) return false;
   const Vec3 pa = Vec3::of(m.point(a)), ab = Vec3::of(m.point(b)) - pa;
   const Vec3 ac = Vec3::of(m.point(c)) - pa, ad = Vec3::of(m.point(d)) - pa;
-  return std::abs(det3(ab, ac, ad)) <= 1e-9 * ab.norm() * ac.norm() * ad.norm();
+  if (std::abs(det3(ab, ac, ad)) > 1e-9 * ab.norm() * ac.norm() * ad.norm()) return false;
+  // The quad a, c, b, d convex: its diagonals ab and cd cross.
+  const Vec3 n = ab.cross(ac), cd = ad - ac;
+  return ab.cross(ac).dot(n) * ab.cross(ad).dot(n) < 0 &&
+         cd.cross(ac * -1.0).dot(n) * cd.cross(ab - ac).dot(n) < 0;
 }
 
 // Face removal across face `opposite` of t: t = (f, p) and its neighbour (f, q) become three
@@ -324,7 +328,8 @@ void remove_slivers(TetMesh& mesh, const std::vector<char>& fixed,
         }
       double replaced = kInfinity;
       for (index_t u : best.old_tets) replaced = std::min(replaced, m.quality(u));
-      if (best.old_tets.empty() || !(best.quality > replaced + 1e-12)) continue;
+      // Never an inverted or flat tet, even in place of one.
+      if (best.old_tets.empty() || !(best.quality > std::max(replaced, 0.0) + 1e-12)) continue;
       const std::int32_t region = m.region(t);
       for (index_t u : best.old_tets) m.remove(u);
       for (const Tet& n : best.new_tets) m.add(n, region);

@@ -1351,6 +1351,11 @@ TetMesh mesh_shape(const std::string& brep, const MeshShapeParameters& parameter
   }
   const std::size_t given = nodes.size() + inserted.size();
   const std::size_t made = frame_points.size() / 3;
+  if (made < given)  // TetGen dropped a point (a duplicate): the numbering no longer holds
+    throw InputError(
+        "TetGen dropped " + std::to_string(given - made) +
+        " of the points given (points too close together); try another size\n(command: " +
+        report.tetgen_command + ")");
   report.nb_steiner_points = made > given ? made - given : 0;
   // Orientation: positive volume in frame coordinates is positive in the world (proper frame).
   for (std::size_t t = 0; t < mesh.tets.size() / 4; ++t) {
