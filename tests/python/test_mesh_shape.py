@@ -138,6 +138,37 @@ def test_shapes_recombine_and_check(shapes, name: str, h: float, floor: float) -
     assert np.allclose(np.abs(np.linalg.det(np.array(meshing["frame"]))), 1.0)
 
 
+def tet_scaled_jacobians(points: np.ndarray, tets: np.ndarray) -> np.ndarray:
+    """Verdict's scaled Jacobian of each tet (src/hexmerge/geometry/quality.h): the smallest
+    corner determinant of unit edge vectors, times sqrt(2)."""
+    p = points[tets]
+    worst = np.full(len(tets), np.inf)
+    for o, x, y, z in ((0, 1, 2, 3), (1, 0, 3, 2), (2, 0, 1, 3), (3, 0, 2, 1)):
+        e = [p[:, k] - p[:, o] for k in (x, y, z)]
+        det = np.einsum("ij,ij->i", e[0], np.cross(e[1], e[2]))
+        worst = np.minimum(worst, det / np.prod([np.linalg.norm(v, axis=1) for v in e], axis=0))
+    return worst * np.sqrt(2)
+
+
+# (shape, h, floor of the smallest tet scaled Jacobian after remove_slivers). Measured when set
+# (lattice faces' points in TetGen's facets): cylinder h 5: 0.0078 (TetGen's own: 0.0008; 417
+# tets below 0.2 left); bracket h 4: 0.039 (0.022; 86 left); plate h 10: 0.195 (0.066; 8 left).
+# Issue #6 asks for 0.2 at 100k tets, not reached: slivers on the boundary layer's sides and
+# next to the surface remain.
+SLIVER_CASES = [("cylinder", 5.0, 0.005), ("bracket", 4.0, 0.03), ("plate", 10.0, 0.18)]
+
+
+@needs_tetgen
+@pytest.mark.parametrize(("name", "h", "floor"), SLIVER_CASES, ids=[c[0] for c in SLIVER_CASES])
+def test_flips_raise_the_smallest_scaled_jacobian(shapes, name: str, h: float, floor: float) -> None:
+    tets, report = hexmerge.mesh_shape(shapes[name], h, recombine=False)
+    meshing = report["meshing"]
+    quality = tet_scaled_jacobians(tets.points, tets.cell_vertices.reshape(-1, 4).astype(np.int64))
+    assert meshing["nb_face_flips"] + meshing["nb_edge_flips"] > 0
+    assert quality.min() >= meshing["min_tet_quality_before"] - 1e-12  # flips never lower it
+    assert quality.min() >= floor
+
+
 @needs_tetgen
 @pytest.mark.parametrize(("name", "h"), [(name, h) for name, h, _ in CASES], ids=[c[0] for c in CASES])
 def test_reported_boundary_distance(shapes, name: str, h: float) -> None:
