@@ -43,7 +43,7 @@ def shape_text(name: str, work: str) -> str:
 
 # A first size per shape (about a tenth of its smallest side); the measured size is rescaled
 # from the tet count it gives.
-PROBE_SIZE = {"box": 4.0, "cylinder": 4.0, "bracket": 3.0, "fem-plate-with-hole": 10.0}
+PROBE_SIZE = {"box": 4.0, "cylinder": 3.0, "bracket": 3.0, "fem-plate-with-hole": 10.0}
 
 
 def run(name: str, brep: str, tets_wanted: int) -> dict:
