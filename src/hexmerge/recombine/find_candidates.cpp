@@ -207,56 +207,25 @@ bool assemble_cell(const TetMesh& mesh, const TetTopology& topology, CellType ty
 
 namespace {
 
-// One chunk's candidates, sorted by root (input id), in blocks that the merge frees as it goes.
-using CandidateBlocks = std::vector<std::vector<Candidate>>;
-constexpr std::size_t kBlock = 512;
-
-// Sorts one chunk's candidates by their root's input id (each group's smallest tet; a root's
-// own stay in the order they were found) and cuts them into blocks.
-CandidateBlocks sorted_blocks(std::vector<Candidate>& found) {
-  std::stable_sort(found.begin(), found.end(),
-                   [](const Candidate& a, const Candidate& b) { return a.tets[0] < b.tets[0]; });
-  CandidateBlocks blocks;
-  for (std::size_t i = 0; i < found.size(); i += kBlock) {
-    blocks.emplace_back(found.begin() + i, found.begin() + std::min(found.size(), i + kBlock));
+// The candidates of every chunk, in the order of their roots' input ids (a stable counting sort
+// on the root, each group's smallest tet), each root's own in the order they were found. The
+// permutation is applied in place: no second copy of the candidates.
+std::vector<Candidate> in_root_order(std::vector<std::vector<Candidate>>& per_chunk, index_t nt) {
+  std::vector<Candidate> all = concatenate(per_chunk);
+  std::vector<std::size_t> destination(all.size());
+  {
+    std::vector<std::size_t> start(static_cast<std::size_t>(nt) + 1, 0);
+    for (const Candidate& c : all) ++start[c.tets[0] + 1];
+    for (index_t t = 0; t < nt; ++t) start[t + 1] += start[t];
+    for (std::size_t i = 0; i < all.size(); ++i) destination[i] = start[all[i].tets[0]]++;
   }
-  std::vector<Candidate>().swap(found);
-  return blocks;
-}
-
-// The candidates of every chunk in the order of their roots' input ids: each root's candidates
-// are in one chunk (the chunk of its position in the search order), so the chunks are merged by
-// walking the input's tets in order. Blocks are freed once read: the candidates are never held
-// twice.
-std::vector<Candidate> in_root_order(std::vector<CandidateBlocks>& per_chunk,
-                                     const std::vector<index_t>& input_id, index_t chunk_size) {
-  std::size_t total = 0;
-  for (const auto& chunk : per_chunk) {
-    for (const auto& block : chunk) total += block.size();
-  }
-  std::vector<index_t> chunk_of(input_id.size());
-  for (std::size_t i = 0; i < input_id.size(); ++i) {
-    chunk_of[input_id[i]] = static_cast<index_t>(i / chunk_size);
-  }
-  struct Cursor {
-    std::size_t block = 0, item = 0;
-  };
-  std::vector<Cursor> cursors(per_chunk.size());
-  std::vector<Candidate> all;
-  all.reserve(total);
-  for (index_t t = 0; t < static_cast<index_t>(chunk_of.size()); ++t) {
-    CandidateBlocks& blocks = per_chunk[chunk_of[t]];
-    Cursor& at = cursors[chunk_of[t]];
-    while (at.block < blocks.size() && blocks[at.block][at.item].tets[0] == t) {
-      all.push_back(blocks[at.block][at.item]);
-      if (++at.item == blocks[at.block].size()) {
-        std::vector<Candidate>().swap(blocks[at.block]);
-        ++at.block;
-        at.item = 0;
-      }
+  for (std::size_t i = 0; i < all.size(); ++i) {
+    while (destination[i] != i) {
+      const std::size_t j = destination[i];
+      std::swap(all[i], all[j]);
+      std::swap(destination[i], destination[j]);
     }
   }
-  HEXMERGE_ASSERT(all.size() == total, "a candidate's root is out of order");
   return all;
 }
 
@@ -559,17 +528,16 @@ std::vector<Candidate> find_candidates(const TetMesh& mesh, const TetTopology& t
   // Small chunks: the threads finish together (the search time per root varies a lot).
   constexpr index_t kChunk = 2048;
   const SearchTree tree(criteria.types);
-  std::vector<CandidateBlocks> per_chunk((nt + kChunk - 1) / kChunk);
+  std::vector<std::vector<Candidate>> per_chunk((nt + kChunk - 1) / kChunk);
   parallel_chunks(
       nt, kChunk, std::max(1, threads),
       [&](index_t chunk, index_t begin, index_t end) {
-        std::vector<Candidate> found;
-        Matcher matcher(local, local_topology, quad_pairs, input_id, criteria, tree, found);
+        Matcher matcher(local, local_topology, quad_pairs, input_id, criteria, tree,
+                        per_chunk[chunk]);
         for (index_t t = begin; t < end; ++t) matcher.run_from(t);
-        per_chunk[chunk] = sorted_blocks(found);
       },
       [&](double fraction) { return !progress || progress("candidates", fraction); });
-  return in_root_order(per_chunk, input_id, kChunk);
+  return in_root_order(per_chunk, nt);
 }
 
 FaceKey face_key(const Candidate& c, int f) {
