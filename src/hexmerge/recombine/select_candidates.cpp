@@ -66,6 +66,29 @@ int cell_face_of(const Candidate& c, const std::array<index_t, 3>& tri) {
 
 bool is_quad(const Candidate& c, int f) { return descriptor(c.type).face_size[f] == 4; }
 
+// A first-in first-out work list of ids (candidates or tets) that holds each id at most once
+// at a time.
+class WorkQueue {
+ public:
+  explicit WorkQueue(std::size_t nb_ids) : queued_(nb_ids, 0) {}
+  void push(index_t i) {
+    if (queued_[i]) return;
+    queued_[i] = 1;
+    items_.push_back(i);
+  }
+  bool empty() const { return items_.empty(); }
+  index_t pop() {
+    const index_t i = items_.front();
+    items_.pop_front();
+    queued_[i] = 0;
+    return i;
+  }
+
+ private:
+  std::deque<index_t> items_;
+  std::vector<char> queued_;
+};
+
 // A stage of a greedy phase: which element type, and whether non-conforming ones may be taken.
 struct Stage {
   CellType type;
@@ -281,12 +304,16 @@ class Selector {
     if (key) keys.add(*key);
     required_quads(n1, keys);
     required_quads(n2, keys);
-    if (keys.count != 1) return NO_INDEX;
+    return keys.count == 1 ? pyramid_on(n1, n2, keys.key[0]) : NO_INDEX;
+  }
+
+  // An available pyramid of tets n1 and n2 with base `key`, or NO_INDEX.
+  index_t pyramid_on(index_t n1, index_t n2, const QuadKey& key) const {
     for (index_t k = offsets_[n1]; k < offsets_[n1 + 1]; ++k) {
       const index_t xi = ids_[k];
       const Candidate& x = cands_[xi];
       if (x.type == CellType::Pyramid && contains(x, n2) && available(xi) &&
-          face_key(x, 0) == keys.key[0]) {
+          face_key(x, 0) == key) {
         return xi;
       }
     }
@@ -462,15 +489,6 @@ class Selector {
       }
       return NO_INDEX;
     };
-    auto pyramid_on = [&](index_t n1, index_t n2, const QuadKey& key) {
-      for (index_t k = offsets_[n1]; k < offsets_[n1 + 1]; ++k) {
-        const Candidate& x = cands_[ids_[k]];
-        if (x.type == CellType::Pyramid && contains(x, n2) && face_key(x, 0) == key) {
-          return ids_[k];
-        }
-      }
-      return NO_INDEX;
-    };
     auto lesser = [&](index_t a, index_t b) {
       return cands_[a].quality < cands_[b].quality ||
              (cands_[a].quality == cands_[b].quality && a > b);
@@ -497,19 +515,13 @@ class Selector {
       }
       return NO_INDEX;
     };
-    std::deque<index_t> work;
-    std::vector<char> queued(cands_.size(), 0);
+    WorkQueue work(cands_.size());
     auto enqueue = [&](index_t h) {
-      if (h != NO_INDEX && in_block[h] && !queued[h]) {
-        queued[h] = 1;
-        work.push_back(h);
-      }
+      if (h != NO_INDEX && in_block[h]) work.push(h);
     };
     for (index_t ci : order) enqueue(ci);
     while (!work.empty()) {
-      const index_t h = work.front();
-      work.pop_front();
-      queued[h] = 0;
+      const index_t h = work.pop();
       if (!in_block[h]) continue;
       const index_t gone = leaving(h);
       if (gone == NO_INDEX) continue;
@@ -741,13 +753,9 @@ class Selector {
       if (chosen_[ci]) close_pending<void (*)(index_t)>(ci, nullptr);
     }
     if (params_.conformity != Conformity::Conforming) return;
-    std::deque<index_t> work;
-    std::vector<char> queued(cands_.size(), 0);
+    WorkQueue work(cands_.size());
     auto enqueue = [&](index_t ci) {
-      if (chosen_[ci] && !queued[ci]) {
-        queued[ci] = 1;
-        work.push_back(ci);
-      }
+      if (chosen_[ci]) work.push(ci);
     };
     // Whatever owns a tet next to a changed element must be looked at again.
     auto touch = [&](index_t ci) {
@@ -764,9 +772,7 @@ class Selector {
       if (chosen_[ci] && violations(ci, false) > 0) enqueue(ci);
     }
     while (!work.empty()) {
-      const index_t ci = work.front();
-      work.pop_front();
-      queued[ci] = 0;
+      const index_t ci = work.pop();
       if (!chosen_[ci]) continue;
       close_pending(ci, &touch);
       if (violations(ci, false) == 0) continue;
@@ -1189,19 +1195,13 @@ class Selector {
     Hood h;
     // Swaps, at every element next to a free tet, in candidate order; an accepted swap puts the
     // elements around it back in the queue.
-    std::deque<index_t> work;
-    std::vector<char> queued(cands_.size(), 0);
+    WorkQueue work(cands_.size());
     auto enqueue = [&](index_t ci) {
-      if (chosen_[ci] && !queued[ci]) {
-        queued[ci] = 1;
-        work.push_back(ci);
-      }
+      if (chosen_[ci]) work.push(ci);
     };
     for (index_t ci = 0; ci < cands_.size(); ++ci) enqueue(ci);
     while (!work.empty()) {
-      const index_t e = work.front();
-      work.pop_front();
-      queued[e] = 0;
+      const index_t e = work.pop();
       if (!chosen_[e] || !try_swap(h, e)) continue;
       ++result_.swap_moves;
       for (index_t t : h.tets) {
@@ -1215,21 +1215,15 @@ class Selector {
     // order; an accepted one puts the seeds whose neighbourhood reaches what changed back in the
     // queue.
     const bool all = params_.local_search_seeds == LocalSearchSeeds::All;
-    std::deque<index_t> seeds;
-    std::vector<char> seeded(nt, 0);
+    WorkQueue seeds(nt);
     auto seed = [&](index_t t) {
-      if ((all || is_free(t)) && !seeded[t]) {
-        seeded[t] = 1;
-        seeds.push_back(t);
-      }
+      if (all || is_free(t)) seeds.push(t);
     };
     if (params_.local_search_radius > 0) {
       for (index_t t = 0; t < nt; ++t) seed(t);
     }
     while (!seeds.empty()) {
-      const index_t s = seeds.front();
-      seeds.pop_front();
-      seeded[s] = 0;
+      const index_t s = seeds.pop();
       if (!try_reselection(h, s)) continue;
       ++result_.reselection_moves;
       // Every seed whose neighbourhood reaches the changed tets is worth another look.
