@@ -187,6 +187,8 @@ py::dict report_to_dict(const RecombineReport& r) {
   d["bound_proved"] = bound_field(r.bound_proved);
   d["bound_conforming"] = bound_field(r.bound_conforming);
   d["gap_percent"] = bound_field(r.gap_percent);
+  d["hex_volume_bound"] = bound_field(r.hex_volume_bound);
+  d["hex_volume_bound_proved"] = bound_field(r.hex_volume_bound_proved);
   return d;
 }
 

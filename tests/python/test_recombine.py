@@ -225,7 +225,8 @@ def _recombine_with_bound(points, tets, **options):
 def test_bound_fields_are_none_unless_asked() -> None:
     points, tets, _ = grid(2, "kuhn")
     _, report = hexmerge.recombine(points, tets)
-    for key in ("bound_elements", "bound_best_elements", "bound_proved", "bound_conforming", "gap_percent"):
+    for key in ("bound_elements", "bound_best_elements", "bound_proved", "bound_conforming", "gap_percent",
+                "hex_volume_bound", "hex_volume_bound_proved"):
         assert report[key] is None
 
 
@@ -235,6 +236,7 @@ def test_bound_on_a_structured_grid_is_reached() -> None:
     assert report["bound_elements"] == report["bound_best_elements"] == report["output_cells"] == 27
     assert report["bound_proved"] is True and report["bound_conforming"] is True
     assert report["gap_percent"] == 0.0
+    assert report["hex_volume_bound"] == pytest.approx(1.0) and report["hex_volume_bound_proved"] is True
     assert "bound" in report["phase_seconds"]
 
 
@@ -247,3 +249,5 @@ def test_bound_on_a_gmsh_mesh_is_below_our_count(gmsh_tet4) -> None:
     assert report["gap_percent"] >= 0.0
     expected = 100.0 * (report["output_cells"] - report["bound_elements"]) / report["bound_elements"]
     assert report["gap_percent"] == pytest.approx(expected)
+    # Allowed to leave quads open, the selection's hexahedra are one set the volume bound covers.
+    assert report["volume_fraction"]["hex"] <= report["hex_volume_bound"] + 1e-9 <= 1.0 + 1e-9

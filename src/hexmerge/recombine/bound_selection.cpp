@@ -7,12 +7,24 @@
 #include <memory>
 
 #include "hexmerge/core/error.h"
+#include "hexmerge/geometry/quality.h"
 
 #ifdef HEXMERGE_WITH_GLPK
 #include <glpk.h>
 #endif
 
 namespace hexmerge {
+namespace {
+
+[[maybe_unused]] [[noreturn]] void throw_without_glpk() {
+  throw InputError(
+      "parameter 'optimality_bound': this build of HexMerge has no GLPK (install libglpk-dev "
+      "and rebuild with HEXMERGE_WITH_GLPK=ON)",
+      Entity::Parameter);
+}
+
+}  // namespace
+
 #ifdef HEXMERGE_WITH_GLPK
 namespace {
 
@@ -86,6 +98,40 @@ class QuietTerminal {
 struct ProblemDeleter {
   void operator()(glp_prob* p) const { glp_delete_prob(p); }
 };
+
+// The set-packing program, to be maximised: one binary column per candidate with its weight, one
+// row per tet that two or more of them share (a tet of one candidate constrains nothing).
+void load_packing(glp_prob* lp, index_t nb_tets, const std::vector<const Candidate*>& columns,
+                  const std::vector<double>& weights) {
+  std::vector<int> covering(nb_tets, 0);
+  for (const Candidate* c : columns) {
+    for (int i = 0; i < c->nb_tets; ++i) ++covering[c->tets[i]];
+  }
+  std::vector<int> row_of(nb_tets, 0);
+  int nb_rows = 0;
+  for (index_t t = 0; t < nb_tets; ++t) {
+    if (covering[t] >= 2) row_of[t] = ++nb_rows;
+  }
+  glp_set_obj_dir(lp, GLP_MAX);
+  if (nb_rows > 0) glp_add_rows(lp, nb_rows);
+  for (int r = 1; r <= nb_rows; ++r) glp_set_row_bnds(lp, r, GLP_UP, 0.0, 1.0);
+  // GLPK's arrays are 1-based: entry 0 is unused.
+  std::vector<int> ia(1, 0), ja(1, 0);
+  std::vector<double> ar(1, 0.0);
+  if (!columns.empty()) glp_add_cols(lp, static_cast<int>(columns.size()));
+  for (std::size_t k = 0; k < columns.size(); ++k) {
+    const int j = static_cast<int>(k) + 1;
+    glp_set_col_kind(lp, j, GLP_BV);
+    glp_set_obj_coef(lp, j, weights[k]);
+    for (int i = 0; i < columns[k]->nb_tets; ++i) {
+      if (row_of[columns[k]->tets[i]] == 0) continue;
+      ia.push_back(row_of[columns[k]->tets[i]]);
+      ja.push_back(j);
+      ar.push_back(1.0);
+    }
+  }
+  glp_load_matrix(lp, static_cast<int>(ia.size()) - 1, ia.data(), ja.data(), ar.data());
+}
 
 }  // namespace
 #endif
@@ -168,26 +214,13 @@ SelectionBound bound_selection(index_t nb_tets, const std::vector<Candidate>& ca
   }
 #ifndef HEXMERGE_WITH_GLPK
   static_cast<void>(conformity);
-  throw InputError(
-      "parameter 'optimality_bound': this build of HexMerge has no GLPK (install libglpk-dev "
-      "and rebuild with HEXMERGE_WITH_GLPK=ON)",
-      Entity::Parameter);
+  throw_without_glpk();
 #else
   const auto start = Clock::now();
   const QuietTerminal quiet;
   SelectionBound result;
   result.best = initial;
 
-  // Rows: tets that two or more candidates share (a tet of one candidate constrains nothing).
-  std::vector<int> covering(nb_tets, 0);
-  for (const Candidate& c : candidates) {
-    for (int i = 0; i < c.nb_tets; ++i) ++covering[c.tets[i]];
-  }
-  std::vector<int> row_of(nb_tets, 0);
-  int nb_rows = 0;
-  for (index_t t = 0; t < nb_tets; ++t) {
-    if (covering[t] >= 2) row_of[t] = ++nb_rows;
-  }
   const int nb_cols = static_cast<int>(candidates.size());
   // Conformity rows the initial selection keeps (x_c - sum x_partners <= 0).
   std::vector<char> chosen(candidates.size(), 0);
@@ -207,25 +240,13 @@ SelectionBound bound_selection(index_t nb_tets, const std::vector<Candidate>& ca
 
   std::unique_ptr<glp_prob, ProblemDeleter> problem(glp_create_prob());
   glp_prob* lp = problem.get();
-  glp_set_obj_dir(lp, GLP_MAX);
-  if (nb_rows > 0) glp_add_rows(lp, nb_rows);
-  for (int r = 1; r <= nb_rows; ++r) glp_set_row_bnds(lp, r, GLP_UP, 0.0, 1.0);
-  // GLPK's arrays are 1-based: entry 0 is unused.
-  std::vector<int> ia(1, 0), ja(1, 0);
-  std::vector<double> ar(1, 0.0);
-  if (nb_cols > 0) glp_add_cols(lp, nb_cols);
-  for (int j = 1; j <= nb_cols; ++j) {
-    const Candidate& c = candidates[j - 1];
-    glp_set_col_kind(lp, j, GLP_BV);
-    glp_set_obj_coef(lp, j, saving(c));
-    for (int i = 0; i < c.nb_tets; ++i) {
-      if (row_of[c.tets[i]] == 0) continue;
-      ia.push_back(row_of[c.tets[i]]);
-      ja.push_back(j);
-      ar.push_back(1.0);
-    }
+  std::vector<const Candidate*> columns;
+  std::vector<double> weights;
+  for (const Candidate& c : candidates) {
+    columns.push_back(&c);
+    weights.push_back(saving(c));
   }
-  glp_load_matrix(lp, static_cast<int>(ia.size()) - 1, ia.data(), ja.data(), ar.data());
+  load_packing(lp, nb_tets, columns, weights);
 
   const auto milliseconds_left = [&] {
     return std::max(1, static_cast<int>(1000.0 * (time_limit - seconds_since(start))));
@@ -312,6 +333,83 @@ SelectionBound bound_selection(index_t nb_tets, const std::vector<Candidate>& ca
     return finish(static_cast<double>(best_saved), best_saved);
   }
   return finish(std::min(lp_bound, state.best_bound), best_saved);
+#endif
+}
+
+VolumeBound bound_hex_volume(const TetMesh& mesh, const std::vector<Candidate>& candidates,
+                             double time_limit) {
+  HEXMERGE_ASSERT(time_limit > 0.0, "bound_hex_volume: the time limit must be positive");
+#ifndef HEXMERGE_WITH_GLPK
+  static_cast<void>(mesh);
+  static_cast<void>(candidates);
+  throw_without_glpk();
+#else
+  const auto start = Clock::now();
+  const QuietTerminal quiet;
+  std::vector<double> volume_of(mesh.nb_tets());
+  double mesh_volume = 0.0;
+  for (index_t t = 0; t < mesh.nb_tets(); ++t) {
+    const index_t* v = mesh.tet(t);
+    volume_of[t] =
+        tet_volume(mesh.point(v[0]), mesh.point(v[1]), mesh.point(v[2]), mesh.point(v[3]));
+    mesh_volume += volume_of[t];
+  }
+  std::vector<const Candidate*> columns;
+  std::vector<double> weights;
+  for (const Candidate& c : candidates) {
+    if (c.type != CellType::Hex) continue;
+    double volume = 0.0;
+    for (int i = 0; i < c.nb_tets; ++i) volume += volume_of[c.tets[i]];
+    columns.push_back(&c);
+    weights.push_back(volume / mesh_volume);
+  }
+  VolumeBound result;
+  result.hexahedra = columns.size();
+  const auto finish = [&] {
+    result.seconds = seconds_since(start);
+    return result;
+  };
+  if (columns.empty()) {
+    result.proved = true;
+    return finish();
+  }
+  std::unique_ptr<glp_prob, ProblemDeleter> problem(glp_create_prob());
+  glp_prob* lp = problem.get();
+  load_packing(lp, mesh.nb_tets(), columns, weights);
+  const auto milliseconds_left = [&] {
+    return std::max(1, static_cast<int>(1000.0 * (time_limit - seconds_since(start))));
+  };
+  glp_smcp simplex;
+  glp_init_smcp(&simplex);
+  simplex.msg_lev = GLP_MSG_OFF;
+  simplex.tm_lim = milliseconds_left();
+  if (glp_simplex(lp, &simplex) != 0 || glp_get_status(lp) != GLP_OPT) {
+    // No LP optimum in time: every hexahedron at once still bounds it.
+    result.bound = 0.0;
+    for (double w : weights) result.bound += w;
+    result.bound = std::min(result.bound, 1.0);
+    return finish();
+  }
+  result.bound = glp_get_obj_val(lp);
+  SearchState state;
+  glp_iocp search;
+  glp_init_iocp(&search);
+  search.msg_lev = GLP_MSG_OFF;
+  search.tm_lim = milliseconds_left();
+  search.presolve = GLP_OFF;
+  search.clq_cuts = GLP_ON;
+  search.cb_func = on_search_event;
+  search.cb_info = &state;
+  const int status = glp_intopt(lp, &search);
+  const int mip = glp_mip_status(lp);
+  if (mip == GLP_OPT || mip == GLP_FEAS) result.best = glp_mip_obj_val(lp);
+  if (status == 0 && mip == GLP_OPT) {
+    result.proved = true;
+    result.bound = result.best;
+  } else {
+    result.bound = std::min(result.bound, state.best_bound);
+  }
+  return finish();
 #endif
 }
 

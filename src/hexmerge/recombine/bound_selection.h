@@ -68,4 +68,25 @@ SelectionBound bound_selection(index_t nb_tets, const std::vector<Candidate>& ca
                                const std::vector<index_t>& initial, double time_limit,
                                const std::vector<ConformityRow>& conformity = {});
 
+/// The outcome of bound_hex_volume.
+struct VolumeBound {
+  /// No selection of the candidates gives hexahedra more than this share of the mesh's volume:
+  /// the integer program's optimum when proved, else the smaller of its LP relaxation's and the
+  /// branch-and-bound's best open node's bound.
+  double bound = 0.0;
+  double best = 0.0;          ///< share of the best set of disjoint hexahedra the solver found
+  bool proved = false;        ///< the solver finished: best == bound
+  std::size_t hexahedra = 0;  ///< hexahedron candidates in the program
+  double seconds = 0.0;       ///< wall time of the solve
+};
+
+/// The largest share of the mesh's volume that the hexahedra of any selection of `candidates` can
+/// fill: the hexahedra must have disjoint tets (set packing weighted by volume, GLPK,
+/// time-limited). It ignores what the other elements need, so it is an upper bound on the
+/// hexahedron volume of every selection. Given the candidates left by prune_unclosable, it bounds
+/// the conforming selections, whatever the selection strategy. Throws InputError
+/// (Entity::Parameter, naming optimality_bound) when GLPK is not compiled in.
+VolumeBound bound_hex_volume(const TetMesh& mesh, const std::vector<Candidate>& candidates,
+                             double time_limit);
+
 }  // namespace hexmerge

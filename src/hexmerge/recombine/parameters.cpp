@@ -122,12 +122,13 @@ std::vector<ParameterInfo> make_table() {
       {"threads", "int", number(d.threads), "", 0, 1024, {}, "Threads",
        "Threads for the candidate search; 0 uses every hardware thread"},
       {"optimality_bound", "bool", flag(d.optimality_bound), "", 0, 1, {}, "Optimality bound",
-       "Also solve the selection as an integer program (GLPK) for a bound; meshes up to about "
-       "20k tets (no cap: larger ones stop at the time limit with a looser bound)"},
+       "Also solve the selection as an integer program (GLPK) for a bound on the element count "
+       "and one on the hexahedron volume; meshes up to about 20k tets (no cap: larger ones stop "
+       "at the time limit with a looser bound)"},
       {"bound_time_limit", "float", number(d.bound_time_limit), "s", 1, 3600, {},
        "Bound time limit",
-       "Time limit of the optimality bound's integer program; past it the best bound so far "
-       "is reported"},
+       "Time limit of each of the optimality bound's two integer programs; past it the best "
+       "bound so far is reported"},
   };
 }
 

@@ -194,6 +194,10 @@ MixedMesh recombine(const TetMesh& input, const RecombineParameters& parameters,
                          (static_cast<double>(report.output_cells) -
                           static_cast<double>(bound.bound_elements)) /
                          static_cast<double>(bound.bound_elements);
+    // The candidates are pruned in conforming mode, so this bounds the conforming selections.
+    const VolumeBound hex_bound = bound_hex_volume(input, candidates, parameters.bound_time_limit);
+    report.hex_volume_bound = hex_bound.bound;
+    report.hex_volume_bound_proved = hex_bound.proved;
     timer.lap("bound");
   }
   report_progress(progress, "done", 1.0);

@@ -49,6 +49,10 @@ struct RecombineReport {
   std::size_t bound_best_elements = 0;  ///< elements of the best selection the solver found
   bool bound_proved = false;            ///< the solver proved bound_best_elements optimal
   double gap_percent = 0.0;             ///< 100 * (output_cells - bound_elements) / bound_elements
+  /// No selection of the candidates (in conforming mode: no conforming selection) fills more than
+  /// this share of the volume with hexahedra (bound_hex_volume, bound_selection.h).
+  double hex_volume_bound = 0.0;
+  bool hex_volume_bound_proved = false;  ///< that share is reached by disjoint hexahedra
 };
 
 /// Merges groups of tetrahedra into hexahedra, prisms and pyramids.

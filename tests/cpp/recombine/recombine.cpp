@@ -378,6 +378,31 @@ TEST(recombine, a_cube_whose_face_nothing_closes_leaves_the_block_and_the_rest_c
   }
 }
 
+TEST(recombine, the_hex_volume_bound_leaves_out_the_cube_nothing_closes) {
+  if (!selection_bound_available()) GTEST_SKIP() << "built without GLPK";
+  // Volume: 27 cubes and 9 cap squares of two tets, 1/6 each (apex 1/2 above the square).
+  const int n = 3;
+  const double volume = n * n * n + n * n / 6.0;
+  RecombineParameters p;
+  p.optimality_bound = true;
+  const Outcome whole = recombine_and_check(capped_kuhn_grid(n), p);
+  EXPECT_TRUE(whole.report.hex_volume_bound_proved);
+  EXPECT_NEAR(whole.report.hex_volume_bound, n * n * n / volume, 1e-9);
+  EXPECT_NEAR(whole.report.volume_fraction[static_cast<int>(CellType::Hex)],
+              whole.report.hex_volume_bound, 1e-9);
+  // Conforming: the cube behind the open square is no candidate any more, so at most 26 cubes.
+  const Outcome open = recombine_and_check(capped_kuhn_grid(n, {1, 2}), p);
+  EXPECT_TRUE(open.report.hex_volume_bound_proved);
+  EXPECT_LE(open.report.hex_volume_bound, (n * n * n - 1) / volume + 1e-9);
+  EXPECT_GE(open.report.hex_volume_bound + 1e-9,
+            open.report.volume_fraction[static_cast<int>(CellType::Hex)]);
+  // Allowed to leave the quad open, every cube can be a hex again.
+  p.conformity = Conformity::Allow;
+  RecombineReport allowed;
+  recombine(capped_kuhn_grid(n, {1, 2}), p, allowed);
+  EXPECT_NEAR(allowed.hex_volume_bound, n * n * n / volume, 1e-9);
+}
+
 TEST(recombine, invalid_input_is_an_input_error) {
   TetMesh mesh = kuhn_grid(1);
   std::swap(mesh.tets[4 * 3 + 1], mesh.tets[4 * 3 + 2]);
