@@ -455,7 +455,9 @@ class Selector {
   // then, until nothing changes, a hexahedron leaves the block when one of its quad faces is
   // not on the domain boundary, not shared with a block hexahedron, and not closable by a
   // pyramid of the two tets behind it that no other block quad touches (of two block hexahedra
-  // whose quads touch the same tet, the lesser leaves). What stays is chosen at once, a
+  // whose quads touch the same tet, the one with fewer faces shared with the block leaves, then
+  // the lesser; by quality alone, all 1 in a lattice, the hole that one missing closer leaves
+  // grew through the core: bracket h 1.38, 97 -> 33 % hex volume). What stays is chosen at once, a
   // transaction that the greedy stages (one element at a time, and a block lost to one missing
   // closer) cannot break up. Its open quads are left to them: each has a closing pyramid that no
   // other quad needs, so both strategies keep it closable; a prism sharing it may close it
@@ -489,9 +491,24 @@ class Selector {
       }
       return NO_INDEX;
     };
+    // Faces of block hexahedron h shared with another block hexahedron.
+    auto block_faces = [&](index_t h) {
+      const Candidate& c = cands_[h];
+      const Sides s = sides(h);
+      int shared = 0;
+      for (int f = 0; f < descriptor(c.type).nb_faces; ++f) {
+        const auto n = tets_behind(s, f);
+        if (n[0] == NO_CELL || n[1] == NO_CELL) continue;
+        const index_t b = block_of[n[0]];
+        if (b != NO_INDEX && b == block_of[n[1]] && has_quad(cands_[b], face_key(c, f))) ++shared;
+      }
+      return shared;
+    };
     auto lesser = [&](index_t a, index_t b) {
-      return cands_[a].quality < cands_[b].quality ||
-             (cands_[a].quality == cands_[b].quality && a > b);
+      const int fa = block_faces(a), fb = block_faces(b);
+      if (fa != fb) return fa < fb;
+      if (cands_[a].quality != cands_[b].quality) return cands_[a].quality < cands_[b].quality;
+      return a > b;
     };
     // The hexahedron of the block that must leave because of h's faces, or NO_INDEX.
     auto leaving = [&](index_t h) {
