@@ -464,6 +464,9 @@ Surface triangulate(const Shape& s, double deflection, double tolerance) {
 
 // Rounds of smoothing and flips after the surface refinement.
 constexpr int kSmoothingRounds = 5;
+// Surface nodes with a smaller angle than this (radians, 20 degrees) in their triangles are
+// smoothed.
+constexpr double kNeedleAngle = 20.0 * M_PI / 180;
 // Largest relative change of a boundary layer's depth from one node to the next.
 constexpr double kLayerJitter = 0.1;
 // Rounds of flips (remove_slivers) and node moves (smooth_nodes) after TetGen; the last is flips.
@@ -706,7 +709,10 @@ void refine(const Shape& s, Surface& surface, double target, const std::vector<b
     for (int n = 0; n < static_cast<int>(surface.nodes.size()); ++n) {
       if (on_edge[n] || around[n].empty()) continue;
       const int face = tris[around[n].front()].face;
-      if (lattice_face[face]) continue;
+      // Only nodes of needles: the others stay where the refinement put them (smoothing them
+      // all changed TetGen's lattice enough for the bracket to lose two thirds of its hexes at
+      // some sizes).
+      if (lattice_face[face] || smallest_angle(n) >= kNeedleAngle) continue;
       Vec3 centroid{0, 0, 0};
       int count = 0;
       for (int ti : around[n])

@@ -22,7 +22,11 @@
 ///     is smooth and there is room, so that the boundary becomes prisms;
 ///  5. TetGen tetrahedralises the surface (kept as it is, `-pY`) with the points inserted
 ///     (`-i`), through its files; the tets are read back, oriented, and given the solid that
-///     holds them as region.
+///     holds them as region;
+///  6. flips (remove_slivers) alternate with moves of the boundary-layer and Steiner points
+///     (smooth_nodes), neither ever lowering the smallest scaled Jacobian. Surface nodes in
+///     needle triangles are smoothed on their face after step 1, and the layers' depths vary by
+///     up to 10 % per node so that the layers' sides are not cocircular quads.
 ///
 /// The header needs no OpenCASCADE include: shapes come in as BREP text.
 
