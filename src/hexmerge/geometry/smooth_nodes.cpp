@@ -13,8 +13,7 @@ namespace hexmerge {
 void smooth_nodes(TetMesh& mesh, const std::vector<char>& movable,
                   const SmoothNodesParameters& parameters, SmoothNodesReport& report) {
   if (!(parameters.target > 0 && parameters.target <= 1) || parameters.max_passes < 1)
-    throw InputError("smooth_nodes: target must be in (0, 1], max_passes >= 1",
-                     Entity::Parameter);
+    throw InputError("smooth_nodes: target must be in (0, 1], max_passes >= 1", Entity::Parameter);
   if (movable.size() != mesh.nb_vertices())
     throw InputError("smooth_nodes: one movable flag per node (" +
                          std::to_string(mesh.nb_vertices()) + "), not " +
@@ -58,8 +57,7 @@ void smooth_nodes(TetMesh& mesh, const std::vector<char>& movable,
     }
   const double r3 = 1 / std::sqrt(3.0);
   for (int c = 0; c < 8; ++c)
-    directions.push_back(
-        Vec3{c & 1 ? r3 : -r3, c & 2 ? r3 : -r3, c & 4 ? r3 : -r3});
+    directions.push_back(Vec3{c & 1 ? r3 : -r3, c & 2 ? r3 : -r3, c & 4 ? r3 : -r3});
 
   for (int pass = 0; pass < parameters.max_passes; ++pass) {
     std::size_t moved = 0;

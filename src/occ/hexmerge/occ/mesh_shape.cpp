@@ -1510,8 +1510,7 @@ TetMesh mesh_shape(const std::string& brep, const MeshShapeParameters& parameter
     for (std::size_t v = 0; v < made; ++v)
       for (int a = 0; a < 3; ++a) {
         cell_of[v][a] = frame_points[3 * v + a] / report.spacing[a];
-        if (std::abs(2 * cell_of[v][a] - std::round(2 * cell_of[v][a])) > 1e-6)
-          half_lattice[v] = 0;
+        if (std::abs(2 * cell_of[v][a] - std::round(2 * cell_of[v][a])) > 1e-6) half_lattice[v] = 0;
       }
     // Whether tet t lies in one lattice cell or one closing pyramid (all its corners on the half
     // lattice, within one cell's width along each axis).
