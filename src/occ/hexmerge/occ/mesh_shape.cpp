@@ -41,6 +41,7 @@
 
 #include "hexmerge/core/error.h"
 #include "hexmerge/geometry/remove_slivers.h"
+#include "hexmerge/geometry/smooth_nodes.h"
 #include "hexmerge/geometry/vec3.h"
 #include "hexmerge/mesh/tet_topology.h"
 #include "hexmerge/occ/brep_text.h"
@@ -461,6 +462,16 @@ Surface triangulate(const Shape& s, double deflection, double tolerance) {
   return surface;
 }
 
+// Rounds of smoothing and flips after the surface refinement.
+constexpr int kSmoothingRounds = 5;
+// Surface nodes with a smaller angle than this (radians, 20 degrees) in their triangles are
+// smoothed.
+constexpr double kNeedleAngle = 20.0 * M_PI / 180;
+// Largest relative change of a boundary layer's depth from one node to the next.
+constexpr double kLayerJitter = 0.1;
+// Rounds of flips (remove_slivers) and node moves (smooth_nodes) after TetGen; the last is flips.
+constexpr int kQualityRounds = 4;
+
 // Splits the triangles of the faces that are not lattice faces until no side is longer than
 // `target` (sides on edges between lattice faces excepted); lattice-face triangles are split
 // only where a neighbour's side must be. New nodes lie on the CAD edge (sides on an edge) or on
@@ -663,6 +674,79 @@ void refine(const Shape& s, Surface& surface, double target, const std::vector<b
                          Entity::Parameter);
       split_longest(ti);
     }
+
+  // Bisection leaves nodes very near a seam or an edge (needles, and a tet on a needle is no
+  // better than its smallest angle). Each node inside a face that is not a lattice face moves to
+  // the centroid of its neighbours, put back on the face's surface, where that raises the
+  // smallest angle of its triangles without turning one over; then the flips again.
+  std::vector<char> on_edge(surface.nodes.size(), 0);
+  for (const auto& [key, segment] : surface.segments) {
+    (void)segment;
+    on_edge[key >> 32] = on_edge[key & 0xffffffffu] = 1;
+  }
+  std::vector<std::unique_ptr<ShapeAnalysis_Surface>> analysis(s.faces.Extent());
+  std::vector<std::vector<int>> around;
+  auto shortest_side = [&](int n) {
+    double shortest = std::numeric_limits<double>::max();
+    for (int ti : around[n])
+      for (int m : tris[ti].node)
+        if (m != n) shortest = std::min(shortest, length(n, m));
+    return shortest;
+  };
+  auto smallest_angle = [&](int n) {
+    double worst = M_PI;
+    for (int ti : around[n])
+      for (int c = 0; c < 3; ++c) {
+        const auto& v = tris[ti].node;
+        worst = std::min(worst, angle_at(v[c], v[(c + 1) % 3], v[(c + 2) % 3]));
+      }
+    return worst;
+  };
+  for (int round = 0; round < kSmoothingRounds; ++round) {
+    around.assign(surface.nodes.size(), {});
+    for (int ti = 0; ti < static_cast<int>(tris.size()); ++ti)
+      for (int n : tris[ti].node) around[n].push_back(ti);
+    for (int n = 0; n < static_cast<int>(surface.nodes.size()); ++n) {
+      if (on_edge[n] || around[n].empty()) continue;
+      const int face = tris[around[n].front()].face;
+      // Only nodes of needles: the others stay where the refinement put them (smoothing them
+      // all changed TetGen's lattice enough for the bracket to lose two thirds of its hexes at
+      // some sizes).
+      if (lattice_face[face] || smallest_angle(n) >= kNeedleAngle) continue;
+      Vec3 centroid{0, 0, 0};
+      int count = 0;
+      for (int ti : around[n])
+        for (int m : tris[ti].node)
+          if (m != n) centroid = centroid + surface.nodes[m], ++count;
+      if (!analysis[face]) {
+        const TopoDS_Face& f = TopoDS::Face(s.faces(face + 1));
+        analysis[face] = std::make_unique<ShapeAnalysis_Surface>(BRep_Tool::Surface(f));
+      }
+      centroid = centroid * (1.0 / count);
+      const gp_Pnt2d uv =
+          analysis[face]->ValueOfUV(gp_Pnt(centroid.x, centroid.y, centroid.z), 1e-9 * target);
+      const Vec3 old = surface.nodes[n];
+      std::vector<Vec3> normals;
+      for (int ti : around[n])
+        normals.push_back(normal_of(tris[ti].node[0], tris[ti].node[1], tris[ti].node[2]));
+      const double before = smallest_angle(n), shortest = shortest_side(n);
+      surface.nodes[n] = of(analysis[face]->Value(uv));
+      // Better angles, and no nearer than h / 4 to a neighbour: nodes must not gather (TetGen
+      // drops points too close together).
+      bool keep =
+          smallest_angle(n) > before && shortest_side(n) >= std::min(shortest, 0.25 * target);
+      for (std::size_t k = 0; k < around[n].size() && keep; ++k) {
+        const auto& v = tris[around[n][k]].node;
+        const Vec3 now = normal_of(v[0], v[1], v[2]);
+        keep = now.dot(normals[k]) > std::cos(20.0 * M_PI / 180) * now.norm() * normals[k].norm();
+      }
+      if (!keep) surface.nodes[n] = old;
+    }
+    std::vector<std::uint64_t> all_sides;
+    for (const SurfaceTriangle& t : tris)
+      for (int c = 0; c < 3; ++c) all_sides.push_back(side_key(t, c));
+    restore_delaunay(all_sides);
+  }
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -1058,7 +1142,11 @@ TetMesh mesh_shape(const std::string& brep, const MeshShapeParameters& parameter
   for (int k = 1; k <= parameters.boundary_layers; ++k)
     for (std::size_t i = 0; i < nodes.size(); ++i) {
       if (!smooth[i] || normal[i].norm() == 0) continue;
-      const double depth = k * layer;
+      // Depths vary by up to kLayerJitter (a fixed pseudo-random fraction per node): the sides
+      // of equally deep layers are cocircular quads (rectangles, isosceles trapezoids), which
+      // TetGen cuts with flat tets where the prisms on either side disagree on the diagonal.
+      const double spread = static_cast<double>((i * 2654435761u) % 1000) / 500.0 - 1;
+      const double depth = k * layer * (1 + kLayerJitter * spread);
       const Vec3 q = nodes[i] - normal[i] * depth;
       // Room: no other part of the surface nearer than the depth, no other point too near.
       if (curved.any_within(q, 0.9 * depth)) continue;
@@ -1322,40 +1410,68 @@ TetMesh mesh_shape(const std::string& brep, const MeshShapeParameters& parameter
         out << i + 1 << ' ' << f.holes[i].x << ' ' << f.holes[i].y << ' ' << f.holes[i].z << '\n';
     }
     out << "0\n0\n";
+    if (!out) throw InputError("cannot write TetGen's input in " + work.path().string());
+  }
+  auto write_inserted = [&] {
     std::ofstream extra(work.path() / "shape.a.node");
     extra.precision(17);
     extra << inserted.size() - nb_on_faces << " 3 0 0\n";
     for (std::size_t i = nb_on_faces; i < inserted.size(); ++i)
       extra << i - nb_on_faces << ' ' << inserted[i].x << ' ' << inserted[i].y << ' '
             << inserted[i].z << '\n';
-    if (!out || !extra) throw InputError("cannot write TetGen's input in " + work.path().string());
-  }
+    if (!extra) throw InputError("cannot write TetGen's input in " + work.path().string());
+  };
+  write_inserted();
   const fs::path log = work.path() / "tetgen.log";
   report.tetgen_command = shell_quote(tetgen) + " -pYizQ " + shell_quote(poly.string());
-  const int status =
-      std::system((report.tetgen_command + " > " + shell_quote(log.string()) + " 2>&1").c_str());
+  const std::size_t given = nodes.size() + inserted.size();
+  std::vector<double> frame_points;
+  for (int attempt = 0;; ++attempt) {
+    const int status =
+        std::system((report.tetgen_command + " > " + shell_quote(log.string()) + " 2>&1").c_str());
+    if (status != 0 || !fs::exists(work.path() / "shape.1.ele"))
+      throw InputError("TetGen failed (exit status " + std::to_string(status) +
+                       ") on the shape's surface "
+                       "and points; its output:\n" +
+                       tail_of_file(log, 2000) + "\n(command: " + report.tetgen_command + ")");
+    frame_points = read_tetgen_table<double>(work.path() / "shape.1.node", 3, 3);
+    if (frame_points.size() / 3 >= given) break;
+    // TetGen now and then fails to insert a point of the regular lattice (degenerate: all
+    // cospherical) and leaves it out as unused, which breaks the numbering. The points left out,
+    // found by their coordinates (TetGen keeps the others in order), move by 1e-7 h (they stay
+    // on the lattice for everything below) and TetGen runs once more.
+    std::vector<std::size_t> dropped;
+    for (std::size_t i = 0, j = 0; i < given; ++i) {
+      const Vec3 p = i < nodes.size() ? nodes[i] : inserted[i - nodes.size()];
+      if (j < frame_points.size() / 3 && (Vec3::of(&frame_points[3 * j]) - p).norm() <= 1e-9 * h)
+        ++j;
+      else
+        dropped.push_back(i);
+    }
+    std::string which;
+    for (std::size_t i : dropped) {
+      const Vec3 p = frame.to_world(i < nodes.size() ? nodes[i] : inserted[i - nodes.size()]);
+      which += " " + std::to_string(i) + " at (" + std::to_string(p.x) + ", " +
+               std::to_string(p.y) + ", " + std::to_string(p.z) + ")";
+    }
+    if (attempt > 0 || dropped.empty() || dropped.front() < nodes.size() + nb_on_faces)
+      throw InputError("TetGen dropped " + std::to_string(given - frame_points.size() / 3) +
+                       " of the points given (points too close together or not insertable):" +
+                       which + "; try another size\n(command: " + report.tetgen_command + ")");
+    for (std::size_t i : dropped)
+      inserted[i - nodes.size()] = inserted[i - nodes.size()] + Vec3{1.0, 0.7, 0.3} * (1e-7 * h);
+    report.nb_nudged_points += dropped.size();
+    write_inserted();
+  }
   clock.lap("tetgen");
-  if (status != 0 || !fs::exists(work.path() / "shape.1.ele"))
-    throw InputError("TetGen failed (exit status " + std::to_string(status) +
-                     ") on the shape's surface "
-                     "and points; its output:\n" +
-                     tail_of_file(log, 2000) + "\n(command: " + report.tetgen_command + ")");
 
   TetMesh mesh;
-  const std::vector<double> frame_points =
-      read_tetgen_table<double>(work.path() / "shape.1.node", 3, 3);
   for (long long v : read_tetgen_table<long long>(work.path() / "shape.1.ele", 4, 4)) {
     if (v < 0 || v >= static_cast<long long>(frame_points.size() / 3))
       throw InputError("TetGen's shape.1.ele refers to a missing node");
     mesh.tets.push_back(static_cast<index_t>(v));
   }
-  const std::size_t given = nodes.size() + inserted.size();
   const std::size_t made = frame_points.size() / 3;
-  if (made < given)  // TetGen dropped a point (a duplicate): the numbering no longer holds
-    throw InputError(
-        "TetGen dropped " + std::to_string(given - made) +
-        " of the points given (points too close together); try another size\n(command: " +
-        report.tetgen_command + ")");
   report.nb_steiner_points = made > given ? made - given : 0;
   // Orientation: positive volume in frame coordinates is positive in the world (proper frame).
   for (std::size_t t = 0; t < mesh.tets.size() / 4; ++t) {
@@ -1383,58 +1499,73 @@ TetMesh mesh_shape(const std::string& brep, const MeshShapeParameters& parameter
   clock.lap("regions");
 
   // TetGen leaves slivers where the lattice meets the boundary layers and the surface (four
-  // nearly cocircular points, as the sides of the layers' prisms are): flips take them out. The
-  // lattice's own tets, in one cell or one closing pyramid, stay for the hexahedra.
+  // nearly cocircular points, as the sides of the layers' prisms are): flips take them out, then
+  // the free nodes (boundary-layer and Steiner points, inside) move to raise the worst tet around
+  // them, then flips again, for kQualityRounds rounds. The lattice's own tets, in one cell or one
+  // closing pyramid, stay for the hexahedra, and lattice points and cell centres do not move.
   {
-    // Whether vertex v is a lattice point or a cell centre; its coordinates in cells.
-    auto on_half_lattice = [&](index_t v, double(&cell)[3]) {
+    // Per vertex: whether it is a lattice point or a cell centre, and its coordinates in cells.
+    std::vector<char> half_lattice(made, 1);
+    std::vector<std::array<double, 3>> cell_of(made);
+    for (std::size_t v = 0; v < made; ++v)
       for (int a = 0; a < 3; ++a) {
-        cell[a] = frame_points[3 * v + a] / report.spacing[a];
-        if (std::abs(2 * cell[a] - std::round(2 * cell[a])) > 1e-6) return false;
+        cell_of[v][a] = frame_points[3 * v + a] / report.spacing[a];
+        if (std::abs(2 * cell_of[v][a] - std::round(2 * cell_of[v][a])) > 1e-6) half_lattice[v] = 0;
+      }
+    // Whether tet t lies in one lattice cell or one closing pyramid (all its corners on the half
+    // lattice, within one cell's width along each axis).
+    auto in_one_cell = [&](index_t t) {
+      double least[3] = {1e300, 1e300, 1e300}, most[3] = {-1e300, -1e300, -1e300};
+      for (int k = 0; k < 4; ++k) {
+        const index_t v = mesh.tet(t)[k];
+        if (!half_lattice[v]) return false;
+        for (int a = 0; a < 3; ++a) {
+          least[a] = std::min(least[a], cell_of[v][a]), most[a] = std::max(most[a], cell_of[v][a]);
+          if (most[a] - least[a] >= 1 + 1e-6) return false;
+        }
       }
       return true;
     };
-    std::vector<char> fixed(mesh.nb_tets(), 0);
-    for (index_t t = 0; t < mesh.nb_tets(); ++t) {
-      double cell[3] = {0, 0, 0}, least[3] = {1e300, 1e300, 1e300},
-             most[3] = {-1e300, -1e300, -1e300};
-      bool in_one_cell = true;
-      for (int k = 0; k < 4 && in_one_cell; ++k) {
-        in_one_cell = on_half_lattice(mesh.tet(t)[k], cell);
-        for (int a = 0; a < 3; ++a) {
-          least[a] = std::min(least[a], cell[a]), most[a] = std::max(most[a], cell[a]);
-          in_one_cell &= most[a] - least[a] < 1 + 1e-6;
-        }
-      }
-      fixed[t] = in_one_cell;
-    }
     // The CAD face of each boundary face, from TetGen's markers (face index + 1), so that
     // triangles of one planar face may swap their shared sides.
     std::map<std::array<index_t, 3>, std::int32_t> face_marker;
     const std::vector<long long> faces =
         read_tetgen_table<long long>(work.path() / "shape.1.face", 1, 4);
+    std::vector<char> movable(made, 0);
+    for (std::size_t v = nodes.size(); v < made; ++v) movable[v] = !half_lattice[v];
     for (std::size_t i = 0; i + 3 < faces.size(); i += 4) {
       std::array<index_t, 3> key{static_cast<index_t>(faces[i]), static_cast<index_t>(faces[i + 1]),
                                  static_cast<index_t>(faces[i + 2])};
+      for (index_t v : key) movable[v] = 0;
       std::sort(key.begin(), key.end());
       face_marker[key] = static_cast<std::int32_t>(faces[i + 3]) - 1;
     }
-    std::vector<std::int32_t> boundary_patch(4 * static_cast<std::size_t>(mesh.nb_tets()), -1);
-    for (index_t t = 0; t < mesh.nb_tets(); ++t)
-      for (int f = 0; f < 4; ++f) {
-        const index_t* v = mesh.tet(t);
-        std::array<index_t, 3> key{v[(f + 1) % 4], v[(f + 2) % 4], v[(f + 3) % 4]};
-        std::sort(key.begin(), key.end());
-        const auto it = face_marker.find(key);
-        if (it != face_marker.end())
-          boundary_patch[4 * static_cast<std::size_t>(t) + f] = it->second;
-      }
-    RemoveSliversReport flips;
-    remove_slivers(mesh, fixed, boundary_patch, RemoveSliversParameters{}, flips);
-    report.min_tet_quality_before = flips.min_before;
-    report.nb_face_flips = flips.face_removals;
-    report.nb_edge_flips = flips.edge_removals;
-    report.nb_boundary_swaps = flips.boundary_swaps;
+    for (int round = 0; round < kQualityRounds; ++round) {
+      std::vector<char> fixed(mesh.nb_tets(), 0);
+      for (index_t t = 0; t < mesh.nb_tets(); ++t) fixed[t] = in_one_cell(t);
+      // Boundary faces swapped by an earlier round are not in face_marker: they stay (-1).
+      std::vector<std::int32_t> boundary_patch(4 * static_cast<std::size_t>(mesh.nb_tets()), -1);
+      for (index_t t = 0; t < mesh.nb_tets(); ++t)
+        for (int f = 0; f < 4; ++f) {
+          const index_t* v = mesh.tet(t);
+          std::array<index_t, 3> key{v[(f + 1) % 4], v[(f + 2) % 4], v[(f + 3) % 4]};
+          std::sort(key.begin(), key.end());
+          const auto it = face_marker.find(key);
+          if (it != face_marker.end())
+            boundary_patch[4 * static_cast<std::size_t>(t) + f] = it->second;
+        }
+      RemoveSliversReport flips;
+      remove_slivers(mesh, fixed, boundary_patch, RemoveSliversParameters{}, flips);
+      if (round == 0) report.min_tet_quality_before = flips.min_before;
+      report.nb_face_flips += flips.face_removals;
+      report.nb_edge_flips += flips.edge_removals;
+      report.nb_boundary_swaps += flips.boundary_swaps;
+      if (round + 1 == kQualityRounds) break;
+      SmoothNodesReport moves;
+      smooth_nodes(mesh, movable, SmoothNodesParameters{}, moves);
+      report.nb_node_moves += moves.moves;
+      if (moves.moves == 0) break;
+    }
   }
   clock.lap("slivers");
   validate_tet_mesh(mesh);

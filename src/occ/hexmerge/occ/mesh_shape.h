@@ -22,7 +22,11 @@
 ///     is smooth and there is room, so that the boundary becomes prisms;
 ///  5. TetGen tetrahedralises the surface (kept as it is, `-pY`) with the points inserted
 ///     (`-i`), through its files; the tets are read back, oriented, and given the solid that
-///     holds them as region.
+///     holds them as region;
+///  6. flips (remove_slivers) alternate with moves of the boundary-layer and Steiner points
+///     (smooth_nodes), neither ever lowering the smallest scaled Jacobian. Surface nodes in
+///     needle triangles are smoothed on their face after step 1, and the layers' depths vary by
+///     up to 10 % per node so that the layers' sides are not cocircular quads.
 ///
 /// The header needs no OpenCASCADE include: shapes come in as BREP text.
 
@@ -73,10 +77,12 @@ struct MeshShapeReport {
   std::size_t nb_apex_points = 0;        ///< closing-pyramid apexes inserted
   std::size_t nb_layer_points = 0;       ///< boundary-layer points inserted
   std::size_t nb_steiner_points = 0;     ///< points TetGen added
+  std::size_t nb_nudged_points = 0;  ///< lattice points TetGen left out, moved by 1e-7 h, run again
   double min_tet_quality_before = 0.0;   ///< smallest scaled Jacobian of TetGen's tets
   std::size_t nb_face_flips = 0;         ///< 2-3 flips taking out slivers (remove_slivers)
   std::size_t nb_edge_flips = 0;         ///< edge removals (3-2, 4-4, ...) taking out slivers
   std::size_t nb_boundary_swaps = 0;     ///< of which on the boundary, inside one planar face
+  std::size_t nb_node_moves = 0;  ///< moves of boundary-layer and Steiner points (smooth_nodes)
   std::array<std::array<double, 3>, 3> frame{};  ///< lattice axes (rows), unit vectors
   std::array<double, 3> spacing{};               ///< lattice spacing along each axis
   double max_boundary_distance = 0.0;  ///< largest distance of a boundary node to the shape

@@ -1,0 +1,106 @@
+#include "hexmerge/geometry/smooth_nodes.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "hexmerge/core/error.h"
+#include "hexmerge/geometry/quality.h"
+#include "hexmerge/geometry/vec3.h"
+
+namespace hexmerge {
+
+void smooth_nodes(TetMesh& mesh, const std::vector<char>& movable,
+                  const SmoothNodesParameters& parameters, SmoothNodesReport& report) {
+  if (!(parameters.target > 0 && parameters.target <= 1) || parameters.max_passes < 1)
+    throw InputError("smooth_nodes: target must be in (0, 1], max_passes >= 1", Entity::Parameter);
+  if (movable.size() != mesh.nb_vertices())
+    throw InputError("smooth_nodes: one movable flag per node (" +
+                         std::to_string(mesh.nb_vertices()) + "), not " +
+                         std::to_string(movable.size()),
+                     Entity::Parameter);
+  report = SmoothNodesReport{};
+  const index_t nv = mesh.nb_vertices(), nt = mesh.nb_tets();
+  // The tets at each node (compressed rows).
+  std::vector<std::size_t> start(static_cast<std::size_t>(nv) + 1, 0);
+  for (index_t v : mesh.tets) ++start[v + 1];
+  for (index_t v = 0; v < nv; ++v) start[v + 1] += start[v];
+  std::vector<index_t> at(start.back());
+  {
+    std::vector<std::size_t> fill(start.begin(), start.end() - 1);
+    for (index_t t = 0; t < nt; ++t)
+      for (int k = 0; k < 4; ++k) at[fill[mesh.tet(t)[k]]++] = t;
+  }
+  auto quality = [&](index_t t) {
+    return scaled_jacobian(CellType::Tet, mesh.points.data(), mesh.tet(t));
+  };
+  // The worst tet around node v where it stands now.
+  auto worst_at = [&](index_t v) {
+    double q = std::numeric_limits<double>::infinity();
+    for (std::size_t i = start[v]; i < start[v + 1]; ++i) q = std::min(q, quality(at[i]));
+    return q;
+  };
+  auto place = [&](index_t v, const Vec3& p) {
+    double* x = &mesh.points[3 * static_cast<std::size_t>(v)];
+    x[0] = p.x, x[1] = p.y, x[2] = p.z;
+  };
+  report.min_before = std::numeric_limits<double>::infinity();
+  for (index_t t = 0; t < nt; ++t) report.min_before = std::min(report.min_before, quality(t));
+
+  // The search directions: the axes and the cube's diagonals, unit length.
+  std::vector<Vec3> directions;
+  for (int a = 0; a < 3; ++a)
+    for (double s : {-1.0, 1.0}) {
+      Vec3 d{0, 0, 0};
+      (a == 0 ? d.x : a == 1 ? d.y : d.z) = s;
+      directions.push_back(d);
+    }
+  const double r3 = 1 / std::sqrt(3.0);
+  for (int c = 0; c < 8; ++c)
+    directions.push_back(Vec3{c & 1 ? r3 : -r3, c & 2 ? r3 : -r3, c & 4 ? r3 : -r3});
+
+  for (int pass = 0; pass < parameters.max_passes; ++pass) {
+    std::size_t moved = 0;
+    for (index_t v = 0; v < nv; ++v) {
+      if (!movable[v] || start[v] == start[v + 1]) continue;
+      double best = worst_at(v);
+      if (best >= parameters.target) continue;
+      const Vec3 origin = Vec3::of(mesh.point(v));
+      Vec3 here = origin, centroid{0, 0, 0};
+      double shortest = std::numeric_limits<double>::infinity();
+      int count = 0;
+      for (std::size_t i = start[v]; i < start[v + 1]; ++i)
+        for (int k = 0; k < 4; ++k) {
+          const index_t w = mesh.tet(at[i])[k];
+          if (w == v) continue;
+          const Vec3 p = Vec3::of(mesh.point(w));
+          centroid = centroid + p, ++count;
+          shortest = std::min(shortest, (p - origin).norm());
+        }
+      centroid = centroid * (1.0 / count);
+      // Tries position p: kept (and the node left there) when strictly better.
+      auto try_at = [&](const Vec3& p) {
+        place(v, p);
+        const double q = worst_at(v);
+        if (q > best + 1e-12) {
+          best = q, here = p;
+          return true;
+        }
+        place(v, here);
+        return false;
+      };
+      try_at(centroid) || try_at((here + centroid) * 0.5);
+      for (double step = 0.25 * shortest; step > 1e-3 * shortest;) {
+        bool better = false;
+        for (const Vec3& d : directions) better |= try_at(here + d * step);
+        if (!better) step *= 0.5;
+      }
+      if ((here - origin).norm() > 0) ++moved, ++report.moves;
+    }
+    if (moved == 0) break;
+  }
+  report.min_after = std::numeric_limits<double>::infinity();
+  for (index_t t = 0; t < nt; ++t) report.min_after = std::min(report.min_after, quality(t));
+}
+
+}  // namespace hexmerge

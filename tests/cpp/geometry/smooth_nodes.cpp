@@ -1,0 +1,84 @@
+#include "hexmerge/geometry/smooth_nodes.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <vector>
+
+#include "hexmerge/core/error.h"
+#include "hexmerge/geometry/quality.h"
+
+namespace hexmerge {
+namespace {
+
+// Adds tet (a, b, c, d), ordered to be positive.
+void add_tet(TetMesh& m, index_t a, index_t b, index_t c, index_t d) {
+  if (tet_volume(m.point(a), m.point(b), m.point(c), m.point(d)) < 0) std::swap(c, d);
+  m.tets.insert(m.tets.end(), {a, b, c, d});
+}
+
+double min_quality(const TetMesh& m) {
+  double q = 1;
+  for (index_t t = 0; t < m.nb_tets(); ++t)
+    q = std::min(q, scaled_jacobian(CellType::Tet, m.points.data(), m.tet(t)));
+  return q;
+}
+
+// An octahedron's six corners around node 6, which sits close to corner 0: the four tets at
+// corner 0 are flat.
+TetMesh star_with_an_offset_centre() {
+  TetMesh m;
+  m.points = {1, 0, 0, -1, 0, 0, 0, 1, 0, 0, -1, 0, 0, 0, 1, 0, 0, -1, 0.9, 0.05, 0.02};
+  const index_t ring[4] = {2, 4, 3, 5};  // around the x axis
+  for (int i = 0; i < 4; ++i) {
+    add_tet(m, 6, 0, ring[i], ring[(i + 1) % 4]);
+    add_tet(m, 6, 1, ring[i], ring[(i + 1) % 4]);
+  }
+  return m;
+}
+
+TEST(smooth_nodes, moving_the_centre_raises_the_minimum_and_nothing_else_moves) {
+  TetMesh m = star_with_an_offset_centre();
+  const std::vector<double> before = m.points;
+  const double q0 = min_quality(m);
+  std::vector<char> movable(m.nb_vertices(), 0);
+  movable[6] = 1;
+  SmoothNodesReport report;
+  smooth_nodes(m, movable, SmoothNodesParameters{}, report);
+  EXPECT_DOUBLE_EQ(report.min_before, q0);
+  EXPECT_GT(report.min_after, 0.5);  // the centre of an octahedron gives 0.707
+  EXPECT_GT(report.min_after, q0);
+  EXPECT_DOUBLE_EQ(report.min_after, min_quality(m));
+  EXPECT_GE(report.moves, 1u);
+  for (std::size_t i = 0; i < 18; ++i) EXPECT_EQ(m.points[i], before[i]);  // corners stay
+  EXPECT_EQ(m.tets.size(), 32u);                                           // tets stay
+  validate_tet_mesh(m);
+}
+
+TEST(smooth_nodes, fixed_nodes_and_good_tets_stay) {
+  TetMesh m = star_with_an_offset_centre();
+  const std::vector<double> before = m.points;
+  SmoothNodesReport report;
+  smooth_nodes(m, std::vector<char>(m.nb_vertices(), 0), SmoothNodesParameters{}, report);
+  EXPECT_EQ(m.points, before);
+  EXPECT_EQ(report.moves, 0u);
+  // Above the target: nothing to do.
+  std::vector<char> movable(m.nb_vertices(), 1);
+  SmoothNodesParameters low;
+  low.target = 1e-3;
+  smooth_nodes(m, movable, low, report);
+  EXPECT_EQ(m.points, before);
+}
+
+TEST(smooth_nodes, bad_arguments_name_what_is_wrong) {
+  TetMesh m = star_with_an_offset_centre();
+  SmoothNodesReport report;
+  EXPECT_THROW(smooth_nodes(m, std::vector<char>(3, 1), SmoothNodesParameters{}, report),
+               InputError);
+  SmoothNodesParameters bad;
+  bad.target = 0;
+  EXPECT_THROW(smooth_nodes(m, std::vector<char>(m.nb_vertices(), 1), bad, report), InputError);
+}
+
+}  // namespace
+}  // namespace hexmerge
