@@ -374,10 +374,12 @@ py::tuple run_mesh_shape(const std::string& brep, double size, int boundary_laye
   d["nb_apex_points"] = report.nb_apex_points;
   d["nb_layer_points"] = report.nb_layer_points;
   d["nb_steiner_points"] = report.nb_steiner_points;
+  d["nb_nudged_points"] = report.nb_nudged_points;
   d["min_tet_quality_before"] = report.min_tet_quality_before;
   d["nb_face_flips"] = report.nb_face_flips;
   d["nb_edge_flips"] = report.nb_edge_flips;
   d["nb_boundary_swaps"] = report.nb_boundary_swaps;
+  d["nb_node_moves"] = report.nb_node_moves;
   py::list axes;
   for (const auto& axis : report.frame) axes.append(py::make_tuple(axis[0], axis[1], axis[2]));
   d["frame"] = axes;
