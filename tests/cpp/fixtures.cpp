@@ -1,10 +1,15 @@
 #include "fixtures.h"
 
+#include <unistd.h>
+
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
+#include <fstream>
 #include <map>
 #include <numeric>
 #include <stdexcept>
+#include <string>
 
 #include "hexmerge/geometry/quality.h"
 #include "hexmerge/geometry/vec3.h"
@@ -107,6 +112,48 @@ double polytope_six_volume(const Polytope& polytope) {
 }
 
 }  // namespace
+
+TetMesh tetgen_mesh(const std::vector<Point>& points) {
+  char dir[] = "/tmp/hexmerge-tetgen-XXXXXX";
+  if (!mkdtemp(dir)) return {};
+  const std::string base = std::string(dir) + "/points";
+  {
+    std::ofstream node(base + ".node");
+    node.precision(17);
+    node << points.size() << " 3 0 0\n";
+    for (std::size_t v = 0; v < points.size(); ++v) {
+      node << v << ' ' << points[v][0] << ' ' << points[v][1] << ' ' << points[v][2] << '\n';
+    }
+  }
+  TetMesh mesh;
+  if (std::system(("tetgen -Q " + base + ".node > /dev/null 2>&1").c_str()) == 0) {
+    std::ifstream ele(base + ".1.ele");
+    std::size_t nb = 0;
+    int per = 0, attr = 0;
+    ele >> nb >> per >> attr;
+    std::vector<Tet> tets(nb);
+    for (std::size_t t = 0; t < nb; ++t) {
+      index_t id;
+      ele >> id >> tets[t][0] >> tets[t][1] >> tets[t][2] >> tets[t][3];
+    }
+    mesh = make_tet_mesh(points, tets);
+    orient_positively(mesh);
+  }
+  std::system(("rm -rf " + std::string(dir)).c_str());
+  return mesh;
+}
+
+TetMesh tetgen_lattice(int n, double jitter, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(-jitter, jitter);
+  std::vector<Point> points;
+  for (int k = 0; k <= n; ++k) {
+    for (int j = 0; j <= n; ++j) {
+      for (int i = 0; i <= n; ++i) points.push_back({i + u(rng), j + u(rng), k + u(rng)});
+    }
+  }
+  return tetgen_mesh(points);
+}
 
 TetMesh make_tet_mesh(const std::vector<Point>& points, const std::vector<Tet>& tets,
                       const std::vector<std::int32_t>& regions) {

@@ -22,6 +22,15 @@ using Tet = std::array<index_t, 4>;
 TetMesh make_tet_mesh(const std::vector<Point>& points, const std::vector<Tet>& tets,
                       const std::vector<std::int32_t>& regions = {});
 
+/// The Delaunay tetrahedralisation of `points` by the tetgen program (no Steiner points: the
+/// points keep their order), positively oriented. Empty when tetgen is not installed.
+TetMesh tetgen_mesh(const std::vector<Point>& points);
+
+/// A lattice of n x n x n unit cells, its points jittered by up to `jitter` per coordinate,
+/// through tetgen_mesh. With no jitter, TetGen splits each cube (eight cospherical points) its
+/// own way: 5 or 6 tets, diagonals as they come.
+TetMesh tetgen_lattice(int n, double jitter, unsigned seed);
+
 /// Swaps two vertices of every negatively oriented tet so that all have positive volume.
 void orient_positively(TetMesh& mesh);
 

@@ -8,12 +8,10 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <fstream>
 #include <map>
 #include <set>
 #include <sstream>
 #include <string>
-#include <unistd.h>
 
 #include "fixtures.h"
 #include "hexmerge/check/check_mesh.h"
@@ -308,46 +306,6 @@ TEST(find_candidates_exhaustive, a_flat_tet_on_a_quad_face_is_taken_in_or_left_o
 }
 
 // ----------------------------------------------------------------------- TetGen lattices
-
-/// Jittered n x n x n lattice of unit cells tetrahedralised by the tetgen program (Delaunay, no
-/// Steiner points: the points keep their order). Empty when tetgen is not installed.
-TetMesh tetgen_lattice(int n, double jitter, unsigned seed) {
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<double> u(-jitter, jitter);
-  char dir[] = "/tmp/hexmerge-tetgen-XXXXXX";
-  if (!mkdtemp(dir)) return {};
-  const std::string base = std::string(dir) + "/lattice";
-  std::vector<Point> points;
-  for (int k = 0; k <= n; ++k) {
-    for (int j = 0; j <= n; ++j) {
-      for (int i = 0; i <= n; ++i) points.push_back({i + u(rng), j + u(rng), k + u(rng)});
-    }
-  }
-  {
-    std::ofstream node(base + ".node");
-    node.precision(17);
-    node << points.size() << " 3 0 0\n";
-    for (std::size_t v = 0; v < points.size(); ++v) {
-      node << v << ' ' << points[v][0] << ' ' << points[v][1] << ' ' << points[v][2] << '\n';
-    }
-  }
-  TetMesh mesh;
-  if (std::system(("tetgen -Q " + base + ".node > /dev/null 2>&1").c_str()) == 0) {
-    std::ifstream ele(base + ".1.ele");
-    std::size_t nb = 0;
-    int per = 0, attr = 0;
-    ele >> nb >> per >> attr;
-    std::vector<Tet> tets(nb);
-    for (std::size_t t = 0; t < nb; ++t) {
-      index_t id;
-      ele >> id >> tets[t][0] >> tets[t][1] >> tets[t][2] >> tets[t][3];
-    }
-    mesh = make_tet_mesh(points, tets);
-    orient_positively(mesh);
-  }
-  std::system(("rm -rf " + std::string(dir)).c_str());
-  return mesh;
-}
 
 TEST(find_candidates_exhaustive, agrees_cell_by_cell_with_a_brute_force_oracle_on_tetgen_lattices) {
   if (std::system("command -v tetgen > /dev/null 2>&1") != 0) GTEST_SKIP() << "no tetgen";
