@@ -113,6 +113,19 @@ double polytope_six_volume(const Polytope& polytope) {
 
 }  // namespace
 
+void add_tet(TetMesh& mesh, index_t a, index_t b, index_t c, index_t d) {
+  if (tet_volume(mesh.point(a), mesh.point(b), mesh.point(c), mesh.point(d)) < 0) std::swap(c, d);
+  mesh.tets.insert(mesh.tets.end(), {a, b, c, d});
+}
+
+double min_quality(const TetMesh& mesh) {
+  double q = 1;
+  for (index_t t = 0; t < mesh.nb_tets(); ++t) {
+    q = std::min(q, scaled_jacobian(CellType::Tet, mesh.points.data(), mesh.tet(t)));
+  }
+  return q;
+}
+
 TetMesh tetgen_mesh(const std::vector<Point>& points) {
   char dir[] = "/tmp/hexmerge-tetgen-XXXXXX";
   if (!mkdtemp(dir)) return {};

@@ -31,6 +31,12 @@ TetMesh tetgen_mesh(const std::vector<Point>& points);
 /// own way: 5 or 6 tets, diagonals as they come.
 TetMesh tetgen_lattice(int n, double jitter, unsigned seed);
 
+/// Appends tet (a, b, c, d) to the mesh, c and d swapped when needed to make it positive.
+void add_tet(TetMesh& mesh, index_t a, index_t b, index_t c, index_t d);
+
+/// The smallest scaled Jacobian of the mesh's tets (1 for none).
+double min_quality(const TetMesh& mesh);
+
 /// Swaps two vertices of every negatively oriented tet so that all have positive volume.
 void orient_positively(TetMesh& mesh);
 

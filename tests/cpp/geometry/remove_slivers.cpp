@@ -7,6 +7,7 @@
 #include <set>
 #include <vector>
 
+#include "fixtures.h"
 #include "hexmerge/core/error.h"
 #include "hexmerge/geometry/quality.h"
 #include "hexmerge/mesh/tet_topology.h"
@@ -14,18 +15,8 @@
 namespace hexmerge {
 namespace {
 
-// Adds tet (a, b, c, d), ordered to be positive.
-void add_tet(TetMesh& m, index_t a, index_t b, index_t c, index_t d) {
-  if (tet_volume(m.point(a), m.point(b), m.point(c), m.point(d)) < 0) std::swap(c, d);
-  m.tets.insert(m.tets.end(), {a, b, c, d});
-}
-
-double min_quality(const TetMesh& m) {
-  double q = 1;
-  for (index_t t = 0; t < m.nb_tets(); ++t)
-    q = std::min(q, scaled_jacobian(CellType::Tet, m.points.data(), m.tet(t)));
-  return q;
-}
+using test::add_tet;
+using test::min_quality;
 
 std::set<std::array<index_t, 3>> boundary_faces(const TetMesh& m) {
   const TetTopology topology(m);

@@ -5,24 +5,15 @@
 #include <algorithm>
 #include <vector>
 
+#include "fixtures.h"
 #include "hexmerge/core/error.h"
 #include "hexmerge/geometry/quality.h"
 
 namespace hexmerge {
 namespace {
 
-// Adds tet (a, b, c, d), ordered to be positive.
-void add_tet(TetMesh& m, index_t a, index_t b, index_t c, index_t d) {
-  if (tet_volume(m.point(a), m.point(b), m.point(c), m.point(d)) < 0) std::swap(c, d);
-  m.tets.insert(m.tets.end(), {a, b, c, d});
-}
-
-double min_quality(const TetMesh& m) {
-  double q = 1;
-  for (index_t t = 0; t < m.nb_tets(); ++t)
-    q = std::min(q, scaled_jacobian(CellType::Tet, m.points.data(), m.tet(t)));
-  return q;
-}
+using test::add_tet;
+using test::min_quality;
 
 // An octahedron's six corners around node 6, which sits close to corner 0: the four tets at
 // corner 0 are flat.
