@@ -520,8 +520,8 @@ samples_per_piece, classify_every_tet, nb_threads: see RegionsBySolidParameters.
 Returns (solids, report): solids int32 (M,), 0-based solid index in TopExp::MapShapes order
 (FreeCAD's Shape.Solids) or -1; report a dict of counts and phase_seconds.)doc");
   m.def("mesh_shape", &run_mesh_shape, py::arg("brep"), py::arg("size"),
-        py::arg("boundary_layers") = 1, py::arg("layer_thickness") = 0.5,
-        py::arg("lattice_margin") = 0.5, py::arg("surface_deflection") = 0.02,
+        py::arg("boundary_layers") = 1, py::arg("layer_thickness") = 0.3,
+        py::arg("lattice_margin") = 0.3, py::arg("surface_deflection") = 0.02,
         py::arg("frame") = "auto", py::arg("tetgen") = "tetgen", py::arg("work_directory") = "",
         R"doc(Lattice-seeded tets of a solid shape (BREP text) with OpenCASCADE and TetGen.
 

@@ -27,10 +27,10 @@ _MESH_TABLE: tuple[dict[str, Any], ...] = (
          label="Boundary layers",
          doc="Layers of points offset from the curved and unaligned faces along the inward "
          "normal, so that the boundary becomes prisms"),
-    dict(name="layer_thickness", type="float", default=0.5, unit="h", min=0.1, max=1.0, choices=[],
+    dict(name="layer_thickness", type="float", default=0.3, unit="h", min=0.1, max=1.0, choices=[],
          label="Layer thickness",
          doc="Thickness of one boundary layer, as a fraction of the target size h"),
-    dict(name="lattice_margin", type="float", default=0.5, unit="h", min=0.1, max=2.0, choices=[],
+    dict(name="lattice_margin", type="float", default=0.3, unit="h", min=0.1, max=2.0, choices=[],
          label="Lattice margin",
          doc="Lattice points nearer than this to a face off the lattice planes (or to the "
          "outermost boundary layer) are dropped; a fraction of h"),
@@ -157,8 +157,8 @@ def mesh_shape(
     size: float,
     *,
     boundary_layers: int = 1,
-    layer_thickness: float = 0.5,
-    lattice_margin: float = 0.5,
+    layer_thickness: float = 0.3,
+    lattice_margin: float = 0.3,
     surface_deflection: float = 0.02,
     frame: str = "auto",
     tetgen: str = "tetgen",
