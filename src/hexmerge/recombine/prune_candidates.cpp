@@ -4,7 +4,7 @@
 #include <array>
 #include <cstdint>
 
-#include "hexmerge/core/work_queue.h"
+#include "hexmerge/core/parallel.h"
 #include "hexmerge/mesh/cell_type.h"
 
 namespace hexmerge {
@@ -35,8 +35,9 @@ struct Side {
   bool exact = true;
 };
 
-// The quad faces of a candidate, in face order: their quads and sides.
+// The quad faces of a candidate, in face order: their keys, quads and sides.
 struct CandidateQuads {
+  std::array<QuadKey, 6> key;
   std::array<Quad, 6> quad;
   std::array<Side, 6> side;
   int count = 0;
@@ -50,6 +51,7 @@ CandidateQuads quads_of(const TetMesh& mesh, const TetTopology& topology, const 
   for (int f = 0; f < d.nb_faces; ++f) {
     if (d.face_size[f] != 4) continue;
     for (int i = 0; i < 4; ++i) quads_at[d.face[f][i]] |= static_cast<std::uint8_t>(1 << out.count);
+    out.key[out.count] = face_key(c, f);
     out.side[out.count].candidate = ci;
     ++out.count;
   }
@@ -99,26 +101,29 @@ CandidateQuads quads_of(const TetMesh& mesh, const TetTopology& topology, const 
 
 std::vector<Candidate> prune_unclosable(const TetMesh& mesh, const TetTopology& topology,
                                         const std::vector<Candidate>& candidates,
-                                        std::size_t& removed) {
-  const std::size_t n = candidates.size();
-  // Every quad face of every candidate (first: per candidate), its side, and how many quads
-  // have each smallest vertex.
-  std::vector<std::size_t> first(n + 1, 0);
-  std::vector<Quad> quads;
-  std::vector<Side> own;
-  std::vector<std::size_t> bucket(static_cast<std::size_t>(mesh.nb_vertices()) + 1, 0);
-  for (std::size_t ci = 0; ci < n; ++ci) {
-    const Candidate& c = candidates[ci];
-    const CellDescriptor& d = descriptor(c.type);
-    first[ci] = quads.size();
-    if (d.nb_quad_faces == 0) continue;
-    const CandidateQuads cq = quads_of(mesh, topology, c, static_cast<index_t>(ci));
-    quads.insert(quads.end(), cq.quad.begin(), cq.quad.begin() + cq.count);
-    own.insert(own.end(), cq.side.begin(), cq.side.begin() + cq.count);
-    for (int f = 0; f < d.nb_faces; ++f)
-      if (d.face_size[f] == 4) ++bucket[face_key(c, f)[0] + 1];
-  }
-  first[n] = quads.size();
+                                        std::size_t& removed, int threads) {
+  const index_t n = static_cast<index_t>(candidates.size());
+  constexpr index_t kChunk = 4096;
+  auto go_on = [](double) { return true; };
+  // Every quad face of every candidate (first: per candidate): its key, quad and side.
+  std::vector<std::size_t> first(static_cast<std::size_t>(n) + 1, 0);
+  for (index_t ci = 0; ci < n; ++ci)
+    first[ci + 1] = first[ci] + descriptor(candidates[ci].type).nb_quad_faces;
+  const std::size_t nb_quads = first[n];
+  std::vector<Quad> quads(nb_quads);
+  std::vector<Side> own(nb_quads);
+  std::vector<QuadKey> keys(nb_quads);
+  parallel_chunks(
+      n, kChunk, threads,
+      [&](index_t, index_t begin, index_t end) {
+        for (index_t ci = begin; ci < end; ++ci) {
+          const CandidateQuads cq = quads_of(mesh, topology, candidates[ci], ci);
+          std::copy_n(cq.key.begin(), cq.count, keys.begin() + first[ci]);
+          std::copy_n(cq.quad.begin(), cq.count, quads.begin() + first[ci]);
+          std::copy_n(cq.side.begin(), cq.count, own.begin() + first[ci]);
+        }
+      },
+      go_on);
 
   // The quads grouped by key: a counting sort on the smallest vertex, then each bucket sorted by
   // the other three (and the quad, so a group lists its candidates in id order).
@@ -127,36 +132,54 @@ std::vector<Candidate> prune_unclosable(const TetMesh& mesh, const TetTopology& 
     index_t quad;
     bool operator<(const Entry& o) const { return rest != o.rest ? rest < o.rest : quad < o.quad; }
   };
-  for (std::size_t v = 0; v + 1 < bucket.size(); ++v) bucket[v + 1] += bucket[v];
-  std::vector<Entry> entries(quads.size());
+  const index_t nv = mesh.nb_vertices();
+  std::vector<std::size_t> bucket(static_cast<std::size_t>(nv) + 1, 0);
+  for (const QuadKey& key : keys) ++bucket[key[0] + 1];
+  for (index_t v = 0; v < nv; ++v) bucket[v + 1] += bucket[v];
+  std::vector<Entry> entries(nb_quads);
   {
     std::vector<std::size_t> fill(bucket.begin(), bucket.end() - 1);
-    for (std::size_t ci = 0; ci < n; ++ci) {
-      const Candidate& c = candidates[ci];
-      const CellDescriptor& d = descriptor(c.type);
-      std::size_t k = first[ci];
-      for (int f = 0; f < d.nb_faces; ++f) {
-        if (d.face_size[f] != 4) continue;
-        const QuadKey key = face_key(c, f);
-        entries[fill[key[0]]++] = {{key[1], key[2], key[3]}, static_cast<index_t>(k++)};
-      }
-    }
+    for (std::size_t k = 0; k < nb_quads; ++k)
+      entries[fill[keys[k][0]]++] = {{keys[k][1], keys[k][2], keys[k][3]}, static_cast<index_t>(k)};
   }
-  // sides[group_start[g] .. group_start[g + 1]): the candidates with the quad of group g.
-  std::vector<Side> sides(quads.size());
-  std::vector<index_t> group_start;
-  for (std::size_t v = 0; v + 1 < bucket.size(); ++v) {
-    const auto begin = entries.begin() + static_cast<std::ptrdiff_t>(bucket[v]);
-    const auto end = entries.begin() + static_cast<std::ptrdiff_t>(bucket[v + 1]);
-    std::sort(begin, end);
-    for (auto e = begin; e != end; ++e) {
-      const std::size_t j = static_cast<std::size_t>(e - entries.begin());
-      if (e == begin || e->rest != (e - 1)->rest) group_start.push_back(static_cast<index_t>(j));
-      quads[e->quad].group = static_cast<index_t>(group_start.size() - 1);
-      sides[j] = own[e->quad];
-    }
-  }
-  group_start.push_back(static_cast<index_t>(quads.size()));
+  std::vector<QuadKey>().swap(keys);
+  // Groups numbered in key order: each chunk of buckets sorts and counts its own, then numbers
+  // them from where the chunks before it end. sides[group_start[g] .. group_start[g + 1]): the
+  // candidates with the quad of group g, one side each (a cell has no two faces alike).
+  auto new_group = [&](index_t v, std::size_t j) {
+    return j == bucket[v] || entries[j].rest != entries[j - 1].rest;
+  };
+  std::vector<index_t> chunk_groups((nv + kChunk - 1) / kChunk + 1, 0);
+  parallel_chunks(
+      nv, kChunk, threads,
+      [&](index_t chunk, index_t begin, index_t end) {
+        for (index_t v = begin; v < end; ++v) {
+          std::sort(entries.begin() + static_cast<std::ptrdiff_t>(bucket[v]),
+                    entries.begin() + static_cast<std::ptrdiff_t>(bucket[v + 1]));
+          for (std::size_t j = bucket[v]; j < bucket[v + 1]; ++j)
+            chunk_groups[chunk + 1] += new_group(v, j);
+        }
+      },
+      go_on);
+  for (std::size_t c = 0; c + 1 < chunk_groups.size(); ++c) chunk_groups[c + 1] += chunk_groups[c];
+  std::vector<index_t> group_start(chunk_groups.back() + 1);
+  std::vector<Side> sides(nb_quads);
+  std::vector<index_t> side_quad(nb_quads);  // the quad of each side
+  parallel_chunks(
+      nv, kChunk, threads,
+      [&](index_t chunk, index_t begin, index_t end) {
+        index_t g = chunk_groups[chunk];
+        for (index_t v = begin; v < end; ++v) {
+          for (std::size_t j = bucket[v]; j < bucket[v + 1]; ++j) {
+            if (new_group(v, j)) group_start[g++] = static_cast<index_t>(j);
+            quads[entries[j].quad].group = g - 1;
+            sides[j] = own[entries[j].quad];
+            side_quad[j] = entries[j].quad;
+          }
+        }
+      },
+      go_on);
+  group_start.back() = static_cast<index_t>(nb_quads);
   std::vector<Entry>().swap(entries);
   std::vector<Side>().swap(own);
   std::vector<std::size_t>().swap(bucket);
@@ -179,20 +202,43 @@ std::vector<Candidate> prune_unclosable(const TetMesh& mesh, const TetTopology& 
     }
     return false;
   };
-  WorkQueue work(n);
-  for (std::size_t ci = 0; ci < n; ++ci)
-    if (first[ci + 1] > first[ci]) work.push(static_cast<index_t>(ci));
-  while (!work.empty()) {
-    const index_t ci = work.pop();
-    if (!viable[ci]) continue;
-    bool ok = true;
-    for (std::size_t k = first[ci]; k < first[ci + 1] && ok; ++k) ok = closed(ci, quads[k]);
-    if (ok) continue;
-    viable[ci] = 0;
-    // Whoever shared a quad with it may have counted on it.
+  auto fails = [&](index_t ci) {
     for (std::size_t k = first[ci]; k < first[ci + 1]; ++k)
-      for (index_t j = group_start[quads[k].group]; j < group_start[quads[k].group + 1]; ++j)
-        if (viable[sides[j].candidate]) work.push(sides[j].candidate);
+      if (!closed(ci, quads[k])) return true;
+    return false;
+  };
+  // The first look at every candidate, against all of them, in parallel. Then each candidate
+  // that goes is followed up: a candidate that still counts on it across a quad has that quad
+  // looked at again, and goes too when nothing else closes it.
+  std::vector<char> gone(n, 0);
+  parallel_chunks(
+      n, kChunk, threads,
+      [&](index_t, index_t begin, index_t end) {
+        for (index_t ci = begin; ci < end; ++ci) gone[ci] = fails(ci);
+      },
+      go_on);
+  std::vector<index_t> to_follow;
+  for (index_t ci = 0; ci < n; ++ci) {
+    if (!gone[ci]) continue;
+    viable[ci] = 0;
+    to_follow.push_back(ci);
+  }
+  std::vector<char>().swap(gone);
+  while (!to_follow.empty()) {
+    const index_t ci = to_follow.back();
+    to_follow.pop_back();
+    for (std::size_t k = first[ci]; k < first[ci + 1]; ++k) {
+      const index_t begin = group_start[quads[k].group], end = group_start[quads[k].group + 1];
+      const Side* mine = &sides[begin];
+      while (mine->candidate != ci) ++mine;
+      for (index_t j = begin; j < end; ++j) {
+        const index_t p = sides[j].candidate;
+        const Quad& q = quads[side_quad[j]];
+        if (!viable[p] || q.open || !across(q, *mine) || closed(p, q)) continue;
+        viable[p] = 0;
+        to_follow.push_back(p);
+      }
+    }
   }
   std::vector<Candidate> kept;
   kept.reserve(static_cast<std::size_t>(std::count(viable.begin(), viable.end(), 1)));
