@@ -6,6 +6,7 @@
 
 #include "hexmerge/core/parallel.h"
 #include "hexmerge/mesh/cell_type.h"
+#include "hexmerge/mesh/spatial_order.h"
 
 namespace hexmerge {
 namespace {
@@ -30,7 +31,7 @@ struct Quad {
 // reading the candidate, unless it has more than two such triangles or a triangle of the quad
 // inside it (flat tets): then `exact` is false and only its tets tell.
 struct Side {
-  index_t candidate;
+  index_t candidate;  // local id (prune_unclosable)
   std::array<index_t, 2> front{NO_CELL, NO_CELL};
   bool exact = true;
 };
@@ -105,10 +106,34 @@ std::vector<Candidate> prune_unclosable(const TetMesh& mesh, const TetTopology& 
   const index_t n = static_cast<index_t>(candidates.size());
   constexpr index_t kChunk = 4096;
   auto go_on = [](double) { return true; };
-  // Every quad face of every candidate (first: per candidate): its key, quad and side.
+  // The work runs on local ids: the candidates in the order of their first tet along a
+  // space-filling curve (spatial_order.h), by_local[l] being the candidate id, and the vertices
+  // ranked in the order that curve first meets them. Candidates close in space, which share
+  // quads and tets, then get close ids, and so do their quads' groups: on large meshes the
+  // walks below stay in cache.
+  const index_t nv = mesh.nb_vertices();
+  std::vector<index_t> by_local(n);
+  std::vector<index_t> vertex_rank(nv, NO_INDEX);
+  {
+    const std::vector<index_t> order = spatial_order(mesh);
+    std::vector<index_t> rank(order.size());
+    index_t next = 0;
+    for (std::size_t i = 0; i < order.size(); ++i) {
+      rank[order[i]] = static_cast<index_t>(i);
+      for (int k = 0; k < 4; ++k) {
+        const index_t v = mesh.tet(order[i])[k];
+        if (vertex_rank[v] == NO_INDEX) vertex_rank[v] = next++;
+      }
+    }
+    std::vector<index_t> start(order.size() + 1, 0);  // first local id per rank of first tet
+    for (const Candidate& c : candidates) ++start[rank[c.tets[0]] + 1];
+    for (std::size_t i = 0; i < order.size(); ++i) start[i + 1] += start[i];
+    for (index_t ci = 0; ci < n; ++ci) by_local[start[rank[candidates[ci].tets[0]]]++] = ci;
+  }
+  // Every quad face of every candidate (first: per local id): its key, quad and side.
   std::vector<std::size_t> first(static_cast<std::size_t>(n) + 1, 0);
-  for (index_t ci = 0; ci < n; ++ci)
-    first[ci + 1] = first[ci] + descriptor(candidates[ci].type).nb_quad_faces;
+  for (index_t l = 0; l < n; ++l)
+    first[l + 1] = first[l] + descriptor(candidates[by_local[l]].type).nb_quad_faces;
   const std::size_t nb_quads = first[n];
   std::vector<Quad> quads(nb_quads);
   std::vector<Side> own(nb_quads);
@@ -116,31 +141,36 @@ std::vector<Candidate> prune_unclosable(const TetMesh& mesh, const TetTopology& 
   parallel_chunks(
       n, kChunk, threads,
       [&](index_t, index_t begin, index_t end) {
-        for (index_t ci = begin; ci < end; ++ci) {
-          const CandidateQuads cq = quads_of(mesh, topology, candidates[ci], ci);
-          std::copy_n(cq.key.begin(), cq.count, keys.begin() + first[ci]);
-          std::copy_n(cq.quad.begin(), cq.count, quads.begin() + first[ci]);
-          std::copy_n(cq.side.begin(), cq.count, own.begin() + first[ci]);
+        for (index_t l = begin; l < end; ++l) {
+          if (l + 8 < end) {  // local order jumps between the candidates' runs: fetch ahead
+            const char* ahead = reinterpret_cast<const char*>(&candidates[by_local[l + 8]]);
+            __builtin_prefetch(ahead);
+            __builtin_prefetch(ahead + 64);
+          }
+          const CandidateQuads cq = quads_of(mesh, topology, candidates[by_local[l]], l);
+          std::copy_n(cq.key.begin(), cq.count, keys.begin() + first[l]);
+          std::copy_n(cq.quad.begin(), cq.count, quads.begin() + first[l]);
+          std::copy_n(cq.side.begin(), cq.count, own.begin() + first[l]);
         }
       },
       go_on);
 
-  // The quads grouped by key: a counting sort on the smallest vertex, then each bucket sorted by
-  // the other three (and the quad, so a group lists its candidates in id order).
+  // The quads grouped by key: a counting sort on the rank of the smallest vertex, then each
+  // bucket sorted by the other three (and the quad).
   struct Entry {
     std::array<index_t, 3> rest;
     index_t quad;
     bool operator<(const Entry& o) const { return rest != o.rest ? rest < o.rest : quad < o.quad; }
   };
-  const index_t nv = mesh.nb_vertices();
   std::vector<std::size_t> bucket(static_cast<std::size_t>(nv) + 1, 0);
-  for (const QuadKey& key : keys) ++bucket[key[0] + 1];
+  for (const QuadKey& key : keys) ++bucket[vertex_rank[key[0]] + 1];
   for (index_t v = 0; v < nv; ++v) bucket[v + 1] += bucket[v];
   std::vector<Entry> entries(nb_quads);
   {
     std::vector<std::size_t> fill(bucket.begin(), bucket.end() - 1);
     for (std::size_t k = 0; k < nb_quads; ++k)
-      entries[fill[keys[k][0]]++] = {{keys[k][1], keys[k][2], keys[k][3]}, static_cast<index_t>(k)};
+      entries[fill[vertex_rank[keys[k][0]]]++] = {{keys[k][1], keys[k][2], keys[k][3]},
+                                                  static_cast<index_t>(k)};
   }
   std::vector<QuadKey>().swap(keys);
   // Groups numbered in key order: each chunk of buckets sorts and counts its own, then numbers
@@ -184,27 +214,28 @@ std::vector<Candidate> prune_unclosable(const TetMesh& mesh, const TetTopology& 
   std::vector<Side>().swap(own);
   std::vector<std::size_t>().swap(bucket);
 
-  std::vector<char> viable(n, 1);
+  std::vector<char> viable(n, 1);  // by local id
   // Whether the candidate of `s` holds the tets behind q: it is on the quad's other side.
   auto across = [&](const Quad& q, const Side& s) {
     for (int i = 0; i < std::min<int>(q.nb_behind, 2); ++i) {
       const index_t b = q.behind[i];
-      if (s.exact ? b != s.front[0] && b != s.front[1] : !holds(candidates[s.candidate], b))
+      if (s.exact ? b != s.front[0] && b != s.front[1]
+                  : !holds(candidates[by_local[s.candidate]], b))
         return false;
     }
     return true;
   };
-  auto closed = [&](std::size_t ci, const Quad& q) {
+  auto closed = [&](std::size_t l, const Quad& q) {
     if (q.open) return !q.inner;  // on the boundary, unless half of it is inside
     for (index_t j = group_start[q.group]; j < group_start[q.group + 1]; ++j) {
       const Side& s = sides[j];
-      if (s.candidate != ci && viable[s.candidate] && across(q, s)) return true;
+      if (s.candidate != l && viable[s.candidate] && across(q, s)) return true;
     }
     return false;
   };
-  auto fails = [&](index_t ci) {
-    for (std::size_t k = first[ci]; k < first[ci + 1]; ++k)
-      if (!closed(ci, quads[k])) return true;
+  auto fails = [&](index_t l) {
+    for (std::size_t k = first[l]; k < first[l + 1]; ++k)
+      if (!closed(l, quads[k])) return true;
     return false;
   };
   // The first look at every candidate, against all of them, in parallel. Then each candidate
@@ -214,23 +245,23 @@ std::vector<Candidate> prune_unclosable(const TetMesh& mesh, const TetTopology& 
   parallel_chunks(
       n, kChunk, threads,
       [&](index_t, index_t begin, index_t end) {
-        for (index_t ci = begin; ci < end; ++ci) gone[ci] = fails(ci);
+        for (index_t l = begin; l < end; ++l) gone[l] = fails(l);
       },
       go_on);
   std::vector<index_t> to_follow;
-  for (index_t ci = 0; ci < n; ++ci) {
-    if (!gone[ci]) continue;
-    viable[ci] = 0;
-    to_follow.push_back(ci);
+  for (index_t l = 0; l < n; ++l) {
+    if (!gone[l]) continue;
+    viable[l] = 0;
+    to_follow.push_back(l);
   }
   std::vector<char>().swap(gone);
   while (!to_follow.empty()) {
-    const index_t ci = to_follow.back();
+    const index_t l = to_follow.back();
     to_follow.pop_back();
-    for (std::size_t k = first[ci]; k < first[ci + 1]; ++k) {
+    for (std::size_t k = first[l]; k < first[l + 1]; ++k) {
       const index_t begin = group_start[quads[k].group], end = group_start[quads[k].group + 1];
       const Side* mine = &sides[begin];
-      while (mine->candidate != ci) ++mine;
+      while (mine->candidate != l) ++mine;
       for (index_t j = begin; j < end; ++j) {
         const index_t p = sides[j].candidate;
         const Quad& q = quads[side_quad[j]];
@@ -240,10 +271,12 @@ std::vector<Candidate> prune_unclosable(const TetMesh& mesh, const TetTopology& 
       }
     }
   }
+  std::vector<char> keep(n, 0);
+  for (index_t l = 0; l < n; ++l) keep[by_local[l]] = viable[l];
   std::vector<Candidate> kept;
-  kept.reserve(static_cast<std::size_t>(std::count(viable.begin(), viable.end(), 1)));
-  for (std::size_t ci = 0; ci < n; ++ci)
-    if (viable[ci]) kept.push_back(candidates[ci]);
+  kept.reserve(static_cast<std::size_t>(std::count(keep.begin(), keep.end(), 1)));
+  for (index_t ci = 0; ci < n; ++ci)
+    if (keep[ci]) kept.push_back(candidates[ci]);
   removed = n - kept.size();
   return kept;
 }
