@@ -148,14 +148,6 @@ void expect_same_as_sweeps(const TetMesh& mesh, const std::vector<Candidate>& al
   }
 }
 
-AcceptanceCriteria permissive() {
-  AcceptanceCriteria criteria;
-  criteria.min_scaled_jacobian = 0.05;
-  criteria.min_dihedral_angle = 120.0;
-  criteria.min_boundary_dihedral_angle = 120.0;
-  criteria.max_face_angle = 175.0;
-  return criteria;
-}
 
 TEST(PruneUnclosable, KeepsEveryCellOfAGrid) {
   // Every quad face of a grid cell is on the boundary or shared with the next cell.
@@ -224,8 +216,8 @@ TEST(PruneUnclosable, KeepsWhatTheDefinitionKeepsOnPerturbedGrids) {
         SCOPED_TRACE(testing::Message() << "kind " << kind << " trial " << trial
                                         << (exhaustive ? " exhaustive" : " programs"));
         const std::vector<Candidate> all =
-            exhaustive ? find_candidates_exhaustive(mesh, topology, permissive(), 1)
-                       : find_candidates(mesh, topology, permissive(), 1);
+            exhaustive ? find_candidates_exhaustive(mesh, topology, test::permissive_criteria(), 1)
+                       : find_candidates(mesh, topology, test::permissive_criteria(), 1);
         expect_same_as_sweeps(mesh, all);
         std::size_t removed = 0;
         kept_total += prune_unclosable(mesh, topology, all, removed).size();
@@ -256,7 +248,7 @@ TEST(PruneUnclosable, KeepsWhatTheDefinitionKeepsWithAFlatTetOnAQuad) {
     TetMesh mesh = test::make_tet_mesh(p, with_cap);
     orient_positively(mesh);
     const TetTopology topology(mesh);
-    const std::vector<Candidate> all = find_candidates_exhaustive(mesh, topology, permissive(), 1);
+    const std::vector<Candidate> all = find_candidates_exhaustive(mesh, topology, test::permissive_criteria(), 1);
     ASSERT_GE(count_type(all, CellType::Hex), 2u);  // with and without the flat tet
     expect_same_as_sweeps(mesh, all);
   }
