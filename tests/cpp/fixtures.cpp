@@ -447,4 +447,25 @@ double total_volume(const TetMesh& mesh) {
   return v;
 }
 
+namespace {
+
+// AcceptanceCriteria and RecombineParameters name the thresholds alike.
+template <class Thresholds>
+Thresholds permissive_thresholds() {
+  Thresholds t;
+  t.min_scaled_jacobian = 0.05;
+  t.min_dihedral_angle = 120.0;
+  t.min_boundary_dihedral_angle = 120.0;
+  t.max_face_angle = 175.0;
+  return t;
+}
+
+}  // namespace
+
+AcceptanceCriteria permissive_criteria() { return permissive_thresholds<AcceptanceCriteria>(); }
+
+RecombineParameters permissive_parameters() {
+  return permissive_thresholds<RecombineParameters>();
+}
+
 }  // namespace hexmerge::test

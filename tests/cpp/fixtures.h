@@ -12,6 +12,8 @@
 
 #include "hexmerge/core/index.h"
 #include "hexmerge/mesh/tet_mesh.h"
+#include "hexmerge/recombine/find_candidates.h"
+#include "hexmerge/recombine/parameters.h"
 
 namespace hexmerge::test {
 
@@ -105,5 +107,11 @@ void random_perturbation(TetMesh& mesh, std::mt19937& rng, double amplitude);
 
 /// Sum of the tets' signed volumes.
 double total_volume(const TetMesh& mesh);
+
+/// Candidate thresholds loose enough for the skewed cells of random affine maps and
+/// perturbations (scaled Jacobian 0.05, dihedral angles 120, face angle 175).
+AcceptanceCriteria permissive_criteria();
+/// The engine's parameters with those thresholds.
+RecombineParameters permissive_parameters();
 
 }  // namespace hexmerge::test

@@ -3,125 +3,280 @@
 #include <algorithm>
 #include <array>
 #include <cstdint>
-#include <deque>
-#include <unordered_map>
 
+#include "hexmerge/core/parallel.h"
 #include "hexmerge/mesh/cell_type.h"
+#include "hexmerge/mesh/spatial_order.h"
 
 namespace hexmerge {
 namespace {
 
 using QuadKey = FaceKey;
 
-struct QuadKeyHash {
-  std::size_t operator()(const QuadKey& k) const {
-    std::uint64_t h = 1469598103934665603ULL;
-    for (index_t v : k) h = (h ^ v) * 1099511628211ULL;
-    return static_cast<std::size_t>(h);
-  }
-};
-
 bool holds(const Candidate& c, index_t t) {
   return std::binary_search(c.tets.begin(), c.tets.begin() + c.nb_tets, t);
 }
 
-// A quad face of a candidate: its key and the tets across its triangles.
+// A quad face of a candidate: the tets across its triangles, and its key's group of sides.
 struct Quad {
-  QuadKey key;
   std::array<index_t, 2> behind{NO_CELL, NO_CELL};
-  int nb_behind = 0;   // triangles found (2 for a proper quad)
-  bool open = false;   // some triangle on the boundary
-  bool inner = false;  // some triangle with a tet behind
+  index_t group = 0;           // index into group_start
+  std::uint8_t nb_behind = 0;  // triangles found (2 for a proper quad)
+  bool open = false;           // some triangle on the boundary
+  bool inner = false;          // some triangle with a tet behind
 };
 
-Quad quad_of(const TetMesh& mesh, const TetTopology& topology, const Candidate& c, int f) {
-  Quad q;
-  q.key = face_key(c, f);
+// A candidate with a given quad face, as the candidates across it see it: whether it holds a
+// tet that touches the quad. Its tets on the quad's triangles (front) answer that without
+// reading the candidate, unless it has more than two such triangles or a triangle of the quad
+// inside it (flat tets): then `exact` is false and only its tets tell.
+struct Side {
+  index_t candidate;  // local id (prune_unclosable)
+  std::array<index_t, 2> front{NO_CELL, NO_CELL};
+  bool exact = true;
+};
+
+// The quad faces of a candidate, in face order: their keys, quads and sides.
+struct CandidateQuads {
+  std::array<QuadKey, 6> key;
+  std::array<Quad, 6> quad;
+  std::array<Side, 6> side;
+  int count = 0;
+};
+
+CandidateQuads quads_of(const TetMesh& mesh, const TetTopology& topology, const Candidate& c,
+                        index_t ci) {
+  const CellDescriptor& d = descriptor(c.type);
+  CandidateQuads out;
+  std::array<std::uint8_t, 8> quads_at{};  // per local vertex: bit k for the k-th quad face
+  for (int f = 0; f < d.nb_faces; ++f) {
+    if (d.face_size[f] != 4) continue;
+    for (int i = 0; i < 4; ++i) quads_at[d.face[f][i]] |= static_cast<std::uint8_t>(1 << out.count);
+    out.key[out.count] = face_key(c, f);
+    out.side[out.count].candidate = ci;
+    ++out.count;
+  }
+  std::array<int, 6> nb_front{};
   for (int i = 0; i < c.nb_tets; ++i) {
     const index_t t = c.tets[i];
     const index_t* v = mesh.tet(t);
+    std::array<std::uint8_t, 4> at{};
+    for (int k = 0; k < 4; ++k)
+      for (int j = 0; j < d.nb_vertices; ++j)
+        if (c.vertices[j] == v[k]) at[k] |= quads_at[j];
     for (int lf = 0; lf < 4; ++lf) {
-      bool in_quad = true;
-      for (int k = 0; k < 4 && in_quad; ++k)
-        if (k != lf) in_quad = std::binary_search(q.key.begin(), q.key.end(), v[k]);
-      if (!in_quad) continue;
+      // The quads holding the triangle opposite vertex lf.
+      unsigned in = 0xff;
+      for (int k = 0; k < 4; ++k)
+        if (k != lf) in &= at[k];
+      if (in == 0) continue;
       const index_t n = topology.neighbor(t, lf);
-      if (n != NO_CELL && holds(c, n)) continue;  // a face inside the cell (flat tets)
-      if (n == NO_CELL)
-        q.open = true;
-      else {
-        q.inner = true;
-        if (q.nb_behind < 2) q.behind[q.nb_behind] = n;
+      const bool inside = n != NO_CELL && holds(c, n);  // a face inside the cell (flat tets)
+      for (int k = 0; k < out.count; ++k) {
+        if (!(in & (1u << k))) continue;
+        Side& s = out.side[k];
+        if (inside) {
+          s.exact = false;
+          continue;
+        }
+        Quad& q = out.quad[k];
+        if (n == NO_CELL)
+          q.open = true;
+        else {
+          q.inner = true;
+          if (q.nb_behind < 2) q.behind[q.nb_behind] = n;
+        }
+        ++q.nb_behind;
+        if (nb_front[k] < 2)
+          s.front[nb_front[k]] = t;
+        else
+          s.exact = false;
+        ++nb_front[k];
       }
-      ++q.nb_behind;
     }
   }
-  return q;
+  return out;
 }
 
 }  // namespace
 
 std::vector<Candidate> prune_unclosable(const TetMesh& mesh, const TetTopology& topology,
                                         const std::vector<Candidate>& candidates,
-                                        std::size_t& removed) {
-  const std::size_t n = candidates.size();
-  // Every quad face of every candidate, and the candidates per quad key.
-  std::vector<std::size_t> first(n + 1, 0);
-  std::vector<Quad> quads;
-  std::unordered_map<QuadKey, std::vector<index_t>, QuadKeyHash> by_key;
-  for (std::size_t ci = 0; ci < n; ++ci) {
-    const Candidate& c = candidates[ci];
-    const CellDescriptor& d = descriptor(c.type);
-    first[ci] = quads.size();
-    for (int f = 0; f < d.nb_faces; ++f) {
-      if (d.face_size[f] != 4) continue;
-      quads.push_back(quad_of(mesh, topology, c, f));
-      by_key[quads.back().key].push_back(static_cast<index_t>(ci));
+                                        std::size_t& removed, int threads) {
+  const index_t n = static_cast<index_t>(candidates.size());
+  constexpr index_t kChunk = 4096;
+  auto go_on = [](double) { return true; };
+  // The work runs on local ids: the candidates in the order of their first tet along a
+  // space-filling curve (spatial_order.h), by_local[l] being the candidate id, and the vertices
+  // ranked in the order that curve first meets them. Candidates close in space, which share
+  // quads and tets, then get close ids, and so do their quads' groups: on large meshes the
+  // walks below stay in cache.
+  const index_t nv = mesh.nb_vertices();
+  std::vector<index_t> by_local(n);
+  std::vector<index_t> vertex_rank(nv, NO_INDEX);
+  {
+    const std::vector<index_t> order = spatial_order(mesh);
+    std::vector<index_t> rank(order.size());
+    index_t next = 0;
+    for (std::size_t i = 0; i < order.size(); ++i) {
+      rank[order[i]] = static_cast<index_t>(i);
+      for (int k = 0; k < 4; ++k) {
+        const index_t v = mesh.tet(order[i])[k];
+        if (vertex_rank[v] == NO_INDEX) vertex_rank[v] = next++;
+      }
     }
+    std::vector<index_t> start(order.size() + 1, 0);  // first local id per rank of first tet
+    for (const Candidate& c : candidates) ++start[rank[c.tets[0]] + 1];
+    for (std::size_t i = 0; i < order.size(); ++i) start[i + 1] += start[i];
+    for (index_t ci = 0; ci < n; ++ci) by_local[start[rank[candidates[ci].tets[0]]]++] = ci;
   }
-  first[n] = quads.size();
+  // Every quad face of every candidate (first: per local id): its key, quad and side.
+  std::vector<std::size_t> first(static_cast<std::size_t>(n) + 1, 0);
+  for (index_t l = 0; l < n; ++l)
+    first[l + 1] = first[l] + descriptor(candidates[by_local[l]].type).nb_quad_faces;
+  const std::size_t nb_quads = first[n];
+  std::vector<Quad> quads(nb_quads);
+  std::vector<Side> own(nb_quads);
+  std::vector<QuadKey> keys(nb_quads);
+  parallel_chunks(
+      n, kChunk, threads,
+      [&](index_t, index_t begin, index_t end) {
+        for (index_t l = begin; l < end; ++l) {
+          if (l + 8 < end) {  // local order jumps between the candidates' runs: fetch ahead
+            const char* ahead = reinterpret_cast<const char*>(&candidates[by_local[l + 8]]);
+            __builtin_prefetch(ahead);
+            __builtin_prefetch(ahead + 64);
+          }
+          const CandidateQuads cq = quads_of(mesh, topology, candidates[by_local[l]], l);
+          std::copy_n(cq.key.begin(), cq.count, keys.begin() + first[l]);
+          std::copy_n(cq.quad.begin(), cq.count, quads.begin() + first[l]);
+          std::copy_n(cq.side.begin(), cq.count, own.begin() + first[l]);
+        }
+      },
+      go_on);
 
-  std::vector<char> viable(n, 1);
-  auto closed = [&](std::size_t ci, const Quad& q) {
+  // The quads grouped by key: a counting sort on the rank of the smallest vertex, then each
+  // bucket sorted by the other three (and the quad).
+  struct Entry {
+    std::array<index_t, 3> rest;
+    index_t quad;
+    bool operator<(const Entry& o) const { return rest != o.rest ? rest < o.rest : quad < o.quad; }
+  };
+  std::vector<std::size_t> bucket(static_cast<std::size_t>(nv) + 1, 0);
+  for (const QuadKey& key : keys) ++bucket[vertex_rank[key[0]] + 1];
+  for (index_t v = 0; v < nv; ++v) bucket[v + 1] += bucket[v];
+  std::vector<Entry> entries(nb_quads);
+  {
+    std::vector<std::size_t> fill(bucket.begin(), bucket.end() - 1);
+    for (std::size_t k = 0; k < nb_quads; ++k)
+      entries[fill[vertex_rank[keys[k][0]]]++] = {{keys[k][1], keys[k][2], keys[k][3]},
+                                                  static_cast<index_t>(k)};
+  }
+  std::vector<QuadKey>().swap(keys);
+  // Groups numbered in key order: each chunk of buckets sorts and counts its own, then numbers
+  // them from where the chunks before it end. sides[group_start[g] .. group_start[g + 1]): the
+  // candidates with the quad of group g, one side each (a cell has no two faces alike).
+  auto new_group = [&](index_t v, std::size_t j) {
+    return j == bucket[v] || entries[j].rest != entries[j - 1].rest;
+  };
+  std::vector<index_t> chunk_groups((nv + kChunk - 1) / kChunk + 1, 0);
+  parallel_chunks(
+      nv, kChunk, threads,
+      [&](index_t chunk, index_t begin, index_t end) {
+        for (index_t v = begin; v < end; ++v) {
+          std::sort(entries.begin() + static_cast<std::ptrdiff_t>(bucket[v]),
+                    entries.begin() + static_cast<std::ptrdiff_t>(bucket[v + 1]));
+          for (std::size_t j = bucket[v]; j < bucket[v + 1]; ++j)
+            chunk_groups[chunk + 1] += new_group(v, j);
+        }
+      },
+      go_on);
+  for (std::size_t c = 0; c + 1 < chunk_groups.size(); ++c) chunk_groups[c + 1] += chunk_groups[c];
+  std::vector<index_t> group_start(chunk_groups.back() + 1);
+  std::vector<Side> sides(nb_quads);
+  std::vector<index_t> side_quad(nb_quads);  // the quad of each side
+  parallel_chunks(
+      nv, kChunk, threads,
+      [&](index_t chunk, index_t begin, index_t end) {
+        index_t g = chunk_groups[chunk];
+        for (index_t v = begin; v < end; ++v) {
+          for (std::size_t j = bucket[v]; j < bucket[v + 1]; ++j) {
+            if (new_group(v, j)) group_start[g++] = static_cast<index_t>(j);
+            quads[entries[j].quad].group = g - 1;
+            sides[j] = own[entries[j].quad];
+            side_quad[j] = entries[j].quad;
+          }
+        }
+      },
+      go_on);
+  group_start.back() = static_cast<index_t>(nb_quads);
+  std::vector<Entry>().swap(entries);
+  std::vector<Side>().swap(own);
+  std::vector<std::size_t>().swap(bucket);
+
+  std::vector<char> viable(n, 1);  // by local id
+  // Whether the candidate of `s` holds the tets behind q: it is on the quad's other side.
+  auto across = [&](const Quad& q, const Side& s) {
+    for (int i = 0; i < std::min<int>(q.nb_behind, 2); ++i) {
+      const index_t b = q.behind[i];
+      if (s.exact ? b != s.front[0] && b != s.front[1]
+                  : !holds(candidates[by_local[s.candidate]], b))
+        return false;
+    }
+    return true;
+  };
+  auto closed = [&](std::size_t l, const Quad& q) {
     if (q.open) return !q.inner;  // on the boundary, unless half of it is inside
-    for (index_t p : by_key[q.key]) {
-      if (p == ci || !viable[p]) continue;
-      const Candidate& other = candidates[p];
-      bool across = true;  // the partner holds the tets behind: it is on the other side
-      for (int i = 0; i < std::min(q.nb_behind, 2) && across; ++i)
-        across = holds(other, q.behind[i]);
-      if (across) return true;
+    for (index_t j = group_start[q.group]; j < group_start[q.group + 1]; ++j) {
+      const Side& s = sides[j];
+      if (s.candidate != l && viable[s.candidate] && across(q, s)) return true;
     }
     return false;
   };
-  std::deque<index_t> work;
-  std::vector<char> queued(n, 0);
-  for (std::size_t ci = 0; ci < n; ++ci)
-    if (first[ci + 1] > first[ci]) {
-      work.push_back(static_cast<index_t>(ci));
-      queued[ci] = 1;
-    }
-  while (!work.empty()) {
-    const index_t ci = work.front();
-    work.pop_front();
-    queued[ci] = 0;
-    if (!viable[ci]) continue;
-    bool ok = true;
-    for (std::size_t k = first[ci]; k < first[ci + 1] && ok; ++k) ok = closed(ci, quads[k]);
-    if (ok) continue;
-    viable[ci] = 0;
-    // Whoever shared a quad with it may have counted on it.
-    for (std::size_t k = first[ci]; k < first[ci + 1]; ++k)
-      for (index_t p : by_key[quads[k].key])
-        if (viable[p] && !queued[p]) {
-          queued[p] = 1;
-          work.push_back(p);
-        }
+  auto fails = [&](index_t l) {
+    for (std::size_t k = first[l]; k < first[l + 1]; ++k)
+      if (!closed(l, quads[k])) return true;
+    return false;
+  };
+  // The first look at every candidate, against all of them, in parallel. Then each candidate
+  // that goes is followed up: a candidate that still counts on it across a quad has that quad
+  // looked at again, and goes too when nothing else closes it.
+  std::vector<char> gone(n, 0);
+  parallel_chunks(
+      n, kChunk, threads,
+      [&](index_t, index_t begin, index_t end) {
+        for (index_t l = begin; l < end; ++l) gone[l] = fails(l);
+      },
+      go_on);
+  std::vector<index_t> to_follow;
+  for (index_t l = 0; l < n; ++l) {
+    if (!gone[l]) continue;
+    viable[l] = 0;
+    to_follow.push_back(l);
   }
+  std::vector<char>().swap(gone);
+  while (!to_follow.empty()) {
+    const index_t l = to_follow.back();
+    to_follow.pop_back();
+    for (std::size_t k = first[l]; k < first[l + 1]; ++k) {
+      const index_t begin = group_start[quads[k].group], end = group_start[quads[k].group + 1];
+      const Side* mine = &sides[begin];
+      while (mine->candidate != l) ++mine;
+      for (index_t j = begin; j < end; ++j) {
+        const index_t p = sides[j].candidate;
+        const Quad& q = quads[side_quad[j]];
+        if (!viable[p] || q.open || !across(q, *mine) || closed(p, q)) continue;
+        viable[p] = 0;
+        to_follow.push_back(p);
+      }
+    }
+  }
+  std::vector<char> keep(n, 0);
+  for (index_t l = 0; l < n; ++l) keep[by_local[l]] = viable[l];
   std::vector<Candidate> kept;
-  kept.reserve(n);
-  for (std::size_t ci = 0; ci < n; ++ci)
-    if (viable[ci]) kept.push_back(candidates[ci]);
+  kept.reserve(static_cast<std::size_t>(std::count(keep.begin(), keep.end(), 1)));
+  for (index_t ci = 0; ci < n; ++ci)
+    if (keep[ci]) kept.push_back(candidates[ci]);
   removed = n - kept.size();
   return kept;
 }

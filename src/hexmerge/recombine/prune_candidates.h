@@ -23,8 +23,9 @@ namespace hexmerge {
 /// only (two closers may still need the same tet), so the selection keeps its own checks; what it
 /// saves the selection is choosing elements, like hexes that chain into a structured region from
 /// an unstructured one, that can only end up released.
+/// @param[in] threads  worker threads (>= 1); the result does not depend on them
 std::vector<Candidate> prune_unclosable(const TetMesh& mesh, const TetTopology& topology,
                                         const std::vector<Candidate>& candidates,
-                                        std::size_t& removed);
+                                        std::size_t& removed, int threads = 1);
 
 }  // namespace hexmerge

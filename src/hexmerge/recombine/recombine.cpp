@@ -157,7 +157,8 @@ MixedMesh recombine(const TetMesh& input, const RecombineParameters& parameters,
   }
   report.candidates_total = candidates.size();
   if (parameters.conformity == Conformity::Conforming) {
-    candidates = prune_unclosable(input, topology, candidates, report.candidates_unclosable);
+    candidates =
+        prune_unclosable(input, topology, candidates, report.candidates_unclosable, threads);
     timer.lap("pruning");
   }
 

@@ -3,11 +3,11 @@
 #include <algorithm>
 #include <array>
 #include <cstdint>
-#include <deque>
 #include <exception>
 #include <thread>
 
 #include "hexmerge/core/error.h"
+#include "hexmerge/core/work_queue.h"
 
 namespace hexmerge {
 namespace {
@@ -65,29 +65,6 @@ int cell_face_of(const Candidate& c, const std::array<index_t, 3>& tri) {
 }
 
 bool is_quad(const Candidate& c, int f) { return descriptor(c.type).face_size[f] == 4; }
-
-// A first-in first-out work list of ids (candidates or tets) that holds each id at most once
-// at a time.
-class WorkQueue {
- public:
-  explicit WorkQueue(std::size_t nb_ids) : queued_(nb_ids, 0) {}
-  void push(index_t i) {
-    if (queued_[i]) return;
-    queued_[i] = 1;
-    items_.push_back(i);
-  }
-  bool empty() const { return items_.empty(); }
-  index_t pop() {
-    const index_t i = items_.front();
-    items_.pop_front();
-    queued_[i] = 0;
-    return i;
-  }
-
- private:
-  std::deque<index_t> items_;
-  std::vector<char> queued_;
-};
 
 // A stage of a greedy phase: which element type, and whether non-conforming ones may be taken.
 struct Stage {

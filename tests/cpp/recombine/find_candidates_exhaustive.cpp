@@ -24,15 +24,6 @@ namespace {
 
 const CellDescriptor& kTetD = descriptor(CellType::Tet);
 
-AcceptanceCriteria permissive() {
-  AcceptanceCriteria c;
-  c.min_scaled_jacobian = 0.05;
-  c.min_dihedral_angle = 120.0;
-  c.min_boundary_dihedral_angle = 120.0;
-  c.max_face_angle = 175.0;
-  return c;
-}
-
 /// Accepts every cell whose quads are folded by less than 90 degrees, so that the lattice oracle
 /// compares filling only.
 AcceptanceCriteria anything() {
@@ -174,7 +165,7 @@ TEST(find_candidates_exhaustive, finds_every_program_candidate_on_the_cube_trian
       TetMesh mesh = polytope_mesh(unit_cube(), triangulations[i]);
       if (k >= 1) random_affine_map(mesh, rng);
       if (k >= 2) random_perturbation(mesh, rng, 0.03);
-      const auto found = compare(mesh, k == 0 ? AcceptanceCriteria{} : permissive());
+      const auto found = compare(mesh, k == 0 ? AcceptanceCriteria{} : permissive_criteria());
       // Skewed and then perturbed, some fall below the permissive thresholds.
       if (k <= 1) {
         EXPECT_EQ(count_type(found, CellType::Hex), 1u);
@@ -208,9 +199,9 @@ TEST(find_candidates_exhaustive, finds_every_program_candidate_on_grids) {
       }
       random_affine_map(mesh, rng, 0.2);
       random_perturbation(mesh, rng, 0.02);
-      compare(mesh, permissive());
+      compare(mesh, permissive_criteria());
       compare(mesh, anything());
-      AcceptanceCriteria only_prisms = permissive();
+      AcceptanceCriteria only_prisms = permissive_criteria();
       only_prisms.types[static_cast<int>(CellType::Hex)] = false;
       EXPECT_EQ(count_type(compare(mesh, only_prisms), CellType::Hex), 0u);
     }
@@ -254,14 +245,14 @@ TEST(find_candidates_exhaustive, finds_a_hex_of_seven_tets_around_a_flat_tet) {
     std::vector<index_t> all(mesh.nb_tets());
     for (index_t t = 0; t < mesh.nb_tets(); ++t) all[t] = t;
     ASSERT_TRUE(fills(mesh, all, CellType::Hex, cube_hex().data())) << "bad fixture";
-    const auto found = compare(mesh, permissive());
+    const auto found = compare(mesh, permissive_criteria());
     ASSERT_EQ(count_type(found, CellType::Hex), 1u);
     const Candidate& hex = *std::find_if(found.begin(), found.end(),
                                          [](const Candidate& c) { return c.type == CellType::Hex; });
     EXPECT_EQ(hex.nb_tets, 7);
     // The programs know only 5- and 6-tet hexahedra.
     const TetTopology topology(mesh);
-    EXPECT_EQ(count_type(find_candidates(mesh, topology, permissive(), 1), CellType::Hex), 0u);
+    EXPECT_EQ(count_type(find_candidates(mesh, topology, permissive_criteria(), 1), CellType::Hex), 0u);
   }
   // Through the engine: one hexahedron, valid.
   RecombineParameters p;
@@ -295,7 +286,7 @@ TEST(find_candidates_exhaustive, a_flat_tet_on_a_quad_face_is_taken_in_or_left_o
     with_cap.push_back({0, 1, 2, 3});
     TetMesh mesh = make_tet_mesh(p, with_cap);
     orient_positively(mesh);
-    const auto found = compare(mesh, permissive());
+    const auto found = compare(mesh, permissive_criteria());
     std::set<int> sizes;
     for (const Candidate& c : found) {
       if (c.type == CellType::Hex) sizes.insert(c.nb_tets);

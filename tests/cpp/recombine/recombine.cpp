@@ -22,16 +22,6 @@
 namespace hexmerge::test {
 namespace {
 
-/// Thresholds loose enough for the skewed hexes of random affine maps and perturbations.
-RecombineParameters permissive() {
-  RecombineParameters p;
-  p.min_scaled_jacobian = 0.05;
-  p.min_dihedral_angle = 120.0;
-  p.min_boundary_dihedral_angle = 120.0;
-  p.max_face_angle = 175.0;
-  return p;
-}
-
 std::string describe(const CheckReport& r) {
   std::string out = "check_mesh: " + std::to_string(r.counts[0]) + " tets, " +
                     std::to_string(r.counts[1]) + " pyramids, " + std::to_string(r.counts[2]) +
@@ -174,7 +164,7 @@ TEST(recombine, cube_triangulations_after_random_affine_maps) {
       SCOPED_TRACE("cube triangulation " + std::to_string(i) + ", map " + std::to_string(k));
       TetMesh mesh = polytope_mesh(unit_cube(), cases[i].tets);
       random_affine_map(mesh, rng);
-      const Outcome run = recombine_and_check(mesh, permissive());
+      const Outcome run = recombine_and_check(mesh, permissive_parameters());
       EXPECT_EQ(run.mesh.nb_cells(), 1u);
       EXPECT_EQ(hexes(run), 1u);
     }
@@ -191,7 +181,7 @@ TEST(recombine, cube_triangulations_after_small_perturbations) {
       TetMesh mesh = polytope_mesh(unit_cube(), cases[i].tets);
       if (k == 2) random_affine_map(mesh, rng, 0.2);
       random_perturbation(mesh, rng, 0.03);
-      const Outcome run = recombine_and_check(mesh, permissive(), /*flat=*/false);
+      const Outcome run = recombine_and_check(mesh, permissive_parameters(), /*flat=*/false);
       EXPECT_EQ(run.mesh.nb_cells(), 1u);
       EXPECT_EQ(hexes(run), 1u);
     }
@@ -545,7 +535,7 @@ TEST(local_search, keeps_validity_and_conformity_and_never_adds_cells) {
       for (bool hexes_on : {true, false}) {
         SCOPED_TRACE("grid " + std::to_string(grid) + ", " + to_string(mode) +
                      (hexes_on ? "" : ", no hexahedra"));
-        RecombineParameters p = permissive();
+        RecombineParameters p = permissive_parameters();
         p.conformity = mode;
         p.make_hexahedra = hexes_on;
         p.local_search = false;
@@ -592,7 +582,7 @@ TEST(local_search, is_deterministic) {
   std::mt19937 rng(3);
   TetMesh mesh = kuhn_grid(4);
   random_perturbation(mesh, rng, 0.15);
-  RecombineParameters p = permissive();
+  RecombineParameters p = permissive_parameters();
   p.local_search_radius = 2;
   p.local_search_seeds = LocalSearchSeeds::All;
   RecombineReport r1, r2;
