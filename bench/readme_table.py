@@ -8,9 +8,9 @@ import sys
 
 
 def main():
-    print("| mesh | tets | total s | candidates s | selection s | peak MB (B/tet) | hex vol % "
+    print("| mesh | tets | total s | candidates s | pruning s | selection s | peak MB (B/tet) | hex vol % "
           "| prism vol % | reduction % | non-conf. quads | cracks | min SJ made | vol. diff |")
-    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
     for path in sys.argv[1:]:
         for r in json.load(open(path))["results"]:
             phases = r["phase_seconds"]
@@ -18,7 +18,8 @@ def main():
                     if t != "tet" and r["output_counts"].get(t, 0) > 0]
             check = r["check"]
             print(f"| {r['mesh'].removesuffix('.msh')} | {r['tets']:,} | {r['wall_seconds']:.2f} "
-                  f"| {phases.get('candidates', 0):.2f} | {phases.get('selection', 0):.2f} "
+                  f"| {phases.get('candidates', 0):.2f} | {phases.get('pruning', 0):.2f} "
+                  f"| {phases.get('selection', 0):.2f} "
                   f"| {r['peak_bytes'] / 2**20:.0f} ({r['bytes_per_tet']:.0f}) "
                   f"| {100 * r['volume_fraction']['hex']:.1f} "
                   f"| {100 * r['volume_fraction']['prism']:.1f} "
