@@ -1384,20 +1384,26 @@ TetMesh mesh_shape(const std::string& brep, const MeshShapeParameters& parameter
   clock.lap("core");
 
   // TetGen: the surface kept as it is (-pY), the lattice faces with their lattice points, the
-  // other points inserted (-i), 0-based (-z), quiet (-Q).
+  // other points as isolated vertices of the PLC, 0-based (-z), quiet (-Q). Given to -i instead,
+  // TetGen 1.5 inserted them after the boundary recovery and left non-Delaunay tets in the
+  // degenerate (cospherical) lattice: a closing pyramid's apex joined to the far corner of the
+  // core cell behind it (bracket h 1.40: two core faces without closer, 89.5 % hex volume).
   WorkDirectory work(parameters.work_directory);
   const fs::path poly = work.path() / "shape.poly";
+  std::vector<Facet> facets = make_facets(surface, nodes, lattice_face, face_plane);
   {
-    std::vector<Vec3> poly_points = nodes;
-    poly_points.insert(poly_points.end(), inserted.begin(), inserted.begin() + nb_on_faces);
+    std::vector<Vec3> face_points = nodes;
+    face_points.insert(face_points.end(), inserted.begin(), inserted.begin() + nb_on_faces);
+    add_face_points(facets, face_points, nodes.size(), lattice_face, face_plane, 1e-7 * h);
+  }
+  auto write_poly = [&] {
     std::ofstream out(poly);
     out.precision(17);
-    out << poly_points.size() << " 3 0 0\n";
-    for (std::size_t i = 0; i < poly_points.size(); ++i)
-      out << i << ' ' << poly_points[i].x << ' ' << poly_points[i].y << ' ' << poly_points[i].z
-          << '\n';
-    std::vector<Facet> facets = make_facets(surface, nodes, lattice_face, face_plane);
-    add_face_points(facets, poly_points, nodes.size(), lattice_face, face_plane, 1e-7 * h);
+    out << nodes.size() + inserted.size() << " 3 0 0\n";
+    for (std::size_t i = 0; i < nodes.size() + inserted.size(); ++i) {
+      const Vec3& p = i < nodes.size() ? nodes[i] : inserted[i - nodes.size()];
+      out << i << ' ' << p.x << ' ' << p.y << ' ' << p.z << '\n';
+    }
     out << facets.size() << " 1\n";
     for (const Facet& f : facets) {
       out << f.polygons.size() << ' ' << f.holes.size() << ' ' << f.marker << '\n';
@@ -1411,19 +1417,10 @@ TetMesh mesh_shape(const std::string& brep, const MeshShapeParameters& parameter
     }
     out << "0\n0\n";
     if (!out) throw InputError("cannot write TetGen's input in " + work.path().string());
-  }
-  auto write_inserted = [&] {
-    std::ofstream extra(work.path() / "shape.a.node");
-    extra.precision(17);
-    extra << inserted.size() - nb_on_faces << " 3 0 0\n";
-    for (std::size_t i = nb_on_faces; i < inserted.size(); ++i)
-      extra << i - nb_on_faces << ' ' << inserted[i].x << ' ' << inserted[i].y << ' '
-            << inserted[i].z << '\n';
-    if (!extra) throw InputError("cannot write TetGen's input in " + work.path().string());
   };
-  write_inserted();
+  write_poly();
   const fs::path log = work.path() / "tetgen.log";
-  report.tetgen_command = shell_quote(tetgen) + " -pYizQ " + shell_quote(poly.string());
+  report.tetgen_command = shell_quote(tetgen) + " -pYzQ " + shell_quote(poly.string());
   const std::size_t given = nodes.size() + inserted.size();
   std::vector<double> frame_points;
   for (int attempt = 0;; ++attempt) {
@@ -1435,18 +1432,27 @@ TetMesh mesh_shape(const std::string& brep, const MeshShapeParameters& parameter
                        "and points; its output:\n" +
                        tail_of_file(log, 2000) + "\n(command: " + report.tetgen_command + ")");
     frame_points = read_tetgen_table<double>(work.path() / "shape.1.node", 3, 3);
-    if (frame_points.size() / 3 >= given) break;
-    // TetGen now and then fails to insert a point of the regular lattice (degenerate: all
-    // cospherical) and leaves it out as unused, which breaks the numbering. The points left out,
-    // found by their coordinates (TetGen keeps the others in order), move by 1e-7 h (they stay
-    // on the lattice for everything below) and TetGen runs once more.
+    // TetGen now and then leaves a point of the regular lattice out (degenerate: all
+    // cospherical): missing from its .node (which breaks the numbering) or in no tet. The points
+    // left out move by 1e-7 h (they stay on the lattice for everything below) and TetGen runs
+    // once more.
     std::vector<std::size_t> dropped;
-    for (std::size_t i = 0, j = 0; i < given; ++i) {
-      const Vec3 p = i < nodes.size() ? nodes[i] : inserted[i - nodes.size()];
-      if (j < frame_points.size() / 3 && (Vec3::of(&frame_points[3 * j]) - p).norm() <= 1e-9 * h)
-        ++j;
-      else
-        dropped.push_back(i);
+    if (frame_points.size() / 3 >= given) {
+      std::vector<char> used(given, 0);
+      for (long long v : read_tetgen_table<long long>(work.path() / "shape.1.ele", 4, 4))
+        if (v >= 0 && v < static_cast<long long>(given)) used[v] = 1;
+      for (std::size_t i = 0; i < given; ++i)
+        if (!used[i]) dropped.push_back(i);
+      if (dropped.empty()) break;
+    } else {
+      // Found by their coordinates: TetGen keeps the others in order.
+      for (std::size_t i = 0, j = 0; i < given; ++i) {
+        const Vec3 p = i < nodes.size() ? nodes[i] : inserted[i - nodes.size()];
+        if (j < frame_points.size() / 3 && (Vec3::of(&frame_points[3 * j]) - p).norm() <= 1e-9 * h)
+          ++j;
+        else
+          dropped.push_back(i);
+      }
     }
     std::string which;
     for (std::size_t i : dropped) {
@@ -1455,13 +1461,13 @@ TetMesh mesh_shape(const std::string& brep, const MeshShapeParameters& parameter
                std::to_string(p.y) + ", " + std::to_string(p.z) + ")";
     }
     if (attempt > 0 || dropped.empty() || dropped.front() < nodes.size() + nb_on_faces)
-      throw InputError("TetGen dropped " + std::to_string(given - frame_points.size() / 3) +
+      throw InputError("TetGen dropped " + std::to_string(dropped.size()) +
                        " of the points given (points too close together or not insertable):" +
                        which + "; try another size\n(command: " + report.tetgen_command + ")");
     for (std::size_t i : dropped)
       inserted[i - nodes.size()] = inserted[i - nodes.size()] + Vec3{1.0, 0.7, 0.3} * (1e-7 * h);
     report.nb_nudged_points += dropped.size();
-    write_inserted();
+    write_poly();
   }
   clock.lap("tetgen");
 
