@@ -217,11 +217,14 @@ def tet_scaled_jacobians(points: np.ndarray, tets: np.ndarray) -> np.ndarray:
 # alternated with smooth_nodes): cylinder h 5: 0.0103 (14 tets below 0.2 left, on skinny
 # triangles of the lateral face); bracket h 4: 0.140 (56 left); plate h 10: 0.237 (none left).
 # Before (flips only): 0.0078 (417 left), 0.039 (86), 0.195 (8). Issue #6 asks for 0.2 at 100k.
-SLIVER_CASES = [("cylinder", 5.0, 0.009), ("bracket", 4.0, 0.12), ("plate", 10.0, 0.22)]
+# Needles at the seam let off it (normal test against the surface's, partial moves, h / 8):
+# cylinder h 5 0.0103 -> 0.0357 (1 tet below 0.2, four surface nodes across the seam); bracket
+# h 1.50 (105k tets) 0.0119 -> 0.243 (none below 0.2; its worst were on the hole's seam).
+SLIVER_CASES = [("cylinder", 5.0, 0.03), ("bracket", 4.0, 0.12), ("bracket", 1.5, 0.2), ("plate", 10.0, 0.22)]
 
 
 @needs_tetgen
-@pytest.mark.parametrize(("name", "h", "floor"), SLIVER_CASES, ids=[c[0] for c in SLIVER_CASES])
+@pytest.mark.parametrize(("name", "h", "floor"), SLIVER_CASES, ids=[f"{c[0]}-{c[1]:g}" for c in SLIVER_CASES])
 def test_flips_raise_the_smallest_scaled_jacobian(shapes, name: str, h: float, floor: float) -> None:
     tets, report = hexmerge.mesh_shape(shapes[name], h, recombine=False)
     meshing = report["meshing"]
