@@ -219,8 +219,11 @@ def tet_scaled_jacobians(points: np.ndarray, tets: np.ndarray) -> np.ndarray:
 # Before (flips only): 0.0078 (417 left), 0.039 (86), 0.195 (8). Issue #6 asks for 0.2 at 100k.
 # Needles at the seam let off it (normal test against the surface's, partial moves, h / 8):
 # cylinder h 5 0.0103 -> 0.0357 (1 tet below 0.2, four surface nodes across the seam); bracket
-# h 1.50 (105k tets) 0.0119 -> 0.243 (none below 0.2; its worst were on the hole's seam).
-SLIVER_CASES = [("cylinder", 5.0, 0.03), ("bracket", 4.0, 0.12), ("bracket", 1.5, 0.2), ("plate", 10.0, 0.22)]
+# h 1.50 (105k tets) 0.0119 -> 0.243 (none below 0.2; its worst were on the hole's seam). Then
+# boundary sides of one face swapped within the chord deflection (a lone flat tet on two
+# triangles across the seam goes): cylinder h 5 0.249 (h 2.3 / 2.50 / 3.2: 0.191 / 0.195 / 0.206;
+# h 2.7 still 0.003, a cluster off the seam).
+SLIVER_CASES = [("cylinder", 5.0, 0.2), ("bracket", 4.0, 0.12), ("bracket", 1.5, 0.2), ("plate", 10.0, 0.22)]
 
 
 @needs_tetgen

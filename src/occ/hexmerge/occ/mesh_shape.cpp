@@ -1574,7 +1574,11 @@ TetMesh mesh_shape(const std::string& brep, const MeshShapeParameters& parameter
             boundary_patch[4 * static_cast<std::size_t>(t) + f] = it->second;
         }
       RemoveSliversReport flips;
-      remove_slivers(mesh, fixed, boundary_patch, RemoveSliversParameters{}, flips);
+      // Boundary triangles of one face may swap their side where the boundary moves by no more
+      // than the surface's chord deflection (a flat tet on two triangles across a seam).
+      RemoveSliversParameters flip_parameters;
+      flip_parameters.max_boundary_shift = deflection;
+      remove_slivers(mesh, fixed, boundary_patch, flip_parameters, flips);
       if (round == 0) report.min_tet_quality_before = flips.min_before;
       report.nb_face_flips += flips.face_removals;
       report.nb_edge_flips += flips.edge_removals;
