@@ -1149,7 +1149,7 @@ TetMesh mesh_shape(const std::string& brep, const MeshShapeParameters& parameter
       if (unit(n).dot(normal[c]) < std::cos(25.0 * M_PI / 180)) smooth[c] = false;
   }
   const double layer = parameters.layer_thickness * h;
-  std::vector<Vec3> inserted;      // points for TetGen's -i, in frame coordinates
+  std::vector<Vec3> inserted;      // points TetGen gets besides the surface, in frame coords
   std::vector<int> inserted_face;  // the lattice face an inserted point lies on, or -1
   PointSet layer_points(box_lo, box_hi, h);
   for (int k = 1; k <= parameters.boundary_layers; ++k)
