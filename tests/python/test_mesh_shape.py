@@ -138,6 +138,68 @@ def test_shapes_recombine_and_check(shapes, name: str, h: float, floor: float) -
     assert np.allclose(np.abs(np.linalg.det(np.array(meshing["frame"]))), 1.0)
 
 
+def open_core_faces(points: np.ndarray, tets: np.ndarray, meshing: dict) -> tuple[int, list]:
+    """The core cells (lattice cells filled by tets of their own corners) and their faces toward
+    the transition that no closing pyramid closes: the tets beyond the face's two triangles do
+    not share their fourth vertex. Faces with nothing beyond are on the boundary."""
+    frame, spacing = np.array(meshing["frame"]), np.array(meshing["spacing"])
+    q = points @ frame.T
+    c = (q - q[: meshing["nb_surface_nodes"]].min(axis=0)) / spacing  # in cells
+    on_lattice = np.all(np.abs(c - np.round(c)) < 1e-6, axis=1)
+    ijk = np.round(c).astype(np.int64)
+    lattice_node = {tuple(ijk[v]): v for v in np.nonzero(on_lattice)[0]}
+    p = points[tets]
+    volume = np.abs(np.einsum("ij,ij->i", p[:, 1] - p[:, 0], np.cross(p[:, 2] - p[:, 0], p[:, 3] - p[:, 0]))) / 6
+    filled: dict[tuple, float] = {}
+    for t in np.nonzero(on_lattice[tets].all(axis=1))[0]:
+        corners = ijk[tets[t]]
+        if (corners.max(axis=0) - corners.min(axis=0) <= 1).all():
+            key = tuple(corners.min(axis=0))
+            filled[key] = filled.get(key, 0.0) + volume[t]
+    cell_volume = np.prod(spacing)
+    core = {key for key, v in filled.items() if abs(v - cell_volume) < 1e-6 * cell_volume}
+    beyond: dict[tuple, list] = {}
+    for tet in tets:
+        for f in range(4):
+            beyond.setdefault(tuple(sorted(np.delete(tet, f))), []).append(tet[f])
+    open_faces = []
+    for cell in core:
+        for axis in range(3):
+            for side in (-1, 1):
+                neighbour = list(cell)
+                neighbour[axis] += side
+                if tuple(neighbour) in core:
+                    continue
+                plane = cell[axis] + (side > 0)
+                others = [a for a in range(3) if a != axis]
+                corners = []
+                for a, b in ((0, 0), (1, 0), (1, 1), (0, 1)):
+                    k = list(cell)
+                    k[axis], k[others[0]], k[others[1]] = plane, k[others[0]] + a, k[others[1]] + b
+                    corners.append(lattice_node[tuple(k)])
+                fourth = [v for i in range(4) for v in beyond.get(tuple(sorted(np.delete(corners, i))), [])
+                          if (c[v][axis] - plane) * side > 1e-6]
+                if fourth and (len(fourth) != 2 or fourth[0] != fourth[1]):
+                    open_faces.append((cell, axis, side))
+    return len(core), open_faces
+
+
+@needs_tetgen
+def test_every_core_face_has_its_closer(shapes) -> None:
+    """The bracket at h 1.50: TetGen's -i insertion left non-Delaunay tets in the lattice (an
+    apex joined to the far corner of the core cell behind its face), core faces without closing
+    pyramid, and the engine's block lost a quarter of the core (79.0 % hex volume; 97.7 % now,
+    with the points in the PLC). Also 1.30, 1.32, 1.36, 1.38, 1.46, 1.48 (84 to 93.7 %)."""
+    tets, tet_report = hexmerge.mesh_shape(shapes["bracket"], 1.50, recombine=False)
+    cells = tets.cell_vertices.reshape(-1, 4).astype(np.int64)
+    nb_core, open_faces = open_core_faces(tets.points, cells, tet_report["meshing"])
+    assert nb_core == tet_report["meshing"]["nb_core_cells"]  # TetGen kept every core cell
+    assert open_faces == []
+    mesh, report = hexmerge.recombine(tets.points, cells, tets.regions)
+    assert report["block_hexahedra"] >= nb_core
+    assert report["volume_fraction"]["hex"] >= 0.97
+
+
 def tet_scaled_jacobians(points: np.ndarray, tets: np.ndarray) -> np.ndarray:
     """Verdict's scaled Jacobian of each tet (src/hexmerge/geometry/quality.h): the smallest
     corner determinant of unit edge vectors, times sqrt(2)."""
@@ -155,11 +217,17 @@ def tet_scaled_jacobians(points: np.ndarray, tets: np.ndarray) -> np.ndarray:
 # alternated with smooth_nodes): cylinder h 5: 0.0103 (14 tets below 0.2 left, on skinny
 # triangles of the lateral face); bracket h 4: 0.140 (56 left); plate h 10: 0.237 (none left).
 # Before (flips only): 0.0078 (417 left), 0.039 (86), 0.195 (8). Issue #6 asks for 0.2 at 100k.
-SLIVER_CASES = [("cylinder", 5.0, 0.009), ("bracket", 4.0, 0.12), ("plate", 10.0, 0.22)]
+# Needles at the seam let off it (normal test against the surface's, partial moves, h / 8):
+# cylinder h 5 0.0103 -> 0.0357 (1 tet below 0.2, four surface nodes across the seam); bracket
+# h 1.50 (105k tets) 0.0119 -> 0.243 (none below 0.2; its worst were on the hole's seam). Then
+# boundary sides of one face swapped within the chord deflection (a lone flat tet on two
+# triangles across the seam goes): cylinder h 5 0.249 (h 2.3 / 2.50 / 3.2: 0.191 / 0.195 / 0.206;
+# h 2.7 still 0.003, a cluster off the seam).
+SLIVER_CASES = [("cylinder", 5.0, 0.2), ("bracket", 4.0, 0.12), ("bracket", 1.5, 0.2), ("plate", 10.0, 0.22)]
 
 
 @needs_tetgen
-@pytest.mark.parametrize(("name", "h", "floor"), SLIVER_CASES, ids=[c[0] for c in SLIVER_CASES])
+@pytest.mark.parametrize(("name", "h", "floor"), SLIVER_CASES, ids=[f"{c[0]}-{c[1]:g}" for c in SLIVER_CASES])
 def test_flips_raise_the_smallest_scaled_jacobian(shapes, name: str, h: float, floor: float) -> None:
     tets, report = hexmerge.mesh_shape(shapes[name], h, recombine=False)
     meshing = report["meshing"]

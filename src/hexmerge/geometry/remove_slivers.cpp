@@ -140,7 +140,7 @@ class FlipMesh {
     if (closed && x != ring.front()) return false;
     if (!closed) ring.push_back(x);
     around = ordered;
-    return closed ? n >= 3 : n >= 2;
+    return closed ? n >= 3 : n >= 1;
   }
 
   // The patch of boundary face (a, b, c), or -1 (no patch given, or not a boundary face).
@@ -241,15 +241,21 @@ void best_edge_removal(const FlipMesh& m, index_t a, index_t b, const std::vecto
 }
 
 // Whether boundary edge (a, b) may be swapped to (c, d), its boundary faces being (a, b, c) and
-// (a, b, d): both on one patch and in one plane, so that the boundary stays where it is.
-bool swappable(const FlipMesh& m, index_t a, index_t b, index_t c, index_t d) {
+// (a, b, d): both on one patch, in one plane (max_shift 0) or with the lines ab and cd at most
+// max_shift apart, so that the boundary stays where it is or within max_shift of it.
+bool swappable(const FlipMesh& m, index_t a, index_t b, index_t c, index_t d, double max_shift) {
   const std::int32_t patch = m.patch(a, b, c);
   if (patch < 0 || m.patch(a, b, d) != patch) return false;
   const Vec3 pa = Vec3::of(m.point(a)), ab = Vec3::of(m.point(b)) - pa;
   const Vec3 ac = Vec3::of(m.point(c)) - pa, ad = Vec3::of(m.point(d)) - pa;
-  if (std::abs(det3(ab, ac, ad)) > 1e-9 * ab.norm() * ac.norm() * ad.norm()) return false;
-  // The quad a, c, b, d convex: its diagonals ab and cd cross.
   const Vec3 n = ab.cross(ac), cd = ad - ac;
+  if (max_shift > 0) {
+    const Vec3 both = ab.cross(cd);
+    if (std::abs(ac.dot(both)) > max_shift * both.norm()) return false;
+  } else if (std::abs(det3(ab, ac, ad)) > 1e-9 * ab.norm() * ac.norm() * ad.norm()) {
+    return false;
+  }
+  // The quad a, c, b, d convex: its diagonals ab and cd cross (seen along n).
   return ab.cross(ac).dot(n) * ab.cross(ad).dot(n) < 0 &&
          cd.cross(ac * -1.0).dot(n) * cd.cross(ab - ac).dot(n) < 0;
 }
@@ -282,9 +288,10 @@ void remove_slivers(TetMesh& mesh, const std::vector<char>& fixed,
                     const std::vector<std::int32_t>& boundary_patch,
                     const RemoveSliversParameters& parameters, RemoveSliversReport& report) {
   if (!(parameters.target > 0 && parameters.target <= 1) || parameters.max_passes < 1 ||
-      parameters.max_ring < 3 || parameters.max_ring > 10)
+      parameters.max_ring < 3 || parameters.max_ring > 10 || !(parameters.max_boundary_shift >= 0))
     throw InputError(
-        "remove_slivers: target must be in (0, 1], max_passes >= 1, max_ring in [3, 10]",
+        "remove_slivers: target must be in (0, 1], max_passes >= 1, max_ring in [3, 10], "
+        "max_boundary_shift >= 0",
         Entity::Parameter);
   if (!fixed.empty() && fixed.size() != mesh.nb_tets())
     throw InputError("remove_slivers: one fixed flag per tet", Entity::Parameter);
@@ -320,7 +327,14 @@ void remove_slivers(TetMesh& mesh, const std::vector<char>& fixed,
           if (!std::all_of(around.begin(), around.end(),
                            [&](index_t u) { return m.movable(u, m.region(t)); }))
             continue;
-          if (!closed && !swappable(m, a, b, ring.front(), ring.back())) continue;
+          if (!closed &&
+              !swappable(m, a, b, ring.front(), ring.back(), parameters.max_boundary_shift))
+            continue;
+          // A lone tet on a boundary edge goes, its faces (c, d, a) and (c, d, b) becoming the
+          // boundary: they must have tets across (else a node could be left in no tet).
+          if (around.size() == 1 &&
+              (m.across(around[0], i) == NO_CELL || m.across(around[0], j) == NO_CELL))
+            continue;
           const double before = best.quality;
           best_edge_removal(m, a, b, around, ring, best);
           if (!closed && best.quality > before)

@@ -18,6 +18,10 @@ struct RemoveSliversParameters {
   int max_passes = 10;
   /// Largest number of tets around an edge that edge removal replaces, in [3, 10].
   int max_ring = 7;
+  /// Two boundary triangles of one patch may swap their shared side when the lines of the old
+  /// and the new side are no farther apart than this (the boundary moves by no more: on a curved
+  /// patch, the chord's sagitta); 0: only triangles in one plane. >= 0.
+  double max_boundary_shift = 0.0;
 };
 
 /// What remove_slivers() did.
@@ -28,7 +32,7 @@ struct RemoveSliversReport {
   std::size_t below_after = 0;     ///< and after
   std::size_t face_removals = 0;   ///< 2-3 flips done
   std::size_t edge_removals = 0;   ///< n-to-(2n-4) flips done (3-2, 4-4, ...), boundary included
-  std::size_t boundary_swaps = 0;  ///< of which on a boundary edge between two coplanar faces
+  std::size_t boundary_swaps = 0;  ///< of which on a boundary edge (see max_boundary_shift)
 };
 
 /// Raises the smallest scaled Jacobian (quality.h) of a tet mesh by flips, Shewchuk's "face
@@ -38,8 +42,9 @@ struct RemoveSliversReport {
 /// smallest scaled Jacobian of the tets it makes is larger than that of the tets it replaces, so
 /// the mesh's minimum never decreases. Points never move or appear; faces between tets of two
 /// regions and the tets marked `fixed` never change, nor does the boundary of the domain as a
-/// surface: its triangles change only where two of them on one patch and in one plane swap their
-/// shared side (edge removal on a boundary edge, the ring closed by the new side).
+/// surface: its triangles change only where two of them on one patch, in one plane or within
+/// max_boundary_shift of it, swap their shared side (edge removal on a boundary edge, the ring
+/// closed by the new side).
 ///
 /// @param[in,out] mesh            a valid tet mesh (validate_tet_mesh); tets are renumbered,
 ///                                regions follow their tets

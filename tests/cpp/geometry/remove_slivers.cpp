@@ -115,6 +115,36 @@ TEST(remove_slivers, boundary_sides_swap_only_within_one_patch) {
               boundary.count({1, 2, 3}) == 1);
 }
 
+// The sliver between the pyramids with the lower pyramid gone: its two lower faces, bent along
+// s0-s2 (s1 and s3 are 0.02 up), are on the boundary, and s0-s2 is in no other tet. The upper
+// pyramid is fixed: only the boundary swap of s0-s2 to s1-s3 can take the sliver out.
+TEST(remove_slivers, a_bent_boundary_side_swaps_within_the_shift_allowed) {
+  TetMesh m = sliver_between_pyramids();
+  m.points.resize(15);
+  m.tets = {1, 2, 3, 4, 1, 3, 0, 4, 0, 1, 2, 3};
+  std::vector<std::int32_t> patches(12, 0);  // one patch for every boundary face
+  const std::vector<char> fixed{1, 1, 0};
+  RemoveSliversParameters p;
+  p.target = 1;
+  RemoveSliversReport report;
+  TetMesh other = m;
+  remove_slivers(other, fixed, patches, p, report);
+  EXPECT_EQ(other.tets, m.tets);  // not in one plane: the boundary stays
+  p.max_boundary_shift = 0.019;   // the lines s0-s2 and s1-s3 are 0.02 apart
+  remove_slivers(other, fixed, patches, p, report);
+  EXPECT_EQ(other.tets, m.tets);
+  p.max_boundary_shift = 0.021;
+  remove_slivers(m, fixed, patches, p, report);
+  validate_tet_mesh(m);
+  EXPECT_EQ(report.boundary_swaps, 1u);
+  EXPECT_EQ(m.nb_tets(), 2u);  // the sliver is gone, the boundary is s0 s1 s3 and s1 s2 s3
+  const auto boundary = boundary_faces(m);
+  EXPECT_TRUE(boundary.count({0, 1, 3}) == 1 && boundary.count({1, 2, 3}) == 1 &&
+              boundary.count({0, 1, 2}) == 0);
+  p.max_boundary_shift = -1;
+  EXPECT_THROW(remove_slivers(m, {}, {}, p, report), InputError);
+}
+
 TEST(remove_slivers, bad_parameters_are_reported) {
   TetMesh m = sliver_between_pyramids();
   RemoveSliversReport report;

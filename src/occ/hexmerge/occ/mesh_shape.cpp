@@ -467,6 +467,8 @@ constexpr int kSmoothingRounds = 5;
 // Surface nodes with a smaller angle than this (radians, 20 degrees) in their triangles are
 // smoothed.
 constexpr double kNeedleAngle = 20.0 * M_PI / 180;
+// A needle's node moves no nearer than this fraction of h to its neighbours.
+constexpr double kNeedleNearest = 0.125;
 // Largest relative change of a boundary layer's depth from one node to the next.
 constexpr double kLayerJitter = 0.1;
 // Rounds of flips (remove_slivers) and node moves (smooth_nodes) after TetGen; the last is flips.
@@ -723,22 +725,33 @@ void refine(const Shape& s, Surface& surface, double target, const std::vector<b
         analysis[face] = std::make_unique<ShapeAnalysis_Surface>(BRep_Tool::Surface(f));
       }
       centroid = centroid * (1.0 / count);
-      const gp_Pnt2d uv =
-          analysis[face]->ValueOfUV(gp_Pnt(centroid.x, centroid.y, centroid.z), 1e-9 * target);
       const Vec3 old = surface.nodes[n];
-      std::vector<Vec3> normals;
+      // The surface's normal at the node: its triangles' normals weighted by area (a needle's
+      // own normal is noise: compared with it, moves off the seam were refused as folds).
+      Vec3 reference{0, 0, 0};
       for (int ti : around[n])
-        normals.push_back(normal_of(tris[ti].node[0], tris[ti].node[1], tris[ti].node[2]));
+        reference = reference + normal_of(tris[ti].node[0], tris[ti].node[1], tris[ti].node[2]);
       const double before = smallest_angle(n), shortest = shortest_side(n);
-      surface.nodes[n] = of(analysis[face]->Value(uv));
-      // Better angles, and no nearer than h / 4 to a neighbour: nodes must not gather (TetGen
-      // drops points too close together).
-      bool keep =
-          smallest_angle(n) > before && shortest_side(n) >= std::min(shortest, 0.25 * target);
-      for (std::size_t k = 0; k < around[n].size() && keep; ++k) {
-        const auto& v = tris[around[n][k]].node;
-        const Vec3 now = normal_of(v[0], v[1], v[2]);
-        keep = now.dot(normals[k]) > std::cos(20.0 * M_PI / 180) * now.norm() * normals[k].norm();
+      // To the centroid, else half or a quarter of the way, put back on the surface: better
+      // angles, no triangle turned more than 20 degrees from the reference, and no nearer than
+      // h / 8 to a neighbour (unless it was already): nodes must not gather (TetGen drops points
+      // too close together). With only the whole way and h / 4, needles whose node sat within
+      // h / 4 of the seam's nodes stayed (cylinder: tets of scaled Jacobian 0.006 on triangles
+      // of 179.4 degrees at the seam).
+      bool keep = false;
+      for (double fraction : {1.0, 0.5, 0.25}) {
+        const Vec3 goal = old + (centroid - old) * fraction;
+        const gp_Pnt2d uv =
+            analysis[face]->ValueOfUV(gp_Pnt(goal.x, goal.y, goal.z), 1e-9 * target);
+        surface.nodes[n] = of(analysis[face]->Value(uv));
+        keep = smallest_angle(n) > before &&
+               shortest_side(n) >= std::min(shortest, kNeedleNearest * target);
+        for (std::size_t k = 0; k < around[n].size() && keep; ++k) {
+          const auto& v = tris[around[n][k]].node;
+          const Vec3 now = normal_of(v[0], v[1], v[2]);
+          keep = now.dot(reference) > std::cos(20.0 * M_PI / 180) * now.norm() * reference.norm();
+        }
+        if (keep) break;
       }
       if (!keep) surface.nodes[n] = old;
     }
@@ -1136,7 +1149,7 @@ TetMesh mesh_shape(const std::string& brep, const MeshShapeParameters& parameter
       if (unit(n).dot(normal[c]) < std::cos(25.0 * M_PI / 180)) smooth[c] = false;
   }
   const double layer = parameters.layer_thickness * h;
-  std::vector<Vec3> inserted;      // points for TetGen's -i, in frame coordinates
+  std::vector<Vec3> inserted;      // points TetGen gets besides the surface, in frame coords
   std::vector<int> inserted_face;  // the lattice face an inserted point lies on, or -1
   PointSet layer_points(box_lo, box_hi, h);
   for (int k = 1; k <= parameters.boundary_layers; ++k)
@@ -1384,20 +1397,26 @@ TetMesh mesh_shape(const std::string& brep, const MeshShapeParameters& parameter
   clock.lap("core");
 
   // TetGen: the surface kept as it is (-pY), the lattice faces with their lattice points, the
-  // other points inserted (-i), 0-based (-z), quiet (-Q).
+  // other points as isolated vertices of the PLC, 0-based (-z), quiet (-Q). Given to -i instead,
+  // TetGen 1.5 inserted them after the boundary recovery and left non-Delaunay tets in the
+  // degenerate (cospherical) lattice: a closing pyramid's apex joined to the far corner of the
+  // core cell behind it (bracket h 1.40: two core faces without closer, 89.5 % hex volume).
   WorkDirectory work(parameters.work_directory);
   const fs::path poly = work.path() / "shape.poly";
+  std::vector<Facet> facets = make_facets(surface, nodes, lattice_face, face_plane);
   {
-    std::vector<Vec3> poly_points = nodes;
-    poly_points.insert(poly_points.end(), inserted.begin(), inserted.begin() + nb_on_faces);
+    std::vector<Vec3> face_points = nodes;
+    face_points.insert(face_points.end(), inserted.begin(), inserted.begin() + nb_on_faces);
+    add_face_points(facets, face_points, nodes.size(), lattice_face, face_plane, 1e-7 * h);
+  }
+  auto write_poly = [&] {
     std::ofstream out(poly);
     out.precision(17);
-    out << poly_points.size() << " 3 0 0\n";
-    for (std::size_t i = 0; i < poly_points.size(); ++i)
-      out << i << ' ' << poly_points[i].x << ' ' << poly_points[i].y << ' ' << poly_points[i].z
-          << '\n';
-    std::vector<Facet> facets = make_facets(surface, nodes, lattice_face, face_plane);
-    add_face_points(facets, poly_points, nodes.size(), lattice_face, face_plane, 1e-7 * h);
+    out << nodes.size() + inserted.size() << " 3 0 0\n";
+    for (std::size_t i = 0; i < nodes.size() + inserted.size(); ++i) {
+      const Vec3& p = i < nodes.size() ? nodes[i] : inserted[i - nodes.size()];
+      out << i << ' ' << p.x << ' ' << p.y << ' ' << p.z << '\n';
+    }
     out << facets.size() << " 1\n";
     for (const Facet& f : facets) {
       out << f.polygons.size() << ' ' << f.holes.size() << ' ' << f.marker << '\n';
@@ -1411,19 +1430,10 @@ TetMesh mesh_shape(const std::string& brep, const MeshShapeParameters& parameter
     }
     out << "0\n0\n";
     if (!out) throw InputError("cannot write TetGen's input in " + work.path().string());
-  }
-  auto write_inserted = [&] {
-    std::ofstream extra(work.path() / "shape.a.node");
-    extra.precision(17);
-    extra << inserted.size() - nb_on_faces << " 3 0 0\n";
-    for (std::size_t i = nb_on_faces; i < inserted.size(); ++i)
-      extra << i - nb_on_faces << ' ' << inserted[i].x << ' ' << inserted[i].y << ' '
-            << inserted[i].z << '\n';
-    if (!extra) throw InputError("cannot write TetGen's input in " + work.path().string());
   };
-  write_inserted();
+  write_poly();
   const fs::path log = work.path() / "tetgen.log";
-  report.tetgen_command = shell_quote(tetgen) + " -pYizQ " + shell_quote(poly.string());
+  report.tetgen_command = shell_quote(tetgen) + " -pYzQ " + shell_quote(poly.string());
   const std::size_t given = nodes.size() + inserted.size();
   std::vector<double> frame_points;
   for (int attempt = 0;; ++attempt) {
@@ -1435,18 +1445,27 @@ TetMesh mesh_shape(const std::string& brep, const MeshShapeParameters& parameter
                        "and points; its output:\n" +
                        tail_of_file(log, 2000) + "\n(command: " + report.tetgen_command + ")");
     frame_points = read_tetgen_table<double>(work.path() / "shape.1.node", 3, 3);
-    if (frame_points.size() / 3 >= given) break;
-    // TetGen now and then fails to insert a point of the regular lattice (degenerate: all
-    // cospherical) and leaves it out as unused, which breaks the numbering. The points left out,
-    // found by their coordinates (TetGen keeps the others in order), move by 1e-7 h (they stay
-    // on the lattice for everything below) and TetGen runs once more.
+    // TetGen now and then leaves a point of the regular lattice out (degenerate: all
+    // cospherical): missing from its .node (which breaks the numbering) or in no tet. The points
+    // left out move by 1e-7 h (they stay on the lattice for everything below) and TetGen runs
+    // once more.
     std::vector<std::size_t> dropped;
-    for (std::size_t i = 0, j = 0; i < given; ++i) {
-      const Vec3 p = i < nodes.size() ? nodes[i] : inserted[i - nodes.size()];
-      if (j < frame_points.size() / 3 && (Vec3::of(&frame_points[3 * j]) - p).norm() <= 1e-9 * h)
-        ++j;
-      else
-        dropped.push_back(i);
+    if (frame_points.size() / 3 >= given) {
+      std::vector<char> used(given, 0);
+      for (long long v : read_tetgen_table<long long>(work.path() / "shape.1.ele", 4, 4))
+        if (v >= 0 && v < static_cast<long long>(given)) used[v] = 1;
+      for (std::size_t i = 0; i < given; ++i)
+        if (!used[i]) dropped.push_back(i);
+      if (dropped.empty()) break;
+    } else {
+      // Found by their coordinates: TetGen keeps the others in order.
+      for (std::size_t i = 0, j = 0; i < given; ++i) {
+        const Vec3 p = i < nodes.size() ? nodes[i] : inserted[i - nodes.size()];
+        if (j < frame_points.size() / 3 && (Vec3::of(&frame_points[3 * j]) - p).norm() <= 1e-9 * h)
+          ++j;
+        else
+          dropped.push_back(i);
+      }
     }
     std::string which;
     for (std::size_t i : dropped) {
@@ -1455,13 +1474,13 @@ TetMesh mesh_shape(const std::string& brep, const MeshShapeParameters& parameter
                std::to_string(p.y) + ", " + std::to_string(p.z) + ")";
     }
     if (attempt > 0 || dropped.empty() || dropped.front() < nodes.size() + nb_on_faces)
-      throw InputError("TetGen dropped " + std::to_string(given - frame_points.size() / 3) +
+      throw InputError("TetGen dropped " + std::to_string(dropped.size()) +
                        " of the points given (points too close together or not insertable):" +
                        which + "; try another size\n(command: " + report.tetgen_command + ")");
     for (std::size_t i : dropped)
       inserted[i - nodes.size()] = inserted[i - nodes.size()] + Vec3{1.0, 0.7, 0.3} * (1e-7 * h);
     report.nb_nudged_points += dropped.size();
-    write_inserted();
+    write_poly();
   }
   clock.lap("tetgen");
 
@@ -1555,7 +1574,11 @@ TetMesh mesh_shape(const std::string& brep, const MeshShapeParameters& parameter
             boundary_patch[4 * static_cast<std::size_t>(t) + f] = it->second;
         }
       RemoveSliversReport flips;
-      remove_slivers(mesh, fixed, boundary_patch, RemoveSliversParameters{}, flips);
+      // Boundary triangles of one face may swap their side where the boundary moves by no more
+      // than the surface's chord deflection (a flat tet on two triangles across a seam).
+      RemoveSliversParameters flip_parameters;
+      flip_parameters.max_boundary_shift = deflection;
+      remove_slivers(mesh, fixed, boundary_patch, flip_parameters, flips);
       if (round == 0) report.min_tet_quality_before = flips.min_before;
       report.nb_face_flips += flips.face_removals;
       report.nb_edge_flips += flips.edge_removals;
