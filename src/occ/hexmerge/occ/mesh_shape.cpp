@@ -363,6 +363,38 @@ struct Surface {
   std::vector<int> seed;
 };
 
+// Geometry of surface triangles on `nodes`: the angle at v between the sides to a and b, the
+// (area-weighted) normal of triangle abc, its smallest angle.
+double angle_at(const std::vector<Vec3>& nodes, int v, int a, int b) {
+  const Vec3 x = nodes[a] - nodes[v], y = nodes[b] - nodes[v];
+  return std::atan2(x.cross(y).norm(), x.dot(y));
+}
+Vec3 normal_of(const std::vector<Vec3>& nodes, int a, int b, int c) {
+  return (nodes[b] - nodes[a]).cross(nodes[c] - nodes[a]);
+}
+double smallest_angle(const std::vector<Vec3>& nodes, const std::array<int, 3>& v) {
+  double worst = M_PI;
+  for (int c = 0; c < 3; ++c)
+    worst = std::min(worst, angle_at(nodes, v[c], v[(c + 1) % 3], v[(c + 2) % 3]));
+  return worst;
+}
+
+// Surface smoothing and collapses keep every triangle within this angle (20 degrees) of the
+// surface's normal at the node they move or remove: true when `now` turned further from it.
+bool turned_over(const Vec3& now, const Vec3& reference) {
+  return now.dot(reference) <= std::cos(20.0 * M_PI / 180) * now.norm() * reference.norm();
+}
+
+// Per node, whether it lies on a CAD edge (an end of a segment).
+std::vector<char> nodes_on_edges(const Surface& surface) {
+  std::vector<char> on_edge(surface.nodes.size(), 0);
+  for (const auto& [key, segment] : surface.segments) {
+    (void)segment;
+    on_edge[key >> 32] = on_edge[key & 0xffffffffu] = 1;
+  }
+  return on_edge;
+}
+
 // Merges points closer than a tolerance into one node.
 class NodeMerger {
  public:
@@ -602,13 +634,8 @@ void refine(const Shape& s, Surface& surface, double target, const std::vector<b
   // summing past pi, in 3D) between two triangles of one face, off the CAD edges, are flipped
   // unless that folds the surface. Bisection alone keeps the needles BRepMesh makes on ruled
   // faces (a cylinder is strips from cap to cap); the flips give them up.
-  auto angle_at = [&](int v, int a, int b) {
-    const Vec3 x = surface.nodes[a] - surface.nodes[v], y = surface.nodes[b] - surface.nodes[v];
-    return std::atan2(x.cross(y).norm(), x.dot(y));
-  };
-  auto normal_of = [&](int a, int b, int c) {
-    return (surface.nodes[b] - surface.nodes[a]).cross(surface.nodes[c] - surface.nodes[a]);
-  };
+  auto angle_at = [&](int v, int a, int b) { return hexmerge::angle_at(surface.nodes, v, a, b); };
+  auto normal_of = [&](int a, int b, int c) { return hexmerge::normal_of(surface.nodes, a, b, c); };
   auto restore_delaunay = [&](std::vector<std::uint64_t> stack) {
     std::size_t flips = 0;
     while (!stack.empty() && flips < 10000) {
@@ -684,11 +711,7 @@ void refine(const Shape& s, Surface& surface, double target, const std::vector<b
   // better than its smallest angle). Each node inside a face that is not a lattice face moves to
   // the centroid of its neighbours, put back on the face's surface, where that raises the
   // smallest angle of its triangles without turning one over; then the flips again.
-  std::vector<char> on_edge(surface.nodes.size(), 0);
-  for (const auto& [key, segment] : surface.segments) {
-    (void)segment;
-    on_edge[key >> 32] = on_edge[key & 0xffffffffu] = 1;
-  }
+  const std::vector<char> on_edge = nodes_on_edges(surface);
   std::vector<std::unique_ptr<ShapeAnalysis_Surface>> analysis(s.faces.Extent());
   std::vector<std::vector<int>> around;
   auto shortest_side = [&](int n) {
@@ -701,10 +724,7 @@ void refine(const Shape& s, Surface& surface, double target, const std::vector<b
   auto smallest_angle = [&](int n) {
     double worst = M_PI;
     for (int ti : around[n])
-      for (int c = 0; c < 3; ++c) {
-        const auto& v = tris[ti].node;
-        worst = std::min(worst, angle_at(v[c], v[(c + 1) % 3], v[(c + 2) % 3]));
-      }
+      worst = std::min(worst, hexmerge::smallest_angle(surface.nodes, tris[ti].node));
     return worst;
   };
   for (int round = 0; round < kSmoothingRounds; ++round) {
@@ -751,8 +771,7 @@ void refine(const Shape& s, Surface& surface, double target, const std::vector<b
                shortest_side(n) >= std::min(shortest, kNeedleNearest * target);
         for (std::size_t k = 0; k < around[n].size() && keep; ++k) {
           const auto& v = tris[around[n][k]].node;
-          const Vec3 now = normal_of(v[0], v[1], v[2]);
-          keep = now.dot(reference) > std::cos(20.0 * M_PI / 180) * now.norm() * reference.norm();
+          keep = !turned_over(normal_of(v[0], v[1], v[2]), reference);
         }
         if (keep) break;
       }
@@ -779,25 +798,16 @@ void collapse_short_sides(Surface& surface, double target, const std::vector<boo
   std::vector<SurfaceTriangle>& tris = surface.triangles;
   const std::vector<Vec3>& nodes = surface.nodes;
   const int nb_nodes = static_cast<int>(nodes.size());
-  std::vector<char> on_edge(nb_nodes, 0);
-  for (const auto& [key, segment] : surface.segments) {
-    (void)segment;
-    on_edge[key >> 32] = on_edge[key & 0xffffffffu] = 1;
-  }
+  const std::vector<char> on_edge = nodes_on_edges(surface);
   std::vector<std::vector<int>> around(nb_nodes);
   for (int ti = 0; ti < static_cast<int>(tris.size()); ++ti)
     for (int n : tris[ti].node) around[n].push_back(ti);
   std::vector<char> dead(tris.size(), 0), removed(nb_nodes, 0);
   auto normal_of = [&](const std::array<int, 3>& v) {
-    return (nodes[v[1]] - nodes[v[0]]).cross(nodes[v[2]] - nodes[v[0]]);
+    return hexmerge::normal_of(nodes, v[0], v[1], v[2]);
   };
   auto smallest_angle = [&](const std::array<int, 3>& v) {
-    double worst = M_PI;
-    for (int c = 0; c < 3; ++c) {
-      const Vec3 x = nodes[v[(c + 1) % 3]] - nodes[v[c]], y = nodes[v[(c + 2) % 3]] - nodes[v[c]];
-      worst = std::min(worst, std::atan2(x.cross(y).norm(), x.dot(y)));
-    }
-    return worst;
+    return hexmerge::smallest_angle(nodes, v);
   };
   auto has = [](const SurfaceTriangle& t, int n) {
     return t.node[0] == n || t.node[1] == n || t.node[2] == n;
@@ -836,8 +846,7 @@ void collapse_short_sides(Surface& surface, double target, const std::vector<boo
       for (int n : v)
         if ((nodes[n] - nodes[k]).norm() > target) return -1.0;
       const Vec3 now = normal_of(v);
-      if (now.dot(reference) <= std::cos(20.0 * M_PI / 180) * now.norm() * reference.norm())
-        return -1.0;
+      if (turned_over(now, reference)) return -1.0;
       after = std::min(after, smallest_angle(v));
     }
     return after >= before ? after : -1.0;
