@@ -99,6 +99,34 @@ struct ProblemDeleter {
   void operator()(glp_prob* p) const { glp_delete_prob(p); }
 };
 
+// Milliseconds left of `time_limit` seconds from `start`; at least 1 (GLPK reads 0 as none).
+int milliseconds_left(Clock::time_point start, double time_limit) {
+  return std::max(1, static_cast<int>(1000.0 * (time_limit - seconds_since(start))));
+}
+
+// GLPK's simplex, quiet (the core never prints).
+glp_smcp simplex_parameters(int time_limit_ms) {
+  glp_smcp simplex;
+  glp_init_smcp(&simplex);
+  simplex.msg_lev = GLP_MSG_OFF;
+  simplex.tm_lim = time_limit_ms;
+  return simplex;
+}
+
+// GLPK's branch and cut, quiet, from the LP relaxation already solved, with clique cuts (tets
+// shared by many candidates are cliques of conflicts), reporting to `state`.
+glp_iocp search_parameters(int time_limit_ms, SearchState& state) {
+  glp_iocp search;
+  glp_init_iocp(&search);
+  search.msg_lev = GLP_MSG_OFF;
+  search.tm_lim = time_limit_ms;
+  search.presolve = GLP_OFF;
+  search.clq_cuts = GLP_ON;
+  search.cb_func = on_search_event;
+  search.cb_info = &state;
+  return search;
+}
+
 // The set-packing program, to be maximised: one binary column per candidate with its weight, one
 // row per tet that two or more of them share (a tet of one candidate constrains nothing).
 void load_packing(glp_prob* lp, index_t nb_tets, const std::vector<const Candidate*>& columns,
@@ -248,9 +276,6 @@ SelectionBound bound_selection(index_t nb_tets, const std::vector<Candidate>& ca
   }
   load_packing(lp, nb_tets, columns, weights);
 
-  const auto milliseconds_left = [&] {
-    return std::max(1, static_cast<int>(1000.0 * (time_limit - seconds_since(start))));
-  };
   const std::size_t initial_saved = elements_saved(candidates, initial);
   const auto finish = [&](double saved_bound, std::size_t best_saved) {
     result.bound_elements = nb_tets - std::min<std::size_t>(whole_savings(saved_bound), nb_tets);
@@ -259,10 +284,7 @@ SelectionBound bound_selection(index_t nb_tets, const std::vector<Candidate>& ca
     return result;
   };
 
-  glp_smcp simplex;
-  glp_init_smcp(&simplex);
-  simplex.msg_lev = GLP_MSG_OFF;  // the core never prints
-  simplex.tm_lim = milliseconds_left();
+  glp_smcp simplex = simplex_parameters(milliseconds_left(start, time_limit));
   if (nb_cols == 0) {
     result.proved = true;
     return finish(0.0, 0);
@@ -292,7 +314,7 @@ SelectionBound bound_selection(index_t nb_tets, const std::vector<Candidate>& ca
       glp_set_mat_row(lp, r, static_cast<int>(index.size()) - 1, index.data(), value.data());
     }
     simplex.meth = GLP_DUALP;
-    simplex.tm_lim = milliseconds_left();
+    simplex.tm_lim = milliseconds_left(start, time_limit);
     if (glp_simplex(lp, &simplex) != 0 || glp_get_status(lp) != GLP_OPT) {
       return finish(lp_bound, initial_saved);
     }
@@ -306,14 +328,7 @@ SelectionBound bound_selection(index_t nb_tets, const std::vector<Candidate>& ca
     for (index_t ci : initial) start_values[ci + 1] = 1.0;
     state.initial = &start_values;
   }
-  glp_iocp search;
-  glp_init_iocp(&search);
-  search.msg_lev = GLP_MSG_OFF;
-  search.tm_lim = milliseconds_left();
-  search.presolve = GLP_OFF;    // the LP relaxation is already solved
-  search.clq_cuts = GLP_ON;     // tets shared by many candidates are cliques of conflicts
-  search.cb_func = on_search_event;
-  search.cb_info = &state;
+  glp_iocp search = search_parameters(milliseconds_left(start, time_limit), state);
   const int status = glp_intopt(lp, &search);
   const int mip = glp_mip_status(lp);
 
@@ -376,13 +391,7 @@ VolumeBound bound_hex_volume(const TetMesh& mesh, const std::vector<Candidate>& 
   std::unique_ptr<glp_prob, ProblemDeleter> problem(glp_create_prob());
   glp_prob* lp = problem.get();
   load_packing(lp, mesh.nb_tets(), columns, weights);
-  const auto milliseconds_left = [&] {
-    return std::max(1, static_cast<int>(1000.0 * (time_limit - seconds_since(start))));
-  };
-  glp_smcp simplex;
-  glp_init_smcp(&simplex);
-  simplex.msg_lev = GLP_MSG_OFF;
-  simplex.tm_lim = milliseconds_left();
+  const glp_smcp simplex = simplex_parameters(milliseconds_left(start, time_limit));
   if (glp_simplex(lp, &simplex) != 0 || glp_get_status(lp) != GLP_OPT) {
     // No LP optimum in time: every hexahedron at once still bounds it.
     result.bound = 0.0;
@@ -392,14 +401,7 @@ VolumeBound bound_hex_volume(const TetMesh& mesh, const std::vector<Candidate>& 
   }
   result.bound = glp_get_obj_val(lp);
   SearchState state;
-  glp_iocp search;
-  glp_init_iocp(&search);
-  search.msg_lev = GLP_MSG_OFF;
-  search.tm_lim = milliseconds_left();
-  search.presolve = GLP_OFF;
-  search.clq_cuts = GLP_ON;
-  search.cb_func = on_search_event;
-  search.cb_info = &state;
+  glp_iocp search = search_parameters(milliseconds_left(start, time_limit), state);
   const int status = glp_intopt(lp, &search);
   const int mip = glp_mip_status(lp);
   if (mip == GLP_OPT || mip == GLP_FEAS) result.best = glp_mip_obj_val(lp);
