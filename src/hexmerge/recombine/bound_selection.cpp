@@ -14,16 +14,6 @@
 #endif
 
 namespace hexmerge {
-namespace {
-
-[[maybe_unused]] [[noreturn]] void throw_without_glpk() {
-  throw InputError(
-      "parameter 'optimality_bound': this build of HexMerge has no GLPK (install libglpk-dev "
-      "and rebuild with HEXMERGE_WITH_GLPK=ON)",
-      Entity::Parameter);
-}
-
-}  // namespace
 
 #ifdef HEXMERGE_WITH_GLPK
 namespace {
@@ -228,6 +218,14 @@ bool selection_bound_available() {
 #endif
 }
 
+void require_selection_bound() {
+  if (selection_bound_available()) return;
+  throw InputError(
+      "parameter 'optimality_bound': this build of HexMerge has no GLPK (install libglpk-dev "
+      "and rebuild with HEXMERGE_WITH_GLPK=ON)",
+      Entity::Parameter);
+}
+
 SelectionBound bound_selection(index_t nb_tets, const std::vector<Candidate>& candidates,
                                const std::vector<index_t>& initial, double time_limit,
                                const std::vector<ConformityRow>& conformity) {
@@ -242,7 +240,8 @@ SelectionBound bound_selection(index_t nb_tets, const std::vector<Candidate>& ca
   }
 #ifndef HEXMERGE_WITH_GLPK
   static_cast<void>(conformity);
-  throw_without_glpk();
+  require_selection_bound();
+  return {};
 #else
   const auto start = Clock::now();
   const QuietTerminal quiet;
@@ -357,7 +356,8 @@ VolumeBound bound_hex_volume(const TetMesh& mesh, const std::vector<Candidate>& 
 #ifndef HEXMERGE_WITH_GLPK
   static_cast<void>(mesh);
   static_cast<void>(candidates);
-  throw_without_glpk();
+  require_selection_bound();
+  return {};
 #else
   const auto start = Clock::now();
   const QuietTerminal quiet;

@@ -53,6 +53,10 @@ std::vector<ConformityRow> conformity_rows(const TetMesh& mesh, const TetTopolog
 /// True when HexMerge was built with GLPK (CMake option HEXMERGE_WITH_GLPK and libglpk-dev).
 bool selection_bound_available();
 
+/// Throws InputError (Entity::Parameter, naming optimality_bound) unless
+/// selection_bound_available().
+void require_selection_bound();
+
 /// Solves the selection of disjoint candidates as an integer program (GLPK's branch and cut,
 /// started from the LP relaxation) within a time limit.
 ///

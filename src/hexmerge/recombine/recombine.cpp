@@ -116,11 +116,7 @@ MixedMesh recombine(const TetMesh& input, const RecombineParameters& parameters,
   report = RecombineReport{};
   PhaseTimer timer(report);
   validate_parameters(parameters);
-  if (parameters.optimality_bound && !selection_bound_available()) {
-    throw InputError("parameter 'optimality_bound': this build of HexMerge has no GLPK (install "
-                     "libglpk-dev and rebuild with HEXMERGE_WITH_GLPK=ON)",
-                     Entity::Parameter);
-  }
+  if (parameters.optimality_bound) require_selection_bound();
   validate_tet_mesh(input);
   report_progress(progress, "topology", 0.0);
   const TetTopology topology(input);
