@@ -24,13 +24,11 @@ import os
 import sys
 import time
 
-import numpy as np
-
 import hexmerge
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
-from run_bench import MESH_DIR, RESULTS_DIR, SHAPES, find_meshes  # noqa: E402
+from run_bench import MESH_DIR, RESULTS_DIR, SHAPES, find_meshes, load_tet_mesh  # noqa: E402
 
 PERMISSIVE = {
     "finder": "exhaustive",
@@ -41,16 +39,8 @@ PERMISSIVE = {
 }
 
 
-def load(path):
-    import meshio
-
-    m = meshio.read(path)
-    tets = np.concatenate([c.data for c in m.cells if c.type == "tetra"])
-    return np.ascontiguousarray(m.points, dtype=np.float64), np.ascontiguousarray(tets, dtype=np.int64)
-
-
 def run(path, time_limit):
-    points, tets = load(path)
+    points, tets = load_tet_mesh(path)
     _, default = hexmerge.recombine(points, tets)
     start = time.perf_counter()
     _, permissive = hexmerge.recombine(

@@ -51,8 +51,6 @@ def main():
     ap.add_argument("--compare", metavar="JSON", help="an earlier output to compare with")
     args = ap.parse_args()
 
-    import numpy as np
-    import meshio
     import hexmerge
 
     options = {}
@@ -64,10 +62,7 @@ def main():
                                                  sizes, args.mesh_dir)
     results = {}
     for path in meshes:
-        m = meshio.read(path)
-        points = np.ascontiguousarray(m.points[:, :3], dtype=np.float64)
-        cells = np.ascontiguousarray(np.concatenate([c.data for c in m.cells if c.type == "tetra"]),
-                                     dtype=np.int32)
+        points, cells = run_bench.load_tet_mesh(path)
         for threads in [int(t) for t in args.threads.split(",")]:
             mesh, report = hexmerge.recombine(points, cells, threads=threads, **options)
             sha, rep = fingerprint(mesh, report)

@@ -171,10 +171,19 @@ def call_check(hexmerge, mesh, points, cells, regions):
     raise TypeError("could not call hexmerge.check: " + " / ".join(errors))
 
 
-def worker(args):
+def load_tet_mesh(path, index_dtype="int32"):
+    """The points (float64, N x 3) and tets (index_dtype, M x 4) of a mesh file, via meshio."""
     import numpy as np
     import meshio
 
+    m = meshio.read(path)
+    points = np.ascontiguousarray(m.points[:, :3], dtype=np.float64)
+    cells = np.ascontiguousarray(np.concatenate([c.data for c in m.cells if c.type == "tetra"]),
+                                 dtype=index_dtype)
+    return points, cells
+
+
+def worker(args):
     src = os.path.join(ROOT, "src", "python")
     if src not in sys.path:
         sys.path.append(src)  # after PYTHONPATH, so an installed or other build can take over
@@ -190,11 +199,7 @@ def worker(args):
             result["core_sha1"] = hashlib.sha1(f.read()).hexdigest()[:12]
         result["core_mtime"] = datetime.datetime.fromtimestamp(os.path.getmtime(core)).isoformat(timespec="seconds")
     t0 = time.perf_counter()
-    m = meshio.read(args.worker)
-    tets = [c.data for c in m.cells if c.type == "tetra"]
-    points = np.ascontiguousarray(m.points[:, :3], dtype=np.float64)
-    cells = np.ascontiguousarray(np.concatenate(tets), dtype=np.int64 if args.int64 else np.int32)
-    del m, tets
+    points, cells = load_tet_mesh(args.worker, "int64" if args.int64 else "int32")
     gc.collect()
     result["load_seconds"] = round(time.perf_counter() - t0, 3)
     result["tets"] = int(cells.shape[0])
