@@ -8,6 +8,7 @@
 
 #include "hexmerge/core/error.h"
 #include "hexmerge/core/work_queue.h"
+#include "hexmerge/geometry/vec3.h"
 
 namespace hexmerge {
 namespace {
@@ -439,14 +440,31 @@ class Selector {
   // closer) cannot break up. Its open quads are left to them: each has a closing pyramid that no
   // other quad needs, so both strategies keep it closable; a prism sharing it may close it
   // instead.
+  bool planar_quads(const Candidate& c) const {
+    const CellDescriptor& d = descriptor(c.type);
+    for (int f = 0; f < d.nb_faces; ++f) {
+      if (d.face_size[f] != 4) continue;
+      Vec3 p[4];
+      for (int i = 0; i < 4; ++i) p[i] = Vec3::of(mesh_.point(c.vertices[d.face[f][i]]));
+      const Vec3 n = (p[1] - p[0]).cross(p[2] - p[0]);
+      const double scale = (p[1] - p[0]).norm() * (p[2] - p[0]).norm() * (p[3] - p[0]).norm();
+      if (std::abs(n.dot(p[3] - p[0])) > 1e-9 * scale) return false;
+    }
+    return true;
+  }
+
   void select_block() {
     std::vector<index_t> order;
     for (index_t ci = 0; ci < cands_.size(); ++ci) {
       const Candidate& c = cands_[ci];
-      if (c.type == CellType::Hex && c.quality >= kBlockQuality) order.push_back(ci);
+      if ((c.type == CellType::Hex && c.quality >= kBlockQuality) ||
+          ((c.type == CellType::Hex || c.type == CellType::Prism) && planar_quads(c)))
+        order.push_back(ci);
     }
-    std::stable_sort(order.begin(), order.end(),
-                     [&](index_t a, index_t b) { return cands_[a].quality > cands_[b].quality; });
+    std::stable_sort(order.begin(), order.end(), [&](index_t a, index_t b) {
+      if (cands_[a].type != cands_[b].type) return cands_[a].type == CellType::Hex;
+      return cands_[a].quality > cands_[b].quality;
+    });
     std::vector<index_t> block_of(mesh_.nb_tets(), NO_INDEX);
     std::vector<char> in_block(cands_.size(), 0);
     for (index_t ci : order) {
@@ -492,14 +510,17 @@ class Selector {
       const Candidate& c = cands_[h];
       const Sides s = sides(h);
       for (int f = 0; f < descriptor(c.type).nb_faces; ++f) {
+        if (!is_quad(c, f)) continue;  // a triangle meets whatever is across it conformingly
         const auto n = tets_behind(s, f);
         if (n[0] == NO_CELL && n[1] == NO_CELL) continue;
         if (n[0] == NO_CELL || n[1] == NO_CELL) return h;
         const QuadKey key = face_key(c, f);
         const index_t b0 = block_of[n[0]], b1 = block_of[n[1]];
         if (b0 != NO_INDEX || b1 != NO_INDEX) {
-          if (b0 != b1 || !has_quad(cands_[b0], key)) return h;
-          continue;
+          if (b0 == b1 && has_quad(cands_[b0], key)) continue;
+          // The quad meets another member's triangles or another quad: the lesser goes.
+          const index_t e = b1 == NO_INDEX || (b0 != NO_INDEX && lesser(b0, b1)) ? b0 : b1;
+          return lesser(h, e) ? h : e;
         }
         if (pyramid_on(n[0], n[1], key) == NO_INDEX) return h;
         for (index_t t : n) {

@@ -919,13 +919,261 @@ void collapse_short_sides(Surface& surface, double target, const std::vector<boo
   surface = std::move(out);
 }
 
-// ---------------------------------------------------------------------------------------------
-// TetGen through its files.
-
+// A planar face normal to a frame axis: the axis and the face's offset along it.
 struct AxisPlane {
   int axis;
   double offset;
 };
+
+// ---------------------------------------------------------------------------------------------
+// Swept shapes. A solid that is a profile extruded along a lattice axis gets a mesh that is
+// extruded too: its walls are triangulated in strips between consecutive lattice planes, with
+// the same nodes (stations) on every plane, so that the layers, the lattice points and TetGen's
+// tets repeat from one plane to the next. Every tet then lies in a slab between two planes, the
+// tets of a slab form prisms over the cross-section's triangles, and two prisms over triangles
+// that make a good quad form a hexahedron: the transition between the lattice core and the
+// boundary layers recombines too, with no closing pyramids.
+
+// The caps of a swept shape (planar faces normal to the axis at either end of the shape's
+// extent along it); every other face is a wall.
+struct Sweep {
+  int axis = -1;                 // frame axis
+  std::vector<signed char> cap;  // per face: -1 bottom cap (offset 0), 1 top cap, 0 wall
+};
+
+// The frame axis along which the shape is swept: one solid whose faces are caps and walls, a wall
+// being a plane, cylinder or surface of extrusion parallel to the axis, bounded by lines along
+// the axis and by curves in the caps' planes, and at least one wall not a lattice face (a box is
+// a lattice already). The frame's third axis is tried first.
+std::optional<Sweep> find_sweep(const Shape& s, const Frame& frame,
+                                const std::vector<std::optional<AxisPlane>>& face_plane,
+                                const std::vector<bool>& lattice_face, const double (&extent)[3],
+                                double h) {
+  if (s.solids.Extent() != 1) return std::nullopt;
+  const double tolerance = 1e-7 * h;
+  for (int a = 2; a >= 0; --a) {
+    const Vec3& axis = frame.axis[a];
+    Sweep sweep{a, std::vector<signed char>(s.faces.Extent(), 0)};
+    bool ok = true, bottom = false, top = false, unaligned_wall = false;
+    for (int f = 0; f < s.faces.Extent() && ok; ++f) {
+      if (face_plane[f] && face_plane[f]->axis == a) {
+        if (std::abs(face_plane[f]->offset) < tolerance)
+          sweep.cap[f] = -1, bottom = true;
+        else if (std::abs(face_plane[f]->offset - extent[a]) < tolerance)
+          sweep.cap[f] = 1, top = true;
+        else
+          ok = false;  // a step
+        continue;
+      }
+      const TopoDS_Face& face = TopoDS::Face(s.faces(f + 1));
+      BRepAdaptor_Surface surface(face, false);
+      const double parallel = 1 - 1e-12;
+      switch (surface.GetType()) {
+        case GeomAbs_Plane:
+          ok = std::abs(of(surface.Plane().Axis().Direction()).dot(axis)) < 1e-9;
+          break;
+        case GeomAbs_Cylinder:
+          ok = std::abs(of(surface.Cylinder().Axis().Direction()).dot(axis)) > parallel;
+          break;
+        case GeomAbs_SurfaceOfExtrusion:
+          ok = std::abs(of(surface.Direction()).dot(axis)) > parallel;
+          break;
+        default:
+          ok = false;
+      }
+      unaligned_wall = unaligned_wall || !lattice_face[f];
+      for (TopExp_Explorer ex(face, TopAbs_EDGE); ex.More() && ok; ex.Next()) {
+        const TopoDS_Edge& edge = TopoDS::Edge(ex.Current());
+        if (BRep_Tool::Degenerated(edge)) {
+          ok = false;
+          break;
+        }
+        BRepAdaptor_Curve curve(edge);
+        if (curve.GetType() == GeomAbs_Line &&
+            std::abs(of(curve.Line().Direction()).dot(axis)) > parallel)
+          continue;
+        int level = 0;  // the cap plane the edge lies in: -1 bottom, 1 top
+        for (int i = 0; i <= 8 && ok; ++i) {
+          const double t = curve.FirstParameter() +
+                           (curve.LastParameter() - curve.FirstParameter()) * i / 8;
+          const double z = coord(frame.to_frame(of(curve.Value(t))), a);
+          const int here = std::abs(z) < tolerance                ? -1
+                           : std::abs(z - extent[a]) < tolerance ? 1
+                                                                  : 0;
+          ok = here != 0 && (level == 0 || here == level);
+          level = here;
+        }
+      }
+    }
+    if (ok && bottom && top && unaligned_wall) return sweep;
+  }
+  return std::nullopt;
+}
+
+// What sweep_surface() made: per node, the node on the bottom plane it repeats (itself there);
+// the sides of the bottom caps' boundary, as the caps' triangles run.
+struct SweptSurface {
+  std::vector<int> base;
+  std::vector<std::array<int, 2>> sides;
+};
+
+// Rebuilds the surface of a swept shape: the bottom caps as BRepMesh made them, their boundary
+// sides split to at most `target` (on walls that are not lattice faces: those keep their
+// lattice points instead), every node of their boundary repeated on the `levels` lattice planes
+// above (`step` apart), the walls as two triangles per side and slab, and the top caps as the
+// bottom ones moved up. The nodes come plane by plane, in the same order on every plane.
+SweptSurface sweep_surface(const Shape& s, const Sweep& sweep, const Frame& frame, const Vec3& step,
+                           int levels, double target, const std::vector<bool>& lattice_face,
+                           Surface& surface) {
+  auto directed = [](int a, int b) {
+    return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(a)) << 32) |
+           static_cast<std::uint32_t>(b);
+  };
+  // The bottom caps' triangles, and the wall behind each side of the other triangles.
+  std::vector<SurfaceTriangle> bottom;
+  std::unordered_map<std::uint64_t, int> wall_at;  // directed side of a wall triangle -> face
+  std::vector<const SurfaceTriangle*> top;
+  for (const SurfaceTriangle& t : surface.triangles) {
+    if (sweep.cap[t.face] < 0)
+      bottom.push_back(t);
+    else if (sweep.cap[t.face] > 0)
+      top.push_back(&t);
+    else
+      for (int c = 0; c < 3; ++c) wall_at[directed(t.node[c], t.node[(c + 1) % 3])] = t.face;
+  }
+  std::unordered_map<std::uint64_t, int> triangle_at;  // directed side -> bottom triangle
+  for (int ti = 0; ti < static_cast<int>(bottom.size()); ++ti)
+    for (int c = 0; c < 3; ++c)
+      triangle_at[directed(bottom[ti].node[c], bottom[ti].node[(c + 1) % 3])] = ti;
+  struct Side {
+    int from, to, wall;
+  };
+  std::vector<Side> boundary;
+  for (const SurfaceTriangle& t : bottom)
+    for (int c = 0; c < 3; ++c) {
+      const int a = t.node[c], b = t.node[(c + 1) % 3];
+      if (triangle_at.count(directed(b, a))) continue;
+      const auto wall = wall_at.find(directed(b, a));
+      if (wall == wall_at.end())
+        throw InputError("mesh_shape: the side from node " + std::to_string(a) + " to " +
+                             std::to_string(b) + " of the swept shape's bottom face " +
+                             std::to_string(t.face) + " has no wall behind it",
+                         Entity::None);
+      boundary.push_back({a, b, wall->second});
+    }
+  // Long sides on walls that are not lattice faces: split evenly along their CAD edge, the
+  // triangle on them cut into a fan.
+  std::vector<Side> sides;
+  for (const Side& side : boundary) {
+    const auto segment = surface.segments.find(pair_key(side.from, side.to));
+    const double length = (surface.nodes[side.to] - surface.nodes[side.from]).norm();
+    const int pieces = static_cast<int>(std::ceil(length / target - 1e-9));
+    if (lattice_face[side.wall] || segment == surface.segments.end() || pieces <= 1) {
+      sides.push_back(side);
+      continue;
+    }
+    const EdgeSegment e = segment->second;
+    const double t_from = side.from < side.to ? e.t_lo : e.t_hi;
+    const double t_to = side.from < side.to ? e.t_hi : e.t_lo;
+    const BRepAdaptor_Curve curve(TopoDS::Edge(s.edges(e.edge + 1)));
+    const int ti = triangle_at.at(directed(side.from, side.to));
+    const SurfaceTriangle t = bottom[ti];
+    const int c = side_with_key(t, pair_key(side.from, side.to));
+    const int apex = t.node[(c + 2) % 3];
+    int previous = side.from;
+    for (int i = 1; i <= pieces; ++i) {
+      int next = side.to;
+      if (i < pieces) {
+        next = static_cast<int>(surface.nodes.size());
+        surface.nodes.push_back(of(curve.Value(t_from + (t_to - t_from) * i / pieces)));
+        surface.node_face.push_back(t.face);
+      }
+      const SurfaceTriangle piece{{previous, next, apex}, {}, t.face};
+      if (i == 1)
+        bottom[ti] = piece;
+      else
+        bottom.push_back(piece);
+      for (int k = 0; k < 3; ++k)
+        triangle_at[directed(piece.node[k], piece.node[(k + 1) % 3])] =
+            i == 1 ? ti : static_cast<int>(bottom.size()) - 1;
+      sides.push_back({previous, next, side.wall});
+      previous = next;
+    }
+  }
+
+  // The new surface: the bottom caps' nodes (renumbered in their order), then plane by plane the
+  // boundary nodes repeated, and on the top plane also the caps' inner nodes.
+  std::vector<int> renumber(surface.nodes.size(), -1);
+  std::vector<int> order;
+  for (const SurfaceTriangle& t : bottom)
+    for (int n : t.node) renumber[n] = 1;
+  for (int n = 0; n < static_cast<int>(surface.nodes.size()); ++n)
+    if (renumber[n] >= 0) renumber[n] = static_cast<int>(order.size()), order.push_back(n);
+  std::vector<char> on_boundary(order.size(), 0);
+  std::vector<int> wall_of(order.size(), -1);
+  for (const Side& side : sides)
+    for (int n : {side.from, side.to}) on_boundary[renumber[n]] = 1, wall_of[renumber[n]] = side.wall;
+  // The top face holding point p (BRepMesh's triangles of the top faces tell which).
+  const int axis = sweep.axis, u = (axis + 1) % 3, v = (axis + 2) % 3;
+  auto top_face = [&](const Vec3& p) {
+    const int first = top.empty() ? -1 : top.front()->face;
+    if (std::all_of(top.begin(), top.end(), [&](const auto* t) { return t->face == first; }))
+      return first;
+    const Vec3 q = frame.to_frame(p);
+    for (const SurfaceTriangle* t : top) {
+      double w[3];
+      for (int c = 0; c < 3; ++c) {
+        const Vec3 a = frame.to_frame(surface.nodes[t->node[(c + 1) % 3]]);
+        const Vec3 b = frame.to_frame(surface.nodes[t->node[(c + 2) % 3]]);
+        w[c] = (coord(a, u) - coord(q, u)) * (coord(b, v) - coord(q, v)) -
+               (coord(b, u) - coord(q, u)) * (coord(a, v) - coord(q, v));
+      }
+      if ((w[0] >= 0 && w[1] >= 0 && w[2] >= 0) || (w[0] <= 0 && w[1] <= 0 && w[2] <= 0))
+        return t->face;
+    }
+    return first;
+  };
+  Surface swept;
+  SweptSurface result;
+  // copy[k][i]: node i of the bottom plane on plane k.
+  std::vector<std::vector<int>> copy(levels + 1, std::vector<int>(order.size(), -1));
+  for (int k = 0; k <= levels; ++k)
+    for (std::size_t i = 0; i < order.size(); ++i) {
+      if (k > 0 && k < levels && !on_boundary[i]) continue;
+      copy[k][i] = static_cast<int>(swept.nodes.size());
+      swept.nodes.push_back(surface.nodes[order[i]] + step * k);
+      swept.node_face.push_back(k == 0          ? surface.node_face[order[i]]
+                                : on_boundary[i] ? wall_of[i]
+                                                 : top_face(swept.nodes.back()));
+      result.base.push_back(static_cast<int>(i));
+    }
+  swept.seed = result.base;
+  for (const SurfaceTriangle& t : bottom)
+    swept.triangles.push_back(
+        {{renumber[t.node[0]], renumber[t.node[1]], renumber[t.node[2]]}, {}, t.face});
+  for (const Side& side : sides) {
+    const int a = renumber[side.from], b = renumber[side.to];
+    result.sides.push_back({a, b});
+    for (int k = 0; k < levels; ++k) {
+      swept.triangles.push_back({{copy[k][b], copy[k][a], copy[k + 1][a]}, {}, side.wall});
+      swept.triangles.push_back({{copy[k][b], copy[k + 1][a], copy[k + 1][b]}, {}, side.wall});
+    }
+  }
+  // The top caps: the bottom ones moved up and turned over.
+  for (const SurfaceTriangle& t : bottom) {
+    const int a = renumber[t.node[0]], b = renumber[t.node[1]], c = renumber[t.node[2]];
+    const Vec3 centroid =
+        (swept.nodes[copy[levels][a]] + swept.nodes[copy[levels][b]] + swept.nodes[copy[levels][c]]) *
+        (1.0 / 3);
+    swept.triangles.push_back(
+        {{copy[levels][a], copy[levels][c], copy[levels][b]}, {}, top_face(centroid)});
+  }
+  surface = std::move(swept);  // the segments are not needed past the refinement, skipped here
+  return result;
+}
+
+// ---------------------------------------------------------------------------------------------
+// TetGen through its files.
 
 // A TetGen facet: polygons (a face's outer and inner boundary loops, or one triangle, and single
 // points inside it), points inside its holes, its boundary marker (face index + 1).
@@ -1259,8 +1507,18 @@ TetMesh mesh_shape(const std::string& brep, const MeshShapeParameters& parameter
     lattice_edge[e] = !around.empty() && std::all_of(around.begin(), around.end(),
                                                      [&](int f) { return lattice_face[f]; });
   }
-  refine(shape, surface, h, lattice_face, lattice_edge);
-  collapse_short_sides(surface, h, lattice_face);
+  std::optional<Sweep> sweep;
+  if (parameters.sweep) sweep = find_sweep(shape, frame, face_plane, lattice_face, extent, h);
+  SweptSurface swept;
+  if (sweep) {
+    const int a = sweep->axis;
+    swept = sweep_surface(shape, *sweep, frame, frame.axis[a] * report.spacing[a], cells[a], h,
+                          lattice_face, surface);
+    report.sweep_axis = a;
+  } else {
+    refine(shape, surface, h, lattice_face, lattice_edge);
+    collapse_short_sides(surface, h, lattice_face);
+  }
   clock.lap("surface");
 
   // Everything below in frame coordinates; nodes of lattice faces exactly on their planes.
@@ -1273,6 +1531,17 @@ TetMesh mesh_shape(const std::string& brep, const MeshShapeParameters& parameter
         const double k = std::round(coord(nodes[n], plane.axis) / report.spacing[plane.axis]);
         set_coord(nodes[n], plane.axis, k * report.spacing[plane.axis]);
       }
+  if (sweep) {
+    // Every node exactly on its lattice plane, and across the axis exactly where the node on the
+    // bottom plane it repeats is: the slabs are then equal to the last bit.
+    const int a = sweep->axis;
+    for (std::size_t i = 0; i < nodes.size(); ++i) {
+      const double level = std::round(coord(nodes[i], a) / report.spacing[a]);
+      Vec3 p = nodes[swept.base[i]];
+      set_coord(p, a, level * report.spacing[a]);
+      nodes[i] = p;
+    }
+  }
   report.nb_surface_nodes = nodes.size();
   report.nb_surface_triangles = surface.triangles.size();
 
@@ -1283,6 +1552,35 @@ TetMesh mesh_shape(const std::string& brep, const MeshShapeParameters& parameter
   for (const SurfaceTriangle& t : surface.triangles)
     if (!lattice_face[t.face]) curved.add(t.node);
   for (const Vec3& p : nodes) surface_points.add(p);
+
+  // Lattice faces' triangles per lattice plane, for "does this lattice point lie on a face".
+  std::map<std::pair<int, long>, std::vector<const SurfaceTriangle*>> plane_triangles;
+  for (const SurfaceTriangle& t : surface.triangles)
+    if (lattice_face[t.face]) {
+      const AxisPlane& plane = *face_plane[t.face];
+      plane_triangles[{plane.axis, std::lround(plane.offset / report.spacing[plane.axis])}]
+          .push_back(&t);
+    }
+  auto on_lattice_face = [&](const Vec3& q, const int(&index)[3]) -> int {
+    for (int a = 0; a < 3; ++a) {
+      auto it = plane_triangles.find({a, index[a]});
+      if (it == plane_triangles.end()) continue;
+      const int u = (a + 1) % 3, v = (a + 2) % 3;
+      const double qu = coord(q, u), qv = coord(q, v);
+      for (const SurfaceTriangle* t : it->second) {
+        const Vec3 &p0 = nodes[t->node[0]], &p1 = nodes[t->node[1]], &p2 = nodes[t->node[2]];
+        const double x0 = coord(p0, u), y0 = coord(p0, v);
+        const double d =
+            (coord(p1, u) - x0) * (coord(p2, v) - y0) - (coord(p2, u) - x0) * (coord(p1, v) - y0);
+        if (d == 0) continue;
+        const double s = ((qu - x0) * (coord(p2, v) - y0) - (coord(p2, u) - x0) * (qv - y0)) / d;
+        const double r = ((coord(p1, u) - x0) * (qv - y0) - (qu - x0) * (coord(p1, v) - y0)) / d;
+        const double eps = 1e-9;
+        if (s >= -eps && r >= -eps && s + r <= 1 + eps) return t->face;
+      }
+    }
+    return -1;
+  };
 
   // Boundary layers: surface nodes of the other faces where the surface is smooth, moved along
   // the inward normal, where there is room.
@@ -1306,6 +1604,36 @@ TetMesh mesh_shape(const std::string& brep, const MeshShapeParameters& parameter
     for (int c : t.node)
       if (unit(n).dot(normal[c]) < std::cos(25.0 * M_PI / 180)) smooth[c] = false;
   }
+  // Swept: the nodes repeating a node of the bottom caps' boundary take its normal across the
+  // walls (its sides' normals weighted by length), on the caps' planes too, and are smooth where
+  // the walls are; the depths, the room and the caps' faces are found on the bottom plane, so
+  // that every plane gets the same layer points.
+  std::vector<std::vector<int>> column;  // swept: per bottom node, its repeats plane by plane
+  if (sweep) {
+    const int a = sweep->axis;
+    Vec3 along{0, 0, 0};
+    set_coord(along, a, 1.0);
+    std::vector<Vec3> sum(nodes.size(), Vec3{0, 0, 0});
+    for (const auto& side : swept.sides) {
+      const Vec3 n = (nodes[side[0]] - nodes[side[1]]).cross(along);  // the wall's, outward
+      for (int end : side) sum[end] = sum[end] + n;
+    }
+    std::vector<char> station(nodes.size(), 0), bent(nodes.size(), 0);
+    for (const auto& side : swept.sides) {
+      const Vec3 n = unit((nodes[side[0]] - nodes[side[1]]).cross(along));
+      for (int end : side) {
+        station[end] = 1;
+        if (n.dot(unit(sum[end])) < std::cos(25.0 * M_PI / 180)) bent[end] = 1;
+      }
+    }
+    column.resize(nodes.size());
+    for (std::size_t i = 0; i < nodes.size(); ++i) {
+      const int b = swept.base[i];
+      column[b].push_back(static_cast<int>(i));
+      smooth[i] = station[b] && !bent[b];
+      normal[i] = station[b] ? unit(sum[b]) : Vec3{0, 0, 0};
+    }
+  }
   const double layer = parameters.layer_thickness * h;
   std::vector<Vec3> inserted;      // points TetGen gets besides the surface, in frame coords
   std::vector<int> inserted_face;  // the lattice face an inserted point lies on, or -1
@@ -1313,6 +1641,7 @@ TetMesh mesh_shape(const std::string& brep, const MeshShapeParameters& parameter
   for (int k = 1; k <= parameters.boundary_layers; ++k)
     for (std::size_t i = 0; i < nodes.size(); ++i) {
       if (!smooth[i] || normal[i].norm() == 0) continue;
+      if (sweep && swept.base[i] != static_cast<int>(i)) continue;  // placed with its base
       // Depths vary by up to kLayerJitter (a fixed pseudo-random fraction per node): the sides
       // of equally deep layers are cocircular quads (rectangles, isosceles trapezoids), which
       // TetGen cuts with flat tets where the prisms on either side disagree on the diagonal.
@@ -1326,6 +1655,31 @@ TetMesh mesh_shape(const std::string& brep, const MeshShapeParameters& parameter
       if (curved.any_within(q, 0.9 * depth)) continue;
       if (layer_points.any_within(q, 0.3 * layer) || surface_points.any_within(q, 0.5 * depth))
         continue;
+      if (sweep) {
+        const int a = sweep->axis;
+        std::vector<std::pair<Vec3, int>> repeats;  // the point on every plane, and its cap face
+        for (int j : column[i]) {
+          Vec3 r = q;
+          set_coord(r, a, coord(nodes[j], a));
+          const int level = static_cast<int>(std::lround(coord(r, a) / report.spacing[a]));
+          int face = -1;
+          if (level == 0 || level == cells[a]) {
+            int index[3] = {-1, -1, -1};
+            index[a] = level;
+            face = on_lattice_face(r, index);
+            if (face < 0) break;  // not inside a cap: none on any plane
+          }
+          repeats.emplace_back(r, face);
+        }
+        if (repeats.size() != column[i].size()) continue;
+        for (const auto& [r, face] : repeats) {
+          layer_points.add(r);
+          inserted.push_back(r);
+          inserted_face.push_back(face);
+          ++report.nb_layer_points;
+        }
+        continue;
+      }
       layer_points.add(q);
       inserted.push_back(q);
       inserted_face.push_back(-1);
@@ -1368,35 +1722,6 @@ TetMesh mesh_shape(const std::string& brep, const MeshShapeParameters& parameter
     return (std::lower_bound(xs.begin(), xs.end(), x) - xs.begin()) % 2 == 1;
   };
   auto inside = [&](const Vec3& q) { return inside_given(crossings(q.y, q.z), q.x); };
-
-  // Lattice faces' triangles per lattice plane, for "does this lattice point lie on a face".
-  std::map<std::pair<int, long>, std::vector<const SurfaceTriangle*>> plane_triangles;
-  for (const SurfaceTriangle& t : surface.triangles)
-    if (lattice_face[t.face]) {
-      const AxisPlane& plane = *face_plane[t.face];
-      plane_triangles[{plane.axis, std::lround(plane.offset / report.spacing[plane.axis])}]
-          .push_back(&t);
-    }
-  auto on_lattice_face = [&](const Vec3& q, const int(&index)[3]) -> int {
-    for (int a = 0; a < 3; ++a) {
-      auto it = plane_triangles.find({a, index[a]});
-      if (it == plane_triangles.end()) continue;
-      const int u = (a + 1) % 3, v = (a + 2) % 3;
-      const double qu = coord(q, u), qv = coord(q, v);
-      for (const SurfaceTriangle* t : it->second) {
-        const Vec3 &p0 = nodes[t->node[0]], &p1 = nodes[t->node[1]], &p2 = nodes[t->node[2]];
-        const double x0 = coord(p0, u), y0 = coord(p0, v);
-        const double d =
-            (coord(p1, u) - x0) * (coord(p2, v) - y0) - (coord(p2, u) - x0) * (coord(p1, v) - y0);
-        if (d == 0) continue;
-        const double s = ((qu - x0) * (coord(p2, v) - y0) - (coord(p2, u) - x0) * (qv - y0)) / d;
-        const double r = ((coord(p1, u) - x0) * (qv - y0) - (qu - x0) * (coord(p1, v) - y0)) / d;
-        const double eps = 1e-9;
-        if (s >= -eps && r >= -eps && s + r <= 1 + eps) return t->face;
-      }
-    }
-    return -1;
-  };
 
   // Lattice points: kept when inside (or on a lattice face) and far enough from the other faces.
   const int n0 = cells[0] + 1, n1 = cells[1] + 1, n2 = cells[2] + 1;
@@ -1472,6 +1797,8 @@ TetMesh mesh_shape(const std::string& brep, const MeshShapeParameters& parameter
     std::uint8_t& state = face_state[cell_index(i, j, k) * 6 + dir];
     if (state) return state;
     const int axis = dir / 2, side = dir % 2 ? 1 : -1;
+    // Swept: the prisms and hexahedra of the slab close the core's sides.
+    if (sweep && axis != sweep->axis) return state = 1;
     int n[3];
     const bool in_range = across(i, j, k, dir, n);
     const Vec3 face_centre =
@@ -1706,13 +2033,24 @@ TetMesh mesh_shape(const std::string& brep, const MeshShapeParameters& parameter
       }
       return true;
     };
+    // Swept: whether tet t lies between two consecutive lattice planes (its prism or hexahedron
+    // stays as TetGen made it).
+    auto in_one_slab = [&](index_t t) {
+      if (!sweep) return false;
+      double least = 1e300, most = -1e300;
+      for (int k = 0; k < 4; ++k) {
+        const double level = cell_of[mesh.tet(t)[k]][sweep->axis];
+        least = std::min(least, level), most = std::max(most, level);
+      }
+      return most - least <= 1 + 1e-6;
+    };
     // The CAD face of each boundary face, from TetGen's markers (face index + 1), so that
     // triangles of one planar face may swap their shared sides.
     std::map<std::array<index_t, 3>, std::int32_t> face_marker;
     const std::vector<long long> faces =
         read_tetgen_table<long long>(work.path() / "shape.1.face", 1, 4);
     std::vector<char> movable(made, 0);
-    for (std::size_t v = nodes.size(); v < made; ++v) movable[v] = !half_lattice[v];
+    for (std::size_t v = nodes.size(); v < made; ++v) movable[v] = !sweep && !half_lattice[v];
     for (std::size_t i = 0; i + 3 < faces.size(); i += 4) {
       std::array<index_t, 3> key{static_cast<index_t>(faces[i]), static_cast<index_t>(faces[i + 1]),
                                  static_cast<index_t>(faces[i + 2])};
@@ -1722,7 +2060,7 @@ TetMesh mesh_shape(const std::string& brep, const MeshShapeParameters& parameter
     }
     for (int round = 0; round < kQualityRounds; ++round) {
       std::vector<char> fixed(mesh.nb_tets(), 0);
-      for (index_t t = 0; t < mesh.nb_tets(); ++t) fixed[t] = in_one_cell(t);
+      for (index_t t = 0; t < mesh.nb_tets(); ++t) fixed[t] = in_one_cell(t) || in_one_slab(t);
       // Boundary faces swapped by an earlier round are not in face_marker: they stay (-1).
       std::vector<std::int32_t> boundary_patch(4 * static_cast<std::size_t>(mesh.nb_tets()), -1);
       for (index_t t = 0; t < mesh.nb_tets(); ++t)

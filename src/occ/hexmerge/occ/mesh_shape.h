@@ -59,6 +59,11 @@ struct MeshShapeParameters {
   /// Lattice orientation: "auto" (normals of the largest planar faces, else principal axes of
   /// inertia), "principal" (principal axes of inertia), "global" (x, y, z).
   std::string frame = "auto";
+  /// Where the shape is one solid swept along a lattice axis (a profile extruded between two
+  /// planar caps on lattice planes: plates with holes, cylinders, profiles), make the tets
+  /// swept too: the same cross-section on every lattice plane along the axis, so that they
+  /// recombine into hexahedra and prisms only, with no pyramids.
+  bool sweep = true;
   /// The TetGen program: a name looked up on PATH, or a path.
   std::string tetgen = "tetgen";
   /// A directory for TetGen's files, kept afterwards; empty: a temporary one, removed.
@@ -83,6 +88,7 @@ struct MeshShapeReport {
   std::size_t nb_edge_flips = 0;         ///< edge removals (3-2, 4-4, ...) taking out slivers
   std::size_t nb_boundary_swaps = 0;     ///< of which on the boundary, inside one planar face
   std::size_t nb_node_moves = 0;  ///< moves of boundary-layer and Steiner points (smooth_nodes)
+  int sweep_axis = -1;  ///< the lattice axis the tets are swept along (0..2), -1: not swept
   std::array<std::array<double, 3>, 3> frame{};  ///< lattice axes (rows), unit vectors
   std::array<double, 3> spacing{};               ///< lattice spacing along each axis
   double max_boundary_distance = 0.0;  ///< largest distance of a boundary node to the shape
