@@ -346,7 +346,7 @@ py::tuple run_regions_by_solid(const std::string& brep, const PointsIn& points, 
 
 py::tuple run_mesh_shape(const std::string& brep, double size, int boundary_layers,
                          double layer_thickness, double lattice_margin, double surface_deflection,
-                         const std::string& frame, const std::string& tetgen,
+                         const std::string& frame, bool sweep, const std::string& tetgen,
                          const std::string& work_directory) {
   MeshShapeParameters parameters;
   parameters.size = size;
@@ -355,6 +355,7 @@ py::tuple run_mesh_shape(const std::string& brep, double size, int boundary_laye
   parameters.lattice_margin = lattice_margin;
   parameters.surface_deflection = surface_deflection;
   parameters.frame = frame;
+  parameters.sweep = sweep;
   parameters.tetgen = tetgen;
   parameters.work_directory = work_directory;
   MeshShapeReport report;
@@ -380,6 +381,7 @@ py::tuple run_mesh_shape(const std::string& brep, double size, int boundary_laye
   d["nb_edge_flips"] = report.nb_edge_flips;
   d["nb_boundary_swaps"] = report.nb_boundary_swaps;
   d["nb_node_moves"] = report.nb_node_moves;
+  d["sweep_axis"] = report.sweep_axis;
   py::list axes;
   for (const auto& axis : report.frame) axes.append(py::make_tuple(axis[0], axis[1], axis[2]));
   d["frame"] = axes;
@@ -522,7 +524,8 @@ Returns (solids, report): solids int32 (M,), 0-based solid index in TopExp::MapS
   m.def("mesh_shape", &run_mesh_shape, py::arg("brep"), py::arg("size"),
         py::arg("boundary_layers") = 1, py::arg("layer_thickness") = 0.3,
         py::arg("lattice_margin") = 0.3, py::arg("surface_deflection") = 0.02,
-        py::arg("frame") = "auto", py::arg("tetgen") = "tetgen", py::arg("work_directory") = "",
+        py::arg("frame") = "auto", py::arg("sweep") = true, py::arg("tetgen") = "tetgen",
+        py::arg("work_directory") = "",
         R"doc(Lattice-seeded tets of a solid shape (BREP text) with OpenCASCADE and TetGen.
 
 See MeshShapeParameters (src/occ/hexmerge/occ/mesh_shape.h) for the options.

@@ -428,18 +428,8 @@ class Selector {
 
   void commit() { journaling_ = false; }
 
-  // The block, before anything else: the near-perfect hexahedra (structured regions, as a
-  // lattice core) that can all be kept together. Disjoint ones are taken by decreasing quality;
-  // then, until nothing changes, a hexahedron leaves the block when one of its quad faces is
-  // not on the domain boundary, not shared with a block hexahedron, and not closable by a
-  // pyramid of the two tets behind it that no other block quad touches (of two block hexahedra
-  // whose quads touch the same tet, the one with fewer faces shared with the block leaves, then
-  // the lesser; by quality alone, all 1 in a lattice, the hole that one missing closer leaves
-  // grew through the core: bracket h 1.38, 97 -> 33 % hex volume). What stays is chosen at once, a
-  // transaction that the greedy stages (one element at a time, and a block lost to one missing
-  // closer) cannot break up. Its open quads are left to them: each has a closing pyramid that no
-  // other quad needs, so both strategies keep it closable; a prism sharing it may close it
-  // instead.
+  // Whether every quad face of c is planar (to round-off): the hexahedra and prisms of swept
+  // meshes (a cross-section repeated from plane to plane) and of lattices.
   bool planar_quads(const Candidate& c) const {
     const CellDescriptor& d = descriptor(c.type);
     for (int f = 0; f < d.nb_faces; ++f) {
@@ -453,6 +443,23 @@ class Selector {
     return true;
   }
 
+  // The block, before anything else: the near-perfect hexahedra (structured regions, as a
+  // lattice core) and the hexahedra and prisms with planar quads (swept regions) that can all be
+  // kept together. Disjoint ones are taken, hexahedra first, by decreasing quality, ties by
+  // their centroids along a fixed direction: on a swept mesh the copies of one element on every
+  // plane then come in the same order against their rivals (two pairings of the same triangles),
+  // and every plane pairs its triangles alike (by candidate index, symmetric cross-sections
+  // paired differently from plane to plane and the block unravelled: 97 -> 40 % hex volume).
+  // Then, until nothing changes, a member leaves the block when one of its quad faces is not on
+  // the domain boundary, not shared with a member, and not closable by a pyramid of the two tets
+  // behind it that no other block quad touches (of two members whose quads touch the same tet,
+  // or whose quad meets the other's triangles, the one with fewer faces shared with the block
+  // leaves, then the lesser; by quality alone, all 1 in a lattice, the hole that one missing
+  // closer leaves grew through the core: bracket h 1.38, 97 -> 33 % hex volume). What stays is
+  // chosen at once, a transaction that the greedy stages (one element at a time, and a block
+  // lost to one missing closer) cannot break up. Its open quads are left to them: each has a
+  // closing pyramid that no other quad needs, so both strategies keep it closable; a prism
+  // sharing it may close it instead.
   void select_block() {
     std::vector<index_t> order;
     for (index_t ci = 0; ci < cands_.size(); ++ci) {
@@ -461,9 +468,19 @@ class Selector {
           ((c.type == CellType::Hex || c.type == CellType::Prism) && planar_quads(c)))
         order.push_back(ci);
     }
-    std::stable_sort(order.begin(), order.end(), [&](index_t a, index_t b) {
+    std::vector<double> along(cands_.size(), 0.0);  // centroid . direction, for the members
+    const Vec3 direction = Vec3{1.0, std::sqrt(2.0), std::sqrt(3.0)} * 0.5;
+    for (index_t ci : order) {
+      const Candidate& c = cands_[ci];
+      const int n = descriptor(c.type).nb_vertices;
+      for (int i = 0; i < n; ++i) along[ci] += Vec3::of(mesh_.point(c.vertices[i])).dot(direction);
+      along[ci] /= n;
+    }
+    std::sort(order.begin(), order.end(), [&](index_t a, index_t b) {
       if (cands_[a].type != cands_[b].type) return cands_[a].type == CellType::Hex;
-      return cands_[a].quality > cands_[b].quality;
+      if (cands_[a].quality != cands_[b].quality) return cands_[a].quality > cands_[b].quality;
+      if (along[a] != along[b]) return along[a] < along[b];
+      return a < b;
     });
     std::vector<index_t> block_of(mesh_.nb_tets(), NO_INDEX);
     std::vector<char> in_block(cands_.size(), 0);

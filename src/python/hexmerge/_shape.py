@@ -41,6 +41,11 @@ _MESH_TABLE: tuple[dict[str, Any], ...] = (
          choices=["auto", "principal", "global"], label="Lattice frame",
          doc="Orientation of the lattice: auto (normals of the largest planar faces, else the "
          "principal axes of inertia), principal (principal axes of inertia), global (x, y, z)"),
+    dict(name="sweep", type="bool", default=True, unit="", min=0, max=1, choices=[],
+         label="Sweep extrusions",
+         doc="Where the shape is one solid extruded along a lattice axis between two planar caps "
+         "(plates with holes, cylinders, profiles), sweep the tets too: the same cross-section "
+         "on every lattice plane, so that they recombine into hexahedra and prisms only"),
 )
 
 #: File name endings read_shape_file() takes.
@@ -55,7 +60,8 @@ def mesh_parameters() -> list[dict[str, Any]]:
     for row in _MESH_TABLE:
         row = dict(row, choices=list(row["choices"]))
         d = row["default"]
-        row["default_text"] = d if isinstance(d, str) else f"{d:g}"
+        row["default_text"] = (d if isinstance(d, str) else str(d).lower() if isinstance(d, bool)
+                               else f"{d:g}")
         rows.append(row)
     return rows
 
@@ -123,6 +129,8 @@ def _options(size: Any, given: dict[str, Any]) -> tuple[float, dict[str, Any]]:
             out[name] = int(value)
         elif row["type"] == "float":
             out[name] = _number(name, value)
+        elif row["type"] == "bool":
+            out[name] = _flag(name, value)
         elif not isinstance(value, str) or value not in row["choices"]:
             raise _core.InputError(f"{name} must be one of {', '.join(row['choices'])}, got {value!r}")
         else:
@@ -161,6 +169,7 @@ def mesh_shape(
     lattice_margin: float = 0.3,
     surface_deflection: float = 0.02,
     frame: str = "auto",
+    sweep: bool = True,
     tetgen: str = "tetgen",
     work_directory: str | os.PathLike[str] | None = None,
     second_order: bool = False,
@@ -178,7 +187,7 @@ def mesh_shape(
     size : float
         Target element size h in the shape's units: the lattice spacing and the surface's
         longest edge. Positive and not larger than the shape.
-    boundary_layers, layer_thickness, lattice_margin, surface_deflection, frame
+    boundary_layers, layer_thickness, lattice_margin, surface_deflection, frame, sweep
         The mesher's options, see mesh_parameters() (fractions of h where they are lengths).
     tetgen : str
         The TetGen program (a name on PATH or a path).
@@ -200,8 +209,8 @@ def mesh_shape(
     (MixedMesh, dict)
         The mesh (regions: the index of the solid holding each cell) and the report: with
         recombine, recombine()'s report; in both cases the mesher's report under ``"meshing"``
-        (counts, ``frame``, ``spacing``, ``max_boundary_distance`` of the corner nodes to the
-        CAD, ``phase_seconds``, ``seconds``, ``tets``, ``points``, ``parameters``).
+        (counts, ``frame``, ``spacing``, ``sweep_axis`` (the frame axis the tets are swept
+        along, -1: not swept), ``max_boundary_distance`` of the corner nodes to the CAD, ``phase_seconds``, ``seconds``, ``tets``, ``points``, ``parameters``).
 
     Raises
     ------
@@ -218,7 +227,8 @@ def mesh_shape(
     fn = _validate.progress_function(progress)
     size, options = _options(size, dict(
         boundary_layers=boundary_layers, layer_thickness=layer_thickness,
-        lattice_margin=lattice_margin, surface_deflection=surface_deflection, frame=frame))
+        lattice_margin=lattice_margin, surface_deflection=surface_deflection, frame=frame,
+        sweep=sweep))
     if not isinstance(tetgen, (str, os.PathLike)) or not os.fspath(tetgen):
         raise _core.InputError(f"tetgen must be the TetGen program's name or path, got {tetgen!r}")
     if work_directory is not None and not isinstance(work_directory, (str, os.PathLike)):
