@@ -130,7 +130,9 @@ def _options(size: Any, given: dict[str, Any]) -> tuple[float, dict[str, Any]]:
         elif row["type"] == "float":
             out[name] = _number(name, value)
         elif row["type"] == "bool":
-            out[name] = _flag(name, value)
+            if not isinstance(value, (bool, np.bool_)):
+                raise _core.InputError(f"{name} must be True or False, got {value!r}")
+            out[name] = bool(value)
         elif not isinstance(value, str) or value not in row["choices"]:
             raise _core.InputError(f"{name} must be one of {', '.join(row['choices'])}, got {value!r}")
         else:
