@@ -28,6 +28,15 @@
 ///     needle triangles are smoothed on their face after step 1, and the layers' depths vary by
 ///     up to 10 % per node so that the layers' sides are not cocircular quads.
 ///
+/// A swept shape (one solid, a profile extruded along a lattice axis between two planar caps on
+/// lattice planes: cylinders, plates with holes, profiles) is meshed as a sweep instead: the
+/// bottom cap's boundary is split to at most h and repeated on every lattice plane along the
+/// axis, the walls are strips of two triangles per side and slab (no refinement), the layers
+/// are placed on the bottom plane and repeated, and no closing pyramids are needed across the
+/// axis. Every plane then has the same points, every tet lies between two consecutive planes,
+/// and the tets of a slab are prisms over the cross-section's triangles, which the engine's
+/// block pairs into hexahedra (cylinder: 95 % hex volume, the rest prisms, no tets).
+///
 /// The header needs no OpenCASCADE include: shapes come in as BREP text.
 
 #include <array>
