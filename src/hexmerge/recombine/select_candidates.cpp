@@ -461,37 +461,56 @@ class Selector {
   // closing pyramid that no other quad needs, so both strategies keep it closable; a prism
   // sharing it may close it instead.
   void select_block() {
-    std::vector<index_t> order;
-    for (index_t ci = 0; ci < cands_.size(); ++ci) {
-      const Candidate& c = cands_[ci];
-      if ((c.type == CellType::Hex && c.quality >= kBlockQuality) ||
-          ((c.type == CellType::Hex || c.type == CellType::Prism) && planar_quads(c)))
-        order.push_back(ci);
-    }
     std::vector<double> along(cands_.size(), 0.0);  // centroid . direction, for the members
     const Vec3 direction = Vec3{1.0, std::sqrt(2.0), std::sqrt(3.0)} * 0.5;
-    for (index_t ci : order) {
-      const Candidate& c = cands_[ci];
-      const int n = descriptor(c.type).nb_vertices;
-      for (int i = 0; i < n; ++i) along[ci] += Vec3::of(mesh_.point(c.vertices[i])).dot(direction);
-      along[ci] /= n;
-    }
-    std::sort(order.begin(), order.end(), [&](index_t a, index_t b) {
-      if (cands_[a].type != cands_[b].type) return cands_[a].type == CellType::Hex;
-      if (cands_[a].quality != cands_[b].quality) return cands_[a].quality > cands_[b].quality;
-      if (along[a] != along[b]) return along[a] < along[b];
-      return a < b;
-    });
+    auto rank = [&](std::vector<index_t>& list) {
+      for (index_t ci : list) {
+        const Candidate& c = cands_[ci];
+        const int n = descriptor(c.type).nb_vertices;
+        for (int i = 0; i < n; ++i) along[ci] += Vec3::of(mesh_.point(c.vertices[i])).dot(direction);
+        along[ci] /= n;
+      }
+      std::sort(list.begin(), list.end(), [&](index_t a, index_t b) {
+        if (cands_[a].type != cands_[b].type) return cands_[a].type == CellType::Hex;
+        if (cands_[a].quality != cands_[b].quality) return cands_[a].quality > cands_[b].quality;
+        if (along[a] != along[b]) return along[a] < along[b];
+        return a < b;
+      });
+    };
     std::vector<index_t> block_of(mesh_.nb_tets(), NO_INDEX);
     std::vector<char> in_block(cands_.size(), 0);
-    for (index_t ci : order) {
+    auto is_free = [&](const Candidate& c) {
+      for (int i = 0; i < c.nb_tets; ++i) {
+        if (block_of[c.tets[i]] != NO_INDEX) return false;
+      }
+      return true;
+    };
+    auto take_disjoint = [&](const std::vector<index_t>& list) {
+      for (index_t ci : list) {
+        const Candidate& c = cands_[ci];
+        if (!is_free(c)) continue;
+        for (int i = 0; i < c.nb_tets; ++i) block_of[c.tets[i]] = ci;
+        in_block[ci] = 1;
+      }
+    };
+    // The near-perfect hexahedra, then the planar-quad ones on the tets they leave (all ranked
+    // below them: by type, then quality), so that only those are tested for planarity.
+    std::vector<index_t> order, planar;
+    for (index_t ci = 0; ci < cands_.size(); ++ci) {
       const Candidate& c = cands_[ci];
-      bool disjoint = true;
-      for (int i = 0; i < c.nb_tets && disjoint; ++i) disjoint = block_of[c.tets[i]] == NO_INDEX;
-      if (!disjoint) continue;
-      for (int i = 0; i < c.nb_tets; ++i) block_of[c.tets[i]] = ci;
-      in_block[ci] = 1;
+      if (c.type == CellType::Hex && c.quality >= kBlockQuality) order.push_back(ci);
     }
+    rank(order);
+    take_disjoint(order);
+    for (index_t ci = 0; ci < cands_.size(); ++ci) {
+      const Candidate& c = cands_[ci];
+      if ((c.type == CellType::Prism || (c.type == CellType::Hex && c.quality < kBlockQuality)) &&
+          is_free(c) && planar_quads(c))
+        planar.push_back(ci);
+    }
+    rank(planar);
+    take_disjoint(planar);
+    order.insert(order.end(), planar.begin(), planar.end());
     // The block hexahedron other than `except` whose quad face meets tet t (not in the block),
     // or NO_INDEX.
     auto other_quad_at = [&](index_t t, index_t except) {
