@@ -453,12 +453,13 @@ def test_cli_mesh(shapes, tmp_path, capsys) -> None:
 def test_cli_mesh_options(shapes, tmp_path, capsys) -> None:
     out, stats = tmp_path / "plate.vtu", tmp_path / "r.json"
     args = ["mesh", str(shapes["plate"]), "-h", "10", "-o", str(out), "--second-order", "--layers", "0",
-            "--frame", "global", "--min-scaled-jacobian", "0.2", "--stats",
+            "--frame", "global", "--no-sweep", "--min-scaled-jacobian", "0.2", "--stats",
             str(stats), "-q"]
     assert cli.main(args) == 0
     assert capsys.readouterr().out == ""
     report = json.loads(stats.read_text())
-    assert report["mesh_options"] == {"boundary_layers": 0, "frame": "global"}
+    assert report["mesh_options"] == {"boundary_layers": 0, "frame": "global", "sweep": False}
+    assert report["report"]["meshing"]["sweep_axis"] == -1  # the plate is an extrusion
     assert report["options"] == {"min_scaled_jacobian": 0.2}
     assert report["order"] == 2
     types = {c.type for c in meshio.read(out).cells}
