@@ -376,6 +376,7 @@ py::tuple run_mesh_shape(const std::string& brep, double size, int boundary_laye
   d["nb_layer_points"] = report.nb_layer_points;
   d["nb_steiner_points"] = report.nb_steiner_points;
   d["nb_nudged_points"] = report.nb_nudged_points;
+  d["nb_tetgen_restarts"] = report.nb_tetgen_restarts;
   d["min_tet_quality_before"] = report.min_tet_quality_before;
   d["nb_face_flips"] = report.nb_face_flips;
   d["nb_edge_flips"] = report.nb_edge_flips;

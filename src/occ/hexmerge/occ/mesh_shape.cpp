@@ -35,6 +35,7 @@
 #include <memory>
 #include <optional>
 #include <sstream>
+#include <sys/wait.h>
 #include <unordered_map>
 #include <unordered_set>
 #include <vector>
@@ -506,6 +507,8 @@ constexpr double kNeedleAngle = 20.0 * M_PI / 180;
 constexpr double kNeedleNearest = 0.125;
 // Largest relative change of a boundary layer's depth from one node to the next.
 constexpr double kLayerJitter = 0.1;
+// Times TetGen is run again, its lattice faces' loops started elsewhere, when it does not finish.
+constexpr int kTetgenRestarts = 5;
 // Rounds of flips (remove_slivers) and node moves (smooth_nodes) after TetGen; the last is flips.
 constexpr int kQualityRounds = 4;
 
@@ -919,6 +922,47 @@ void collapse_short_sides(Surface& surface, double target, const std::vector<boo
   surface = std::move(out);
 }
 
+// Puts the nodes of each straight CAD edge that bounds a lattice face and runs across two frame
+// axes exactly on one line (nodes in frame coordinates). TetGen 1.5 never ended, or lost the
+// face, on lattice faces whose loop had a nearly collinear run (a hexagonal prism's caps, a
+// trapezoid's). The edge's ends go to a grid of 2^-40 of the shape's size along those two axes,
+// and every node between to their exact binary interpolation at its parameter, rounded to 2^-20
+// of the edge (bisection and the sweep's power-of-two pieces give such parameters).
+void align_straight_edges(const Shape& s, const Surface& surface,
+                          const std::vector<bool>& lattice_face, double largest,
+                          std::vector<Vec3>& nodes) {
+  std::map<int, std::vector<std::pair<double, int>>> on_edge;  // edge -> (parameter, node)
+  for (const auto& [key, segment] : surface.segments) {
+    const auto& faces = s.edge_faces[segment.edge];
+    if (std::none_of(faces.begin(), faces.end(), [&](int f) { return lattice_face[f]; }))
+      continue;
+    auto& list = on_edge[segment.edge];
+    list.emplace_back(segment.t_lo, static_cast<int>(key >> 32));  // the smaller id
+    list.emplace_back(segment.t_hi, static_cast<int>(key & 0xffffffffu));
+  }
+  const int exponent = std::ilogb(largest) - 40;
+  auto grid = [&](double x) { return std::ldexp(std::round(std::ldexp(x, -exponent)), exponent); };
+  for (auto& [edge, list] : on_edge) {
+    if (BRepAdaptor_Curve(TopoDS::Edge(s.edges(edge + 1))).GetType() != GeomAbs_Line) continue;
+    std::sort(list.begin(), list.end());
+    list.erase(std::unique(list.begin(), list.end()), list.end());
+    const double t0 = list.front().first, t1 = list.back().first;
+    Vec3& a = nodes[list.front().second];
+    Vec3& b = nodes[list.back().second];
+    std::vector<int> across;  // the axes the edge runs across
+    for (int c = 0; c < 3; ++c)
+      if (coord(a, c) != coord(b, c)) across.push_back(c);
+    if (across.size() < 2 || t1 <= t0) continue;
+    for (int c : across) set_coord(a, c, grid(coord(a, c))), set_coord(b, c, grid(coord(b, c)));
+    for (std::size_t k = 1; k + 1 < list.size(); ++k) {
+      const double f =
+          std::ldexp(std::round(std::ldexp((list[k].first - t0) / (t1 - t0), 20)), -20);
+      for (int c : across)
+        set_coord(nodes[list[k].second], c, coord(a, c) + (coord(b, c) - coord(a, c)) * f);
+    }
+  }
+}
+
 // A planar face normal to a frame axis: the axis and the face's offset along it.
 struct AxisPlane {
   int axis;
@@ -1064,11 +1108,13 @@ SweptSurface sweep_surface(const Shape& s, const Sweep& sweep, const Frame& fram
   // Long sides on walls that are not lattice faces: split evenly along their CAD edge, the
   // triangle on them cut into a fan.
   std::vector<Side> sides;
+  std::unordered_map<std::uint64_t, EdgeSegment> segments;  // of the sides, old numbering
   for (const Side& side : boundary) {
     const auto segment = surface.segments.find(pair_key(side.from, side.to));
     const double length = (surface.nodes[side.to] - surface.nodes[side.from]).norm();
-    const int pieces = static_cast<int>(std::ceil(length / target - 1e-9));
+    int pieces = static_cast<int>(std::ceil(length / target - 1e-9));
     if (lattice_face[side.wall] || segment == surface.segments.end() || pieces <= 1) {
+      if (segment != surface.segments.end()) segments.insert(*segment);
       sides.push_back(side);
       continue;
     }
@@ -1076,6 +1122,10 @@ SweptSurface sweep_surface(const Shape& s, const Sweep& sweep, const Frame& fram
     const double t_from = side.from < side.to ? e.t_lo : e.t_hi;
     const double t_to = side.from < side.to ? e.t_hi : e.t_lo;
     const BRepAdaptor_Curve curve(TopoDS::Edge(s.edges(e.edge + 1)));
+    // A straight side is split into a power of two of pieces, so that align_straight_edges()
+    // can put its nodes exactly on one line.
+    const bool straight = curve.GetType() == GeomAbs_Line;
+    if (straight) pieces = 1 << static_cast<int>(std::ceil(std::log2(pieces) - 1e-9));
     const int ti = triangle_at.at(directed(side.from, side.to));
     const SurfaceTriangle t = bottom[ti];
     const int c = side_with_key(t, pair_key(side.from, side.to));
@@ -1088,6 +1138,11 @@ SweptSurface sweep_surface(const Shape& s, const Sweep& sweep, const Frame& fram
         surface.nodes.push_back(of(curve.Value(t_from + (t_to - t_from) * i / pieces)));
         surface.node_face.push_back(t.face);
       }
+      // The piece's segment of the CAD edge, at its parameters.
+      const double ta = t_from + (t_to - t_from) * (i - 1) / pieces;
+      const double tb = i == pieces ? t_to : t_from + (t_to - t_from) * i / pieces;
+      segments[pair_key(previous, next)] =
+          previous < next ? EdgeSegment{e.edge, ta, tb} : EdgeSegment{e.edge, tb, ta};
       const SurfaceTriangle piece{{previous, next, apex}, {}, t.face};
       if (i == 1)
         bottom[ti] = piece;
@@ -1148,6 +1203,9 @@ SweptSurface sweep_surface(const Shape& s, const Sweep& sweep, const Frame& fram
       result.base.push_back(static_cast<int>(i));
     }
   swept.seed = result.base;
+  // The bottom plane's segments (the planes above repeat its nodes, see mesh_shape).
+  for (const auto& [key, segment] : segments)
+    swept.segments[pair_key(renumber[key >> 32], renumber[key & 0xffffffffu])] = segment;
   for (const SurfaceTriangle& t : bottom)
     swept.triangles.push_back(
         {{renumber[t.node[0]], renumber[t.node[1]], renumber[t.node[2]]}, {}, t.face});
@@ -1168,7 +1226,7 @@ SweptSurface sweep_surface(const Shape& s, const Sweep& sweep, const Frame& fram
     swept.triangles.push_back(
         {{copy[levels][a], copy[levels][c], copy[levels][b]}, {}, top_face(centroid)});
   }
-  surface = std::move(swept);  // the segments are not needed past the refinement, skipped here
+  surface = std::move(swept);
   return result;
 }
 
@@ -1531,10 +1589,11 @@ TetMesh mesh_shape(const std::string& brep, const MeshShapeParameters& parameter
         const double k = std::round(coord(nodes[n], plane.axis) / report.spacing[plane.axis]);
         set_coord(nodes[n], plane.axis, k * report.spacing[plane.axis]);
       }
+  align_straight_edges(shape, surface, lattice_face, largest, nodes);
   if (sweep) {
+    const int a = sweep->axis;
     // Every node exactly on its lattice plane, and across the axis exactly where the node on the
     // bottom plane it repeats is: the slabs are then equal to the last bit.
-    const int a = sweep->axis;
     for (std::size_t i = 0; i < nodes.size(); ++i) {
       const double level = std::round(coord(nodes[i], a) / report.spacing[a]);
       Vec3 p = nodes[swept.base[i]];
@@ -1924,9 +1983,38 @@ TetMesh mesh_shape(const std::string& brep, const MeshShapeParameters& parameter
   report.tetgen_command = shell_quote(tetgen) + " -pYzQ " + shell_quote(poly.string());
   const std::size_t given = nodes.size() + inserted.size();
   std::vector<double> frame_points;
+  // TetGen 1.5 can fail to triangulate a lattice face from its loops: it never ends, or leaves
+  // the face with a gap and every tet counted as outside. Nearly collinear loop nodes did it
+  // (align_straight_edges() now prevents that), and whether it happened depended on the vertex
+  // the loop started at. So TetGen runs under a time limit, far above its own time (about 1 s
+  // per 20k points), and after a failure the loops start elsewhere.
+  const double time_limit = 30 + 1e-3 * static_cast<double>(nodes.size() + inserted.size());
+  const std::string limited = "timeout -k 5 " + std::to_string(static_cast<int>(time_limit)) + " ";
+  int restarts = 0;
   for (int attempt = 0;; ++attempt) {
-    const int status =
-        std::system((report.tetgen_command + " > " + shell_quote(log.string()) + " 2>&1").c_str());
+    const int status = std::system(
+        (limited + report.tetgen_command + " > " + shell_quote(log.string()) + " 2>&1").c_str());
+    const bool timed_out = WIFEXITED(status) && WEXITSTATUS(status) == 124;
+    if (timed_out || (status == 0 && !fs::exists(work.path() / "shape.1.ele"))) {
+      if (++restarts > kTetgenRestarts)
+        throw InputError(std::string("TetGen ") +
+                         (timed_out ? "did not finish within " + std::to_string(int(time_limit)) + " s"
+                                    : "lost the shape's surface (no tets inside)") +
+                         ", " + std::to_string(restarts) +
+                         " times with the lattice faces' loops started at other vertices; try "
+                         "another size\n(command: " + report.tetgen_command + ")");
+      for (Facet& facet : facets)
+        for (auto& polygon : facet.polygons)
+          if (polygon.size() > 3)
+            std::rotate(polygon.begin(),
+                        polygon.begin() + static_cast<std::ptrdiff_t>(
+                                              (7919u * static_cast<unsigned>(restarts)) % polygon.size()),
+                        polygon.end());
+      ++report.nb_tetgen_restarts;
+      write_poly();
+      --attempt;  // a restart is not a nudge
+      continue;
+    }
     if (status != 0 || !fs::exists(work.path() / "shape.1.ele"))
       throw InputError("TetGen failed (exit status " + std::to_string(status) +
                        ") on the shape's surface "
