@@ -346,8 +346,8 @@ py::tuple run_regions_by_solid(const std::string& brep, const PointsIn& points, 
 
 py::tuple run_mesh_shape(const std::string& brep, double size, int boundary_layers,
                          double layer_thickness, double lattice_margin, double surface_deflection,
-                         const std::string& frame, bool sweep, const std::string& tetgen,
-                         const std::string& work_directory) {
+                         const std::string& frame, bool sweep, double tetgen_time_limit,
+                         const std::string& tetgen, const std::string& work_directory) {
   MeshShapeParameters parameters;
   parameters.size = size;
   parameters.boundary_layers = boundary_layers;
@@ -356,6 +356,7 @@ py::tuple run_mesh_shape(const std::string& brep, double size, int boundary_laye
   parameters.surface_deflection = surface_deflection;
   parameters.frame = frame;
   parameters.sweep = sweep;
+  parameters.tetgen_time_limit = tetgen_time_limit;
   parameters.tetgen = tetgen;
   parameters.work_directory = work_directory;
   MeshShapeReport report;
@@ -525,7 +526,8 @@ Returns (solids, report): solids int32 (M,), 0-based solid index in TopExp::MapS
   m.def("mesh_shape", &run_mesh_shape, py::arg("brep"), py::arg("size"),
         py::arg("boundary_layers") = 1, py::arg("layer_thickness") = 0.3,
         py::arg("lattice_margin") = 0.3, py::arg("surface_deflection") = 0.02,
-        py::arg("frame") = "auto", py::arg("sweep") = true, py::arg("tetgen") = "tetgen",
+        py::arg("frame") = "auto", py::arg("sweep") = true, py::arg("tetgen_time_limit") = 0.0,
+        py::arg("tetgen") = "tetgen",
         py::arg("work_directory") = "",
         R"doc(Lattice-seeded tets of a solid shape (BREP text) with OpenCASCADE and TetGen.
 

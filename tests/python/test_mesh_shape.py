@@ -414,7 +414,8 @@ def test_mesh_parameters_are_the_compiled_defaults() -> None:
             row["type"], lambda: float(compiled))()
         assert value == row["default"], row["name"]
     assert [r["name"] for r in hexmerge.mesh_parameters()] == [
-        "boundary_layers", "layer_thickness", "lattice_margin", "surface_deflection", "frame", "sweep"]
+        "boundary_layers", "layer_thickness", "lattice_margin", "surface_deflection", "frame", "sweep",
+        "tetgen_time_limit"]
 
 
 @pytest.mark.parametrize(
@@ -431,6 +432,7 @@ def test_mesh_parameters_are_the_compiled_defaults() -> None:
         ("box", {"size": 10.0, "boundary_layers": 1.5}, "boundary_layers must be a whole number"),
         ("box", {"size": 10.0, "frame": "diagonal"}, "frame must be one of"),
         ("box", {"size": 10.0, "sweep": "yes"}, "sweep must be True or False"),
+        ("box", {"size": 10.0, "tetgen_time_limit": -1.0}, "tetgen_time_limit must be"),
         ("box", {"size": 10.0, "layer_thickness": 5.0}, "layer_thickness"),
         ("missing", {"size": 10.0}, "no such file"),
         ("not brep", {"size": 10.0}, "file name must end in"),
@@ -449,6 +451,21 @@ def test_bad_input(shapes, tmp_path, shape, kwargs, message) -> None:
         shape = shapes[shape]
     with pytest.raises(hexmerge.InputError, match=message):
         hexmerge.mesh_shape(shape, **kwargs)
+
+
+@pytest.mark.parametrize(("script", "limit", "message"), [
+    ("exit 0", 0.0, "TetGen lost the shape's surface \\(no tets inside\\), 6 times"),
+    ("sleep 30", 0.5, "TetGen did not finish within 0.5 s, 6 times"),
+])
+def test_tetgen_failures_are_restarted_then_reported(shapes, tmp_path, script, limit, message) -> None:
+    """A TetGen that leaves no tets, or never ends (as TetGen 1.5 did on some lattice faces), is
+    run 6 times (5 restarts, the loops started elsewhere), then the meshing fails saying so."""
+    fake = tmp_path / "tetgen"
+    fake.write_text(f"#!/bin/sh\necho started >> {tmp_path / 'runs'}\n{script}\n")
+    fake.chmod(0o755)
+    with pytest.raises(hexmerge.InputError, match=message):
+        hexmerge.mesh_shape(shapes["box"], 10.0, tetgen=str(fake), tetgen_time_limit=limit)
+    assert (tmp_path / "runs").read_text().count("started") == 6
 
 
 def test_bad_flags(shapes) -> None:

@@ -46,6 +46,11 @@ _MESH_TABLE: tuple[dict[str, Any], ...] = (
          doc="Where the shape is one solid extruded along a lattice axis between two planar caps "
          "(plates with holes, cylinders, profiles), sweep the tets too: the same cross-section "
          "on every lattice plane, so that they recombine into hexahedra and prisms only"),
+    dict(name="tetgen_time_limit", type="float", default=0.0, unit="s", min=0.0, max=86400.0,
+         choices=[], label="TetGen time limit",
+         doc="Time limit of one TetGen run (0: 30 s plus 1 ms per point); a run past it, or one "
+         "that leaves no tet, is restarted with the lattice faces' loops started elsewhere, up to "
+         "5 times, then the meshing fails"),
 )
 
 #: File name endings read_shape_file() takes.
@@ -172,6 +177,7 @@ def mesh_shape(
     surface_deflection: float = 0.02,
     frame: str = "auto",
     sweep: bool = True,
+    tetgen_time_limit: float = 0.0,
     tetgen: str = "tetgen",
     work_directory: str | os.PathLike[str] | None = None,
     second_order: bool = False,
@@ -189,7 +195,8 @@ def mesh_shape(
     size : float
         Target element size h in the shape's units: the lattice spacing and the surface's
         longest edge. Positive and not larger than the shape.
-    boundary_layers, layer_thickness, lattice_margin, surface_deflection, frame, sweep
+    boundary_layers, layer_thickness, lattice_margin, surface_deflection, frame, sweep,
+    tetgen_time_limit
         The mesher's options, see mesh_parameters() (fractions of h where they are lengths).
     tetgen : str
         The TetGen program (a name on PATH or a path).
@@ -230,7 +237,7 @@ def mesh_shape(
     size, options = _options(size, dict(
         boundary_layers=boundary_layers, layer_thickness=layer_thickness,
         lattice_margin=lattice_margin, surface_deflection=surface_deflection, frame=frame,
-        sweep=sweep))
+        sweep=sweep, tetgen_time_limit=tetgen_time_limit))
     if not isinstance(tetgen, (str, os.PathLike)) or not os.fspath(tetgen):
         raise _core.InputError(f"tetgen must be the TetGen program's name or path, got {tetgen!r}")
     if work_directory is not None and not isinstance(work_directory, (str, os.PathLike)):

@@ -1472,6 +1472,8 @@ void check_parameters(const MeshShapeParameters& p) {
   if (p.frame != "auto" && p.frame != "principal" && p.frame != "global")
     bad("frame must be \"auto\", \"principal\" or \"global\"");
   if (p.tetgen.empty()) bad("tetgen must name the TetGen program");
+  if (!(p.tetgen_time_limit >= 0) || !std::isfinite(p.tetgen_time_limit))
+    bad("tetgen_time_limit must be a number of seconds >= 0");
 }
 
 }  // namespace
@@ -1988,8 +1990,13 @@ TetMesh mesh_shape(const std::string& brep, const MeshShapeParameters& parameter
   // (align_straight_edges() now prevents that), and whether it happened depended on the vertex
   // the loop started at. So TetGen runs under a time limit, far above its own time (about 1 s
   // per 20k points), and after a failure the loops start elsewhere.
-  const double time_limit = 30 + 1e-3 * static_cast<double>(nodes.size() + inserted.size());
-  const std::string limited = "timeout -k 5 " + std::to_string(static_cast<int>(time_limit)) + " ";
+  const double time_limit =
+      parameters.tetgen_time_limit > 0
+          ? parameters.tetgen_time_limit
+          : 30 + 1e-3 * static_cast<double>(nodes.size() + inserted.size());
+  std::ostringstream limit_text;
+  limit_text << time_limit;
+  const std::string limited = "timeout -k 5 " + limit_text.str() + " ";
   int restarts = 0;
   for (int attempt = 0;; ++attempt) {
     const int status = std::system(
@@ -1998,7 +2005,7 @@ TetMesh mesh_shape(const std::string& brep, const MeshShapeParameters& parameter
     if (timed_out || (status == 0 && !fs::exists(work.path() / "shape.1.ele"))) {
       if (++restarts > kTetgenRestarts)
         throw InputError(std::string("TetGen ") +
-                         (timed_out ? "did not finish within " + std::to_string(int(time_limit)) + " s"
+                         (timed_out ? "did not finish within " + limit_text.str() + " s"
                                     : "lost the shape's surface (no tets inside)") +
                          ", " + std::to_string(restarts) +
                          " times with the lattice faces' loops started at other vertices; try "

@@ -73,6 +73,11 @@ struct MeshShapeParameters {
   /// swept too: the same cross-section on every lattice plane along the axis, so that they
   /// recombine into hexahedra and prisms only, with no pyramids.
   bool sweep = true;
+  /// Time limit of one TetGen run, in seconds; 0: 30 s plus 1 ms per point (far above TetGen's
+  /// own time, about 1 s per 20k points). A run past it (TetGen 1.5 can loop on a lattice face),
+  /// or one that leaves no tet, is restarted with the lattice faces' loops started at other
+  /// vertices, up to 5 times; then mesh_shape fails, saying so. >= 0.
+  double tetgen_time_limit = 0.0;
   /// The TetGen program: a name looked up on PATH, or a path.
   std::string tetgen = "tetgen";
   /// A directory for TetGen's files, kept afterwards; empty: a temporary one, removed.
