@@ -22,7 +22,9 @@
 ///     is smooth and there is room, so that the boundary becomes prisms;
 ///  5. TetGen tetrahedralises the surface (kept as it is, `-pY`) with the points as isolated
 ///     vertices of its input (not `-i`: non-Delaunay lattice tets), through its files; the tets are
-///     read back, oriented, and given the solid that holds them as region;
+///     read back, oriented, and given the solid that holds them as region. The nodes of straight
+///     edges across the lattice on lattice faces are put exactly on one line first (TetGen 1.5
+///     loops on nearly collinear loop nodes), and TetGen runs under a time limit;
 ///  6. flips (remove_slivers) alternate with moves of the boundary-layer and Steiner points
 ///     (smooth_nodes), neither ever lowering the smallest scaled Jacobian. Surface nodes in
 ///     needle triangles are smoothed on their face after step 1, and the layers' depths vary by
