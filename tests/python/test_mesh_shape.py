@@ -498,6 +498,7 @@ def test_cli_mesh(shapes, tmp_path, capsys) -> None:
     for text in ("tets", "hex volume", "reduction", "non-conforming quads",
                  "min scaled Jacobian", "max boundary distance", " s -> "):
         assert text in line, line
+    assert "swept" not in line  # the bracket is no extrusion
     report = json.loads(stats.read_text())
     assert report["size"] == 4.0 and report["report"]["meshing"]["tets"] == report["report"]["input_tets"]
     assert cli.main(["mesh", str(shapes["bracket"]), "-h", "4", "-o", str(tets), "--tets-only"]) == 0
@@ -525,6 +526,8 @@ def test_cli_mesh_options(shapes, tmp_path, capsys) -> None:
     assert report["order"] == 2
     types = {c.type for c in meshio.read(out).cells}
     assert types <= {"tetra10", "pyramid13", "wedge15", "hexahedron20"} and "hexahedron20" in types
+    assert cli.main(["mesh", str(shapes["plate"]), "-h", "10", "-o", str(tmp_path / "swept.vtu")]) == 0
+    assert "tets swept along lattice axis 2," in capsys.readouterr().out
 
 
 @pytest.mark.parametrize(

@@ -302,8 +302,9 @@ def cmd_recombine(args: argparse.Namespace) -> int:
 
 def _mesh_summary(args: argparse.Namespace, mesh: _api.MixedMesh, report: dict[str, Any], seconds: float) -> str:
     meshing = report["meshing"]
+    swept = f" swept along lattice axis {meshing['sweep_axis']}" if meshing["sweep_axis"] >= 0 else ""
     head = (
-        f"{args.shape}: h {args.size:g}: {meshing['tets']} tets, max boundary distance "
+        f"{args.shape}: h {args.size:g}: {meshing['tets']} tets{swept}, max boundary distance "
         f"{meshing['max_boundary_distance']:.2g}"
     )
     if "output_counts" not in report:
