@@ -527,8 +527,7 @@ Returns (solids, report): solids int32 (M,), 0-based solid index in TopExp::MapS
         py::arg("boundary_layers") = 1, py::arg("layer_thickness") = 0.3,
         py::arg("lattice_margin") = 0.3, py::arg("surface_deflection") = 0.02,
         py::arg("frame") = "auto", py::arg("sweep") = true, py::arg("tetgen_time_limit") = 0.0,
-        py::arg("tetgen") = "tetgen",
-        py::arg("work_directory") = "",
+        py::arg("tetgen") = "tetgen", py::arg("work_directory") = "",
         R"doc(Lattice-seeded tets of a solid shape (BREP text) with OpenCASCADE and TetGen.
 
 See MeshShapeParameters (src/occ/hexmerge/occ/mesh_shape.h) for the options.

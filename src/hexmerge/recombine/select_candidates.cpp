@@ -467,7 +467,8 @@ class Selector {
       for (index_t ci : list) {
         const Candidate& c = cands_[ci];
         const int n = descriptor(c.type).nb_vertices;
-        for (int i = 0; i < n; ++i) along[ci] += Vec3::of(mesh_.point(c.vertices[i])).dot(direction);
+        for (int i = 0; i < n; ++i)
+          along[ci] += Vec3::of(mesh_.point(c.vertices[i])).dot(direction);
         along[ci] /= n;
       }
       std::sort(list.begin(), list.end(), [&](index_t a, index_t b) {

@@ -1,5 +1,7 @@
 #include "hexmerge/occ/mesh_shape.h"
 
+#include <sys/wait.h>
+
 #include <BRepAdaptor_Curve.hxx>
 #include <BRepAdaptor_Surface.hxx>
 #include <BRepGProp.hxx>
@@ -35,7 +37,6 @@
 #include <memory>
 #include <optional>
 #include <sstream>
-#include <sys/wait.h>
 #include <unordered_map>
 #include <unordered_set>
 #include <vector>
@@ -934,8 +935,7 @@ void align_straight_edges(const Shape& s, const Surface& surface,
   std::map<int, std::vector<std::pair<double, int>>> on_edge;  // edge -> (parameter, node)
   for (const auto& [key, segment] : surface.segments) {
     const auto& faces = s.edge_faces[segment.edge];
-    if (std::none_of(faces.begin(), faces.end(), [&](int f) { return lattice_face[f]; }))
-      continue;
+    if (std::none_of(faces.begin(), faces.end(), [&](int f) { return lattice_face[f]; })) continue;
     auto& list = on_edge[segment.edge];
     list.emplace_back(segment.t_lo, static_cast<int>(key >> 32));  // the smaller id
     list.emplace_back(segment.t_hi, static_cast<int>(key & 0xffffffffu));
@@ -1038,12 +1038,12 @@ std::optional<Sweep> find_sweep(const Shape& s, const Frame& frame,
           continue;
         int level = 0;  // the cap plane the edge lies in: -1 bottom, 1 top
         for (int i = 0; i <= 8 && ok; ++i) {
-          const double t = curve.FirstParameter() +
-                           (curve.LastParameter() - curve.FirstParameter()) * i / 8;
+          const double t =
+              curve.FirstParameter() + (curve.LastParameter() - curve.FirstParameter()) * i / 8;
           const double z = coord(frame.to_frame(of(curve.Value(t))), a);
-          const int here = std::abs(z) < tolerance                ? -1
+          const int here = std::abs(z) < tolerance               ? -1
                            : std::abs(z - extent[a]) < tolerance ? 1
-                                                                  : 0;
+                                                                 : 0;
           ok = here != 0 && (level == 0 || here == level);
           level = here;
         }
@@ -1167,7 +1167,8 @@ SweptSurface sweep_surface(const Shape& s, const Sweep& sweep, const Frame& fram
   std::vector<char> on_boundary(order.size(), 0);
   std::vector<int> wall_of(order.size(), -1);
   for (const Side& side : sides)
-    for (int n : {side.from, side.to}) on_boundary[renumber[n]] = 1, wall_of[renumber[n]] = side.wall;
+    for (int n : {side.from, side.to})
+      on_boundary[renumber[n]] = 1, wall_of[renumber[n]] = side.wall;
   // The top face holding point p (BRepMesh's triangles of the top faces tell which).
   const int axis = sweep.axis, u = (axis + 1) % 3, v = (axis + 2) % 3;
   auto top_face = [&](const Vec3& p) {
@@ -1197,7 +1198,7 @@ SweptSurface sweep_surface(const Shape& s, const Sweep& sweep, const Frame& fram
       if (k > 0 && k < levels && !on_boundary[i]) continue;
       copy[k][i] = static_cast<int>(swept.nodes.size());
       swept.nodes.push_back(surface.nodes[order[i]] + step * k);
-      swept.node_face.push_back(k == 0          ? surface.node_face[order[i]]
+      swept.node_face.push_back(k == 0           ? surface.node_face[order[i]]
                                 : on_boundary[i] ? wall_of[i]
                                                  : top_face(swept.nodes.back()));
       result.base.push_back(static_cast<int>(i));
@@ -1220,9 +1221,9 @@ SweptSurface sweep_surface(const Shape& s, const Sweep& sweep, const Frame& fram
   // The top caps: the bottom ones moved up and turned over.
   for (const SurfaceTriangle& t : bottom) {
     const int a = renumber[t.node[0]], b = renumber[t.node[1]], c = renumber[t.node[2]];
-    const Vec3 centroid =
-        (swept.nodes[copy[levels][a]] + swept.nodes[copy[levels][b]] + swept.nodes[copy[levels][c]]) *
-        (1.0 / 3);
+    const Vec3 centroid = (swept.nodes[copy[levels][a]] + swept.nodes[copy[levels][b]] +
+                           swept.nodes[copy[levels][c]]) *
+                          (1.0 / 3);
     swept.triangles.push_back(
         {{copy[levels][a], copy[levels][c], copy[levels][b]}, {}, top_face(centroid)});
   }
@@ -1990,10 +1991,9 @@ TetMesh mesh_shape(const std::string& brep, const MeshShapeParameters& parameter
   // (align_straight_edges() now prevents that), and whether it happened depended on the vertex
   // the loop started at. So TetGen runs under a time limit, far above its own time (about 1 s
   // per 20k points), and after a failure the loops start elsewhere.
-  const double time_limit =
-      parameters.tetgen_time_limit > 0
-          ? parameters.tetgen_time_limit
-          : 30 + 1e-3 * static_cast<double>(nodes.size() + inserted.size());
+  const double time_limit = parameters.tetgen_time_limit > 0
+                                ? parameters.tetgen_time_limit
+                                : 30 + 1e-3 * static_cast<double>(nodes.size() + inserted.size());
   std::ostringstream limit_text;
   limit_text << time_limit;
   const std::string limited = "timeout -k 5 " + limit_text.str() + " ";
@@ -2009,14 +2009,16 @@ TetMesh mesh_shape(const std::string& brep, const MeshShapeParameters& parameter
                                     : "lost the shape's surface (no tets inside)") +
                          ", " + std::to_string(restarts) +
                          " times with the lattice faces' loops started at other vertices; try "
-                         "another size\n(command: " + report.tetgen_command + ")");
+                         "another size\n(command: " +
+                         report.tetgen_command + ")");
       for (Facet& facet : facets)
         for (auto& polygon : facet.polygons)
           if (polygon.size() > 3)
-            std::rotate(polygon.begin(),
-                        polygon.begin() + static_cast<std::ptrdiff_t>(
-                                              (7919u * static_cast<unsigned>(restarts)) % polygon.size()),
-                        polygon.end());
+            std::rotate(
+                polygon.begin(),
+                polygon.begin() + static_cast<std::ptrdiff_t>(
+                                      (7919u * static_cast<unsigned>(restarts)) % polygon.size()),
+                polygon.end());
       ++report.nb_tetgen_restarts;
       write_poly();
       --attempt;  // a restart is not a nudge

@@ -99,7 +99,7 @@ struct MeshShapeReport {
   std::size_t nb_layer_points = 0;       ///< boundary-layer points inserted
   std::size_t nb_steiner_points = 0;     ///< points TetGen added
   std::size_t nb_nudged_points = 0;  ///< lattice points TetGen left out, moved by 1e-7 h, run again
-  std::size_t nb_tetgen_restarts = 0;  ///< TetGen runs that failed on a lattice face, restarted
+  std::size_t nb_tetgen_restarts = 0;    ///< TetGen runs that failed on a lattice face, restarted
   double min_tet_quality_before = 0.0;   ///< smallest scaled Jacobian of TetGen's tets
   std::size_t nb_face_flips = 0;         ///< 2-3 flips taking out slivers (remove_slivers)
   std::size_t nb_edge_flips = 0;         ///< edge removals (3-2, 4-4, ...) taking out slivers
