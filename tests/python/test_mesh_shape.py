@@ -65,6 +65,15 @@ Box(10) = {20, 0, 15, 10, 10, 10};
 BooleanDifference(11) = { Volume{1}; Delete; }{ Volume{10}; Delete; };
 """
 
+# Ten solids: a box cut in five along x, a cylinder through them all (bench/regions_by_solid.py).
+BOX_5_CYLINDER_GEO = """SetFactory("OpenCASCADE");
+For i In {0:4}
+  Box(i + 1) = {20 * i, 0, 0, 20, 40, 30};
+EndFor
+Cylinder(6) = {0, 20, 15, 100, 0, 0, 8};
+BooleanFragments{ Volume{1:5}; Delete; }{ Volume{6}; Delete; }
+"""
+
 
 def gmsh_brep(folder: Path, name: str, geo: Path | str) -> Path:
     """A .geo (file or text) written out as BREP by Gmsh's OpenCASCADE kernel (gmsh -0)."""
@@ -87,6 +96,7 @@ def shapes(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
     out["open_solid"] = gmsh_brep(folder, "open_solid", OPEN_SOLID_GEO)
     out["hexagonal_prism"] = gmsh_brep(folder, "hexagonal_prism", HEXAGONAL_PRISM_GEO)
     out["notched_trapezoid"] = gmsh_brep(folder, "notched_trapezoid", NOTCHED_TRAPEZOID_GEO)
+    out["box_5_cylinder"] = gmsh_brep(folder, "box_5_cylinder", BOX_5_CYLINDER_GEO)
     out["plate"] = PLATE
     return out
 
@@ -326,9 +336,35 @@ def test_straight_edges_across_the_lattice(shapes, name: str, h: float, sweep_ax
     meshing = report["meshing"]
     assert meshing["nb_tetgen_restarts"] == 0
     assert meshing["sweep_axis"] == sweep_axis
+    assert meshing["max_boundary_distance"] <= 1e-3 * h
     mesh, report = hexmerge.mesh_shape(shapes[name], h, **options)
     assert_checked(mesh, tets, report, h)
     assert report["volume_fraction"]["hex"] >= 0.55
+
+
+@needs_tetgen
+def test_solids_stacked_along_the_axis_are_swept(shapes) -> None:
+    """Ten solids, one cross-section (a cylinder through five boxes along x, every piece a solid):
+    swept along x, the walls split at the boxes' faces, the cylinder between two solids layered
+    on both sides. h 3: 92.8 % hex volume, the rest prisms, min SJ 0.31; unswept 67.9 %, 0.087
+    (h 2.5: 94.5 % against 75.0 %)."""
+    tets, report = hexmerge.mesh_shape(shapes["box_5_cylinder"], 3.0, recombine=False)
+    meshing = report["meshing"]
+    assert meshing["sweep_axis"] >= 0 and meshing["nb_solids"] == 10
+    assert np.array_equal(np.unique(tets.regions), np.arange(10))
+    frame = np.array(meshing["frame"])
+    assert np.allclose(np.abs(frame[meshing["sweep_axis"]]), [1, 0, 0])  # along x
+    q = tets.points @ frame.T
+    axis = meshing["sweep_axis"]
+    level = np.round((q[:, axis] - q[:, axis].min()) / meshing["spacing"][axis]).astype(np.int64)
+    cells = tets.cell_vertices.reshape(-1, 4).astype(np.int64)
+    assert (level[cells].max(axis=1) - level[cells].min(axis=1) == 1).all()
+    assert meshing["max_boundary_distance"] <= 1e-3 * 3.0
+    mesh, report = hexmerge.mesh_shape(shapes["box_5_cylinder"], 3.0)
+    result = assert_checked(mesh, tets, report, 3.0)
+    assert report["output_counts"]["tet"] == report["output_counts"]["pyramid"] == 0
+    assert report["volume_fraction"]["hex"] >= 0.9
+    assert result["min_scaled_jacobian"] >= 0.3
 
 
 @needs_tetgen

@@ -43,9 +43,10 @@ _MESH_TABLE: tuple[dict[str, Any], ...] = (
          "principal axes of inertia), principal (principal axes of inertia), global (x, y, z)"),
     dict(name="sweep", type="bool", default=True, unit="", min=0, max=1, choices=[],
          label="Sweep extrusions",
-         doc="Where the shape is one solid extruded along a lattice axis between two planar caps "
-         "(plates with holes, cylinders, profiles), sweep the tets too: the same cross-section "
-         "on every lattice plane, so that they recombine into hexahedra and prisms only"),
+         doc="Where the shape is one cross-section extruded along a lattice axis between two planar "
+         "caps (plates with holes, cylinders, profiles; one solid or several), sweep the tets "
+         "too: the same cross-section on every lattice plane, so that they recombine into "
+         "hexahedra and prisms only"),
     dict(name="tetgen_time_limit", type="float", default=0.0, unit="s", min=0.0, max=86400.0,
          choices=[], label="TetGen time limit",
          doc="Time limit of one TetGen run (0: 30 s plus 1 ms per point); a run past it, or one "

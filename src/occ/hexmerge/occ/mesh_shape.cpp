@@ -978,35 +978,42 @@ struct AxisPlane {
 // that make a good quad form a hexahedron: the transition between the lattice core and the
 // boundary layers recombines too, with no closing pyramids.
 
-// The caps of a swept shape (planar faces normal to the axis at either end of the shape's
-// extent along it); every other face is a wall.
+// A swept shape's faces: caps (planar, normal to the axis, on a lattice plane) and walls
+// (parallel to the axis, between two lattice planes).
 struct Sweep {
-  int axis = -1;                 // frame axis
-  std::vector<signed char> cap;  // per face: -1 bottom cap (offset 0), 1 top cap, 0 wall
+  int axis = -1;                          // frame axis
+  std::vector<int> cap;                   // per face: its lattice plane if a cap, else -1
+  std::vector<std::array<int, 2>> range;  // per wall: the lattice planes of its ends
 };
 
-// The frame axis along which the shape is swept: one solid whose faces are caps and walls, a wall
-// being a plane, cylinder or surface of extrusion parallel to the axis, bounded by lines along
-// the axis and by curves in the caps' planes, and at least one wall not a lattice face (a box is
-// a lattice already). The frame's third axis is tried first.
+// The frame axis along which the shape is swept: every face is a cap on a lattice plane or a wall
+// (a plane, cylinder or surface of extrusion parallel to the axis, bounded by lines along the
+// axis and by curves in lattice planes), there are caps on the first and the last plane, and at
+// least one wall is not a lattice face (a box is a lattice already). The frame's third axis is
+// tried first. Whether the cross-section is the same on every plane is sweep_surface()'s to see.
 std::optional<Sweep> find_sweep(const Shape& s, const Frame& frame,
                                 const std::vector<std::optional<AxisPlane>>& face_plane,
-                                const std::vector<bool>& lattice_face, const double (&extent)[3],
-                                double h) {
-  if (s.solids.Extent() != 1) return std::nullopt;
+                                const std::vector<bool>& lattice_face, const int (&cells)[3],
+                                const std::array<double, 3>& spacing, double h) {
   const double tolerance = 1e-7 * h;
   for (int a = 2; a >= 0; --a) {
     const Vec3& axis = frame.axis[a];
-    Sweep sweep{a, std::vector<signed char>(s.faces.Extent(), 0)};
+    // The lattice plane at offset z along the axis, or -1.
+    auto plane_at = [&](double z) {
+      const long k = std::lround(z / spacing[a]);
+      return std::abs(z - k * spacing[a]) < tolerance && k >= 0 && k <= cells[a]
+                 ? static_cast<int>(k)
+                 : -1;
+    };
+    const int nb_faces = s.faces.Extent();
+    Sweep sweep{a, std::vector<int>(nb_faces, -1), std::vector<std::array<int, 2>>(nb_faces)};
     bool ok = true, bottom = false, top = false, unaligned_wall = false;
-    for (int f = 0; f < s.faces.Extent() && ok; ++f) {
+    for (int f = 0; f < nb_faces && ok; ++f) {
       if (face_plane[f] && face_plane[f]->axis == a) {
-        if (std::abs(face_plane[f]->offset) < tolerance)
-          sweep.cap[f] = -1, bottom = true;
-        else if (std::abs(face_plane[f]->offset - extent[a]) < tolerance)
-          sweep.cap[f] = 1, top = true;
-        else
-          ok = false;  // a step
+        sweep.cap[f] = plane_at(face_plane[f]->offset);
+        ok = sweep.cap[f] >= 0 && lattice_face[f];
+        bottom = bottom || sweep.cap[f] == 0;
+        top = top || sweep.cap[f] == cells[a];
         continue;
       }
       const TopoDS_Face& face = TopoDS::Face(s.faces(f + 1));
@@ -1026,6 +1033,7 @@ std::optional<Sweep> find_sweep(const Shape& s, const Frame& frame,
           ok = false;
       }
       unaligned_wall = unaligned_wall || !lattice_face[f];
+      int lo = cells[a] + 1, hi = -1;  // the planes of its edges across the axis
       for (TopExp_Explorer ex(face, TopAbs_EDGE); ex.More() && ok; ex.Next()) {
         const TopoDS_Edge& edge = TopoDS::Edge(ex.Current());
         if (BRep_Tool::Degenerated(edge)) {
@@ -1036,18 +1044,18 @@ std::optional<Sweep> find_sweep(const Shape& s, const Frame& frame,
         if (curve.GetType() == GeomAbs_Line &&
             std::abs(of(curve.Line().Direction()).dot(axis)) > parallel)
           continue;
-        int level = 0;  // the cap plane the edge lies in: -1 bottom, 1 top
+        int level = -2;  // the lattice plane the edge lies in
         for (int i = 0; i <= 8 && ok; ++i) {
           const double t =
               curve.FirstParameter() + (curve.LastParameter() - curve.FirstParameter()) * i / 8;
-          const double z = coord(frame.to_frame(of(curve.Value(t))), a);
-          const int here = std::abs(z) < tolerance               ? -1
-                           : std::abs(z - extent[a]) < tolerance ? 1
-                                                                 : 0;
-          ok = here != 0 && (level == 0 || here == level);
+          const int here = plane_at(coord(frame.to_frame(of(curve.Value(t))), a));
+          ok = here >= 0 && (level == -2 || here == level);
           level = here;
         }
+        lo = std::min(lo, level), hi = std::max(hi, level);
       }
+      ok = ok && lo < hi;
+      sweep.range[f] = {lo, hi};
     }
     if (ok && bottom && top && unaligned_wall) return sweep;
   }
@@ -1055,65 +1063,118 @@ std::optional<Sweep> find_sweep(const Shape& s, const Frame& frame,
 }
 
 // What sweep_surface() made: per node, the node on the bottom plane it repeats (itself there);
-// the sides of the bottom caps' boundary, as the caps' triangles run.
+// the first plane's sides on walls, as a cap's triangles run, and whether that wall lies
+// between two solids.
 struct SweptSurface {
   std::vector<int> base;
   std::vector<std::array<int, 2>> sides;
+  std::vector<char> shared;
 };
 
-// Rebuilds the surface of a swept shape: the bottom caps as BRepMesh made them, their boundary
-// sides split to at most `target` (on walls that are not lattice faces: those keep their
-// lattice points instead), every node of their boundary repeated on the `levels` lattice planes
-// above (`step` apart), the walls as two triangles per side and slab, and the top caps as the
-// bottom ones moved up. The nodes come plane by plane, in the same order on every plane.
-SweptSurface sweep_surface(const Shape& s, const Sweep& sweep, const Frame& frame, const Vec3& step,
-                           int levels, double target, const std::vector<bool>& lattice_face,
-                           Surface& surface) {
+// Rebuilds the surface of a swept shape, when its cross-section is the same on every lattice
+// plane along the axis (else nothing changes and the result is empty): the caps on the first
+// plane as BRepMesh made them, their sides on walls split to at most `target` (on walls that
+// are not lattice faces: those keep their lattice points instead), every node on a wall repeated
+// on the `levels` planes above (`step` apart), the walls as two triangles per side and slab (of
+// the wall face there), and the caps on the planes above as copies of the first plane's
+// triangles, each in the cap face that holds its centroid there. The nodes come plane by plane,
+// in the same order on every plane.
+std::optional<SweptSurface> sweep_surface(const Shape& s, const Sweep& sweep, const Frame& frame,
+                                          const Vec3& step, int levels, double target,
+                                          double deflection, const std::vector<bool>& lattice_face,
+                                          Surface& surface) {
+  const int axis = sweep.axis, u = (axis + 1) % 3, v = (axis + 2) % 3;
   auto directed = [](int a, int b) {
     return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(a)) << 32) |
            static_cast<std::uint32_t>(b);
   };
-  // The bottom caps' triangles, and the wall behind each side of the other triangles.
+  auto in_frame = [&](int n) { return frame.to_frame(surface.nodes[n]); };
+  // The first plane's caps, the caps' triangles per plane, and the wall face behind each
+  // directed side of a wall triangle.
   std::vector<SurfaceTriangle> bottom;
-  std::unordered_map<std::uint64_t, int> wall_at;  // directed side of a wall triangle -> face
-  std::vector<const SurfaceTriangle*> top;
+  std::map<int, std::vector<const SurfaceTriangle*>> caps_on;  // plane -> cap triangles
+  std::unordered_map<std::uint64_t, int> wall_at;
   for (const SurfaceTriangle& t : surface.triangles) {
-    if (sweep.cap[t.face] < 0)
+    if (sweep.cap[t.face] == 0)
       bottom.push_back(t);
     else if (sweep.cap[t.face] > 0)
-      top.push_back(&t);
+      caps_on[sweep.cap[t.face]].push_back(&t);
     else
       for (int c = 0; c < 3; ++c) wall_at[directed(t.node[c], t.node[(c + 1) % 3])] = t.face;
   }
+  // Each wall's profile: the sides of its triangles on its lowest plane, across the axis.
+  std::vector<std::vector<std::array<Vec3, 2>>> profile(s.faces.Extent());
+  for (const SurfaceTriangle& t : surface.triangles) {
+    if (sweep.cap[t.face] >= 0) continue;
+    for (int c = 0; c < 3; ++c) {
+      Vec3 p = in_frame(t.node[c]), q = in_frame(t.node[(c + 1) % 3]);
+      const double z = sweep.range[t.face][0] * (step.norm());
+      if (std::abs(coord(p, axis) - z) > 1e-7 * target ||
+          std::abs(coord(q, axis) - z) > 1e-7 * target)
+        continue;
+      set_coord(p, axis, 0), set_coord(q, axis, 0);
+      profile[t.face].push_back({p, q});
+    }
+  }
+  // The wall face with a strip over the side from p to q (across the axis) in slab k: its range
+  // holds k and its profile passes by the side's midpoint (two chords of one curve are at most
+  // twice the deflection apart).
+  auto wall_over = [&](const Vec3& p, const Vec3& q, int k) {
+    Vec3 m = (p + q) * 0.5;
+    set_coord(m, axis, 0);
+    for (int f = 0; f < s.faces.Extent(); ++f) {
+      if (sweep.cap[f] >= 0 || sweep.range[f][0] > k || sweep.range[f][1] <= k) continue;
+      for (const auto& side : profile[f]) {
+        const Vec3 d = side[1] - side[0];
+        const double t = std::clamp((m - side[0]).dot(d) / d.dot(d), 0.0, 1.0);
+        if ((side[0] + d * t - m).norm() <= 2 * deflection + 1e-7 * target) return f;
+      }
+    }
+    return -1;
+  };
   std::unordered_map<std::uint64_t, int> triangle_at;  // directed side -> bottom triangle
   for (int ti = 0; ti < static_cast<int>(bottom.size()); ++ti)
     for (int c = 0; c < 3; ++c)
       triangle_at[directed(bottom[ti].node[c], bottom[ti].node[(c + 1) % 3])] = ti;
+  // The first plane's sides on walls (once, directed as the wall's triangles run the other way),
+  // and the wall of each slab over them; every wall must be over some side.
   struct Side {
-    int from, to, wall;
+    int from, to;
+    std::vector<int> wall;  // per slab
   };
   std::vector<Side> boundary;
+  std::vector<char> used(s.faces.Extent(), 0);
+  std::unordered_set<std::uint64_t> seen;
   for (const SurfaceTriangle& t : bottom)
     for (int c = 0; c < 3; ++c) {
-      const int a = t.node[c], b = t.node[(c + 1) % 3];
-      if (triangle_at.count(directed(b, a))) continue;
-      const auto wall = wall_at.find(directed(b, a));
-      if (wall == wall_at.end())
-        throw InputError("mesh_shape: the side from node " + std::to_string(a) + " to " +
-                             std::to_string(b) + " of the swept shape's bottom face " +
-                             std::to_string(t.face) + " has no wall behind it",
-                         Entity::None);
-      boundary.push_back({a, b, wall->second});
+      int a = t.node[c], b = t.node[(c + 1) % 3];
+      if (!seen.insert(pair_key(a, b)).second) continue;
+      if (!wall_at.count(directed(b, a))) std::swap(a, b);
+      if (!wall_at.count(directed(b, a))) {
+        if (!triangle_at.count(directed(b, a)) || !triangle_at.count(directed(a, b)))
+          return std::nullopt;  // an outer side with no wall behind
+        continue;               // inside the first plane's caps
+      }
+      Side side{a, b, std::vector<int>(levels, -1)};
+      for (int k = 0; k < levels; ++k) {
+        side.wall[k] = wall_over(in_frame(a), in_frame(b), k);
+        if (side.wall[k] < 0) return std::nullopt;  // the cross-section changes
+        used[side.wall[k]] = 1;
+      }
+      boundary.push_back(std::move(side));
     }
+  for (int f = 0; f < s.faces.Extent(); ++f)
+    if (sweep.cap[f] < 0 && !used[f]) return std::nullopt;  // a wall the first plane lacks
+
   // Long sides on walls that are not lattice faces: split evenly along their CAD edge, the
-  // triangle on them cut into a fan.
+  // first plane's triangles on them cut into fans.
   std::vector<Side> sides;
   std::unordered_map<std::uint64_t, EdgeSegment> segments;  // of the sides, old numbering
   for (const Side& side : boundary) {
     const auto segment = surface.segments.find(pair_key(side.from, side.to));
     const double length = (surface.nodes[side.to] - surface.nodes[side.from]).norm();
     int pieces = static_cast<int>(std::ceil(length / target - 1e-9));
-    if (lattice_face[side.wall] || segment == surface.segments.end() || pieces <= 1) {
+    if (lattice_face[side.wall[0]] || segment == surface.segments.end() || pieces <= 1) {
       if (segment != surface.segments.end()) segments.insert(*segment);
       sides.push_back(side);
       continue;
@@ -1124,87 +1185,106 @@ SweptSurface sweep_surface(const Shape& s, const Sweep& sweep, const Frame& fram
     const BRepAdaptor_Curve curve(TopoDS::Edge(s.edges(e.edge + 1)));
     // A straight side is split into a power of two of pieces, so that align_straight_edges()
     // can put its nodes exactly on one line.
-    const bool straight = curve.GetType() == GeomAbs_Line;
-    if (straight) pieces = 1 << static_cast<int>(std::ceil(std::log2(pieces) - 1e-9));
-    const int ti = triangle_at.at(directed(side.from, side.to));
-    const SurfaceTriangle t = bottom[ti];
-    const int c = side_with_key(t, pair_key(side.from, side.to));
-    const int apex = t.node[(c + 2) % 3];
-    int previous = side.from;
+    if (curve.GetType() == GeomAbs_Line)
+      pieces = 1 << static_cast<int>(std::ceil(std::log2(pieces) - 1e-9));
+    std::vector<int> chain{side.from};
+    for (int i = 1; i < pieces; ++i) {
+      chain.push_back(static_cast<int>(surface.nodes.size()));
+      surface.nodes.push_back(of(curve.Value(t_from + (t_to - t_from) * i / pieces)));
+      surface.node_face.push_back(side.wall[0]);  // on its bottom edge
+    }
+    chain.push_back(side.to);
     for (int i = 1; i <= pieces; ++i) {
-      int next = side.to;
-      if (i < pieces) {
-        next = static_cast<int>(surface.nodes.size());
-        surface.nodes.push_back(of(curve.Value(t_from + (t_to - t_from) * i / pieces)));
-        surface.node_face.push_back(t.face);
-      }
       // The piece's segment of the CAD edge, at its parameters.
       const double ta = t_from + (t_to - t_from) * (i - 1) / pieces;
       const double tb = i == pieces ? t_to : t_from + (t_to - t_from) * i / pieces;
+      const int previous = chain[i - 1], next = chain[i];
       segments[pair_key(previous, next)] =
           previous < next ? EdgeSegment{e.edge, ta, tb} : EdgeSegment{e.edge, tb, ta};
-      const SurfaceTriangle piece{{previous, next, apex}, {}, t.face};
-      if (i == 1)
-        bottom[ti] = piece;
-      else
-        bottom.push_back(piece);
-      for (int k = 0; k < 3; ++k)
-        triangle_at[directed(piece.node[k], piece.node[(k + 1) % 3])] =
-            i == 1 ? ti : static_cast<int>(bottom.size()) - 1;
       sides.push_back({previous, next, side.wall});
-      previous = next;
+    }
+    // The triangles on the side (one, or two on a wall between two caps): fans.
+    for (const auto& [x, y] : {std::pair{side.from, side.to}, std::pair{side.to, side.from}}) {
+      const auto at = triangle_at.find(directed(x, y));
+      if (at == triangle_at.end()) continue;
+      const int ti = at->second;
+      const SurfaceTriangle t = bottom[ti];
+      const int apex = t.node[(side_with_key(t, pair_key(x, y)) + 2) % 3];
+      for (int i = 1; i <= pieces; ++i) {
+        const int p = x == side.from ? chain[i - 1] : chain[pieces - i + 1];
+        const int q = x == side.from ? chain[i] : chain[pieces - i];
+        const SurfaceTriangle piece{{p, q, apex}, {}, t.face};
+        const int index = i == 1 ? ti : static_cast<int>(bottom.size());
+        if (i == 1)
+          bottom[ti] = piece;
+        else
+          bottom.push_back(piece);
+        for (int k = 0; k < 3; ++k)
+          triangle_at[directed(piece.node[k], piece.node[(k + 1) % 3])] = index;
+      }
     }
   }
 
-  // The new surface: the bottom caps' nodes (renumbered in their order), then plane by plane the
-  // boundary nodes repeated, and on the top plane also the caps' inner nodes.
+  // The new surface: the first plane's caps' nodes (renumbered in their order), then plane by
+  // plane the nodes on walls repeated, and on planes with caps the caps' inner nodes they use.
   std::vector<int> renumber(surface.nodes.size(), -1);
   std::vector<int> order;
   for (const SurfaceTriangle& t : bottom)
     for (int n : t.node) renumber[n] = 1;
   for (int n = 0; n < static_cast<int>(surface.nodes.size()); ++n)
     if (renumber[n] >= 0) renumber[n] = static_cast<int>(order.size()), order.push_back(n);
-  std::vector<char> on_boundary(order.size(), 0);
-  std::vector<int> wall_of(order.size(), -1);
+  std::vector<int> wall_of(order.size(), -1);  // per node of the first plane: a wall there
   for (const Side& side : sides)
-    for (int n : {side.from, side.to})
-      on_boundary[renumber[n]] = 1, wall_of[renumber[n]] = side.wall;
-  // The top face holding point p (BRepMesh's triangles of the top faces tell which).
-  const int axis = sweep.axis, u = (axis + 1) % 3, v = (axis + 2) % 3;
-  auto top_face = [&](const Vec3& p) {
-    const int first = top.empty() ? -1 : top.front()->face;
-    if (std::all_of(top.begin(), top.end(), [&](const auto* t) { return t->face == first; }))
-      return first;
+    for (int n : {side.from, side.to}) wall_of[renumber[n]] = side.wall[0];
+  // The cap face on plane k holding point p (BRepMesh's triangles of the caps there), or -1.
+  auto cap_face = [&](int k, const Vec3& p) {
+    const auto it = caps_on.find(k);
+    if (it == caps_on.end()) return -1;
     const Vec3 q = frame.to_frame(p);
-    for (const SurfaceTriangle* t : top) {
+    for (const SurfaceTriangle* t : it->second) {
       double w[3];
       for (int c = 0; c < 3; ++c) {
-        const Vec3 a = frame.to_frame(surface.nodes[t->node[(c + 1) % 3]]);
-        const Vec3 b = frame.to_frame(surface.nodes[t->node[(c + 2) % 3]]);
+        const Vec3 a = in_frame(t->node[(c + 1) % 3]), b = in_frame(t->node[(c + 2) % 3]);
         w[c] = (coord(a, u) - coord(q, u)) * (coord(b, v) - coord(q, v)) -
                (coord(b, u) - coord(q, u)) * (coord(a, v) - coord(q, v));
       }
       if ((w[0] >= 0 && w[1] >= 0 && w[2] >= 0) || (w[0] <= 0 && w[1] <= 0 && w[2] <= 0))
         return t->face;
     }
-    return first;
+    return -1;
   };
+  // The caps on the planes above: the first plane's triangles that fall in one, per plane.
+  std::vector<std::vector<std::pair<int, int>>> capped(levels + 1);  // (bottom triangle, face)
+  std::vector<std::vector<char>> needed(levels + 1, std::vector<char>(order.size(), 0));
+  for (int k = 1; k <= levels; ++k) {
+    if (!caps_on.count(k)) continue;
+    for (int ti = 0; ti < static_cast<int>(bottom.size()); ++ti) {
+      const SurfaceTriangle& t = bottom[ti];
+      const Vec3 centroid =
+          (surface.nodes[t.node[0]] + surface.nodes[t.node[1]] + surface.nodes[t.node[2]]) *
+              (1.0 / 3) +
+          step * k;
+      const int face = cap_face(k, centroid);
+      if (face < 0) continue;
+      capped[k].emplace_back(ti, face);
+      for (int n : t.node) needed[k][renumber[n]] = 1;
+    }
+  }
   Surface swept;
   SweptSurface result;
-  // copy[k][i]: node i of the bottom plane on plane k.
   std::vector<std::vector<int>> copy(levels + 1, std::vector<int>(order.size(), -1));
   for (int k = 0; k <= levels; ++k)
     for (std::size_t i = 0; i < order.size(); ++i) {
-      if (k > 0 && k < levels && !on_boundary[i]) continue;
+      if (k > 0 && wall_of[i] < 0 && !needed[k][i]) continue;
       copy[k][i] = static_cast<int>(swept.nodes.size());
       swept.nodes.push_back(surface.nodes[order[i]] + step * k);
-      swept.node_face.push_back(k == 0           ? surface.node_face[order[i]]
-                                : on_boundary[i] ? wall_of[i]
-                                                 : top_face(swept.nodes.back()));
+      swept.node_face.push_back(k == 0            ? surface.node_face[order[i]]
+                                : wall_of[i] >= 0 ? wall_of[i]
+                                                  : cap_face(k, swept.nodes.back()));
       result.base.push_back(static_cast<int>(i));
     }
   swept.seed = result.base;
-  // The bottom plane's segments (the planes above repeat its nodes, see mesh_shape).
+  // The first plane's segments (the planes above repeat its nodes, see mesh_shape).
   for (const auto& [key, segment] : segments)
     swept.segments[pair_key(renumber[key >> 32], renumber[key & 0xffffffffu])] = segment;
   for (const SurfaceTriangle& t : bottom)
@@ -1213,20 +1293,18 @@ SweptSurface sweep_surface(const Shape& s, const Sweep& sweep, const Frame& fram
   for (const Side& side : sides) {
     const int a = renumber[side.from], b = renumber[side.to];
     result.sides.push_back({a, b});
+    result.shared.push_back(s.face_solid_count[side.wall[0]] > 1);
     for (int k = 0; k < levels; ++k) {
-      swept.triangles.push_back({{copy[k][b], copy[k][a], copy[k + 1][a]}, {}, side.wall});
-      swept.triangles.push_back({{copy[k][b], copy[k + 1][a], copy[k + 1][b]}, {}, side.wall});
+      swept.triangles.push_back({{copy[k][b], copy[k][a], copy[k + 1][a]}, {}, side.wall[k]});
+      swept.triangles.push_back({{copy[k][b], copy[k + 1][a], copy[k + 1][b]}, {}, side.wall[k]});
     }
   }
-  // The top caps: the bottom ones moved up and turned over.
-  for (const SurfaceTriangle& t : bottom) {
-    const int a = renumber[t.node[0]], b = renumber[t.node[1]], c = renumber[t.node[2]];
-    const Vec3 centroid = (swept.nodes[copy[levels][a]] + swept.nodes[copy[levels][b]] +
-                           swept.nodes[copy[levels][c]]) *
-                          (1.0 / 3);
-    swept.triangles.push_back(
-        {{copy[levels][a], copy[levels][c], copy[levels][b]}, {}, top_face(centroid)});
-  }
+  for (int k = 1; k <= levels; ++k)
+    for (const auto& [ti, face] : capped[k]) {
+      const SurfaceTriangle& t = bottom[ti];
+      const int a = renumber[t.node[0]], b = renumber[t.node[1]], c = renumber[t.node[2]];
+      swept.triangles.push_back({{copy[k][a], copy[k][c], copy[k][b]}, {}, face});
+    }
   surface = std::move(swept);
   return result;
 }
@@ -1569,13 +1647,21 @@ TetMesh mesh_shape(const std::string& brep, const MeshShapeParameters& parameter
                                                      [&](int f) { return lattice_face[f]; });
   }
   std::optional<Sweep> sweep;
-  if (parameters.sweep) sweep = find_sweep(shape, frame, face_plane, lattice_face, extent, h);
+  if (parameters.sweep)
+    sweep = find_sweep(shape, frame, face_plane, lattice_face, cells, report.spacing, h);
   SweptSurface swept;
   if (sweep) {
     const int a = sweep->axis;
-    swept = sweep_surface(shape, *sweep, frame, frame.axis[a] * report.spacing[a], cells[a], h,
-                          lattice_face, surface);
-    report.sweep_axis = a;
+    const std::optional<SweptSurface> made =
+        sweep_surface(shape, *sweep, frame, frame.axis[a] * report.spacing[a], cells[a], h,
+                      deflection, lattice_face, surface);
+    if (made)
+      swept = *made;
+    else
+      sweep.reset();  // the cross-section changes along the axis
+  }
+  if (sweep) {
+    report.sweep_axis = sweep->axis;
   } else {
     refine(shape, surface, h, lattice_face, lattice_edge);
     collapse_short_sides(surface, h, lattice_face);
@@ -1669,8 +1755,11 @@ TetMesh mesh_shape(const std::string& brep, const MeshShapeParameters& parameter
   // Swept: the nodes repeating a node of the bottom caps' boundary take its normal across the
   // walls (its sides' normals weighted by length), on the caps' planes too, and are smooth where
   // the walls are; the depths, the room and the caps' faces are found on the bottom plane, so
-  // that every plane gets the same layer points.
+  // that every plane gets the same layer points. A wall between two solids gets layers on both
+  // sides (without them, a cylinder through boxes had triangles of 14 degrees between its fine
+  // stations and the lattice, prisms below the quality floor, and the block unravelled).
   std::vector<std::vector<int>> column;  // swept: per bottom node, its repeats plane by plane
+  std::vector<char> two_sided(nodes.size(), 0);
   if (sweep) {
     const int a = sweep->axis;
     Vec3 along{0, 0, 0};
@@ -1680,18 +1769,26 @@ TetMesh mesh_shape(const std::string& brep, const MeshShapeParameters& parameter
       const Vec3 n = (nodes[side[0]] - nodes[side[1]]).cross(along);  // the wall's, outward
       for (int end : side) sum[end] = sum[end] + n;
     }
-    std::vector<char> station(nodes.size(), 0), bent(nodes.size(), 0);
-    for (const auto& side : swept.sides) {
+    std::vector<char> station(nodes.size(), 0), bent(nodes.size(), 0), outer(nodes.size(), 0);
+    for (std::size_t k = 0; k < swept.sides.size(); ++k) {
+      const auto& side = swept.sides[k];
       const Vec3 n = unit((nodes[side[0]] - nodes[side[1]]).cross(along));
       for (int end : side) {
         station[end] = 1;
         if (n.dot(unit(sum[end])) < std::cos(25.0 * M_PI / 180)) bent[end] = 1;
+        if (swept.shared[k])
+          two_sided[end] = 1;
+        else
+          outer[end] = 1;
       }
     }
+    for (std::size_t i = 0; i < nodes.size(); ++i)
+      if (two_sided[i] && outer[i]) bent[i] = 1, two_sided[i] = 0;  // where solids meet a wall
     column.resize(nodes.size());
     for (std::size_t i = 0; i < nodes.size(); ++i) {
       const int b = swept.base[i];
       column[b].push_back(static_cast<int>(i));
+      two_sided[i] = two_sided[b];
       smooth[i] = station[b] && !bent[b];
       normal[i] = station[b] ? unit(sum[b]) : Vec3{0, 0, 0};
     }
@@ -1701,52 +1798,51 @@ TetMesh mesh_shape(const std::string& brep, const MeshShapeParameters& parameter
   std::vector<int> inserted_face;  // the lattice face an inserted point lies on, or -1
   PointSet layer_points(box_lo, box_hi, h);
   for (int k = 1; k <= parameters.boundary_layers; ++k)
-    for (std::size_t i = 0; i < nodes.size(); ++i) {
-      if (!smooth[i] || normal[i].norm() == 0) continue;
-      if (sweep && swept.base[i] != static_cast<int>(i)) continue;  // placed with its base
-      // Depths vary by up to kLayerJitter (a fixed pseudo-random fraction per node): the sides
-      // of equally deep layers are cocircular quads (rectangles, isosceles trapezoids), which
-      // TetGen cuts with flat tets where the prisms on either side disagree on the diagonal.
-      const double spread =
-          static_cast<double>((static_cast<std::size_t>(surface.seed[i]) * 2654435761u) % 1000) /
-              500.0 -
-          1;
-      const double depth = k * layer * (1 + kLayerJitter * spread);
-      const Vec3 q = nodes[i] - normal[i] * depth;
-      // Room: no other part of the surface nearer than the depth, no other point too near.
-      if (curved.any_within(q, 0.9 * depth)) continue;
-      if (layer_points.any_within(q, 0.3 * layer) || surface_points.any_within(q, 0.5 * depth))
-        continue;
-      if (sweep) {
-        const int a = sweep->axis;
-        std::vector<std::pair<Vec3, int>> repeats;  // the point on every plane, and its cap face
-        for (int j : column[i]) {
-          Vec3 r = q;
-          set_coord(r, a, coord(nodes[j], a));
-          const int level = static_cast<int>(std::lround(coord(r, a) / report.spacing[a]));
-          int face = -1;
-          if (level == 0 || level == cells[a]) {
+    for (std::size_t i = 0; i < nodes.size(); ++i)
+      for (const double sign : {1.0, -1.0}) {
+        if (sign < 0 && !two_sided[i]) continue;
+        if (!smooth[i] || normal[i].norm() == 0) continue;
+        if (sweep && swept.base[i] != static_cast<int>(i)) continue;  // placed with its base
+        // Depths vary by up to kLayerJitter (a fixed pseudo-random fraction per node): the sides
+        // of equally deep layers are cocircular quads (rectangles, isosceles trapezoids), which
+        // TetGen cuts with flat tets where the prisms on either side disagree on the diagonal.
+        const double spread =
+            static_cast<double>((static_cast<std::size_t>(surface.seed[i]) * 2654435761u) % 1000) /
+                500.0 -
+            1;
+        const double depth = k * layer * (1 + kLayerJitter * spread);
+        const Vec3 q = nodes[i] - normal[i] * (sign * depth);
+        // Room: no other part of the surface nearer than the depth, no other point too near.
+        if (curved.any_within(q, 0.9 * depth)) continue;
+        if (layer_points.any_within(q, 0.3 * layer) || surface_points.any_within(q, 0.5 * depth))
+          continue;
+        if (sweep) {
+          const int a = sweep->axis;
+          std::vector<std::pair<Vec3, int>> repeats;  // the point on every plane, and its cap face
+          for (int j : column[i]) {
+            Vec3 r = q;
+            set_coord(r, a, coord(nodes[j], a));
+            const int level = static_cast<int>(std::lround(coord(r, a) / report.spacing[a]));
             int index[3] = {-1, -1, -1};
             index[a] = level;
-            face = on_lattice_face(r, index);
-            if (face < 0) break;  // not inside a cap: none on any plane
+            const int face = on_lattice_face(r, index);  // a cap it lies in, on any plane
+            if (face < 0 && (level == 0 || level == cells[a])) break;  // outside: none anywhere
+            repeats.emplace_back(r, face);
           }
-          repeats.emplace_back(r, face);
+          if (repeats.size() != column[i].size()) continue;
+          for (const auto& [r, face] : repeats) {
+            layer_points.add(r);
+            inserted.push_back(r);
+            inserted_face.push_back(face);
+            ++report.nb_layer_points;
+          }
+          continue;
         }
-        if (repeats.size() != column[i].size()) continue;
-        for (const auto& [r, face] : repeats) {
-          layer_points.add(r);
-          inserted.push_back(r);
-          inserted_face.push_back(face);
-          ++report.nb_layer_points;
-        }
-        continue;
+        layer_points.add(q);
+        inserted.push_back(q);
+        inserted_face.push_back(-1);
+        ++report.nb_layer_points;
       }
-      layer_points.add(q);
-      inserted.push_back(q);
-      inserted_face.push_back(-1);
-      ++report.nb_layer_points;
-    }
   clock.lap("layers");
 
   // Inside/outside by ray parity along frame x lines (faces between two solids do not count).

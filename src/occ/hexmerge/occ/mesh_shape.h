@@ -30,14 +30,17 @@
 ///     needle triangles are smoothed on their face after step 1, and the layers' depths vary by
 ///     up to 10 % per node so that the layers' sides are not cocircular quads.
 ///
-/// A swept shape (one solid, a profile extruded along a lattice axis between two planar caps on
-/// lattice planes: cylinders, plates with holes, profiles) is meshed as a sweep instead: the
-/// bottom cap's boundary is split to at most h and repeated on every lattice plane along the
-/// axis, the walls are strips of two triangles per side and slab (no refinement), the layers
-/// are placed on the bottom plane and repeated, and no closing pyramids are needed across the
-/// axis. Every plane then has the same points, every tet lies between two consecutive planes,
-/// and the tets of a slab are prisms over the cross-section's triangles, which the engine's
-/// block pairs into hexahedra (cylinder: 95 % hex volume, the rest prisms, no tets).
+/// A swept shape (one cross-section extruded along a lattice axis, from a planar cap on one
+/// lattice plane to one on another: cylinders, plates with holes, profiles, and solids stacked
+/// along the axis or side by side, with faces between them on lattice planes or along the axis)
+/// is meshed as a sweep instead: the first plane's boundary is split to at most h and repeated
+/// on every lattice plane along the axis, the walls are strips of two triangles per side and
+/// slab (no refinement), the caps above are copies of the first, the layers are placed on the
+/// first plane and repeated (on both sides of a wall between two solids), and no closing
+/// pyramids are needed across the axis. Every plane then has the same points, every tet lies
+/// between two consecutive planes, and the tets of a slab are prisms over the cross-section's
+/// triangles, which the engine's block pairs into hexahedra (cylinder: 95 % hex volume, the rest
+/// prisms, no tets).
 ///
 /// The header needs no OpenCASCADE include: shapes come in as BREP text.
 
@@ -70,10 +73,10 @@ struct MeshShapeParameters {
   /// Lattice orientation: "auto" (normals of the largest planar faces, else principal axes of
   /// inertia), "principal" (principal axes of inertia), "global" (x, y, z).
   std::string frame = "auto";
-  /// Where the shape is one solid swept along a lattice axis (a profile extruded between two
-  /// planar caps on lattice planes: plates with holes, cylinders, profiles), make the tets
-  /// swept too: the same cross-section on every lattice plane along the axis, so that they
-  /// recombine into hexahedra and prisms only, with no pyramids.
+  /// Where the shape is one cross-section extruded along a lattice axis between two planar caps
+  /// on lattice planes (plates with holes, cylinders, profiles; one solid or several, stacked or
+  /// side by side), make the tets swept too: the same cross-section on every lattice plane along
+  /// the axis, so that they recombine into hexahedra and prisms only, with no pyramids.
   bool sweep = true;
   /// Time limit of one TetGen run, in seconds; 0: 30 s plus 1 ms per point (far above TetGen's
   /// own time, about 1 s per 20k points). A run past it (TetGen 1.5 can loop on a lattice face),
