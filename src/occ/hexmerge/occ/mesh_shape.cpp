@@ -1157,7 +1157,9 @@ std::optional<SweptSurface> sweep_surface(const Shape& s, const Sweep& sweep, co
       }
       Side side{a, b, std::vector<int>(levels, -1)};
       for (int k = 0; k < levels; ++k) {
-        side.wall[k] = wall_over(in_frame(a), in_frame(b), k);
+        side.wall[k] = k > 0 && sweep.range[side.wall[k - 1]][1] > k
+                           ? side.wall[k - 1]
+                           : wall_over(in_frame(a), in_frame(b), k);
         if (side.wall[k] < 0) return std::nullopt;  // the cross-section changes
         used[side.wall[k]] = 1;
       }
