@@ -163,6 +163,26 @@ class ShapeMode(unittest.TestCase):
         doc.recompute()
         self.assertEqual(obj.FemMesh.HexaCount, 12 * 8 * 10)
 
+    def test_cylinder_is_swept_into_hexahedra_and_prisms(self):
+        doc = FreeCAD.newDocument("HexMergeShape")
+        cylinder = doc.addObject("Part::Cylinder", "Cylinder")
+        cylinder.Radius, cylinder.Height = 20, 50
+        doc.recompute()
+        obj = hm.make_hexdominant_mesh(doc, cylinder, target_size=4, second_order=False)
+        self.assertTrue(obj.Sweep)
+        report = mesh_hexdominant.report_dict(obj)
+        self.assertGreaterEqual(report["meshing"]["sweep_axis"], 0)
+        counts = report["output_counts"]
+        self.assertEqual(counts["tet"] + counts["pyramid"], 0, counts)
+        self.assertGreaterEqual(report["volume_fraction"]["hex"], 0.85)
+        self.assertEqual(obj.FemMesh.HexaCount, counts["hex"])
+        self.assertEqual(obj.FemMesh.PrismCount, counts["prism"])
+        obj.Sweep = False
+        doc.recompute()
+        report = mesh_hexdominant.report_dict(obj)
+        self.assertEqual(report["meshing"]["sweep_axis"], -1)
+        self.assertGreater(report["output_counts"]["pyramid"], 0)
+
     def test_second_order_default_and_options(self):
         doc, box = self.box()
         obj = hm.make_hexdominant_mesh(doc, box, boundary_layers=0, min_scaled_jacobian=0.4)
