@@ -480,7 +480,7 @@ class Selector {
     };
     std::vector<index_t> block_of(mesh_.nb_tets(), NO_INDEX);
     std::vector<char> in_block(cands_.size(), 0);
-    auto is_free = [&](const Candidate& c) {
+    auto unclaimed = [&](const Candidate& c) {
       for (int i = 0; i < c.nb_tets; ++i) {
         if (block_of[c.tets[i]] != NO_INDEX) return false;
       }
@@ -489,7 +489,7 @@ class Selector {
     auto take_disjoint = [&](const std::vector<index_t>& list) {
       for (index_t ci : list) {
         const Candidate& c = cands_[ci];
-        if (!is_free(c)) continue;
+        if (!unclaimed(c)) continue;
         for (int i = 0; i < c.nb_tets; ++i) block_of[c.tets[i]] = ci;
         in_block[ci] = 1;
       }
@@ -506,7 +506,7 @@ class Selector {
     for (index_t ci = 0; ci < cands_.size(); ++ci) {
       const Candidate& c = cands_[ci];
       if ((c.type == CellType::Prism || (c.type == CellType::Hex && c.quality < kBlockQuality)) &&
-          is_free(c) && planar_quads(c))
+          unclaimed(c) && planar_quads(c))
         planar.push_back(ci);
     }
     rank(planar);
@@ -595,7 +595,7 @@ class Selector {
     for (index_t ci : order) {
       if (!in_block[ci]) continue;
       choose(ci);
-      ++result_.block_hexahedra;
+      if (cands_[ci].type == CellType::Hex) ++result_.block_hexahedra;
     }
   }
 
