@@ -65,6 +65,12 @@ Box(10) = {20, 0, 15, 10, 10, 10};
 BooleanDifference(11) = { Volume{1}; Delete; }{ Volume{10}; Delete; };
 """
 
+# A rectangle with rounded corners (radius 8), extruded: fillets meeting lattice faces.
+ROUNDED_RECTANGLE_GEO = """SetFactory("OpenCASCADE");
+Rectangle(1) = {0, 0, 0, 60, 30, 8};
+Extrude {0, 0, 20} { Surface{1}; }
+"""
+
 # Ten solids: a box cut in five along x, a cylinder through them all (bench/regions_by_solid.py).
 BOX_5_CYLINDER_GEO = """SetFactory("OpenCASCADE");
 For i In {0:4}
@@ -97,6 +103,7 @@ def shapes(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
     out["hexagonal_prism"] = gmsh_brep(folder, "hexagonal_prism", HEXAGONAL_PRISM_GEO)
     out["notched_trapezoid"] = gmsh_brep(folder, "notched_trapezoid", NOTCHED_TRAPEZOID_GEO)
     out["box_5_cylinder"] = gmsh_brep(folder, "box_5_cylinder", BOX_5_CYLINDER_GEO)
+    out["rounded_rectangle"] = gmsh_brep(folder, "rounded_rectangle", ROUNDED_RECTANGLE_GEO)
     out["plate"] = PLATE
     return out
 
@@ -294,11 +301,13 @@ def test_boundary_nodes_on_the_surfaces(shapes, name: str, h: float, options: di
 
 
 @needs_tetgen
-@pytest.mark.parametrize(("name", "h"), [("cylinder", 5.0), ("cylinder", 8.0), ("plate", 10.0)])
+@pytest.mark.parametrize(("name", "h"), [("cylinder", 5.0), ("cylinder", 8.0), ("plate", 10.0),
+                                         ("rounded_rectangle", 3.0)])
 def test_extrusions_are_swept(shapes, name: str, h: float) -> None:
     """An extruded shape's tets repeat one cross-section from lattice plane to lattice plane, so
     they recombine into hexahedra and prisms only (cylinder h 5: 86.6 % hex volume, 0.44 unswept;
-    h 8 made TetGen drop four surface points by the seam before)."""
+    h 8 made TetGen drop four surface points by the seam before; the rounded rectangle at h 3:
+    98.6 %, 58.7 % while its fillets' layers ended beside the lattice faces in thin triangles)."""
     tets, report = hexmerge.mesh_shape(shapes[name], h, recombine=False)
     meshing = report["meshing"]
     axis = meshing["sweep_axis"]

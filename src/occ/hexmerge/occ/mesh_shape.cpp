@@ -1063,12 +1063,12 @@ std::optional<Sweep> find_sweep(const Shape& s, const Frame& frame,
 }
 
 // What sweep_surface() made: per node, the node on the bottom plane it repeats (itself there);
-// the first plane's sides on walls, as a cap's triangles run, and whether that wall lies
-// between two solids.
+// the first plane's sides on walls, as a cap's triangles run, whether that wall lies between two
+// solids, and whether it is a lattice face.
 struct SweptSurface {
   std::vector<int> base;
   std::vector<std::array<int, 2>> sides;
-  std::vector<char> shared;
+  std::vector<char> shared, on_lattice_face;
 };
 
 // Rebuilds the surface of a swept shape, when its cross-section is the same on every lattice
@@ -1296,6 +1296,7 @@ std::optional<SweptSurface> sweep_surface(const Shape& s, const Sweep& sweep, co
     const int a = renumber[side.from], b = renumber[side.to];
     result.sides.push_back({a, b});
     result.shared.push_back(s.face_solid_count[side.wall[0]] > 1);
+    result.on_lattice_face.push_back(lattice_face[side.wall[0]]);
     for (int k = 0; k < levels; ++k) {
       swept.triangles.push_back({{copy[k][b], copy[k][a], copy[k + 1][a]}, {}, side.wall[k]});
       swept.triangles.push_back({{copy[k][b], copy[k + 1][a], copy[k + 1][b]}, {}, side.wall[k]});
@@ -1782,6 +1783,9 @@ TetMesh mesh_shape(const std::string& brep, const MeshShapeParameters& parameter
           two_sided[end] = 1;
         else
           outer[end] = 1;
+        // Lattice faces have no layers: one ending at a station beside one (where a fillet meets
+        // a lattice face) left triangles of 11 degrees there, prisms below the quality floor.
+        if (swept.on_lattice_face[k]) bent[end] = 1;
       }
     }
     for (std::size_t i = 0; i < nodes.size(); ++i)
