@@ -1554,8 +1554,8 @@ void check_parameters(const MeshShapeParameters& p) {
   if (p.frame != "auto" && p.frame != "principal" && p.frame != "global")
     bad("frame must be \"auto\", \"principal\" or \"global\"");
   if (p.tetgen.empty()) bad("tetgen must name the TetGen program");
-  if (!(p.tetgen_time_limit >= 0) || !std::isfinite(p.tetgen_time_limit))
-    bad("tetgen_time_limit must be a number of seconds >= 0");
+  if (!(p.tetgen_time_limit >= 0 && p.tetgen_time_limit <= 86400))
+    bad("tetgen_time_limit must be in [0, 86400] seconds");
 }
 
 }  // namespace

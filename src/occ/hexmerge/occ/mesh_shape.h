@@ -81,7 +81,7 @@ struct MeshShapeParameters {
   /// Time limit of one TetGen run, in seconds; 0: 30 s plus 1 ms per point (far above TetGen's
   /// own time, about 1 s per 20k points). A run past it (TetGen 1.5 can loop on a lattice face),
   /// or one that leaves no tet, is restarted with the lattice faces' loops started at other
-  /// vertices, up to 5 times; then mesh_shape fails, saying so. >= 0.
+  /// vertices, up to 5 times; then mesh_shape fails, saying so. In [0, 86400].
   double tetgen_time_limit = 0.0;
   /// The TetGen program: a name looked up on PATH, or a path.
   std::string tetgen = "tetgen";
