@@ -397,6 +397,34 @@ std::vector<char> nodes_on_edges(const Surface& surface) {
   return on_edge;
 }
 
+// The coordinates (s, r) of q in triangle p0 p1 p2, q = p0 + s (p1 - p0) + r (p2 - p0), all seen
+// along frame axis `axis` (nodes in frame coordinates); false when the triangle is edge-on.
+bool coordinates_across(const Vec3& q, const Vec3& p0, const Vec3& p1, const Vec3& p2, int axis,
+                        double& s, double& r) {
+  const int u = (axis + 1) % 3, v = (axis + 2) % 3;
+  const double x0 = coord(p0, u), y0 = coord(p0, v);
+  const double d =
+      (coord(p1, u) - x0) * (coord(p2, v) - y0) - (coord(p2, u) - x0) * (coord(p1, v) - y0);
+  if (d == 0) return false;
+  s = ((coord(q, u) - x0) * (coord(p2, v) - y0) - (coord(p2, u) - x0) * (coord(q, v) - y0)) / d;
+  r = ((coord(p1, u) - x0) * (coord(q, v) - y0) - (coord(q, u) - x0) * (coord(p1, v) - y0)) / d;
+  return true;
+}
+
+// The face of the first of `triangles` (on a plane normal to frame axis `axis`, nodes in frame
+// coordinates) that holds q, to 1e-9 of its coordinates; -1 for none.
+int face_holding(const Vec3& q, const std::vector<const SurfaceTriangle*>& triangles,
+                 const std::vector<Vec3>& nodes, int axis) {
+  for (const SurfaceTriangle* t : triangles) {
+    double s, r;
+    if (!coordinates_across(q, nodes[t->node[0]], nodes[t->node[1]], nodes[t->node[2]], axis, s, r))
+      continue;
+    const double eps = 1e-9;
+    if (s >= -eps && r >= -eps && s + r <= 1 + eps) return t->face;
+  }
+  return -1;
+}
+
 // Merges points closer than a tolerance into one node.
 class NodeMerger {
  public:
@@ -941,7 +969,8 @@ void align_straight_edges(const Shape& s, const Surface& surface,
     list.emplace_back(segment.t_hi, static_cast<int>(key & 0xffffffffu));
   }
   const int exponent = std::ilogb(largest) - 40;
-  auto grid = [&](double x) { return std::ldexp(std::round(std::ldexp(x, -exponent)), exponent); };
+  // x rounded to a multiple of 2^e.
+  auto round_to = [](double x, int e) { return std::ldexp(std::round(std::ldexp(x, -e)), e); };
   for (auto& [edge, list] : on_edge) {
     if (BRepAdaptor_Curve(TopoDS::Edge(s.edges(edge + 1))).GetType() != GeomAbs_Line) continue;
     std::sort(list.begin(), list.end());
@@ -953,10 +982,11 @@ void align_straight_edges(const Shape& s, const Surface& surface,
     for (int c = 0; c < 3; ++c)
       if (coord(a, c) != coord(b, c)) across.push_back(c);
     if (across.size() < 2 || t1 <= t0) continue;
-    for (int c : across) set_coord(a, c, grid(coord(a, c))), set_coord(b, c, grid(coord(b, c)));
+    for (int c : across)
+      set_coord(a, c, round_to(coord(a, c), exponent)),
+          set_coord(b, c, round_to(coord(b, c), exponent));
     for (std::size_t k = 1; k + 1 < list.size(); ++k) {
-      const double f =
-          std::ldexp(std::round(std::ldexp((list[k].first - t0) / (t1 - t0), 20)), -20);
+      const double f = round_to((list[k].first - t0) / (t1 - t0), -20);
       for (int c : across)
         set_coord(nodes[list[k].second], c, coord(a, c) + (coord(b, c) - coord(a, c)) * f);
     }
@@ -1083,12 +1113,13 @@ std::optional<SweptSurface> sweep_surface(const Shape& s, const Sweep& sweep, co
                                           const Vec3& step, int levels, double target,
                                           double deflection, const std::vector<bool>& lattice_face,
                                           Surface& surface) {
-  const int axis = sweep.axis, u = (axis + 1) % 3, v = (axis + 2) % 3;
+  const int axis = sweep.axis;
   auto directed = [](int a, int b) {
     return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(a)) << 32) |
            static_cast<std::uint32_t>(b);
   };
-  auto in_frame = [&](int n) { return frame.to_frame(surface.nodes[n]); };
+  std::vector<Vec3> framed(surface.nodes.size());  // of the nodes BRepMesh made
+  for (std::size_t n = 0; n < framed.size(); ++n) framed[n] = frame.to_frame(surface.nodes[n]);
   // The first plane's caps, the caps' triangles per plane, and the wall face behind each
   // directed side of a wall triangle.
   std::vector<SurfaceTriangle> bottom;
@@ -1107,7 +1138,7 @@ std::optional<SweptSurface> sweep_surface(const Shape& s, const Sweep& sweep, co
   for (const SurfaceTriangle& t : surface.triangles) {
     if (sweep.cap[t.face] >= 0) continue;
     for (int c = 0; c < 3; ++c) {
-      Vec3 p = in_frame(t.node[c]), q = in_frame(t.node[(c + 1) % 3]);
+      Vec3 p = framed[t.node[c]], q = framed[t.node[(c + 1) % 3]];
       const double z = sweep.range[t.face][0] * (step.norm());
       if (std::abs(coord(p, axis) - z) > 1e-7 * target ||
           std::abs(coord(q, axis) - z) > 1e-7 * target)
@@ -1159,7 +1190,7 @@ std::optional<SweptSurface> sweep_surface(const Shape& s, const Sweep& sweep, co
       for (int k = 0; k < levels; ++k) {
         side.wall[k] = k > 0 && sweep.range[side.wall[k - 1]][1] > k
                            ? side.wall[k - 1]
-                           : wall_over(in_frame(a), in_frame(b), k);
+                           : wall_over(framed[a], framed[b], k);
         if (side.wall[k] < 0) return std::nullopt;  // the cross-section changes
         used[side.wall[k]] = 1;
       }
@@ -1241,19 +1272,7 @@ std::optional<SweptSurface> sweep_surface(const Shape& s, const Sweep& sweep, co
   // The cap face on plane k holding point p (BRepMesh's triangles of the caps there), or -1.
   auto cap_face = [&](int k, const Vec3& p) {
     const auto it = caps_on.find(k);
-    if (it == caps_on.end()) return -1;
-    const Vec3 q = frame.to_frame(p);
-    for (const SurfaceTriangle* t : it->second) {
-      double w[3];
-      for (int c = 0; c < 3; ++c) {
-        const Vec3 a = in_frame(t->node[(c + 1) % 3]), b = in_frame(t->node[(c + 2) % 3]);
-        w[c] = (coord(a, u) - coord(q, u)) * (coord(b, v) - coord(q, v)) -
-               (coord(b, u) - coord(q, u)) * (coord(a, v) - coord(q, v));
-      }
-      if ((w[0] >= 0 && w[1] >= 0 && w[2] >= 0) || (w[0] <= 0 && w[1] <= 0 && w[2] <= 0))
-        return t->face;
-    }
-    return -1;
+    return it == caps_on.end() ? -1 : face_holding(frame.to_frame(p), it->second, framed, axis);
   };
   // The caps on the planes above: the first plane's triangles that fall in one, per plane.
   std::vector<std::vector<std::pair<int, int>>> capped(levels + 1);  // (bottom triangle, face)
@@ -1716,19 +1735,8 @@ TetMesh mesh_shape(const std::string& brep, const MeshShapeParameters& parameter
     for (int a = 0; a < 3; ++a) {
       auto it = plane_triangles.find({a, index[a]});
       if (it == plane_triangles.end()) continue;
-      const int u = (a + 1) % 3, v = (a + 2) % 3;
-      const double qu = coord(q, u), qv = coord(q, v);
-      for (const SurfaceTriangle* t : it->second) {
-        const Vec3 &p0 = nodes[t->node[0]], &p1 = nodes[t->node[1]], &p2 = nodes[t->node[2]];
-        const double x0 = coord(p0, u), y0 = coord(p0, v);
-        const double d =
-            (coord(p1, u) - x0) * (coord(p2, v) - y0) - (coord(p2, u) - x0) * (coord(p1, v) - y0);
-        if (d == 0) continue;
-        const double s = ((qu - x0) * (coord(p2, v) - y0) - (coord(p2, u) - x0) * (qv - y0)) / d;
-        const double r = ((coord(p1, u) - x0) * (qv - y0) - (qu - x0) * (coord(p1, v) - y0)) / d;
-        const double eps = 1e-9;
-        if (s >= -eps && r >= -eps && s + r <= 1 + eps) return t->face;
-      }
+      const int face = face_holding(q, it->second, nodes, a);
+      if (face >= 0) return face;
     }
     return -1;
   };
@@ -1767,15 +1775,16 @@ TetMesh mesh_shape(const std::string& brep, const MeshShapeParameters& parameter
     const int a = sweep->axis;
     Vec3 along{0, 0, 0};
     set_coord(along, a, 1.0);
-    std::vector<Vec3> sum(nodes.size(), Vec3{0, 0, 0});
-    for (const auto& side : swept.sides) {
-      const Vec3 n = (nodes[side[0]] - nodes[side[1]]).cross(along);  // the wall's, outward
-      for (int end : side) sum[end] = sum[end] + n;
+    std::vector<Vec3> side_normal(swept.sides.size()), sum(nodes.size(), Vec3{0, 0, 0});
+    for (std::size_t k = 0; k < swept.sides.size(); ++k) {
+      const auto& side = swept.sides[k];
+      side_normal[k] = (nodes[side[0]] - nodes[side[1]]).cross(along);  // the wall's, outward
+      for (int end : side) sum[end] = sum[end] + side_normal[k];
     }
     std::vector<char> station(nodes.size(), 0), bent(nodes.size(), 0), outer(nodes.size(), 0);
     for (std::size_t k = 0; k < swept.sides.size(); ++k) {
       const auto& side = swept.sides[k];
-      const Vec3 n = unit((nodes[side[0]] - nodes[side[1]]).cross(along));
+      const Vec3 n = unit(side_normal[k]);
       for (int end : side) {
         station[end] = 1;
         if (n.dot(unit(sum[end])) < std::cos(25.0 * M_PI / 180)) bent[end] = 1;
@@ -1871,10 +1880,8 @@ TetMesh mesh_shape(const std::string& brep, const MeshShapeParameters& parameter
       if (!seen.insert(i).second) return false;
       const auto& t = parity_tris[i];
       const Vec3 &p0 = nodes[t[0]], &p1 = nodes[t[1]], &p2 = nodes[t[2]];
-      const double d = (p1.y - p0.y) * (p2.z - p0.z) - (p2.y - p0.y) * (p1.z - p0.z);
-      if (d == 0) return false;
-      const double u = ((y - p0.y) * (p2.z - p0.z) - (p2.y - p0.y) * (z - p0.z)) / d;
-      const double v = ((p1.y - p0.y) * (z - p0.z) - (y - p0.y) * (p1.z - p0.z)) / d;
+      double u, v;
+      if (!coordinates_across(Vec3{0, y, z}, p0, p1, p2, 0, u, v)) return false;
       if (u < 0 || v < 0 || u + v > 1) return false;
       xs.push_back(p0.x + u * (p1.x - p0.x) + v * (p2.x - p0.x));
       return false;
@@ -2100,7 +2107,7 @@ TetMesh mesh_shape(const std::string& brep, const MeshShapeParameters& parameter
   limit_text << time_limit;
   const std::string limited = "timeout -k 5 " + limit_text.str() + " ";
   int restarts = 0;
-  for (int attempt = 0;; ++attempt) {
+  for (bool nudged = false;;) {
     const int status = std::system(
         (limited + report.tetgen_command + " > " + shell_quote(log.string()) + " 2>&1").c_str());
     const bool timed_out = WIFEXITED(status) && WEXITSTATUS(status) == 124;
@@ -2123,7 +2130,6 @@ TetMesh mesh_shape(const std::string& brep, const MeshShapeParameters& parameter
                 polygon.end());
       ++report.nb_tetgen_restarts;
       write_poly();
-      --attempt;  // a restart is not a nudge
       continue;
     }
     if (status != 0 || !fs::exists(work.path() / "shape.1.ele"))
@@ -2160,13 +2166,14 @@ TetMesh mesh_shape(const std::string& brep, const MeshShapeParameters& parameter
       which += " " + std::to_string(i) + " at (" + std::to_string(p.x) + ", " +
                std::to_string(p.y) + ", " + std::to_string(p.z) + ")";
     }
-    if (attempt > 0 || dropped.empty() || dropped.front() < nodes.size() + nb_on_faces)
+    if (nudged || dropped.empty() || dropped.front() < nodes.size() + nb_on_faces)
       throw InputError("TetGen dropped " + std::to_string(dropped.size()) +
                        " of the points given (points too close together or not insertable):" +
                        which + "; try another size\n(command: " + report.tetgen_command + ")");
     for (std::size_t i : dropped)
       inserted[i - nodes.size()] = inserted[i - nodes.size()] + Vec3{1.0, 0.7, 0.3} * (1e-7 * h);
     report.nb_nudged_points += dropped.size();
+    nudged = true;
     write_poly();
   }
   clock.lap("tetgen");
