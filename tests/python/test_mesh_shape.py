@@ -300,6 +300,19 @@ def test_boundary_nodes_on_the_surfaces(shapes, name: str, h: float, options: di
     assert SURFACES[name](boundary_nodes(tets)).max() <= 1e-3 * h
 
 
+def sweep_planes(tets: hexmerge.MixedMesh, meshing: dict) -> tuple[np.ndarray, np.ndarray]:
+    """The nodes in the lattice frame, and the lattice plane along the sweep axis each lies on
+    (asserted: to 1e-9 of the spacing); every tet lies between two consecutive planes."""
+    axis = meshing["sweep_axis"]
+    q = tets.points @ np.array(meshing["frame"]).T
+    level = (q[:, axis] - q[:, axis].min()) / meshing["spacing"][axis]
+    assert np.abs(level - np.round(level)).max() < 1e-9  # every node on a lattice plane
+    level = np.round(level).astype(np.int64)
+    cells = tets.cell_vertices.reshape(-1, 4).astype(np.int64)
+    assert (level[cells].max(axis=1) - level[cells].min(axis=1) == 1).all()  # every tet in a slab
+    return q, level
+
+
 @needs_tetgen
 @pytest.mark.parametrize(("name", "h"), [("cylinder", 5.0), ("cylinder", 8.0), ("plate", 10.0),
                                          ("rounded_rectangle", 3.0)])
@@ -312,12 +325,7 @@ def test_extrusions_are_swept(shapes, name: str, h: float) -> None:
     meshing = report["meshing"]
     axis = meshing["sweep_axis"]
     assert axis == 2  # the frame's third axis: the normal of the largest planar faces
-    q = tets.points @ np.array(meshing["frame"]).T
-    level = (q[:, axis] - q[:, axis].min()) / meshing["spacing"][axis]
-    assert np.abs(level - np.round(level)).max() < 1e-9  # every node on a lattice plane
-    level = np.round(level).astype(np.int64)
-    cells = tets.cell_vertices.reshape(-1, 4).astype(np.int64)
-    assert (level[cells].max(axis=1) - level[cells].min(axis=1) == 1).all()  # every tet in a slab
+    q, level = sweep_planes(tets, meshing)
     section = [np.round(np.delete(q[level == k], axis, axis=1), 9) for k in range(level.max() + 1)]
     first = section[0][np.lexsort(section[0].T)]
     for k, s in enumerate(section):  # the same cross-section on every plane
@@ -363,11 +371,7 @@ def test_solids_stacked_along_the_axis_are_swept(shapes) -> None:
     assert np.array_equal(np.unique(tets.regions), np.arange(10))
     frame = np.array(meshing["frame"])
     assert np.allclose(np.abs(frame[meshing["sweep_axis"]]), [1, 0, 0])  # along x
-    q = tets.points @ frame.T
-    axis = meshing["sweep_axis"]
-    level = np.round((q[:, axis] - q[:, axis].min()) / meshing["spacing"][axis]).astype(np.int64)
-    cells = tets.cell_vertices.reshape(-1, 4).astype(np.int64)
-    assert (level[cells].max(axis=1) - level[cells].min(axis=1) == 1).all()
+    sweep_planes(tets, meshing)
     assert meshing["max_boundary_distance"] <= 1e-3 * 3.0
     mesh, report = hexmerge.mesh_shape(shapes["box_5_cylinder"], 3.0)
     result = assert_checked(mesh, tets, report, 3.0)

@@ -136,9 +136,7 @@ def _options(size: Any, given: dict[str, Any]) -> tuple[float, dict[str, Any]]:
         elif row["type"] == "float":
             out[name] = _number(name, value)
         elif row["type"] == "bool":
-            if not isinstance(value, (bool, np.bool_)):
-                raise _core.InputError(f"{name} must be True or False, got {value!r}")
-            out[name] = bool(value)
+            out[name] = _flag(name, value, _core.InputError)
         elif not isinstance(value, str) or value not in row["choices"]:
             raise _core.InputError(f"{name} must be one of {', '.join(row['choices'])}, got {value!r}")
         else:
@@ -146,9 +144,9 @@ def _options(size: Any, given: dict[str, Any]) -> tuple[float, dict[str, Any]]:
     return size, out
 
 
-def _flag(name: str, value: Any) -> bool:
+def _flag(name: str, value: Any, error: type[Exception] = ValueError) -> bool:
     if not isinstance(value, (bool, np.bool_)):
-        raise ValueError(f"{name} must be True or False, got {value!r}")
+        raise error(f"{name} must be True or False, got {value!r}")
     return bool(value)
 
 
