@@ -1,0 +1,50 @@
+#include "hexmerge/occ/mesher/boundary_distance.h"
+
+#include <BRep_Tool.hxx>
+#include <ShapeAnalysis_Surface.hxx>
+#include <TopoDS.hxx>
+#include <TopoDS_Face.hxx>
+#include <algorithm>
+#include <memory>
+#include <string>
+
+#include "hexmerge/core/error.h"
+#include "hexmerge/mesh/tet_topology.h"
+#include "hexmerge/occ/mesher/shape.h"
+
+namespace hexmerge::mesher {
+
+double max_boundary_distance(const Shape& shape, const TetMesh& mesh,
+                             const std::vector<int>& vertex_face, double tolerance) {
+  const std::size_t made = mesh.points.size() / 3;
+  // Face f of a tet is the one opposite its vertex f (TetTopology).
+  const TetTopology topology(mesh);
+  std::vector<char> boundary(made, 0);
+  for (index_t t = 0; t < mesh.nb_tets(); ++t)
+    for (int f = 0; f < 4; ++f)
+      if (topology.on_boundary(t, f))
+        for (int k = 0; k < 4; ++k)
+          if (k != f) boundary[mesh.tet(t)[k]] = 1;
+  std::vector<std::unique_ptr<ShapeAnalysis_Surface>> analysis(shape.faces.Extent());
+  double worst = 0;
+  for (std::size_t v = 0; v < made; ++v) {
+    if (!boundary[v]) continue;
+    const int face = v < vertex_face.size() ? vertex_face[v] : -1;
+    const gp_Pnt p(mesh.points[3 * v], mesh.points[3 * v + 1], mesh.points[3 * v + 2]);
+    if (face < 0) {
+      throw InputError("TetGen put node " + std::to_string(v) +
+                           " on the boundary, which is on no face of the shape",
+                       Entity::Node, static_cast<index_t>(v));
+    }
+    if (!analysis[face]) {
+      const TopoDS_Face& f = TopoDS::Face(shape.faces(face + 1));
+      analysis[face] = std::make_unique<ShapeAnalysis_Surface>(BRep_Tool::Surface(f));
+    }
+    // BRep_Tool::Surface(face) is the face's surface with its location applied.
+    analysis[face]->ValueOfUV(p, tolerance);
+    worst = std::max(worst, analysis[face]->Gap());
+  }
+  return worst;
+}
+
+}  // namespace hexmerge::mesher

@@ -1,0 +1,36 @@
+#pragma once
+/// @file
+/// Small helpers the mesher's stages share (internal header of mesh_shape(); no OpenCASCADE):
+/// component-wise minimum and maximum, a coordinate by axis, the key of an unordered node pair.
+
+#include <algorithm>
+#include <cstdint>
+#include <utility>
+
+#include "hexmerge/geometry/vec3.h"
+
+namespace hexmerge::mesher {
+
+/// The key of the unordered pair {a, b} (the smaller in the high 32 bits).
+inline std::uint64_t pair_key(int a, int b) {
+  if (a > b) std::swap(a, b);
+  return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(a)) << 32) |
+         static_cast<std::uint32_t>(b);
+}
+
+/// Component-wise minimum and maximum.
+inline Vec3 vmin(const Vec3& a, const Vec3& b) {
+  return {std::min(a.x, b.x), std::min(a.y, b.y), std::min(a.z, b.z)};
+}
+inline Vec3 vmax(const Vec3& a, const Vec3& b) {
+  return {std::max(a.x, b.x), std::max(a.y, b.y), std::max(a.z, b.z)};
+}
+/// Coordinate `axis` (0, 1, 2: x, y, z) of v, read and written.
+inline double coord(const Vec3& v, int axis) { return axis == 0 ? v.x : axis == 1 ? v.y : v.z; }
+inline void set_coord(Vec3& v, int axis, double value) {
+  (axis == 0 ? v.x : axis == 1 ? v.y : v.z) = value;
+}
+/// v scaled to length 1 (v must not be zero).
+inline Vec3 unit(const Vec3& v) { return v * (1.0 / v.norm()); }
+
+}  // namespace hexmerge::mesher

@@ -1,0 +1,139 @@
+#include "hexmerge/occ/mesher/facets.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <map>
+#include <unordered_map>
+#include <utility>
+
+#include "hexmerge/occ/mesher/common.h"
+
+namespace hexmerge::mesher {
+
+// The facets for TetGen: every triangle of the other faces as it is (TetGen keeps them, -Y);
+// a lattice face as its boundary loops only, so that nothing but the inserted lattice points
+// decides how it is cut into triangles (a triangle's edges would be segments TetGen must keep).
+std::vector<Facet> make_facets(const Surface& surface, const std::vector<Vec3>& nodes,
+                               const std::vector<bool>& lattice_face,
+                               const std::vector<std::optional<AxisPlane>>& face_plane) {
+  std::vector<Facet> facets;
+  std::map<int, std::vector<const SurfaceTriangle*>> by_face;
+  for (const SurfaceTriangle& t : surface.triangles) {
+    if (lattice_face[t.face])
+      by_face[t.face].push_back(&t);
+    else
+      facets.push_back(Facet{{{t.node[0], t.node[1], t.node[2]}}, {}, t.face + 1});
+  }
+  for (const auto& [face, triangles] : by_face) {
+    std::unordered_map<std::uint64_t, int> uses;
+    for (const SurfaceTriangle* t : triangles)
+      for (int c = 0; c < 3; ++c) ++uses[pair_key(t->node[c], t->node[(c + 1) % 3])];
+    std::unordered_map<int, int> next;  // directed boundary edges, as the triangles run
+    bool simple = true;
+    for (const SurfaceTriangle* t : triangles)
+      for (int c = 0; c < 3; ++c) {
+        const int a = t->node[c], b = t->node[(c + 1) % 3];
+        if (uses[pair_key(a, b)] == 1) simple &= next.emplace(a, b).second;
+      }
+    if (!simple) {  // a loop touching itself: keep the triangles
+      for (const SurfaceTriangle* t : triangles)
+        facets.push_back(Facet{{{t->node[0], t->node[1], t->node[2]}}, {}, face + 1});
+      continue;
+    }
+    const int axis = face_plane[face]->axis, u = (axis + 1) % 3, v = (axis + 2) % 3;
+    const SurfaceTriangle* t0 = triangles.front();
+    const Vec3 normal =
+        (nodes[t0->node[1]] - nodes[t0->node[0]]).cross(nodes[t0->node[2]] - nodes[t0->node[0]]);
+    const double side = coord(normal, axis) > 0 ? 1 : -1;
+    Facet facet{{}, {}, face + 1};
+    while (!next.empty()) {
+      std::vector<int> loop;
+      int a = next.begin()->first;
+      while (next.count(a)) {
+        loop.push_back(a);
+        const int b = next[a];
+        next.erase(a);
+        a = b;
+      }
+      double area = 0;
+      for (std::size_t i = 0; i < loop.size(); ++i) {
+        const Vec3 &p = nodes[loop[i]], &q = nodes[loop[(i + 1) % loop.size()]];
+        area += coord(p, u) * coord(q, v) - coord(q, u) * coord(p, v);
+      }
+      if (area * side < 0) {
+        // An inner loop: a point just beside its first edge, away from the face's triangles.
+        const Vec3 &p = nodes[loop[0]], &q = nodes[loop[1]];
+        Vec3 axis_normal{0, 0, 0};
+        set_coord(axis_normal, axis, side);
+        const Vec3 left = axis_normal.cross(q - p);
+        facet.holes.push_back((p + q) * 0.5 - left * 1e-3);
+      }
+      facet.polygons.push_back(std::move(loop));
+    }
+    facets.push_back(std::move(facet));
+  }
+  return facets;
+}
+
+// Puts the lattice points lying on lattice faces, points[first..], into the facets of those
+// faces: into a boundary loop where they lie on one of its sides, else as a polygon of one point
+// where they lie inside. TetGen then triangulates each lattice face with its lattice points from
+// the start; left to -i, they came into two large triangles per face, which left long and flat
+// tets along the face.
+void add_face_points(std::vector<Facet>& facets, const std::vector<Vec3>& points, std::size_t first,
+                     const std::vector<bool>& lattice_face,
+                     const std::vector<std::optional<AxisPlane>>& face_plane, double tolerance) {
+  // Per axis, the points by their coordinate along it.
+  std::vector<std::pair<double, int>> by_axis[3];
+  for (int a = 0; a < 3; ++a) {
+    for (std::size_t i = first; i < points.size(); ++i)
+      by_axis[a].emplace_back(coord(points[i], a), static_cast<int>(i));
+    std::sort(by_axis[a].begin(), by_axis[a].end());
+  }
+  for (Facet& facet : facets) {
+    if (!lattice_face[facet.marker - 1]) continue;
+    const int axis = face_plane[facet.marker - 1]->axis, u = (axis + 1) % 3, v = (axis + 2) % 3;
+    const double offset = coord(points[facet.polygons[0][0]], axis);
+    const auto& list = by_axis[axis];
+    auto it = std::lower_bound(list.begin(), list.end(), std::make_pair(offset - tolerance, -1));
+    // Points on each side of each polygon, by their parameter along it.
+    std::map<std::pair<std::size_t, std::size_t>, std::vector<std::pair<double, int>>> on_side;
+    std::vector<std::vector<int>> singles;
+    for (; it != list.end() && it->first <= offset + tolerance; ++it) {
+      const Vec3& q = points[it->second];
+      const double qu = coord(q, u), qv = coord(q, v);
+      bool on_boundary = false, inside = false;
+      for (std::size_t p = 0; p < facet.polygons.size() && !on_boundary; ++p) {
+        const auto& polygon = facet.polygons[p];
+        for (std::size_t k = 0; k < polygon.size() && !on_boundary; ++k) {
+          const Vec3 &a = points[polygon[k]], &b = points[polygon[(k + 1) % polygon.size()]];
+          const double du = coord(b, u) - coord(a, u), dv = coord(b, v) - coord(a, v);
+          const double wu = qu - coord(a, u), wv = qv - coord(a, v);
+          const double length2 = du * du + dv * dv, t = (wu * du + wv * dv) / length2;
+          if (std::abs(wu * dv - wv * du) <= tolerance * std::sqrt(length2) && t > 0 && t < 1) {
+            on_side[{p, k}].emplace_back(t, it->second);
+            on_boundary = true;
+          }
+          // Even-odd rule along +u.
+          if ((coord(a, v) > qv) != (coord(b, v) > qv) &&
+              qu < coord(a, u) + (qv - coord(a, v)) * du / dv)
+            inside = !inside;
+        }
+      }
+      if (!on_boundary && inside) singles.push_back({it->second});
+    }
+    // From the last side back, so that the sides' indices hold.
+    for (auto entry = on_side.rbegin(); entry != on_side.rend(); ++entry) {
+      auto& polygon = facet.polygons[entry->first.first];
+      std::sort(entry->second.begin(), entry->second.end());
+      std::vector<int> between;
+      for (const auto& along : entry->second) between.push_back(along.second);
+      polygon.insert(polygon.begin() + static_cast<std::ptrdiff_t>(entry->first.second) + 1,
+                     between.begin(), between.end());
+    }
+    facet.polygons.insert(facet.polygons.end(), singles.begin(), singles.end());
+  }
+}
+
+}  // namespace hexmerge::mesher

@@ -1,0 +1,39 @@
+#pragma once
+/// @file
+/// The lattice frame: three orthonormal axes and an origin (internal header of mesh_shape(); no
+/// OpenCASCADE). Everything from the lattice on works in frame coordinates.
+
+#include "hexmerge/geometry/vec3.h"
+
+namespace hexmerge::mesher {
+
+/// A right-handed orthonormal frame (axis[0..2], unit vectors, rows) and an origin.
+struct Frame {
+  Vec3 axis[3];
+  Vec3 origin{0, 0, 0};
+  /// World coordinates -> frame coordinates.
+  Vec3 to_frame(const Vec3& p) const {
+    const Vec3 d = p - origin;
+    return {d.dot(axis[0]), d.dot(axis[1]), d.dot(axis[2])};
+  }
+  /// Frame coordinates -> world coordinates.
+  Vec3 to_world(const Vec3& q) const {
+    return origin + axis[0] * q.x + axis[1] * q.y + axis[2] * q.z;
+  }
+};
+
+/// Completes e3 (and e1 when given) into a right-handed orthonormal frame at the origin.
+/// @param[in] e3        the third axis (any length > 0)
+/// @param[in] e1_hint   the first axis, projected normal to e3; null or shorter than 0.5: the
+///                      axis of `fallback` least aligned with e3 instead
+/// @param[in] fallback  three candidate first axes
+Frame make_frame(const Vec3& e3, const Vec3* e1_hint, const Vec3 (&fallback)[3]);
+
+/// A planar face normal to a frame axis: the axis and the face's offset along it (frame
+/// coordinates).
+struct AxisPlane {
+  int axis;
+  double offset;
+};
+
+}  // namespace hexmerge::mesher

@@ -1,0 +1,50 @@
+#pragma once
+/// @file
+/// Quality of the tets after TetGen (internal header of mesh_shape(); no OpenCASCADE): flips
+/// (remove_slivers) alternating with moves of the free nodes (smooth_nodes), neither ever
+/// lowering the smallest scaled Jacobian, the lattice's own tets kept for the hexahedra.
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "hexmerge/mesh/tet_mesh.h"
+
+namespace hexmerge::mesher {
+
+/// What improve_tets() did.
+struct ImproveReport {
+  double min_quality_before = 0.0;  ///< smallest scaled Jacobian before the first flips
+  std::size_t face_flips = 0;       ///< 2-3 flips
+  std::size_t edge_flips = 0;       ///< edge removals (3-2, 4-4, ...)
+  std::size_t boundary_swaps = 0;   ///< of which on the boundary, inside one CAD face
+  std::size_t node_moves = 0;       ///< moves of free nodes
+};
+
+/// How improve_tets() works.
+struct ImproveParameters {
+  std::array<double, 3> spacing{};  ///< the lattice's spacing per frame axis
+  int sweep_axis = -1;              ///< swept: the tets within one slab stay; -1: not swept
+  /// Vertices below this index (the surface's nodes) never move.
+  std::size_t nb_surface_nodes = 0;
+  /// Boundary triangles of one CAD face may swap their side where the boundary moves by no more
+  /// than this (the surface's chord deflection).
+  double max_boundary_shift = 0.0;
+};
+
+/// Flips take out slivers, then the free nodes (not on the surface, not on the half lattice,
+/// not in a swept mesh) move to raise the worst tet around them, then flips again, for 4 rounds
+/// of flips. Tets within one lattice cell or closing pyramid (all corners on the half lattice,
+/// within one cell's width), or swept within one slab, stay as they are.
+/// @param[in,out] mesh           the tets (coordinates in the world)
+/// @param[in]     frame_points   #vertices by 3: the vertices in frame coordinates (lattice at
+///                               multiples of the spacing)
+/// @param[in]     boundary       the boundary triangles and, per triangle, its CAD face
+///                (boundary_face); their vertices never move
+void improve_tets(TetMesh& mesh, const std::vector<double>& frame_points,
+                  const std::vector<std::array<index_t, 3>>& boundary,
+                  const std::vector<std::int32_t>& boundary_face,
+                  const ImproveParameters& parameters, ImproveReport& report);
+
+}  // namespace hexmerge::mesher

@@ -1,0 +1,351 @@
+#include "hexmerge/occ/mesher/lattice.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <string>
+#include <unordered_set>
+
+#include "hexmerge/core/error.h"
+#include "hexmerge/occ/mesher/common.h"
+#include "hexmerge/occ/mesher/shape.h"
+#include "hexmerge/occ/mesher/surface_repair.h"
+#include "hexmerge/occ/mesher/sweep.h"
+
+namespace hexmerge::mesher {
+
+Lattice lay_lattice(const Shape& shape, const Frame& frame, const std::vector<Vec3>& surface_nodes,
+                    double h) {
+  Lattice lattice;
+  lattice.frame = frame;
+  Vec3 lo{std::numeric_limits<double>::max(), std::numeric_limits<double>::max(),
+          std::numeric_limits<double>::max()};
+  Vec3 hi = lo * -1.0;
+  for (const Vec3& p : surface_nodes) {
+    const Vec3 q = frame.to_frame(p);
+    lo = vmin(lo, q), hi = vmax(hi, q);
+  }
+  lattice.extent = {hi.x - lo.x, hi.y - lo.y, hi.z - lo.z};
+  const auto& extent = lattice.extent;
+  lattice.largest = std::max({extent[0], extent[1], extent[2]});
+  const double largest = lattice.largest;
+  if (h > largest)
+    throw InputError("mesh_shape: size " + std::to_string(h) + " is larger than the shape (" +
+                         std::to_string(largest) + " across)",
+                     Entity::Parameter);
+  lattice.frame.origin = frame.to_world(lo);  // lattice planes through the box's lower corner
+  lattice.face_plane = face_planes(shape, lattice.frame);
+  const auto& face_plane = lattice.face_plane;
+  std::vector<double> offsets[3];
+  for (const auto& plane : face_plane)
+    if (plane) offsets[plane->axis].push_back(plane->offset);
+  // Whether an offset along an axis falls on a lattice plane of the given spacing.
+  const auto on_lattice_plane = [plane_tolerance = 1e-7 * h](double offset, double spacing) {
+    const double k = offset / spacing;
+    return std::abs(k - std::round(k)) * spacing < plane_tolerance;
+  };
+  // Cells per axis: about h wide, chosen so that as many axis-normal planar faces as possible
+  // lie on lattice planes (the box's own faces always do).
+  for (int a = 0; a < 3; ++a) {
+    const double L = extent[a];
+    const int guess = std::max(1, static_cast<int>(std::lround(L / h)));
+    int best = guess, best_hits = -1;
+    const int lo_n = std::max(1, static_cast<int>(std::floor(L / (1.5 * h))));
+    const int hi_n = std::max(lo_n, static_cast<int>(std::ceil(L / (0.75 * h))));
+    for (int n = lo_n; n <= hi_n; ++n) {
+      const double spacing = L / n;
+      int hits = 0;
+      for (double o : offsets[a]) hits += on_lattice_plane(o, spacing);
+      if (hits > best_hits || (hits == best_hits && std::abs(n - L / h) < std::abs(best - L / h)))
+        best = n, best_hits = hits;
+    }
+    lattice.cells[a] = best;
+    lattice.spacing[a] = L / best;
+  }
+
+  std::vector<bool>& lattice_face = lattice.lattice_face;
+  lattice_face.assign(shape.faces.Extent(), false);
+  for (int f = 0; f < shape.faces.Extent(); ++f) {
+    if (!face_plane[f]) continue;
+    lattice_face[f] = on_lattice_plane(face_plane[f]->offset, lattice.spacing[face_plane[f]->axis]);
+    lattice.nb_lattice_faces += lattice_face[f];
+  }
+  std::vector<bool>& lattice_edge = lattice.lattice_edge;
+  lattice_edge.assign(shape.edges.Extent(), false);
+  for (int e = 0; e < shape.edges.Extent(); ++e) {
+    const auto& around = shape.edge_faces[e];
+    lattice_edge[e] = !around.empty() && std::all_of(around.begin(), around.end(),
+                                                     [&](int f) { return lattice_face[f]; });
+  }
+  return lattice;
+}
+
+std::vector<Vec3> frame_nodes(const Shape& shape, const Surface& surface, const Lattice& lattice,
+                              int sweep_axis, const SweptSurface& swept) {
+  // Everything below in frame coordinates; nodes of lattice faces exactly on their planes.
+  std::vector<Vec3> nodes(surface.nodes.size());
+  for (std::size_t i = 0; i < nodes.size(); ++i)
+    nodes[i] = lattice.frame.to_frame(surface.nodes[i]);
+  for (const SurfaceTriangle& t : surface.triangles)
+    if (lattice.lattice_face[t.face])
+      for (int n : t.node) {
+        const AxisPlane& plane = *lattice.face_plane[t.face];
+        const double k = std::round(coord(nodes[n], plane.axis) / lattice.spacing[plane.axis]);
+        set_coord(nodes[n], plane.axis, k * lattice.spacing[plane.axis]);
+      }
+  align_straight_edges(shape, surface, lattice.lattice_face, lattice.largest, nodes);
+  if (sweep_axis >= 0) {
+    const int a = sweep_axis;
+    // Every node exactly on its lattice plane, and across the axis exactly where the node on the
+    // bottom plane it repeats is: the slabs are then equal to the last bit.
+    for (std::size_t i = 0; i < nodes.size(); ++i) {
+      const double level = std::round(coord(nodes[i], a) / lattice.spacing[a]);
+      Vec3 p = nodes[swept.base[i]];
+      set_coord(p, a, level * lattice.spacing[a]);
+      nodes[i] = p;
+    }
+  }
+  return nodes;
+}
+
+Surroundings::Surroundings(const std::vector<Vec3>& nodes, const Surface& surface,
+                           const Lattice& lattice, double h)
+    : box_lo(Vec3{0, 0, 0} - Vec3{2 * h, 2 * h, 2 * h}),
+      box_hi(Vec3{lattice.extent[0], lattice.extent[1], lattice.extent[2]} +
+             Vec3{2 * h, 2 * h, 2 * h}),
+      curved(nodes, box_lo, box_hi, h),
+      surface_points(box_lo, box_hi, h),
+      layer_points(box_lo, box_hi, h),
+      nodes_(nodes) {
+  for (const SurfaceTriangle& t : surface.triangles)
+    if (!lattice.lattice_face[t.face]) curved.add(t.node);
+  for (const Vec3& p : nodes) surface_points.add(p);
+  for (const SurfaceTriangle& t : surface.triangles)
+    if (lattice.lattice_face[t.face]) {
+      const AxisPlane& plane = *lattice.face_plane[t.face];
+      plane_triangles_[{plane.axis, std::lround(plane.offset / lattice.spacing[plane.axis])}]
+          .push_back(&t);
+    }
+}
+
+int Surroundings::on_lattice_face(const Vec3& q, const int (&index)[3]) const {
+  for (int a = 0; a < 3; ++a) {
+    auto it = plane_triangles_.find({a, index[a]});
+    if (it == plane_triangles_.end()) continue;
+    const int face = face_holding(q, it->second, nodes_, a);
+    if (face >= 0) return face;
+  }
+  return -1;
+}
+
+bool Surroundings::ball_is_empty(const Vec3& centre, double r) const {
+  const double inner = r * (1 - 1e-9);
+  return !curved.any_within(centre, inner) && !surface_points.any_within(centre, inner) &&
+         !layer_points.any_within(centre, inner);
+}
+
+Parity::Parity(const std::vector<Vec3>& nodes, const Surface& surface,
+               const std::vector<int>& face_solid_count, const Surroundings& around, double h)
+    : nodes_(nodes),
+      h_(h),
+      yz_(Vec3{around.box_lo.y, around.box_lo.z, 0}, Vec3{around.box_hi.y, around.box_hi.z, 0}, h) {
+  for (const SurfaceTriangle& t : surface.triangles)
+    if (face_solid_count[t.face] <= 1) triangles_.push_back(t.node);
+  for (std::size_t i = 0; i < triangles_.size(); ++i) {
+    const auto& t = triangles_[i];
+    Vec3 a{nodes[t[0]].y, nodes[t[0]].z, 0}, b{nodes[t[1]].y, nodes[t[1]].z, 0},
+        c{nodes[t[2]].y, nodes[t[2]].z, 0};
+    yz_.add(static_cast<int>(i), vmin(a, vmin(b, c)), vmax(a, vmax(b, c)));
+  }
+}
+
+std::vector<double> Parity::crossings(double y, double z) const {
+  y += 1.234567e-7 * h_, z += 2.345678e-7 * h_;
+  std::vector<double> xs;
+  std::unordered_set<int> seen;
+  yz_.any_in(Vec3{y, z, 0}, Vec3{y, z, 0}, [&](int i) {
+    if (!seen.insert(i).second) return false;
+    const auto& t = triangles_[i];
+    const Vec3 &p0 = nodes_[t[0]], &p1 = nodes_[t[1]], &p2 = nodes_[t[2]];
+    double u, v;
+    if (!coordinates_across(Vec3{0, y, z}, p0, p1, p2, 0, u, v)) return false;
+    if (u < 0 || v < 0 || u + v > 1) return false;
+    xs.push_back(p0.x + u * (p1.x - p0.x) + v * (p2.x - p0.x));
+    return false;
+  });
+  std::sort(xs.begin(), xs.end());
+  return xs;
+}
+
+bool Parity::inside_given(const std::vector<double>& xs, double x) {
+  return (std::lower_bound(xs.begin(), xs.end(), x) - xs.begin()) % 2 == 1;
+}
+
+KeptPoints keep_lattice_points(const Lattice& lattice, const Surroundings& around,
+                               const Parity& parity, double keep_distance, double margin) {
+  // Lattice points: kept when inside (or on a lattice face) and far enough from the other faces.
+  const int n0 = lattice.cells[0] + 1, n1 = lattice.cells[1] + 1, n2 = lattice.cells[2] + 1;
+  auto point_index = [&](int i, int j, int k) {
+    return (static_cast<std::size_t>(k) * n1 + j) * n0 + i;
+  };
+  KeptPoints out;
+  std::vector<char>& kept = out.kept;
+  std::vector<int>& kept_face = out.face;
+  kept.assign(static_cast<std::size_t>(n0) * n1 * n2, 0);
+  kept_face.assign(kept.size(), -1);
+  for (int k = 0; k < n2; ++k)
+    for (int j = 0; j < n1; ++j) {
+      const std::vector<double> xs =
+          parity.crossings(j * lattice.spacing[1], k * lattice.spacing[2]);
+      for (int i = 0; i < n0; ++i) {
+        const Vec3 q = lattice.point(i, j, k);
+        const int index[3] = {i, j, k};
+        const int face = around.on_lattice_face(q, index);
+        if (face < 0 && !Parity::inside_given(xs, q.x)) continue;
+        if (around.curved.any_within(q, keep_distance)) continue;
+        if (around.layer_points.any_within(q, margin)) continue;
+        kept[point_index(i, j, k)] = 1;
+        kept_face[point_index(i, j, k)] = face;
+      }
+    }
+  return out;
+}
+
+CoreCounts add_core(const Lattice& lattice, const Surroundings& around, const Parity& parity,
+                    const KeptPoints& kept_points, int sweep_axis, double h,
+                    InsertedPoints& inserted) {
+  // The hexahedral core: cells with 8 kept corners whose circumsphere holds nothing else; then
+  // every quad face between the core and another cell inside needs a closing pyramid whose apex
+  // is that cell's centre and whose circumsphere holds nothing else, or the core cell goes.
+  const int c0 = lattice.cells[0], c1 = lattice.cells[1], c2 = lattice.cells[2];
+  const int n0 = lattice.cells[0] + 1, n1 = lattice.cells[1] + 1, n2 = lattice.cells[2] + 1;
+  auto point_index = [&](int i, int j, int k) {
+    return (static_cast<std::size_t>(k) * n1 + j) * n0 + i;
+  };
+  const std::vector<char>& kept = kept_points.kept;
+  CoreCounts counts;
+  auto cell_index = [&](int i, int j, int k) {
+    return (static_cast<std::size_t>(k) * c1 + j) * c0 + i;
+  };
+  // The cell across face dir (0..5: -x, +x, -y, +y, -z, +z) of cell (i, j, k), in n; whether it
+  // is in the lattice.
+  auto across = [&](int i, int j, int k, int dir, int(&n)[3]) {
+    n[0] = i, n[1] = j, n[2] = k;
+    n[dir / 2] += dir % 2 ? 1 : -1;
+    return n[0] >= 0 && n[0] < c0 && n[1] >= 0 && n[1] < c1 && n[2] >= 0 && n[2] < c2;
+  };
+  auto cell_centre = [&](int i, int j, int k) { return lattice.cell_centre(i, j, k); };
+  const double half_diagonal = 0.5 * std::sqrt(lattice.spacing[0] * lattice.spacing[0] +
+                                               lattice.spacing[1] * lattice.spacing[1] +
+                                               lattice.spacing[2] * lattice.spacing[2]);
+  std::vector<char> core(static_cast<std::size_t>(c0) * c1 * c2, 0);
+  for (int k = 0; k < c2; ++k)
+    for (int j = 0; j < c1; ++j)
+      for (int i = 0; i < c0; ++i) {
+        bool all = true;
+        for (int corner = 0; corner < 8 && all; ++corner)
+          all =
+              kept[point_index(i + (corner & 1), j + ((corner >> 1) & 1), k + ((corner >> 2) & 1))];
+        if (!all) continue;
+        const Vec3 centre = cell_centre(i, j, k);
+        if (!parity.inside(centre) || !around.ball_is_empty(centre, half_diagonal)) continue;
+        core[cell_index(i, j, k)] = 1;
+      }
+  // Per directed face (cell, direction 0..5): 0 unknown, 1 boundary (no pyramid needed),
+  // 2 pyramid possible, 3 impossible.
+  std::vector<std::uint8_t> face_state(core.size() * 6, 0);
+  auto face_kind = [&](int i, int j, int k, int dir) -> std::uint8_t {
+    std::uint8_t& state = face_state[cell_index(i, j, k) * 6 + dir];
+    if (state) return state;
+    const int axis = dir / 2, side = dir % 2 ? 1 : -1;
+    // Swept: the prisms and hexahedra of the slab close the core's sides.
+    if (sweep_axis >= 0 && axis != sweep_axis) return state = 1;
+    int n[3];
+    const bool in_range = across(i, j, k, dir, n);
+    const Vec3 face_centre =
+        cell_centre(i, j, k) + Vec3{axis == 0 ? side * 0.5 * lattice.spacing[0] : 0,
+                                    axis == 1 ? side * 0.5 * lattice.spacing[1] : 0,
+                                    axis == 2 ? side * 0.5 * lattice.spacing[2] : 0};
+    const Vec3 apex = in_range ? cell_centre(n[0], n[1], n[2]) : face_centre;
+    if (!in_range || !parity.inside(apex)) return state = 1;
+    // The sphere through the face's corners and the apex.
+    const double a = 0.5 * lattice.spacing[axis];
+    double rho2 = 0;
+    for (int b = 0; b < 3; ++b)
+      if (b != axis) rho2 += 0.25 * lattice.spacing[b] * lattice.spacing[b];
+    const double c = (a * a - rho2) / (2 * a);
+    const Vec3 towards = apex - face_centre;
+    const Vec3 centre = face_centre + towards * (c / a);
+    const double r = a - c;
+    const bool ok = around.ball_is_empty(centre, r) &&
+                    !around.surface_points.any_within(apex, 0.25 * h) &&
+                    !around.layer_points.any_within(apex, 0.25 * h);
+    return state = ok ? 2 : 3;
+  };
+  for (bool changed = true; changed;) {
+    changed = false;
+    for (int k = 0; k < c2; ++k)
+      for (int j = 0; j < c1; ++j)
+        for (int i = 0; i < c0; ++i) {
+          if (!core[cell_index(i, j, k)]) continue;
+          for (int dir = 0; dir < 6; ++dir) {
+            int n[3];
+            if (across(i, j, k, dir, n) && core[cell_index(n[0], n[1], n[2])]) continue;
+            if (face_kind(i, j, k, dir) == 3) {
+              core[cell_index(i, j, k)] = 0;
+              changed = true;
+              break;
+            }
+          }
+        }
+  }
+  std::vector<char> apex_cell(core.size(), 0);
+  for (int k = 0; k < c2; ++k)
+    for (int j = 0; j < c1; ++j)
+      for (int i = 0; i < c0; ++i) {
+        if (!core[cell_index(i, j, k)]) continue;
+        ++counts.nb_core_cells;
+        for (int dir = 0; dir < 6; ++dir) {
+          int n[3];
+          if (!across(i, j, k, dir, n) || core[cell_index(n[0], n[1], n[2])]) continue;
+          if (face_kind(i, j, k, dir) == 2) apex_cell[cell_index(n[0], n[1], n[2])] = 1;
+        }
+      }
+  for (int k = 0; k < n2; ++k)
+    for (int j = 0; j < n1; ++j)
+      for (int i = 0; i < n0; ++i) {
+        if (!kept[point_index(i, j, k)]) continue;
+        const Vec3 q = lattice.point(i, j, k);
+        if (around.surface_points.any_within(q, 1e-6 * h)) continue;  // already a surface node
+        inserted.points.push_back(q);
+        inserted.face.push_back(kept_points.face[point_index(i, j, k)]);
+        ++counts.nb_lattice_points;
+      }
+  for (int k = 0; k < c2; ++k)
+    for (int j = 0; j < c1; ++j)
+      for (int i = 0; i < c0; ++i)
+        if (apex_cell[cell_index(i, j, k)]) {
+          inserted.points.push_back(cell_centre(i, j, k));
+          inserted.face.push_back(-1);
+          ++counts.nb_apex_points;
+        }
+  return counts;
+}
+
+std::size_t face_points_first(InsertedPoints& inserted) {
+  std::vector<std::size_t> order(inserted.points.size());
+  for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::stable_partition(order.begin(), order.end(),
+                        [&](std::size_t i) { return inserted.face[i] >= 0; });
+  std::vector<Vec3> points(order.size());
+  std::vector<int> faces(order.size());
+  for (std::size_t i = 0; i < order.size(); ++i)
+    points[i] = inserted.points[order[i]], faces[i] = inserted.face[order[i]];
+  inserted.points.swap(points);
+  inserted.face.swap(faces);
+  return static_cast<std::size_t>(
+      std::count_if(inserted.face.begin(), inserted.face.end(), [](int f) { return f >= 0; }));
+}
+
+}  // namespace hexmerge::mesher

@@ -1,0 +1,145 @@
+#pragma once
+/// @file
+/// The cubic lattice in the frame and the points it gives TetGen (internal header of
+/// mesh_shape(); no OpenCASCADE): the lattice laid through the shape's bounding box with as many
+/// planar faces on its planes as can be ("lattice faces"), the surface's nodes in frame
+/// coordinates, the queries of what lies near a point, inside/outside by ray parity, the lattice
+/// points kept, and the hexahedral core with its closing pyramids' apexes.
+
+#include <array>
+#include <cstddef>
+#include <map>
+#include <optional>
+#include <utility>
+#include <vector>
+
+#include "hexmerge/geometry/vec3.h"
+#include "hexmerge/occ/mesher/frame.h"
+#include "hexmerge/occ/mesher/spatial.h"
+#include "hexmerge/occ/mesher/surface.h"
+
+namespace hexmerge::mesher {
+
+struct Shape;
+struct SweptSurface;
+
+/// The lattice: cells[a] cells of spacing[a] along frame axis a, its planes through the lower
+/// corner of the surface's bounding box in the frame (the frame's origin).
+struct Lattice {
+  Frame frame;
+  std::array<double, 3> extent{};  ///< the bounding box's size along each axis
+  double largest = 0;              ///< the largest of extent
+  int cells[3] = {0, 0, 0};
+  std::array<double, 3> spacing{};
+  /// Per face, its plane when planar and normal to a frame axis.
+  std::vector<std::optional<AxisPlane>> face_plane;
+  std::vector<bool> lattice_face;  ///< per face: planar and on a lattice plane
+  std::vector<bool> lattice_edge;  ///< per edge: every face it bounds is a lattice face
+  std::size_t nb_lattice_faces = 0;
+
+  /// Lattice point (i, j, k) and the centre of cell (i, j, k), in frame coordinates.
+  Vec3 point(int i, int j, int k) const {
+    return Vec3{i * spacing[0], j * spacing[1], k * spacing[2]};
+  }
+  Vec3 cell_centre(int i, int j, int k) const {
+    return Vec3{(i + 0.5) * spacing[0], (j + 0.5) * spacing[1], (k + 0.5) * spacing[2]};
+  }
+};
+
+/// The lattice in `frame` through the bounding box of the surface's nodes (world coordinates):
+/// cells about h wide per axis, chosen so that as many axis-normal planar faces as possible lie
+/// on lattice planes (the box's own faces always do).
+/// @throws InputError when h is larger than the shape's largest extent
+Lattice lay_lattice(const Shape& shape, const Frame& frame, const std::vector<Vec3>& surface_nodes,
+                    double h);
+
+/// The surface's nodes in frame coordinates: the nodes of lattice faces exactly on their planes,
+/// straight edges across the lattice on one line (align_straight_edges); swept (sweep_axis >= 0),
+/// every node exactly on its lattice plane and across the axis exactly where the node on the
+/// bottom plane it repeats is.
+std::vector<Vec3> frame_nodes(const Shape& shape, const Surface& surface, const Lattice& lattice,
+                              int sweep_axis, const SweptSurface& swept);
+
+/// Points TetGen gets besides the surface's nodes (frame coordinates), with the lattice face
+/// each lies on (-1: inside).
+struct InsertedPoints {
+  std::vector<Vec3> points;
+  std::vector<int> face;
+};
+
+/// What lies near a point (frame coordinates, within 2 h of the lattice's box): the triangles of
+/// the faces that are not lattice faces, the surface's nodes, the boundary-layer points placed so
+/// far; and which lattice face holds a point on a lattice plane. Keeps references to `nodes` and
+/// `surface`.
+class Surroundings {
+ public:
+  Surroundings(const std::vector<Vec3>& nodes, const Surface& surface, const Lattice& lattice,
+               double h);
+  /// The lattice face holding q, on the lattice planes index[a] (a = 0..2; -1: none), or -1.
+  int on_lattice_face(const Vec3& q, const int (&index)[3]) const;
+  /// Whether the ball (centre, r) holds no surface triangle, surface node or layer point (to
+  /// 1e-9 of r).
+  bool ball_is_empty(const Vec3& centre, double r) const;
+
+  const Vec3 box_lo, box_hi;  ///< the box the queries cover
+  TriangleSet curved;         ///< triangles of the faces that are not lattice faces
+  PointSet surface_points;    ///< the surface's nodes
+  PointSet layer_points;      ///< boundary-layer points (place_layers() adds them)
+
+ private:
+  const std::vector<Vec3>& nodes_;
+  // Lattice faces' triangles per lattice plane (axis, index).
+  std::map<std::pair<int, long>, std::vector<const SurfaceTriangle*>> plane_triangles_;
+};
+
+/// Inside/outside by ray parity along frame x lines through the surface's triangles, faces
+/// between two solids left out. Keeps references to `nodes`.
+class Parity {
+ public:
+  Parity(const std::vector<Vec3>& nodes, const Surface& surface,
+         const std::vector<int>& face_solid_count, const Surroundings& around, double h);
+  /// Crossings of the line {y, z} along x (nudged off lattice lines) with the surface, sorted.
+  std::vector<double> crossings(double y, double z) const;
+  /// Whether x is inside, given the crossings of its line.
+  static bool inside_given(const std::vector<double>& xs, double x);
+  bool inside(const Vec3& q) const { return inside_given(crossings(q.y, q.z), q.x); }
+
+ private:
+  const std::vector<Vec3>& nodes_;
+  double h_;
+  std::vector<std::array<int, 3>> triangles_;
+  BucketGrid yz_;
+};
+
+/// Per lattice point (i fastest, then j, then k), whether it is kept and the lattice face it
+/// lies on (-1: inside).
+struct KeptPoints {
+  std::vector<char> kept;
+  std::vector<int> face;
+};
+
+/// The lattice points inside (or on a lattice face), not within `keep_distance` of a face that
+/// is not a lattice face, nor within `margin` of a boundary-layer point.
+KeptPoints keep_lattice_points(const Lattice& lattice, const Surroundings& around,
+                               const Parity& parity, double keep_distance, double margin);
+
+/// Counts of add_core().
+struct CoreCounts {
+  std::size_t nb_core_cells = 0;      ///< cells with all corners kept (the hexahedral core)
+  std::size_t nb_lattice_points = 0;  ///< kept lattice points inserted
+  std::size_t nb_apex_points = 0;     ///< closing pyramids' apexes inserted
+};
+
+/// The hexahedral core: cells with 8 kept corners whose circumsphere holds nothing else; every
+/// quad face between the core and another cell inside needs a closing pyramid whose apex is
+/// that cell's centre and whose circumsphere holds nothing else, or the core cell goes (swept,
+/// sweep_axis >= 0: only across the axis). Appends the kept lattice points that are no surface
+/// node, then the apexes, to `inserted`.
+CoreCounts add_core(const Lattice& lattice, const Surroundings& around, const Parity& parity,
+                    const KeptPoints& kept, int sweep_axis, double h, InsertedPoints& inserted);
+
+/// Reorders `inserted` so that the points on lattice faces come first (stable); returns their
+/// number.
+std::size_t face_points_first(InsertedPoints& inserted);
+
+}  // namespace hexmerge::mesher

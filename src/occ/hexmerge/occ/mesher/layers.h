@@ -1,0 +1,32 @@
+#pragma once
+/// @file
+/// Boundary-layer points (internal header of mesh_shape(); no OpenCASCADE): the surface's nodes
+/// where the surface is smooth, moved along the inward normal by up to `layers` layer depths,
+/// where there is room, so that TetGen's tets there recombine into prisms.
+
+#include <cstddef>
+#include <vector>
+
+#include "hexmerge/geometry/vec3.h"
+#include "hexmerge/occ/mesher/lattice.h"
+#include "hexmerge/occ/mesher/surface.h"
+#include "hexmerge/occ/mesher/sweep.h"
+
+namespace hexmerge::mesher {
+
+/// Places the boundary-layer points, appending them to `inserted` and to around.layer_points.
+/// Nodes of lattice faces and of faces between two solids get none (swept: the walls between
+/// two solids get layers on both sides); depths vary by up to 10 % per node (from
+/// Surface::seed) so that the layers' sides are not cocircular quads.
+/// @param[in] nodes             the surface's nodes in frame coordinates
+/// @param[in] face_solid_count  per face, the solids it bounds
+/// @param[in] sweep_axis        the sweep's axis, -1: not swept (then `swept` is unused)
+/// @param[in] layers            number of layers (0 to 3)
+/// @param[in] thickness         one layer's depth (a length)
+/// @return the number of points placed
+std::size_t place_layers(const std::vector<Vec3>& nodes, const Surface& surface,
+                         const std::vector<int>& face_solid_count, const Lattice& lattice,
+                         int sweep_axis, const SweptSurface& swept, int layers, double thickness,
+                         Surroundings& around, InsertedPoints& inserted);
+
+}  // namespace hexmerge::mesher

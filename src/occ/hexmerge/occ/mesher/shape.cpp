@@ -1,0 +1,120 @@
+#include "hexmerge/occ/mesher/shape.h"
+
+#include <BRepAdaptor_Surface.hxx>
+#include <BRepGProp.hxx>
+#include <BRep_Tool.hxx>
+#include <GProp_GProps.hxx>
+#include <GProp_PrincipalProps.hxx>
+#include <TopExp.hxx>
+#include <TopTools_IndexedDataMapOfShapeListOfShape.hxx>
+#include <TopTools_ListOfShape.hxx>
+#include <TopoDS.hxx>
+#include <TopoDS_Edge.hxx>
+#include <TopoDS_Face.hxx>
+#include <algorithm>
+#include <cmath>
+#include <gp_Pln.hxx>
+#include <utility>
+
+#include "hexmerge/core/error.h"
+#include "hexmerge/occ/brep_text.h"
+#include "hexmerge/occ/mesher/common.h"
+
+namespace hexmerge::mesher {
+
+Shape load_shape(const std::string& brep) {
+  Shape s;
+  s.shape = read_brep(brep);
+  TopExp::MapShapes(s.shape, TopAbs_SOLID, s.solids);
+  if (s.solids.IsEmpty())
+    throw InputError(
+        "the shape holds no solid (a face, a shell or a wire cannot be meshed "
+        "into tets): give a closed solid");
+  TopExp::MapShapes(s.shape, TopAbs_FACE, s.faces);
+  TopExp::MapShapes(s.shape, TopAbs_EDGE, s.edges);
+  s.face_solid_count.assign(static_cast<std::size_t>(s.faces.Extent()), 0);
+  for (int i = 1; i <= s.solids.Extent(); ++i) {
+    TopTools_IndexedMapOfShape solid_faces;
+    TopExp::MapShapes(s.solids(i), TopAbs_FACE, solid_faces);
+    for (int f = 1; f <= solid_faces.Extent(); ++f) {
+      const int index = s.faces.FindIndex(solid_faces(f));
+      if (index > 0) ++s.face_solid_count[index - 1];
+    }
+    // A closed shell: every edge of the solid bounds two faces, or one face twice (a seam).
+    TopTools_IndexedDataMapOfShapeListOfShape edge_faces;
+    TopExp::MapShapesAndAncestors(s.solids(i), TopAbs_EDGE, TopAbs_FACE, edge_faces);
+    for (int e = 1; e <= edge_faces.Extent(); ++e) {
+      const TopoDS_Edge& edge = TopoDS::Edge(edge_faces.FindKey(e));
+      if (BRep_Tool::Degenerated(edge)) continue;
+      const TopTools_ListOfShape& around = edge_faces.FindFromIndex(e);
+      if (around.Extent() >= 2) continue;
+      if (around.Extent() == 1 && BRep_Tool::IsClosed(edge, TopoDS::Face(around.First()))) continue;
+      throw InputError("solid " + std::to_string(i - 1) + " is not closed: edge " +
+                       std::to_string(s.edges.FindIndex(edge) - 1) +
+                       " bounds a single face (an open shell); give a closed solid");
+    }
+  }
+  s.edge_faces.resize(static_cast<std::size_t>(s.edges.Extent()));
+  TopTools_IndexedDataMapOfShapeListOfShape edge_faces;
+  TopExp::MapShapesAndAncestors(s.shape, TopAbs_EDGE, TopAbs_FACE, edge_faces);
+  for (int e = 1; e <= edge_faces.Extent(); ++e) {
+    const int edge = s.edges.FindIndex(edge_faces.FindKey(e)) - 1;
+    for (const TopoDS_Shape& f : edge_faces.FindFromIndex(e)) {
+      const int face = s.faces.FindIndex(f) - 1;
+      auto& list = s.edge_faces[edge];
+      if (std::find(list.begin(), list.end(), face) == list.end()) list.push_back(face);
+    }
+  }
+  return s;
+}
+
+Frame choose_frame(const Shape& s, const std::string& kind) {
+  const Vec3 global[3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  if (kind == "global") return make_frame(global[2], &global[0], global);
+  GProp_GProps volume;
+  BRepGProp::VolumeProperties(s.shape, volume);
+  const GProp_PrincipalProps principal = volume.PrincipalProperties();
+  const Vec3 principal_axes[3] = {of(gp_Dir(principal.FirstAxisOfInertia())),
+                                  of(gp_Dir(principal.SecondAxisOfInertia())),
+                                  of(gp_Dir(principal.ThirdAxisOfInertia()))};
+  if (kind == "principal") return make_frame(principal_axes[2], &principal_axes[0], principal_axes);
+  // "auto": planar face normals, grouped by direction (up to sign), weighted by area.
+  std::vector<std::pair<Vec3, double>> directions;
+  for (int i = 1; i <= s.faces.Extent(); ++i) {
+    const TopoDS_Face& face = TopoDS::Face(s.faces(i));
+    BRepAdaptor_Surface surface(face, false);
+    if (surface.GetType() != GeomAbs_Plane) continue;
+    GProp_GProps area;
+    BRepGProp::SurfaceProperties(face, area);
+    const Vec3 n = of(surface.Plane().Axis().Direction());
+    bool merged = false;
+    for (auto& [d, a] : directions)
+      if (std::abs(std::abs(d.dot(n)) - 1) < 1e-9) a += area.Mass(), merged = true;
+    if (!merged) directions.emplace_back(n, area.Mass());
+  }
+  if (directions.empty()) return make_frame(principal_axes[2], &principal_axes[0], principal_axes);
+  std::stable_sort(directions.begin(), directions.end(),
+                   [](const auto& a, const auto& b) { return a.second > b.second; });
+  const Vec3 e3 = directions[0].first;
+  for (std::size_t i = 1; i < directions.size(); ++i)
+    if (std::abs(directions[i].first.dot(e3)) < 1e-9)
+      return make_frame(e3, &directions[i].first, principal_axes);
+  return make_frame(e3, nullptr, principal_axes);
+}
+
+std::vector<std::optional<AxisPlane>> face_planes(const Shape& shape, const Frame& frame) {
+  std::vector<std::optional<AxisPlane>> face_plane(shape.faces.Extent());
+  for (int fi = 1; fi <= shape.faces.Extent(); ++fi) {
+    BRepAdaptor_Surface s(TopoDS::Face(shape.faces(fi)), false);
+    if (s.GetType() != GeomAbs_Plane) continue;
+    const Vec3 n = of(s.Plane().Axis().Direction());
+    for (int a = 0; a < 3; ++a) {
+      if (std::abs(std::abs(n.dot(frame.axis[a])) - 1) > 1e-9) continue;
+      const double offset = coord(frame.to_frame(of(s.Plane().Location())), a);
+      face_plane[fi - 1] = AxisPlane{a, offset};
+    }
+  }
+  return face_plane;
+}
+
+}  // namespace hexmerge::mesher

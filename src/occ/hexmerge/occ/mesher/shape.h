@@ -1,0 +1,46 @@
+#pragma once
+/// @file
+/// The shape to mesh: its solids, faces and edges, checked closed; the lattice frame chosen from
+/// it; its planar faces normal to a frame axis. Internal header of mesh_shape(), and the one
+/// mesher header that includes OpenCASCADE: the other stages take `const Shape&` declared only.
+
+#include <TopTools_IndexedMapOfShape.hxx>
+#include <TopoDS_Shape.hxx>
+#include <gp_Dir.hxx>
+#include <gp_Pnt.hxx>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "hexmerge/geometry/vec3.h"
+#include "hexmerge/occ/mesher/frame.h"
+
+namespace hexmerge::mesher {
+
+/// A shape of closed solids. Faces, edges and solids are numbered from 0 in the order of
+/// TopExp::MapShapes (index i is map(i + 1)).
+struct Shape {
+  TopoDS_Shape shape;
+  TopTools_IndexedMapOfShape solids, faces, edges;
+  std::vector<int> face_solid_count;         ///< per face, the solids it bounds (2: shared by two)
+  std::vector<std::vector<int>> edge_faces;  ///< per edge, the faces it bounds
+};
+
+/// The shape in BREP text, its maps filled.
+/// @throws InputError when the text cannot be read, holds no solid, or a solid is not closed
+///         (naming the edge that bounds a single face)
+Shape load_shape(const std::string& brep);
+
+/// The lattice frame (origin at 0): "global" (x, y, z), "principal" (principal axes of
+/// inertia), "auto" (the normals of the largest planar faces by area, else "principal").
+Frame choose_frame(const Shape& s, const std::string& kind);
+
+/// Per face, its plane when it is planar and normal to an axis of `frame` (offset in frame
+/// coordinates), else nothing.
+std::vector<std::optional<AxisPlane>> face_planes(const Shape& s, const Frame& frame);
+
+/// OpenCASCADE's directions and points as Vec3.
+inline Vec3 of(const gp_Dir& d) { return {d.X(), d.Y(), d.Z()}; }
+inline Vec3 of(const gp_Pnt& p) { return {p.X(), p.Y(), p.Z()}; }
+
+}  // namespace hexmerge::mesher

@@ -1,0 +1,110 @@
+#pragma once
+/// @file
+/// Spatial queries of the mesher (internal header of mesh_shape(); no OpenCASCADE): points and
+/// triangles in a uniform grid of cubic buckets, "is there one within r of q".
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstddef>
+#include <vector>
+
+#include "hexmerge/geometry/vec3.h"
+#include "hexmerge/occ/mesher/common.h"
+
+namespace hexmerge::mesher {
+
+/// Items (ints) filed under every bucket their bounding box overlaps, in a grid of cubic
+/// buckets of side `cell` over the box [lo, hi] (points outside go to the nearest bucket).
+class BucketGrid {
+ public:
+  BucketGrid(const Vec3& lo, const Vec3& hi, double cell) : lo_(lo), cell_(cell) {
+    for (int a = 0; a < 3; ++a) {
+      const double extent = (a == 0 ? hi.x - lo.x : a == 1 ? hi.y - lo.y : hi.z - lo.z);
+      n_[a] = std::max(1, static_cast<int>(std::ceil(extent / cell)) + 1);
+    }
+    buckets_.resize(static_cast<std::size_t>(n_[0]) * n_[1] * n_[2]);
+  }
+  // Adds item to every bucket the box [a, b] overlaps.
+  void add(int item, const Vec3& a, const Vec3& b) {
+    std::array<int, 3> i0 = coords(a), i1 = coords(b);
+    for (int i = i0[0]; i <= i1[0]; ++i)
+      for (int j = i0[1]; j <= i1[1]; ++j)
+        for (int k = i0[2]; k <= i1[2]; ++k) buckets_[index(i, j, k)].push_back(item);
+  }
+  // Calls f(item) for the items of the buckets the box [a, b] overlaps (an item may come twice);
+  // stops when f returns true, and returns whether it did.
+  template <typename F>
+  bool any_in(const Vec3& a, const Vec3& b, F&& f) const {
+    std::array<int, 3> i0 = coords(a), i1 = coords(b);
+    for (int i = i0[0]; i <= i1[0]; ++i)
+      for (int j = i0[1]; j <= i1[1]; ++j)
+        for (int k = i0[2]; k <= i1[2]; ++k)
+          for (int item : buckets_[index(i, j, k)])
+            if (f(item)) return true;
+    return false;
+  }
+
+ private:
+  std::array<int, 3> coords(const Vec3& p) const {
+    const double c[3] = {(p.x - lo_.x) / cell_, (p.y - lo_.y) / cell_, (p.z - lo_.z) / cell_};
+    std::array<int, 3> out{};
+    for (int a = 0; a < 3; ++a)
+      out[a] = std::clamp(static_cast<int>(std::floor(c[a])), 0, n_[a] - 1);
+    return out;
+  }
+  std::size_t index(int i, int j, int k) const {
+    return (static_cast<std::size_t>(i) * n_[1] + j) * n_[2] + k;
+  }
+  Vec3 lo_;
+  double cell_;
+  std::array<int, 3> n_{};
+  std::vector<std::vector<int>> buckets_;
+};
+
+/// Squared distance from p to triangle abc (Ericson, Real-Time Collision Detection, 5.1.5).
+double squared_distance_to_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c);
+
+/// Points, with "is there one within r of q" queries.
+class PointSet {
+ public:
+  PointSet(const Vec3& lo, const Vec3& hi, double cell) : grid_(lo, hi, cell) {}
+  void add(const Vec3& p) {
+    grid_.add(static_cast<int>(points_.size()), p, p);
+    points_.push_back(p);
+  }
+  bool any_within(const Vec3& q, double r) const {
+    const Vec3 d{r, r, r};
+    return grid_.any_in(q - d, q + d, [&](int i) { return (points_[i] - q).norm() < r; });
+  }
+
+ private:
+  BucketGrid grid_;
+  std::vector<Vec3> points_;
+};
+
+/// Triangles (of nodes the caller keeps alive), with "is one nearer than r to q" queries.
+class TriangleSet {
+ public:
+  TriangleSet(const std::vector<Vec3>& nodes, const Vec3& lo, const Vec3& hi, double cell)
+      : nodes_(nodes), grid_(lo, hi, cell) {}
+  void add(const std::array<int, 3>& t) {
+    const Vec3 &a = nodes_[t[0]], &b = nodes_[t[1]], &c = nodes_[t[2]];
+    grid_.add(static_cast<int>(tris_.size()), vmin(a, vmin(b, c)), vmax(a, vmax(b, c)));
+    tris_.push_back(t);
+  }
+  bool any_within(const Vec3& q, double r) const {
+    const Vec3 d{r, r, r};
+    return grid_.any_in(q - d, q + d, [&](int i) {
+      const auto& t = tris_[i];
+      return squared_distance_to_triangle(q, nodes_[t[0]], nodes_[t[1]], nodes_[t[2]]) < r * r;
+    });
+  }
+
+ private:
+  const std::vector<Vec3>& nodes_;
+  BucketGrid grid_;
+  std::vector<std::array<int, 3>> tris_;
+};
+
+}  // namespace hexmerge::mesher

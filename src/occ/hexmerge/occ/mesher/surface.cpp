@@ -1,0 +1,185 @@
+#include "hexmerge/occ/mesher/surface.h"
+
+#include <BRepAdaptor_Curve.hxx>
+#include <BRepMesh_IncrementalMesh.hxx>
+#include <BRep_Tool.hxx>
+#include <Poly_PolygonOnTriangulation.hxx>
+#include <Poly_Triangulation.hxx>
+#include <Standard_Failure.hxx>
+#include <TopExp_Explorer.hxx>
+#include <TopoDS.hxx>
+#include <TopoDS_Edge.hxx>
+#include <TopoDS_Face.hxx>
+#include <cmath>
+#include <string>
+#include <utility>
+
+#include "hexmerge/core/error.h"
+#include "hexmerge/occ/mesher/shape.h"
+
+namespace hexmerge::mesher {
+namespace {
+
+// Merges points closer than a tolerance into one node.
+class NodeMerger {
+ public:
+  NodeMerger(Surface& s, double tolerance) : s_(s), tol_(tolerance) {}
+  int id(const Vec3& p, int face) {
+    const std::array<long long, 3> c = cell(p);
+    for (long long i = c[0] - 1; i <= c[0] + 1; ++i)
+      for (long long j = c[1] - 1; j <= c[1] + 1; ++j)
+        for (long long k = c[2] - 1; k <= c[2] + 1; ++k) {
+          auto it = cells_.find(hash(i, j, k));
+          if (it == cells_.end()) continue;
+          for (int n : it->second)
+            if ((s_.nodes[n] - p).norm() <= tol_) return n;
+        }
+    const int n = static_cast<int>(s_.nodes.size());
+    s_.nodes.push_back(p);
+    s_.node_face.push_back(face);
+    cells_[hash(c[0], c[1], c[2])].push_back(n);
+    return n;
+  }
+
+ private:
+  std::array<long long, 3> cell(const Vec3& p) const {
+    const double w = 4 * tol_;
+    return {static_cast<long long>(std::floor(p.x / w)),
+            static_cast<long long>(std::floor(p.y / w)),
+            static_cast<long long>(std::floor(p.z / w))};
+  }
+  static std::uint64_t hash(long long i, long long j, long long k) {
+    return static_cast<std::uint64_t>(i) * 73856093ULL ^
+           static_cast<std::uint64_t>(j) * 19349663ULL ^
+           static_cast<std::uint64_t>(k) * 83492791ULL;
+  }
+  Surface& s_;
+  double tol_;
+  std::unordered_map<std::uint64_t, std::vector<int>> cells_;
+};
+
+}  // namespace
+
+double angle_at(const std::vector<Vec3>& nodes, int v, int a, int b) {
+  const Vec3 x = nodes[a] - nodes[v], y = nodes[b] - nodes[v];
+  return std::atan2(x.cross(y).norm(), x.dot(y));
+}
+Vec3 normal_of(const std::vector<Vec3>& nodes, int a, int b, int c) {
+  return (nodes[b] - nodes[a]).cross(nodes[c] - nodes[a]);
+}
+double smallest_angle(const std::vector<Vec3>& nodes, const std::array<int, 3>& v) {
+  double worst = M_PI;
+  for (int c = 0; c < 3; ++c)
+    worst = std::min(worst, angle_at(nodes, v[c], v[(c + 1) % 3], v[(c + 2) % 3]));
+  return worst;
+}
+
+// Surface smoothing and collapses keep every triangle within this angle (20 degrees) of the
+// surface's normal at the node they move or remove: true when `now` turned further from it.
+bool turned_over(const Vec3& now, const Vec3& reference) {
+  return now.dot(reference) <= std::cos(20.0 * M_PI / 180) * now.norm() * reference.norm();
+}
+
+// Per node, whether it lies on a CAD edge (an end of a segment).
+std::vector<char> nodes_on_edges(const Surface& surface) {
+  std::vector<char> on_edge(surface.nodes.size(), 0);
+  for (const auto& [key, segment] : surface.segments) {
+    (void)segment;
+    on_edge[key >> 32] = on_edge[key & 0xffffffffu] = 1;
+  }
+  return on_edge;
+}
+
+// The coordinates (s, r) of q in triangle p0 p1 p2, q = p0 + s (p1 - p0) + r (p2 - p0), all seen
+// along frame axis `axis` (nodes in frame coordinates); false when the triangle is edge-on.
+bool coordinates_across(const Vec3& q, const Vec3& p0, const Vec3& p1, const Vec3& p2, int axis,
+                        double& s, double& r) {
+  const int u = (axis + 1) % 3, v = (axis + 2) % 3;
+  const double x0 = coord(p0, u), y0 = coord(p0, v);
+  const double d =
+      (coord(p1, u) - x0) * (coord(p2, v) - y0) - (coord(p2, u) - x0) * (coord(p1, v) - y0);
+  if (d == 0) return false;
+  s = ((coord(q, u) - x0) * (coord(p2, v) - y0) - (coord(p2, u) - x0) * (coord(q, v) - y0)) / d;
+  r = ((coord(p1, u) - x0) * (coord(q, v) - y0) - (coord(q, u) - x0) * (coord(p1, v) - y0)) / d;
+  return true;
+}
+
+// The face of the first of `triangles` (on a plane normal to frame axis `axis`, nodes in frame
+// coordinates) that holds q, to 1e-9 of its coordinates; -1 for none.
+int face_holding(const Vec3& q, const std::vector<const SurfaceTriangle*>& triangles,
+                 const std::vector<Vec3>& nodes, int axis) {
+  for (const SurfaceTriangle* t : triangles) {
+    double s, r;
+    if (!coordinates_across(q, nodes[t->node[0]], nodes[t->node[1]], nodes[t->node[2]], axis, s, r))
+      continue;
+    const double eps = 1e-9;
+    if (s >= -eps && r >= -eps && s + r <= 1 + eps) return t->face;
+  }
+  return -1;
+}
+
+Surface triangulate(const Shape& s, double deflection, double tolerance) {
+  try {
+    BRepMesh_IncrementalMesh mesher(s.shape, deflection, false, 0.35, true);
+    if (!mesher.IsDone()) throw InputError("OpenCASCADE could not triangulate the shape's faces");
+  } catch (const Standard_Failure& e) {
+    throw InputError(std::string("OpenCASCADE could not triangulate the shape's faces: ") +
+                     e.GetMessageString());
+  }
+  Surface surface;
+  NodeMerger merger(surface, tolerance);
+  for (int fi = 1; fi <= s.faces.Extent(); ++fi) {
+    const int face_index = fi - 1;
+    const TopoDS_Face& face = TopoDS::Face(s.faces(fi));
+    TopLoc_Location loc;
+    const Handle(Poly_Triangulation)& tri = BRep_Tool::Triangulation(face, loc);
+    if (tri.IsNull() || tri->NbTriangles() == 0)
+      throw InputError(
+          "OpenCASCADE could not triangulate face " + std::to_string(face_index) + " of the shape",
+          Entity::None);
+    const gp_Trsf trsf = loc.Transformation();
+    std::vector<int> global(static_cast<std::size_t>(tri->NbNodes()) + 1);
+    for (int i = 1; i <= tri->NbNodes(); ++i)
+      global[i] = merger.id(of(tri->Node(i).Transformed(trsf)), face_index);
+    const bool reversed = face.Orientation() == TopAbs_REVERSED;
+    for (int k = 1; k <= tri->NbTriangles(); ++k) {
+      int n[3];
+      tri->Triangle(k).Get(n[0], n[1], n[2]);
+      if (reversed) std::swap(n[1], n[2]);
+      SurfaceTriangle t;
+      t.face = face_index;
+      for (int c = 0; c < 3; ++c) {
+        t.node[c] = global[n[c]];
+        if (tri->HasUVNodes()) t.uv[c] = UV{tri->UVNode(n[c]).X(), tri->UVNode(n[c]).Y()};
+      }
+      if (t.node[0] == t.node[1] || t.node[1] == t.node[2] || t.node[0] == t.node[2]) continue;
+      surface.triangles.push_back(t);
+    }
+    for (TopExp_Explorer ex(face, TopAbs_EDGE); ex.More(); ex.Next()) {
+      const TopoDS_Edge& edge = TopoDS::Edge(ex.Current());
+      if (BRep_Tool::Degenerated(edge)) continue;
+      const Handle(Poly_PolygonOnTriangulation)& poly =
+          BRep_Tool::PolygonOnTriangulation(edge, tri, loc);
+      if (poly.IsNull()) continue;
+      const int edge_index = s.edges.FindIndex(edge) - 1;
+      BRepAdaptor_Curve curve(edge);
+      for (int k = 1; k < poly->NbNodes(); ++k) {
+        const int a = global[poly->Node(k)], b = global[poly->Node(k + 1)];
+        if (a == b) continue;
+        double ta, tb;
+        if (poly->HasParameters()) {
+          ta = poly->Parameter(k), tb = poly->Parameter(k + 1);
+        } else {  // spread evenly over the edge's range
+          const double f = curve.FirstParameter(), l = curve.LastParameter();
+          ta = f + (l - f) * (k - 1) / (poly->NbNodes() - 1);
+          tb = f + (l - f) * k / (poly->NbNodes() - 1);
+        }
+        surface.segments[pair_key(a, b)] =
+            a < b ? EdgeSegment{edge_index, ta, tb} : EdgeSegment{edge_index, tb, ta};
+      }
+    }
+  }
+  return surface;
+}
+
+}  // namespace hexmerge::mesher

@@ -1,0 +1,90 @@
+#pragma once
+/// @file
+/// The shape's surface triangulation (internal header of mesh_shape(); no OpenCASCADE): nodes
+/// merged across faces, triangles oriented outward with their nodes' parameters on their face,
+/// the sides on CAD edges with their parameters; and the geometry of surface triangles.
+
+#include <array>
+#include <cstdint>
+#include <unordered_map>
+#include <vector>
+
+#include "hexmerge/geometry/vec3.h"
+#include "hexmerge/occ/mesher/common.h"
+
+namespace hexmerge::mesher {
+
+struct Shape;
+
+/// A point's parameters (u, v) on a face's surface.
+struct UV {
+  double u = 0, v = 0;
+};
+
+/// A triangle of the surface on CAD face `face` (0-based), oriented outward (as the face is in
+/// its solid).
+struct SurfaceTriangle {
+  std::array<int, 3> node;
+  std::array<UV, 3> uv;  ///< the nodes' parameters on the triangle's face (sweeps: unset)
+  int face;
+};
+
+/// The key of side c of a triangle (from node c to node c + 1).
+inline std::uint64_t side_key(const SurfaceTriangle& t, int c) {
+  return pair_key(t.node[c], t.node[(c + 1) % 3]);
+}
+/// The side of t with a given key (t must have it).
+inline int side_with_key(const SurfaceTriangle& t, std::uint64_t key) {
+  int c = 0;
+  while (side_key(t, c) != key) ++c;
+  return c;
+}
+
+/// A segment of the surface triangulation on a CAD edge: the edge and its parameters at the
+/// segment's smaller and larger node id.
+struct EdgeSegment {
+  int edge;
+  double t_lo, t_hi;
+};
+
+/// A triangulated surface.
+struct Surface {
+  std::vector<Vec3> nodes;                 ///< world coordinates
+  std::vector<int> node_face;              ///< a face the node lies on
+  std::vector<SurfaceTriangle> triangles;  ///< oriented outward (as the face is in its solid)
+  std::unordered_map<std::uint64_t, EdgeSegment> segments;  ///< by pair_key of their nodes
+  /// Per node, its index before collapse_short_sides() (seeds the layers' depths, so that a
+  /// collapse does not change them everywhere).
+  std::vector<int> seed;
+};
+
+/// The shape's faces triangulated by OpenCASCADE (BRepMesh, chord deflection `deflection`),
+/// nodes closer than `tolerance` merged into one.
+/// @throws InputError when a face cannot be triangulated
+Surface triangulate(const Shape& s, double deflection, double tolerance);
+
+/// The angle at node v between the sides to a and b.
+double angle_at(const std::vector<Vec3>& nodes, int v, int a, int b);
+/// The (area-weighted: twice the area long) normal of triangle abc.
+Vec3 normal_of(const std::vector<Vec3>& nodes, int a, int b, int c);
+/// The smallest angle of triangle v.
+double smallest_angle(const std::vector<Vec3>& nodes, const std::array<int, 3>& v);
+
+/// Surface smoothing and collapses keep every triangle within 20 degrees of the surface's normal
+/// at the node they move or remove: true when `now` turned further from `reference`.
+bool turned_over(const Vec3& now, const Vec3& reference);
+
+/// Per node, whether it lies on a CAD edge (an end of a segment).
+std::vector<char> nodes_on_edges(const Surface& surface);
+
+/// The coordinates (s, r) of q in triangle p0 p1 p2, q = p0 + s (p1 - p0) + r (p2 - p0), all
+/// seen along frame axis `axis` (nodes in frame coordinates); false when the triangle is edge-on.
+bool coordinates_across(const Vec3& q, const Vec3& p0, const Vec3& p1, const Vec3& p2, int axis,
+                        double& s, double& r);
+
+/// The face of the first of `triangles` (on a plane normal to frame axis `axis`, nodes in frame
+/// coordinates) that holds q, to 1e-9 of its coordinates; -1 for none.
+int face_holding(const Vec3& q, const std::vector<const SurfaceTriangle*>& triangles,
+                 const std::vector<Vec3>& nodes, int axis);
+
+}  // namespace hexmerge::mesher

@@ -1,0 +1,496 @@
+#include "hexmerge/occ/mesher/surface_repair.h"
+
+#include <BRepAdaptor_Curve.hxx>
+#include <BRepAdaptor_Surface.hxx>
+#include <BRep_Tool.hxx>
+#include <Geom2d_Curve.hxx>
+#include <ShapeAnalysis_Surface.hxx>
+#include <TopExp_Explorer.hxx>
+#include <TopoDS.hxx>
+#include <TopoDS_Edge.hxx>
+#include <TopoDS_Face.hxx>
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <gp_Pnt2d.hxx>
+#include <limits>
+#include <map>
+#include <memory>
+#include <string>
+#include <unordered_map>
+#include <unordered_set>
+#include <utility>
+
+#include "hexmerge/core/error.h"
+#include "hexmerge/occ/mesher/shape.h"
+
+namespace hexmerge::mesher {
+namespace {
+
+// Rounds of smoothing and flips after the surface refinement.
+constexpr int kSmoothingRounds = 5;
+// Surface nodes with a smaller angle than this (radians, 20 degrees) in their triangles are
+// smoothed.
+constexpr double kNeedleAngle = 20.0 * M_PI / 180;
+// A needle's node moves no nearer than this fraction of h to its neighbours.
+constexpr double kNeedleNearest = 0.125;
+// Sides shorter than this fraction of h inside one face are collapsed after the refinement.
+constexpr double kCollapseSide = 0.25;
+
+gp_Pnt2d point2d(const UV& uv) { return gp_Pnt2d(uv.u, uv.v); }
+
+}  // namespace
+
+// Splits the triangles of the faces that are not lattice faces until no side is longer than
+// `target` (sides on edges between lattice faces excepted); lattice-face triangles are split
+// only where a neighbour's side must be. New nodes lie on the CAD edge (sides on an edge) or on
+// the face's surface.
+void refine(const Shape& s, Surface& surface, double target, const std::vector<bool>& lattice_face,
+            const std::vector<bool>& lattice_edge) {
+  std::vector<std::unique_ptr<BRepAdaptor_Surface>> surfaces(s.faces.Extent());
+  std::vector<std::unique_ptr<BRepAdaptor_Curve>> curves(s.edges.Extent());
+  // Per face, the pcurves of its edges (a seam has two: one per orientation).
+  struct PCurve {
+    int edge;
+    Handle(Geom2d_Curve) curve;
+  };
+  std::vector<std::vector<PCurve>> pcurves(s.faces.Extent());
+  for (int fi = 1; fi <= s.faces.Extent(); ++fi) {
+    const TopoDS_Face& face = TopoDS::Face(s.faces(fi));
+    for (TopExp_Explorer ex(face, TopAbs_EDGE); ex.More(); ex.Next()) {
+      const TopoDS_Edge& edge = TopoDS::Edge(ex.Current());
+      if (BRep_Tool::Degenerated(edge)) continue;
+      double f, l;
+      Handle(Geom2d_Curve) pc = BRep_Tool::CurveOnSurface(edge, face, f, l);
+      if (!pc.IsNull()) pcurves[fi - 1].push_back({s.edges.FindIndex(edge) - 1, pc});
+    }
+  }
+  auto face_surface = [&](int f) -> const BRepAdaptor_Surface& {
+    if (!surfaces[f])
+      surfaces[f] = std::make_unique<BRepAdaptor_Surface>(TopoDS::Face(s.faces(f + 1)));
+    return *surfaces[f];
+  };
+  auto edge_curve = [&](int e) -> const BRepAdaptor_Curve& {
+    if (!curves[e]) curves[e] = std::make_unique<BRepAdaptor_Curve>(TopoDS::Edge(s.edges(e + 1)));
+    return *curves[e];
+  };
+
+  // Longest-side bisection with Delaunay flips after each insertion: the triangles across a
+  // split side are split along (the triangulation stays conforming) and the flips take back the
+  // poor shapes that this and BRepMesh's own needles make.
+  std::vector<SurfaceTriangle>& tris = surface.triangles;
+  std::unordered_map<std::uint64_t, std::vector<int>> at_edge;  // triangles per side
+  auto link = [&](int ti) {
+    for (int c = 0; c < 3; ++c) at_edge[side_key(tris[ti], c)].push_back(ti);
+  };
+  auto unlink = [&](int ti) {
+    for (int c = 0; c < 3; ++c) {
+      auto& v = at_edge[side_key(tris[ti], c)];
+      v.erase(std::remove(v.begin(), v.end(), ti), v.end());
+    }
+  };
+  for (int ti = 0; ti < static_cast<int>(tris.size()); ++ti) link(ti);
+  auto length = [&](int a, int b) { return (surface.nodes[a] - surface.nodes[b]).norm(); };
+  // The longest side of triangle ti.
+  auto longest = [&](int ti) {
+    const SurfaceTriangle& t = tris[ti];
+    int best = 0;
+    for (int c = 1; c < 3; ++c)
+      if (length(t.node[c], t.node[(c + 1) % 3]) > length(t.node[best], t.node[(best + 1) % 3]))
+        best = c;
+    return best;
+  };
+  // The midpoint of side c of triangle ti: its parameters on the triangle's face, and its node,
+  // made when `node` is -1 (on the CAD edge for a side on one, else on the face's surface).
+  auto midpoint = [&](int ti, int c, int node, UV& uv) {
+    const SurfaceTriangle& t = tris[ti];
+    const int a = t.node[c], b = t.node[(c + 1) % 3];
+    uv = UV{0.5 * (t.uv[c].u + t.uv[(c + 1) % 3].u), 0.5 * (t.uv[c].v + t.uv[(c + 1) % 3].v)};
+    auto seg = surface.segments.find(pair_key(a, b));
+    const bool on_edge = seg != surface.segments.end();
+    const double tm = on_edge ? 0.5 * (seg->second.t_lo + seg->second.t_hi) : 0.0;
+    if (on_edge) {
+      const EdgeSegment& e = seg->second;
+      const double ta = a < b ? e.t_lo : e.t_hi;
+      double best = std::numeric_limits<double>::max();
+      for (const PCurve& pc : pcurves[t.face]) {  // the pcurve through node a (seams have two)
+        if (pc.edge != e.edge) continue;
+        const double d = pc.curve->Value(ta).Distance(point2d(t.uv[c]));
+        if (d < best) {
+          best = d;
+          const gp_Pnt2d at = pc.curve->Value(tm);
+          uv = UV{at.X(), at.Y()};
+        }
+      }
+    }
+    if (node >= 0) return node;
+    surface.nodes.push_back(on_edge ? of(edge_curve(seg->second.edge).Value(tm))
+                                    : of(face_surface(t.face).Value(uv.u, uv.v)));
+    surface.node_face.push_back(t.face);
+    return static_cast<int>(surface.nodes.size()) - 1;
+  };
+  // Splits side (a, b) in every triangle that has it; the halves of an edge segment stay one.
+  auto split_side = [&](int a, int b) {
+    const std::uint64_t key = pair_key(a, b);
+    const std::vector<int> around = at_edge[key];
+    int m = -1;
+    for (int ti : around) {
+      const SurfaceTriangle t = tris[ti];
+      const int c = side_with_key(t, key);
+      UV uv;
+      m = midpoint(ti, c, m, uv);
+      const int c1 = (c + 1) % 3, c2 = (c + 2) % 3;
+      unlink(ti);
+      tris[ti] = SurfaceTriangle{{t.node[c], m, t.node[c2]}, {t.uv[c], uv, t.uv[c2]}, t.face};
+      link(ti);
+      tris.push_back(
+          SurfaceTriangle{{m, t.node[c1], t.node[c2]}, {uv, t.uv[c1], t.uv[c2]}, t.face});
+      link(static_cast<int>(tris.size()) - 1);
+    }
+    auto seg = surface.segments.find(key);
+    if (seg != surface.segments.end()) {
+      const EdgeSegment e = seg->second;
+      const double tm = 0.5 * (e.t_lo + e.t_hi);
+      const int lo = std::min(a, b), hi = std::max(a, b);
+      surface.segments.erase(seg);
+      surface.segments[pair_key(lo, m)] =
+          lo < m ? EdgeSegment{e.edge, e.t_lo, tm} : EdgeSegment{e.edge, tm, e.t_lo};
+      surface.segments[pair_key(m, hi)] =
+          m < hi ? EdgeSegment{e.edge, tm, e.t_hi} : EdgeSegment{e.edge, e.t_hi, tm};
+    }
+    at_edge.erase(key);
+    std::vector<std::uint64_t> stack;  // the sides of the triangles around the new node
+    for (int end : {a, b})
+      for (int ti : at_edge[pair_key(m, end)])
+        for (int c = 0; c < 3; ++c) stack.push_back(side_key(tris[ti], c));
+    return stack;
+  };
+  // Lawson's flips after an insertion: sides that fail the Delaunay test (opposite angles
+  // summing past pi, in 3D) between two triangles of one face, off the CAD edges, are flipped
+  // unless that folds the surface. Bisection alone keeps the needles BRepMesh makes on ruled
+  // faces (a cylinder is strips from cap to cap); the flips give them up.
+  auto angle_at = [&](int v, int a, int b) { return mesher::angle_at(surface.nodes, v, a, b); };
+  auto normal_of = [&](int a, int b, int c) { return mesher::normal_of(surface.nodes, a, b, c); };
+  auto restore_delaunay = [&](std::vector<std::uint64_t> stack) {
+    std::size_t flips = 0;
+    while (!stack.empty() && flips < 10000) {
+      const std::uint64_t key = stack.back();
+      stack.pop_back();
+      auto it = at_edge.find(key);
+      if (it == at_edge.end() || it->second.size() != 2 || surface.segments.count(key)) continue;
+      const int t1 = it->second[0], t2 = it->second[1];
+      if (tris[t1].face != tris[t2].face || lattice_face[tris[t1].face]) continue;
+      // t1 = (p, q, m), t2 = (q, p, x).
+      const int c1 = side_with_key(tris[t1], key), c2 = side_with_key(tris[t2], key);
+      const SurfaceTriangle a = tris[t1], b = tris[t2];
+      const int p = a.node[c1], q = a.node[(c1 + 1) % 3], m = a.node[(c1 + 2) % 3];
+      const int x = b.node[(c2 + 2) % 3];
+      if (b.node[c2] != q || m == x) continue;
+      // Off the plane the test can fail both ways: flip only to a strictly better pair.
+      const double now = angle_at(m, p, q) + angle_at(x, q, p);
+      if (now <= M_PI * (1 + 1e-9) || angle_at(p, x, m) + angle_at(q, m, x) >= now - 1e-9) continue;
+      const Vec3 before = normal_of(p, q, m) + normal_of(q, p, x);
+      // Nor across the surface's curvature: both new triangles within 20 degrees of the old.
+      const Vec3 n1 = normal_of(m, p, x), n2 = normal_of(x, q, m);
+      const double c20 = std::cos(20.0 * M_PI / 180);
+      if (n1.dot(before) <= c20 * n1.norm() * before.norm() ||
+          n2.dot(before) <= c20 * n2.norm() * before.norm())
+        continue;
+      const UV up = a.uv[c1], uq = a.uv[(c1 + 1) % 3], um = a.uv[(c1 + 2) % 3];
+      const UV ux = b.uv[(c2 + 2) % 3];
+      unlink(t1);
+      unlink(t2);
+      at_edge.erase(key);
+      tris[t1] = SurfaceTriangle{{m, p, x}, {um, up, ux}, a.face};
+      tris[t2] = SurfaceTriangle{{x, q, m}, {ux, uq, um}, a.face};
+      link(t1);
+      link(t2);
+      ++flips;
+      for (std::uint64_t k : {pair_key(m, p), pair_key(p, x), pair_key(x, q), pair_key(q, m)})
+        stack.push_back(k);
+    }
+  };
+  auto needs_split = [&](int ti) {
+    if (lattice_face[tris[ti].face]) return false;
+    const int c = longest(ti);
+    const int a = tris[ti].node[c], b = tris[ti].node[(c + 1) % 3];
+    auto seg = surface.segments.find(pair_key(a, b));
+    if (seg != surface.segments.end() && lattice_edge[seg->second.edge]) return false;
+    return length(a, b) > target;
+  };
+  // Splits the longest side of triangle ti (in every triangle that has it), then restores the
+  // Delaunay property around the new node.
+  auto split_longest = [&](int ti) {
+    const int c = longest(ti);
+    restore_delaunay(split_side(tris[ti].node[c], tris[ti].node[(c + 1) % 3]));
+  };
+  // Sides end at about target / 2 or more: more nodes than ten times the surface's area over
+  // such triangles' area (plus BRepMesh's own) means the refinement is not converging, which is
+  // reported rather than run without end.
+  double area = 0;
+  for (const SurfaceTriangle& t : tris)
+    area += 0.5 * normal_of(t.node[0], t.node[1], t.node[2]).norm();
+  const std::size_t node_budget =
+      surface.nodes.size() + static_cast<std::size_t>(10 * area / (0.1 * target * target)) + 1000;
+  for (int ti = 0; ti < static_cast<int>(tris.size()); ++ti)
+    while (needs_split(ti)) {
+      if (surface.nodes.size() > node_budget)
+        throw InputError("the surface triangulation of face " + std::to_string(tris[ti].face) +
+                             " does not converge to size " + std::to_string(target) + " (over " +
+                             std::to_string(node_budget) + " nodes); try another size",
+                         Entity::Parameter);
+      split_longest(ti);
+    }
+
+  // Bisection leaves nodes very near a seam or an edge (needles, and a tet on a needle is no
+  // better than its smallest angle). Each node inside a face that is not a lattice face moves to
+  // the centroid of its neighbours, put back on the face's surface, where that raises the
+  // smallest angle of its triangles without turning one over; then the flips again.
+  const std::vector<char> on_edge = nodes_on_edges(surface);
+  std::vector<std::unique_ptr<ShapeAnalysis_Surface>> analysis(s.faces.Extent());
+  std::vector<std::vector<int>> around;
+  auto shortest_side = [&](int n) {
+    double shortest = std::numeric_limits<double>::max();
+    for (int ti : around[n])
+      for (int m : tris[ti].node)
+        if (m != n) shortest = std::min(shortest, length(n, m));
+    return shortest;
+  };
+  auto smallest_angle = [&](int n) {
+    double worst = M_PI;
+    for (int ti : around[n])
+      worst = std::min(worst, mesher::smallest_angle(surface.nodes, tris[ti].node));
+    return worst;
+  };
+  for (int round = 0; round < kSmoothingRounds; ++round) {
+    around.assign(surface.nodes.size(), {});
+    for (int ti = 0; ti < static_cast<int>(tris.size()); ++ti)
+      for (int n : tris[ti].node) around[n].push_back(ti);
+    for (int n = 0; n < static_cast<int>(surface.nodes.size()); ++n) {
+      if (on_edge[n] || around[n].empty()) continue;
+      const int face = tris[around[n].front()].face;
+      // Only nodes of needles: the others stay where the refinement put them (smoothing them
+      // all changed TetGen's lattice enough for the bracket to lose two thirds of its hexes at
+      // some sizes).
+      if (lattice_face[face] || smallest_angle(n) >= kNeedleAngle) continue;
+      Vec3 centroid{0, 0, 0};
+      int count = 0;
+      for (int ti : around[n])
+        for (int m : tris[ti].node)
+          if (m != n) centroid = centroid + surface.nodes[m], ++count;
+      if (!analysis[face]) {
+        const TopoDS_Face& f = TopoDS::Face(s.faces(face + 1));
+        analysis[face] = std::make_unique<ShapeAnalysis_Surface>(BRep_Tool::Surface(f));
+      }
+      centroid = centroid * (1.0 / count);
+      const Vec3 old = surface.nodes[n];
+      // The surface's normal at the node: its triangles' normals weighted by area (a needle's
+      // own normal is noise: compared with it, moves off the seam were refused as folds).
+      Vec3 reference{0, 0, 0};
+      for (int ti : around[n])
+        reference = reference + normal_of(tris[ti].node[0], tris[ti].node[1], tris[ti].node[2]);
+      const double before = smallest_angle(n), shortest = shortest_side(n);
+      // To the centroid, else half or a quarter of the way, put back on the surface: better
+      // angles, no triangle turned more than 20 degrees from the reference, and no nearer than
+      // h / 8 to a neighbour (unless it was already): nodes must not gather (TetGen drops points
+      // too close together). With only the whole way and h / 4, needles whose node sat within
+      // h / 4 of the seam's nodes stayed (cylinder: tets of scaled Jacobian 0.006 on triangles
+      // of 179.4 degrees at the seam).
+      bool keep = false;
+      for (double fraction : {1.0, 0.5, 0.25}) {
+        const Vec3 goal = old + (centroid - old) * fraction;
+        const gp_Pnt2d uv =
+            analysis[face]->ValueOfUV(gp_Pnt(goal.x, goal.y, goal.z), 1e-9 * target);
+        surface.nodes[n] = of(analysis[face]->Value(uv));
+        keep = smallest_angle(n) > before &&
+               shortest_side(n) >= std::min(shortest, kNeedleNearest * target);
+        for (std::size_t k = 0; k < around[n].size() && keep; ++k) {
+          const auto& v = tris[around[n][k]].node;
+          keep = !turned_over(normal_of(v[0], v[1], v[2]), reference);
+        }
+        if (keep) break;
+      }
+      if (!keep) surface.nodes[n] = old;
+    }
+    std::vector<std::uint64_t> all_sides;
+    for (const SurfaceTriangle& t : tris)
+      for (int c = 0; c < 3; ++c) all_sides.push_back(side_key(t, c));
+    restore_delaunay(all_sides);
+  }
+}
+
+// Collapses the short sides that bisection and smoothing leave inside a face (not on a CAD edge,
+// not on a lattice face): one end goes to the other, which stays where it is (so on its face),
+// where the link condition holds, no triangle turns more than 20 degrees from the surface's
+// normal at the removed node, no side gets longer than `target`, and the smallest angle of the
+// triangles around both ends does not get worse. Runs of nodes 0.1 to 0.3 h apart (cylinder at
+// h 2.7: twenty in a line on the side face) otherwise make triangles of 179 degrees, and tets on
+// them of scaled Jacobian 0.003. The removed nodes are dropped and the rest renumbered.
+void collapse_short_sides(Surface& surface, double target, const std::vector<bool>& lattice_face) {
+  std::vector<SurfaceTriangle>& tris = surface.triangles;
+  const std::vector<Vec3>& nodes = surface.nodes;
+  const int nb_nodes = static_cast<int>(nodes.size());
+  const std::vector<char> on_edge = nodes_on_edges(surface);
+  std::vector<std::vector<int>> around(nb_nodes);
+  for (int ti = 0; ti < static_cast<int>(tris.size()); ++ti)
+    for (int n : tris[ti].node) around[n].push_back(ti);
+  std::vector<char> dead(tris.size(), 0), removed(nb_nodes, 0);
+  auto normal_of = [&](const std::array<int, 3>& v) {
+    return mesher::normal_of(nodes, v[0], v[1], v[2]);
+  };
+  auto smallest_angle = [&](const std::array<int, 3>& v) {
+    return mesher::smallest_angle(nodes, v);
+  };
+  auto has = [](const SurfaceTriangle& t, int n) {
+    return t.node[0] == n || t.node[1] == n || t.node[2] == n;
+  };
+  // The smallest angle after moving node r onto node k, or -1 when that is not allowed.
+  auto try_collapse = [&](int r, int k) {
+    if (on_edge[r] || around[r].empty()) return -1.0;
+    const int face = tris[around[r].front()].face;
+    if (lattice_face[face]) return -1.0;
+    std::vector<int> shared;
+    Vec3 reference{0, 0, 0};
+    for (int ti : around[r]) {
+      if (tris[ti].face != face) return -1.0;
+      if (has(tris[ti], k)) shared.push_back(ti);
+      reference = reference + normal_of(tris[ti].node);
+    }
+    if (shared.size() != 2) return -1.0;
+    // Link condition: the ends' common neighbours are the shared triangles' third nodes.
+    std::unordered_set<int> near_r, common;
+    for (int ti : around[r])
+      for (int n : tris[ti].node) near_r.insert(n);
+    for (int ti : around[k])
+      for (int n : tris[ti].node)
+        if (n != r && n != k && near_r.count(n)) common.insert(n);
+    if (common.size() != 2) return -1.0;
+    double before = M_PI, after = M_PI;
+    for (int ti : around[k]) before = std::min(before, smallest_angle(tris[ti].node));
+    for (int ti : around[k])
+      if (!has(tris[ti], r)) after = std::min(after, smallest_angle(tris[ti].node));
+    for (int ti : around[r]) {
+      before = std::min(before, smallest_angle(tris[ti].node));
+      if (has(tris[ti], k)) continue;
+      std::array<int, 3> v = tris[ti].node;
+      for (int& n : v)
+        if (n == r) n = k;
+      for (int n : v)
+        if ((nodes[n] - nodes[k]).norm() > target) return -1.0;
+      const Vec3 now = normal_of(v);
+      if (turned_over(now, reference)) return -1.0;
+      after = std::min(after, smallest_angle(v));
+    }
+    return after >= before ? after : -1.0;
+  };
+  auto collapse = [&](int r, int k) {
+    UV uv_k;
+    for (int ti : around[r])
+      if (has(tris[ti], k)) {
+        dead[ti] = 1;
+        for (int c = 0; c < 3; ++c)
+          if (tris[ti].node[c] == k) uv_k = tris[ti].uv[c];
+      }
+    for (int ti : around[r]) {
+      if (dead[ti]) {
+        for (int n : tris[ti].node)
+          if (n != r)
+            around[n].erase(std::remove(around[n].begin(), around[n].end(), ti), around[n].end());
+        continue;
+      }
+      for (int c = 0; c < 3; ++c)
+        if (tris[ti].node[c] == r) tris[ti].node[c] = k, tris[ti].uv[c] = uv_k;
+      around[k].push_back(ti);
+    }
+    around[r].clear();
+    removed[r] = 1;
+  };
+  for (bool changed = true; changed;) {
+    changed = false;
+    std::vector<std::pair<double, std::uint64_t>> sides;
+    for (int ti = 0; ti < static_cast<int>(tris.size()); ++ti) {
+      if (dead[ti] || lattice_face[tris[ti].face]) continue;
+      for (int c = 0; c < 3; ++c) {
+        const int a = tris[ti].node[c], b = tris[ti].node[(c + 1) % 3];
+        const double l = (nodes[a] - nodes[b]).norm();
+        if (a < b && l < kCollapseSide * target && !surface.segments.count(pair_key(a, b)))
+          sides.push_back({l, pair_key(a, b)});
+      }
+    }
+    std::sort(sides.begin(), sides.end());
+    for (const auto& [l, key] : sides) {
+      (void)l;
+      const int a = static_cast<int>(key >> 32), b = static_cast<int>(key & 0xffffffffu);
+      if (removed[a] || removed[b]) continue;
+      const double ab = try_collapse(a, b), ba = try_collapse(b, a);
+      if (ab < 0 && ba < 0) continue;
+      if (ab >= ba)
+        collapse(a, b);
+      else
+        collapse(b, a);
+      changed = true;
+    }
+  }
+  std::vector<int> renumber(nb_nodes, -1);
+  Surface out;
+  for (int n = 0; n < nb_nodes; ++n)
+    if (!removed[n]) {
+      renumber[n] = static_cast<int>(out.nodes.size());
+      out.nodes.push_back(nodes[n]);
+      out.node_face.push_back(surface.node_face[n]);
+      out.seed.push_back(n);
+    }
+  for (std::size_t ti = 0; ti < tris.size(); ++ti) {
+    if (dead[ti]) continue;
+    SurfaceTriangle t = tris[ti];
+    for (int& n : t.node) n = renumber[n];
+    out.triangles.push_back(t);
+  }
+  for (const auto& [key, segment] : surface.segments)
+    out.segments[pair_key(renumber[key >> 32], renumber[key & 0xffffffffu])] = segment;
+  surface = std::move(out);
+}
+
+// Puts the nodes of each straight CAD edge that bounds a lattice face and runs across two frame
+// axes exactly on one line (nodes in frame coordinates). TetGen 1.5 never ended, or lost the
+// face, on lattice faces whose loop had a nearly collinear run (a hexagonal prism's caps, a
+// trapezoid's). The edge's ends go to a grid of 2^-40 of the shape's size along those two axes,
+// and every node between to their exact binary interpolation at its parameter, rounded to 2^-20
+// of the edge (bisection and the sweep's power-of-two pieces give such parameters).
+void align_straight_edges(const Shape& s, const Surface& surface,
+                          const std::vector<bool>& lattice_face, double largest,
+                          std::vector<Vec3>& nodes) {
+  std::map<int, std::vector<std::pair<double, int>>> on_edge;  // edge -> (parameter, node)
+  for (const auto& [key, segment] : surface.segments) {
+    const auto& faces = s.edge_faces[segment.edge];
+    if (std::none_of(faces.begin(), faces.end(), [&](int f) { return lattice_face[f]; })) continue;
+    auto& list = on_edge[segment.edge];
+    list.emplace_back(segment.t_lo, static_cast<int>(key >> 32));  // the smaller id
+    list.emplace_back(segment.t_hi, static_cast<int>(key & 0xffffffffu));
+  }
+  const int exponent = std::ilogb(largest) - 40;
+  // x rounded to a multiple of 2^e.
+  auto round_to = [](double x, int e) { return std::ldexp(std::round(std::ldexp(x, -e)), e); };
+  for (auto& [edge, list] : on_edge) {
+    if (BRepAdaptor_Curve(TopoDS::Edge(s.edges(edge + 1))).GetType() != GeomAbs_Line) continue;
+    std::sort(list.begin(), list.end());
+    list.erase(std::unique(list.begin(), list.end()), list.end());
+    const double t0 = list.front().first, t1 = list.back().first;
+    Vec3& a = nodes[list.front().second];
+    Vec3& b = nodes[list.back().second];
+    std::vector<int> across;  // the axes the edge runs across
+    for (int c = 0; c < 3; ++c)
+      if (coord(a, c) != coord(b, c)) across.push_back(c);
+    if (across.size() < 2 || t1 <= t0) continue;
+    for (int c : across)
+      set_coord(a, c, round_to(coord(a, c), exponent)),
+          set_coord(b, c, round_to(coord(b, c), exponent));
+    for (std::size_t k = 1; k + 1 < list.size(); ++k) {
+      const double f = round_to((list[k].first - t0) / (t1 - t0), -20);
+      for (int c : across)
+        set_coord(nodes[list[k].second], c, coord(a, c) + (coord(b, c) - coord(a, c)) * f);
+    }
+  }
+}
+
+}  // namespace hexmerge::mesher

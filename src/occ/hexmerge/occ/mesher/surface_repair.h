@@ -1,0 +1,39 @@
+#pragma once
+/// @file
+/// The surface triangulation brought to the target size and cleaned (internal header of
+/// mesh_shape(); no OpenCASCADE): refinement by longest-side bisection with Delaunay flips and
+/// needle smoothing, collapse of short sides, straight edges across the lattice put exactly on one
+/// line.
+
+#include <vector>
+
+#include "hexmerge/geometry/vec3.h"
+#include "hexmerge/occ/mesher/surface.h"
+
+namespace hexmerge::mesher {
+
+struct Shape;
+
+/// Splits the triangles of the faces that are not lattice faces until no side is longer than
+/// `target` (sides on edges between lattice faces excepted); lattice-face triangles are split
+/// only where a neighbour's side must be. New nodes lie on the CAD edge (sides on an edge) or on
+/// the face's surface. Then needles are smoothed on their face and the Delaunay flips redone.
+/// @param[in] lattice_face  per face, whether it is a lattice face (planar, on a lattice plane)
+/// @param[in] lattice_edge  per edge, whether every face it bounds is a lattice face
+/// @throws InputError when the refinement does not converge
+void refine(const Shape& s, Surface& surface, double target, const std::vector<bool>& lattice_face,
+            const std::vector<bool>& lattice_edge);
+
+/// Collapses the short sides (under target / 4) that bisection and smoothing leave inside a face
+/// (not on a CAD edge, not on a lattice face) where no triangle gets worse; the removed nodes
+/// are dropped, the rest renumbered, and Surface::seed gives each node's index before.
+void collapse_short_sides(Surface& surface, double target, const std::vector<bool>& lattice_face);
+
+/// Puts the nodes (frame coordinates, `nodes`, numbered as `surface`'s) of each straight CAD
+/// edge that bounds a lattice face and runs across two frame axes exactly on one line.
+/// @param[in] largest  the shape's largest extent (sets the grid the edges' ends go to)
+void align_straight_edges(const Shape& s, const Surface& surface,
+                          const std::vector<bool>& lattice_face, double largest,
+                          std::vector<Vec3>& nodes);
+
+}  // namespace hexmerge::mesher

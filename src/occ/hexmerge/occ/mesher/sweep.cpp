@@ -1,0 +1,319 @@
+#include "hexmerge/occ/mesher/sweep.h"
+
+#include <BRepAdaptor_Curve.hxx>
+#include <BRepAdaptor_Surface.hxx>
+#include <BRep_Tool.hxx>
+#include <TopExp_Explorer.hxx>
+#include <TopoDS.hxx>
+#include <TopoDS_Edge.hxx>
+#include <TopoDS_Face.hxx>
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <gp_Cylinder.hxx>
+#include <gp_Lin.hxx>
+#include <gp_Pln.hxx>
+#include <map>
+#include <unordered_map>
+#include <unordered_set>
+#include <utility>
+
+#include "hexmerge/occ/mesher/common.h"
+#include "hexmerge/occ/mesher/shape.h"
+
+namespace hexmerge::mesher {
+
+std::optional<Sweep> find_sweep(const Shape& s, const Frame& frame,
+                                const std::vector<std::optional<AxisPlane>>& face_plane,
+                                const std::vector<bool>& lattice_face, const int (&cells)[3],
+                                const std::array<double, 3>& spacing, double h) {
+  const double tolerance = 1e-7 * h;
+  for (int a = 2; a >= 0; --a) {
+    const Vec3& axis = frame.axis[a];
+    // The lattice plane at offset z along the axis, or -1.
+    auto plane_at = [&](double z) {
+      const long k = std::lround(z / spacing[a]);
+      return std::abs(z - k * spacing[a]) < tolerance && k >= 0 && k <= cells[a]
+                 ? static_cast<int>(k)
+                 : -1;
+    };
+    const int nb_faces = s.faces.Extent();
+    Sweep sweep{a, std::vector<int>(nb_faces, -1), std::vector<std::array<int, 2>>(nb_faces)};
+    bool ok = true, bottom = false, top = false, unaligned_wall = false;
+    for (int f = 0; f < nb_faces && ok; ++f) {
+      if (face_plane[f] && face_plane[f]->axis == a) {
+        sweep.cap[f] = plane_at(face_plane[f]->offset);
+        ok = sweep.cap[f] >= 0 && lattice_face[f];
+        bottom = bottom || sweep.cap[f] == 0;
+        top = top || sweep.cap[f] == cells[a];
+        continue;
+      }
+      const TopoDS_Face& face = TopoDS::Face(s.faces(f + 1));
+      BRepAdaptor_Surface surface(face, false);
+      const double parallel = 1 - 1e-12;
+      switch (surface.GetType()) {
+        case GeomAbs_Plane:
+          ok = std::abs(of(surface.Plane().Axis().Direction()).dot(axis)) < 1e-9;
+          break;
+        case GeomAbs_Cylinder:
+          ok = std::abs(of(surface.Cylinder().Axis().Direction()).dot(axis)) > parallel;
+          break;
+        case GeomAbs_SurfaceOfExtrusion:
+          ok = std::abs(of(surface.Direction()).dot(axis)) > parallel;
+          break;
+        default:
+          ok = false;
+      }
+      unaligned_wall = unaligned_wall || !lattice_face[f];
+      int lo = cells[a] + 1, hi = -1;  // the planes of its edges across the axis
+      for (TopExp_Explorer ex(face, TopAbs_EDGE); ex.More() && ok; ex.Next()) {
+        const TopoDS_Edge& edge = TopoDS::Edge(ex.Current());
+        if (BRep_Tool::Degenerated(edge)) {
+          ok = false;
+          break;
+        }
+        BRepAdaptor_Curve curve(edge);
+        if (curve.GetType() == GeomAbs_Line &&
+            std::abs(of(curve.Line().Direction()).dot(axis)) > parallel)
+          continue;
+        int level = -2;  // the lattice plane the edge lies in
+        for (int i = 0; i <= 8 && ok; ++i) {
+          const double t =
+              curve.FirstParameter() + (curve.LastParameter() - curve.FirstParameter()) * i / 8;
+          const int here = plane_at(coord(frame.to_frame(of(curve.Value(t))), a));
+          ok = here >= 0 && (level == -2 || here == level);
+          level = here;
+        }
+        lo = std::min(lo, level), hi = std::max(hi, level);
+      }
+      ok = ok && lo < hi;
+      sweep.range[f] = {lo, hi};
+    }
+    if (ok && bottom && top && unaligned_wall) return sweep;
+  }
+  return std::nullopt;
+}
+
+std::optional<SweptSurface> sweep_surface(const Shape& s, const Sweep& sweep, const Frame& frame,
+                                          const Vec3& step, int levels, double target,
+                                          double deflection, const std::vector<bool>& lattice_face,
+                                          Surface& surface) {
+  const int axis = sweep.axis;
+  auto directed = [](int a, int b) {
+    return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(a)) << 32) |
+           static_cast<std::uint32_t>(b);
+  };
+  std::vector<Vec3> framed(surface.nodes.size());  // of the nodes BRepMesh made
+  for (std::size_t n = 0; n < framed.size(); ++n) framed[n] = frame.to_frame(surface.nodes[n]);
+  // The first plane's caps, the caps' triangles per plane, and the wall face behind each
+  // directed side of a wall triangle.
+  std::vector<SurfaceTriangle> bottom;
+  std::map<int, std::vector<const SurfaceTriangle*>> caps_on;  // plane -> cap triangles
+  std::unordered_map<std::uint64_t, int> wall_at;
+  for (const SurfaceTriangle& t : surface.triangles) {
+    if (sweep.cap[t.face] == 0)
+      bottom.push_back(t);
+    else if (sweep.cap[t.face] > 0)
+      caps_on[sweep.cap[t.face]].push_back(&t);
+    else
+      for (int c = 0; c < 3; ++c) wall_at[directed(t.node[c], t.node[(c + 1) % 3])] = t.face;
+  }
+  // Each wall's profile: the sides of its triangles on its lowest plane, across the axis.
+  std::vector<std::vector<std::array<Vec3, 2>>> profile(s.faces.Extent());
+  for (const SurfaceTriangle& t : surface.triangles) {
+    if (sweep.cap[t.face] >= 0) continue;
+    for (int c = 0; c < 3; ++c) {
+      Vec3 p = framed[t.node[c]], q = framed[t.node[(c + 1) % 3]];
+      const double z = sweep.range[t.face][0] * (step.norm());
+      if (std::abs(coord(p, axis) - z) > 1e-7 * target ||
+          std::abs(coord(q, axis) - z) > 1e-7 * target)
+        continue;
+      set_coord(p, axis, 0), set_coord(q, axis, 0);
+      profile[t.face].push_back({p, q});
+    }
+  }
+  // The wall face with a strip over the side from p to q (across the axis) in slab k: its range
+  // holds k and its profile passes by the side's midpoint (two chords of one curve are at most
+  // twice the deflection apart).
+  auto wall_over = [&](const Vec3& p, const Vec3& q, int k) {
+    Vec3 m = (p + q) * 0.5;
+    set_coord(m, axis, 0);
+    for (int f = 0; f < s.faces.Extent(); ++f) {
+      if (sweep.cap[f] >= 0 || sweep.range[f][0] > k || sweep.range[f][1] <= k) continue;
+      for (const auto& side : profile[f]) {
+        const Vec3 d = side[1] - side[0];
+        const double t = std::clamp((m - side[0]).dot(d) / d.dot(d), 0.0, 1.0);
+        if ((side[0] + d * t - m).norm() <= 2 * deflection + 1e-7 * target) return f;
+      }
+    }
+    return -1;
+  };
+  std::unordered_map<std::uint64_t, int> triangle_at;  // directed side -> bottom triangle
+  for (int ti = 0; ti < static_cast<int>(bottom.size()); ++ti)
+    for (int c = 0; c < 3; ++c)
+      triangle_at[directed(bottom[ti].node[c], bottom[ti].node[(c + 1) % 3])] = ti;
+  // The first plane's sides on walls (once, directed as the wall's triangles run the other way),
+  // and the wall of each slab over them; every wall must be over some side.
+  struct Side {
+    int from, to;
+    std::vector<int> wall;  // per slab
+  };
+  std::vector<Side> boundary;
+  std::vector<char> used(s.faces.Extent(), 0);
+  std::unordered_set<std::uint64_t> seen;
+  for (const SurfaceTriangle& t : bottom)
+    for (int c = 0; c < 3; ++c) {
+      int a = t.node[c], b = t.node[(c + 1) % 3];
+      if (!seen.insert(pair_key(a, b)).second) continue;
+      if (!wall_at.count(directed(b, a))) std::swap(a, b);
+      if (!wall_at.count(directed(b, a))) {
+        if (!triangle_at.count(directed(b, a)) || !triangle_at.count(directed(a, b)))
+          return std::nullopt;  // an outer side with no wall behind
+        continue;               // inside the first plane's caps
+      }
+      Side side{a, b, std::vector<int>(levels, -1)};
+      for (int k = 0; k < levels; ++k) {
+        side.wall[k] = k > 0 && sweep.range[side.wall[k - 1]][1] > k
+                           ? side.wall[k - 1]
+                           : wall_over(framed[a], framed[b], k);
+        if (side.wall[k] < 0) return std::nullopt;  // the cross-section changes
+        used[side.wall[k]] = 1;
+      }
+      boundary.push_back(std::move(side));
+    }
+  for (int f = 0; f < s.faces.Extent(); ++f)
+    if (sweep.cap[f] < 0 && !used[f]) return std::nullopt;  // a wall the first plane lacks
+
+  // Long sides on walls that are not lattice faces: split evenly along their CAD edge, the
+  // first plane's triangles on them cut into fans.
+  std::vector<Side> sides;
+  std::unordered_map<std::uint64_t, EdgeSegment> segments;  // of the sides, old numbering
+  for (const Side& side : boundary) {
+    const auto segment = surface.segments.find(pair_key(side.from, side.to));
+    const double length = (surface.nodes[side.to] - surface.nodes[side.from]).norm();
+    int pieces = static_cast<int>(std::ceil(length / target - 1e-9));
+    if (lattice_face[side.wall[0]] || segment == surface.segments.end() || pieces <= 1) {
+      if (segment != surface.segments.end()) segments.insert(*segment);
+      sides.push_back(side);
+      continue;
+    }
+    const EdgeSegment e = segment->second;
+    const double t_from = side.from < side.to ? e.t_lo : e.t_hi;
+    const double t_to = side.from < side.to ? e.t_hi : e.t_lo;
+    const BRepAdaptor_Curve curve(TopoDS::Edge(s.edges(e.edge + 1)));
+    // A straight side is split into a power of two of pieces, so that align_straight_edges()
+    // can put its nodes exactly on one line.
+    if (curve.GetType() == GeomAbs_Line)
+      pieces = 1 << static_cast<int>(std::ceil(std::log2(pieces) - 1e-9));
+    std::vector<int> chain{side.from};
+    for (int i = 1; i < pieces; ++i) {
+      chain.push_back(static_cast<int>(surface.nodes.size()));
+      surface.nodes.push_back(of(curve.Value(t_from + (t_to - t_from) * i / pieces)));
+      surface.node_face.push_back(side.wall[0]);  // on its bottom edge
+    }
+    chain.push_back(side.to);
+    for (int i = 1; i <= pieces; ++i) {
+      // The piece's segment of the CAD edge, at its parameters.
+      const double ta = t_from + (t_to - t_from) * (i - 1) / pieces;
+      const double tb = i == pieces ? t_to : t_from + (t_to - t_from) * i / pieces;
+      const int previous = chain[i - 1], next = chain[i];
+      segments[pair_key(previous, next)] =
+          previous < next ? EdgeSegment{e.edge, ta, tb} : EdgeSegment{e.edge, tb, ta};
+      sides.push_back({previous, next, side.wall});
+    }
+    // The triangles on the side (one, or two on a wall between two caps): fans.
+    for (const auto& [x, y] : {std::pair{side.from, side.to}, std::pair{side.to, side.from}}) {
+      const auto at = triangle_at.find(directed(x, y));
+      if (at == triangle_at.end()) continue;
+      const int ti = at->second;
+      const SurfaceTriangle t = bottom[ti];
+      const int apex = t.node[(side_with_key(t, pair_key(x, y)) + 2) % 3];
+      for (int i = 1; i <= pieces; ++i) {
+        const int p = x == side.from ? chain[i - 1] : chain[pieces - i + 1];
+        const int q = x == side.from ? chain[i] : chain[pieces - i];
+        const SurfaceTriangle piece{{p, q, apex}, {}, t.face};
+        const int index = i == 1 ? ti : static_cast<int>(bottom.size());
+        if (i == 1)
+          bottom[ti] = piece;
+        else
+          bottom.push_back(piece);
+        for (int k = 0; k < 3; ++k)
+          triangle_at[directed(piece.node[k], piece.node[(k + 1) % 3])] = index;
+      }
+    }
+  }
+
+  // The new surface: the first plane's caps' nodes (renumbered in their order), then plane by
+  // plane the nodes on walls repeated, and on planes with caps the caps' inner nodes they use.
+  std::vector<int> renumber(surface.nodes.size(), -1);
+  std::vector<int> order;
+  for (const SurfaceTriangle& t : bottom)
+    for (int n : t.node) renumber[n] = 1;
+  for (int n = 0; n < static_cast<int>(surface.nodes.size()); ++n)
+    if (renumber[n] >= 0) renumber[n] = static_cast<int>(order.size()), order.push_back(n);
+  std::vector<int> wall_of(order.size(), -1);  // per node of the first plane: a wall there
+  for (const Side& side : sides)
+    for (int n : {side.from, side.to}) wall_of[renumber[n]] = side.wall[0];
+  // The cap face on plane k holding point p (BRepMesh's triangles of the caps there), or -1.
+  auto cap_face = [&](int k, const Vec3& p) {
+    const auto it = caps_on.find(k);
+    return it == caps_on.end() ? -1 : face_holding(frame.to_frame(p), it->second, framed, axis);
+  };
+  // The caps on the planes above: the first plane's triangles that fall in one, per plane.
+  std::vector<std::vector<std::pair<int, int>>> capped(levels + 1);  // (bottom triangle, face)
+  std::vector<std::vector<char>> needed(levels + 1, std::vector<char>(order.size(), 0));
+  for (int k = 1; k <= levels; ++k) {
+    if (!caps_on.count(k)) continue;
+    for (int ti = 0; ti < static_cast<int>(bottom.size()); ++ti) {
+      const SurfaceTriangle& t = bottom[ti];
+      const Vec3 centroid =
+          (surface.nodes[t.node[0]] + surface.nodes[t.node[1]] + surface.nodes[t.node[2]]) *
+              (1.0 / 3) +
+          step * k;
+      const int face = cap_face(k, centroid);
+      if (face < 0) continue;
+      capped[k].emplace_back(ti, face);
+      for (int n : t.node) needed[k][renumber[n]] = 1;
+    }
+  }
+  Surface swept;
+  SweptSurface result;
+  std::vector<std::vector<int>> copy(levels + 1, std::vector<int>(order.size(), -1));
+  for (int k = 0; k <= levels; ++k)
+    for (std::size_t i = 0; i < order.size(); ++i) {
+      if (k > 0 && wall_of[i] < 0 && !needed[k][i]) continue;
+      copy[k][i] = static_cast<int>(swept.nodes.size());
+      swept.nodes.push_back(surface.nodes[order[i]] + step * k);
+      swept.node_face.push_back(k == 0            ? surface.node_face[order[i]]
+                                : wall_of[i] >= 0 ? wall_of[i]
+                                                  : cap_face(k, swept.nodes.back()));
+      result.base.push_back(static_cast<int>(i));
+    }
+  swept.seed = result.base;
+  // The first plane's segments (the planes above repeat its nodes, see mesh_shape).
+  for (const auto& [key, segment] : segments)
+    swept.segments[pair_key(renumber[key >> 32], renumber[key & 0xffffffffu])] = segment;
+  for (const SurfaceTriangle& t : bottom)
+    swept.triangles.push_back(
+        {{renumber[t.node[0]], renumber[t.node[1]], renumber[t.node[2]]}, {}, t.face});
+  for (const Side& side : sides) {
+    const int a = renumber[side.from], b = renumber[side.to];
+    result.sides.push_back({a, b});
+    result.shared.push_back(s.face_solid_count[side.wall[0]] > 1);
+    result.on_lattice_face.push_back(lattice_face[side.wall[0]]);
+    for (int k = 0; k < levels; ++k) {
+      swept.triangles.push_back({{copy[k][b], copy[k][a], copy[k + 1][a]}, {}, side.wall[k]});
+      swept.triangles.push_back({{copy[k][b], copy[k + 1][a], copy[k + 1][b]}, {}, side.wall[k]});
+    }
+  }
+  for (int k = 1; k <= levels; ++k)
+    for (const auto& [ti, face] : capped[k]) {
+      const SurfaceTriangle& t = bottom[ti];
+      const int a = renumber[t.node[0]], b = renumber[t.node[1]], c = renumber[t.node[2]];
+      swept.triangles.push_back({{copy[k][a], copy[k][c], copy[k][b]}, {}, face});
+    }
+  surface = std::move(swept);
+  return result;
+}
+
+}  // namespace hexmerge::mesher

@@ -1,0 +1,70 @@
+#pragma once
+/// @file
+/// Swept shapes (internal header of mesh_shape(); no OpenCASCADE). A solid that is a profile
+/// extruded along a lattice axis gets a mesh that is extruded too: its walls are triangulated in
+/// strips between consecutive lattice planes, with the same nodes (stations) on every plane, so
+/// that the layers, the lattice points and TetGen's tets repeat from one plane to the next. Every
+/// tet then lies in a slab between two planes, the tets of a slab form prisms over the
+/// cross-section's triangles, and two prisms over triangles that make a good quad form a
+/// hexahedron: the transition between the lattice core and the boundary layers recombines too,
+/// with no closing pyramids.
+
+#include <array>
+#include <optional>
+#include <vector>
+
+#include "hexmerge/geometry/vec3.h"
+#include "hexmerge/occ/mesher/frame.h"
+#include "hexmerge/occ/mesher/surface.h"
+
+namespace hexmerge::mesher {
+
+struct Shape;
+
+/// A swept shape's faces: caps (planar, normal to the axis, on a lattice plane) and walls
+/// (parallel to the axis, between two lattice planes).
+struct Sweep {
+  int axis = -1;                          ///< frame axis
+  std::vector<int> cap;                   ///< per face: its lattice plane if a cap, else -1
+  std::vector<std::array<int, 2>> range;  ///< per wall: the lattice planes of its ends
+};
+
+/// The frame axis along which the shape is swept: every face is a cap on a lattice plane or a
+/// wall (a plane, cylinder or surface of extrusion parallel to the axis, bounded by lines along
+/// the axis and by curves in lattice planes), there are caps on the first and the last plane,
+/// and at least one wall is not a lattice face (a box is a lattice already). The frame's third
+/// axis is tried first. Whether the cross-section is the same on every plane is
+/// sweep_surface()'s to see.
+/// @param[in] face_plane    per face, its plane when planar and normal to a frame axis
+/// @param[in] lattice_face  per face, whether it is a lattice face
+/// @param[in] cells         lattice cells per axis
+/// @param[in] spacing       lattice spacing per axis
+/// @param[in] h             the target size (planes are matched to 1e-7 h)
+std::optional<Sweep> find_sweep(const Shape& s, const Frame& frame,
+                                const std::vector<std::optional<AxisPlane>>& face_plane,
+                                const std::vector<bool>& lattice_face, const int (&cells)[3],
+                                const std::array<double, 3>& spacing, double h);
+
+/// What sweep_surface() made: per node, the node on the bottom plane it repeats (itself there);
+/// the first plane's sides on walls, as a cap's triangles run, whether that wall lies between
+/// two solids, and whether it is a lattice face.
+struct SweptSurface {
+  std::vector<int> base;
+  std::vector<std::array<int, 2>> sides;
+  std::vector<char> shared, on_lattice_face;
+};
+
+/// Rebuilds the surface of a swept shape, when its cross-section is the same on every lattice
+/// plane along the axis (else nothing changes and the result is empty): the caps on the first
+/// plane as BRepMesh made them, their sides on walls split to at most `target` (on walls that
+/// are not lattice faces: those keep their lattice points instead), every node on a wall
+/// repeated on the `levels` planes above (`step` apart), the walls as two triangles per side and
+/// slab (of the wall face there), and the caps on the planes above as copies of the first
+/// plane's triangles, each in the cap face that holds its centroid there. The nodes come plane
+/// by plane, in the same order on every plane.
+std::optional<SweptSurface> sweep_surface(const Shape& s, const Sweep& sweep, const Frame& frame,
+                                          const Vec3& step, int levels, double target,
+                                          double deflection, const std::vector<bool>& lattice_face,
+                                          Surface& surface);
+
+}  // namespace hexmerge::mesher

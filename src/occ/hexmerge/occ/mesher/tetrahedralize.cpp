@@ -1,0 +1,258 @@
+#include "hexmerge/occ/mesher/tetrahedralize.h"
+
+#include <sys/wait.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "hexmerge/core/error.h"
+
+namespace hexmerge::mesher {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string shell_quote(const std::string& s) {
+  std::string out = "'";
+  for (char c : s) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return out + "'";
+}
+
+std::string find_program(const std::string& name) {
+  if (name.find('/') != std::string::npos) return fs::exists(name) ? name : std::string();
+  const char* path = std::getenv("PATH");
+  std::stringstream dirs(path ? path : "");
+  std::string dir;
+  while (std::getline(dirs, dir, ':')) {
+    if (dir.empty()) continue;
+    const fs::path candidate = fs::path(dir) / name;
+    std::error_code ec;
+    if (fs::is_regular_file(candidate, ec)) return candidate.string();
+  }
+  return std::string();
+}
+
+std::string tail_of_file(const fs::path& path, std::size_t max_chars) {
+  std::ifstream in(path);
+  std::ostringstream text;
+  text << in.rdbuf();
+  std::string s = text.str();
+  return s.size() > max_chars ? "..." + s.substr(s.size() - max_chars) : s;
+}
+
+// Reads a TetGen output table (.node, .ele or .face, 0-based with -z): a header "count header
+// ...", then per line an id and `columns` values; '#' starts a comment. The header's second
+// number is `header`: the values per row of .node (3) and .ele (4), the marker flag of .face
+// (1: three vertices and a marker per row). Returns count * columns values.
+template <typename T>
+std::vector<T> read_tetgen_table(const fs::path& path, int header, int columns) {
+  std::ifstream in(path);
+  const std::string name = path.filename().string();
+  if (!in) throw InputError("TetGen wrote no " + name);
+  std::string line;
+  long long n = -1, width = 0;
+  std::vector<T> values;
+  while (std::getline(in, line)) {
+    const auto hash = line.find('#');
+    if (hash != std::string::npos) line.resize(hash);
+    std::istringstream ls(line);
+    if (n < 0) {
+      if (!(ls >> n >> width)) continue;
+      if (width != header)
+        throw InputError("TetGen's " + name + " has " + std::to_string(width) +
+                         " in its header, not " + std::to_string(header));
+      values.reserve(static_cast<std::size_t>(n) * columns);
+      continue;
+    }
+    long long id;
+    if (!(ls >> id)) continue;
+    for (int k = 0; k < columns; ++k) {
+      T x;
+      if (!(ls >> x)) throw InputError("TetGen's " + name + " has a short row: " + line);
+      values.push_back(x);
+    }
+  }
+  if (n < 0 || static_cast<long long>(values.size()) != columns * n)
+    throw InputError("TetGen's " + name + " is truncated");
+  return values;
+}
+
+// A temporary directory removed on destruction (unless kept).
+class WorkDirectory {
+ public:
+  explicit WorkDirectory(const std::string& requested) {
+    if (!requested.empty()) {
+      path_ = requested;
+      fs::create_directories(path_);
+      keep_ = true;
+      return;
+    }
+    std::string pattern = (fs::temp_directory_path() / "hexmerge-mesh-XXXXXX").string();
+    if (!mkdtemp(pattern.data()))
+      throw InputError("cannot create a temporary directory for TetGen");
+    path_ = pattern;
+  }
+  ~WorkDirectory() {
+    std::error_code ec;
+    if (!keep_) fs::remove_all(path_, ec);
+  }
+  const fs::path& path() const { return path_; }
+
+ private:
+  fs::path path_;
+  bool keep_ = false;
+};
+
+}  // namespace
+
+Tetrahedralizer::Tetrahedralizer(const TetrahedralizeParameters& parameters)
+    : parameters_(parameters), program_(find_program(parameters.program)) {
+  if (program_.empty())
+    throw InputError("mesh_shape needs TetGen: \"" + parameters.program +
+                         "\" is not found (Debian: apt install tetgen)",
+                     Entity::Parameter);
+}
+
+// TetGen: the surface kept as it is (-pY), the facets' single points with it, the isolated
+// points as isolated vertices of the PLC, 0-based (-z), quiet (-Q). Given to -i instead, TetGen
+// 1.5 inserted them after the boundary recovery and left non-Delaunay tets in the degenerate
+// (cospherical) lattice: a closing pyramid's apex joined to the far corner of the core cell
+// behind it (bracket h 1.40: two core faces without closer, 89.5 % hex volume).
+TetrahedralizeOutput Tetrahedralizer::run(TetrahedralizeInput input) const {
+  std::vector<Vec3>& points = input.points;
+  std::vector<Facet>& facets = input.facets;
+  const auto to_world = [&](const Vec3& p) { return input.to_world ? input.to_world(p) : p; };
+  TetrahedralizeOutput output;
+  WorkDirectory work(parameters_.work_directory);
+  const fs::path poly = work.path() / "shape.poly";
+  auto write_poly = [&] {
+    std::ofstream out(poly);
+    out.precision(17);
+    out << points.size() << " 3 0 0\n";
+    for (std::size_t i = 0; i < points.size(); ++i) {
+      const Vec3& p = points[i];
+      out << i << ' ' << p.x << ' ' << p.y << ' ' << p.z << '\n';
+    }
+    out << facets.size() << " 1\n";
+    for (const Facet& f : facets) {
+      out << f.polygons.size() << ' ' << f.holes.size() << ' ' << f.marker << '\n';
+      for (const auto& polygon : f.polygons) {
+        out << polygon.size();
+        for (int v : polygon) out << ' ' << v;
+        out << '\n';
+      }
+      for (std::size_t i = 0; i < f.holes.size(); ++i)
+        out << i + 1 << ' ' << f.holes[i].x << ' ' << f.holes[i].y << ' ' << f.holes[i].z << '\n';
+    }
+    out << "0\n0\n";
+    if (!out) throw InputError("cannot write TetGen's input in " + work.path().string());
+  };
+  write_poly();
+  const fs::path log = work.path() / "tetgen.log";
+  output.command = shell_quote(program_) + " -pYzQ " + shell_quote(poly.string());
+  const std::size_t given = points.size();
+  std::vector<double> frame_points;
+  // TetGen 1.5 can fail to triangulate a lattice face from its loops: it never ends, or leaves
+  // the face with a gap and every tet counted as outside. Nearly collinear loop nodes did it
+  // (align_straight_edges() now prevents that), and whether it happened depended on the vertex
+  // the loop started at. So TetGen runs under a time limit, far above its own time (about 1 s
+  // per 20k points), and after a failure the loops start elsewhere.
+  const double time_limit = parameters_.time_limit > 0
+                                ? parameters_.time_limit
+                                : 30 + 1e-3 * static_cast<double>(points.size());
+  std::ostringstream limit_text;
+  limit_text << time_limit;
+  const std::string limited = "timeout -k 5 " + limit_text.str() + " ";
+  int restarts = 0;
+  for (bool nudged = false;;) {
+    const int status = std::system(
+        (limited + output.command + " > " + shell_quote(log.string()) + " 2>&1").c_str());
+    const bool timed_out = WIFEXITED(status) && WEXITSTATUS(status) == 124;
+    if (timed_out || (status == 0 && !fs::exists(work.path() / "shape.1.ele"))) {
+      if (++restarts > parameters_.restarts)
+        throw InputError(std::string("TetGen ") +
+                         (timed_out ? "did not finish within " + limit_text.str() + " s"
+                                    : "lost the shape's surface (no tets inside)") +
+                         ", " + std::to_string(restarts) +
+                         " times with the lattice faces' loops started at other vertices; try "
+                         "another size\n(command: " +
+                         output.command + ")");
+      for (Facet& facet : facets)
+        for (auto& polygon : facet.polygons)
+          if (polygon.size() > 3)
+            std::rotate(
+                polygon.begin(),
+                polygon.begin() + static_cast<std::ptrdiff_t>(
+                                      (7919u * static_cast<unsigned>(restarts)) % polygon.size()),
+                polygon.end());
+      ++output.nb_restarts;
+      write_poly();
+      continue;
+    }
+    if (status != 0 || !fs::exists(work.path() / "shape.1.ele"))
+      throw InputError("TetGen failed (exit status " + std::to_string(status) +
+                       ") on the shape's surface "
+                       "and points; its output:\n" +
+                       tail_of_file(log, 2000) + "\n(command: " + output.command + ")");
+    frame_points = read_tetgen_table<double>(work.path() / "shape.1.node", 3, 3);
+    // TetGen now and then leaves a point of the regular lattice out (degenerate: all
+    // cospherical): missing from its .node (which breaks the numbering) or in no tet. The points
+    // left out move by 1e-7 h (they stay on the lattice for everything below) and TetGen runs
+    // once more.
+    std::vector<std::size_t> dropped;
+    if (frame_points.size() / 3 >= given) {
+      std::vector<char> used(given, 0);
+      for (long long v : read_tetgen_table<long long>(work.path() / "shape.1.ele", 4, 4))
+        if (v >= 0 && v < static_cast<long long>(given)) used[v] = 1;
+      for (std::size_t i = 0; i < given; ++i)
+        if (!used[i]) dropped.push_back(i);
+      if (dropped.empty()) break;
+    } else {
+      // Found by their coordinates: TetGen keeps the others in order.
+      for (std::size_t i = 0, j = 0; i < given; ++i) {
+        const Vec3 p = points[i];
+        if (j < frame_points.size() / 3 &&
+            (Vec3::of(&frame_points[3 * j]) - p).norm() <= parameters_.tolerance)
+          ++j;
+        else
+          dropped.push_back(i);
+      }
+    }
+    std::string which;
+    for (std::size_t i : dropped) {
+      const Vec3 p = to_world(points[i]);
+      which += " " + std::to_string(i) + " at (" + std::to_string(p.x) + ", " +
+               std::to_string(p.y) + ", " + std::to_string(p.z) + ")";
+    }
+    if (nudged || dropped.empty() || dropped.front() < input.first_isolated)
+      throw InputError("TetGen dropped " + std::to_string(dropped.size()) +
+                       " of the points given (points too close together or not insertable):" +
+                       which + "; try another size\n(command: " + output.command + ")");
+    for (std::size_t i : dropped) points[i] = points[i] + Vec3{1.0, 0.7, 0.3} * parameters_.nudge;
+    output.nb_nudged += dropped.size();
+    nudged = true;
+    write_poly();
+  }
+
+  for (long long v : read_tetgen_table<long long>(work.path() / "shape.1.ele", 4, 4)) {
+    if (v < 0 || v >= static_cast<long long>(frame_points.size() / 3))
+      throw InputError("TetGen's shape.1.ele refers to a missing node");
+    output.tets.push_back(static_cast<index_t>(v));
+  }
+  // The boundary faces and the facets' markers they carry.
+  const std::vector<long long> faces =
+      read_tetgen_table<long long>(work.path() / "shape.1.face", 1, 4);
+  for (std::size_t i = 0; i + 3 < faces.size(); i += 4) {
+    output.boundary.push_back({static_cast<index_t>(faces[i]), static_cast<index_t>(faces[i + 1]),
+                               static_cast<index_t>(faces[i + 2])});
+    output.boundary_marker.push_back(static_cast<int>(faces[i + 3]));
+  }
+  output.points = std::move(frame_points);
+  return output;
+}
+
+}  // namespace hexmerge::mesher
