@@ -1,0 +1,73 @@
+#include "hexmerge/occ/mesher/boundary_distance.h"
+
+#include <gtest/gtest.h>
+
+#include <BRepAdaptor_Surface.hxx>
+#include <TopoDS.hxx>
+#include <cmath>
+#include <gp_Pln.hxx>
+
+#include "fixtures.h"
+#include "hexmerge/core/error.h"
+#include "mesher_fixtures.h"
+
+namespace hexmerge::test {
+namespace {
+
+// The box [0, 10]^3 as 6 tets on its corners (corner i at 10 (i & 1, (i >> 1) & 1, (i >> 2) & 1))
+// and the shape; per corner, the index of the box face normal to x through it.
+struct BoxMesh {
+  mesher::Shape shape = load(occ_box(0, 0, 0, 10, 10, 10));
+  TetMesh mesh;
+  std::vector<int> x_face;
+  BoxMesh() {
+    std::vector<Point> points;
+    for (int i = 0; i < 8; ++i)
+      points.push_back({10.0 * (i & 1), 10.0 * ((i >> 1) & 1), 10.0 * ((i >> 2) & 1)});
+    mesh = make_tet_mesh(points, {});
+    for (const auto& t : std::vector<std::array<index_t, 4>>{
+             {0, 1, 3, 7}, {0, 1, 5, 7}, {0, 2, 3, 7}, {0, 2, 6, 7}, {0, 4, 5, 7}, {0, 4, 6, 7}})
+      add_tet(mesh, t[0], t[1], t[2], t[3]);
+    for (int i = 0; i < 8; ++i)
+      for (int f = 0; f < shape.faces.Extent(); ++f) {
+        const BRepAdaptor_Surface s(TopoDS::Face(shape.faces(f + 1)));
+        const gp_Pln plane = s.Plane();
+        if (std::abs(plane.Axis().Direction().X()) > 0.5 &&
+            std::abs(plane.Location().X() - 10.0 * (i & 1)) < 1e-9)
+          x_face.push_back(f);
+      }
+  }
+};
+
+TEST(max_boundary_distance, nodes_on_their_faces_are_at_zero) {
+  BoxMesh box;
+  ASSERT_EQ(box.x_face.size(), 8u);
+  EXPECT_LT(mesher::max_boundary_distance(box.shape, box.mesh, box.x_face, 1e-9), 1e-12);
+}
+
+TEST(max_boundary_distance, moved_node_is_at_its_offset) {
+  for (const double offset : {0.3, -0.7}) {
+    BoxMesh moved;
+    moved.mesh.points[3 * 7] += offset;  // corner 7, on face x = 10, moved along x
+    EXPECT_NEAR(mesher::max_boundary_distance(moved.shape, moved.mesh, moved.x_face, 1e-9),
+                std::abs(offset), 1e-9);
+  }
+}
+
+TEST(max_boundary_distance, boundary_node_on_no_face_is_named) {
+  BoxMesh box;
+  std::vector<int> faces = box.x_face;
+  faces[5] = -1;
+  try {
+    mesher::max_boundary_distance(box.shape, box.mesh, faces, 1e-9);
+    FAIL() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.entity(), Entity::Node);
+    EXPECT_EQ(e.id(), 5u);
+  }
+  faces.resize(4);  // nodes past the list are on no face either
+  EXPECT_THROW(mesher::max_boundary_distance(box.shape, box.mesh, faces, 1e-9), InputError);
+}
+
+}  // namespace
+}  // namespace hexmerge::test

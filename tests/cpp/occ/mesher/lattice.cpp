@@ -1,0 +1,167 @@
+#include "hexmerge/occ/mesher/lattice.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+#include "hexmerge/core/error.h"
+#include "hexmerge/occ/mesher/sweep.h"
+#include "mesher_fixtures.h"
+
+namespace hexmerge::test {
+namespace {
+
+// The surface in frame coordinates (not swept), with its queries.
+struct Placed {
+  std::vector<Vec3> nodes;
+  std::unique_ptr<mesher::Surroundings> around;
+  std::unique_ptr<mesher::Parity> parity;
+};
+Placed place(const Prepared& p) {
+  Placed out;
+  out.nodes = mesher::frame_nodes(p.shape, p.surface, p.lattice, -1, mesher::SweptSurface{});
+  out.around = std::make_unique<mesher::Surroundings>(out.nodes, p.surface, p.lattice, p.h);
+  out.parity = std::make_unique<mesher::Parity>(out.nodes, p.surface, p.shape.face_solid_count,
+                                                *out.around, p.h);
+  return out;
+}
+
+TEST(lay_lattice, box_faces_are_lattice_faces) {
+  const double h = 7;
+  const Prepared p = prepare(occ_box(0, 0, 0, 100, 40, 30), h);
+  const auto& l = p.lattice;
+  const double extent[3] = {100, 40, 30};
+  for (int a = 0; a < 3; ++a) {
+    EXPECT_NEAR(l.extent[a], extent[a], 1e-9);
+    EXPECT_NEAR(l.cells[a] * l.spacing[a], extent[a], 1e-9);
+    EXPECT_EQ(l.cells[a], std::lround(extent[a] / h));  // no other face to fit
+  }
+  EXPECT_EQ(l.nb_lattice_faces, 6u);
+  for (bool e : l.lattice_edge) EXPECT_TRUE(e);
+  const Vec3 origin = l.frame.origin;
+  EXPECT_NEAR(origin.norm(), 0, 1e-9);
+}
+
+TEST(lay_lattice, spacing_puts_planes_on_the_steps) {
+  // The flange's side at x = 10 of a 60-long foot and the foot's top at z = 10 of a 50-high
+  // flange: the spacings put lattice planes on them (60 / 18 and 50 / 15, nearest h = 3).
+  const Prepared p = prepare(occ_bracket(), 3.0);
+  const auto& l = p.lattice;
+  for (int a = 0; a < 3; ++a) {
+    EXPECT_GE(l.spacing[a], 0.75 * p.h * (1 - 1e-9));
+    EXPECT_LE(l.spacing[a], 1.5 * p.h * (1 + 1e-9));
+  }
+  EXPECT_EQ(l.cells[0], 18);
+  EXPECT_EQ(l.cells[2], 15);
+  for (int f = 0; f < p.shape.faces.Extent(); ++f)
+    if (l.face_plane[f]) {
+      EXPECT_TRUE(l.lattice_face[f]) << f;
+    }
+}
+
+TEST(lay_lattice, size_larger_than_the_shape_is_refused) {
+  EXPECT_THROW(prepare(occ_box(0, 0, 0, 10, 10, 10), 11.0), InputError);
+}
+
+// Inside/outside by ray parity agrees with OpenCASCADE's classifier, away from the surface
+// (within the chord deflection the triangulation and the CAD may disagree).
+TEST(Parity, agrees_with_the_solid_classifier) {
+  for (const auto& [name, solid, h] :
+       {std::tuple{"bracket", occ_bracket(), 3.0}, std::tuple{"plate", occ_plate_with_hole(), 2.0},
+        std::tuple{"cylinder", occ_cylinder(10, 30), 3.0}}) {
+    SCOPED_TRACE(name);
+    const Prepared p = prepare(solid, h);
+    const Placed placed = place(p);
+    // Every triangle, for "near the surface".
+    mesher::TriangleSet all(placed.nodes, placed.around->box_lo, placed.around->box_hi, h);
+    for (const auto& t : p.surface.triangles) all.add(t.node);
+    std::mt19937 random(7);
+    std::uniform_real_distribution<double> u(-0.1, 1.1);
+    int inside = 0, outside = 0;
+    for (int i = 0; i < 3000; ++i) {
+      const Vec3 q{u(random) * p.lattice.extent[0], u(random) * p.lattice.extent[1],
+                   u(random) * p.lattice.extent[2]};
+      if (all.any_within(q, 0.1 * h)) continue;
+      bool on = false;
+      const bool expected = occ_inside(p.shape, p.lattice.frame.to_world(q), on);
+      ASSERT_FALSE(on);
+      EXPECT_EQ(placed.parity->inside(q), expected) << q.x << " " << q.y << " " << q.z;
+      (expected ? inside : outside)++;
+    }
+    EXPECT_GT(inside, 300);
+    EXPECT_GT(outside, 300);
+  }
+}
+
+// The lattice points kept are inside the solid (or on a lattice face) and at least
+// keep_distance from the faces off the lattice; the core cells have their 8 corners kept.
+TEST(keep_lattice_points, inside_and_clear_of_the_curved_faces) {
+  const double h = 2.0, keep = 0.6 * h;
+  const Prepared p = prepare(occ_plate_with_hole(), h);
+  Placed placed = place(p);
+  const auto& l = p.lattice;
+  const mesher::KeptPoints kept =
+      mesher::keep_lattice_points(l, *placed.around, *placed.parity, keep, 0.3 * h);
+  std::size_t nb_kept = 0;
+  for (int k = 0; k <= l.cells[2]; ++k)
+    for (int j = 0; j <= l.cells[1]; ++j)
+      for (int i = 0; i <= l.cells[0]; ++i) {
+        const std::size_t index =
+            (static_cast<std::size_t>(k) * (l.cells[1] + 1) + j) * (l.cells[0] + 1) + i;
+        if (!kept.kept[index]) continue;
+        ++nb_kept;
+        const Vec3 q = l.point(i, j, k);
+        bool on = false;
+        const bool in = occ_inside(p.shape, l.frame.to_world(q), on);
+        EXPECT_TRUE(in || (on && kept.face[index] >= 0)) << i << " " << j << " " << k;
+        // The hole's axis is at (30, 20): kept points are at least r + keep from it.
+        EXPECT_GE(std::hypot(q.x - 30, q.y - 20), 8 + keep - 0.02 * h - 1e-9);
+      }
+  EXPECT_GT(nb_kept, 1000u);
+
+  mesher::InsertedPoints inserted;
+  const mesher::CoreCounts core =
+      mesher::add_core(l, *placed.around, *placed.parity, kept, -1, h, inserted);
+  EXPECT_GT(core.nb_core_cells, 0u);
+  EXPECT_EQ(inserted.points.size(), core.nb_lattice_points + core.nb_apex_points);
+  EXPECT_LE(core.nb_lattice_points, nb_kept);
+  // The apexes are cell centres inside the solid.
+  for (std::size_t i = core.nb_lattice_points; i < inserted.points.size(); ++i) {
+    const Vec3 q = inserted.points[i];
+    for (int a = 0; a < 3; ++a) {
+      const double c = mesher::coord(q, a) / l.spacing[a] - 0.5;
+      EXPECT_NEAR(c, std::round(c), 1e-9);
+    }
+    bool on = false;
+    EXPECT_TRUE(occ_inside(p.shape, l.frame.to_world(q), on));
+    EXPECT_EQ(inserted.face[i], -1);
+  }
+  const std::size_t on_faces = mesher::face_points_first(inserted);
+  for (std::size_t i = 0; i < inserted.face.size(); ++i)
+    EXPECT_EQ(inserted.face[i] >= 0, i < on_faces);
+}
+
+// A box: every lattice point kept, every cell in the core, no pyramid needed; the points given
+// are the lattice points less the box's corners (the surface's nodes).
+TEST(add_core, box_is_all_core) {
+  const double h = 2.5;
+  const Prepared p = prepare(occ_box(0, 0, 0, 20, 10, 5), h);
+  Placed placed = place(p);
+  const auto& l = p.lattice;
+  const mesher::KeptPoints kept =
+      mesher::keep_lattice_points(l, *placed.around, *placed.parity, 0.6 * h, 0.3 * h);
+  for (char k : kept.kept) EXPECT_TRUE(k);
+  mesher::InsertedPoints inserted;
+  const mesher::CoreCounts core =
+      mesher::add_core(l, *placed.around, *placed.parity, kept, -1, h, inserted);
+  const std::size_t cells = static_cast<std::size_t>(l.cells[0]) * l.cells[1] * l.cells[2];
+  const std::size_t points =
+      static_cast<std::size_t>(l.cells[0] + 1) * (l.cells[1] + 1) * (l.cells[2] + 1);
+  EXPECT_EQ(core.nb_core_cells, cells);
+  EXPECT_EQ(core.nb_apex_points, 0u);
+  EXPECT_EQ(core.nb_lattice_points, points - placed.nodes.size());
+}
+
+}  // namespace
+}  // namespace hexmerge::test

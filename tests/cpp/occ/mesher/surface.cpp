@@ -1,0 +1,114 @@
+#include "hexmerge/occ/mesher/surface.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <string>
+
+#include "hexmerge/occ/mesher/surface_repair.h"
+#include "mesher_fixtures.h"
+
+namespace hexmerge::test {
+namespace {
+
+using mesher::Surface;
+
+// The triangulation is closed and outward, and every node lies on the CAD face it is said to be
+// on, as are the three nodes of every triangle on the triangle's face.
+void expect_sound_surface(const Prepared& p, const Surface& surface, double volume,
+                          double relative_volume_tolerance, double on_face_tolerance) {
+  std::string problem;
+  EXPECT_TRUE(closed_and_oriented(surface.triangles, problem)) << problem;
+  EXPECT_NEAR(enclosed_volume(surface.nodes, surface.triangles), volume,
+              relative_volume_tolerance * volume);
+  ASSERT_EQ(surface.node_face.size(), surface.nodes.size());
+  for (std::size_t n = 0; n < surface.nodes.size(); ++n)
+    EXPECT_LT(distance_to_face(p.shape, surface.node_face[n], surface.nodes[n]), on_face_tolerance)
+        << "node " << n;
+  for (std::size_t t = 0; t < surface.triangles.size(); ++t)
+    for (int n : surface.triangles[t].node)
+      EXPECT_LT(distance_to_face(p.shape, surface.triangles[t].face, surface.nodes[n]),
+                on_face_tolerance)
+          << "triangle " << t << " node " << n;
+}
+
+TEST(triangulate, box_is_closed_outward_and_on_its_faces) {
+  const Prepared p = prepare(occ_box(0, 0, 0, 20, 10, 5), 2.0);
+  EXPECT_EQ(p.shape.faces.Extent(), 6);
+  expect_sound_surface(p, p.surface, 1000.0, 1e-12, 1e-9);
+}
+
+TEST(triangulate, cylinder_is_closed_outward_and_on_its_faces) {
+  const double r = 10, height = 30, h = 3;
+  const Prepared p = prepare(occ_cylinder(r, height), h);
+  // Chords inside the circle: the polyhedron is a little smaller, by at most the deflection.
+  const double volume = M_PI * r * r * height;
+  expect_sound_surface(p, p.surface, volume, 2 * 0.02 * h / r, 1e-7);
+  EXPECT_LT(enclosed_volume(p.surface.nodes, p.surface.triangles), volume);
+}
+
+TEST(triangulate, nodes_shared_across_faces_are_merged) {
+  // A box's 8 corners and nothing twice: every node is on at least one triangle, and no two
+  // nodes coincide.
+  const Prepared p = prepare(occ_box(0, 0, 0, 20, 10, 5), 2.0);
+  for (std::size_t a = 0; a < p.surface.nodes.size(); ++a)
+    for (std::size_t b = a + 1; b < p.surface.nodes.size(); ++b)
+      EXPECT_GT((p.surface.nodes[a] - p.surface.nodes[b]).norm(), 1e-6) << a << " " << b;
+}
+
+// Refinement brings every side of the faces off the lattice to at most h (sides on edges
+// between lattice faces excepted), keeps the surface closed and its nodes on the CAD, and the
+// collapses after it keep that too.
+TEST(refine, sides_at_most_h_on_the_cad) {
+  const double h = 3;
+  Prepared p = prepare(occ_plate_with_hole(), h);
+  const auto& lattice = p.lattice;
+  mesher::refine(p.shape, p.surface, h, lattice.lattice_face, lattice.lattice_edge);
+  const double volume = 60 * 40 * 10 - M_PI * 8 * 8 * 10;
+  expect_sound_surface(p, p.surface, volume, 0.01, 1e-6 * h);
+  std::size_t checked = 0;
+  for (const auto& t : p.surface.triangles) {
+    if (lattice.lattice_face[t.face]) continue;
+    for (int c = 0; c < 3; ++c) {
+      const int a = t.node[c], b = t.node[(c + 1) % 3];
+      const auto segment = p.surface.segments.find(mesher::pair_key(a, b));
+      if (segment != p.surface.segments.end() && lattice.lattice_edge[segment->second.edge])
+        continue;
+      EXPECT_LE((p.surface.nodes[a] - p.surface.nodes[b]).norm(), h * (1 + 1e-9));
+      ++checked;
+    }
+  }
+  EXPECT_GT(checked, 100u);  // the hole's wall
+
+  const std::size_t before = p.surface.nodes.size();
+  mesher::collapse_short_sides(p.surface, h, lattice.lattice_face);
+  expect_sound_surface(p, p.surface, volume, 0.01, 1e-6 * h);
+  ASSERT_EQ(p.surface.seed.size(), p.surface.nodes.size());
+  for (std::size_t n = 1; n < p.surface.seed.size(); ++n)
+    EXPECT_LT(p.surface.seed[n - 1], p.surface.seed[n]);  // the kept nodes, in their old order
+  EXPECT_LE(p.surface.nodes.size(), before);
+}
+
+TEST(coordinates_across, seen_along_each_axis) {
+  // The triangle (0,0,0) (2,0,0) (0,2,0) seen along z; q = p0 + s (p1 - p0) + r (p2 - p0).
+  const Vec3 p0{0, 0, 0}, p1{2, 0, 0}, p2{0, 2, 0};
+  double s = -1, r = -1;
+  ASSERT_TRUE(mesher::coordinates_across(Vec3{0.5, 1.0, 7.0}, p0, p1, p2, 2, s, r));
+  EXPECT_DOUBLE_EQ(s, 0.25);
+  EXPECT_DOUBLE_EQ(r, 0.5);
+  // Seen along x the triangle is edge-on.
+  EXPECT_FALSE(mesher::coordinates_across(Vec3{0, 0.5, 0.5}, p0, p1, p2, 0, s, r));
+}
+
+TEST(face_holding, first_triangle_holding_the_point) {
+  const std::vector<Vec3> nodes{{0, 0, 5}, {4, 0, 5}, {0, 4, 5}, {4, 4, 5}};
+  const mesher::SurfaceTriangle a{{0, 1, 2}, {}, 7}, b{{1, 3, 2}, {}, 8};
+  const std::vector<const mesher::SurfaceTriangle*> triangles{&a, &b};
+  EXPECT_EQ(mesher::face_holding(Vec3{1, 1, 5}, triangles, nodes, 2), 7);
+  EXPECT_EQ(mesher::face_holding(Vec3{3, 3, 5}, triangles, nodes, 2), 8);
+  EXPECT_EQ(mesher::face_holding(Vec3{2, 2, 5}, triangles, nodes, 2), 7);  // on both: the first
+  EXPECT_EQ(mesher::face_holding(Vec3{5, 1, 5}, triangles, nodes, 2), -1);
+}
+
+}  // namespace
+}  // namespace hexmerge::test
