@@ -1,0 +1,102 @@
+#include "hexmerge/occ/mesher/facets.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "hexmerge/occ/mesher/lattice.h"
+#include "hexmerge/occ/mesher/sweep.h"
+#include "mesher_fixtures.h"
+
+namespace hexmerge::test {
+namespace {
+
+// The plate with a hole (global frame, not swept): its lattice faces become loops, the hole's
+// wall stays triangles.
+struct PlateFacets {
+  Prepared p = prepare(occ_plate_with_hole(), 2.0);
+  std::vector<Vec3> nodes =
+      mesher::frame_nodes(p.shape, p.surface, p.lattice, -1, mesher::SweptSurface{});
+  std::vector<mesher::Facet> facets =
+      mesher::make_facets(p.surface, nodes, p.lattice.lattice_face, p.lattice.face_plane);
+};
+
+TEST(make_facets, lattice_faces_as_loops) {
+  const PlateFacets plate;
+  const auto& l = plate.p.lattice;
+  std::vector<int> facets_per_face(plate.p.shape.faces.Extent(), 0);
+  for (const auto& facet : plate.facets) {
+    const int face = facet.marker - 1;
+    ASSERT_GE(face, 0);
+    ++facets_per_face[face];
+    if (!l.lattice_face[face]) {  // one triangle of the hole's wall
+      ASSERT_EQ(facet.polygons.size(), 1u);
+      EXPECT_EQ(facet.polygons[0].size(), 3u);
+      EXPECT_TRUE(facet.holes.empty());
+      continue;
+    }
+    // A lattice face: every loop's nodes on its plane; the caps (normal to z) have the outer
+    // loop and the hole's, with a hole point inside the hole.
+    const int axis = l.face_plane[face]->axis;
+    for (const auto& loop : facet.polygons) {
+      EXPECT_GE(loop.size(), 3u);
+      for (int n : loop)
+        EXPECT_NEAR(mesher::coord(plate.nodes[n], axis), mesher::coord(plate.nodes[loop[0]], axis),
+                    1e-12);
+    }
+    if (axis == 2) {
+      EXPECT_EQ(facet.polygons.size(), 2u);
+      ASSERT_EQ(facet.holes.size(), 1u);
+      EXPECT_LT(std::hypot(facet.holes[0].x - 30, facet.holes[0].y - 20), 8);
+    } else {
+      EXPECT_EQ(facet.polygons.size(), 1u);
+      EXPECT_EQ(facet.polygons[0].size(), 4u);  // a side: its 4 corners
+      EXPECT_TRUE(facet.holes.empty());
+    }
+  }
+  for (int f = 0; f < plate.p.shape.faces.Extent(); ++f)
+    if (l.lattice_face[f]) {
+      EXPECT_EQ(facets_per_face[f], 1) << "face " << f;
+    }
+}
+
+// Points on a lattice face go into its facet: onto a loop's side, in order along it, or as a
+// polygon of one point inside.
+TEST(add_face_points, into_the_loops_and_inside) {
+  PlateFacets plate;
+  std::vector<Vec3> points = plate.nodes;
+  const std::size_t first = points.size();
+  points.push_back({0, 10, 0});   // on the bottom cap's side x = 0 (corners (0,0,0), (0,40,0))
+  points.push_back({0, 30, 0});   // further along the same side
+  points.push_back({10, 10, 0});  // inside the bottom cap
+  points.push_back({30, 20, 0});  // in the hole: nowhere
+  const auto& l = plate.p.lattice;
+  mesher::add_face_points(plate.facets, points, first, l.lattice_face, l.face_plane, 1e-9);
+  bool on_side = false, inside = false;
+  for (const auto& facet : plate.facets) {
+    const int face = facet.marker - 1;
+    if (!l.lattice_face[face] || l.face_plane[face]->axis != 2 ||
+        std::abs(l.face_plane[face]->offset) > 1e-9)
+      continue;
+    for (const auto& loop : facet.polygons) {
+      const auto a = std::find(loop.begin(), loop.end(), static_cast<int>(first));
+      const auto b = std::find(loop.begin(), loop.end(), static_cast<int>(first + 1));
+      if (loop.size() == 1) {
+        EXPECT_EQ(loop[0], static_cast<int>(first + 2));
+        inside = true;
+      } else if (a != loop.end()) {
+        ASSERT_NE(b, loop.end());
+        // Consecutive in the loop, in the loop's direction along the side.
+        const std::size_t i = a - loop.begin(), j = b - loop.begin();
+        EXPECT_TRUE(j == (i + 1) % loop.size() || i == (j + 1) % loop.size());
+        on_side = true;
+      }
+      EXPECT_EQ(std::find(loop.begin(), loop.end(), static_cast<int>(first + 3)), loop.end());
+    }
+  }
+  EXPECT_TRUE(on_side);
+  EXPECT_TRUE(inside);
+}
+
+}  // namespace
+}  // namespace hexmerge::test

@@ -1,0 +1,93 @@
+#include "hexmerge/occ/mesher/improve.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+
+#include "fixtures.h"
+#include "hexmerge/geometry/quality.h"
+#include "hexmerge/geometry/vec3.h"
+#include "hexmerge/mesh/tet_topology.h"
+
+namespace hexmerge::test {
+namespace {
+
+// The boundary triangles of a tet mesh (face f of a tet is opposite its vertex f).
+std::vector<std::array<index_t, 3>> boundary_of(const TetMesh& mesh) {
+  const TetTopology topology(mesh);
+  std::vector<std::array<index_t, 3>> out;
+  for (index_t t = 0; t < mesh.nb_tets(); ++t)
+    for (int f = 0; f < 4; ++f)
+      if (topology.on_boundary(t, f))
+        out.push_back(
+            {mesh.tet(t)[(f + 1) % 4], mesh.tet(t)[(f + 2) % 4], mesh.tet(t)[(f + 3) % 4]});
+  return out;
+}
+
+double total_volume(const TetMesh& mesh) {
+  double v = 0;
+  for (index_t t = 0; t < mesh.nb_tets(); ++t) {
+    const auto p = [&](int k) { return Vec3::of(mesh.point(mesh.tet(t)[k])); };
+    v += det3(p(1) - p(0), p(2) - p(0), p(3) - p(0)) / 6;
+  }
+  return v;
+}
+
+std::size_t count_below(const TetMesh& mesh, double quality) {
+  std::size_t n = 0;
+  for (index_t t = 0; t < mesh.nb_tets(); ++t)
+    n += scaled_jacobian(CellType::Tet, mesh.points.data(), mesh.tet(t)) < quality;
+  return n;
+}
+
+mesher::ImproveReport improve(TetMesh& mesh) {
+  const auto boundary = boundary_of(mesh);
+  mesher::ImproveParameters parameters;
+  parameters.spacing = {1, 1, 1};
+  mesher::ImproveReport report;
+  mesher::improve_tets(mesh, mesh.points, boundary, std::vector<std::int32_t>(boundary.size(), -1),
+                       parameters, report);
+  return report;
+}
+
+// Points on the lattice (spacing 1): every tet lies in one cell, so nothing changes.
+TEST(improve_tets, lattice_tets_stay) {
+  TetMesh mesh = tetgen_lattice(3, 0.0, 1);
+  if (mesh.nb_tets() == 0) GTEST_SKIP() << "the tetgen program is not installed";
+  const TetMesh before = mesh;
+  const mesher::ImproveReport report = improve(mesh);
+  EXPECT_EQ(mesh.tets, before.tets);
+  EXPECT_EQ(mesh.points, before.points);
+  EXPECT_EQ(report.face_flips + report.edge_flips + report.node_moves, 0u);
+}
+
+// Jittered points: flips and moves take out poor tets, never lower the worst, keep the volume,
+// the boundary nodes and a valid mesh of positive tets.
+TEST(improve_tets, takes_out_poor_tets_and_keeps_the_boundary) {
+  TetMesh mesh = tetgen_lattice(4, 0.2, 11);
+  if (mesh.nb_tets() == 0) GTEST_SKIP() << "the tetgen program is not installed";
+  const TetMesh before = mesh;
+  const double worst = min_quality(mesh);
+  const mesher::ImproveReport report = improve(mesh);
+  validate_tet_mesh(mesh);
+  EXPECT_DOUBLE_EQ(report.min_quality_before, worst);
+  // The worst tet can be a flat one on the (jittered, unchangeable) boundary: it stays; the
+  // poor tets inside go.
+  EXPECT_GE(min_quality(mesh), worst);
+  EXPECT_LT(count_below(mesh, 0.2), count_below(before, 0.2));
+  EXPECT_GT(report.face_flips + report.edge_flips, 0u);
+  EXPECT_GT(report.node_moves, 0u);
+  EXPECT_NEAR(total_volume(mesh), total_volume(before), 1e-9 * total_volume(before));
+  for (index_t t = 0; t < mesh.nb_tets(); ++t)
+    EXPECT_GT(scaled_jacobian(CellType::Tet, mesh.points.data(), mesh.tet(t)), 0) << "tet " << t;
+  std::vector<char> on_boundary(before.points.size() / 3, 0);
+  for (const auto& f : boundary_of(before))
+    for (index_t v : f) on_boundary[v] = 1;
+  for (std::size_t v = 0; v < on_boundary.size(); ++v)
+    if (on_boundary[v]) {
+      for (int a = 0; a < 3; ++a) EXPECT_EQ(mesh.points[3 * v + a], before.points[3 * v + a]);
+    }
+}
+
+}  // namespace
+}  // namespace hexmerge::test

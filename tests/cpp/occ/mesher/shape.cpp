@@ -1,0 +1,133 @@
+#include "hexmerge/occ/mesher/shape.h"
+
+#include <gtest/gtest.h>
+
+#include <BRepAlgoAPI_BuilderAlgo.hxx>
+#include <BRepBuilderAPI_MakeFace.hxx>
+#include <BRepBuilderAPI_Transform.hxx>
+#include <BRep_Builder.hxx>
+#include <TopExp.hxx>
+#include <TopoDS.hxx>
+#include <TopoDS_Shell.hxx>
+#include <TopoDS_Solid.hxx>
+#include <cmath>
+#include <gp_Ax1.hxx>
+#include <gp_Pln.hxx>
+#include <gp_Trsf.hxx>
+#include <string>
+
+#include "hexmerge/core/error.h"
+#include "hexmerge/occ/brep_text.h"
+#include "mesher_fixtures.h"
+
+namespace hexmerge::test {
+namespace {
+
+TEST(load_shape, box_faces_edges_and_solids) {
+  const mesher::Shape s = load(occ_box(0, 0, 0, 3, 2, 1));
+  EXPECT_EQ(s.solids.Extent(), 1);
+  EXPECT_EQ(s.faces.Extent(), 6);
+  EXPECT_EQ(s.edges.Extent(), 12);
+  for (int count : s.face_solid_count) EXPECT_EQ(count, 1);
+  ASSERT_EQ(s.edge_faces.size(), 12u);
+  for (const auto& faces : s.edge_faces) EXPECT_EQ(faces.size(), 2u);
+}
+
+TEST(load_shape, face_between_two_solids_counts_twice) {
+  TopTools_ListOfShape arguments;
+  arguments.Append(occ_box(0, 0, 0, 2, 2, 2));
+  arguments.Append(occ_box(2, 0, 0, 4, 2, 2));
+  BRepAlgoAPI_BuilderAlgo fuse;
+  fuse.SetArguments(arguments);
+  fuse.Build();
+  const mesher::Shape s = load(fuse.Shape());
+  EXPECT_EQ(s.solids.Extent(), 2);
+  EXPECT_EQ(s.faces.Extent(), 11);
+  int shared = 0;
+  for (int count : s.face_solid_count) shared += count == 2;
+  EXPECT_EQ(shared, 1);
+}
+
+TEST(load_shape, no_solid_and_open_shell_are_input_errors) {
+  const TopoDS_Shape face = BRepBuilderAPI_MakeFace(gp_Pln(), 0, 1, 0, 1).Face();
+  try {
+    load(face);
+    FAIL() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("holds no solid"), std::string::npos) << e.what();
+  }
+  // A solid on the box's shell less one face.
+  const TopoDS_Shape box = occ_box(0, 0, 0, 1, 1, 1);
+  TopTools_IndexedMapOfShape faces;
+  TopExp::MapShapes(box, TopAbs_FACE, faces);
+  BRep_Builder builder;
+  TopoDS_Shell shell;
+  builder.MakeShell(shell);
+  for (int f = 1; f < faces.Extent(); ++f) builder.Add(shell, faces(f));
+  TopoDS_Solid solid;
+  builder.MakeSolid(solid);
+  builder.Add(solid, shell);
+  try {
+    load(solid);
+    FAIL() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("is not closed: edge"), std::string::npos) << e.what();
+  }
+}
+
+void expect_orthonormal_right_handed(const mesher::Frame& f) {
+  for (int a = 0; a < 3; ++a) {
+    EXPECT_NEAR(f.axis[a].norm(), 1, 1e-12);
+    EXPECT_NEAR(f.axis[a].dot(f.axis[(a + 1) % 3]), 0, 1e-12);
+  }
+  EXPECT_NEAR(det3(f.axis[0], f.axis[1], f.axis[2]), 1, 1e-12);
+}
+
+// A 100 x 40 x 30 box turned 30 degrees about z: "auto" takes the normal of the largest faces
+// (z) as the third axis and that of the next largest (the turned y) as the first.
+TEST(choose_frame, auto_follows_the_largest_planar_faces) {
+  gp_Trsf turn;
+  turn.SetRotation(gp_Ax1(gp_Pnt(0, 0, 0), gp_Dir(0, 0, 1)), M_PI / 6);
+  const TopoDS_Shape box =
+      BRepBuilderAPI_Transform(occ_box(0, 0, 0, 100, 40, 30), turn, true).Shape();
+  const mesher::Shape s = load(box);
+  const mesher::Frame f = mesher::choose_frame(s, "auto");
+  expect_orthonormal_right_handed(f);
+  EXPECT_NEAR(std::abs(f.axis[2].z), 1, 1e-9);
+  const Vec3 turned_y{-std::sin(M_PI / 6), std::cos(M_PI / 6), 0};
+  EXPECT_NEAR(std::abs(f.axis[0].dot(turned_y)), 1, 1e-9);
+
+  const mesher::Frame global = mesher::choose_frame(s, "global");
+  EXPECT_EQ(global.axis[0].x, 1);
+  EXPECT_EQ(global.axis[1].y, 1);
+  EXPECT_EQ(global.axis[2].z, 1);
+  const mesher::Frame principal = mesher::choose_frame(s, "principal");
+  expect_orthonormal_right_handed(principal);
+  // The box's principal axes are its edges' directions.
+  for (int a = 0; a < 3; ++a) {
+    const double along =
+        std::max({std::abs(principal.axis[a].z), std::abs(principal.axis[a].dot(turned_y)),
+                  std::abs(principal.axis[a].dot(Vec3{turned_y.y, -turned_y.x, 0}))});
+    EXPECT_NEAR(along, 1, 1e-9);
+  }
+}
+
+TEST(face_planes, planar_faces_normal_to_an_axis) {
+  const mesher::Shape s = load(occ_plate_with_hole());
+  mesher::Frame frame = mesher::choose_frame(s, "global");
+  frame.origin = Vec3{1, 2, 3};
+  const auto planes = mesher::face_planes(s, frame);
+  int planar = 0;
+  for (const auto& plane : planes) {
+    if (!plane) continue;
+    ++planar;
+    const double expected[3][2] = {{-1, 59}, {-2, 38}, {-3, 7}};  // offsets in the frame
+    EXPECT_TRUE(std::abs(plane->offset - expected[plane->axis][0]) < 1e-9 ||
+                std::abs(plane->offset - expected[plane->axis][1]) < 1e-9)
+        << plane->axis << " " << plane->offset;
+  }
+  EXPECT_EQ(planar, 6);  // the hole's wall is not planar
+}
+
+}  // namespace
+}  // namespace hexmerge::test
