@@ -25,82 +25,80 @@ void improve_tets(TetMesh& mesh, const std::vector<double>& frame_points,
   // the free nodes (boundary-layer and Steiner points, inside) move to raise the worst tet around
   // them, then flips again, for kQualityRounds rounds. The lattice's own tets, in one cell or one
   // closing pyramid, stay for the hexahedra, and lattice points and cell centres do not move.
-  {
-    // Per vertex: whether it is a lattice point or a cell centre, and its coordinates in cells.
-    std::vector<char> half_lattice(made, 1);
-    std::vector<std::array<double, 3>> cell_of(made);
-    for (std::size_t v = 0; v < made; ++v)
+  // Per vertex: whether it is a lattice point or a cell centre, and its coordinates in cells.
+  std::vector<char> half_lattice(made, 1);
+  std::vector<std::array<double, 3>> cell_of(made);
+  for (std::size_t v = 0; v < made; ++v)
+    for (int a = 0; a < 3; ++a) {
+      cell_of[v][a] = frame_points[3 * v + a] / parameters.spacing[a];
+      if (std::abs(2 * cell_of[v][a] - std::round(2 * cell_of[v][a])) > 1e-6) half_lattice[v] = 0;
+    }
+  // Whether tet t lies in one lattice cell or one closing pyramid (all its corners on the half
+  // lattice, within one cell's width along each axis).
+  auto in_one_cell = [&](index_t t) {
+    double least[3] = {1e300, 1e300, 1e300}, most[3] = {-1e300, -1e300, -1e300};
+    for (int k = 0; k < 4; ++k) {
+      const index_t v = mesh.tet(t)[k];
+      if (!half_lattice[v]) return false;
       for (int a = 0; a < 3; ++a) {
-        cell_of[v][a] = frame_points[3 * v + a] / parameters.spacing[a];
-        if (std::abs(2 * cell_of[v][a] - std::round(2 * cell_of[v][a])) > 1e-6) half_lattice[v] = 0;
+        least[a] = std::min(least[a], cell_of[v][a]), most[a] = std::max(most[a], cell_of[v][a]);
+        if (most[a] - least[a] >= 1 + 1e-6) return false;
       }
-    // Whether tet t lies in one lattice cell or one closing pyramid (all its corners on the half
-    // lattice, within one cell's width along each axis).
-    auto in_one_cell = [&](index_t t) {
-      double least[3] = {1e300, 1e300, 1e300}, most[3] = {-1e300, -1e300, -1e300};
-      for (int k = 0; k < 4; ++k) {
-        const index_t v = mesh.tet(t)[k];
-        if (!half_lattice[v]) return false;
-        for (int a = 0; a < 3; ++a) {
-          least[a] = std::min(least[a], cell_of[v][a]), most[a] = std::max(most[a], cell_of[v][a]);
-          if (most[a] - least[a] >= 1 + 1e-6) return false;
-        }
-      }
-      return true;
-    };
-    // Swept: whether tet t lies between two consecutive lattice planes (its prism or hexahedron
-    // stays as TetGen made it).
-    auto in_one_slab = [&](index_t t) {
-      if (parameters.sweep_axis < 0) return false;
-      double least = 1e300, most = -1e300;
-      for (int k = 0; k < 4; ++k) {
-        const double level = cell_of[mesh.tet(t)[k]][parameters.sweep_axis];
-        least = std::min(least, level), most = std::max(most, level);
-      }
-      return most - least <= 1 + 1e-6;
-    };
-    // The CAD face of each boundary face, from TetGen's markers (face index + 1), so that
-    // triangles of one planar face may swap their shared sides.
-    std::map<std::array<index_t, 3>, std::int32_t> face_marker;
-    std::vector<char> movable(made, 0);
-    for (std::size_t v = parameters.nb_surface_nodes; v < made; ++v)
-      movable[v] = parameters.sweep_axis < 0 && !half_lattice[v];
-    for (std::size_t i = 0; i < boundary.size(); ++i) {
-      std::array<index_t, 3> key = boundary[i];
-      for (index_t v : key) movable[v] = 0;
-      std::sort(key.begin(), key.end());
-      face_marker[key] = boundary_face[i];
     }
-    for (int round = 0; round < kQualityRounds; ++round) {
-      std::vector<char> fixed(mesh.nb_tets(), 0);
-      for (index_t t = 0; t < mesh.nb_tets(); ++t) fixed[t] = in_one_cell(t) || in_one_slab(t);
-      // Boundary faces swapped by an earlier round are not in face_marker: they stay (-1).
-      std::vector<std::int32_t> boundary_patch(4 * static_cast<std::size_t>(mesh.nb_tets()), -1);
-      for (index_t t = 0; t < mesh.nb_tets(); ++t)
-        for (int f = 0; f < 4; ++f) {
-          const index_t* v = mesh.tet(t);
-          std::array<index_t, 3> key{v[(f + 1) % 4], v[(f + 2) % 4], v[(f + 3) % 4]};
-          std::sort(key.begin(), key.end());
-          const auto it = face_marker.find(key);
-          if (it != face_marker.end())
-            boundary_patch[4 * static_cast<std::size_t>(t) + f] = it->second;
-        }
-      RemoveSliversReport flips;
-      // Boundary triangles of one face may swap their side where the boundary moves by no more
-      // than the surface's chord deflection (a flat tet on two triangles across a seam).
-      RemoveSliversParameters flip_parameters;
-      flip_parameters.max_boundary_shift = parameters.max_boundary_shift;
-      remove_slivers(mesh, fixed, boundary_patch, flip_parameters, flips);
-      if (round == 0) report.min_quality_before = flips.min_before;
-      report.face_flips += flips.face_removals;
-      report.edge_flips += flips.edge_removals;
-      report.boundary_swaps += flips.boundary_swaps;
-      if (round + 1 == kQualityRounds) break;
-      SmoothNodesReport moves;
-      smooth_nodes(mesh, movable, SmoothNodesParameters{}, moves);
-      report.node_moves += moves.moves;
-      if (moves.moves == 0) break;
+    return true;
+  };
+  // Swept: whether tet t lies between two consecutive lattice planes (its prism or hexahedron
+  // stays as TetGen made it).
+  auto in_one_slab = [&](index_t t) {
+    if (parameters.sweep_axis < 0) return false;
+    double least = 1e300, most = -1e300;
+    for (int k = 0; k < 4; ++k) {
+      const double level = cell_of[mesh.tet(t)[k]][parameters.sweep_axis];
+      least = std::min(least, level), most = std::max(most, level);
     }
+    return most - least <= 1 + 1e-6;
+  };
+  // The CAD face of each boundary face, from TetGen's markers (face index + 1), so that
+  // triangles of one planar face may swap their shared sides.
+  std::map<std::array<index_t, 3>, std::int32_t> face_marker;
+  std::vector<char> movable(made, 0);
+  for (std::size_t v = parameters.nb_surface_nodes; v < made; ++v)
+    movable[v] = parameters.sweep_axis < 0 && !half_lattice[v];
+  for (std::size_t i = 0; i < boundary.size(); ++i) {
+    std::array<index_t, 3> key = boundary[i];
+    for (index_t v : key) movable[v] = 0;
+    std::sort(key.begin(), key.end());
+    face_marker[key] = boundary_face[i];
+  }
+  for (int round = 0; round < kQualityRounds; ++round) {
+    std::vector<char> fixed(mesh.nb_tets(), 0);
+    for (index_t t = 0; t < mesh.nb_tets(); ++t) fixed[t] = in_one_cell(t) || in_one_slab(t);
+    // Boundary faces swapped by an earlier round are not in face_marker: they stay (-1).
+    std::vector<std::int32_t> boundary_patch(4 * static_cast<std::size_t>(mesh.nb_tets()), -1);
+    for (index_t t = 0; t < mesh.nb_tets(); ++t)
+      for (int f = 0; f < 4; ++f) {
+        const index_t* v = mesh.tet(t);
+        std::array<index_t, 3> key{v[(f + 1) % 4], v[(f + 2) % 4], v[(f + 3) % 4]};
+        std::sort(key.begin(), key.end());
+        const auto it = face_marker.find(key);
+        if (it != face_marker.end())
+          boundary_patch[4 * static_cast<std::size_t>(t) + f] = it->second;
+      }
+    RemoveSliversReport flips;
+    // Boundary triangles of one face may swap their side where the boundary moves by no more
+    // than the surface's chord deflection (a flat tet on two triangles across a seam).
+    RemoveSliversParameters flip_parameters;
+    flip_parameters.max_boundary_shift = parameters.max_boundary_shift;
+    remove_slivers(mesh, fixed, boundary_patch, flip_parameters, flips);
+    if (round == 0) report.min_quality_before = flips.min_before;
+    report.face_flips += flips.face_removals;
+    report.edge_flips += flips.edge_removals;
+    report.boundary_swaps += flips.boundary_swaps;
+    if (round + 1 == kQualityRounds) break;
+    SmoothNodesReport moves;
+    smooth_nodes(mesh, movable, SmoothNodesParameters{}, moves);
+    report.node_moves += moves.moves;
+    if (moves.moves == 0) break;
   }
 }
 
