@@ -68,20 +68,23 @@ class CommandBase:
             return selected_solid()[1]
         return ""
 
+    def tooltip(self, reason):
+        """The tooltip, with the reason the command is not available when there is one."""
+        tip = self.resources["ToolTip"]
+        return "{}\n\nNot available: {}.".format(tip, reason) if reason else tip
+
     def IsActive(self):
         reason = self.unavailable()
         self.show_reason(reason)
         return not reason
 
     def show_reason(self, reason):
-        """Puts the reason into the command's tooltip and status tip (shown on the greyed-out
-        toolbar button and menu entry), or the plain tooltip back."""
+        """Puts the reason into the tooltip and status tip of the command's own QActions (the
+        HexMerge workbench's greyed-out toolbar button and menu entry)."""
         if reason == getattr(self, "_shown_reason", None):
             return
         self._shown_reason = reason
-        tip = self.resources["ToolTip"]
-        if reason:
-            tip = "{}\n\nNot available: {}.".format(tip, reason)
+        tip = self.tooltip(reason)
         command = FreeCADGui.Command.get(self.name)
         for action in (command.getAction() if command is not None else []):
             action.setToolTip(tip)
@@ -100,10 +103,11 @@ class HexDominantFromTetrahedra(CommandBase):
     is_active = "with_tet_mesh"
 
     def Activated(self):
-        source, reason = selected_tet_mesh()
-        if source is None:
+        reason = self.unavailable()
+        if reason:
             FreeCAD.Console.PrintError("HexMerge: {}\n".format(reason))
             return
+        source = selected_tet_mesh()[0]
         doc = source.Document
         doc.openTransaction("Hex-dominant mesh from tetrahedra")
         FreeCADGui.addModule("freecad.hexmerge")
@@ -128,10 +132,11 @@ class HexDominantFromShape(CommandBase):
     is_active = "with_solid"
 
     def Activated(self):
-        source, reason = selected_solid()
-        if source is None:
+        reason = self.unavailable()
+        if reason:
             FreeCAD.Console.PrintError("HexMerge: {}\n".format(reason))
             return
+        source = selected_solid()[0]
         doc = source.Document
         analysis = active_analysis()
         doc.openTransaction("Hex-dominant mesh from shape")

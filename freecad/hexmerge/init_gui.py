@@ -3,6 +3,7 @@
 workbench, the commands, and the commands' place in FEM's Mesh menu and toolbar."""
 
 from freecad import app, gui
+from PySide import QtGui
 
 from . import commands
 from .resources import resource_path
@@ -32,49 +33,104 @@ class HexMergeWorkbench(gui.Workbench):
         pass
 
 
-def command_actions(name):
-    command = gui.Command.get(name)
-    return list(command.getAction()) if command is not None else []
+class FemMenuEntries:
+    """The HexMerge commands as QActions for FEM's Mesh menu and toolbar.
 
+    FreeCAD 0.20 has no API for an add-on to extend another workbench's menus, and creates a
+    command's own QAction only when its workbench is first shown. These actions run the commands
+    (FreeCADGui.runCommand) and follow their availability: enabled or not, with the reason in
+    the tooltip and status tip, updated when the selection changes and when a menu opens."""
 
-def insert_after_fem_meshers(container):
-    """Inserts the HexMerge commands' actions into a QMenu or QToolBar after FEM's Gmsh and
-    Netgen entries, if it has them and not ours yet. Returns True when it holds ours."""
-    present = container.actions()
-    fem = [a for name in FEM_MESHERS for a in command_actions(name) if a in present]
-    if not fem:
-        return False
-    ours = [a for name in commands.COMMAND_NAMES for a in command_actions(name)]
-    if all(a in present for a in ours):
+    def __init__(self, window):
+        self.menus = []  # menus whose aboutToShow refreshes the entries
+        self.commands = {cls.name: cls() for cls in commands.COMMANDS}
+        self.actions = {}
+        for name, command in self.commands.items():
+            res = command.GetResources()
+            action = QtGui.QAction(QtGui.QIcon(res["Pixmap"]), res["MenuText"], window)
+            action.setObjectName(name)
+            action.triggered.connect(lambda checked=False, n=name: gui.runCommand(n))
+            self.actions[name] = action
+        self.refresh()
+
+    def refresh(self):
+        for name, action in self.actions.items():
+            command = self.commands[name]
+            reason = command.unavailable()
+            tip = command.tooltip(reason)
+            action.setEnabled(not reason)
+            action.setToolTip(tip)
+            action.setStatusTip(tip.replace("\n\n", " "))
+
+    # selection observer (FreeCADGui.Selection.addObserver)
+    def addSelection(self, *args):
+        self.refresh()
+
+    def removeSelection(self, *args):
+        self.refresh()
+
+    def setSelection(self, *args):
+        self.refresh()
+
+    def clearSelection(self, *args):
+        self.refresh()
+
+    def insert_into(self, container):
+        """Inserts the actions into a QMenu or QToolBar after FEM's Gmsh and Netgen entries, if
+        it has them and not ours yet. Returns True when it holds ours."""
+        present = container.actions()
+        fem = [i for i, a in enumerate(present)
+               if a.objectName() in FEM_MESHERS or _command_of(a) in FEM_MESHERS]
+        if not fem:
+            return False
+        before = present[max(fem) + 1] if max(fem) + 1 < len(present) else None
+        for action in self.actions.values():
+            if action in present:
+                continue
+            if before is None:
+                container.addAction(action)
+            else:
+                container.insertAction(before, action)
+        if isinstance(container, QtGui.QMenu) and container not in self.menus:
+            container.aboutToShow.connect(self.refresh)
+            self.menus.append(container)
         return True
-    last = max(present.index(a) for a in fem)
-    before = present[last + 1] if last + 1 < len(present) else None
-    for action in ours:
-        if action in present:
-            continue
-        if before is None:
-            container.addAction(action)
-        else:
-            container.insertAction(before, action)
-    return True
+
+
+def _command_of(action):
+    """The FreeCAD command name of one of FreeCAD's own QActions (by identity), or ""."""
+    for name in FEM_MESHERS:
+        command = gui.Command.get(name)
+        if command is not None and action in command.getAction():
+            return name
+    return ""
+
+
+ENTRIES = None
 
 
 def add_to_fem_menus(workbench=None):
-    """Puts both commands into FEM's Mesh menu and Mesh toolbar, beside Gmsh and Netgen.
-
-    FreeCAD 0.20 has no API for an add-on to extend another workbench's menus; FreeCAD rebuilds
-    them on each activation, so this runs on every activation of the FEM workbench (connected to
-    the main window's workbenchActivated) and inserts the commands' own QActions, which FreeCAD
-    keeps enabled, disabled and tipped (commands.CommandBase.show_reason)."""
-    from PySide import QtGui
-    if (workbench or gui.activeWorkbench().name()) != FEM_WORKBENCH:
+    """Puts both commands into FEM's Mesh menu and Mesh toolbar, beside Gmsh and Netgen. FreeCAD
+    rebuilds a workbench's menus on each activation, so this runs on every activation of the FEM
+    workbench (the main window's workbenchActivated signal). Returns True when they are there."""
+    global ENTRIES
+    if workbench is None:
+        try:
+            workbench = gui.activeWorkbench().name()
+        except AssertionError:  # none yet: FreeCAD is starting
+            return False
+    if workbench != FEM_WORKBENCH:
         return False
     window = gui.getMainWindow()
+    if ENTRIES is None:
+        ENTRIES = FemMenuEntries(window)
+        gui.Selection.addObserver(ENTRIES)
     found = False
     for menu in window.menuBar().findChildren(QtGui.QMenu):
-        found = insert_after_fem_meshers(menu) or found
+        found = ENTRIES.insert_into(menu) or found
     for bar in window.findChildren(QtGui.QToolBar):
-        found = insert_after_fem_meshers(bar) or found
+        found = ENTRIES.insert_into(bar) or found
+    ENTRIES.refresh()
     return found
 
 
@@ -94,3 +150,4 @@ gui.addWorkbench(HexMergeWorkbench())
 commands.register()  # the commands exist before any workbench loads
 remove_old_fem_toolbar()
 gui.getMainWindow().workbenchActivated.connect(add_to_fem_menus)
+add_to_fem_menus()  # FEM may be the start-up workbench, active before this module loads

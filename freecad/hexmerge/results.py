@@ -5,6 +5,15 @@ results table and as a one-line summary. Nothing here touches FreeCAD or Qt."""
 import numpy as np
 
 CELL_LABELS = ("tetrahedra", "pyramids", "prisms", "hexahedra")
+# What the shorter row names of results_rows() mean (the panel's tooltips).
+ROW_DOCS = {
+    "quads on tets": "Quad faces against two triangles of tetrahedra (non-conforming faces left)",
+    "min. Jacobian": "Smallest scaled Jacobian of any element (1: perfect, > 0: valid)",
+    "boundary dist.": "Largest distance from the mesh's boundary to the shape",
+    "hex volume": "Share of the volume in hexahedra",
+    "prism volume": "Share of the volume in prisms",
+    "regions": "Regions kept apart (materials, solids)",
+}
 
 _LABELS = {"tet": "tetrahedra", "tetra": "tetrahedra", "tetra10": "tetrahedra",
            "pyramid": "pyramids", "pyramid13": "pyramids", "prism": "prisms", "wedge": "prisms",
@@ -62,23 +71,22 @@ def results_rows(report):
     fractions = _by_label(report.get("volume_fraction"))
     for label in ("hexahedra", "prisms"):
         if label in fractions:
-            rows.append(("volume in {}".format(label), "", "{:.1f} %".format(100 * fractions[label])))
+            rows.append(("{} volume".format(label[:-1] if label == "prisms" else "hex"), "",
+                         "{:.1f} %".format(100 * fractions[label])))
     if "nonconforming_quads" in report:
-        rows.append(("quads on 2 triangles", "", str(report["nonconforming_quads"])))
+        rows.append(("quads on tets", "", str(report["nonconforming_quads"])))
     mins = _by_label(report.get("min_scaled_jacobian"))
     present = [v for k, v in mins.items() if counts.get(k)]
     if present:
-        rows.append(("min. scaled Jacobian", "", "{:.3f}".format(min(present))))
+        rows.append(("min. Jacobian", "", "{:.3f}".format(min(present))))
     meshing = report.get("meshing")
     if meshing:
         rows.append(("target size", "", "{:g} mm".format(meshing["parameters"]["size"])))
-        rows.append(("max. boundary distance", "", "{:.2g} mm".format(meshing["max_boundary_distance"])))
+        rows.append(("boundary dist.", "", "{:.2g} mm".format(meshing["max_boundary_distance"])))
         rows.append(("meshing time", "", "{:.2f} s".format(meshing["seconds"])))
     fc = report.get("freecad", {})
     if fc:
         rows.append(("regions", "", regions_text(fc)))
-        rows.append(("pyramids in CalculiX", "",
-                     "as C3D8/C3D20" if fc.get("pyramids_as_collapsed_hexahedra") else "left out"))
     return rows
 
 

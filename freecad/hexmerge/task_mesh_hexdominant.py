@@ -25,9 +25,9 @@ COMMON = {
     "RespectRegions": "materials", "PyramidsAsHexahedra": "materials",
 }
 TOLERANCES = ("MinDihedralAngle", "MinBoundaryDihedralAngle", "MaxFaceAngle", "MinScaledJacobian")
-LABELS = {"PyramidsAsHexahedra": "Pyramids as collapsed hexahedra",
+LABELS = {"PyramidsAsHexahedra": "Pyramids as hexahedra",
           "SecondOrder": "Second order (Tet10, Hexa20, ...)",
-          "RespectRegions": "Respect regions (no element across two)"}
+          "RespectRegions": "Keep regions apart"}
 
 # Engine and mesher phases -> (readable name, start, end) on one bar of 0..1. In shape mode the
 # meshing takes the first part and the recombination's phases are scaled into the rest.
@@ -67,6 +67,7 @@ class TaskPanelHexDominant(base_taskpanel.TransactionTaskPanel):
         self.accept_when_done = False
         self.shape_mode_running = False
         self.wheel_guard = base_taskpanel.WheelGuard(self.form)
+        self.loader = FreeCADGui.UiLoader()  # kept: its widgets die with it
         self.widgets = {}  # property name -> (spec, widget)
         self.shape_only = []  # widgets shown only for a shape source
         self.build_parameter_widgets()
@@ -111,7 +112,7 @@ class TaskPanelHexDominant(base_taskpanel.TransactionTaskPanel):
         elif unit == "s":
             label += " (s)"
         if spec.kind in ("App::PropertyLength", "App::PropertyAngle"):
-            w = FreeCADGui.UiLoader().createWidget("Gui::QuantitySpinBox")
+            w = self.loader.createWidget("Gui::QuantitySpinBox")
             w.setObjectName("qsb_" + spec.name)
             length = spec.kind == "App::PropertyLength"
             w.setProperty("unit", "mm" if length else "deg")
@@ -228,7 +229,7 @@ class TaskPanelHexDominant(base_taskpanel.TransactionTaskPanel):
             text = "One region (no volume groups, a single solid)."
         self.form.l_regions.setText(text)
         self.form.l_regions.setToolTip(
-            "Tetrahedra of different regions are never merged unless 'Respect regions' is off; "
+            "Tetrahedra of different regions are never merged unless 'Keep regions apart' is off; "
             "material groups are written into the new mesh for CalculiX.")
 
     # -- running ------------------------------------------------------------------------------
@@ -266,6 +267,15 @@ class TaskPanelHexDominant(base_taskpanel.TransactionTaskPanel):
         if self.run is not None:
             self.run.cancel()
 
+    def release_quantity_boxes(self):
+        """Deletes the Gui::QuantitySpinBox widgets through PySide before the form goes. They
+        come from FreeCAD's UiLoader, so PySide is not told when Qt deletes them, and a later
+        panel's box at the same address would get the dead one's wrapper ("already deleted")."""
+        import shiboken2
+        for spec, w in self.widgets.values():
+            if w.objectName().startswith("qsb_") and shiboken2.isValid(w):
+                shiboken2.delete(w)
+
     def on_progress(self, fraction, phase):
         if not phase:
             return
@@ -292,6 +302,7 @@ class TaskPanelHexDominant(base_taskpanel.TransactionTaskPanel):
         self.show_results(report)
         if self.accept_when_done:
             self.accept_when_done = False
+            self.release_quantity_boxes()
             super().accept()
 
     def fail(self, error):
@@ -327,10 +338,12 @@ class TaskPanelHexDominant(base_taskpanel.TransactionTaskPanel):
             self.apply()
             return False
         self.shut_down()
+        self.release_quantity_boxes()
         return super().accept()
 
     def reject(self):
         self.shut_down()
+        self.release_quantity_boxes()
         return super().reject()
 
     # -- results ------------------------------------------------------------------------------
@@ -358,12 +371,11 @@ class TaskPanelHexDominant(base_taskpanel.TransactionTaskPanel):
         for i, row in enumerate(rows):
             for j, text in enumerate(row):
                 item = QtGui.QTableWidgetItem(text)
-                item.setToolTip(text)
+                item.setToolTip(results.ROW_DOCS.get(row[0], text) if j == 0 else text)
                 t.setItem(i, j, item)
             if row[0] in colors.LABEL_COLORS:
                 t.item(i, 0).setIcon(color_swatch(colors.LABEL_COLORS[row[0]]))
                 t.item(i, 0).setToolTip("Colour of {} in the 3D view".format(row[0]))
-        t.resizeRowsToContents()
         self.fit_table_height()
 
 

@@ -20,6 +20,7 @@ def scene_nodes(vobj):
     search = coin.SoSearchAction()
     search.setType(coin.SoIndexedFaceSet.getClassTypeId())
     search.setInterest(coin.SoSearchAction.FIRST)
+    search.setSearchingAll(True)  # a hidden object too, so it is right when shown
     search.apply(vobj.RootNode)
     path = search.getPath()
     if path is None:
