@@ -297,6 +297,21 @@ def main():
     check_colors(quad.ViewObject, "second order, mixed")
     quad.ViewObject.Visibility = False
 
+    # a swept cylinder from its shape, second order: Hexa20 and Penta15
+    cylinder = doc.addObject("Part::Cylinder", "Cylinder")
+    cylinder.Radius, cylinder.Height = 15, 40
+    doc.recompute()
+    swept = hm.make_hexdominant_mesh(doc, cylinder, name="Swept", target_size=4)
+    wait(lambda: False, 0.5)
+    m = swept.FemMesh
+    assert m.HexaCount > m.PrismCount > 0 and len(m.getElementNodes(m.Volumes[0])) in (15, 20)
+    check_colors(swept.ViewObject, "second order, Hexa20 and Penta15")
+    FreeCADGui.ActiveDocument.activeView().viewIsometric()
+    FreeCADGui.SendMsgToActiveView("ViewFit")
+    wait(lambda: False, 1.0)
+    subprocess.run(["import", "-window", "root", SHOT_COLORS], check=True)
+    swept.ViewObject.Visibility = False
+
     # Cancel during the engine: no timer left, no error in the Report view afterwards
     FreeCADGui.Selection.clearSelection()
     big_doc, big = helpers.box_doc("1st", 2.5, name="HexMergeCancel")
@@ -338,7 +353,6 @@ def main():
     FreeCADGui.SendMsgToActiveView("ViewFit")
     wait(lambda: False, 1.0)
     check_colors(shape_obj.ViewObject, "Hexa20 box")
-    subprocess.run(["import", "-window", "root", SHOT_COLORS], check=True)
 
     # save and reopen: no error in the Report view
     path = os.path.join(tempfile.mkdtemp(), "hexmerge_gui.FCStd")
