@@ -337,10 +337,23 @@ def main():
     shape_obj = panel.obj
     assert not panel.form.gb_shape_meshing.isHidden(), "no shape options for a shape"
     assert panel.widgets["TargetSize"][1].isVisibleTo(panel.form), "no target size for a shape"
-    panel.widgets["TargetSize"][1].setProperty("rawValue", 10.0)
+    size = panel.widgets["TargetSize"][1]
+    size.setProperty("rawValue", 10.0)
+    panel.widgets["SecondOrder"][1].setChecked(False)
+    panel.apply()
+    assert wait(finished(panel), 60), "apply (shape) did not finish"
+    assert panel.form.tw_results.rowCount() > 5, panel.form.l_status.text()
+    # a failed run clears the results and says why
+    size.setProperty("rawValue", 500.0)
+    panel.apply()
+    assert wait(lambda: panel.form.pb_apply.isEnabled(), 60)
+    assert panel.form.tw_results.rowCount() == 0, "results of the previous run kept after an error"
+    assert "larger than the shape" in panel.form.l_status.text(), panel.form.l_status.text()
+    # OK without Apply: runs with the new settings in the background, closes when done
+    size.setProperty("rawValue", 10.0)
     panel.widgets["SecondOrder"][1].setChecked(True)
     assert panel.accept() is False, "OK closed the panel before the mesh was made"
-    assert panel.run is not None and panel.form.pb_stop.isEnabled() or not panel.run.running()
+    assert panel.form.pb_stop.isEnabled() and panel.run.running(), "OK did not run in the background"
     assert wait(lambda: not FreeCADGui.Control.activeDialog(), 60), "OK's run did not close the panel"
     shape_report = mesh_hexdominant.report_dict(shape_obj)
     assert shape_report.get("meshing"), "no meshing report"

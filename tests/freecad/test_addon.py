@@ -236,6 +236,27 @@ class ShapeMode(unittest.TestCase):
             hm.make_hexdominant_mesh(doc, box, no_such_option=1)
 
 
+class Progress(unittest.TestCase):
+    """The panel's one progress bar across the engine's and the mesher's phases."""
+
+    def test_one_bar_across_phases(self):
+        from freecad.hexmerge.task_mesh_hexdominant import PHASES, overall_progress
+        for shape_mode, phases in ((False, ["topology", "candidates", "selection", "bound", "done"]),
+                                   (True, ["mesh shape", "topology", "candidates", "selection",
+                                           "done"])):
+            values = []
+            for phase in phases:
+                for f in (0.0, 0.5, 1.0):
+                    value, name = overall_progress(phase, f, shape_mode)
+                    self.assertEqual(name, PHASES[phase][0])
+                    self.assertNotEqual(name, phase)  # a readable name, not the engine's
+                    values.append(value)
+            self.assertEqual(values, sorted(values), (shape_mode, values))
+            self.assertEqual(values[0], 0.0)
+            self.assertEqual(values[-1], 1.0)
+            self.assertGreater(values[3], 0.0)  # the second phase does not restart at 0
+
+
 class WriterLink(unittest.TestCase):
     """FreeCAD's CalculiX writer reads the mesh object's shape from its Part (or Shape) link and
     warns "A finite mesh without a link to a Shape" when there is none."""
