@@ -138,12 +138,16 @@ def remove_old_fem_toolbar():
     """Removes the custom "HexMerge" FEM toolbar that earlier versions wrote into the user
     parameters (the commands are in FEM's own Mesh menu and toolbar now)."""
     base = app.ParamGet("User parameter:BaseApp/Workbench/FemWorkbench/Toolbar")
+    ours = {"Name", "Active"} | set(commands.COMMAND_NAMES)
+    old = []
     for group in base.GetGroups():
         bar = base.GetGroup(group)
-        names = {entry[1] for entry in (bar.GetContents() or [])}
         if bar.GetString("Name") == OLD_FEM_TOOLBAR_NAME and \
-                names <= {"Name", "Active"} | set(commands.COMMAND_NAMES):
-            base.RemGroup(group)
+                {entry[1] for entry in (bar.GetContents() or [])} <= ours:
+            old.append(group)
+        del bar  # RemGroup only empties a group someone still holds
+    for group in old:
+        base.RemGroup(group)
 
 
 gui.addWorkbench(HexMergeWorkbench())

@@ -115,6 +115,20 @@ def check_fem_menu():
         for a in actions:
             assert not a.isEnabled(), "{} enabled with nothing selected".format(a.text())
             assert "Not available: select exactly one" in a.toolTip(), a.toolTip()
+    # the custom FEM toolbar earlier versions wrote is removed, other custom toolbars are kept
+    import FreeCAD
+    from freecad.hexmerge import init_gui
+    base = FreeCAD.ParamGet("User parameter:BaseApp/Workbench/FemWorkbench/Toolbar")
+    for group, name in (("Custom_91", "HexMerge"), ("Custom_92", "Mine")):
+        bar = base.GetGroup(group)
+        bar.SetString("Name", name)
+        bar.SetBool("Active", True)
+        bar.SetString("HexMerge_MeshHexDominant", "freecad.hexmerge.commands")
+        del bar
+    init_gui.remove_old_fem_toolbar()
+    groups = base.GetGroups()
+    assert "Custom_91" not in groups and "Custom_92" in groups, groups
+    base.RemGroup("Custom_92")
     print("FEM Mesh menu and toolbar: {} after Gmsh".format(names))
     return actions
 
