@@ -18,6 +18,21 @@ from . import regions as regions_mod
 from . import results
 
 
+def addon_report(input_cells, regions, region_count, group_names, pyramids_as_hexahedra,
+                 femmesh, seconds, warnings=()):
+    """The report's "freecad" part: what the add-on did around the engine."""
+    return {
+        "input_cells": input_cells,
+        "warnings": list(warnings),
+        "regions": regions,
+        "region_count": region_count,
+        "material_groups": sorted((group_names or {}).values()),
+        "pyramids_as_collapsed_hexahedra": bool(pyramids_as_hexahedra),
+        "femmesh_volumes": femmesh.VolumeCount,
+        "seconds": seconds,
+    }
+
+
 class RecombineJob:
     """One recombination of a tetrahedral FemMesh; see the module docstring."""
 
@@ -87,15 +102,10 @@ class RecombineJob:
         self.seconds["write FemMesh"] = time.perf_counter() - t
 
         report = dict(self.result[1])
-        report["freecad"] = {
-            "input_cells": self.cell_name,
-            "regions": (self.regions.source if self.regions is not None else "none"),
-            "region_count": (self.regions.count if self.regions is not None else 0),
-            "material_groups": sorted((names or {}).values()),
-            "pyramids_as_collapsed_hexahedra": bool(self.pyramids_as_hexahedra),
-            "femmesh_volumes": femmesh.VolumeCount,
-            "seconds": self.seconds,
-        }
+        report["freecad"] = addon_report(
+            self.cell_name, self.regions.source if self.regions is not None else "none",
+            self.regions.count if self.regions is not None else 0, names,
+            self.pyramids_as_hexahedra, femmesh, self.seconds)
         return femmesh, report
 
 
@@ -175,17 +185,11 @@ class ShapeJob:
             self.pyramids_as_hexahedra)
         self.seconds["write FemMesh"] = time.perf_counter() - t
         report = dict(self.result[1])
-        report["freecad"] = {
-            "input_cells": "shape",
-            "warnings": list(self.warnings),
-            "regions": ("solids of the shape ({} solids, mesher)".format(self.nb_solids)
-                        if block_regions is not None else "none"),
-            "region_count": count if block_regions is not None else 0,
-            "material_groups": sorted((names or {}).values()),
-            "pyramids_as_collapsed_hexahedra": bool(self.pyramids_as_hexahedra),
-            "femmesh_volumes": femmesh.VolumeCount,
-            "seconds": self.seconds,
-        }
+        report["freecad"] = addon_report(
+            "shape", ("solids of the shape ({} solids, mesher)".format(self.nb_solids)
+                      if block_regions is not None else "none"),
+            count if block_regions is not None else 0, names, self.pyramids_as_hexahedra,
+            femmesh, self.seconds, self.warnings)
         return femmesh, report
 
 

@@ -281,7 +281,6 @@ class TaskPanelHexDominant(base_taskpanel.TransactionTaskPanel):
             return
         value, name = overall_progress(phase, fraction, self.shape_mode_running)
         self.form.pgb_progress.setValue(int(round(100 * value)))
-        self.form.pgb_progress.setFormat("%p %  " + name)
         self.set_status(name + "...")
 
     def on_done(self, job):
@@ -295,7 +294,6 @@ class TaskPanelHexDominant(base_taskpanel.TransactionTaskPanel):
             self.fail(e)
             return
         self.form.pgb_progress.setValue(100)
-        self.form.pgb_progress.setFormat("%p %")
         warnings = report["freecad"].get("warnings", [])
         self.set_status("Done: " + self.obj.Summary
                         + "".join("\nWarning: " + w for w in warnings))
@@ -309,7 +307,6 @@ class TaskPanelHexDominant(base_taskpanel.TransactionTaskPanel):
         self.set_running(False)
         self.accept_when_done = False
         self.form.pgb_progress.setValue(0)
-        self.form.pgb_progress.setFormat("%p %")
         self.form.tw_results.setRowCount(0)
         if isinstance(error, engine.Cancelled):
             text = "Stopped; the mesh is unchanged."
