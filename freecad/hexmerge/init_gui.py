@@ -3,7 +3,7 @@
 workbench, the commands, and the commands' place in FEM's Mesh menu and toolbar."""
 
 from freecad import app, gui
-from PySide import QtGui
+from PySide import QtCore, QtGui
 
 from . import commands
 from .resources import resource_path
@@ -39,10 +39,12 @@ class FemMenuEntries:
     FreeCAD 0.20 has no API for an add-on to extend another workbench's menus, and creates a
     command's own QAction only when its workbench is first shown. These actions run the commands
     (FreeCADGui.runCommand) and follow their availability: enabled or not, with the reason in
-    the tooltip and status tip, updated when the selection changes and when a menu opens."""
+    the tooltip and status tip, updated when the selection changes, when a menu opens and when
+    the pointer comes to a toolbar (a task panel opened or closed changes no selection)."""
 
     def __init__(self, window):
-        self.menus = []  # menus whose aboutToShow refreshes the entries
+        self.watched = []  # menus and toolbars whose opening or hovering refreshes the entries
+        self.pointer_filter = PointerFilter(self.refresh, window)
         self.commands = {cls.name: cls() for cls in commands.COMMANDS}
         self.actions = {}
         for name, command in self.commands.items():
@@ -91,10 +93,27 @@ class FemMenuEntries:
                 container.addAction(action)
             else:
                 container.insertAction(before, action)
-        if isinstance(container, QtGui.QMenu) and container not in self.menus:
-            container.aboutToShow.connect(self.refresh)
-            self.menus.append(container)
+        if container not in self.watched:
+            if isinstance(container, QtGui.QMenu):
+                container.aboutToShow.connect(self.refresh)
+            else:  # a toolbar: refresh when the pointer comes to it
+                container.installEventFilter(self.pointer_filter)
+            self.watched.append(container)
         return True
+
+
+class PointerFilter(QtCore.QObject):
+    """Calls back when the pointer enters a watched widget (the availability of a command can
+    change without a selection change: a task panel opened or closed)."""
+
+    def __init__(self, callback, parent):
+        super().__init__(parent)
+        self.callback = callback
+
+    def eventFilter(self, widget, event):
+        if event.type() == QtCore.QEvent.Enter:
+            self.callback()
+        return False
 
 
 def _command_of(action):

@@ -14,7 +14,7 @@ import traceback
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(HERE))
-sys.path[:0] = [ROOT, HERE]
+sys.path[:0] = [ROOT, HERE, os.path.join(ROOT, "src", "python")]  # this checkout's engine first
 SHOT = os.environ.get("HEXMERGE_SCREENSHOT", "/tmp/hexmerge_gui.png")
 SHOT_COLORS = os.environ.get("HEXMERGE_SCREENSHOT_COLORS", "/tmp/hexmerge_colors.png")
 COMBO_VIEW_WIDTH = 264  # FreeCAD 0.20's default combo view
@@ -246,7 +246,7 @@ def finished(panel):
 def main():
     import FreeCAD
     import FreeCADGui
-    from PySide import QtGui
+    from PySide import QtCore, QtGui
     import helpers
     from freecad.hexmerge import commands, mesh_hexdominant
 
@@ -269,6 +269,11 @@ def main():
     # tet mesh: the panel at the default width, wheel guard, Apply, colours, OK
     panel = open_panel("HexMerge_MeshHexDominant", mesh)
     obj = panel.obj
+    # with a task panel open (no selection change), the FEM entries say so once hovered
+    toolbar = [w for w in fem_actions[1].associatedWidgets() if isinstance(w, QtGui.QToolBar)][0]
+    QtGui.QApplication.sendEvent(toolbar, QtCore.QEvent(QtCore.QEvent.Enter))
+    assert not fem_actions[1].isEnabled(), "FEM entry enabled while a task panel is open"
+    assert "close the open task panel" in fem_actions[1].toolTip(), fem_actions[1].toolTip()
     dock = set_combo_view_width(COMBO_VIEW_WIDTH)
     assert not panel.form.w_advanced.isVisible(), "Advanced is open by default"
     assert panel.form.gb_shape_meshing.isHidden(), "shape options for a tet mesh"

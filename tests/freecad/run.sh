@@ -8,6 +8,9 @@ root="$(cd "$here/../.." && pwd)"
 log="${HEXMERGE_TEST_LOG:-$(mktemp -d)/freecad-tests}"
 mkdir -p "$(dirname "$log")"
 passed=0; failed=0
+# The add-on under test uses this checkout's engine (as tests/python's conftest does), not another
+# `hexmerge` the interpreter may find first.
+export PYTHONPATH="$root/src/python${PYTHONPATH:+:$PYTHONPATH}"
 
 run_suite() {  # module, per-suite timeout (s)
   local out="$log.$1.txt"
