@@ -37,5 +37,5 @@ def recombine_femmesh(femmesh, **options):
     """Recombines a tetrahedral FemMesh; returns (new FemMesh, report dict). The input is not
     modified. Options as for make_hexdominant_mesh, plus regions="auto"|"none" and shape=<Part
     shape> (regions per solid when the mesh has no "Volume" groups)."""
-    from .hexmergetools import recombine_femmesh as recombine
+    from .jobs import recombine_femmesh as recombine
     return recombine(femmesh, **options)

@@ -3,7 +3,6 @@
 
 import FreeCAD
 
-from . import femmesh_arrays
 from . import properties
 from .mesh_hexdominant import MeshHexDominant, containing_analysis, is_shape_source
 
@@ -35,7 +34,7 @@ def check_shape_source(source):
     return source
 
 
-def check_source(source):
+def checked_new_source(source):
     """A tetrahedral FEM mesh object or a solid; ValueError with a message otherwise."""
     if source is None:
         raise ValueError("no mesh selected: select one tetrahedral FEM mesh object or a solid")
@@ -68,7 +67,7 @@ def set_options(obj, options):
 
 def make_hexdominant_mesh(doc, source, name="HexDominantMesh", recompute=True, analysis=None,
                           **options):
-    check_source(source)
+    checked_new_source(source)
     shape_mode = is_shape_source(source)
     obj = doc.addObject("Fem::FemMeshObjectPython", name)
     MeshHexDominant(obj)

@@ -13,9 +13,10 @@ import json
 
 import FreeCAD
 
-from . import hexmergetools
+from . import jobs
 from . import properties
 from . import regions as regions_mod
+from . import results
 
 TYPE = "HexMerge::MeshHexDominant"
 
@@ -37,6 +38,12 @@ class MeshHexDominant:
             # read-only in the editor, and an output: setting it does not touch the object
             obj.addProperty("App::PropertyString", "Report", "Report",
                             "The engine's report of the last recompute (JSON)", 8, True)
+        if "Part" not in obj.PropertiesList:
+            # FreeCAD's solver writers read a mesh object's shape from its Part (as Gmsh's).
+            obj.addProperty("App::PropertyLink", "Part", "Source",
+                            "The shape this mesh is made from (set from the source: the shape "
+                            "itself, or the source mesh's shape); read by FreeCAD's solver "
+                            "writers", 0, True)
         if "Summary" not in obj.PropertiesList:
             obj.addProperty("App::PropertyString", "Summary", "Report",
                             "One-line summary of the last recompute", 8, True)
@@ -44,6 +51,18 @@ class MeshHexDominant:
     def onDocumentRestored(self, obj):
         # New engine parameters (or add-on options) get their default on old documents.
         self.add_properties(obj)
+        link_part(obj)
+
+    def onChanged(self, obj, prop):
+        if prop == "SourceMesh":
+            link_part(obj)
+
+    # Stateless (Python 3.11's default __getstate__ would return the instance's __dict__).
+    def __getstate__(self):
+        return None
+
+    def __setstate__(self, state):
+        return None
 
     def dumps(self):
         return None
@@ -64,7 +83,7 @@ def is_shape_source(source):
     return shape is not None and not shape.isNull() and len(shape.Solids) > 0
 
 
-def check_source(obj):
+def source_of(obj):
     """The source object (FEM mesh or solid shape), or a ValueError with a message for the user."""
     source = obj.SourceMesh
     if source is None:
@@ -85,6 +104,17 @@ def source_shape(source):
     return None
 
 
+def link_part(obj):
+    """Sets obj.Part to the shape obj's mesh is made from: the shape source itself, or the
+    source mesh's Part/Shape (None when there is none)."""
+    if "Part" not in obj.PropertiesList:
+        return
+    source = obj.SourceMesh
+    part = source if is_shape_source(source) else (source_shape(source) if source else None)
+    if obj.Part != part:
+        obj.Part = part
+
+
 def containing_analysis(obj):
     for o in obj.InList:
         if o.isDerivedFrom("Fem::FemAnalysis"):
@@ -95,17 +125,17 @@ def containing_analysis(obj):
 def prepare(obj):
     """A RecombineJob (or a ShapeJob for a shape source) for the object's current source and
     properties (FreeCAD thread)."""
-    source = check_source(obj)
+    source = source_of(obj)
     analysis = containing_analysis(obj) or containing_analysis(source)
     if is_shape_source(source):
-        return hexmergetools.ShapeJob.prepare(
-            source.Shape, properties.mesher_options(obj), properties.engine_options(obj),
+        return jobs.ShapeJob.prepare(
+            source.Shape, properties.mesher_values(obj), properties.engine_values(obj),
             material_names=regions_mod.material_solids(analysis, source),
             pyramids_as_hexahedra=obj.PyramidsAsHexahedra)
     part = source_shape(source)
-    options = properties.engine_options(obj)
+    options = properties.engine_values(obj)
     regions = "auto" if options.get("respect_regions", True) else "none"
-    return hexmergetools.RecombineJob.prepare(
+    return jobs.RecombineJob.prepare(
         source.FemMesh, options, regions,
         shape=part.Shape if part is not None else None,
         material_solids=regions_mod.material_solids(analysis, part),
@@ -122,25 +152,11 @@ def run(obj, progress=None):
 
 
 def store(obj, femmesh, report):
+    for warning in report.get("freecad", {}).get("warnings", []):
+        FreeCAD.Console.PrintWarning("HexMerge: {}: {}\n".format(obj.Label, warning))
     obj.FemMesh = femmesh
     obj.Report = json.dumps(report, indent=1, sort_keys=True, default=_plain)
-    obj.Summary = summary(report)
-
-
-def summary(report):
-    counts = report.get("output_counts") or report.get("counts") or {}
-    before = report.get("input_tets") or report.get("input_cells")
-    parts = []
-    if isinstance(counts, dict):
-        parts = ["{} {}".format(v, k) for k, v in counts.items() if v]
-    red = report.get("element_reduction_percent")
-    text = "{} tets -> {}".format(before, ", ".join(parts)) if before is not None else ", ".join(parts)
-    meshing = report.get("meshing")
-    if meshing:
-        text = "shape at h {:g}: ".format(meshing["parameters"]["size"]) + text
-    if red is not None:
-        text += " ({:.1f} % fewer elements)".format(red)
-    return text
+    obj.Summary = results.summary(report)
 
 
 def _plain(x):

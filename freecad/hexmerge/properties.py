@@ -11,7 +11,7 @@ The mesher's options (hexmerge.mesh_parameters(): used when the source is a shap
 the same way into the group "Shape meshing", with the target size (a length) and SecondOrder.
 """
 
-from . import hexmergetools
+from . import engine
 
 # Property groups, by parameter name; parameters not listed go to "Engine".
 GROUPS = {
@@ -106,7 +106,7 @@ def _default(row):
 
 def engine_specs():
     specs = []
-    for row in hexmergetools.parameter_table():
+    for row in engine.parameter_table():
         kind = {
             "float": "App::PropertyAngle" if row.get("unit") == "deg" else "App::PropertyFloatConstraint",
             "int": "App::PropertyIntegerConstraint",
@@ -130,7 +130,7 @@ def mesher_specs():
                           "Target element size h when the source is a shape: the lattice spacing "
                           "and the surface's longest edge (must be smaller than the shape)", 0.0,
                           "size", {"name": "size", "label": "Target size"})]
-    for row in hexmergetools.mesh_parameter_table():
+    for row in engine.mesh_parameter_table():
         kind = {"float": "App::PropertyFloatConstraint", "int": "App::PropertyIntegerConstraint",
                 "bool": "App::PropertyBool", "choice": "App::PropertyEnumeration"}[row["type"]]
         specs.append(PropertySpec(kind, MESHER_NAMES.get(row["name"], camel(row["name"])),
@@ -149,7 +149,7 @@ def addon_specs():
                      "any object with a solid Shape) to mesh with HexMerge's mesher and "
                      "recombine (never modified)", None),
         PropertySpec("App::PropertyBool", "PyramidsAsHexahedra", "CalculiX",
-                     hexmergetools.PYRAMIDS_AS_HEXAHEDRA_DOC, True),
+                     engine.PYRAMIDS_AS_HEXAHEDRA_DOC, True),
     ]
 
 
@@ -157,11 +157,11 @@ def all_specs():
     return addon_specs() + mesher_specs() + engine_specs()
 
 
-def engine_options(obj):
+def engine_values(obj):
     """{engine parameter: value} from an object's properties (properties it lacks are skipped)."""
     return {s.parameter: s.value(obj) for s in engine_specs() if s.name in obj.PropertiesList}
 
 
-def mesher_options(obj):
+def mesher_values(obj):
     """{mesh_shape() keyword: value} (size, the mesher's options, second_order)."""
     return {s.parameter: s.value(obj) for s in mesher_specs() if s.name in obj.PropertiesList}

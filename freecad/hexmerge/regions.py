@@ -9,6 +9,8 @@ with the material object's Name followed by "_") instead of its slow per-node se
 
 import numpy as np
 
+from . import engine
+
 
 class Regions:
     """ids: (M,) int32 region per tet; names: {region id: group name}; source: how they were found."""
@@ -63,8 +65,7 @@ def from_solids(shape, points, tets, material_names=None):
     solids = list(getattr(shape, "Solids", []) or [])
     if len(solids) < 2:
         return None
-    from .hexmergetools import engine
-    hexmerge = engine()
+    hexmerge = engine.module()
     if not getattr(hexmerge, "WITH_OPENCASCADE", False):
         raise ValueError(
             "the shape has {} solids, but the HexMerge engine was built without OpenCASCADE, "

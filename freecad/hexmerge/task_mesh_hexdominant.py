@@ -1,41 +1,83 @@
 # SPDX-License-Identifier: LGPL-2.1-or-later
-"""Task panel of the hex-dominant mesh: maps widgets to the object's properties, runs the engine
-off the GUI thread on Apply, shows the results. OK keeps, Cancel undoes."""
-
-import os
+"""Task panel of the hex-dominant mesh: maps widgets to the object's properties, runs the job off
+the GUI thread on Apply (and on OK when nothing was applied), shows the results. OK keeps, Cancel
+undoes. Imports its job and base panel, never the view provider (which opens it)."""
 
 import FreeCAD
 import FreeCADGui
-from PySide import QtGui
+from PySide import QtCore, QtGui
 
 from . import base_taskpanel
-from . import hexmergetools
+from . import colors
+from . import engine
 from . import mesh_hexdominant
 from . import properties
-from .view_mesh_hexdominant import RESOURCES, TYPE_COLORS
+from . import results
+from .resources import resource_path
 
-UI_FILE = os.path.join(RESOURCES, "ui", "MeshHexDominant.ui")
+UI_FILE = resource_path("ui", "MeshHexDominant.ui")
 
-CELL_LABELS = ("tetrahedra", "pyramids", "prisms", "hexahedra")
-# The 3D view's colour of each type (view provider, ColorByType), shown as a legend in the table.
-LABEL_COLORS = dict(zip(CELL_LABELS, (TYPE_COLORS[k] for k in ("tetra", "pyramid", "wedge", "hexahedron"))))
+# Where each property's widget goes. Common settings (a FEM user's) in "mesh" and "materials";
+# the rest (the engine's and the mesher's research settings) in the folded "Advanced" part.
+COMMON = {
+    "TargetSize": "mesh", "SecondOrder": "mesh", "MakeHexahedra": "mesh", "MakePrisms": "mesh",
+    "MakePyramids": "mesh", "Conformity": "mesh",
+    "RespectRegions": "materials", "PyramidsAsHexahedra": "materials",
+}
+TOLERANCES = ("MinDihedralAngle", "MinBoundaryDihedralAngle", "MaxFaceAngle", "MinScaledJacobian")
+LABELS = {"PyramidsAsHexahedra": "Pyramids as hexahedra",
+          "SecondOrder": "Second order (Tet10, Hexa20, ...)",
+          "RespectRegions": "Keep regions apart"}
+
+# Engine and mesher phases -> (readable name, start, end) on one bar of 0..1. In shape mode the
+# meshing takes the first part and the recombination's phases are scaled into the rest.
+PHASES = {
+    "mesh shape": ("Meshing the shape (OpenCASCADE, TetGen)", 0.0, 1.0),
+    "topology": ("Reading the tetrahedra", 0.0, 0.05),
+    "candidates": ("Finding hexahedra, prisms, pyramids", 0.05, 0.6),
+    "selection": ("Choosing the elements", 0.6, 0.95),
+    "bound": ("Optimality bound (GLPK)", 0.95, 0.99),
+    "done": ("Writing the mesh", 1.0, 1.0),
+}
+SHAPE_MESHING_SHARE = 0.4
+
+
+def overall_progress(phase, fraction, shape_mode):
+    """(fraction of the whole run in [0, 1], readable phase name) for an engine progress call."""
+    name, start, end = PHASES.get(phase, (phase, 0.0, 1.0))
+    f = start + (end - start) * max(0.0, min(1.0, fraction))
+    if not shape_mode:
+        return f, name
+    if phase == "mesh shape":
+        return SHAPE_MESHING_SHARE * f, name
+    return SHAPE_MESHING_SHARE + (1.0 - SHAPE_MESHING_SHARE) * f, name
 
 
 class TaskPanelHexDominant(base_taskpanel.TransactionTaskPanel):
 
     transaction_name = "Hex-dominant mesh"
+    current = None  # the open panel, for macros and the GUI test
 
     def __init__(self, obj):
         super().__init__(obj)
-        TaskPanelHexDominant.current = self  # for macros and the GUI test
+        TaskPanelHexDominant.current = self
         self.form = FreeCADGui.PySideUic.loadUi(UI_FILE)
         self.form.setWindowTitle("Hex-dominant mesh")
         self.run = None
-        self.widgets = {}  # property name -> widget
+        self.accept_when_done = False
+        self.shape_mode_running = False
+        self.wheel_guard = base_taskpanel.WheelGuard(self.form)
+        self.loader = FreeCADGui.UiLoader()  # kept: its widgets die with it
+        self.widgets = {}  # property name -> (spec, widget)
+        self.shape_only = []  # widgets shown only for a shape source
         self.build_parameter_widgets()
-        self.form.ckb_pyramids_as_hexahedra.setChecked(bool(obj.PyramidsAsHexahedra))
+        self.set_up_results_table()
+        self.form.tb_advanced.toggled.connect(self.show_advanced)
+        self.show_advanced(False)
         self.form.pb_apply.clicked.connect(self.apply)
         self.form.pb_stop.clicked.connect(self.stop)
+        # However the panel goes (OK, Cancel, the document closed), its timer and thread stop.
+        self.form.destroyed.connect(self.shut_down)
         self.show_source()
         report = mesh_hexdominant.report_dict(obj)
         if report:
@@ -43,72 +85,83 @@ class TaskPanelHexDominant(base_taskpanel.TransactionTaskPanel):
 
     # -- widgets <-> properties ---------------------------------------------------------------
     def build_parameter_widgets(self):
-        # The mesher's options, shown when the source is a shape, in a group under the source.
-        self.gb_shape = QtGui.QGroupBox(properties.SHAPE_GROUP)
-        self.gb_shape.setObjectName("gb_shape_meshing")
-        self.fl_shape = QtGui.QFormLayout(self.gb_shape)
-        self.form.layout().insertWidget(1, self.gb_shape)
-        for spec in properties.mesher_specs():
-            self.add_widget(spec, self.fl_shape)
-        for spec in properties.engine_specs():
-            layout = getattr(self.form, "fl_" + spec.group.lower().replace(" ", "_"),
-                             self.form.fl_engine)
+        for spec in properties.all_specs():
+            if spec.name == "SourceMesh" or spec.name not in self.obj.PropertiesList:
+                continue
+            if spec.name in COMMON:
+                layout = getattr(self.form, "fl_" + COMMON[spec.name])
+            elif spec.name in TOLERANCES:
+                layout = self.form.fl_tolerances
+            elif spec.group == properties.SHAPE_GROUP:
+                layout = self.form.fl_shape_meshing
+            else:
+                layout = self.form.fl_engine
             self.add_widget(spec, layout)
-        if not self.form.fl_engine.rowCount():
-            self.form.gb_engine.hide()
+        for fl in (self.form.fl_mesh, self.form.fl_materials, self.form.fl_tolerances,
+                   self.form.fl_engine, self.form.fl_shape_meshing):
+            fl.setRowWrapPolicy(QtGui.QFormLayout.WrapLongRows)
+            fl.setFieldGrowthPolicy(QtGui.QFormLayout.AllNonFixedFieldsGrow)
 
     def add_widget(self, spec, layout):
         """One widget for a property, in a form layout, kept in self.widgets."""
-        row = spec.row
-        label = row.get("label") or spec.name
-        if spec.kind == "App::PropertyLength":
-            w = FreeCADGui.UiLoader().createWidget("Gui::QuantitySpinBox")
-            w.setObjectName("qsb_" + row["name"])
-            w.setProperty("unit", "mm")
-            w.setProperty("minimum", 0.0)
-            w.setProperty("maximum", 1e9)
-            w.setProperty("rawValue", spec.value(self.obj))
-        elif spec.kind == "App::PropertyAngle":
-            w = FreeCADGui.UiLoader().createWidget("Gui::QuantitySpinBox")
-            w.setObjectName("qsb_" + row["name"])
-            w.setProperty("unit", "deg")
-            w.setProperty("minimum", float(row["min"]))
-            w.setProperty("maximum", float(row["max"]))
+        row = spec.row or {}
+        label = LABELS.get(spec.name) or row.get("label") or spec.name
+        unit = row.get("unit")
+        if unit == "h":
+            label += " (\u00d7 h)"  # a fraction of the target size
+        elif unit == "s":
+            label += " (s)"
+        if spec.kind in ("App::PropertyLength", "App::PropertyAngle"):
+            w = self.loader.createWidget("Gui::QuantitySpinBox")
+            w.setObjectName("qsb_" + spec.name)
+            length = spec.kind == "App::PropertyLength"
+            w.setProperty("unit", "mm" if length else "deg")
+            w.setProperty("minimum", 0.0 if length else float(row["min"]))
+            w.setProperty("maximum", 1e9 if length else float(row["max"]))
             w.setProperty("rawValue", spec.value(self.obj))
         elif spec.kind == "App::PropertyFloatConstraint":
             w = QtGui.QDoubleSpinBox()
-            w.setObjectName("dsb_" + row["name"])
+            w.setObjectName("dsb_" + spec.name)
             w.setRange(float(row["min"]), float(row["max"]))
             w.setSingleStep(0.05)
             w.setDecimals(3)
             w.setValue(float(getattr(self.obj, spec.name)))
         elif spec.kind == "App::PropertyIntegerConstraint":
             w = QtGui.QSpinBox()
-            w.setObjectName("sb_" + row["name"])
+            w.setObjectName("sb_" + spec.name)
             w.setRange(int(row["min"]), int(row["max"]))
             w.setValue(int(getattr(self.obj, spec.name)))
         elif spec.kind == "App::PropertyBool":
-            w = QtGui.QCheckBox()
-            w.setObjectName("ckb_" + row["name"])
+            w = QtGui.QCheckBox(label)
+            w.setObjectName("ckb_" + spec.name)
             w.setChecked(bool(getattr(self.obj, spec.name)))
         else:
             w = QtGui.QComboBox()
-            w.setObjectName("cb_" + row["name"])
+            w.setObjectName("cb_" + spec.name)
             w.addItems(list(row["choices"]))
             w.setCurrentIndex(list(row["choices"]).index(getattr(self.obj, spec.name)))
+            w.setSizeAdjustPolicy(QtGui.QComboBox.AdjustToMinimumContentsLengthWithIcon)
+            w.setMinimumContentsLength(8)
         w.setToolTip(spec.doc)
-        l = QtGui.QLabel(label)
-        l.setToolTip(spec.doc)
-        layout.addRow(l, w)
+        shown = [w]
+        if isinstance(w, QtGui.QCheckBox):
+            layout.addRow(w)
+        else:
+            self.wheel_guard.guard(w)
+            w.setSizePolicy(QtGui.QSizePolicy.Expanding, QtGui.QSizePolicy.Fixed)
+            w.setMinimumWidth(0)
+            l = QtGui.QLabel(label)
+            l.setToolTip(spec.doc)
+            layout.addRow(l, w)
+            shown.append(l)
+        if spec.group == properties.SHAPE_GROUP:
+            self.shape_only.extend(shown)
         self.widgets[spec.name] = (spec, w)
         self.bind_expression(spec.name, w)
 
     def bind_expression(self, name, widget):
         if widget.objectName().startswith("qsb_"):
-            try:
-                FreeCADGui.ExpressionBinding(widget).bind(self.obj, name)
-            except Exception:
-                pass
+            FreeCADGui.ExpressionBinding(widget).bind(self.obj, name)
 
     def widgets_to_properties(self):
         for name, (spec, w) in self.widgets.items():
@@ -127,51 +180,63 @@ class TaskPanelHexDominant(base_taskpanel.TransactionTaskPanel):
                 value = FreeCAD.Units.Quantity(w.property("rawValue"), FreeCAD.Units.Unit("deg"))
             if getattr(self.obj, name) != value:
                 setattr(self.obj, name, value)
-        if self.obj.PyramidsAsHexahedra != self.form.ckb_pyramids_as_hexahedra.isChecked():
-            self.obj.PyramidsAsHexahedra = self.form.ckb_pyramids_as_hexahedra.isChecked()
+
+    def show_advanced(self, shown):
+        self.form.w_advanced.setVisible(shown)
+        self.form.tb_advanced.setArrowType(QtCore.Qt.DownArrow if shown else QtCore.Qt.RightArrow)
 
     # -- source and regions -------------------------------------------------------------------
+    def shape_mode(self):
+        return mesh_hexdominant.is_shape_source(self.obj.SourceMesh)
+
     def show_source(self):
         src = self.obj.SourceMesh
-        shape_mode = mesh_hexdominant.is_shape_source(src)
-        self.gb_shape.setVisible(shape_mode)
+        shape_mode = self.shape_mode()
+        for w in self.shape_only:
+            w.setVisible(shape_mode)
+        self.form.gb_shape_meshing.setVisible(shape_mode)
         if src is None:
-            self.form.l_source.setText("No source mesh (deleted?)")
+            self.form.l_source.setText("No source (deleted?)")
             self.form.l_regions.setText("-")
             return
         if shape_mode:
-            self.form.gb_source.setTitle("Source shape")
             box = src.Shape.BoundBox
             nsolids = len(src.Shape.Solids)
             self.form.l_source.setText(
-                "{}: {} solid{}, {:g} x {:g} x {:g}. Meshed with tetrahedra on a lattice "
-                "(OpenCASCADE, TetGen) at the target size, then recombined.".format(
+                "Shape {}: {} solid{}, {:g} \u00d7 {:g} \u00d7 {:g} mm".format(
                     src.Label, nsolids, "s" if nsolids > 1 else "", box.XLength, box.YLength,
                     box.ZLength))
-            text = ("Regions per solid of {} ({} solids).".format(src.Label, nsolids)
-                    if nsolids > 1 else "One region (a single solid).")
-            self.form.l_regions.setText(text + " Elements never span two solids unless "
-                                        "'Respect regions' is off.")
+            self.form.l_source.setToolTip(
+                "Meshed with tetrahedra on a lattice (OpenCASCADE, TetGen) at the target size, "
+                "then recombined")
+            text = ("Regions: the {} solids.".format(nsolids) if nsolids > 1
+                    else "One region (a single solid).")
+            self.form.l_regions.setText(text)
             return
         m = src.FemMesh
-        kind = "Tet10" if m.VolumeCount and m.getElementNodes(m.Volumes[0]).__len__() == 10 else "Tet4"
-        self.form.l_source.setText("{}: {} {} tetrahedra, {} nodes ({} output)".format(
+        kind = "Tet10" if m.VolumeCount and len(m.getElementNodes(m.Volumes[0])) == 10 else "Tet4"
+        self.form.l_source.setText("Mesh {}: {} {}, {} nodes ({} output)".format(
             src.Label, m.TetraCount, kind, m.NodeCount,
-            "quadratic" if kind == "Tet10" else "linear"))
+            "second-order" if kind == "Tet10" else "first-order"))
         groups = [m.getGroupName(g) for g in m.Groups if m.getGroupElementType(g) == "Volume"]
         part = mesh_hexdominant.source_shape(src)
         nsolids = len(part.Shape.Solids) if part is not None else 0
         if groups:
-            text = "Regions from the mesh's volume groups: {}.".format(", ".join(groups))
+            text = "Regions: the mesh's volume groups ({}).".format(", ".join(groups))
         elif nsolids > 1:
-            text = "Regions per solid of {} ({} solids).".format(part.Label, nsolids)
+            text = "Regions: the {} solids of {}.".format(nsolids, part.Label)
         else:
             text = "One region (no volume groups, a single solid)."
-        self.form.l_regions.setText(text + " Tets of different regions are never merged "
-                                    "unless 'Respect regions' is off; material groups are "
-                                    "written into the new mesh for CalculiX.")
+        self.form.l_regions.setText(text)
+        self.form.l_regions.setToolTip(
+            "Tetrahedra of different regions are never merged unless 'Keep regions apart' is off; "
+            "material groups are written into the new mesh for CalculiX.")
 
     # -- running ------------------------------------------------------------------------------
+    def needs_run(self):
+        state = self.obj.State
+        return not self.obj.Report or "Touched" in state or "Invalid" in state
+
     def apply(self):
         if self.run is not None and self.run.running():
             return
@@ -187,21 +252,36 @@ class TaskPanelHexDominant(base_taskpanel.TransactionTaskPanel):
             return job
 
         self.set_running(True)
-        shape_mode = mesh_hexdominant.is_shape_source(self.obj.SourceMesh)
-        self.form.l_status.setText("Meshing the shape and recombining..." if shape_mode
-                                   else "Recombining...")
+        self.shape_mode_running = self.shape_mode()
+        self.on_progress(0.0, "mesh shape" if self.shape_mode_running else "topology")
         self.run = base_taskpanel.BackgroundRun(work, self.on_progress, self.on_done, self.fail)
         self.run.start()
 
     def stop(self):
-        if self.run is not None:
+        if self.run is not None and self.run.running():
             self.run.stop()
-            self.form.l_status.setText("Stopping...")
+            self.set_status("Stopping...")
 
-    def on_progress(self, fraction, message):
-        self.form.pgb_progress.setValue(int(round(100 * max(0.0, min(1.0, fraction)))))
-        if message:
-            self.form.l_status.setText(message)
+    def shut_down(self, *args):
+        """Stops the run and its timer for good (the panel is closing)."""
+        if self.run is not None:
+            self.run.cancel()
+
+    def release_quantity_boxes(self):
+        """Deletes the Gui::QuantitySpinBox widgets through PySide before the form goes. They
+        come from FreeCAD's UiLoader, so PySide is not told when Qt deletes them, and a later
+        panel's box at the same address would get the dead one's wrapper ("already deleted")."""
+        import shiboken2
+        for spec, w in self.widgets.values():
+            if w.objectName().startswith("qsb_") and shiboken2.isValid(w):
+                shiboken2.delete(w)
+
+    def on_progress(self, fraction, phase):
+        if not phase:
+            return
+        value, name = overall_progress(phase, fraction, self.shape_mode_running)
+        self.form.pgb_progress.setValue(int(round(100 * value)))
+        self.set_status(name + "...")
 
     def on_done(self, job):
         self.set_running(False)
@@ -214,105 +294,89 @@ class TaskPanelHexDominant(base_taskpanel.TransactionTaskPanel):
             self.fail(e)
             return
         self.form.pgb_progress.setValue(100)
-        self.form.l_status.setText("Done: " + self.obj.Summary)
+        warnings = report["freecad"].get("warnings", [])
+        self.set_status("Done: " + self.obj.Summary
+                        + "".join("\nWarning: " + w for w in warnings))
         self.show_results(report)
-        FreeCADGui.updateGui()
+        if self.accept_when_done:
+            self.accept_when_done = False
+            self.release_quantity_boxes()
+            super().accept()
 
     def fail(self, error):
         self.set_running(False)
+        self.accept_when_done = False
         self.form.pgb_progress.setValue(0)
-        if isinstance(error, hexmergetools.Cancelled):
-            text = "Cancelled; the mesh is unchanged."
+        self.form.tw_results.setRowCount(0)
+        if isinstance(error, engine.Cancelled):
+            text = "Stopped; the mesh is unchanged."
         else:
             text = "Error: {}".format(error)
-        self.form.l_status.setText('<span style="color:#b00020">{}</span>'.format(text))
-        FreeCAD.Console.PrintError("HexMerge: {}\n".format(text))
+            FreeCAD.Console.PrintError("HexMerge: {}\n".format(text))
+        self.set_status(text, error=True)
+
+    def set_status(self, text, error=False):
+        self.form.l_status.setText(text)
+        self.form.l_status.setStyleSheet("color: #b00020" if error else "")
 
     def set_running(self, running):
         self.form.pb_apply.setEnabled(not running)
         self.form.pb_stop.setEnabled(running)
 
     def accept(self):
+        """OK: keeps the mesh. Settings not applied yet are applied first, like Apply (off the
+        GUI thread, with progress and Stop); the panel closes when that run succeeds."""
         if self.run is not None and self.run.running():
-            FreeCAD.Console.PrintWarning("HexMerge: stop the run or wait for it before OK.\n")
+            self.set_status("Running: wait for it, or Stop.")
             return False
         self.widgets_to_properties()
-        if not self.obj.Report or "Touched" in self.obj.State:
-            self.doc.recompute()
+        if self.needs_run():
+            self.accept_when_done = True
+            self.apply()
+            return False
+        self.shut_down()
+        self.release_quantity_boxes()
         return super().accept()
 
     def reject(self):
-        if self.run is not None and self.run.running():
-            self.run.stop()
-            self.run.thread.join(30)
+        self.shut_down()
+        self.release_quantity_boxes()
         return super().reject()
 
     # -- results ------------------------------------------------------------------------------
+    def set_up_results_table(self):
+        t = self.form.tw_results
+        t.verticalHeader().hide()
+        t.verticalHeader().setDefaultSectionSize(t.fontMetrics().height() + 6)
+        header = t.horizontalHeader()
+        header.setSectionResizeMode(0, QtGui.QHeaderView.Stretch)
+        header.setSectionResizeMode(1, QtGui.QHeaderView.ResizeToContents)
+        header.setSectionResizeMode(2, QtGui.QHeaderView.ResizeToContents)
+        t.setRowCount(0)
+        self.fit_table_height()
+
+    def fit_table_height(self):
+        t = self.form.tw_results
+        rows = sum(t.rowHeight(i) for i in range(t.rowCount()))
+        t.setFixedHeight(t.horizontalHeader().height() + rows + 2 * t.frameWidth())
+        t.setVisible(t.rowCount() > 0)
+
     def show_results(self, report):
-        rows = results_rows(report)
+        rows = results.results_rows(report)
         t = self.form.tw_results
         t.setRowCount(len(rows))
         for i, row in enumerate(rows):
             for j, text in enumerate(row):
-                t.setItem(i, j, QtGui.QTableWidgetItem(text))
-            if row[0] in LABEL_COLORS:
-                t.item(i, 0).setIcon(color_swatch(LABEL_COLORS[row[0]]))
+                item = QtGui.QTableWidgetItem(text)
+                item.setToolTip(results.ROW_DOCS.get(row[0], text) if j == 0 else text)
+                t.setItem(i, j, item)
+            if row[0] in colors.LABEL_COLORS:
+                t.item(i, 0).setIcon(color_swatch(colors.LABEL_COLORS[row[0]]))
                 t.item(i, 0).setToolTip("Colour of {} in the 3D view".format(row[0]))
-        t.resizeColumnsToContents()
+        self.fit_table_height()
 
 
 def color_swatch(rgb):
     pixmap = QtGui.QPixmap(12, 12)
     pixmap.fill(QtGui.QColor.fromRgbF(*rgb))
     return QtGui.QIcon(pixmap)
-
-
-def results_rows(report):
-    """(quantity, before, after) rows of the results table from an engine report."""
-    counts = report.get("output_counts", {})
-    if isinstance(counts, (list, tuple)):
-        counts = dict(zip(CELL_LABELS, counts))
-    counts = {_label(k): v for k, v in counts.items()}
-    before = report.get("input_tets", "")
-    rows = [("tetrahedra", str(before), str(counts.get("tetrahedra", 0)))]
-    for label in CELL_LABELS[1:]:
-        rows.append((label, "0", str(counts.get(label, 0))))
-    rows.append(("elements", str(before), str(report.get("output_cells", sum(counts.values())))))
-    if "element_reduction_percent" in report:
-        rows.append(("reduction", "", "{:.1f} %".format(report["element_reduction_percent"])))
-    fractions = report.get("volume_fraction", {})
-    if isinstance(fractions, (list, tuple)):
-        fractions = dict(zip(CELL_LABELS, fractions))
-    fractions = {_label(k): v for k, v in fractions.items()}
-    for label in ("hexahedra", "prisms"):
-        if label in fractions:
-            rows.append(("{} volume".format(label[:-1]), "", "{:.1f} %".format(100 * fractions[label])))
-    if "nonconforming_quads" in report:
-        rows.append(("quads meeting 2 triangles", "", str(report["nonconforming_quads"])))
-    mins = report.get("min_scaled_jacobian", {})
-    if isinstance(mins, (list, tuple)):
-        mins = dict(zip(CELL_LABELS, mins))
-    present = [v for k, v in mins.items() if counts.get(_label(k))]
-    if present:
-        rows.append(("min. scaled Jacobian", "", "{:.3f}".format(min(present))))
-    meshing = report.get("meshing")
-    if meshing:
-        rows.append(("target size", "", "{:g}".format(meshing["parameters"]["size"])))
-        rows.append(("max. boundary distance", "", "{:.2g}".format(meshing["max_boundary_distance"])))
-        rows.append(("meshing time", "", "{:.2f} s".format(meshing["seconds"])))
-    fc = report.get("freecad", {})
-    if fc:
-        rows.append(("regions", "", "{} ({})".format(fc.get("region_count", 0), fc.get("regions"))))
-        rows.append(("pyramids in CalculiX", "",
-                     "as C3D8/C3D20" if fc.get("pyramids_as_collapsed_hexahedra") else "left out"))
-    return rows
-
-
-_LABELS = {"tet": "tetrahedra", "tetra": "tetrahedra", "tetra10": "tetrahedra",
-           "pyramid": "pyramids", "pyramid13": "pyramids", "prism": "prisms", "wedge": "prisms",
-           "wedge15": "prisms", "hex": "hexahedra", "hexahedron": "hexahedra",
-           "hexahedron20": "hexahedra"}
-
-
-def _label(key):
-    return _LABELS.get(str(key).lower(), str(key))

@@ -1,53 +1,63 @@
 # SPDX-License-Identifier: LGPL-2.1-or-later
-"""View provider of the hex-dominant mesh: icon, source as child, colour by element type."""
-
-import os
+"""View provider of the hex-dominant mesh: icon, source as child, colour by element type, and the
+task panel in edit mode (as FEM's view_mesh_gmsh.py opens task_mesh_gmsh)."""
 
 import FreeCAD
 import FreeCADGui
+from PySide import QtCore
 
-from . import femmesh_arrays
+from . import colors
+from .resources import resource_path
+from .task_mesh_hexdominant import TaskPanelHexDominant
 
-RESOURCES = os.path.join(os.path.dirname(os.path.dirname(os.path.dirname(__file__))), "resources")
-ICON = os.path.join(RESOURCES, "icons", "HexMerge_MeshHexDominant.svg")
-
-# RGB per element type; collapsed pyramids (8 or 20 nodes with a repeated node) are found by
-# their nodes. Tet light grey, pyramid red, prism green, hexahedron blue: none near FreeCAD's
-# default mesh orange, so an uncoloured view is not mistaken for a coloured one.
-TYPE_COLORS = {
-    "tetra": (0.80, 0.80, 0.80),
-    "pyramid": (0.85, 0.25, 0.25),
-    "wedge": (0.30, 0.70, 0.30),
-    "hexahedron": (0.25, 0.45, 0.90),
-}
-TYPE_COLOR_NAMES = {"tetra": "grey", "pyramid": "red", "wedge": "green", "hexahedron": "blue"}
-
-# FreeCAD 0.20's mesh view keeps element ids in 16 bits when it colours by element: the colour
-# of id e is looked up as e mod 65536. The add-on numbers the volumes it draws (those on the
-# boundary) first, so colouring ids up to this limit colours what is seen.
-VIEW_ID_LIMIT = 65535
+ICON = resource_path("icons", "HexMerge_MeshHexDominant.svg")
 
 
-def element_kind(nodes):
-    """Linear kind of a stored volume from its node ids (SMESH order)."""
-    corners = {4: 4, 10: 4, 5: 5, 13: 5, 6: 6, 15: 6, 8: 8, 20: 8}[len(nodes)]
-    if corners == 8 and len(set(nodes[:8])) == 5:
-        return "pyramid"
-    return {4: "tetra", 5: "pyramid", 6: "wedge", 8: "hexahedron"}[corners]
+def scene_nodes(vobj):
+    """The mesh view's (SoMaterial, SoMaterialBinding, SoIndexedFaceSet) of its faces, from the
+    Coin scene graph (the group holding the face set holds its material and binding)."""
+    from pivy import coin
+    search = coin.SoSearchAction()
+    search.setType(coin.SoIndexedFaceSet.getClassTypeId())
+    search.setInterest(coin.SoSearchAction.FIRST)
+    search.setSearchingAll(True)  # a hidden object too, so it is right when shown
+    search.apply(vobj.RootNode)
+    path = search.getPath()
+    if path is None:
+        return None
+    group = path.getNodeFromTail(1)
+    material = binding = None
+    for i in range(group.getNumChildren()):
+        child = group.getChild(i)
+        if child.isOfType(coin.SoMaterial.getClassTypeId()):
+            material = child
+        elif child.isOfType(coin.SoMaterialBinding.getClassTypeId()):
+            binding = child
+    return material, binding, path.getTail()
 
 
-def colors_by_type(femmesh):
-    """{element id: RGB} for the volumes with ids up to VIEW_ID_LIMIT (see there)."""
-    return {e: TYPE_COLORS[element_kind(femmesh.getElementNodes(e))]
-            for e in femmesh.Volumes if e <= VIEW_ID_LIMIT}
+def drawn_triangles(face_set):
+    """Number of triangles of an indexed face set (faces end with -1)."""
+    return sum(1 for i in face_set.coordIndex.getValues() if i < 0)
 
 
-def legend():
-    """"hexahedra blue, prisms green, pyramids red, tetrahedra grey"."""
-    plural = {"hexahedron": "hexahedra", "wedge": "prisms", "pyramid": "pyramids",
-              "tetra": "tetrahedra"}
-    return ", ".join("{} {}".format(plural[k], TYPE_COLOR_NAMES[k])
-                     for k in ("hexahedron", "wedge", "pyramid", "tetra"))
+def color_by_type(vobj):
+    """Colours each drawn triangle by the type of its element (colors.face_colors), on the
+    scene graph: FreeCAD 0.20's ElementColor misplaces colours on quadratic faces."""
+    from pivy import coin
+    nodes = scene_nodes(vobj)
+    if nodes is None or None in nodes:
+        raise RuntimeError("the mesh view has no face set with a material")
+    material, binding, face_set = nodes
+    femmesh = vobj.Object.FemMesh
+    rgb = colors.face_colors(vobj.VisibleElementFaces, femmesh.getElementNodes)
+    triangles = drawn_triangles(face_set)
+    if len(rgb) != triangles:
+        raise RuntimeError("{} triangles drawn, {} coloured: the mesh view's face order is not "
+                           "the one HexMerge knows".format(triangles, len(rgb)))
+    binding.value = coin.SoMaterialBinding.PER_FACE
+    material.diffuseColor.setValues(0, len(rgb), [coin.SbColor(*c) for c in rgb])
+    material.diffuseColor.setNum(len(rgb))
 
 
 class VPMeshHexDominant:
@@ -60,7 +70,7 @@ class VPMeshHexDominant:
     def add_properties(vobj):
         if "ColorByType" not in vobj.PropertiesList:
             vobj.addProperty("App::PropertyBool", "ColorByType", "HexMerge",
-                             "Colour elements by type: " + legend())
+                             "Colour elements by type: " + colors.legend())
             vobj.ColorByType = True
 
     def attach(self, vobj):
@@ -84,20 +94,20 @@ class VPMeshHexDominant:
     def onChanged(self, vobj, prop):
         if prop == "ColorByType":
             self.apply_colors(vobj)
-        elif prop == "ShowInner":  # the C++ side redraws other faces: colour them again
+        elif prop in ("ShowInner", "ShapeColor", "Transparency", "DisplayMode"):
+            # the C++ side redraws the faces or resets the material: colour them again
             self.apply_colors_later(vobj)
 
     def apply_colors_later(self, vobj):
-        from PySide import QtCore
-
-        name = vobj.Object.Name if vobj is not None else None
-        doc = vobj.Object.Document.Name if vobj is not None else None
+        if vobj is None:
+            return
+        name = vobj.Object.Name
+        doc = vobj.Object.Document.Name
 
         def apply():
-            try:
-                obj = FreeCAD.getDocument(doc).getObject(name)
-            except Exception:  # the document was closed meanwhile
+            if doc not in FreeCAD.listDocuments():  # the document was closed meanwhile
                 return
+            obj = FreeCAD.getDocument(doc).getObject(name)
             if obj is not None and obj.ViewObject is not None:
                 self.apply_colors(obj.ViewObject)
 
@@ -108,14 +118,13 @@ class VPMeshHexDominant:
             return
         try:
             if vobj.ColorByType and vobj.Object.FemMesh.VolumeCount:
-                vobj.ElementColor = colors_by_type(vobj.Object.FemMesh)
+                color_by_type(vobj)
             else:
                 vobj.ElementColor = {}
         except Exception as e:  # colouring must never break a recompute
             FreeCAD.Console.PrintWarning("HexMerge: colour by type failed: {}\n".format(e))
 
     def setEdit(self, vobj, mode=0):
-        from .task_mesh_hexdominant import TaskPanelHexDominant
         FreeCADGui.Control.showDialog(TaskPanelHexDominant(vobj.Object))
         return True
 
@@ -129,6 +138,14 @@ class VPMeshHexDominant:
             return True
         FreeCADGui.ActiveDocument.setEdit(vobj.Object.Name)
         return True
+
+    # Nothing to save: Python 3.11 gives every object a __getstate__ returning its __dict__
+    # (self.Object here), which FreeCAD 0.20 prefers to dumps() and cannot write as JSON.
+    def __getstate__(self):
+        return None
+
+    def __setstate__(self, state):
+        return None
 
     def dumps(self):
         return None

@@ -8,6 +8,9 @@ root="$(cd "$here/../.." && pwd)"
 log="${HEXMERGE_TEST_LOG:-$(mktemp -d)/freecad-tests}"
 mkdir -p "$(dirname "$log")"
 passed=0; failed=0
+# The add-on under test uses this checkout's engine (as tests/python's conftest does), not another
+# `hexmerge` the interpreter may find first.
+export PYTHONPATH="$root/src/python${PYTHONPATH:+:$PYTHONPATH}"
 
 run_suite() {  # module, per-suite timeout (s)
   local out="$log.$1.txt"
@@ -25,10 +28,11 @@ run_suite() {  # module, per-suite timeout (s)
 
 run_suite test_femmesh_arrays 120
 run_suite test_addon 480
+run_suite test_modules 240
 if [[ "${1:-}" != "--no-gui" ]]; then
   out="$log.gui.txt"
-  (cd "$here" && QTWEBENGINE_DISABLE_SANDBOX=1 timeout 240 xvfb-run -a -s "-screen 0 1600x1000x24" \
-     freecad "$here/gui_test.py" >"$out" 2>&1)
+  (cd "$here" && QTWEBENGINE_DISABLE_SANDBOX=1 timeout 300 xvfb-run -a -s "-screen 0 1600x1000x24" \
+     freecad "$here/gui_test.py" -M "$root" >"$out" 2>&1)
   if grep -q "^GUI TEST PASSED" "$out"; then passed=$((passed + 1)); echo "gui: passed";
   else failed=$((failed + 1)); echo "gui: FAILED (log $out)"; grep -E "GUI TEST|Error" "$out" | head -20; fi
 fi

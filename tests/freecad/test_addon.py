@@ -211,6 +211,17 @@ class ShapeMode(unittest.TestCase):
         doc.recompute()
         self.assertEqual(obj.FemMesh.HexaCount, 84)
 
+    def test_target_size_above_the_thinnest_side_is_warned(self):
+        doc, box = self.box()
+        obj = hm.make_hexdominant_mesh(doc, box, target_size=35, second_order=False)
+        warnings = mesh_hexdominant.report_dict(obj)["freecad"]["warnings"]
+        self.assertEqual(len(warnings), 1, warnings)
+        self.assertIn("thinnest side", warnings[0])
+        self.assertIn("30 mm", warnings[0])
+        obj.TargetSize = 10
+        doc.recompute()
+        self.assertEqual(mesh_hexdominant.report_dict(obj)["freecad"]["warnings"], [])
+
     def test_bad_shapes(self):
         doc, box = self.box()
         with self.assertRaisesRegex(RuntimeError, "larger than the shape"):
@@ -223,6 +234,62 @@ class ShapeMode(unittest.TestCase):
         self.assertEqual(len(doc.Objects), n)
         with self.assertRaisesRegex(ValueError, "unknown HexMerge option"):
             hm.make_hexdominant_mesh(doc, box, no_such_option=1)
+
+
+class Progress(unittest.TestCase):
+    """The panel's one progress bar across the engine's and the mesher's phases."""
+
+    def test_one_bar_across_phases(self):
+        from freecad.hexmerge.task_mesh_hexdominant import PHASES, overall_progress
+        for shape_mode, phases in ((False, ["topology", "candidates", "selection", "bound", "done"]),
+                                   (True, ["mesh shape", "topology", "candidates", "selection",
+                                           "done"])):
+            values = []
+            for phase in phases:
+                for f in (0.0, 0.5, 1.0):
+                    value, name = overall_progress(phase, f, shape_mode)
+                    self.assertEqual(name, PHASES[phase][0])
+                    self.assertNotEqual(name, phase)  # a readable name, not the engine's
+                    values.append(value)
+            self.assertEqual(values, sorted(values), (shape_mode, values))
+            self.assertEqual(values[0], 0.0)
+            self.assertEqual(values[-1], 1.0)
+            self.assertGreater(values[3], 0.0)  # the second phase does not restart at 0
+
+
+class WriterLink(unittest.TestCase):
+    """FreeCAD's CalculiX writer reads the mesh object's shape from its Part (or Shape) link and
+    warns "A finite mesh without a link to a Shape" when there is none."""
+
+    def tearDown(self):
+        close_all()
+
+    def shape_seen_by_writer(self, doc, mesh):
+        from femmesh.meshsetsgetter import MeshSetsGetter
+        from femtools.membertools import AnalysisMember
+        solver = [o for o in doc.Analysis.Group
+                  if o.isDerivedFrom("Fem::FemSolverObjectPython")][0]
+        return MeshSetsGetter(doc.Analysis, solver, mesh, AnalysisMember(doc.Analysis)).theshape
+
+    def test_shape_mode_links_the_shape(self):
+        doc = helpers.cantilever_from_shape(size=500.0, second_order=False)
+        mesh = doc.getObject(helpers.mesh_name(doc))
+        self.assertEqual(mesh.Proxy.Type, mesh_hexdominant.TYPE)
+        self.assertEqual(self.shape_seen_by_writer(doc, mesh), doc.Box)
+
+    def test_tet_mode_links_the_source_meshs_shape_after_reopen(self):
+        doc = helpers.cantilever("1st", 400.0)
+        gmsh = doc.getObject(helpers.mesh_name(doc))
+        name = hm.make_hexdominant_mesh(doc, gmsh).Name
+        self.assertEqual(self.shape_seen_by_writer(doc, doc.getObject(name)), doc.Box)
+        path = os.path.join(tempfile.mkdtemp(), "link.FCStd")
+        doc.saveAs(path)
+        FreeCAD.closeDocument(doc.Name)
+        doc = FreeCAD.openDocument(path)
+        self.assertEqual(self.shape_seen_by_writer(doc, doc.getObject(name)), doc.Box)
+        # the link follows the source
+        doc.getObject(name).SourceMesh = None
+        self.assertIsNone(doc.getObject(name).Part)
 
 
 class MultiMaterial(unittest.TestCase):

@@ -1,83 +1,36 @@
 # SPDX-License-Identifier: LGPL-2.1-or-later
-"""Recombination of a FemMesh with no GUI (the role of FEM's femmesh/netgentools.py).
+"""Jobs that make a hex-dominant FemMesh, with no GUI (the role of FEM's femmesh/gmshtools.py).
 
 A run has three steps so that a GUI can keep the middle one off its thread:
     job = RecombineJob.prepare(femmesh, ...)   # FreeCAD thread: FemMesh -> arrays, regions
     job.run(progress)                          # any thread: numpy and the engine only
     femmesh, report = job.finish()             # FreeCAD thread: arrays -> new FemMesh
-recombine_femmesh() chains them.
+ShapeJob does the same for a solid (mesher, then engine). recombine_femmesh() chains them.
 """
 
-import os
-import sys
 import time
 
 import numpy as np
 
+from . import engine
 from . import femmesh_arrays
 from . import regions as regions_mod
-
-REPO = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-
-# Options of the add-on itself (not engine parameters).
-PYRAMIDS_AS_HEXAHEDRA_DOC = (
-    "FreeCAD 0.20's CalculiX writer leaves pyramids out of the input file. When on, every "
-    "pyramid is stored as a collapsed hexahedron (base, apex four times), which the writer emits "
-    "as C3D8 (C3D20 for quadratic meshes), so the solver sees every element.")
+from . import results
 
 
-class Cancelled(Exception):
-    """The user cancelled the run through the progress callback."""
-
-
-def engine():
-    """The hexmerge Python module, with a clear message when it is not built or not importable."""
-    try:
-        import hexmerge
-    except ImportError:
-        # A checkout linked into FreeCAD's Mod folder: the module is built into src/python.
-        built = os.path.join(REPO, "src", "python")
-        if os.path.isdir(os.path.join(built, "hexmerge")) and built not in sys.path:
-            sys.path.append(built)
-    try:
-        import hexmerge
-    except ImportError as e:
-        raise ImportError(
-            "the HexMerge engine (Python module 'hexmerge') cannot be imported into FreeCAD's "
-            "Python: build it with the README's setup command ({})".format(e)) from e
-    return hexmerge
-
-
-def parameter_table():
-    """The engine's parameter table as a list of dicts (name, type, default, unit, min, max,
-    choices, label, doc), whatever the module returns rows as."""
-    rows = []
-    for r in engine().parameters():
-        get = (lambda k, r=r: r.get(k)) if isinstance(r, dict) else (lambda k, r=r: getattr(r, k, None))
-        rows.append({k: get(k) for k in
-                     ("name", "type", "default", "unit", "min", "max", "choices", "label", "doc")})
-    return rows
-
-
-def mesh_parameter_table():
-    """The mesher's options (hexmerge.mesh_parameters()), in parameter_table()'s row format."""
-    return [{k: r.get(k) for k in ("name", "type", "default", "unit", "min", "max", "choices",
-                                   "label", "doc")}
-            for r in engine().mesh_parameters()]
-
-
-def engine_options(options):
-    """Keeps the options the engine knows, with their table types; rejects unknown names."""
-    table = {r["name"]: r for r in parameter_table()}
-    out = {}
-    for name, value in options.items():
-        if name not in table:
-            raise ValueError("unknown HexMerge option '{}' (known: {})"
-                             .format(name, ", ".join(table)))
-        kind = table[name]["type"]
-        out[name] = (float(value) if kind == "float" else int(value) if kind == "int"
-                     else bool(value) if kind == "bool" else str(value))
-    return out
+def addon_report(input_cells, regions, region_count, group_names, pyramids_as_hexahedra,
+                 femmesh, seconds, warnings=()):
+    """The report's "freecad" part: what the add-on did around the engine."""
+    return {
+        "input_cells": input_cells,
+        "warnings": list(warnings),
+        "regions": regions,
+        "region_count": region_count,
+        "material_groups": sorted((group_names or {}).values()),
+        "pyramids_as_collapsed_hexahedra": bool(pyramids_as_hexahedra),
+        "femmesh_volumes": femmesh.VolumeCount,
+        "seconds": seconds,
+    }
 
 
 class RecombineJob:
@@ -114,14 +67,14 @@ class RecombineJob:
             regions = found
         elif regions == "none":
             regions = None
-        job = cls(arrays, name, tets, regions, engine_options(options or {}),
+        job = cls(arrays, name, tets, regions, engine.typed_options(options or {}),
                   pyramids_as_hexahedra)
         job.seconds = {"read FemMesh": read, "regions": time.perf_counter() - t}
         return job
 
     def run(self, progress=None):
         """Runs the engine. progress(phase, fraction) -> False cancels (raises Cancelled)."""
-        hexmerge = engine()
+        hexmerge = engine.module()
         t = time.perf_counter()
         region_ids = self.regions.ids if self.regions is not None else None
         if region_ids is not None and "respect_regions" in self.options \
@@ -133,13 +86,13 @@ class RecombineJob:
         try:
             self.result = hexmerge.recombine(self.arrays.points, self.tets, region_ids, **kwargs)
         except hexmerge.Cancelled as e:
-            raise Cancelled(str(e) or "cancelled") from e
+            raise engine.Cancelled(str(e) or "cancelled") from e
         self.seconds["engine"] = time.perf_counter() - t
 
     def finish(self):
         """The new FemMesh and the report (the engine's, plus what the add-on did)."""
         t = time.perf_counter()
-        blocks, block_regions, point_index = result_blocks(self.result)
+        blocks, block_regions, point_index = results.result_blocks(self.result)
         points, point_ids = self.arrays.points, self.arrays.point_ids
         if point_index is not None:
             points, point_ids = points[point_index], point_ids[point_index]
@@ -148,16 +101,11 @@ class RecombineJob:
             points, point_ids, blocks, block_regions, names, self.pyramids_as_hexahedra)
         self.seconds["write FemMesh"] = time.perf_counter() - t
 
-        report = dict(result_report(self.result))
-        report["freecad"] = {
-            "input_cells": self.cell_name,
-            "regions": (self.regions.source if self.regions is not None else "none"),
-            "region_count": (self.regions.count if self.regions is not None else 0),
-            "material_groups": sorted((names or {}).values()),
-            "pyramids_as_collapsed_hexahedra": bool(self.pyramids_as_hexahedra),
-            "femmesh_volumes": femmesh.VolumeCount,
-            "seconds": self.seconds,
-        }
+        report = dict(self.result[1])
+        report["freecad"] = addon_report(
+            self.cell_name, self.regions.source if self.regions is not None else "none",
+            self.regions.count if self.regions is not None else 0, names,
+            self.pyramids_as_hexahedra, femmesh, self.seconds)
         return femmesh, report
 
 
@@ -174,6 +122,7 @@ class ShapeJob:
         self.pyramids_as_hexahedra = pyramids_as_hexahedra
         self.result = None
         self.seconds = {}
+        self.warnings = []
 
     @classmethod
     def prepare(cls, shape, mesher, options=None, material_names=None, pyramids_as_hexahedra=True):
@@ -186,16 +135,26 @@ class ShapeJob:
         size = float(mesher.get("size") or 0.0)
         if size <= 0:
             raise ValueError("set the target size (TargetSize) to a positive length")
+        box = shape.BoundBox
+        thinnest = min(box.XLength, box.YLength, box.ZLength)
+        warnings = []
+        if size > thinnest:
+            warnings.append(
+                "the target size {:g} mm is larger than the thinnest side of the shape's "
+                "bounding box ({:g} mm): "
+                "the mesh has fewer than one element across it; a size of {:.2g} mm or less "
+                "follows the shape".format(size, thinnest, thinnest / 2))
         t = time.perf_counter()
         brep = shape.exportBrepToString()
-        job = cls(brep, len(solids), dict(mesher, size=size), engine_options(options or {}),
+        job = cls(brep, len(solids), dict(mesher, size=size), engine.typed_options(options or {}),
                   dict(material_names or {}), pyramids_as_hexahedra)
         job.seconds = {"export shape": time.perf_counter() - t}
+        job.warnings = warnings
         return job
 
     def run(self, progress=None):
         """Meshes and recombines. progress(phase, fraction) -> False cancels (raises Cancelled)."""
-        hexmerge = engine()
+        hexmerge = engine.module()
         t = time.perf_counter()
         kwargs = dict(self.mesher)
         kwargs.update(self.options)
@@ -203,7 +162,7 @@ class ShapeJob:
         try:
             self.result = hexmerge.mesh_shape(self.brep, size, progress=progress, **kwargs)
         except hexmerge.Cancelled as e:
-            raise Cancelled(str(e) or "cancelled") from e
+            raise engine.Cancelled(str(e) or "cancelled") from e
         self.seconds["mesh and recombine"] = time.perf_counter() - t
 
     def finish(self):
@@ -211,7 +170,7 @@ class ShapeJob:
         what the add-on did)."""
         t = time.perf_counter()
         mesh = self.result[0]
-        blocks, block_regions, _ = result_blocks(self.result)
+        blocks, block_regions, _ = results.result_blocks(self.result)
         # Regions are the solids (0-based): tets of different solids were never merged. With one
         # solid there is nothing to tell apart, as for a tet mesh of one solid.
         names, count = None, 1
@@ -225,17 +184,12 @@ class ShapeJob:
             mesh.points, np.arange(1, mesh.nb_points + 1), blocks, block_regions, names,
             self.pyramids_as_hexahedra)
         self.seconds["write FemMesh"] = time.perf_counter() - t
-        report = dict(result_report(self.result))
-        report["freecad"] = {
-            "input_cells": "shape",
-            "regions": ("solids of the shape ({} solids, mesher)".format(self.nb_solids)
-                        if block_regions is not None else "none"),
-            "region_count": count if block_regions is not None else 0,
-            "material_groups": sorted((names or {}).values()),
-            "pyramids_as_collapsed_hexahedra": bool(self.pyramids_as_hexahedra),
-            "femmesh_volumes": femmesh.VolumeCount,
-            "seconds": self.seconds,
-        }
+        report = dict(self.result[1])
+        report["freecad"] = addon_report(
+            "shape", ("solids of the shape ({} solids, mesher)".format(self.nb_solids)
+                      if block_regions is not None else "none"),
+            count if block_regions is not None else 0, names, self.pyramids_as_hexahedra,
+            femmesh, self.seconds, self.warnings)
         return femmesh, report
 
 
@@ -245,28 +199,9 @@ def recombine_femmesh(femmesh, regions="auto", shape=None, pyramids_as_hexahedra
 
     The input is not modified. Options are the engine's parameters (hexmerge.parameters()).
     regions: "auto" (from "Volume" mesh groups, else per solid of `shape`), "none", or a
-    regions.Regions. pyramids_as_hexahedra: see PYRAMIDS_AS_HEXAHEDRA_DOC.
+    regions.Regions. pyramids_as_hexahedra: see engine.PYRAMIDS_AS_HEXAHEDRA_DOC.
     """
     job = RecombineJob.prepare(femmesh, options, regions, shape,
                                pyramids_as_hexahedra=pyramids_as_hexahedra)
     job.run(progress)
     return job.finish()
-
-
-# ---- the engine's result, read in one place ------------------------------------------------
-
-def result_blocks(result):
-    """[(cell name, VTK-ordered cells)], [regions per block] (or None) and the index into the
-    input points of each output point, from hexmerge.recombine()'s (MixedMesh, report)."""
-    mesh = result[0]
-    blocks, regs = [], []
-    for block in mesh.cell_blocks():
-        blocks.append((block.type, np.asarray(block.data, dtype=np.int64)))
-        if mesh.regions is not None:
-            regs.append(np.asarray(mesh.regions)[block.cells])
-    index = None if mesh.point_map is None else np.asarray(mesh.point_map, dtype=np.int64)
-    return blocks, (regs if mesh.regions is not None else None), index
-
-
-def result_report(result):
-    return result[1]

@@ -1,0 +1,67 @@
+# SPDX-License-Identifier: LGPL-2.1-or-later
+"""Access to the HexMerge engine (the Python module `hexmerge`): importing it, its parameter
+tables, typing options by the table. Nothing here touches FreeCAD."""
+
+import os
+import sys
+
+from .resources import ROOT
+
+# Options of the add-on itself (not engine parameters).
+PYRAMIDS_AS_HEXAHEDRA_DOC = (
+    "FreeCAD 0.20's CalculiX writer leaves pyramids out of the input file. When on, every "
+    "pyramid is stored as a collapsed hexahedron (base, apex four times), which the writer emits "
+    "as C3D8 (C3D20 for quadratic meshes), so the solver sees every element.")
+
+TABLE_KEYS = ("name", "type", "default", "unit", "min", "max", "choices", "label", "doc")
+
+
+class Cancelled(Exception):
+    """The user cancelled the run through the progress callback."""
+
+
+def module():
+    """The hexmerge Python module, with a clear message when it is not built or not importable."""
+    try:
+        import hexmerge
+    except ImportError:
+        # A checkout linked into FreeCAD's Mod folder: the module is built into src/python.
+        built = os.path.join(ROOT, "src", "python")
+        if os.path.isdir(os.path.join(built, "hexmerge")) and built not in sys.path:
+            sys.path.append(built)
+    try:
+        import hexmerge
+    except ImportError as e:
+        raise ImportError(
+            "the HexMerge engine (Python module 'hexmerge') cannot be imported into FreeCAD's "
+            "Python: build it with the README's setup command ({})".format(e)) from e
+    return hexmerge
+
+
+def parameter_table():
+    """The engine's parameter table as a list of dicts (TABLE_KEYS), whatever the module
+    returns rows as."""
+    rows = []
+    for r in module().parameters():
+        get = (lambda k, r=r: r.get(k)) if isinstance(r, dict) else (lambda k, r=r: getattr(r, k, None))
+        rows.append({k: get(k) for k in TABLE_KEYS})
+    return rows
+
+
+def mesh_parameter_table():
+    """The mesher's options (hexmerge.mesh_parameters()), in parameter_table()'s row format."""
+    return [{k: r.get(k) for k in TABLE_KEYS} for r in module().mesh_parameters()]
+
+
+def typed_options(options):
+    """The options with the engine's table types; ValueError for a name the engine does not know."""
+    table = {r["name"]: r for r in parameter_table()}
+    out = {}
+    for name, value in options.items():
+        if name not in table:
+            raise ValueError("unknown HexMerge option '{}' (known: {})"
+                             .format(name, ", ".join(table)))
+        kind = table[name]["type"]
+        out[name] = (float(value) if kind == "float" else int(value) if kind == "int"
+                     else bool(value) if kind == "bool" else str(value))
+    return out
