@@ -347,7 +347,8 @@ py::tuple run_regions_by_solid(const std::string& brep, const PointsIn& points, 
 py::tuple run_mesh_shape(const std::string& brep, double size, int boundary_layers,
                          double layer_thickness, double lattice_margin, double surface_deflection,
                          const std::string& frame, bool sweep, double tetgen_time_limit,
-                         const std::string& tetgen, const std::string& work_directory) {
+                         double memory_limit, const std::string& tetgen,
+                         const std::string& work_directory) {
   MeshShapeParameters parameters;
   parameters.size = size;
   parameters.boundary_layers = boundary_layers;
@@ -357,6 +358,7 @@ py::tuple run_mesh_shape(const std::string& brep, double size, int boundary_laye
   parameters.frame = frame;
   parameters.sweep = sweep;
   parameters.tetgen_time_limit = tetgen_time_limit;
+  parameters.memory_limit = memory_limit;
   parameters.tetgen = tetgen;
   parameters.work_directory = work_directory;
   MeshShapeReport report;
@@ -389,6 +391,12 @@ py::tuple run_mesh_shape(const std::string& brep, double size, int boundary_laye
   d["frame"] = axes;
   d["spacing"] = py::make_tuple(report.spacing[0], report.spacing[1], report.spacing[2]);
   d["max_boundary_distance"] = report.max_boundary_distance;
+  d["estimated_tets"] = report.estimated_tets;
+  d["nb_shared_faces"] = report.nb_shared_faces;
+  d["strategy"] = report.strategy;
+  py::list failed;
+  for (const std::string& f : report.failed_strategies) failed.append(f);
+  d["failed_strategies"] = failed;
   d["tetgen_command"] = report.tetgen_command;
   d["phase_seconds"] = phases_dict(report.phase_seconds);
   const auto nb_points = static_cast<py::ssize_t>(mesh.points.size() / 3);
@@ -527,7 +535,7 @@ Returns (solids, report): solids int32 (M,), 0-based solid index in TopExp::MapS
         py::arg("boundary_layers") = 1, py::arg("layer_thickness") = 0.3,
         py::arg("lattice_margin") = 0.3, py::arg("surface_deflection") = 0.02,
         py::arg("frame") = "auto", py::arg("sweep") = true, py::arg("tetgen_time_limit") = 0.0,
-        py::arg("tetgen") = "tetgen", py::arg("work_directory") = "",
+        py::arg("memory_limit") = 0.0, py::arg("tetgen") = "tetgen", py::arg("work_directory") = "",
         R"doc(Lattice-seeded tets of a solid shape (BREP text) with OpenCASCADE and TetGen.
 
 See MeshShapeParameters (src/occ/hexmerge/occ/mesh_shape.h) for the options.

@@ -13,6 +13,7 @@ import json
 import re
 import shutil
 import subprocess
+import time
 from pathlib import Path
 
 import numpy as np
@@ -464,7 +465,7 @@ def test_mesh_parameters_are_the_compiled_defaults() -> None:
         assert value == row["default"], row["name"]
     assert [r["name"] for r in hexmerge.mesh_parameters()] == [
         "boundary_layers", "layer_thickness", "lattice_margin", "surface_deflection", "frame", "sweep",
-        "tetgen_time_limit"]
+        "tetgen_time_limit", "memory_limit"]
 
 
 @pytest.mark.parametrize(
@@ -509,13 +510,119 @@ def test_bad_input(shapes, tmp_path, shape, kwargs, message) -> None:
 ])
 def test_tetgen_failures_are_restarted_then_reported(shapes, tmp_path, script, limit, message) -> None:
     """A TetGen that leaves no tets, or never ends (as TetGen 1.5 did on some lattice faces), is
-    run 6 times (5 restarts, the loops started elsewhere), then the meshing fails saying so."""
+    run 6 times (5 restarts, the loops started elsewhere) for each of the 4 ways of placing the
+    points, then the meshing fails saying so."""
     fake = tmp_path / "tetgen"
     fake.write_text(f"#!/bin/sh\necho started >> {tmp_path / 'runs'}\n{script}\n")
     fake.chmod(0o755)
     with pytest.raises(hexmerge.InputError, match=message):
         hexmerge.mesh_shape(shapes["box"], 10.0, tetgen=str(fake), tetgen_time_limit=limit)
-    assert (tmp_path / "runs").read_text().count("started") == 6
+    assert (tmp_path / "runs").read_text().count("started") == 24
+
+
+@pytest.mark.parametrize(("crash", "how"), [
+    ("kill -ABRT $$", "TetGen stopped on an internal error"),
+    ("kill -SEGV $$", "TetGen crashed \\(segmentation fault\\)"),
+])
+def test_a_tetgen_crash_falls_back_to_the_next_strategy(shapes, tmp_path, crash, how) -> None:
+    """TetGen crashing on the lattice faces (as TetGen 1.5 does on FreeCAD's plate with a hole at
+    h 2.5): the next way of placing the points is tried, the report names the failure in our
+    words with TetGen's reason, and the mesh is valid. TetGen's crash text is never shown."""
+    real = shutil.which("tetgen")
+    fake = tmp_path / "tetgen"
+    fake.write_text(f"""#!/bin/sh
+if [ ! -e {tmp_path / 'crashed'} ]; then
+  touch {tmp_path / 'crashed'}
+  echo "Opening $2."
+  echo "Error:  Invalid PLC."
+  echo "  Two segments (1, 2) and (3, 4) intersect."
+  echo "terminate called after throwing an instance of 'int'" >&2
+  {crash}
+fi
+exec {real} "$@"
+""")
+    fake.chmod(0o755)
+    tets, report = hexmerge.mesh_shape(shapes["bracket"], 3.0, recombine=False, tetgen=str(fake))
+    meshing = report["meshing"]
+    assert meshing["strategy"] == "lattice without lattice faces"
+    assert meshing["nb_lattice_faces"] == 0
+    [failure] = meshing["failed_strategies"]
+    assert re.fullmatch(f"lattice: {how} \\(it reports: Invalid PLC. Two segments \\(1, 2\\) and "
+                        "\\(3, 4\\) intersect.\\)(; faces? .* of the shape)?", failure), failure
+    mesh, rep = hexmerge.recombine(tets.points, tets.cell_vertices.reshape(-1, 4), tets.regions)
+    assert_checked(mesh, tets, rep, 3.0)
+
+
+def test_sizes_that_do_not_fit_in_memory_are_refused_before_any_work(shapes) -> None:
+    """The tets are estimated from the shape's volume and area; a size needing more memory than
+    the limit (or the system has) is refused at once, with the estimate and a size that fits."""
+    started = time.perf_counter()
+    with pytest.raises(hexmerge.InputError, match=r"size 0.05 would make about .* million tets, "
+                       r"which need about .* GB .*: give a size of at least"):
+        hexmerge.mesh_shape(shapes["box"], 0.05)
+    with pytest.raises(hexmerge.InputError, match=r"memory_limit is 0.001 GB"):
+        hexmerge.mesh_shape(shapes["box"], 2.0, memory_limit=0.001)
+    assert time.perf_counter() - started < 10
+    with pytest.raises(hexmerge.InputError, match="memory_limit must be in"):
+        hexmerge.mesh_shape(shapes["box"], 2.0, memory_limit=-1.0)
+    # The estimate is within a factor 4 of the tets made (it counts every face as refined to h:
+    # shapes of planar lattice faces make fewer).
+    for name, h in (("box", 4.0), ("bracket", 3.0), ("cylinder", 3.0)):
+        tets, report = hexmerge.mesh_shape(shapes[name], h, recombine=False)
+        made, estimated = len(tets.cell_vertices) // 4, report["meshing"]["estimated_tets"]
+        assert made / 4 < estimated < 4 * made, (name, made, estimated)
+
+
+TOUCHING_GEO = """SetFactory("OpenCASCADE");
+Box(1) = {0, 0, 0, 30, 20, 10};
+Box(2) = {30, 5, 2, 15, 8, 6};   // touches box 1 over an 8 x 6 patch of its +x face
+Cylinder(3) = {10, 10, 10, 0, 0, 12, 6};   // stands on box 1's top face
+"""
+OVERLAPPING_GEO = """SetFactory("OpenCASCADE");
+Box(1) = {0, 0, 0, 30, 20, 10};
+Box(2) = {25, 5, 2, 15, 8, 6};   // 5 mm inside box 1
+"""
+
+
+def test_touching_solids_are_meshed_conformally_one_region_each(tmp_path) -> None:
+    """Solids that touch as separate closed shells (a compound, as STEP assemblies and FreeCAD
+    compounds arrive) are glued: a conforming mesh, one region per solid, each region's volume
+    that of its solid."""
+    shape = gmsh_brep(tmp_path, "touching", TOUCHING_GEO)
+    h = 2.0
+    tets, report = hexmerge.mesh_shape(shape, h, recombine=False)
+    meshing = report["meshing"]
+    assert meshing["nb_solids"] == 3 and meshing["nb_shared_faces"] == 2
+    mesh, rep = hexmerge.recombine(tets.points, tets.cell_vertices.reshape(-1, 4), tets.regions)
+    assert_checked(mesh, tets, rep, h)
+    cells = tets.cell_vertices.reshape(-1, 4)
+    p = tets.points[cells]
+    volumes = np.einsum("ij,ij->i", np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]), p[:, 3] - p[:, 0]) / 6
+    assert (volumes > 0).all()
+    expected = [30 * 20 * 10, 15 * 8 * 6, np.pi * 36 * 12]
+    for region, volume in enumerate(expected):
+        got = volumes[tets.regions == region].sum()
+        assert abs(got - volume) < 0.01 * volume, (region, got, volume)
+    # No face between two regions is a boundary face: every interface triangle has a tet on
+    # each side (the mesh is one conforming piece).
+    faces = np.sort(np.concatenate([cells[:, [1, 2, 3]], cells[:, [0, 2, 3]], cells[:, [0, 1, 3]],
+                                    cells[:, [0, 1, 2]]]), axis=1)
+    _, counts = np.unique(faces, axis=0, return_counts=True)
+    assert counts.max() == 2
+    # The outer boundary: the boxes' faces less the patch they share (on both), the cylinder's
+    # side and top (its bottom is box 1's, taken from box 1's top).
+    boundary_area_expected = (2 * (30 * 20 + 30 * 10 + 20 * 10) + 2 * (15 * 8 + 15 * 6 + 8 * 6) - 2 * 8 * 6
+                              + 2 * np.pi * 6 * 12)
+    unique, counts = np.unique(faces, axis=0, return_counts=True)
+    q = tets.points[unique[counts == 1]]
+    area = 0.5 * np.linalg.norm(np.cross(q[:, 1] - q[:, 0], q[:, 2] - q[:, 0]), axis=1).sum()
+    assert abs(area - boundary_area_expected) < 0.01 * boundary_area_expected, (area, boundary_area_expected)
+
+
+def test_overlapping_solids_are_refused_by_name(tmp_path) -> None:
+    shape = gmsh_brep(tmp_path, "overlapping", OVERLAPPING_GEO)
+    with pytest.raises(hexmerge.InputError, match=r"solids 0 and 1 of the shape overlap \(common volume 240"):
+        hexmerge.mesh_shape(shape, 2.0)
 
 
 def test_bad_flags(shapes) -> None:

@@ -52,6 +52,10 @@ _MESH_TABLE: tuple[dict[str, Any], ...] = (
          doc="Time limit of one TetGen run (0: 30 s plus 1 ms per point); a run past it, or one "
          "that leaves no tet, is restarted with the lattice faces' loops started elsewhere, up to "
          "5 times, then the meshing fails"),
+    dict(name="memory_limit", type="float", default=0.0, unit="GB", min=0.0, max=1e6, choices=[],
+         label="Memory limit",
+         doc="Memory the meshing and recombination may take (0: what the system has available); "
+         "a size whose estimated tets would need more is refused before any work"),
 )
 
 #: File name endings read_shape_file() takes.
@@ -177,6 +181,7 @@ def mesh_shape(
     frame: str = "auto",
     sweep: bool = True,
     tetgen_time_limit: float = 0.0,
+    memory_limit: float = 0.0,
     tetgen: str = "tetgen",
     work_directory: str | os.PathLike[str] | None = None,
     second_order: bool = False,
@@ -195,7 +200,7 @@ def mesh_shape(
         Target element size h in the shape's units: the lattice spacing and the surface's
         longest edge. Positive and not larger than the shape.
     boundary_layers, layer_thickness, lattice_margin, surface_deflection, frame, sweep,
-    tetgen_time_limit
+    tetgen_time_limit, memory_limit
         The mesher's options, see mesh_parameters() (fractions of h where they are lengths).
     tetgen : str
         The TetGen program (a name on PATH or a path).
@@ -236,7 +241,7 @@ def mesh_shape(
     size, options = _options(size, dict(
         boundary_layers=boundary_layers, layer_thickness=layer_thickness,
         lattice_margin=lattice_margin, surface_deflection=surface_deflection, frame=frame,
-        sweep=sweep, tetgen_time_limit=tetgen_time_limit))
+        sweep=sweep, tetgen_time_limit=tetgen_time_limit, memory_limit=memory_limit))
     if not isinstance(tetgen, (str, os.PathLike)) or not os.fspath(tetgen):
         raise _core.InputError(f"tetgen must be the TetGen program's name or path, got {tetgen!r}")
     if work_directory is not None and not isinstance(work_directory, (str, os.PathLike)):

@@ -3,17 +3,21 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <iterator>
 #include <optional>
+#include <sstream>
 #include <utility>
 #include <vector>
 
 #include "hexmerge/core/error.h"
+#include "hexmerge/occ/brep_text.h"
 #include "hexmerge/occ/mesher/boundary_distance.h"
 #include "hexmerge/occ/mesher/facets.h"
 #include "hexmerge/occ/mesher/improve.h"
 #include "hexmerge/occ/mesher/lattice.h"
 #include "hexmerge/occ/mesher/layers.h"
 #include "hexmerge/occ/mesher/shape.h"
+#include "hexmerge/occ/mesher/size_estimate.h"
 #include "hexmerge/occ/mesher/surface.h"
 #include "hexmerge/occ/mesher/surface_repair.h"
 #include "hexmerge/occ/mesher/sweep.h"
@@ -62,6 +66,7 @@ void check_parameters(const MeshShapeParameters& p) {
   if (p.tetgen.empty()) bad("tetgen must name the TetGen program");
   if (!(p.tetgen_time_limit >= 0 && p.tetgen_time_limit <= 86400))
     bad("tetgen_time_limit must be in [0, 86400] seconds");
+  if (!(p.memory_limit >= 0 && p.memory_limit <= 1e6)) bad("memory_limit must be in [0, 10^6] GB");
 }
 
 // The tet mesh from the tetrahedraliser's output (frame coordinates): tets oriented positive,
@@ -98,12 +103,102 @@ TetMesh world_mesh(const std::string& brep, const Shape& shape, const Surface& s
   return mesh;
 }
 
+// How one attempt places its points. mesh_shape() tries them in this order until TetGen
+// tetrahedralises the input; the later ones hand TetGen simpler input (no planar facets holding
+// lattice points, on which TetGen 1.5 fails for some shapes and sizes; no boundary layers; no
+// points inside at all, TetGen adding its own) and give fewer hexahedra.
+struct Strategy {
+  const char* name;
+  bool lattice_faces;   // planar faces on lattice planes carry lattice points (and sweeps)
+  bool layers;          // boundary-layer points
+  bool lattice_points;  // lattice points inside the shape (the hexahedral core)
+};
+constexpr Strategy kStrategies[] = {
+    {"lattice", true, true, true},
+    {"lattice without lattice faces", false, true, true},
+    {"lattice without boundary layers", false, false, true},
+    {"surface only", false, false, false},
+};
+
+// One attempt: steps 3 to 12 of mesh_shape() with one strategy.
+TetMesh mesh_attempt(const Shape& shape, const Frame& frame, const std::string& regions_brep,
+                     const MeshShapeParameters& parameters, const Strategy& strategy,
+                     MeshShapeReport& report);
+
 }  // namespace
 
 TetMesh mesh_shape(const std::string& brep, const MeshShapeParameters& parameters,
                    MeshShapeReport& report) {
   check_parameters(parameters);
   report = MeshShapeReport{};
+  const auto start = PhaseClock::Clock::now();
+  const auto seconds_since = [](PhaseClock::Clock::time_point t) {
+    return std::chrono::duration<double>(PhaseClock::Clock::now() - t).count();
+  };
+  {
+    TetrahedralizeParameters program;
+    program.program = parameters.tetgen;
+    const Tetrahedralizer check(program);  // fails now when TetGen is missing
+  }
+
+  // 1. The shape, its solids glued where they touch, and its frame.
+  GlueSolidsReport glue;
+  const Shape shape = load_shape(brep, 1e-7 * parameters.size, glue);
+  report.nb_solids = static_cast<std::size_t>(shape.solids.Extent());
+  report.nb_faces = static_cast<std::size_t>(shape.faces.Extent());
+  report.nb_shared_faces = glue.nb_shared_faces;
+  const Frame frame = choose_frame(shape, parameters.frame);
+  const std::string regions_brep = glue.glued ? write_brep(shape.shape) : brep;
+
+  // 2. A size whose mesh would not fit in memory is refused before any work.
+  const SizeEstimate estimate = estimate_size(shape.shape, parameters.size);
+  report.estimated_tets = estimate.tets;
+  const double limit = parameters.memory_limit > 0 ? parameters.memory_limit * 1e9
+                                                   : static_cast<double>(available_memory());
+  if (limit > 0 && estimate.bytes > limit) {
+    std::ostringstream text;
+    text.precision(3);
+    text << "mesh_shape: size " << parameters.size << " would make about " << estimate.tets / 1e6
+         << " million tets, which need about " << estimate.bytes / 1e9
+         << " GB to mesh and recombine; "
+         << (parameters.memory_limit > 0 ? "memory_limit is " : "the system has ") << limit / 1e9
+         << " GB" << (parameters.memory_limit > 0 ? "" : " available")
+         << ": give a size of at least " << parameters.size * std::cbrt(estimate.bytes / limit)
+         << " (or raise memory_limit)";
+    throw InputError(text.str(), Entity::Parameter);
+  }
+  const double shape_seconds = seconds_since(start);
+
+  // 3. The attempts, simplest input last; what failed is reported.
+  std::string failures;
+  double failed_seconds = 0;
+  for (const Strategy& strategy : kStrategies) {
+    MeshShapeReport attempt = report;
+    const auto attempt_start = PhaseClock::Clock::now();
+    try {
+      TetMesh mesh = mesh_attempt(shape, frame, regions_brep, parameters, strategy, attempt);
+      attempt.strategy = strategy.name;
+      attempt.phase_seconds["shape"] = shape_seconds;
+      if (failed_seconds > 0) attempt.phase_seconds["failed attempts"] = failed_seconds;
+      report = std::move(attempt);
+      return mesh;
+    } catch (const TetrahedralizeFailure& e) {
+      report.failed_strategies.push_back(std::string(strategy.name) + ": " + e.what());
+      failures += std::string(failures.empty() ? "" : "; ") + strategy.name + ": " + e.what();
+      failed_seconds += seconds_since(attempt_start);
+    }
+  }
+  throw InputError("mesh_shape: TetGen could not tetrahedralise the shape at size " +
+                   std::to_string(parameters.size) + " in any of " +
+                   std::to_string(std::size(kStrategies)) + " ways of placing the points (" +
+                   failures + ")");
+}
+
+namespace {
+
+TetMesh mesh_attempt(const Shape& shape, const Frame& frame, const std::string& regions_brep,
+                     const MeshShapeParameters& parameters, const Strategy& strategy,
+                     MeshShapeReport& report) {
   PhaseClock clock(report.phase_seconds);
   const double h = parameters.size;
   TetrahedralizeParameters tetgen_parameters;
@@ -113,30 +208,26 @@ TetMesh mesh_shape(const std::string& brep, const MeshShapeParameters& parameter
   tetgen_parameters.restarts = kTetgenRestarts;
   tetgen_parameters.nudge = 1e-7 * h;
   tetgen_parameters.tolerance = 1e-9 * h;
-  const Tetrahedralizer tetgen(tetgen_parameters);  // fails now when TetGen is missing
+  tetgen_parameters.quality = !strategy.lattice_points;
+  const Tetrahedralizer tetgen(tetgen_parameters);
 
-  // 1. The shape and its frame.
-  const Shape shape = load_shape(brep);
-  report.nb_solids = static_cast<std::size_t>(shape.solids.Extent());
-  report.nb_faces = static_cast<std::size_t>(shape.faces.Extent());
-  const Frame frame = choose_frame(shape, parameters.frame);
-  clock.lap("shape");
-
-  // 2. The surface triangulation (on the CAD), and the lattice through its bounding box in the
+  // 4. The surface triangulation (on the CAD), and the lattice through its bounding box in the
   // frame.
   const double deflection = parameters.surface_deflection * h;
-  Surface surface = triangulate(shape, deflection, 1e-9 * h + 1e-12);
-  const Lattice lattice = lay_lattice(shape, frame, surface.nodes, h);
+  // Nodes nearer than TetGen's own tolerance (1e-8 of the input's size) are one node: TetGen
+  // would merge them itself and renumber the points after them.
+  Surface surface = triangulate(shape, deflection, 1e-9 * h + 2e-8 * shape.diagonal + 1e-12);
+  const Lattice lattice = lay_lattice(shape, frame, surface.nodes, h, strategy.lattice_faces);
   for (int a = 0; a < 3; ++a) {
     report.spacing[a] = lattice.spacing[a];
     report.frame[a] = {lattice.frame.axis[a].x, lattice.frame.axis[a].y, lattice.frame.axis[a].z};
   }
   report.nb_lattice_faces = lattice.nb_lattice_faces;
 
-  // 3. The surface at size h: swept when the shape is an extrusion along a lattice axis, else
+  // 5. The surface at size h: swept when the shape is an extrusion along a lattice axis, else
   // refined and cleaned.
   std::optional<Sweep> sweep;
-  if (parameters.sweep)
+  if (parameters.sweep && strategy.lattice_faces)
     sweep = find_sweep(shape, lattice.frame, lattice.face_plane, lattice.lattice_face,
                        lattice.cells, lattice.spacing, h);
   SweptSurface swept;
@@ -159,36 +250,39 @@ TetMesh mesh_shape(const std::string& brep, const MeshShapeParameters& parameter
   const int sweep_axis = report.sweep_axis;
   clock.lap("surface");
 
-  // 4. Everything below in frame coordinates, the nodes of lattice faces exactly on their planes.
+  // 6. Everything below in frame coordinates, the nodes of lattice faces exactly on their planes.
   const std::vector<Vec3> nodes = frame_nodes(shape, surface, lattice, sweep_axis, swept);
   report.nb_surface_nodes = nodes.size();
   report.nb_surface_triangles = surface.triangles.size();
   Surroundings around(nodes, surface, lattice, h);
 
-  // 5. Boundary layers.
+  // 7. Boundary layers, inside the shape (by ray parity) and clear of the faces.
+  const Parity parity(nodes, surface, shape.face_solid_count, around, h);
   InsertedPoints inserted;
+  const int nb_layers = strategy.layers ? parameters.boundary_layers : 0;
   report.nb_layer_points =
-      place_layers(nodes, surface, shape.face_solid_count, lattice, sweep_axis, swept,
-                   parameters.boundary_layers, parameters.layer_thickness * h, around, inserted);
+      place_layers(nodes, surface, shape.face_solid_count, lattice, sweep_axis, swept, nb_layers,
+                   parameters.layer_thickness * h, parity, around, inserted);
   clock.lap("layers");
 
-  // 6. The lattice points kept: inside, far enough from the other faces and the layers.
-  const Parity parity(nodes, surface, shape.face_solid_count, around, h);
-  const KeptPoints kept = keep_lattice_points(
-      lattice, around, parity,
-      (parameters.boundary_layers * parameters.layer_thickness + parameters.lattice_margin) * h,
-      parameters.lattice_margin * h);
+  // 8. The lattice points kept: inside, far enough from the other faces and the layers.
+  const KeptPoints kept =
+      keep_lattice_points(lattice, around, parity,
+                          (nb_layers * parameters.layer_thickness + parameters.lattice_margin) * h,
+                          parameters.lattice_margin * h);
   clock.lap("lattice");
 
-  // 7. The hexahedral core and its closing pyramids' apexes.
-  const CoreCounts core = add_core(lattice, around, parity, kept, sweep_axis, h, inserted);
-  report.nb_core_cells = core.nb_core_cells;
-  report.nb_lattice_points = core.nb_lattice_points;
-  report.nb_apex_points = core.nb_apex_points;
+  // 9. The hexahedral core and its closing pyramids' apexes.
+  if (strategy.lattice_points) {
+    const CoreCounts core = add_core(lattice, around, parity, kept, sweep_axis, h, inserted);
+    report.nb_core_cells = core.nb_core_cells;
+    report.nb_lattice_points = core.nb_lattice_points;
+    report.nb_apex_points = core.nb_apex_points;
+  }
   const std::size_t nb_on_faces = face_points_first(inserted);
   clock.lap("core");
 
-  // 8. TetGen: the surface kept as it is, the lattice faces with their lattice points, the other
+  // 10. TetGen: the surface kept as it is, the lattice faces with their lattice points, the other
   // points as isolated vertices.
   TetrahedralizeInput input;
   input.facets = make_facets(surface, nodes, lattice.lattice_face, lattice.face_plane);
@@ -211,11 +305,11 @@ TetMesh mesh_shape(const std::string& brep, const MeshShapeParameters& parameter
   report.nb_steiner_points = made > given ? made - given : 0;
   clock.lap("tetgen");
 
-  // 9. The tets in the world, regions by solid.
-  TetMesh mesh = world_mesh(brep, shape, surface, lattice.frame, tets);
+  // 11. The tets in the world, regions by solid.
+  TetMesh mesh = world_mesh(regions_brep, shape, surface, lattice.frame, tets);
   clock.lap("regions");
 
-  // 10. Flips and node moves against slivers.
+  // 12. Flips and node moves against slivers.
   ImproveParameters improve;
   improve.spacing = lattice.spacing;
   improve.sweep_axis = sweep_axis;
@@ -234,7 +328,7 @@ TetMesh mesh_shape(const std::string& brep, const MeshShapeParameters& parameter
   clock.lap("slivers");
   validate_tet_mesh(mesh);
 
-  // 11. How far the boundary nodes are from the CAD faces they lie on.
+  // 13. How far the boundary nodes are from the CAD faces they lie on.
   std::vector<int> vertex_face = surface.node_face;
   vertex_face.insert(vertex_face.end(), inserted.face.begin(), inserted.face.end());
   report.max_boundary_distance = max_boundary_distance(shape, mesh, vertex_face, 1e-6 * h);
@@ -242,4 +336,5 @@ TetMesh mesh_shape(const std::string& brep, const MeshShapeParameters& parameter
   return mesh;
 }
 
+}  // namespace
 }  // namespace hexmerge

@@ -48,6 +48,7 @@
 #include <cstddef>
 #include <map>
 #include <string>
+#include <vector>
 
 #include "hexmerge/mesh/tet_mesh.h"
 
@@ -83,6 +84,10 @@ struct MeshShapeParameters {
   /// or one that leaves no tet, is restarted with the lattice faces' loops started at other
   /// vertices, up to 5 times; then mesh_shape fails, saying so. In [0, 86400].
   double tetgen_time_limit = 0.0;
+  /// Memory the meshing and recombination may take, in GB (10^9 bytes); 0: what the system has
+  /// available. A size whose estimated tets (from the shape's volume and area) would need more
+  /// is refused before any work, with the estimate. In [0, 10^6].
+  double memory_limit = 0.0;
   /// The TetGen program: a name looked up on PATH, or a path.
   std::string tetgen = "tetgen";
   /// A directory for TetGen's files, kept afterwards; empty: a temporary one, removed.
@@ -112,6 +117,13 @@ struct MeshShapeReport {
   std::array<std::array<double, 3>, 3> frame{};  ///< lattice axes (rows), unit vectors
   std::array<double, 3> spacing{};               ///< lattice spacing along each axis
   double max_boundary_distance = 0.0;  ///< largest distance of a boundary node to the shape
+  double estimated_tets = 0;  ///< tets expected from the shape's volume and area, before any work
+  std::size_t nb_shared_faces = 0;  ///< faces between two solids (touching solids glued)
+  /// How the points were placed: "lattice" (lattice points, lattice faces, boundary layers),
+  /// then, where TetGen failed on that, "lattice without lattice faces", "lattice without
+  /// boundary layers" or "surface only" (TetGen's own points inside: few hexahedra).
+  std::string strategy;
+  std::vector<std::string> failed_strategies;  ///< the ways tried before, each with its failure
   std::string tetgen_command;          ///< the command line run
   std::map<std::string, double> phase_seconds;  ///< wall time per phase
 };

@@ -22,10 +22,11 @@ TEST(place_layers, around_the_curved_faces_at_their_depths) {
     const std::vector<Vec3> nodes =
         mesher::frame_nodes(p.shape, p.surface, p.lattice, -1, mesher::SweptSurface{});
     mesher::Surroundings around(nodes, p.surface, p.lattice, h);
+    const mesher::Parity parity(nodes, p.surface, p.shape.face_solid_count, around, h);
     mesher::InsertedPoints inserted;
     const std::size_t placed =
         mesher::place_layers(nodes, p.surface, p.shape.face_solid_count, p.lattice, -1,
-                             mesher::SweptSurface{}, layers, thickness, around, inserted);
+                             mesher::SweptSurface{}, layers, thickness, parity, around, inserted);
     ASSERT_EQ(inserted.points.size(), placed);
     ASSERT_EQ(inserted.face.size(), placed);
     EXPECT_GT(placed, 50u * layers);

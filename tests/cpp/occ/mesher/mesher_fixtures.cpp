@@ -18,7 +18,10 @@
 
 namespace hexmerge::test {
 
-mesher::Shape load(const TopoDS_Shape& solid) { return mesher::load_shape(write_brep(solid)); }
+mesher::Shape load(const TopoDS_Shape& solid) {
+  mesher::GlueSolidsReport glue;
+  return mesher::load_shape(write_brep(solid), 1e-9, glue);
+}
 
 TopoDS_Shape occ_box(double x0, double y0, double z0, double x1, double y1, double z1) {
   return BRepPrimAPI_MakeBox(gp_Pnt(x0, y0, z0), gp_Pnt(x1, y1, z1)).Shape();

@@ -16,7 +16,7 @@
 namespace hexmerge::mesher {
 
 Lattice lay_lattice(const Shape& shape, const Frame& frame, const std::vector<Vec3>& surface_nodes,
-                    double h) {
+                    double h, bool lattice_faces) {
   Lattice lattice;
   lattice.frame = frame;
   Vec3 lo{std::numeric_limits<double>::max(), std::numeric_limits<double>::max(),
@@ -68,7 +68,8 @@ Lattice lay_lattice(const Shape& shape, const Frame& frame, const std::vector<Ve
   lattice_face.assign(shape.faces.Extent(), false);
   for (int f = 0; f < shape.faces.Extent(); ++f) {
     if (!face_plane[f]) continue;
-    lattice_face[f] = on_lattice_plane(face_plane[f]->offset, lattice.spacing[face_plane[f]->axis]);
+    lattice_face[f] = lattice_faces &&
+                      on_lattice_plane(face_plane[f]->offset, lattice.spacing[face_plane[f]->axis]);
     lattice.nb_lattice_faces += lattice_face[f];
   }
   std::vector<bool>& lattice_edge = lattice.lattice_edge;
@@ -115,11 +116,14 @@ Surroundings::Surroundings(const std::vector<Vec3>& nodes, const Surface& surfac
       box_hi(Vec3{lattice.extent[0], lattice.extent[1], lattice.extent[2]} +
              Vec3{2 * h, 2 * h, 2 * h}),
       curved(nodes, box_lo, box_hi, h),
+      every_face(nodes, box_lo, box_hi, h),
       surface_points(box_lo, box_hi, h),
       layer_points(box_lo, box_hi, h),
       nodes_(nodes) {
-  for (const SurfaceTriangle& t : surface.triangles)
+  for (const SurfaceTriangle& t : surface.triangles) {
     if (!lattice.lattice_face[t.face]) curved.add(t.node);
+    every_face.add(t.node);
+  }
   for (const Vec3& p : nodes) surface_points.add(p);
   for (const SurfaceTriangle& t : surface.triangles)
     if (lattice.lattice_face[t.face]) {

@@ -48,10 +48,11 @@ struct Lattice {
 
 /// The lattice in `frame` through the bounding box of the surface's nodes (world coordinates):
 /// cells about h wide per axis, chosen so that as many axis-normal planar faces as possible lie
-/// on lattice planes (the box's own faces always do).
+/// on lattice planes (the box's own faces always do). Without `lattice_faces`, no face is a
+/// lattice face (its planar faces are treated like the others).
 /// @throws InputError when h is larger than the shape's largest extent
 Lattice lay_lattice(const Shape& shape, const Frame& frame, const std::vector<Vec3>& surface_nodes,
-                    double h);
+                    double h, bool lattice_faces = true);
 
 /// The surface's nodes in frame coordinates: the nodes of lattice faces exactly on their planes,
 /// straight edges across the lattice on one line (align_straight_edges); swept (sweep_axis >= 0),
@@ -83,6 +84,7 @@ class Surroundings {
 
   const Vec3 box_lo, box_hi;  ///< the box the queries cover
   TriangleSet curved;         ///< triangles of the faces that are not lattice faces
+  TriangleSet every_face;     ///< triangles of every face
   PointSet surface_points;    ///< the surface's nodes
   PointSet layer_points;      ///< boundary-layer points (place_layers() adds them)
 

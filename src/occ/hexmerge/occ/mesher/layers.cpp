@@ -10,13 +10,15 @@ namespace {
 
 // Largest relative change of a boundary layer's depth from one node to the next.
 constexpr double kLayerJitter = 0.1;
+// A boundary-layer point stays at least this fraction of its depth from every face.
+constexpr double kLayerClearance = 0.5;
 
 }  // namespace
 
 std::size_t place_layers(const std::vector<Vec3>& nodes, const Surface& surface,
                          const std::vector<int>& face_solid_count, const Lattice& lattice,
                          int sweep_axis, const SweptSurface& swept, int layers, double thickness,
-                         Surroundings& around, InsertedPoints& inserted) {
+                         const Parity& parity, Surroundings& around, InsertedPoints& inserted) {
   // Boundary layers: surface nodes of the other faces where the surface is smooth, moved along
   // the inward normal, where there is room.
   std::vector<Vec3> normal(nodes.size(), Vec3{0, 0, 0});
@@ -130,6 +132,9 @@ std::size_t place_layers(const std::vector<Vec3>& nodes, const Surface& surface,
           }
           continue;
         }
+        // Inside the shape and clear of every face, lattice faces too: points offset from a
+        // curved face next to a planar one went through the planar one, and TetGen left them out.
+        if (!parity.inside(q) || around.every_face.any_within(q, kLayerClearance * depth)) continue;
         around.layer_points.add(q);
         inserted.points.push_back(q);
         inserted.face.push_back(-1);

@@ -17,7 +17,8 @@ namespace hexmerge::mesher {
 /// Places the boundary-layer points, appending them to `inserted` and to around.layer_points.
 /// Nodes of lattice faces and of faces between two solids get none (swept: the walls between
 /// two solids get layers on both sides); depths vary by up to 10 % per node (from
-/// Surface::seed) so that the layers' sides are not cocircular quads.
+/// Surface::seed) so that the layers' sides are not cocircular quads. A point is placed only
+/// inside the shape (`parity`) and clear of every face by half its depth.
 /// @param[in] nodes             the surface's nodes in frame coordinates
 /// @param[in] face_solid_count  per face, the solids it bounds
 /// @param[in] sweep_axis        the sweep's axis, -1: not swept (then `swept` is unused)
@@ -27,6 +28,6 @@ namespace hexmerge::mesher {
 std::size_t place_layers(const std::vector<Vec3>& nodes, const Surface& surface,
                          const std::vector<int>& face_solid_count, const Lattice& lattice,
                          int sweep_axis, const SweptSurface& swept, int layers, double thickness,
-                         Surroundings& around, InsertedPoints& inserted);
+                         const Parity& parity, Surroundings& around, InsertedPoints& inserted);
 
 }  // namespace hexmerge::mesher

@@ -1,8 +1,10 @@
 #include "hexmerge/occ/mesher/shape.h"
 
 #include <BRepAdaptor_Surface.hxx>
+#include <BRepBndLib.hxx>
 #include <BRepGProp.hxx>
 #include <BRep_Tool.hxx>
+#include <Bnd_Box.hxx>
 #include <GProp_GProps.hxx>
 #include <GProp_PrincipalProps.hxx>
 #include <TopExp.hxx>
@@ -22,7 +24,7 @@
 
 namespace hexmerge::mesher {
 
-Shape load_shape(const std::string& brep) {
+Shape load_shape(const std::string& brep, double glue_tolerance, GlueSolidsReport& glue) {
   Shape s;
   s.shape = read_brep(brep);
   TopExp::MapShapes(s.shape, TopAbs_SOLID, s.solids);
@@ -30,6 +32,12 @@ Shape load_shape(const std::string& brep) {
     throw InputError(
         "the shape holds no solid (a face, a shell or a wire cannot be meshed "
         "into tets): give a closed solid");
+  s.shape = glue_solids(s.shape, glue_tolerance, glue);
+  s.solids.Clear();
+  TopExp::MapShapes(s.shape, TopAbs_SOLID, s.solids);
+  Bnd_Box box;
+  BRepBndLib::Add(s.shape, box);
+  if (!box.IsVoid()) s.diagonal = std::sqrt(box.SquareExtent());
   TopExp::MapShapes(s.shape, TopAbs_FACE, s.faces);
   TopExp::MapShapes(s.shape, TopAbs_EDGE, s.edges);
   s.face_solid_count.assign(static_cast<std::size_t>(s.faces.Extent()), 0);

@@ -14,6 +14,7 @@
 
 #include "hexmerge/geometry/vec3.h"
 #include "hexmerge/occ/mesher/frame.h"
+#include "hexmerge/occ/mesher/glue_solids.h"
 
 namespace hexmerge::mesher {
 
@@ -24,12 +25,14 @@ struct Shape {
   TopTools_IndexedMapOfShape solids, faces, edges;
   std::vector<int> face_solid_count;         ///< per face, the solids it bounds (2: shared by two)
   std::vector<std::vector<int>> edge_faces;  ///< per edge, the faces it bounds
+  double diagonal = 0;                       ///< the diagonal of the shape's bounding box
 };
 
-/// The shape in BREP text, its maps filled.
-/// @throws InputError when the text cannot be read, holds no solid, or a solid is not closed
-///         (naming the edge that bounds a single face)
-Shape load_shape(const std::string& brep);
+/// The shape in BREP text, its solids glued where they touch (glue_solids(), within
+/// `glue_tolerance`), its maps filled.
+/// @throws InputError when the text cannot be read, holds no solid, a solid is not closed
+///         (naming the edge that bounds a single face), or two solids overlap
+Shape load_shape(const std::string& brep, double glue_tolerance, GlueSolidsReport& glue);
 
 /// The lattice frame (origin at 0): "global" (x, y, z), "principal" (principal axes of
 /// inertia), "auto" (the normals of the largest planar faces by area, else "principal").

@@ -10,9 +10,13 @@
 #include <TopoDS.hxx>
 #include <TopoDS_Edge.hxx>
 #include <TopoDS_Face.hxx>
+#include <algorithm>
+#include <array>
 #include <cmath>
+#include <map>
 #include <string>
 #include <utility>
+#include <vector>
 
 #include "hexmerge/core/error.h"
 #include "hexmerge/occ/mesher/shape.h"
@@ -118,6 +122,51 @@ int face_holding(const Vec3& q, const std::vector<const SurfaceTriangle*>& trian
   return -1;
 }
 
+namespace {
+
+// Triangles on the same three nodes (faces of the CAD that coincide over a patch, or nodes of
+// two faces merged within the tolerance): a pair facing opposite ways bounds no volume and both
+// go; of triangles facing the same way one stays. TetGen refuses such duplicated facets.
+void remove_coincident_triangles(Surface& surface) {
+  std::map<std::array<int, 3>, std::vector<std::size_t>> by_nodes;
+  for (std::size_t i = 0; i < surface.triangles.size(); ++i) {
+    std::array<int, 3> key = surface.triangles[i].node;
+    std::sort(key.begin(), key.end());
+    by_nodes[key].push_back(i);
+  }
+  std::vector<char> drop(surface.triangles.size(), 0);
+  // Whether triangles a and b run their nodes the same way round.
+  const auto same_way = [&](std::size_t a, std::size_t b) {
+    const auto& u = surface.triangles[a].node;
+    const auto& v = surface.triangles[b].node;
+    for (int r = 0; r < 3; ++r)
+      if (u[0] == v[r] && u[1] == v[(r + 1) % 3]) return true;
+    return false;
+  };
+  for (const auto& [key, list] : by_nodes) {
+    if (list.size() < 2) continue;
+    std::vector<std::size_t> left(list);
+    while (left.size() >= 2) {  // take out opposite pairs
+      bool paired = false;
+      for (std::size_t j = 1; j < left.size() && !paired; ++j)
+        if (!same_way(left[0], left[j])) {
+          drop[left[0]] = drop[left[j]] = 1;
+          left.erase(left.begin() + static_cast<std::ptrdiff_t>(j));
+          left.erase(left.begin());
+          paired = true;
+        }
+      if (!paired) break;
+    }
+    for (std::size_t j = 1; j < left.size(); ++j) drop[left[j]] = 1;  // the same way: one stays
+  }
+  std::size_t kept = 0;
+  for (std::size_t i = 0; i < surface.triangles.size(); ++i)
+    if (!drop[i]) surface.triangles[kept++] = surface.triangles[i];
+  surface.triangles.resize(kept);
+}
+
+}  // namespace
+
 Surface triangulate(const Shape& s, double deflection, double tolerance) {
   try {
     BRepMesh_IncrementalMesh mesher(s.shape, deflection, false, 0.35, true);
@@ -179,6 +228,7 @@ Surface triangulate(const Shape& s, double deflection, double tolerance) {
       }
     }
   }
+  remove_coincident_triangles(surface);
   return surface;
 }
 

@@ -28,6 +28,9 @@ namespace hexmerge::mesher {
 namespace {
 
 // Rounds of smoothing and flips after the surface refinement.
+// A bisection point on a face further than this fraction of the side from the side's middle
+// means the parametrisation is distorted there: the middle is projected on the face instead.
+constexpr double kDistortedMiddle = 0.25;
 constexpr int kSmoothingRounds = 5;
 // Surface nodes with a smaller angle than this (radians, 20 degrees) in their triangles are
 // smoothed.
@@ -70,6 +73,7 @@ void refine(const Shape& s, Surface& surface, double target, const std::vector<b
       surfaces[f] = std::make_unique<BRepAdaptor_Surface>(TopoDS::Face(s.faces(f + 1)));
     return *surfaces[f];
   };
+  std::vector<std::unique_ptr<ShapeAnalysis_Surface>> projector(s.faces.Extent());
   auto edge_curve = [&](int e) -> const BRepAdaptor_Curve& {
     if (!curves[e]) curves[e] = std::make_unique<BRepAdaptor_Curve>(TopoDS::Edge(s.edges(e + 1)));
     return *curves[e];
@@ -124,8 +128,24 @@ void refine(const Shape& s, Surface& surface, double target, const std::vector<b
       }
     }
     if (node >= 0) return node;
-    surface.nodes.push_back(on_edge ? of(edge_curve(seg->second.edge).Value(tm))
-                                    : of(face_surface(t.face).Value(uv.u, uv.v)));
+    Vec3 p = on_edge ? of(edge_curve(seg->second.edge).Value(tm))
+                     : of(face_surface(t.face).Value(uv.u, uv.v));
+    // Where the face's parametrisation is distorted (near a pole, a seam, a B-spline's collapsed
+    // side), the middle of the parameters is far from the middle of the side, and bisecting there
+    // never shortens it: the side's own middle, projected on the face, is taken instead.
+    const Vec3 chord_middle = (surface.nodes[a] + surface.nodes[b]) * 0.5;
+    const double side = length(a, b);
+    if (!on_edge && (p - chord_middle).norm() > kDistortedMiddle * side) {
+      if (!projector[t.face]) {
+        const TopoDS_Face& f = TopoDS::Face(s.faces(t.face + 1));
+        projector[t.face] = std::make_unique<ShapeAnalysis_Surface>(BRep_Tool::Surface(f));
+      }
+      const gp_Pnt2d at = projector[t.face]->ValueOfUV(
+          gp_Pnt(chord_middle.x, chord_middle.y, chord_middle.z), 1e-9 * side);
+      uv = UV{at.X(), at.Y()};
+      p = of(projector[t.face]->Value(at));
+    }
+    surface.nodes.push_back(p);
     surface.node_face.push_back(t.face);
     return static_cast<int>(surface.nodes.size()) - 1;
   };

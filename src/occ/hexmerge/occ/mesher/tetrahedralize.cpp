@@ -3,6 +3,7 @@
 #include <sys/wait.h>
 
 #include <algorithm>
+#include <csignal>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -36,12 +37,84 @@ std::string find_program(const std::string& name) {
   return std::string();
 }
 
-std::string tail_of_file(const fs::path& path, std::size_t max_chars) {
-  std::ifstream in(path);
-  std::ostringstream text;
-  text << in.rdbuf();
-  std::string s = text.str();
-  return s.size() > max_chars ? "..." + s.substr(s.size() - max_chars) : s;
+// Why a TetGen run failed, in a sentence: how it ended (exit code or signal), the reason it
+// printed (its progress lines and crash text, such as "terminate called", left out) and the
+// facets' markers (the shape's faces + 1) of the points it names in brackets.
+std::string failure_text(int status, const fs::path& log, const std::vector<Facet>& facets) {
+  // std::system runs a shell, which reports a child killed by signal N as exit code 128 + N.
+  const int code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  const int signal = WIFSIGNALED(status) ? WTERMSIG(status) : code > 128 ? code - 128 : 0;
+  std::string how;
+  if (signal == SIGSEGV)
+    how = "TetGen crashed (segmentation fault)";
+  else if (signal == SIGABRT)
+    how = "TetGen stopped on an internal error";
+  else if (signal == SIGKILL)
+    how = "TetGen was killed (out of memory?)";
+  else if (signal != 0)
+    how = "TetGen ended on signal " + std::to_string(signal);
+  else if (code != 0)
+    how = "TetGen failed with exit code " + std::to_string(code);
+  else
+    how = "TetGen wrote no tets";
+  std::ifstream in(log);
+  std::string line, reason;
+  while (std::getline(in, line) && reason.size() < 300) {
+    const auto first = line.find_first_not_of(' ');
+    if (first == std::string::npos) continue;
+    line = line.substr(first);
+    const bool progress = line.find("seconds:") != std::string::npos ||
+                          (line.size() >= 3 && line.compare(line.size() - 3, 3, "...") == 0);
+    if (progress) line.clear();
+    for (const char* noise : {"Opening ", "terminate called", "Aborted", "Segmentation fault",
+                              "Killed", "timeout:", "stdbuf:"})
+      if (line.rfind(noise, 0) == 0) line.clear();
+    if (line.rfind("Error:", 0) == 0)
+      line = line.substr(std::min(line.size(), line.find_first_not_of(' ', 6)));
+    if (!line.empty()) reason += (reason.empty() ? "" : " ") + line;
+  }
+  if (reason.empty()) return how;
+  // The faces (markers - 1) that hold all the points of each bracketed group.
+  std::vector<std::vector<int>> markers_of;
+  for (const Facet& f : facets)
+    for (const auto& polygon : f.polygons)
+      for (int v : polygon) {
+        if (v < 0) continue;
+        if (static_cast<std::size_t>(v) >= markers_of.size()) markers_of.resize(v + 1);
+        auto& list = markers_of[v];
+        if (std::find(list.begin(), list.end(), f.marker) == list.end()) list.push_back(f.marker);
+      }
+  std::vector<int> faces;
+  for (std::size_t open = reason.find('['); open != std::string::npos;
+       open = reason.find('[', open + 1)) {
+    const std::size_t close = reason.find(']', open);
+    if (close == std::string::npos) break;
+    std::string group = reason.substr(open + 1, close - open - 1);
+    std::replace(group.begin(), group.end(), ',', ' ');
+    std::istringstream ids(group);
+    std::vector<int> common;
+    bool first = true;
+    for (long v; ids >> v;) {
+      if (v < 0 || static_cast<std::size_t>(v) >= markers_of.size()) {
+        common.clear();
+        break;
+      }
+      std::vector<int> next;
+      for (int m : markers_of[v])
+        if (first || std::find(common.begin(), common.end(), m) != common.end()) next.push_back(m);
+      common = next;
+      first = false;
+    }
+    for (int m : common)
+      if (std::find(faces.begin(), faces.end(), m - 1) == faces.end()) faces.push_back(m - 1);
+  }
+  std::string where;
+  for (std::size_t k = 0; k < faces.size(); ++k)
+    where += (k == 0 ? "" : k + 1 == faces.size() ? " and " : ", ") + std::to_string(faces[k]);
+  return how + " (it reports: " + reason + ")" +
+         (faces.empty()
+              ? ""
+              : std::string(faces.size() > 1 ? "; faces " : "; face ") + where + " of the shape");
 }
 
 // Reads a TetGen output table (.node, .ele or .face, 0-based with -z): a header "count header
@@ -153,7 +226,9 @@ TetrahedralizeOutput Tetrahedralizer::run(TetrahedralizeInput input) const {
   };
   write_poly();
   const fs::path log = work.path() / "tetgen.log";
-  output.command = shell_quote(program_) + " -pYzQ " + shell_quote(poly.string());
+  // Not quiet: on failure, its last lines say why (read by failure_text()).
+  output.command = shell_quote(program_) + (parameters_.quality ? " -pYzq1.5 " : " -pYz ") +
+                   shell_quote(poly.string());
   const std::size_t given = points.size();
   std::vector<double> frame_points;
   // TetGen 1.5 can fail to triangulate a lattice face from its loops: it never ends, or leaves
@@ -166,7 +241,8 @@ TetrahedralizeOutput Tetrahedralizer::run(TetrahedralizeInput input) const {
                                 : 30 + 1e-3 * static_cast<double>(points.size());
   std::ostringstream limit_text;
   limit_text << time_limit;
-  const std::string limited = "timeout -k 5 " + limit_text.str() + " ";
+  // TetGen's output line-buffered, so that its reason survives an abort.
+  const std::string limited = "timeout -k 5 " + limit_text.str() + " stdbuf -oL ";
   int restarts = 0;
   for (bool nudged = false;;) {
     const int status = std::system(
@@ -174,13 +250,12 @@ TetrahedralizeOutput Tetrahedralizer::run(TetrahedralizeInput input) const {
     const bool timed_out = WIFEXITED(status) && WEXITSTATUS(status) == 124;
     if (timed_out || (status == 0 && !fs::exists(work.path() / "shape.1.ele"))) {
       if (++restarts > parameters_.restarts)
-        throw InputError(std::string("TetGen ") +
-                         (timed_out ? "did not finish within " + limit_text.str() + " s"
-                                    : "lost the shape's surface (no tets inside)") +
-                         ", " + std::to_string(restarts) +
-                         " times with the lattice faces' loops started at other vertices; try "
-                         "another size\n(command: " +
-                         output.command + ")");
+        throw TetrahedralizeFailure(
+            std::string("TetGen ") +
+            (timed_out ? "did not finish within " + limit_text.str() + " s"
+                       : "lost the shape's surface (no tets inside)") +
+            ", " + std::to_string(restarts) +
+            " times with the lattice faces' loops started at other vertices");
       for (Facet& facet : facets)
         for (auto& polygon : facet.polygons)
           if (polygon.size() > 3)
@@ -194,17 +269,19 @@ TetrahedralizeOutput Tetrahedralizer::run(TetrahedralizeInput input) const {
       continue;
     }
     if (status != 0 || !fs::exists(work.path() / "shape.1.ele"))
-      throw InputError("TetGen failed (exit status " + std::to_string(status) +
-                       ") on the shape's surface "
-                       "and points; its output:\n" +
-                       tail_of_file(log, 2000) + "\n(command: " + output.command + ")");
+      throw TetrahedralizeFailure(failure_text(status, log, facets));
     frame_points = read_tetgen_table<double>(work.path() / "shape.1.node", 3, 3);
     // TetGen now and then leaves a point of the regular lattice out (degenerate: all
     // cospherical): missing from its .node (which breaks the numbering) or in no tet. The points
     // left out move by 1e-7 h (they stay on the lattice for everything below) and TetGen runs
     // once more.
     std::vector<std::size_t> dropped;
-    if (frame_points.size() / 3 >= given) {
+    // TetGen keeps the points' order, but merges points within its tolerance and leaves out
+    // points it cannot insert, which shifts the numbering after them.
+    bool same_numbering = frame_points.size() / 3 >= given;
+    for (std::size_t i = 0; i < given && same_numbering; ++i)
+      same_numbering = (Vec3::of(&frame_points[3 * i]) - points[i]).norm() <= parameters_.tolerance;
+    if (same_numbering) {
       std::vector<char> used(given, 0);
       for (long long v : read_tetgen_table<long long>(work.path() / "shape.1.ele", 4, 4))
         if (v >= 0 && v < static_cast<long long>(given)) used[v] = 1;
@@ -229,9 +306,9 @@ TetrahedralizeOutput Tetrahedralizer::run(TetrahedralizeInput input) const {
                std::to_string(p.y) + ", " + std::to_string(p.z) + ")";
     }
     if (nudged || dropped.empty() || dropped.front() < input.first_isolated)
-      throw InputError("TetGen dropped " + std::to_string(dropped.size()) +
-                       " of the points given (points too close together or not insertable):" +
-                       which + "; try another size\n(command: " + output.command + ")");
+      throw TetrahedralizeFailure(
+          "TetGen left out " + std::to_string(dropped.size()) +
+          " of the points given (too close together or to a face):" + which);
     for (std::size_t i : dropped) points[i] = points[i] + Vec3{1.0, 0.7, 0.3} * parameters_.nudge;
     output.nb_nudged += dropped.size();
     nudged = true;
@@ -240,7 +317,7 @@ TetrahedralizeOutput Tetrahedralizer::run(TetrahedralizeInput input) const {
 
   for (long long v : read_tetgen_table<long long>(work.path() / "shape.1.ele", 4, 4)) {
     if (v < 0 || v >= static_cast<long long>(frame_points.size() / 3))
-      throw InputError("TetGen's shape.1.ele refers to a missing node");
+      throw TetrahedralizeFailure("TetGen's tets refer to a node it did not write");
     output.tets.push_back(static_cast<index_t>(v));
   }
   // The boundary faces and the facets' markers they carry.

@@ -4,7 +4,7 @@
 /// no TetGen types): a piecewise linear complex (points, facets with markers) in, tets and the
 /// boundary faces with their markers out, the surface kept as it is (no point added on it).
 ///
-/// Today's implementation runs the `tetgen` program (TetGen 1.5, `-pYzQ`) through its files,
+/// Today's implementation runs the `tetgen` program (TetGen 1.5, `-pYz`) through its files,
 /// under a time limit, restarting it with the facets' polygons started at other vertices when a
 /// run does not finish or loses the surface, and nudging isolated points it leaves out. A
 /// version on TetGen as a library (libtet1.5-dev: tetgenio and tetrahedralize()) fits the same
@@ -13,6 +13,7 @@
 #include <array>
 #include <cstddef>
 #include <functional>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -43,6 +44,14 @@ struct TetrahedralizeInput {
   std::function<Vec3(const Vec3&)> to_world;
 };
 
+/// The tetrahedraliser could not tetrahedralise the input: it crashed, refused the input, left
+/// points out or did not finish. The message says which, in our words (the program's own crash
+/// text is left out; the reason it gives is quoted).
+class TetrahedralizeFailure : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
 /// How to tetrahedralise.
 struct TetrahedralizeParameters {
   /// The TetGen program: a name looked up on PATH, or a path.
@@ -57,6 +66,9 @@ struct TetrahedralizeParameters {
   double nudge = 0.0;
   /// Distance within which an output point is the input point of the same rank.
   double tolerance = 0.0;
+  /// Let the tetrahedraliser add points inside for quality (radius-edge ratio at most 1.5), for
+  /// an input with no isolated points.
+  bool quality = false;
 };
 
 /// The tets.

@@ -1,0 +1,34 @@
+#pragma once
+/// @file
+/// Solids that touch, made to share their common faces (internal header: includes OpenCASCADE).
+///
+/// FreeCAD's compounds, BooleanFragments and assemblies read from STEP bring solids that touch
+/// each other as separate closed shells: two coincident faces where one is wanted. A tet mesher
+/// given both fails or makes a mesh that is not conforming across the contact. glue_solids()
+/// imprints every solid on the others with OpenCASCADE's General Fuse, so that the area two
+/// solids share becomes one face bounding both; solids that overlap in volume are refused.
+
+#include <TopoDS_Shape.hxx>
+#include <cstddef>
+
+namespace hexmerge::mesher {
+
+/// What glue_solids() did.
+struct GlueSolidsReport {
+  std::size_t nb_solids = 0;        ///< solids of the shape
+  std::size_t nb_shared_faces = 0;  ///< faces bounding two solids after gluing
+  bool glued = false;               ///< General Fuse ran (more than one solid)
+};
+
+/// The shape's solids, in the order TopExp::MapShapes(shape, TopAbs_SOLID) gives them, glued:
+/// a compound of as many solids, each bounded by its own faces, where the faces two solids share
+/// (touching solids) are one face of both. A single solid is returned as it is.
+/// @param[in]  shape      a shape holding at least one solid
+/// @param[in]  tolerance  distance under which two faces count as touching (the shape's own
+///                        tolerances are added), in the shape's units
+/// @param[out] report     counts
+/// @throws InputError naming the two solids (0-based, in the order above) when solids overlap
+///         in volume, or when OpenCASCADE cannot intersect the solids' faces
+TopoDS_Shape glue_solids(const TopoDS_Shape& shape, double tolerance, GlueSolidsReport& report);
+
+}  // namespace hexmerge::mesher
