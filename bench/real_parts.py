@@ -113,10 +113,10 @@ def boundary_triangle_angles(points, tets):
     faces, counts = np.unique(faces, axis=0, return_counts=True)
     p = points[faces[counts == 1]]
     smallest = np.full(len(p), 180.0)
-    for i in range(3):
+    for i in range(3):  # atan2 of the sine and cosine: exact down to tiny angles, unlike arccos
         u, w = p[:, (i + 1) % 3] - p[:, i], p[:, (i + 2) % 3] - p[:, i]
-        cos = np.einsum("ij,ij->i", u, w) / (np.linalg.norm(u, axis=1) * np.linalg.norm(w, axis=1))
-        smallest = np.minimum(smallest, np.degrees(np.arccos(np.clip(cos, -1, 1))))
+        sine = np.linalg.norm(np.cross(u, w), axis=1)
+        smallest = np.minimum(smallest, np.degrees(np.arctan2(sine, np.einsum("ij,ij->i", u, w))))
     return smallest
 
 
@@ -352,6 +352,22 @@ def pct(row, kind):
     return f"{100 * vf[kind]:.1f}" if kind in vf else "–"
 
 
+def error_summary(row) -> str:
+    """The first line of the error; when it ends with a colon (TetGen's output follows), with the
+    next non-empty line too."""
+    lines = [line.strip() for line in (row.get("error_text") or "").splitlines() if line.strip()]
+    first = row.get("error", "")
+    if first.endswith(":") and len(lines) > 1:
+        return f"{first} {lines[1]}"
+    return first
+
+
+def short(text: str, width: int = 200) -> str:
+    """A message cut to `width` characters for a table cell."""
+    text = text.replace("|", "/")
+    return text if len(text) <= width else text[:width - 1].rstrip() + "…"
+
+
 def cell(row, key, spec):
     v = row.get(key)
     return "–" if v is None else format(v, spec)
@@ -375,16 +391,19 @@ def markdown(data) -> str:
                   "| SJ < 0.2 |",
                   "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
         for r in rows:
-            status = r["status"] if r["status"] == "ok" else f"{r['status']}: {r.get('error', '')}".replace("|", "/")
+            status = r["status"] if r["status"] == "ok" else short(f"{r['status']}: {error_summary(r)}")
             if r["status"] == "ok" and not r.get("valid"):
                 status = "ok, **invalid**"
+            meshed = [t for t in r.get("tries", []) if t[2] == "ok"]
+            if r["status"] != "ok" and meshed:  # the size search met a size that meshes
+                status += f" (ok at h {meshed[-1][0]:.4g}: {meshed[-1][1]:,} tets)"
             seconds = (f"{r['mesh_s'] + r['recombine_s']:.1f}" if r.get("recombine_s") is not None
                        else (f"{r['mesh_s']:.1f} (mesh)" if r.get("mesh_s") is not None else "–"))
             bdist = (f"{r['boundary_distance'] / r['h']:.1e}" if r.get("boundary_distance") is not None else "–")
             lines.append(" | ".join([
                 f"| {r['part']}", cell(r, "h", ".4g"), status, seconds, cell(r, "tets", ","),
-                pct(r, "hex"), pct(r, "prism"), pct(r, "pyramid"), pct(r, "tet"), cell(r, "min_sj", ".3f"),
-                cell(r, "min_boundary_angle", ".2f"), bdist, cell(r, "nonconforming_quads", ","),
+                pct(r, "hex"), pct(r, "prism"), pct(r, "pyramid"), pct(r, "tet"), cell(r, "min_sj", ".2g"),
+                cell(r, "min_boundary_angle", ".2g"), bdist, cell(r, "nonconforming_quads", ","),
                 cell(r, "cracks", ","), cell(r, "below_sj_floor", ",")]) + " |")
         ok = [r for r in rows if r["status"] == "ok"]
         hexes = [100 * r["volume_fraction"]["hex"] for r in ok]
