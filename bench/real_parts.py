@@ -298,6 +298,7 @@ class Runner:
         if fixed:
             row = self.run(name, path, fixed, facts, target)
             tries.append((fixed, row.get("tets"), row["status"]))
+            row["search_tries"] = self.fixed[name][target].get("tries", [])  # how h was found
         else:  # calibrate c on a coarse run, or on the smaller size's count
             if previous and previous.get("tets"):
                 size = benchlib.rescaled_size(previous["h"], previous["tets"], wanted,
@@ -330,7 +331,9 @@ class Runner:
         row["solids_cad"] = facts.get("solids")
         with self.lock:
             self.rows.append(row)
-            self.sizes.setdefault(name, {})[target] = {"h": row["h"], "tets": row.get("tets"), "tries": tries}
+            self.sizes.setdefault(name, {})[target] = (
+                self.fixed[name][target] if "search_tries" in row
+                else {"h": row["h"], "tets": row.get("tets"), "tries": tries})
             self.save()
         return row
 
@@ -394,7 +397,7 @@ def markdown(data) -> str:
             status = r["status"] if r["status"] == "ok" else short(f"{r['status']}: {error_summary(r)}")
             if r["status"] == "ok" and not r.get("valid"):
                 status = "ok, **invalid**"
-            meshed = [t for t in r.get("tries", []) if t[2] == "ok"]
+            meshed = [t for t in r.get("search_tries", []) + r.get("tries", []) if t[2] == "ok"]
             if r["status"] != "ok" and meshed:  # the size search met a size that meshes
                 status += f" (ok at h {meshed[-1][0]:.4g}: {meshed[-1][1]:,} tets)"
             seconds = (f"{r['mesh_s'] + r['recombine_s']:.1f}" if r.get("recombine_s") is not None
