@@ -144,7 +144,7 @@ def worker(path: str, size: float) -> dict:
         cells = tets.cell_vertices.reshape(-1, 4).astype(np.int64)
         regions = tets.regions
         out.update(mesh_s=meshing["seconds"], tets=meshing["tets"], points=meshing["points"],
-                   tetgen_s=meshing["phase_seconds"].get("tetgen"),
+                   tetgen_s=meshing["phase_seconds"].get("tetgen"), mesh_phase_s=meshing["phase_seconds"],
                    boundary_distance=meshing["max_boundary_distance"],
                    solids=meshing["nb_solids"], sweep_axis=meshing["sweep_axis"],
                    tetgen_restarts=meshing["nb_tetgen_restarts"],
@@ -156,7 +156,8 @@ def worker(path: str, size: float) -> dict:
         out["recombine_s"] = time.perf_counter() - start
         out.update(volume=report["input_volume"],
                    counts=report["output_counts"], volume_fraction=report["volume_fraction"],
-                   reduction=report["element_reduction_percent"], strategy=report["selection_strategy"])
+                   reduction=report["element_reduction_percent"], strategy=report["selection_strategy"],
+                   recombine_phase_s=report["phase_seconds"])
         out["phase"] = "check"
         check = hexmerge.check(mesh, points, cells, regions)
         sj = scaled_jacobians(mesh)
