@@ -3,8 +3,9 @@
 - geo_to_cad: a Gmsh .geo (OpenCASCADE kernel) to a CAD file (BREP or STEP) with `gmsh -0`.
 - rescaled_size: the size h that should give the wanted tet count, from one measured count.
 - jsonable: numpy scalars and arrays, objects and odd values to plain JSON types.
-- run_worker: one run of a worker command in a fresh subprocess, with a timeout and an optional
-  memory limit; the worker prints its result as one JSON line after RESULT_MARKER.
+- run_worker: one run of a worker command in a fresh subprocess (a session of its own), with a
+  timeout and an optional memory limit; the worker prints its result as one JSON line after
+  RESULT_MARKER. kill_session, stop_workers_on_signals: leave no worker behind.
 - git_commit, machine: what a results file is headed by.
 """
 import os
@@ -19,6 +20,7 @@ ROOT = os.path.dirname(HERE)
 GEOMETRY_DIR = os.path.join(HERE, "geometry")
 RESULTS_DIR = os.path.join(HERE, "results")
 RESULT_MARKER = "@@RESULT@@"
+LIVE_WORKERS = set()  # session ids of the workers running now (run_worker), for stop_workers
 
 
 def geo_to_cad(geo: str, out: str) -> str:
@@ -86,20 +88,53 @@ def run_worker(cmd, timeout, env=None, memory_bytes=None):
     t0 = time.perf_counter()
     proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env,
                             start_new_session=True, preexec_fn=limit if memory_bytes else None)
+    LIVE_WORKERS.add(proc.pid)
     try:
         out, err = proc.communicate(timeout=timeout)
     except subprocess.TimeoutExpired:
-        try:
-            os.killpg(proc.pid, signal.SIGKILL)  # the worker's own session: it and its children
-        except ProcessLookupError:
-            pass
+        kill_session(proc.pid)
         out, err = proc.communicate()
         return "timeout", None, err, time.perf_counter() - t0
+    except BaseException:  # interrupted: leave no worker behind
+        kill_session(proc.pid)
+        raise
+    finally:
+        LIVE_WORKERS.discard(proc.pid)
     seconds = time.perf_counter() - t0
     for line in reversed(out.splitlines()):
         if line.startswith(RESULT_MARKER):
             return "result", json.loads(line[len(RESULT_MARKER):]), err, seconds
     return "exit", proc.returncode, err, seconds
+
+
+def kill_session(sid: int) -> None:
+    """SIGKILL every process of session `sid` (a worker started with start_new_session, and
+    what it started, even in process groups of their own such as timeout(1)'s)."""
+    for entry in os.listdir("/proc"):
+        if not entry.isdigit():
+            continue
+        try:
+            with open(f"/proc/{entry}/stat") as f:
+                fields = f.read().rsplit(")", 1)[1].split()
+        except OSError:
+            continue
+        if int(fields[3]) == sid:  # fields after the name: state, ppid, pgrp, session
+            try:
+                os.kill(int(entry), signal.SIGKILL)
+            except ProcessLookupError:
+                pass
+
+
+def stop_workers_on_signals() -> None:
+    """On SIGINT or SIGTERM, end every running worker's session, then exit (128 + the signal):
+    workers run in sessions of their own, which the terminal's Ctrl-C does not reach."""
+    def stop(signum, _frame):
+        for sid in list(LIVE_WORKERS):
+            kill_session(sid)
+        os._exit(128 + signum)
+
+    for signum in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(signum, stop)
 
 
 def git_commit(root: str = ROOT) -> str:

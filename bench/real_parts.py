@@ -463,6 +463,7 @@ def main() -> int:
             write_docs(table)
         return 0
 
+    benchlib.stop_workers_on_signals()
     targets = [t.strip().lower() for t in args.sizes.split(",") if t.strip()]
     targets.sort(key=parse_count)
     header = {"commit": benchlib.git_commit(), "machine": benchlib.machine(),
