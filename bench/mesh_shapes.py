@@ -15,15 +15,15 @@ Results: bench/results/mesh-shapes-latest.json and a Markdown table on stdout.
 import argparse
 import json
 import os
-import subprocess
 import sys
 import tempfile
 import time
 
+import benchlib
 import hexmerge
 from hexmerge import _core
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+ROOT = benchlib.ROOT
 SHAPES = {
     "box": os.path.join(ROOT, "bench", "geometry", "box.geo"),
     "cylinder": os.path.join(ROOT, "bench", "geometry", "cylinder.geo"),
@@ -35,9 +35,7 @@ SHAPES = {
 def shape_text(name: str, work: str) -> str:
     path = SHAPES[name]
     if path.endswith(".geo"):
-        brep = os.path.join(work, name + ".brep")
-        subprocess.run(["gmsh", "-0", path, "-o", brep], check=True, capture_output=True)
-        path = brep
+        path = benchlib.geo_to_cad(path, os.path.join(work, name + ".brep"))
     return _core.read_shape_file(path)
 
 
@@ -50,7 +48,7 @@ def run(name: str, brep: str, tets_wanted: int) -> dict:
     size = PROBE_SIZE[name]
     for _ in range(2):  # the count goes about as h^-3; twice, to land near the wanted count
         _, probe, _, rep = _core.mesh_shape(brep, size)
-        size *= (len(probe) / tets_wanted) ** (1 / 3)
+        size = benchlib.rescaled_size(size, len(probe), tets_wanted)
     start = time.perf_counter()
     pts, tets, regions, rep = _core.mesh_shape(brep, size)
     mesh_s = time.perf_counter() - start

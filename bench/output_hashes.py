@@ -18,7 +18,8 @@ import sys
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
-import run_bench  # noqa: E402  (find_meshes, parse_value, jsonable)
+import benchlib  # noqa: E402
+import run_bench  # noqa: E402  (find_meshes, parse_value)
 
 ARRAYS = ["types", "offsets", "cell_vertices", "points", "point_map", "regions",
           "source_offsets", "source_tets", "quadratic_offsets", "quadratic_nodes"]
@@ -34,7 +35,7 @@ def fingerprint(mesh, report):
             a = np.ascontiguousarray(a)
             h.update(str(a.dtype).encode() + str(a.shape).encode())
             h.update(a.tobytes())
-    rep = {k: v for k, v in run_bench.jsonable(report).items() if k != "phase_seconds"}
+    rep = {k: v for k, v in benchlib.jsonable(report).items() if k != "phase_seconds"}
     return h.hexdigest(), rep
 
 
@@ -69,7 +70,7 @@ def main():
             key = f"{os.path.basename(path)} threads={threads}"
             ps = report.get("phase_seconds")
             results[key] = {"sha1": sha, "report": rep,
-                            "phase_seconds": run_bench.jsonable(ps)}
+                            "phase_seconds": benchlib.jsonable(ps)}
             print(f"{key}: {sha[:12]} {rep.get('output_counts')}", file=sys.stderr, flush=True)
     with open(args.output, "w") as f:
         json.dump(results, f, indent=1)

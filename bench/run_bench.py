@@ -26,14 +26,16 @@ import json
 import os
 import platform
 import resource
-import subprocess
 import sys
 import time
 
-HERE = os.path.dirname(os.path.abspath(__file__))
-ROOT = os.path.dirname(HERE)
+import benchlib
+from benchlib import jsonable
+
+HERE = benchlib.HERE
+ROOT = benchlib.ROOT
 MESH_DIR = os.path.join(HERE, "meshes")
-RESULTS_DIR = os.path.join(HERE, "results")
+RESULTS_DIR = benchlib.RESULTS_DIR
 SHAPES = ["box", "cylinder", "bracket", "sphere", "torus"]
 KINDS = ["delaunay", "lattice"]
 SIZES = ["10k", "100k", "1m"]
@@ -91,27 +93,6 @@ def per_type(value):
     except TypeError:
         return {}
     return {TYPE_NAMES[i]: seq[i] for i in range(min(len(seq), len(TYPE_NAMES)))}
-
-
-def jsonable(x):
-    """Convert numpy scalars/arrays and other odd values into plain JSON types."""
-    try:
-        import numpy as np
-        if isinstance(x, np.generic):
-            return x.item()
-        if isinstance(x, np.ndarray):
-            return x.tolist() if x.size <= 64 else f"<array {x.shape} {x.dtype}>"
-    except ImportError:
-        pass
-    if isinstance(x, dict):
-        return {str(k): jsonable(v) for k, v in x.items()}
-    if isinstance(x, (list, tuple)):
-        return [jsonable(v) for v in x]
-    if isinstance(x, (str, int, float, bool)) or x is None:
-        return x
-    if hasattr(x, "__dict__"):
-        return {k: jsonable(v) for k, v in vars(x).items() if not k.startswith("_")}
-    return repr(x)
 
 
 def as_dict(obj):
@@ -274,23 +255,17 @@ def run_one(path, args):
     env = dict(os.environ)
     env["PYTHONPATH"] = os.pathsep.join(
         [p for p in env.get("PYTHONPATH", "").split(os.pathsep) if p] + [os.path.join(ROOT, "src", "python")])
-    t0 = time.perf_counter()
-    try:
-        p = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                           timeout=args.timeout, env=env)
-    except subprocess.TimeoutExpired:
+    kind, payload, err, seconds = benchlib.run_worker(cmd, args.timeout, env)
+    if kind == "timeout":
         return {"mesh": os.path.basename(path), "error": f"timeout after {args.timeout} s"}
-    marker = "@@RESULT@@"
-    for line in reversed(p.stdout.splitlines()):
-        if line.startswith(marker):
-            res = json.loads(line[len(marker):])
-            if p.stderr.strip():
-                res["stderr_tail"] = p.stderr.strip().splitlines()[-5:]
-            return res
+    if kind == "result":
+        if err.strip():
+            payload["stderr_tail"] = err.strip().splitlines()[-5:]
+        return payload
     return {"mesh": os.path.basename(path),
-            "error": f"worker exit {p.returncode}" + (f" (signal {-p.returncode})" if p.returncode < 0 else ""),
-            "stderr_tail": p.stderr.strip().splitlines()[-10:],
-            "subprocess_seconds": round(time.perf_counter() - t0, 2)}
+            "error": f"worker exit {payload}" + (f" (signal {-payload})" if payload < 0 else ""),
+            "stderr_tail": err.strip().splitlines()[-10:],
+            "subprocess_seconds": round(seconds, 2)}
 
 
 def fmt(x, spec):
@@ -376,7 +351,7 @@ def main():
 
     if args.worker:
         res = worker(args)
-        print("@@RESULT@@" + json.dumps(jsonable(res)), flush=True)
+        print(benchlib.RESULT_MARKER + json.dumps(jsonable(res)), flush=True)
         return 0
 
     if args.table:
@@ -397,8 +372,7 @@ def main():
     started = datetime.datetime.now()
     os.makedirs(RESULTS_DIR, exist_ok=True)
     out = args.output or os.path.join(RESULTS_DIR, f"bench-{started:%Y%m%d-%H%M%S}.json")
-    git = subprocess.run(["git", "-C", ROOT, "rev-parse", "--short", "HEAD"],
-                         stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True).stdout.strip()
+    git = benchlib.git_commit()
     for path in meshes:
         print(f"{os.path.basename(path)} ...", end=" ", flush=True, file=sys.stderr)
         res = run_one(path, args)
