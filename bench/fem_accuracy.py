@@ -49,6 +49,10 @@ REFERENCES = {
     "cylinder": {"hoop": 100.0 * (50.0 ** 2 + 100.0 ** 2) / (100.0 ** 2 - 50.0 ** 2)},
 }
 
+# Errors closer than this (percentage points) are a tie: the references are known to about
+# 0.05 % and Gmsh's meshes vary from run to run.
+TIE = 0.1
+
 # Sizes (mm): coarse, fine.
 SIZES = {"cantilever": (300.0, 200.0), "plate": (12.0, 8.0), "cylinder": (8.0, 5.0)}
 
@@ -59,7 +63,8 @@ VARIANTS = [
     ("pyramids anywhere (collapsed C3D8/C3D20)", {"pyramid_placement": "anywhere"}, None),
     ("pyramids anywhere, as wedges C3D6/C3D15", {"pyramid_placement": "anywhere"}, "wedge"),
     ("no pyramid with a boundary face", {"pyramid_placement": "no_boundary_face"}, None),
-    ("no pyramid with a boundary node", {"pyramid_placement": "no_boundary_node"}, None),
+    ("no pyramid with a boundary node (the add-on's CalculiX default)",
+     {"pyramid_placement": "no_boundary_node"}, None),
     ("no pyramids", {"make_pyramids": False}, None),
 ]
 LINEAR_ONLY_VARIANTS = [
@@ -547,7 +552,7 @@ def markdown(rows, header):
                 source_error[r["source"]] = main
                 verdict = ""
             else:
-                verdict = "ok" if main <= source_error.get(r["source"], float("inf")) + 1e-9 \
+                verdict = "ok" if main <= source_error.get(r["source"], float("inf")) + TIE \
                     else "**worse**"
             vf = r.get("volume %") or {}
             vol = "/".join(str(vf.get(k, "")) for k in ("hex", "prism", "pyramid", "tet")) if vf \

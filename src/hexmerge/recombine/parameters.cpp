@@ -87,12 +87,13 @@ std::vector<ParameterInfo> make_table() {
       {"make_pyramids", "bool", flag(d.make_pyramids), "", 0, 1, {}, "Pyramids",
        "Merge tetrahedra into pyramids. In conforming mode pyramids close the quad faces of "
        "hexes and prisms: without them almost nothing merges on unstructured meshes (for "
-       "CalculiX, keep them and write them as collapsed hexahedra)"},
+       "CalculiX, keep them off the boundary with pyramid_placement)"},
       {"pyramid_placement", "choice", to_string(d.pyramid_placement), "", 0, 0,
        kPyramidPlacementChoices, "Pyramid placement",
        "Where pyramids may be made: anywhere, not with a face on the boundary "
        "(no_boundary_face), or not with a node on it (no_boundary_node); tets stay there "
-       "instead. CalculiX has no pyramid: see docs/fem-accuracy.md"},
+       "instead. For CalculiX (no pyramid element: collapsed hexahedra) no_boundary_node keeps "
+       "peak stresses as accurate as the tets' (docs/fem-accuracy.md)"},
       {"conformity", "choice", to_string(d.conformity), "", 0, 0, kConformityChoices,
        "Conformity",
        "Quad faces meeting two triangles: never (conforming), only where nothing else is "
