@@ -17,7 +17,7 @@ Pyramids reach CalculiX as collapsed hexahedra (the add-on's PyramidsAsHexahedra
 be post-processed here to hand them over as degenerate wedges instead (C3D6/C3D15, the collapsed
 edge at the apex), and first-order hexahedra as C3D8I.
 
-Run (about 15 min on 2 shared cores):
+Run (5 to 10 min on 2 shared cores, depending on their other load):
     /usr/bin/python3.11 bench/fem_accuracy.py                      # every case, docs/fem-accuracy.md
     /usr/bin/python3.11 bench/fem_accuracy.py --cases plate --no-doc
 It starts one freecadcmd per case and source mesh (the module and the add-on from this checkout,
@@ -27,7 +27,6 @@ a private HOME) and collects their rows; results also go to bench/results/fem-ac
 import argparse
 import datetime
 import json
-import math
 import os
 import platform
 import re
@@ -77,8 +76,6 @@ LINEAR_ONLY_VARIANTS = [
 def build_case(case):
     """A new document with the case's geometry, analysis, solver, material and loads; returns
     (doc, mesh object)."""
-    import FreeCAD
-    import ObjectsFem
     if case == "cantilever":
         from femexamples.ccx_cantilever_faceload import setup
         doc = setup()
