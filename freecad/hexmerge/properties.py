@@ -107,6 +107,8 @@ def _default(row):
 def engine_specs():
     specs = []
     for row in engine.parameter_table():
+        # The add-on meshes for CalculiX: its defaults where they differ from the engine's.
+        row = dict(row, default=engine.CALCULIX_DEFAULTS.get(row["name"], row["default"]))
         kind = {
             "float": "App::PropertyAngle" if row.get("unit") == "deg" else "App::PropertyFloatConstraint",
             "int": "App::PropertyIntegerConstraint",

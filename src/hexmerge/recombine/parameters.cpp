@@ -21,6 +21,8 @@ const std::vector<std::string> kConformityChoices = {"conforming", "last_resort"
 const std::vector<std::string> kFinderChoices = {"programs", "exhaustive"};
 const std::vector<std::string> kBoundaryOrderChoices = {"quality", "fewest_matches"};
 const std::vector<std::string> kLocalSearchSeedsChoices = {"unmatched", "all"};
+const std::vector<std::string> kPyramidPlacementChoices = {"anywhere", "no_boundary_face",
+                                                           "no_boundary_node"};
 
 InputError bad_value(const std::string& name, const std::string& value, const std::string& why) {
   return InputError("parameter '" + name + "': " + why + " (got '" + value + "')",
@@ -85,7 +87,13 @@ std::vector<ParameterInfo> make_table() {
       {"make_pyramids", "bool", flag(d.make_pyramids), "", 0, 1, {}, "Pyramids",
        "Merge tetrahedra into pyramids. In conforming mode pyramids close the quad faces of "
        "hexes and prisms: without them almost nothing merges on unstructured meshes (for "
-       "CalculiX, keep them and write them as collapsed hexahedra)"},
+       "CalculiX, keep them off the boundary with pyramid_placement)"},
+      {"pyramid_placement", "choice", to_string(d.pyramid_placement), "", 0, 0,
+       kPyramidPlacementChoices, "Pyramid placement",
+       "Where pyramids may be made: anywhere, not with a face on the boundary "
+       "(no_boundary_face), or not with a node on it (no_boundary_node); tets stay there "
+       "instead. For CalculiX (no pyramid element: collapsed hexahedra) no_boundary_node keeps "
+       "peak stresses as accurate as the tets' (docs/fem-accuracy.md)"},
       {"conformity", "choice", to_string(d.conformity), "", 0, 0, kConformityChoices,
        "Conformity",
        "Quad faces meeting two triangles: never (conforming), only where nothing else is "
@@ -148,6 +156,10 @@ std::string to_string(LocalSearchSeeds seeds) {
   return kLocalSearchSeedsChoices[static_cast<int>(seeds)];
 }
 
+std::string to_string(PyramidPlacement placement) {
+  return kPyramidPlacementChoices[static_cast<int>(placement)];
+}
+
 const std::vector<ParameterInfo>& parameter_table() {
   static const std::vector<ParameterInfo> table = make_table();
   return table;
@@ -174,6 +186,8 @@ void set_parameter(RecombineParameters& p, const std::string& name, const std::s
     p.make_prisms = parse_bool(name, value);
   } else if (name == "make_pyramids") {
     p.make_pyramids = parse_bool(name, value);
+  } else if (name == "pyramid_placement") {
+    p.pyramid_placement = static_cast<PyramidPlacement>(parse_choice(name, value, row->choices));
   } else if (name == "conformity") {
     p.conformity = static_cast<Conformity>(parse_choice(name, value, row->choices));
   } else if (name == "respect_regions") {

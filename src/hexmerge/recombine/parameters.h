@@ -46,6 +46,17 @@ enum class LocalSearchSeeds {
   All,
 };
 
+/// Where pyramids may be made (for solvers that take a pyramid only as a collapsed hexahedron or
+/// wedge, whose stresses are poor on the surface: docs/fem-accuracy.md).
+enum class PyramidPlacement {
+  /// Wherever a pyramid passes the acceptance.
+  Anywhere,
+  /// Not with a face (base or side) on the domain boundary: those tets stay tets.
+  NoBoundaryFace,
+  /// Not with a vertex on the domain boundary.
+  NoBoundaryNode,
+};
+
 /// Parameters of hexmerge::recombine. Every field is listed in parameter_table() with its unit,
 /// range and documentation.
 struct RecombineParameters {
@@ -58,6 +69,7 @@ struct RecombineParameters {
   bool make_hexahedra = true;
   bool make_prisms = true;
   bool make_pyramids = true;
+  PyramidPlacement pyramid_placement = PyramidPlacement::Anywhere;
   Conformity conformity = Conformity::Conforming;
   bool respect_regions = true;        ///< never merge tets of different regions
   bool local_optimisation = true;     ///< the paper's section 4.2
@@ -106,5 +118,6 @@ std::string to_string(Conformity conformity);
 std::string to_string(Finder finder);
 std::string to_string(BoundaryOrder order);
 std::string to_string(LocalSearchSeeds seeds);
+std::string to_string(PyramidPlacement placement);
 
 }  // namespace hexmerge

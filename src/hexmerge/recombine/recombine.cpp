@@ -75,6 +75,36 @@ MixedMesh build_output(const TetMesh& input, const std::vector<Candidate>& candi
   return out;
 }
 
+// Removes the pyramid candidates that parameters.pyramid_placement forbids: with a face on the
+// domain boundary (one of its two tets has a boundary face), or with a vertex on it.
+void drop_boundary_pyramids(const TetMesh& mesh, const TetTopology& topology,
+                            PyramidPlacement placement, std::vector<Candidate>& candidates) {
+  if (placement == PyramidPlacement::Anywhere) return;
+  std::vector<char> boundary_vertex;
+  if (placement == PyramidPlacement::NoBoundaryNode) {
+    boundary_vertex.assign(mesh.nb_vertices(), 0);
+    for (index_t t = 0; t < mesh.nb_tets(); ++t) {
+      for (int f = 0; f < 4; ++f) {
+        if (!topology.on_boundary(t, f)) continue;
+        for (int v = 0; v < 4; ++v) {
+          if (v != f) boundary_vertex[mesh.tet(t)[v]] = 1;
+        }
+      }
+    }
+  }
+  const auto forbidden = [&](const Candidate& c) {
+    if (c.type != CellType::Pyramid) return false;
+    if (placement == PyramidPlacement::NoBoundaryFace) {
+      return std::any_of(c.tets.begin(), c.tets.begin() + c.nb_tets,
+                         [&](index_t t) { return topology.is_boundary_tet(t); });
+    }
+    return std::any_of(c.vertices.begin(), c.vertices.begin() + nb_vertices(c.type),
+                       [&](index_t v) { return boundary_vertex[v] != 0; });
+  };
+  candidates.erase(std::remove_if(candidates.begin(), candidates.end(), forbidden),
+                   candidates.end());
+}
+
 void fill_report(const TetMesh& input, const MixedMesh& out, RecombineReport& report) {
   report.input_tets = input.nb_tets();
   report.output_cells = out.nb_cells();
@@ -136,6 +166,7 @@ MixedMesh recombine(const TetMesh& input, const RecombineParameters& parameters,
       parameters.finder == Finder::Exhaustive
           ? find_candidates_exhaustive(input, topology, criteria, threads, progress)
           : find_candidates(input, topology, criteria, threads, progress);
+  drop_boundary_pyramids(input, topology, parameters.pyramid_placement, candidates);
   timer.lap("candidates");
   // Templates by name; the exhaustive finder's candidates count as "exhaustive_<type>".
   std::vector<std::array<std::size_t, NB_CELL_TYPES>> counts(256);
