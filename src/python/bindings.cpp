@@ -392,6 +392,7 @@ py::tuple run_mesh_shape(const std::string& brep, double size, int boundary_laye
   d["spacing"] = py::make_tuple(report.spacing[0], report.spacing[1], report.spacing[2]);
   d["max_boundary_distance"] = report.max_boundary_distance;
   d["estimated_tets"] = report.estimated_tets;
+  d["nb_unrefined_faces"] = report.nb_unrefined_faces;
   d["nb_shared_faces"] = report.nb_shared_faces;
   d["strategy"] = report.strategy;
   py::list failed;

@@ -510,24 +510,25 @@ def test_bad_input(shapes, tmp_path, shape, kwargs, message) -> None:
 ])
 def test_tetgen_failures_are_restarted_then_reported(shapes, tmp_path, script, limit, message) -> None:
     """A TetGen that leaves no tets, or never ends (as TetGen 1.5 did on some lattice faces), is
-    run 6 times (5 restarts, the loops started elsewhere) for each of the 4 ways of placing the
+    run 6 times (5 restarts, the loops started elsewhere) for each of the 6 ways of placing the
     points, then the meshing fails saying so."""
     fake = tmp_path / "tetgen"
     fake.write_text(f"#!/bin/sh\necho started >> {tmp_path / 'runs'}\n{script}\n")
     fake.chmod(0o755)
     with pytest.raises(hexmerge.InputError, match=message):
         hexmerge.mesh_shape(shapes["box"], 10.0, tetgen=str(fake), tetgen_time_limit=limit)
-    assert (tmp_path / "runs").read_text().count("started") == 24
+    assert (tmp_path / "runs").read_text().count("started") == 36
 
 
 @pytest.mark.parametrize(("crash", "how"), [
     ("kill -ABRT $$", "TetGen stopped on an internal error"),
     ("kill -SEGV $$", "TetGen crashed \\(segmentation fault\\)"),
 ])
-def test_a_tetgen_crash_falls_back_to_the_next_strategy(shapes, tmp_path, crash, how) -> None:
+def test_a_tetgen_crash_falls_back_to_the_next_strategy(shapes, tmp_path, capsys, crash, how) -> None:
     """TetGen crashing on the lattice faces (as TetGen 1.5 does on FreeCAD's plate with a hole at
-    h 2.5): the next way of placing the points is tried, the report names the failure in our
-    words with TetGen's reason, and the mesh is valid. TetGen's crash text is never shown."""
+    h 2.5): the next way of placing the points (the lattice at 0.95 of the size) is tried, the
+    report names the failure in our words with TetGen's reason, and the mesh is valid. TetGen's
+    crash text is never shown."""
     real = shutil.which("tetgen")
     fake = tmp_path / "tetgen"
     fake.write_text(f"""#!/bin/sh
@@ -544,13 +545,23 @@ exec {real} "$@"
     fake.chmod(0o755)
     tets, report = hexmerge.mesh_shape(shapes["bracket"], 3.0, recombine=False, tetgen=str(fake))
     meshing = report["meshing"]
-    assert meshing["strategy"] == "lattice without lattice faces"
-    assert meshing["nb_lattice_faces"] == 0
+    assert meshing["strategy"] == "lattice at 0.95 of the size"
+    assert meshing["nb_lattice_faces"] > 0
+    assert meshing["spacing"][0] < 0.97 * 3.0
     [failure] = meshing["failed_strategies"]
     assert re.fullmatch(f"lattice: {how} \\(it reports: Invalid PLC. Two segments \\(1, 2\\) and "
                         "\\(3, 4\\) intersect.\\)(; faces? .* of the shape)?", failure), failure
     mesh, rep = hexmerge.recombine(tets.points, tets.cell_vertices.reshape(-1, 4), tets.regions)
     assert_checked(mesh, tets, rep, 3.0)
+    # The CLI says so (no silent fallback), in our words.
+    (tmp_path / "crashed").unlink()
+    capsys.readouterr()
+    assert main(["mesh", str(shapes["bracket"]), "-h", "3", "-o", str(tmp_path / "b.vtu"),
+                 "--tetgen", str(fake)]) == 0
+    err = capsys.readouterr().err
+    assert "note: TetGen failed with the points placed by lattice: TetGen " in err, err
+    assert "the tets were made with the points placed by lattice at 0.95 of the size" in err, err
+    assert "terminate called" not in err and "Aborted" not in err, err
 
 
 def test_sizes_that_do_not_fit_in_memory_are_refused_before_any_work(shapes) -> None:

@@ -358,7 +358,22 @@ def cmd_mesh(args: argparse.Namespace) -> int:
     _write_output(args, fmt, mesh, stats, region_key="region", region_names=names)
     if not args.quiet:
         print(_mesh_summary(args, mesh, report, seconds))
+        for note in _mesh_notes(report["meshing"]):
+            print(f"hexmerge mesh: note: {note}", file=sys.stderr)
     return EXIT_OK
+
+
+def _mesh_notes(meshing: dict[str, Any]) -> list[str]:
+    """What the user should know about how the tets were made: the ways of placing points that
+    TetGen failed on (the mesh comes from a simpler one, with fewer hexahedra), faces left
+    coarser than h."""
+    notes = [f"TetGen failed with the points placed by {failure}" for failure in meshing["failed_strategies"]]
+    if notes:
+        notes.append(f"the tets were made with the points placed by {meshing['strategy']}")
+    if meshing["nb_unrefined_faces"]:
+        notes.append(f"the surface of {meshing['nb_unrefined_faces']} face(s) did not refine to h "
+                     "(a distorted parametrisation): sides longer than h remain there")
+    return notes
 
 
 def _print_check(report: dict[str, Any]) -> None:

@@ -109,15 +109,21 @@ TetMesh world_mesh(const std::string& brep, const Shape& shape, const Surface& s
 // points inside at all, TetGen adding its own) and give fewer hexahedra.
 struct Strategy {
   const char* name;
+  double size_factor;   // the lattice spacing and surface size: this times the size asked for
   bool lattice_faces;   // planar faces on lattice planes carry lattice points (and sweeps)
   bool layers;          // boundary-layer points
   bool lattice_points;  // lattice points inside the shape (the hexahedral core)
 };
+// TetGen's failures on the lattice come and go with the size (FreeCAD's plate with a hole fails
+// at h 2.25, 2.375 and 2.5 and meshes at 2.75 and 3), so the lattice is tried at a slightly finer
+// and a slightly coarser size before it is simplified (which costs most of the hexahedra).
 constexpr Strategy kStrategies[] = {
-    {"lattice", true, true, true},
-    {"lattice without lattice faces", false, true, true},
-    {"lattice without boundary layers", false, false, true},
-    {"surface only", false, false, false},
+    {"lattice", 1.0, true, true, true},
+    {"lattice at 0.95 of the size", 0.95, true, true, true},
+    {"lattice at 1.1 of the size", 1.1, true, true, true},
+    {"lattice without lattice faces", 1.0, false, true, true},
+    {"lattice without boundary layers", 1.0, false, false, true},
+    {"surface only", 1.0, false, false, false},
 };
 
 // One attempt: steps 3 to 12 of mesh_shape() with one strategy.
@@ -200,7 +206,7 @@ TetMesh mesh_attempt(const Shape& shape, const Frame& frame, const std::string& 
                      const MeshShapeParameters& parameters, const Strategy& strategy,
                      MeshShapeReport& report) {
   PhaseClock clock(report.phase_seconds);
-  const double h = parameters.size;
+  const double h = parameters.size * strategy.size_factor;
   TetrahedralizeParameters tetgen_parameters;
   tetgen_parameters.program = parameters.tetgen;
   tetgen_parameters.work_directory = parameters.work_directory;
@@ -245,6 +251,7 @@ TetMesh mesh_attempt(const Shape& shape, const Frame& frame, const std::string& 
     report.sweep_axis = sweep->axis;
   } else {
     refine(shape, surface, h, lattice.lattice_face, lattice.lattice_edge);
+    report.nb_unrefined_faces = surface.unrefined_faces.size();
     collapse_short_sides(surface, h, lattice.lattice_face);
   }
   const int sweep_axis = report.sweep_axis;

@@ -118,10 +118,15 @@ struct MeshShapeReport {
   std::array<double, 3> spacing{};               ///< lattice spacing along each axis
   double max_boundary_distance = 0.0;  ///< largest distance of a boundary node to the shape
   double estimated_tets = 0;  ///< tets expected from the shape's volume and area, before any work
+  /// Faces whose surface refinement to h did not converge and was given up (sides longer
+  /// than h remain on them)
+  std::size_t nb_unrefined_faces = 0;
   std::size_t nb_shared_faces = 0;  ///< faces between two solids (touching solids glued)
   /// How the points were placed: "lattice" (lattice points, lattice faces, boundary layers),
-  /// then, where TetGen failed on that, "lattice without lattice faces", "lattice without
-  /// boundary layers" or "surface only" (TetGen's own points inside: few hexahedra).
+  /// then, where TetGen failed on that, "lattice at 0.95 of the size", "lattice at 1.1 of the
+  /// size", "lattice without lattice
+  /// faces", "lattice without boundary layers" or "surface only" (TetGen's own points inside:
+  /// few hexahedra).
   std::string strategy;
   std::vector<std::string> failed_strategies;  ///< the ways tried before, each with its failure
   std::string tetgen_command;          ///< the command line run

@@ -2,6 +2,7 @@
 
 #include <BRepAdaptor_Curve.hxx>
 #include <BRepMesh_IncrementalMesh.hxx>
+#include <BRepTools.hxx>
 #include <BRep_Tool.hxx>
 #include <Poly_PolygonOnTriangulation.hxx>
 #include <Poly_Triangulation.hxx>
@@ -124,6 +125,24 @@ int face_holding(const Vec3& q, const std::vector<const SurfaceTriangle*>& trian
 
 namespace {
 
+// The triangles of faces that bound no area (a line on the axis of a revolution makes one: all
+// its nodes on the axis). They are flat, overlap their own sides, and TetGen refuses them
+// ("two segments intersect"); the faces around meet at the axis without them.
+void remove_faces_without_area(Surface& surface) {
+  std::map<int, double> area, longest;
+  for (const SurfaceTriangle& t : surface.triangles) {
+    const Vec3 &a = surface.nodes[t.node[0]], &b = surface.nodes[t.node[1]],
+               &c = surface.nodes[t.node[2]];
+    area[t.face] += 0.5 * (b - a).cross(c - a).norm();
+    longest[t.face] = std::max({longest[t.face], (b - a).norm(), (c - b).norm(), (a - c).norm()});
+  }
+  std::vector<SurfaceTriangle> kept;
+  kept.reserve(surface.triangles.size());
+  for (const SurfaceTriangle& t : surface.triangles)
+    if (area[t.face] > 1e-12 * longest[t.face] * longest[t.face]) kept.push_back(t);
+  surface.triangles.swap(kept);
+}
+
 // Triangles on the same three nodes (faces of the CAD that coincide over a patch, or nodes of
 // two faces merged within the tolerance): a pair facing opposite ways bounds no volume and both
 // go; of triangles facing the same way one stays. TetGen refuses such duplicated facets.
@@ -169,6 +188,9 @@ void remove_coincident_triangles(Surface& surface) {
 
 Surface triangulate(const Shape& s, double deflection, double tolerance) {
   try {
+    // A triangulation left in the shape by an earlier call (another attempt, another size) would
+    // be kept where it meets the deflection: each call starts from none.
+    BRepTools::Clean(s.shape);
     BRepMesh_IncrementalMesh mesher(s.shape, deflection, false, 0.35, true);
     if (!mesher.IsDone()) throw InputError("OpenCASCADE could not triangulate the shape's faces");
   } catch (const Standard_Failure& e) {
@@ -229,6 +251,7 @@ Surface triangulate(const Shape& s, double deflection, double tolerance) {
     }
   }
   remove_coincident_triangles(surface);
+  remove_faces_without_area(surface);
   return surface;
 }
 

@@ -56,6 +56,8 @@ struct Surface {
   /// Per node, its index before collapse_short_sides() (seeds the layers' depths, so that a
   /// collapse does not change them everywhere).
   std::vector<int> seed;
+  /// Faces whose refinement to the target size did not converge and was given up (refine()).
+  std::vector<int> unrefined_faces;
 };
 
 /// The shape's faces triangulated by OpenCASCADE (BRepMesh, chord deflection `deflection`),

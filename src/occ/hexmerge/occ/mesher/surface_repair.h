@@ -20,7 +20,8 @@ struct Shape;
 /// the face's surface. Then needles are smoothed on their face and the Delaunay flips redone.
 /// @param[in] lattice_face  per face, whether it is a lattice face (planar, on a lattice plane)
 /// @param[in] lattice_edge  per edge, whether every face it bounds is a lattice face
-/// @throws InputError when the refinement does not converge
+/// A face whose refinement adds far more nodes than its area needs (it is not converging) is
+/// left as it is then, and listed in Surface::unrefined_faces.
 void refine(const Shape& s, Surface& surface, double target, const std::vector<bool>& lattice_face,
             const std::vector<bool>& lattice_edge);
 

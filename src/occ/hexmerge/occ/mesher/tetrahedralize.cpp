@@ -69,6 +69,8 @@ std::string failure_text(int status, const fs::path& log, const std::vector<Face
     for (const char* noise : {"Opening ", "terminate called", "Aborted", "Segmentation fault",
                               "Killed", "timeout:", "stdbuf:"})
       if (line.rfind(noise, 0) == 0) line.clear();
+    // An assertion names TetGen's source file and function: it is said in our words.
+    if (line.find("Assertion") != std::string::npos) line = "an internal consistency check failed";
     if (line.rfind("Error:", 0) == 0)
       line = line.substr(std::min(line.size(), line.find_first_not_of(' ', 6)));
     if (!line.empty()) reason += (reason.empty() ? "" : " ") + line;
