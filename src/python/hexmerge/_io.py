@@ -7,6 +7,7 @@ second-order cells, for one) when reading and writing.
 from __future__ import annotations
 
 import os
+import stat
 import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -159,10 +160,12 @@ def read_mixed(path: str | os.PathLike[str], file_format: str | None = None) -> 
     have_regions = True
     for b, block in enumerate(mesh.cells):
         if block.type in _cells.BY_MESHIO_NAME:
-            blocks.append((block.type, block.data))
             _, r = _block_regions(mesh, b)
             have_regions = have_regions and r is not None
-            region_parts.append(r)
+            for name, rows in _uncollapsed_pyramids(block.type, np.asarray(block.data)):
+                data = np.asarray(block.data)[rows]
+                blocks.append((name, data[:, :5] if name != block.type else data))
+                region_parts.append(None if r is None else r[rows])
         elif block.type in _cells.OTHER_VOLUME_NAMES:
             raise MeshFileError(f"{path}: unsupported cell type {block.type!r} ({len(block.data)} cells)")
     if not blocks:
@@ -174,23 +177,94 @@ def read_mixed(path: str | os.PathLike[str], file_format: str | None = None) -> 
     return mixed, mesh
 
 
-def format_of(path: str | os.PathLike[str], file_format: str | None) -> str:
-    """The meshio format name for writing `path`."""
-    if file_format:
-        return file_format
-    suffix = Path(path).suffix.lower()
-    if suffix in PREFERRED_FORMAT:
-        return PREFERRED_FORMAT[suffix]
-    _meshio()
-    from meshio._helpers import _filetypes_from_path  # meshio's own extension table
+#: meshio formats that hold points, lines and surface cells only: a mixed volume mesh written
+#: to them would lose every cell (meshio writes such files without a word).
+SURFACE_ONLY_FORMATS = {"stl", "obj", "off", "ply", "wkt", "svg", "neuroglancer"}
 
+
+def format_of(path: str | os.PathLike[str], file_format: str | None) -> str:
+    """The meshio format name for writing `path`; surface-only formats are refused."""
+    if file_format:
+        fmt = file_format
+    elif Path(path).suffix.lower() in PREFERRED_FORMAT:
+        fmt = PREFERRED_FORMAT[Path(path).suffix.lower()]
+    else:
+        _meshio()
+        from meshio._helpers import _filetypes_from_path  # meshio's own extension table
+
+        try:
+            types = _filetypes_from_path(Path(path))
+        except Exception:
+            types = []
+        if not types:
+            raise MeshFileError(f"{path}: unknown mesh file extension; give the format with --output-format")
+        fmt = types[0]
+    if fmt in SURFACE_ONLY_FORMATS:
+        raise MeshFileError(
+            f"{path}: the {fmt} format holds surfaces only and would lose every volume cell; "
+            "write a volume format (.vtu, .msh, .inp, .mesh, .med)"
+        )
+    return fmt
+
+
+def _identity(path: Path) -> tuple[int, int] | None:
+    """(device, inode) of the file `path` names (through symlinks), None when there is none."""
     try:
-        types = _filetypes_from_path(Path(path))
-    except Exception:
-        types = []
-    if not types:
-        raise MeshFileError(f"{path}: unknown mesh file extension; give the format with --output-format")
-    return types[0]
+        st = path.stat()
+    except OSError:
+        return None
+    return st.st_dev, st.st_ino
+
+
+def check_targets(targets: dict[str, str | os.PathLike[str] | None], inputs: list[str | os.PathLike[str]]) -> None:
+    """Refuses, before any work, output paths (label -> path; None: not asked for) that are not
+    regular files, that name an input, or that name each other (by inode for files that exist,
+    by real path for files to be made): writing never overwrites an input, never replaces a
+    device node, a FIFO or a symlink, and never writes two outputs over one another."""
+    seen: dict[object, str] = {}
+    for path in inputs:
+        ident = _identity(Path(path))
+        if ident is not None:
+            seen[ident] = f"the input {path}"
+        seen[os.path.realpath(path)] = f"the input {path}"
+    for label, path in targets.items():
+        if path is None:
+            continue
+        p = Path(path)
+        folder = p.parent if str(p.parent) else Path(".")
+        if not folder.is_dir():
+            raise MeshFileError(f"{path} ({label}): the folder {folder} does not exist")
+        try:
+            st = p.lstat()
+        except FileNotFoundError:
+            st = None
+        if st is not None:
+            if stat.S_ISLNK(st.st_mode):
+                raise MeshFileError(
+                    f"{path} ({label}): is a symbolic link; hexmerge writes regular files only "
+                    "(name the file it points to, or another path)"
+                )
+            if not stat.S_ISREG(st.st_mode):
+                kind = _FILE_KINDS.get(stat.S_IFMT(st.st_mode), "not a regular file")
+                raise MeshFileError(f"{path} ({label}): is {kind}; hexmerge writes regular files only")
+        keys = [os.path.realpath(p)]
+        ident = _identity(p)
+        if ident is not None:
+            keys.append(ident)
+        for key in keys:
+            if key in seen:
+                raise MeshFileError(f"{path} ({label}): is also {seen[key]}; give another path")
+        for key in keys:
+            seen[key] = f"the {label} {path}"
+
+
+_FILE_KINDS = {
+    stat.S_IFDIR: "a folder",
+    stat.S_IFCHR: "a character device",
+    stat.S_IFBLK: "a block device",
+    stat.S_IFIFO: "a FIFO (named pipe)",
+    stat.S_IFSOCK: "a socket",
+}
 
 
 def _collapsed_pyramids(blocks: list[tuple[str, np.ndarray]]) -> list[tuple[str, np.ndarray]]:
@@ -201,6 +275,21 @@ def _collapsed_pyramids(blocks: list[tuple[str, np.ndarray]]) -> list[tuple[str,
         if name == "pyramid":
             name, data = "hexahedron", data[:, [0, 1, 2, 3, 4, 4, 4, 4]]
         out.append((name, data))
+    return out
+
+
+def _uncollapsed_pyramids(name: str, data: np.ndarray) -> list[tuple[str, np.ndarray]]:
+    """The rows of a cell block by type: hexahedra written as pyramids (base, then the apex four
+    times, as --collapse-pyramids writes them for CalculiX) are pyramids again; other rows keep
+    their type."""
+    if name != "hexahedron" or len(data) == 0:
+        return [(name, np.arange(len(data)))]
+    apex = (data[:, 4:8] == data[:, 4:5]).all(axis=1)
+    out = []
+    if (~apex).any():
+        out.append((name, np.flatnonzero(~apex)))
+    if apex.any():
+        out.append(("pyramid", np.flatnonzero(apex)))
     return out
 
 
@@ -275,25 +364,52 @@ def to_meshio(
     )
 
 
-def write_atomic(path: str | os.PathLike[str], mesh: Any, fmt: str, **kwargs: Any) -> None:
-    """Writes through a temporary file in the same folder, renamed over `path` only on success:
-    a failed write never leaves a partial or stale output."""
-    meshio = _meshio()
-
-    path = Path(path)
+def _temp_beside(path: Path) -> Path:
+    """A new empty temporary file in `path`'s folder (so that renaming it over `path` is atomic)."""
     folder = path.parent if str(path.parent) else Path(".")
     if not folder.is_dir():
         raise MeshFileError(f"{path}: the folder {folder} does not exist")
     fd, tmp = tempfile.mkstemp(dir=folder, prefix=f".{path.stem}.", suffix=".tmp" + "".join(path.suffixes))
     os.close(fd)
+    umask = os.umask(0)
+    os.umask(umask)
+    os.chmod(tmp, 0o666 & ~umask)  # mkstemp makes it private; give it a normal file's mode
+    return Path(tmp)
+
+
+def write_atomic(
+    path: str | os.PathLike[str],
+    mesh: Any,
+    fmt: str,
+    *,
+    text_files: dict[str | os.PathLike[str], str] | None = None,
+    **kwargs: Any,
+) -> None:
+    """Writes the mesh and the text files (path -> text) through temporary files in their
+    folders, renamed over their paths only once every one is written: a failed write leaves no
+    output, partial or stale."""
+    meshio = _meshio()
+
+    path = Path(path)
+    temps: list[tuple[Path, Path]] = []
     try:
-        meshio.write(tmp, mesh, file_format=fmt, **kwargs)
-        umask = os.umask(0)
-        os.umask(umask)
-        os.chmod(tmp, 0o666 & ~umask)  # mkstemp makes it private; give it a normal file's mode
-        os.replace(tmp, path)
-    except BaseException as e:
-        Path(tmp).unlink(missing_ok=True)
-        if isinstance(e, Exception) and not isinstance(e, MeshFileError):
+        temps.append((_temp_beside(path), path))
+        try:
+            meshio.write(temps[0][0], mesh, file_format=fmt, **kwargs)
+        except Exception as e:
             raise MeshFileError(f"{path}: cannot write the mesh as {fmt}: {type(e).__name__}: {e}") from None
+        for target, text in (text_files or {}).items():
+            target = Path(target)
+            temps.append((_temp_beside(target), target))
+            try:
+                temps[-1][0].write_text(text)
+            except OSError as e:
+                raise MeshFileError(f"{target}: cannot write: {e.strerror or e}") from None
+        while temps:
+            tmp, target = temps[0]
+            os.replace(tmp, target)
+            temps.pop(0)
+    except BaseException:
+        for tmp, _ in temps:
+            tmp.unlink(missing_ok=True)
         raise
