@@ -219,6 +219,8 @@ py::dict check_report_to_dict(const CheckReport& r) {
   d["input_volume"] = r.input_volume;
   d["output_volume"] = r.output_volume;
   d["relative_volume_difference"] = r.relative_volume_difference;
+  d["max_region_volume_difference"] = r.max_region_volume_difference;
+  d["worst_region"] = r.worst_region < 0 ? py::object(py::none()) : py::object(py::int_(r.worst_region));
   d["problems"] = r.problems;
   return d;
 }

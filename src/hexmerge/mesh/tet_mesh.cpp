@@ -12,6 +12,19 @@
 
 namespace hexmerge {
 
+int normalising_exponent(const std::vector<double>& points) {
+  double largest = 0.0;
+  for (const double c : points) {
+    if (std::isfinite(c)) largest = std::max(largest, std::fabs(c));
+  }
+  if (largest == 0.0 || (largest >= std::ldexp(1.0, -32) && largest <= std::ldexp(1.0, 32))) {
+    return 0;
+  }
+  int e = 0;
+  std::frexp(largest, &e);  // largest = m 2^e, m in [0.5, 1)
+  return 1 - e;
+}
+
 void validate_tet_mesh(const TetMesh& mesh) {
   if (mesh.points.size() % 3 != 0) {
     throw InputError("the point array must have 3 coordinates per point");

@@ -266,6 +266,13 @@ class CellBuilder {
     return false;
   }
 
+  // Face f of tet t on the domain's boundary, or on a region interface when regions are kept
+  // apart (then the interface is each region's boundary and takes the boundary's dangle).
+  bool boundary_face(index_t t, int f) const {
+    if (topo_.on_boundary(t, f)) return true;
+    return criteria_.respect_regions && mesh_.region(t) != mesh_.region(topo_.neighbor(t, f));
+  }
+
   // Whether the quad made of two outward faces of one tet (a flat cap) passes the angles.
   bool cap_accepted(index_t t, int f1, int f2) const {
     std::array<index_t, 4> q;
@@ -274,7 +281,7 @@ class CellBuilder {
                                           mesh_.point(q[2]), mesh_.point(q[3]));
     const double cr = quad_max_corner_angle(mesh_.point(q[0]), mesh_.point(q[1]),
                                             mesh_.point(q[2]), mesh_.point(q[3]));
-    const bool on_boundary = topo_.on_boundary(t, f1) && topo_.on_boundary(t, f2);
+    const bool on_boundary = boundary_face(t, f1) && boundary_face(t, f2);
     const double min_dihedral =
         on_boundary ? criteria_.min_boundary_dihedral_angle : criteria_.min_dihedral_angle;
     return dh >= min_dihedral && cr <= criteria_.max_face_angle;
@@ -464,7 +471,8 @@ std::vector<Candidate> find_candidates_exhaustive(const TetMesh& mesh, const Tet
                                                   const ProgressCallback& progress) {
   threads = std::max(1, threads);
   const QuadPairs pairs(mesh, topology, criteria.min_dihedral_angle,
-                        criteria.min_boundary_dihedral_angle, criteria.max_face_angle, threads);
+                        criteria.min_boundary_dihedral_angle, criteria.max_face_angle, threads,
+                        criteria.respect_regions);
   const QuadIndex index(mesh, pairs, threads);
 
   const index_t nq = static_cast<index_t>(index.size());

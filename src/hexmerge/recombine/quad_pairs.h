@@ -37,8 +37,13 @@ class QuadPairs {
   ///                                         domain boundary
   /// @param[in] max_face_angle               degrees, the paper's fangle
   /// @param[in] threads                      worker threads (>= 1)
+  /// @param[in] region_interfaces_are_boundary  a face between tets of two regions takes the
+  ///                                         boundary's dangle (when regions are kept apart,
+  ///                                         the interface is each region's boundary: a bent
+  ///                                         quad there would move volume between regions)
   QuadPairs(const TetMesh& mesh, const TetTopology& topology, double min_dihedral_angle,
-            double min_boundary_dihedral_angle, double max_face_angle, int threads);
+            double min_boundary_dihedral_angle, double max_face_angle, int threads,
+            bool region_interfaces_are_boundary);
 
   /// The partners of face f of tet t: [begin, end). Pointer arithmetic on data(), never
   /// operator[]: end() of the last face is one past the last partner, and `partners_` may be

@@ -379,6 +379,11 @@ def _print_check(report: dict[str, Any]) -> None:
         f"volume {report['output_volume']:.9g} against {report['input_volume']:.9g} "
         f"(relative difference {report['relative_volume_difference']:.3g})"
     )
+    if report.get("worst_region") is not None:
+        print(
+            f"largest region volume difference {report['max_region_volume_difference']:.3g} "
+            f"(region {report['worst_region']})"
+        )
     for line in report["problems"]:
         print(f"  {line}")
     print("valid" if report["valid"] else "INVALID")

@@ -33,7 +33,7 @@ void expect_ranges_inside(const TetMesh& mesh, const QuadPairs& pairs) {
 TEST(QuadPairs, RangesOfAGridStayInsideThePartners) {
   const TetMesh mesh = kuhn_grid(2);
   const TetTopology topology(mesh);
-  const QuadPairs pairs(mesh, topology, 150.0, 179.0, 150.0, 2);
+  const QuadPairs pairs(mesh, topology, 150.0, 179.0, 150.0, 2, true);
   EXPECT_GT(pairs.size(), 0u);
   expect_ranges_inside(mesh, pairs);
 }
@@ -41,7 +41,7 @@ TEST(QuadPairs, RangesOfAGridStayInsideThePartners) {
 TEST(QuadPairs, ATetAloneHasEmptyRanges) {
   const TetMesh mesh = make_tet_mesh({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}}, {{0, 1, 2, 3}});
   const TetTopology topology(mesh);
-  const QuadPairs pairs(mesh, topology, 150.0, 179.0, 150.0, 1);
+  const QuadPairs pairs(mesh, topology, 150.0, 179.0, 150.0, 1, true);
   EXPECT_EQ(pairs.size(), 0u);
   expect_ranges_inside(mesh, pairs);
 }
