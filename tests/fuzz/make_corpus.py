@@ -24,6 +24,7 @@ sys.path.insert(0, str(ROOT / "tests" / "python"))
 sys.path.insert(0, str(ROOT / "src" / "python"))
 from meshes import grid, orient, to_tet10  # noqa: E402
 
+import hexmerge  # noqa: E402
 import meshio  # noqa: E402
 
 CORPUS = HERE / "corpus"
@@ -40,6 +41,7 @@ Mesh.CharacteristicLengthMax = %g;
 
 
 def write_tets(path: Path, points: np.ndarray, tets: np.ndarray, regions: np.ndarray | None, note: str) -> None:
+    hexmerge.validate(points, tets, regions)  # seeds are valid meshes: the fuzzers break them
     lines = [f"# {note}", f"points {len(points)}"]
     lines += [" ".join(repr(float(c)) for c in p) for p in points]
     lines.append(f"tets {len(tets)}")
@@ -74,7 +76,7 @@ def main() -> None:
                "Gmsh 4.8 Delaunay mesh of a box with a cylinder inclusion, two regions")
     rng = np.random.default_rng(3)
     lp, lt, _ = grid(3, "kuhn")
-    lp = lp + rng.uniform(-0.15, 0.15, lp.shape) * (lp > 0) * (lp < 3)  # jitter the interior only
+    lp = lp + rng.uniform(-0.08, 0.08, lp.shape) * (lp > 0) * (lp < 3)  # jitter the interior only
     write_tets(CORPUS / "jittered_kuhn_3.tets", lp, orient(lp, lt), None, "3^3 Kuhn cubes, interior nodes jittered")
 
     # Reader corpus: one small mesh in each format the CLI reads (and one Tet10).

@@ -490,11 +490,14 @@ CheckReport check_at_scale(const MixedMesh& mesh, const TetMesh& input) {
     index_t q[4];
     face_vertices(r, q);
     bool boundary = false, covered = false;
-    for (int diag = 0; diag < 2 && !boundary && !covered; ++diag) {
+    // Both diagonals are looked at: when a tet caps the quad, all four of its faces are on the
+    // quad's corners and may be unpaired (its far faces halves of other quads); the quad's own
+    // cover is then either pair, and neither pair is left open.
+    for (int diag = 0; diag < 2 && !boundary; ++diag) {
       const index_t t0[3] = {q[diag], q[diag + 1], q[(diag + 2) % 4]};
       const index_t t1[3] = {q[diag], q[(diag + 2) % 4], q[(diag + 3) % 4]};
       if (on_domain_boundary(t0) && on_domain_boundary(t1)) {
-        boundary = true;
+        boundary = !covered;
         break;
       }
       const std::size_t c0 = cover(t0, r.cell), c1 = cover(t1, r.cell);

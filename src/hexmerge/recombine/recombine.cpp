@@ -137,7 +137,9 @@ MixedMesh recombine(const TetMesh& input, const RecombineParameters& parameters,
   criteria.min_dihedral_angle = parameters.min_dihedral_angle;
   criteria.min_boundary_dihedral_angle = parameters.min_boundary_dihedral_angle;
   criteria.max_face_angle = parameters.max_face_angle;
-  criteria.min_scaled_jacobian = parameters.min_scaled_jacobian;
+  // A hard floor under the option: whatever it says (down to -1), no element is made flat or
+  // inverted.
+  criteria.min_scaled_jacobian = std::max(parameters.min_scaled_jacobian, kMinElementScaledJacobian);
   criteria.respect_regions = parameters.respect_regions;
   criteria.types[static_cast<int>(CellType::Hex)] = parameters.make_hexahedra;
   criteria.types[static_cast<int>(CellType::Prism)] = parameters.make_prisms;

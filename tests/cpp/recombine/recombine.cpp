@@ -549,11 +549,12 @@ TEST(local_search, a_reselection_reaches_what_a_swap_cannot) {
 }
 
 // On jittered grids (many skewed candidates, so the greedy is far from optimal) in every
-// conformity mode: never more cells than without the local search; every cell positive, no face
-// shared by three cells, every node kept, the volume kept up to what non-planar quads explain;
-// conforming mode valid with no non-conforming quad; last_resort no more non-conforming quads or
-// cracks than without (allow mode promises nothing about them, and the five-tet grids give
-// cracks in allow and last_resort mode with or without the local search).
+// conformity mode: never more cells than without the local search (in allow and last_resort
+// mode, where the elements that would leave a crack are released after the search, when
+// neither run released one); every cell positive, no face shared by three cells, every node
+// kept, the volume kept up to what non-planar quads explain; every mode valid (no crack);
+// conforming mode with no non-conforming quad; last_resort no more non-conforming quads than
+// without.
 TEST(local_search, keeps_validity_and_conformity_and_never_adds_cells) {
   std::mt19937 rng(7);
   std::size_t moves = 0, saved = 0;
@@ -575,10 +576,16 @@ TEST(local_search, keeps_validity_and_conformity_and_never_adds_cells) {
         p.local_search_seeds = LocalSearchSeeds::All;
         const MixedMesh on = recombine(mesh, p, on_report);
         const CheckReport off_check = check_mesh(off, mesh), on_check = check_mesh(on, mesh);
-        EXPECT_LE(on.nb_cells(), off.nb_cells());
-        if (mode != Conformity::Conforming) {  // one selection, so the saving is all the search's
+        const bool released = off_report.released_elements + on_report.released_elements > 0;
+        if (mode == Conformity::Conforming || !released) {
+          EXPECT_LE(on.nb_cells(), off.nb_cells());
+        }
+        if (mode != Conformity::Conforming && !released) {
+          // One selection, so the saving is all the search's.
           EXPECT_EQ(off.nb_cells() - on.nb_cells(), on_report.local_search_saved);
         }
+        EXPECT_TRUE(on_check.valid()) << describe(on_check);
+        EXPECT_TRUE(off_check.valid()) << describe(off_check);
         EXPECT_EQ(on_check.inverted_cells, 0u) << describe(on_check);
         EXPECT_GT(on_check.min_scaled_jacobian, 0.0);
         EXPECT_EQ(on_check.overshared_faces, 0u);
@@ -593,9 +600,8 @@ TEST(local_search, keeps_validity_and_conformity_and_never_adds_cells) {
           EXPECT_TRUE(on_check.valid()) << describe(on_check);
           EXPECT_EQ(on_check.nonconforming_quads, 0u);
           EXPECT_EQ(on_report.nonconforming_quads, 0u);
-        } else if (mode == Conformity::LastResort) {
+        } else if (mode == Conformity::LastResort && !released) {
           EXPECT_LE(on_check.nonconforming_quads, off_check.nonconforming_quads);
-          EXPECT_LE(on_check.cracks, off_check.cracks);
           EXPECT_LE(on_report.nonconforming_quads, off_report.nonconforming_quads);
         }
         moves += on_report.swap_moves + on_report.reselection_moves;
