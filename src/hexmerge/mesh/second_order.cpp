@@ -60,9 +60,9 @@ namespace {
 
 // Edge -> mid node of every edge of a Tet10 mesh, sorted by edge, after checking that the mesh
 // agrees with itself: ids in range, one mid node per edge, a mid node on one edge only and never
-// a corner, and each mid node near its edge (within half the edge's length of its midpoint:
-// the ball with the edge as diameter, which holds every circular arc up to a half circle, so
-// curved boundary edges pass).
+// a corner, and each mid node near its edge: within the middle half of the edge along it (the
+// element's Jacobian vanishes on the edge outside it) and within half the edge's length of its
+// midpoint (every circular arc up to a half circle passes, so curved boundary edges do).
 std::vector<EdgeMid> mid_nodes(const Tet10Mesh& input) {
   check_tet10_sizes(input);
   const index_t nt = input.nb_tets();
@@ -142,17 +142,23 @@ std::vector<EdgeMid> mid_nodes(const Tet10Mesh& input) {
     const double* a = &input.points[3 * (e.edge >> 32)];
     const double* b = &input.points[3 * (e.edge & 0xffffffffu)];
     const double* m = &input.points[3 * std::size_t(e.mid)];
-    double off = 0.0, length = 0.0;
+    double off = 0.0, along = 0.0, length = 0.0;  // squared; along: dot with the edge
     for (int c = 0; c < 3; ++c) {
-      off += (m[c] - 0.5 * (a[c] + b[c])) * (m[c] - 0.5 * (a[c] + b[c]));
+      const double d = m[c] - 0.5 * (a[c] + b[c]);
+      off += d * d;
+      along += d * (b[c] - a[c]);
       length += (b[c] - a[c]) * (b[c] - a[c]);
     }
-    if (!(off <= 0.25 * length)) {  // also refuses NaN
+    // Along the edge, within its middle half (outside it the element's Jacobian vanishes on the
+    // edge); across it, within half its length.
+    if (!(off <= 0.25 * length) || !(std::fabs(along) < 0.25 * length)) {  // also refuses NaN
       throw InputError("tetrahedron " + std::to_string(e.tet) + ": mid node " +
                            std::to_string(e.mid) + " of " + edge_name(e) + " lies " +
                            std::to_string(std::sqrt(off)) +
-                           " from the edge's midpoint, more than half the edge's length (" +
-                           std::to_string(std::sqrt(length)) + ")",
+                           " from the edge's midpoint (edge length " +
+                           std::to_string(std::sqrt(length)) +
+                           "): a mid node must lie within the middle half of its edge and at most "
+                           "half the edge's length off it",
                        Entity::Element, e.tet);
     }
   }

@@ -27,8 +27,9 @@ TetMesh corner_mesh(const Tet10Mesh& mesh);
 
 /// Throws InputError (Entity::Element, naming the tet and the node) when the mid-edge nodes of a
 /// Tet10 mesh disagree with themselves: an id out of range, an edge with two mid nodes, a node
-/// that is the mid node of two edges or also a corner, or a mid node further from its edge's
-/// midpoint than half the edge's length (curved edges up to a half circle pass).
+/// that is the mid node of two edges or also a corner, or a mid node outside the middle half of
+/// its edge (along it) or further from its midpoint than half the edge's length (curved edges up
+/// to a half circle pass).
 void validate_tet10_mesh(const Tet10Mesh& mesh);
 
 /// Quadratic cells of a mixed mesh: cell c has nodes nodes[offsets[c] .. offsets[c+1]): its

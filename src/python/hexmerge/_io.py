@@ -6,7 +6,10 @@ second-order cells, for one) when reading and writing.
 
 from __future__ import annotations
 
+import contextlib
+import io
 import os
+import re
 import stat
 import tempfile
 from dataclasses import dataclass, field
@@ -48,17 +51,147 @@ class TetFile:
     ignored: dict[str, int] = field(default_factory=dict)  # lower-dimensional cells left out
 
 
+#: Text formats with no end marker and no counts, whose writers end the last line with a newline:
+#: a file cut short inside a line is refused (an .inp cut inside a node id would give an element
+#: a wrong node). (.msh has $End markers and counts, legacy .vtk counts: checked otherwise.)
+_TEXT_SUFFIXES = {".inp"}
+#: Largest node tag accepted for n nodes, and at all: meshio maps tags through an array as long
+#: as the largest tag (sparse tags near 1e12 needed 8 GB), in 32 bits for Gmsh 2.2.
+_MAX_TAG_FACTOR = 64
+_MAX_TAG_FLOOR = 1 << 20
+_MAX_TAG_GMSH22 = (1 << 31) - 2
+
+
+def _is_text(head: bytes) -> bool:
+    return b"\0" not in head and all(b >= 9 for b in head[:4096])
+
+
+def _check_gmsh_nodes(path: Path, data: bytes) -> None:
+    """Refuses an ASCII Gmsh file cut short (a section not closed) or whose node tags meshio
+    cannot map: tags that are not positive whole numbers, or so sparse that its tag table would
+    not fit in memory."""
+    start = data.find(b"$MeshFormat")
+    nodes = data.find(b"$Nodes")
+    end = data.find(b"$EndNodes", nodes)
+    if start < 0 or nodes < 0 or end < 0:
+        return  # meshio reports what is missing
+    version = data[start:].split(None, 3)[1:3]
+    if len(version) < 2 or version[1] != b"0":
+        return  # binary: meshio checks the tags itself
+    # Every section closed: a file cut short loses its last $End... line.
+    opened = None
+    for name in re.findall(rb"(?m)^\$(\w+)\s*$", data):
+        if opened is None:
+            opened = name
+        elif name == b"End" + opened:
+            opened = None
+        else:
+            break
+    if opened is not None:
+        raise MeshFileError(f"{path}: section ${opened.decode()} is not closed: the file is cut short or damaged")
+    words = data[nodes + len(b"$Nodes") : end].split()
+    try:
+        if version[0].startswith(b"2"):
+            count = int(words[0])
+            tags = [words[1 + 4 * i] for i in range(count)]
+        else:  # 4.x: numEntityBlocks numNodes minTag maxTag, then per block dim tag param n
+            count, tags, i = int(words[1]), [], 4
+            while i < len(words) and len(tags) < count:
+                n = int(words[i + 3])
+                tags += words[i + 4 : i + 4 + n]
+                i += 4 + n + 3 * n
+    except (ValueError, IndexError):
+        return  # malformed: meshio reports it
+    largest = 0
+    for word in tags:
+        try:
+            tag = int(word)
+        except ValueError:
+            raise MeshFileError(f"{path}: node tag {word.decode(errors='replace')} is not a whole number") from None
+        if tag <= 0:
+            raise MeshFileError(f"{path}: node tag {tag} is not positive (Gmsh numbers nodes from 1)")
+        largest = max(largest, tag)
+    limit = max(_MAX_TAG_FACTOR * len(tags), _MAX_TAG_FLOOR)
+    if version[0].startswith(b"2"):
+        limit = min(limit, _MAX_TAG_GMSH22)
+    if largest > limit:
+        raise MeshFileError(
+            f"{path}: node tags are too sparse to read (largest {largest} for {len(tags)} nodes; "
+            f"at most {limit}): renumber the nodes"
+        )
+
+
+def _check_vtk_counts(path: Path, data: bytes, mesh: Any) -> None:
+    """A legacy ASCII .vtk file declares how many points and cells it has: fewer read means the
+    file was cut short."""
+    head = data[:1024].split(b"\n")
+    if len(head) < 3 or head[2].strip().upper() != b"ASCII":
+        return
+    for keyword, got, what in (
+        (rb"\bPOINTS\s+(\d+)", len(mesh.points), "points"),
+        (rb"\bCELLS\s+(\d+)", sum(len(b.data) for b in mesh.cells), "cells"),
+    ):
+        m = re.search(keyword, data)
+        if m and int(m.group(1)) != got:
+            raise MeshFileError(
+                f"{path}: the file declares {int(m.group(1))} {what} but holds {got}: it is cut short or damaged"
+            )
+
+
 def read(path: str | os.PathLike[str], file_format: str | None = None) -> Any:
+    """The meshio mesh in a file. Refuses, in our words, what meshio would read wrongly (a text
+    file cut inside a line, a legacy .vtk with fewer points or cells than it declares, Gmsh node
+    tags too sparse to map) or fail on with its own text."""
     meshio = _meshio()
 
-    if not Path(path).is_file():
+    path = Path(path)
+    if not path.is_file():
         raise MeshFileError(f"{path}: no such file")
+    with open(path, "rb") as f:
+        data = f.read()
+    suffix = path.suffix.lower()
+    if suffix in _TEXT_SUFFIXES and data and _is_text(data[:4096]) and not data.endswith((b"\n", b"\r")):
+        raise MeshFileError(f"{path}: the file ends inside a line: it is cut short")
+    if suffix == ".msh" or (file_format or "").startswith("gmsh"):
+        _check_gmsh_nodes(path, data)
+    if suffix == ".mesh" and _is_text(data[:4096]) and data.split()[-1:] != [b"End"]:
+        # Medit ends with the keyword End: without it the file was cut short.
+        raise MeshFileError(f"{path}: the file does not end with the keyword End: it is cut short")
+    del data
+    said = io.StringIO()
     try:
-        return meshio.read(path, file_format=file_format)
+        with contextlib.redirect_stdout(said), contextlib.redirect_stderr(said):
+            mesh = meshio.read(path, file_format=file_format)
     except SystemExit:  # meshio 5.0 prints its error and calls sys.exit(1) when no reader fits
-        raise MeshFileError(f"{path}: cannot read the mesh (see meshio's message above)") from None
+        text = " ".join(said.getvalue().split()) or "no reader fits"
+        raise MeshFileError(f"{path}: cannot read the mesh ({text})") from None
+    except MemoryError:
+        raise MeshFileError(f"{path}: cannot read the mesh: out of memory") from None
     except Exception as e:  # meshio raises ReadError, KeyError, ValueError... for bad files
-        raise MeshFileError(f"{path}: cannot read the mesh: {type(e).__name__}: {e}") from None
+        raise MeshFileError(f"{path}: cannot read the mesh: {_reader_error(e)}") from None
+    if suffix == ".vtk":
+        with open(path, "rb") as f:
+            _check_vtk_counts(path, f.read(), mesh)
+    for block in mesh.cells:
+        data = np.asarray(block.data)
+        if data.size and (data.min() < 0 or data.max() >= len(mesh.points)):
+            raise MeshFileError(
+                f"{path}: a {block.type} cell refers to a node the file does not define"
+            )
+    return mesh
+
+
+def _reader_error(e: Exception) -> str:
+    """meshio's exception as a sentence: its own messages are kept, its internals (a KeyError on
+    a missing node id, numpy's 'need at least one array to concatenate') are said plainly."""
+    if isinstance(e, KeyError):
+        return f"it refers to {e.args[0] if e.args else 'an id'}, which the file does not define"
+    text = str(e)
+    if "need at least one array to concatenate" in text:
+        return "it has no cells"
+    if isinstance(e, (ValueError, IndexError)) and ("reshape" in text or "index" in text):
+        return "it is cut short or damaged"
+    return f"{type(e).__name__}: {text}" if text else f"{type(e).__name__} (damaged file?)"
 
 
 def _block_regions(mesh: Any, b: int) -> tuple[str | None, np.ndarray | None]:

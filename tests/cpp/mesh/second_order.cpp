@@ -188,6 +188,12 @@ TEST(validate_tet10_mesh, mid_nodes_must_be_distinct_near_their_edges_and_no_cor
     tet10.points[3 * tet10.tets10[7] + 1] += 1e6;
     expect_tet10_error(tet10, "from the edge's midpoint");
   }
+  {  // a mid node at the position of an end of its edge (the reader fuzzer's case: -0 for 0)
+    Tet10Mesh tet10 = good;
+    const index_t end = tet10.tets10[0];  // edge 0 runs from corner 0 to corner 1
+    for (int c = 0; c < 3; ++c) tet10.points[3 * tet10.tets10[4] + c] = tet10.points[3 * end + c];
+    expect_tet10_error(tet10, "middle half of its edge");
+  }
   {  // a mid node that is a corner of another tet
     Tet10Mesh tet10 = good;
     const index_t mid = tet10.tets10[4];
