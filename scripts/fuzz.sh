@@ -16,6 +16,7 @@ source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 ASAN_BUILD="${HEXMERGE_ASAN_BUILD:-$HEXMERGE_ROOT/build-asan}"
 SEED="${HEXMERGE_FUZZ_SEED:-$(date -u +%Y%m%d)}"
 SANITIZE="-fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer"
+ensure_packages "${HEXMERGE_FUZZ_PACKAGES[@]}"
 
 echo "== sanitized build (ASan + UBSan + _GLIBCXX_ASSERTIONS) into $ASAN_BUILD"
 # Only what the fuzzing needs: no Python module, no OpenCASCADE layer, no benchmarks.

@@ -186,7 +186,8 @@ struct Fuzzer {
         const int axis = static_cast<int>(pick(3));
         for (index_t t = 0; t < mesh.nb_tets(); ++t) {
           const double x = mesh.point(mesh.tet(t)[0])[axis];
-          mesh.regions[t] = static_cast<std::int32_t>(std::fmod(std::fabs(x / h), nr));
+          const double slab = std::fmod(std::fabs(x / h), nr);  // NaN for a NaN node
+          mesh.regions[t] = std::isfinite(slab) ? static_cast<std::int32_t>(slab) : 0;
         }
         log.push_back("regions: " + std::to_string(nr) + " slabs along axis " + std::to_string(axis));
         break;
