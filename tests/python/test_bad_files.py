@@ -131,3 +131,42 @@ def test_work_directory_naming_a_file(tmp_path: Path, capsys) -> None:
     step.write_text("not used")
     one_line_error(capsys, "not a folder", "mesh", step, "-h", "1", "-o", tmp_path / "o.vtu",
                    "--work-directory", a_file / "sub")
+
+
+def test_threads_the_system_cannot_start_are_one_line(tmp_path: Path) -> None:
+    """--threads 1024 (inside the documented range) under a 4 GB address-space limit: a thread
+    fails to start; before, the process aborted (SIGABRT, exit 134, no message)."""
+    import subprocess
+    import sys
+
+    from conftest import PYTHON_SRC
+
+    points, tets, _ = grid(4, "kuhn")
+    src = tmp_path / "in.vtu"
+    meshio.write(src, meshio.Mesh(points, [("tetra", tets)]))
+    script = (
+        "import resource, sys\n"
+        "resource.setrlimit(resource.RLIMIT_AS, (4 << 30, resource.RLIM_INFINITY))\n"
+        "from hexmerge import cli\n"
+        "sys.exit(cli.main(sys.argv[1:]))\n"
+    )
+    done = subprocess.run(
+        [sys.executable, "-c", script, "recombine", str(src), "-o", str(tmp_path / "out.vtu"), "--threads", "1024"],
+        capture_output=True, text=True, env={"PYTHONPATH": str(PYTHON_SRC), "PATH": "/usr/bin:/bin"}, timeout=300,
+    )
+    assert done.returncode == 1, (done.returncode, done.stderr)
+    assert len(done.stderr.strip().splitlines()) == 1, done.stderr
+    assert "could not start thread" in done.stderr and "threads" in done.stderr
+    assert not (tmp_path / "out.vtu").exists()
+
+
+def test_out_of_memory_is_one_line(tmp_path: Path, capsys, monkeypatch) -> None:
+    points, tets, _ = grid(1, "kuhn")
+    src = tmp_path / "in.vtu"
+    meshio.write(src, meshio.Mesh(points, [("tetra", tets)]))
+
+    def no_memory(*args, **kwargs):
+        raise MemoryError("std::bad_alloc")
+
+    monkeypatch.setattr(hexmerge._api, "recombine", no_memory)
+    one_line_error(capsys, "out of memory", "recombine", src, "-o", tmp_path / "out.vtu")
