@@ -135,9 +135,9 @@ class Progress {
       const py::object answer = function_(phase, fraction);
       if (answer.is_none()) return true;
       if (!PyBool_Check(answer.ptr()) && !py::isinstance(answer, numpy_bool())) {
-        throw InputError("progress must return True, False or None, got " +
-                             std::string(py::repr(answer)),
-                         Entity::Parameter);
+        throw InputError(
+            "progress must return True, False or None, got " + std::string(py::repr(answer)),
+            Entity::Parameter);
       }
       return answer.cast<bool>();
     } catch (...) {
@@ -220,7 +220,8 @@ py::dict check_report_to_dict(const CheckReport& r) {
   d["output_volume"] = r.output_volume;
   d["relative_volume_difference"] = r.relative_volume_difference;
   d["max_region_volume_difference"] = r.max_region_volume_difference;
-  d["worst_region"] = r.worst_region < 0 ? py::object(py::none()) : py::object(py::int_(r.worst_region));
+  d["worst_region"] =
+      r.worst_region < 0 ? py::object(py::none()) : py::object(py::int_(r.worst_region));
   d["problems"] = r.problems;
   return d;
 }

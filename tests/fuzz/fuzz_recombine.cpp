@@ -94,7 +94,9 @@ struct Fuzzer {
   std::mt19937_64 rng;
   std::vector<std::string> log;  // the mutations and options of this run
 
-  std::size_t pick(std::size_t n) { return std::uniform_int_distribution<std::size_t>(0, n - 1)(rng); }
+  std::size_t pick(std::size_t n) {
+    return std::uniform_int_distribution<std::size_t>(0, n - 1)(rng);
+  }
   double uniform(double a, double b) { return std::uniform_real_distribution<double>(a, b)(rng); }
 
   double edge_scale(const TetMesh& mesh) {
@@ -172,10 +174,12 @@ struct Fuzzer {
           for (int c = 0; c < 3; ++c) p[i][c] = mesh.point(q[i])[c];
         const double u[3] = {p[1][0] - p[0][0], p[1][1] - p[0][1], p[1][2] - p[0][2]};
         const double w[3] = {p[2][0] - p[0][0], p[2][1] - p[0][1], p[2][2] - p[0][2]};
-        double n[3] = {u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0]};
+        double n[3] = {u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2],
+                       u[0] * w[1] - u[1] * w[0]};
         const double nn = n[0] * n[0] + n[1] * n[1] + n[2] * n[2];
         if (!(nn > 0.0)) break;
-        const double k = ((d[0] - p[0][0]) * n[0] + (d[1] - p[0][1]) * n[1] + (d[2] - p[0][2]) * n[2]) / nn;
+        const double k =
+            ((d[0] - p[0][0]) * n[0] + (d[1] - p[0][1]) * n[1] + (d[2] - p[0][2]) * n[2]) / nn;
         for (int c = 0; c < 3; ++c) d[c] -= k * n[c];
         log.push_back("flatten tet " + std::to_string(t));
         break;
@@ -189,7 +193,8 @@ struct Fuzzer {
           const double slab = std::fmod(std::fabs(x / h), nr);  // NaN for a NaN node
           mesh.regions[t] = std::isfinite(slab) ? static_cast<std::int32_t>(slab) : 0;
         }
-        log.push_back("regions: " + std::to_string(nr) + " slabs along axis " + std::to_string(axis));
+        log.push_back("regions: " + std::to_string(nr) + " slabs along axis " +
+                      std::to_string(axis));
         break;
       }
       case 10: {  // NaN or infinite coordinate
@@ -260,12 +265,18 @@ int main(int argc, char** argv) {
   std::string dump;
   for (int i = 2; i < argc; ++i) {
     const std::string a = argv[i];
-    if (a == "--seconds" && i + 1 < argc) seconds = std::atof(argv[++i]);
-    else if (a == "--runs" && i + 1 < argc) runs = std::atol(argv[++i]);
-    else if (a == "--seed" && i + 1 < argc) base = std::strtoull(argv[++i], nullptr, 10);
-    else if (a == "--only" && i + 1 < argc) only = std::atol(argv[++i]);
-    else if (a == "--verbose") verbose = true;
-    else if (a == "--dump" && i + 1 < argc) dump = argv[++i];
+    if (a == "--seconds" && i + 1 < argc)
+      seconds = std::atof(argv[++i]);
+    else if (a == "--runs" && i + 1 < argc)
+      runs = std::atol(argv[++i]);
+    else if (a == "--seed" && i + 1 < argc)
+      base = std::strtoull(argv[++i], nullptr, 10);
+    else if (a == "--only" && i + 1 < argc)
+      only = std::atol(argv[++i]);
+    else if (a == "--verbose")
+      verbose = true;
+    else if (a == "--dump" && i + 1 < argc)
+      dump = argv[++i];
     else {
       std::fprintf(stderr, "unknown argument %s\n", a.c_str());
       return 2;
@@ -289,8 +300,9 @@ int main(int argc, char** argv) {
     if (only >= 0 && run > only) break;
     if (only < 0) {
       if (runs >= 0 && done >= runs) break;
-      if (runs < 0 && std::chrono::duration<double>(std::chrono::steady_clock::now() - start)
-                              .count() > seconds) {
+      if (runs < 0 &&
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() >
+              seconds) {
         break;
       }
     }
@@ -312,7 +324,8 @@ int main(int argc, char** argv) {
       if (!check.valid()) {
         failure = "the output is invalid: " + (check.problems.empty() ? "" : check.problems[0]);
       } else if (parameters.conformity == Conformity::Conforming && check.nonconforming_quads) {
-        failure = std::to_string(check.nonconforming_quads) + " non-conforming quads in conforming mode";
+        failure =
+            std::to_string(check.nonconforming_quads) + " non-conforming quads in conforming mode";
       }
       if (verbose) std::printf("run %ld: %u cells\n", run, static_cast<unsigned>(out.nb_cells()));
     } catch (const InputError& e) {

@@ -260,8 +260,8 @@ CheckReport check_at_scale(const MixedMesh& mesh, const TetMesh& input) {
     for (index_t t = 0; t < nt; ++t) {
       const index_t* q = input.tet(t);
       if (q[0] < nv_in && q[1] < nv_in && q[2] < nv_in && q[3] < nv_in) {
-        volumes[input.region(t)][0] += tet_volume(input.point(q[0]), input.point(q[1]),
-                                                  input.point(q[2]), input.point(q[3]));
+        volumes[input.region(t)][0] +=
+            tet_volume(input.point(q[0]), input.point(q[1]), input.point(q[2]), input.point(q[3]));
       }
     }
     for (index_t c = 0; c < nc; ++c) {

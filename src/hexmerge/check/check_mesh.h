@@ -64,10 +64,11 @@ struct CheckReport {
 /// bitwise-equal coordinates); regions preserved and every cell the union of its source tets
 /// (via MixedMesh::source_tets when present, else skipped); total volume compared with the
 /// input's, and every region's volume with the input's. Runs on the points scaled by
-/// normalising_exponent (exact), so the answers do not depend on the model's scale. The domain boundary is the input's boundary triangles: a boundary quad must be
-/// covered by two of them on one of its diagonals. Never throws on a bad `mesh`: every fault is
-/// counted and described in CheckReport::problems (at most kMaxProblemsPerKind lines per kind).
-/// Runs in O(#faces log(faces per vertex)) time.
+/// normalising_exponent (exact), so the answers do not depend on the model's scale. The domain
+/// boundary is the input's boundary triangles: a boundary quad must be covered by two of them on
+/// one of its diagonals. Never throws on a bad `mesh`: every fault is counted and described in
+/// CheckReport::problems (at most kMaxProblemsPerKind lines per kind). Runs in O(#faces log(faces
+/// per vertex)) time.
 /// @param[in] mesh   the mixed mesh to check
 /// @param[in] input  the tet mesh it was made from (assumed valid: see validate_tet_mesh)
 CheckReport check_mesh(const MixedMesh& mesh, const TetMesh& input);

@@ -29,8 +29,8 @@ std::thread start_thread(int number, int asked, Fn&& fn) {
     return std::thread(std::forward<Fn>(fn));
   } catch (const std::system_error& e) {
     throw ResourceError("could not start thread " + std::to_string(number) + " of the " +
-                        std::to_string(asked) + " asked for by the parameter threads (" +
-                        e.what() + "): give fewer threads");
+                        std::to_string(asked) + " asked for by the parameter threads (" + e.what() +
+                        "): give fewer threads");
   }
 }
 

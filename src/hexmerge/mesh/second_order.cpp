@@ -134,8 +134,7 @@ std::vector<EdgeMid> mid_nodes(const Tet10Mesh& input) {
       const EdgeMid& other = edges[edge_of_mid[e.mid]];
       throw InputError("node " + std::to_string(e.mid) + " is the mid node of two edges: " +
                            edge_name(other) + " (tetrahedron " + std::to_string(other.tet) +
-                           ") and " + edge_name(e) + " (tetrahedron " + std::to_string(e.tet) +
-                           ")",
+                           ") and " + edge_name(e) + " (tetrahedron " + std::to_string(e.tet) + ")",
                        Entity::Element, e.tet);
     }
     edge_of_mid[e.mid] = i;
@@ -152,14 +151,13 @@ std::vector<EdgeMid> mid_nodes(const Tet10Mesh& input) {
     // Along the edge, within its middle half (outside it the element's Jacobian vanishes on the
     // edge); across it, within half its length.
     if (!(off <= 0.25 * length) || !(std::fabs(along) < 0.25 * length)) {  // also refuses NaN
-      throw InputError("tetrahedron " + std::to_string(e.tet) + ": mid node " +
-                           std::to_string(e.mid) + " of " + edge_name(e) + " lies " +
-                           std::to_string(std::sqrt(off)) +
-                           " from the edge's midpoint (edge length " +
-                           std::to_string(std::sqrt(length)) +
-                           "): a mid node must lie within the middle half of its edge and at most "
-                           "half the edge's length off it",
-                       Entity::Element, e.tet);
+      throw InputError(
+          "tetrahedron " + std::to_string(e.tet) + ": mid node " + std::to_string(e.mid) + " of " +
+              edge_name(e) + " lies " + std::to_string(std::sqrt(off)) +
+              " from the edge's midpoint (edge length " + std::to_string(std::sqrt(length)) +
+              "): a mid node must lie within the middle half of its edge and at most "
+              "half the edge's length off it",
+          Entity::Element, e.tet);
     }
   }
   return edges;

@@ -83,10 +83,10 @@ TetTopology::TetTopology(const TetMesh& mesh) {
           // Both tets see the face with the same orientation: they lie on the same side of it.
           index_t s[3];
           sorted_face(a / 4, a % 4, s);
-          throw InputError("tetrahedra " + std::to_string(a / 4) + " and " +
-                               std::to_string(b / 4) + " lie on the same side of their shared face (" +
-                               "nodes " + std::to_string(s[0]) + ", " + std::to_string(s[1]) +
-                               ", " + std::to_string(s[2]) + "): the mesh folds over itself",
+          throw InputError("tetrahedra " + std::to_string(a / 4) + " and " + std::to_string(b / 4) +
+                               " lie on the same side of their shared face (" + "nodes " +
+                               std::to_string(s[0]) + ", " + std::to_string(s[1]) + ", " +
+                               std::to_string(s[2]) + "): the mesh folds over itself",
                            Entity::Element, b / 4);
         }
         neighbors_[a] = b / 4;

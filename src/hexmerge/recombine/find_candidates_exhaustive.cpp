@@ -45,8 +45,8 @@ class QuadIndex {
         for (int f = 0; f < 4; ++f) {
           for (const QuadPartner* p = pairs.begin(t, f); p != pairs.end(t, f); ++p) {
             std::array<index_t, 4> q;
-            if (!quad_from_triangles(tet_face(mesh, t, f),
-                                     tet_face(mesh, p->face / 4, p->face % 4), q)) {
+            if (!quad_from_triangles(tet_face(mesh, t, f), tet_face(mesh, p->face / 4, p->face % 4),
+                                     q)) {
               continue;
             }
             const int r = static_cast<int>(std::min_element(q.begin(), q.end()) - q.begin());

@@ -11,8 +11,8 @@
 #include "hexmerge/recombine/bound_selection.h"
 #include "hexmerge/recombine/find_candidates.h"
 #include "hexmerge/recombine/find_candidates_exhaustive.h"
-#include "hexmerge/recombine/rf_graph.h"
 #include "hexmerge/recombine/prune_candidates.h"
+#include "hexmerge/recombine/rf_graph.h"
 #include "hexmerge/recombine/select_candidates.h"
 
 namespace hexmerge {
@@ -139,7 +139,8 @@ MixedMesh recombine(const TetMesh& input, const RecombineParameters& parameters,
   criteria.max_face_angle = parameters.max_face_angle;
   // A hard floor under the option: whatever it says (down to -1), no element is made flat or
   // inverted.
-  criteria.min_scaled_jacobian = std::max(parameters.min_scaled_jacobian, kMinElementScaledJacobian);
+  criteria.min_scaled_jacobian =
+      std::max(parameters.min_scaled_jacobian, kMinElementScaledJacobian);
   criteria.respect_regions = parameters.respect_regions;
   criteria.types[static_cast<int>(CellType::Hex)] = parameters.make_hexahedra;
   criteria.types[static_cast<int>(CellType::Prism)] = parameters.make_prisms;

@@ -755,13 +755,12 @@ class Selector {
 
   // Where quads may meet triangles (allow, last_resort), chosen elements can still leave a
   // crack: (1) a quad face half on the domain boundary, half inside (nothing can cover it);
-  // (2) a tet face on a quad face of two elements, the quads different (each half of the
-  // other's bilinear face); (3) two elements capping one free tet from its two sides, each with
-  // a quad face on two of the tet's faces: two quads on the same four corners with the other
-  // diagonal, the tet sandwiched between; (4) an element capping a free tet whose other two
-  // faces are on the domain boundary (the quad has the boundary's corners). Releases the element
-  // in (1) and (4), and the element of each pair that saves fewer tets (the later one on ties):
-  // a release only leaves tets, so no new crack appears.
+  // (2) two elements capping one free tet from its two sides, each with a quad face on two of
+  // the tet's faces: two quads on the same four corners with the other diagonal, the tet
+  // sandwiched between; (3) an element capping a free tet whose other two faces are on the
+  // domain boundary (the quad has the boundary's corners). Releases the element in (1) and (3),
+  // and in (2) the one that saves fewer tets (the later one on ties): a release only leaves tets,
+  // so no new crack appears.
   void release_cracks() {
     for (index_t ci = 0; ci < cands_.size(); ++ci) {
       if (!chosen_[ci]) continue;
@@ -782,22 +781,6 @@ class Selector {
       release(ga > gb || (ga == gb && a < b) ? b : a);
       ++result_.released_elements;
     };
-    for (index_t ci = 0; ci < cands_.size(); ++ci) {
-      if (!chosen_[ci]) continue;
-      const Candidate& c = cands_[ci];
-      const Sides s = sides(ci);
-      for (int i = 0; i < s.count && chosen_[ci]; ++i) {
-        const Side& side = s.side[i];
-        if (side.neighbor == NO_CELL || is_free(side.neighbor)) continue;
-        const index_t e = owner_[side.neighbor];
-        if (e == ci || !is_quad(c, side.cell_face)) continue;
-        const int ef = cell_face_at(e, side.neighbor, side.neighbor_face);
-        if (ef >= 0 && is_quad(cands_[e], ef) &&
-            face_key(cands_[e], ef) != face_key(c, side.cell_face)) {
-          drop_one(ci, e);
-        }
-      }
-    }
     // The complementary pairs of a tet's faces: faces (p, q) form one quad on the tet's
     // corners, the other two faces the same quad with the other diagonal.
     static constexpr int kPairs[3][4] = {{0, 1, 2, 3}, {0, 2, 1, 3}, {0, 3, 1, 2}};

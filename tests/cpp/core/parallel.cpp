@@ -12,7 +12,6 @@
 #include <string>
 #include <thread>
 
-
 #if defined(__SANITIZE_ADDRESS__)
 #define HEXMERGE_TEST_ASAN 1
 #elif defined(__has_feature)
