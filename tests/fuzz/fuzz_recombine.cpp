@@ -109,7 +109,8 @@ struct Fuzzer {
   void mutate(TetMesh& mesh) {
     const index_t nv = mesh.nb_vertices();
     const index_t nt = mesh.nb_tets();
-    const double h = edge_scale(mesh);
+    double h = edge_scale(mesh);
+    if (!(std::isfinite(h) && h > 0.0)) h = 1.0;  // after a non-finite or coincident node
     switch (pick(13)) {
       case 0: {  // small or large move of one node
         const index_t v = pick(nv);
