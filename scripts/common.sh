@@ -16,6 +16,9 @@ HEXMERGE_BASE_PACKAGES=(g++ cmake make pybind11-dev python3-dev python3-numpy py
                         libocct-modeling-algorithms-dev libocct-data-exchange-dev
                         libocct-visualization-dev libtbb-dev libglpk-dev)
 
+# scripts/fuzz.sh: clang with its sanitizer runtimes (AddressSanitizer, UBSan).
+HEXMERGE_FUZZ_PACKAGES=(clang)
+
 # Installs the Debian packages given that are not installed yet (apt-get update first, once).
 ensure_packages() {
   local missing=() p

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Installs everything the tests need (Debian 12: the build, pytest, FreeCAD, CalculiX, Xvfb),
-# builds, and runs every test: GoogleTest (ctest), pytest, and the FreeCAD add-on's tests
-# (headless freecadcmd suites and a GUI test under Xvfb). Safe to run again.
+# builds, and runs every test: GoogleTest (ctest), pytest, the fuzzers on an ASan + UBSan build
+# (scripts/fuzz.sh, about two minutes of fuzzing) and the FreeCAD add-on's tests (headless
+# freecadcmd suites and a GUI test under Xvfb). Safe to run again.
 #   scripts/test.sh            everything
 #   scripts/test.sh --no-gui   without the FreeCAD GUI test
 set -euo pipefail
@@ -16,6 +17,8 @@ ctest --test-dir "$HEXMERGE_BUILD" --output-on-failure -j"$(nproc)" || status=1
 echo "== Python tests (pytest)"
 (cd "$HEXMERGE_ROOT" && "$HEXMERGE_PYTHON" -m pytest -q -W error --strict-markers tests/python) \
   || status=1
+echo "== fuzzing, sanitized build (scripts/fuzz.sh)"
+bash "$HEXMERGE_ROOT/scripts/fuzz.sh" || status=1
 echo "== FreeCAD add-on tests"
 bash "$HEXMERGE_ROOT/tests/freecad/run.sh" "$@" || status=1
 exit $status

@@ -10,6 +10,7 @@
 #include <chrono>
 #include <cstring>
 #include <exception>
+#include <new>
 #include <string>
 #include <utility>
 #include <vector>
@@ -21,6 +22,7 @@
 #include "hexmerge/mesh/mixed_mesh.h"
 #include "hexmerge/mesh/second_order.h"
 #include "hexmerge/mesh/tet_mesh.h"
+#include "hexmerge/mesh/tet_topology.h"
 #include "hexmerge/recombine/parameters.h"
 #include "hexmerge/recombine/recombine.h"
 #ifdef HEXMERGE_WITH_OCC
@@ -131,12 +133,20 @@ class Progress {
       if (PyErr_CheckSignals() != 0) throw py::error_already_set();
       if (function_.is_none()) return true;
       const py::object answer = function_(phase, fraction);
-      return answer.is_none() || answer.cast<bool>();
+      if (answer.is_none()) return true;
+      if (!PyBool_Check(answer.ptr()) && !py::isinstance(answer, numpy_bool())) {
+        throw InputError(
+            "progress must return True, False or None, got " + std::string(py::repr(answer)),
+            Entity::Parameter);
+      }
+      return answer.cast<bool>();
     } catch (...) {
       error_ = std::current_exception();
       return false;
     }
   }
+
+  static py::object numpy_bool() { return py::module_::import("numpy").attr("bool_"); }
 
   static constexpr std::chrono::milliseconds kInterval{50};
   py::object function_;
@@ -209,6 +219,9 @@ py::dict check_report_to_dict(const CheckReport& r) {
   d["input_volume"] = r.input_volume;
   d["output_volume"] = r.output_volume;
   d["relative_volume_difference"] = r.relative_volume_difference;
+  d["max_region_volume_difference"] = r.max_region_volume_difference;
+  d["worst_region"] =
+      r.worst_region < 0 ? py::object(py::none()) : py::object(py::int_(r.worst_region));
   d["problems"] = r.problems;
   return d;
 }
@@ -271,7 +284,10 @@ py::tuple run_recombine(const PointsIn& points, const IndexIn& cells, const py::
   QuadraticCells second;
   try {
     py::gil_scoped_release released;
-    if (quadratic) input = corner_mesh(tet10);
+    if (quadratic) {
+      input = corner_mesh(tet10);
+      validate_tet10_mesh(tet10);  // before the run, not after it
+    }
     mesh = recombine(input, parameters, report, watcher.callback());
     if (quadratic) second = quadratic_cells(mesh, tet10);
   } catch (const Cancelled&) {
@@ -312,6 +328,7 @@ void run_validate(const PointsIn& points, const IndexIn& cells, const py::object
   input.regions = regions_of(regions, "regions");
   py::gil_scoped_release released;
   validate_tet_mesh(input);
+  const TetTopology topology(input);  // faces shared by three tets, folded tets
 }
 
 #ifdef HEXMERGE_WITH_OCC
@@ -466,6 +483,8 @@ invariant raises RuntimeError.)doc";
   // `index` (0-based, or None).
   static py::exception<InputError> input_error(m, "InputError", PyExc_ValueError);
   static py::exception<Cancelled> cancelled(m, "Cancelled", PyExc_Exception);
+  // ResourceError: the machine lacks what the run needs (threads); a MemoryError.
+  static py::exception<ResourceError> resource_error(m, "ResourceError", PyExc_MemoryError);
   g_input_error = input_error.ptr();
   py::register_exception_translator([](std::exception_ptr p) {
     try {
@@ -478,6 +497,12 @@ invariant raises RuntimeError.)doc";
       PyErr_SetObject(g_input_error, error.ptr());
     } catch (const Cancelled& e) {
       cancelled(e.what());
+    } catch (const ResourceError& e) {
+      resource_error(e.what());
+    } catch (const std::bad_alloc&) {
+      PyErr_SetString(PyExc_MemoryError,
+                      "out of memory: the run needs more memory than the system gives it (a "
+                      "smaller mesh, fewer threads or more memory)");
     } catch (const InternalError& e) {
       PyErr_SetString(PyExc_RuntimeError, (std::string("HexMerge internal error: ") + e.what() +
                                            " (please report this bug)").c_str());

@@ -1,7 +1,9 @@
 #include "hexmerge/check/check_mesh.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstring>
+#include <map>
 #include <string>
 #include <utility>
 
@@ -163,7 +165,9 @@ std::string face_text(const index_t* f, int n) {
 
 }  // namespace
 
-CheckReport check_mesh(const MixedMesh& mesh, const TetMesh& input) {
+namespace {
+
+CheckReport check_at_scale(const MixedMesh& mesh, const TetMesh& input) {
   CheckReport report;
   ProblemLog log(report.problems);
   const index_t nc = mesh.nb_cells();
@@ -247,6 +251,31 @@ CheckReport check_mesh(const MixedMesh& mesh, const TetMesh& input) {
   if (report.input_volume != 0.0) {
     report.relative_volume_difference =
         (report.output_volume - report.input_volume) / report.input_volume;
+  }
+
+  // Per region: a bent quad on a region interface moves volume between materials and leaves
+  // the total as it was.
+  if (!mesh.regions.empty() && mesh.regions.size() == nc && !input.regions.empty()) {
+    std::map<std::int32_t, std::array<double, 2>> volumes;  // region -> (input, output)
+    for (index_t t = 0; t < nt; ++t) {
+      const index_t* q = input.tet(t);
+      if (q[0] < nv_in && q[1] < nv_in && q[2] < nv_in && q[3] < nv_in) {
+        volumes[input.region(t)][0] +=
+            tet_volume(input.point(q[0]), input.point(q[1]), input.point(q[2]), input.point(q[3]));
+      }
+    }
+    for (index_t c = 0; c < nc; ++c) {
+      if (cell_ok[c]) {
+        volumes[mesh.region(c)][1] += cell_volume(mesh.types[c], mesh.points.data(), mesh.cell(c));
+      }
+    }
+    for (const auto& [region, v] : volumes) {
+      const double difference = v[0] != 0.0 ? std::fabs(v[1] - v[0]) / std::fabs(v[0]) : 1.0;
+      if (report.worst_region < 0 || difference > report.max_region_volume_difference) {
+        report.max_region_volume_difference = difference;
+        report.worst_region = region;
+      }
+    }
   }
 
   // --- Nodes -----------------------------------------------------------------------------------
@@ -461,11 +490,14 @@ CheckReport check_mesh(const MixedMesh& mesh, const TetMesh& input) {
     index_t q[4];
     face_vertices(r, q);
     bool boundary = false, covered = false;
-    for (int diag = 0; diag < 2 && !boundary && !covered; ++diag) {
+    // Both diagonals are looked at: when a tet caps the quad, all four of its faces are on the
+    // quad's corners and may be unpaired (its far faces halves of other quads); the quad's own
+    // cover is then either pair, and neither pair is left open.
+    for (int diag = 0; diag < 2 && !boundary; ++diag) {
       const index_t t0[3] = {q[diag], q[diag + 1], q[(diag + 2) % 4]};
       const index_t t1[3] = {q[diag], q[(diag + 2) % 4], q[(diag + 3) % 4]};
       if (on_domain_boundary(t0) && on_domain_boundary(t1)) {
-        boundary = true;
+        boundary = !covered;
         break;
       }
       const std::size_t c0 = cover(t0, r.cell), c1 = cover(t1, r.cell);
@@ -495,6 +527,22 @@ CheckReport check_mesh(const MixedMesh& mesh, const TetMesh& input) {
     }
   }
   log.finish();
+  return report;
+}
+
+}  // namespace
+
+CheckReport check_mesh(const MixedMesh& mesh, const TetMesh& input) {
+  const int exponent = normalising_exponent(input.points);
+  if (exponent == 0) return check_at_scale(mesh, input);
+  // Both meshes scaled by the same power of two: exact, so equal coordinates stay equal.
+  MixedMesh scaled_mesh = mesh;
+  TetMesh scaled_input = input;
+  for (double& c : scaled_mesh.points) c = std::ldexp(c, exponent);
+  for (double& c : scaled_input.points) c = std::ldexp(c, exponent);
+  CheckReport report = check_at_scale(scaled_mesh, scaled_input);
+  report.input_volume = std::ldexp(report.input_volume, -3 * exponent);
+  report.output_volume = std::ldexp(report.output_volume, -3 * exponent);
   return report;
 }
 

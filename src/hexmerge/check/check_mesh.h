@@ -41,6 +41,11 @@ struct CheckReport {
   double input_volume = 0.0;
   double output_volume = 0.0;             ///< with bilinear quad faces
   double relative_volume_difference = 0.0;
+  /// Per region (when both meshes have regions): the largest |output - input| / input volume,
+  /// and the region it is in (0 and -1 without regions). Volume moved from one material to
+  /// another through a bent region interface shows here, not in the total.
+  double max_region_volume_difference = 0.0;
+  std::int32_t worst_region = -1;
   std::vector<std::string> problems;      ///< human-readable, one line each, first few of each kind
 
   bool valid() const {
@@ -58,10 +63,12 @@ struct CheckReport {
 /// used, at its exact coordinates (the output's points must equal the input's, same count and
 /// bitwise-equal coordinates); regions preserved and every cell the union of its source tets
 /// (via MixedMesh::source_tets when present, else skipped); total volume compared with the
-/// input's. The domain boundary is the input's boundary triangles: a boundary quad must be
-/// covered by two of them on one of its diagonals. Never throws on a bad `mesh`: every fault is
-/// counted and described in CheckReport::problems (at most kMaxProblemsPerKind lines per kind).
-/// Runs in O(#faces log(faces per vertex)) time.
+/// input's, and every region's volume with the input's. Runs on the points scaled by
+/// normalising_exponent (exact), so the answers do not depend on the model's scale. The domain
+/// boundary is the input's boundary triangles: a boundary quad must be covered by two of them on
+/// one of its diagonals. Never throws on a bad `mesh`: every fault is counted and described in
+/// CheckReport::problems (at most kMaxProblemsPerKind lines per kind). Runs in O(#faces log(faces
+/// per vertex)) time.
 /// @param[in] mesh   the mixed mesh to check
 /// @param[in] input  the tet mesh it was made from (assumed valid: see validate_tet_mesh)
 CheckReport check_mesh(const MixedMesh& mesh, const TetMesh& input);

@@ -37,6 +37,13 @@ class Cancelled : public std::runtime_error {
   Cancelled() : std::runtime_error("cancelled by the user") {}
 };
 
+/// The machine cannot give the run what it needs (threads, memory). `what()` is a complete
+/// sentence for the user naming what ran out and, where one helps, the parameter to change.
+class ResourceError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
 /// A broken internal invariant: a bug in HexMerge, never the user's fault.
 class InternalError : public std::logic_error {
  public:

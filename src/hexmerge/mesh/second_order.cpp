@@ -1,6 +1,7 @@
 #include "hexmerge/mesh/second_order.h"
 
 #include <algorithm>
+#include <cmath>
 #include <string>
 
 #include "hexmerge/core/error.h"
@@ -55,7 +56,14 @@ TetMesh corner_mesh(const Tet10Mesh& mesh) {
   return out;
 }
 
-QuadraticCells quadratic_cells(const MixedMesh& linear, const Tet10Mesh& input) {
+namespace {
+
+// Edge -> mid node of every edge of a Tet10 mesh, sorted by edge, after checking that the mesh
+// agrees with itself: ids in range, one mid node per edge, a mid node on one edge only and never
+// a corner, and each mid node near its edge: within the middle half of the edge along it (the
+// element's Jacobian vanishes on the edge outside it) and within half the edge's length of its
+// midpoint (every circular arc up to a half circle passes, so curved boundary edges do).
+std::vector<EdgeMid> mid_nodes(const Tet10Mesh& input) {
   check_tet10_sizes(input);
   const index_t nt = input.nb_tets();
   const index_t nv = static_cast<index_t>(input.points.size() / 3);
@@ -63,6 +71,7 @@ QuadraticCells quadratic_cells(const MixedMesh& linear, const Tet10Mesh& input) 
   // Edge -> mid node, as a sorted array: one entry per (edge, tet), then checked for agreement.
   std::vector<EdgeMid> edges;
   edges.reserve(6 * static_cast<std::size_t>(nt));
+  std::vector<char> is_corner(nv, 0);
   for (index_t t = 0; t < nt; ++t) {
     const index_t* q = &input.tets10[10 * static_cast<std::size_t>(t)];
     for (int k = 0; k < 10; ++k) {
@@ -74,6 +83,7 @@ QuadraticCells quadratic_cells(const MixedMesh& linear, const Tet10Mesh& input) 
                          Entity::Element, t);
       }
     }
+    for (int i = 0; i < 4; ++i) is_corner[q[i]] = 1;
     for (int k = 0; k < 6; ++k) {
       const index_t mid = q[4 + k];
       for (int i = 0; i < 4; ++i) {
@@ -107,6 +117,58 @@ QuadraticCells quadratic_cells(const MixedMesh& linear, const Tet10Mesh& input) 
   }
   edges.resize(unique);
 
+  auto edge_name = [](const EdgeMid& e) {
+    return "the edge between nodes " + std::to_string(e.edge >> 32) + " and " +
+           std::to_string(e.edge & 0xffffffffu);
+  };
+  std::vector<index_t> edge_of_mid(nv, NO_INDEX);
+  for (index_t i = 0; i < edges.size(); ++i) {
+    const EdgeMid& e = edges[i];
+    if (is_corner[e.mid]) {
+      throw InputError("tetrahedron " + std::to_string(e.tet) + " has node " +
+                           std::to_string(e.mid) + " as the mid node of " + edge_name(e) +
+                           ", but the node is a corner of another tetrahedron",
+                       Entity::Element, e.tet);
+    }
+    if (edge_of_mid[e.mid] != NO_INDEX) {
+      const EdgeMid& other = edges[edge_of_mid[e.mid]];
+      throw InputError("node " + std::to_string(e.mid) + " is the mid node of two edges: " +
+                           edge_name(other) + " (tetrahedron " + std::to_string(other.tet) +
+                           ") and " + edge_name(e) + " (tetrahedron " + std::to_string(e.tet) + ")",
+                       Entity::Element, e.tet);
+    }
+    edge_of_mid[e.mid] = i;
+    const double* a = &input.points[3 * (e.edge >> 32)];
+    const double* b = &input.points[3 * (e.edge & 0xffffffffu)];
+    const double* m = &input.points[3 * std::size_t(e.mid)];
+    double off = 0.0, along = 0.0, length = 0.0;  // squared; along: dot with the edge
+    for (int c = 0; c < 3; ++c) {
+      const double d = m[c] - 0.5 * (a[c] + b[c]);
+      off += d * d;
+      along += d * (b[c] - a[c]);
+      length += (b[c] - a[c]) * (b[c] - a[c]);
+    }
+    // Along the edge, within its middle half (outside it the element's Jacobian vanishes on the
+    // edge); across it, within half its length.
+    if (!(off <= 0.25 * length) || !(std::fabs(along) < 0.25 * length)) {  // also refuses NaN
+      throw InputError(
+          "tetrahedron " + std::to_string(e.tet) + ": mid node " + std::to_string(e.mid) + " of " +
+              edge_name(e) + " lies " + std::to_string(std::sqrt(off)) +
+              " from the edge's midpoint (edge length " + std::to_string(std::sqrt(length)) +
+              "): a mid node must lie within the middle half of its edge and at most "
+              "half the edge's length off it",
+          Entity::Element, e.tet);
+    }
+  }
+  return edges;
+}
+
+}  // namespace
+
+void validate_tet10_mesh(const Tet10Mesh& mesh) { mid_nodes(mesh); }
+
+QuadraticCells quadratic_cells(const MixedMesh& linear, const Tet10Mesh& input) {
+  const std::vector<EdgeMid> edges = mid_nodes(input);
   QuadraticCells out;
   const index_t nc = linear.nb_cells();
   out.offsets.reserve(static_cast<std::size_t>(nc) + 1);

@@ -25,6 +25,13 @@ struct Tet10Mesh {
 /// match (points not by 3, tets10 not by 10, regions not one per tet).
 TetMesh corner_mesh(const Tet10Mesh& mesh);
 
+/// Throws InputError (Entity::Element, naming the tet and the node) when the mid-edge nodes of a
+/// Tet10 mesh disagree with themselves: an id out of range, an edge with two mid nodes, a node
+/// that is the mid node of two edges or also a corner, or a mid node outside the middle half of
+/// its edge (along it) or further from its midpoint than half the edge's length (curved edges up
+/// to a half circle pass).
+void validate_tet10_mesh(const Tet10Mesh& mesh);
+
 /// Quadratic cells of a mixed mesh: cell c has nodes nodes[offsets[c] .. offsets[c+1]): its
 /// corners in linear order, then one mid-edge node per edge in the order of cell_type.h
 /// (VTK's quadratic order: Tet10, Pyramid13, Wedge15, Hexahedron20).

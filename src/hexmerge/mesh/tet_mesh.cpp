@@ -3,12 +3,27 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdio>
 #include <string>
 
 #include "hexmerge/core/error.h"
 #include "hexmerge/geometry/quality.h"
+#include "hexmerge/mesh/cell_type.h"
 
 namespace hexmerge {
+
+int normalising_exponent(const std::vector<double>& points) {
+  double largest = 0.0;
+  for (const double c : points) {
+    if (std::isfinite(c)) largest = std::max(largest, std::fabs(c));
+  }
+  if (largest == 0.0 || (largest >= std::ldexp(1.0, -32) && largest <= std::ldexp(1.0, 32))) {
+    return 0;
+  }
+  int e = 0;
+  std::frexp(largest, &e);  // largest = m 2^e, m in [0.5, 1)
+  return 1 - e;
+}
 
 void validate_tet_mesh(const TetMesh& mesh) {
   if (mesh.points.size() % 3 != 0) {
@@ -54,6 +69,16 @@ void validate_tet_mesh(const TetMesh& mesh) {
       throw InputError("tetrahedron " + std::to_string(t) +
                            (v < 0.0 ? " is inverted (negative volume " : " has zero volume (") +
                            std::to_string(v) + ")",
+                       Entity::Element, t);
+    }
+    // Flat to round-off: a positive volume that is noise against the tet's size (the scaled
+    // Jacobian does not depend on the scale); its sign could flip in any other computation.
+    const double sj = scaled_jacobian(CellType::Tet, mesh.points.data(), q);
+    if (!(sj > kMinInputScaledJacobian)) {
+      char text[32];
+      std::snprintf(text, sizeof text, "%.3g", sj);
+      throw InputError("tetrahedron " + std::to_string(t) +
+                           " is flat to round-off (scaled Jacobian " + text + ")",
                        Entity::Element, t);
     }
   }

@@ -23,11 +23,23 @@ struct TetMesh {
   const index_t* tet(index_t t) const { return &tets[4 * static_cast<std::size_t>(t)]; }
 };
 
+/// The exponent k of the power of two that brings the largest absolute finite coordinate of
+/// `points` (x, y, z per point) into [1, 2) when it lies outside [2^-32, 2^32]; 0 inside that
+/// range (the points are used as given). Scaling by 2^k is exact, so geometric tests on the
+/// scaled points give the answers they give at a moderate scale, where no product of
+/// coordinates under- or overflows.
+int normalising_exponent(const std::vector<double>& points);
+
+/// Smallest scaled Jacobian of an input tet (scale-free): below it a tet is flat to round-off,
+/// its orientation noise.
+constexpr double kMinInputScaledJacobian = 1e-12;
+
 /// Checks a TetMesh for everything the engine cannot process and throws InputError naming the
 /// first node or element at fault: an empty mesh, array sizes that do not match, NaN or infinite
 /// coordinates, vertex ids out of range, a tet with a repeated vertex, an inverted or zero-volume
-/// tet, two tets on the same four vertices. (Faces shared by three or more tets are found by
-/// TetTopology.) The mesh is never modified.
+/// tet, a tet flat to round-off (scaled Jacobian <= kMinInputScaledJacobian), two tets on the
+/// same four vertices. (Faces shared by three or more tets and folded tets, two on the same side
+/// of their shared face, are found by TetTopology.) The mesh is never modified.
 void validate_tet_mesh(const TetMesh& mesh);
 
 }  // namespace hexmerge

@@ -31,6 +31,16 @@ TetTopology::TetTopology(const TetMesh& mesh) {
     out[2] = std::max(hi, c);
     out[1] = std::max(lo, std::min(hi, c));
   };
+  // Whether a tet face's vertex cycle, started at its smallest vertex, runs to the smaller of
+  // the two others: the two tets of an interior face must see it with opposite cycles.
+  auto ascending = [&](index_t tet_face) {
+    const index_t* q = mesh.tet(tet_face / 4);
+    const index_t a = q[tet.face[tet_face % 4][0]], b = q[tet.face[tet_face % 4][1]],
+                  c = q[tet.face[tet_face % 4][2]];
+    if (a < b && a < c) return b < c;
+    if (b < c) return c < a;
+    return a < b;
+  };
   for (index_t t = 0; t < nt; ++t) {
     for (int f = 0; f < 4; ++f) {
       index_t s[3];
@@ -69,6 +79,16 @@ TetTopology::TetTopology(const TetMesh& mesh) {
       }
       if (count == 2) {
         const index_t a = it->tet_face, b = (it + 1)->tet_face;
+        if (ascending(a) == ascending(b)) {
+          // Both tets see the face with the same orientation: they lie on the same side of it.
+          index_t s[3];
+          sorted_face(a / 4, a % 4, s);
+          throw InputError("tetrahedra " + std::to_string(a / 4) + " and " + std::to_string(b / 4) +
+                               " lie on the same side of their shared face (" + "nodes " +
+                               std::to_string(s[0]) + ", " + std::to_string(s[1]) + ", " +
+                               std::to_string(s[2]) + "): the mesh folds over itself",
+                           Entity::Element, b / 4);
+        }
         neighbors_[a] = b / 4;
         neighbors_[b] = a / 4;
         neighbor_faces_[a] = static_cast<signed char>(b % 4);

@@ -15,8 +15,9 @@ namespace hexmerge {
 /// boundaries are decided by the caller.
 class TetTopology {
  public:
-  /// Builds the adjacency. Throws InputError when a face is shared by three or more tets
-  /// (naming one of them). Linear in the number of tets.
+  /// Builds the adjacency. Throws InputError when a face is shared by three or more tets, or
+  /// by two tets on the same side of it (a fold; the tets must be positively oriented), naming
+  /// one of them. Linear in the number of tets.
   explicit TetTopology(const TetMesh& mesh);
 
   /// The adjacency of reorder_tets(mesh, order) (spatial_order.h), from this one without a

@@ -524,7 +524,7 @@ std::vector<Candidate> find_candidates(const TetMesh& mesh, const TetTopology& t
   const TetTopology local_topology = topology.reordered(input_id);
   const QuadPairs quad_pairs(local, local_topology, criteria.min_dihedral_angle,
                              criteria.min_boundary_dihedral_angle, criteria.max_face_angle,
-                             std::max(1, threads));
+                             std::max(1, threads), criteria.respect_regions);
   // Small chunks: the threads finish together (the search time per root varies a lot).
   constexpr index_t kChunk = 2048;
   const SearchTree tree(criteria.types);

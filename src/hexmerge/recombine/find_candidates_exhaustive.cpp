@@ -2,8 +2,6 @@
 
 #include <algorithm>
 #include <array>
-#include <atomic>
-#include <thread>
 
 #include "hexmerge/core/error.h"
 #include "hexmerge/core/parallel.h"
@@ -41,41 +39,29 @@ class QuadIndex {
     constexpr index_t kChunk = 16384;
     const index_t nb_chunks = (nt + kChunk - 1) / kChunk;
     std::vector<std::vector<PairRecord>> per_chunk(nb_chunks);
-    std::atomic<index_t> next{0};
-    auto work = [&] {
-      for (index_t chunk; (chunk = next.fetch_add(1)) < nb_chunks;) {
-        auto& out = per_chunk[chunk];
-        const index_t end = std::min(nt, (chunk + 1) * kChunk);
-        for (index_t t = chunk * kChunk; t < end; ++t) {
-          for (int f = 0; f < 4; ++f) {
-            for (const QuadPartner* p = pairs.begin(t, f); p != pairs.end(t, f); ++p) {
-              std::array<index_t, 4> q;
-              if (!quad_from_triangles(tet_face(mesh, t, f),
-                                       tet_face(mesh, p->face / 4, p->face % 4), q)) {
-                continue;
-              }
-              const int r = static_cast<int>(std::min_element(q.begin(), q.end()) - q.begin());
-              PairRecord rec;
-              for (int i = 0; i < 4; ++i) rec.v[i] = q[(r + i) % 4];
-              rec.seed = 4 * t + f;
-              rec.diagonal = static_cast<std::uint8_t>(r % 2);
-              out.push_back(rec);
+    parallel_chunks(nt, kChunk, threads, [&](index_t chunk, index_t begin, index_t end) {
+      auto& out = per_chunk[chunk];
+      for (index_t t = begin; t < end; ++t) {
+        for (int f = 0; f < 4; ++f) {
+          for (const QuadPartner* p = pairs.begin(t, f); p != pairs.end(t, f); ++p) {
+            std::array<index_t, 4> q;
+            if (!quad_from_triangles(tet_face(mesh, t, f), tet_face(mesh, p->face / 4, p->face % 4),
+                                     q)) {
+              continue;
             }
+            const int r = static_cast<int>(std::min_element(q.begin(), q.end()) - q.begin());
+            PairRecord rec;
+            for (int i = 0; i < 4; ++i) rec.v[i] = q[(r + i) % 4];
+            rec.seed = 4 * t + f;
+            rec.diagonal = static_cast<std::uint8_t>(r % 2);
+            out.push_back(rec);
           }
         }
-        std::sort(out.begin(), out.end(), less);
       }
-    };
-    run(threads, work);
+      std::sort(out.begin(), out.end(), less);
+    });
 
-    std::vector<PairRecord> all;
-    std::size_t total = 0;
-    for (const auto& c : per_chunk) total += c.size();
-    all.reserve(total);
-    for (auto& c : per_chunk) {
-      all.insert(all.end(), c.begin(), c.end());
-      std::vector<PairRecord>().swap(c);
-    }
+    std::vector<PairRecord> all = concatenate(per_chunk);
     std::sort(all.begin(), all.end(), less);
     for (const PairRecord& r : all) {
       if (quads_.empty() || quads_.back().v != r.v) quads_.push_back({r.v, {NO_INDEX, NO_INDEX}});
@@ -125,14 +111,6 @@ class QuadIndex {
       return !found;
     });
     return found;
-  }
-
-  template <class Work>
-  static void run(int threads, Work& work) {
-    std::vector<std::thread> pool;
-    for (int i = 1; i < std::max(1, threads); ++i) pool.emplace_back(work);
-    work();
-    for (auto& th : pool) th.join();
   }
 
  private:
@@ -288,6 +266,13 @@ class CellBuilder {
     return false;
   }
 
+  // Face f of tet t on the domain's boundary, or on a region interface when regions are kept
+  // apart (then the interface is each region's boundary and takes the boundary's dangle).
+  bool boundary_face(index_t t, int f) const {
+    if (topo_.on_boundary(t, f)) return true;
+    return criteria_.respect_regions && mesh_.region(t) != mesh_.region(topo_.neighbor(t, f));
+  }
+
   // Whether the quad made of two outward faces of one tet (a flat cap) passes the angles.
   bool cap_accepted(index_t t, int f1, int f2) const {
     std::array<index_t, 4> q;
@@ -296,7 +281,7 @@ class CellBuilder {
                                           mesh_.point(q[2]), mesh_.point(q[3]));
     const double cr = quad_max_corner_angle(mesh_.point(q[0]), mesh_.point(q[1]),
                                             mesh_.point(q[2]), mesh_.point(q[3]));
-    const bool on_boundary = topo_.on_boundary(t, f1) && topo_.on_boundary(t, f2);
+    const bool on_boundary = boundary_face(t, f1) && boundary_face(t, f2);
     const double min_dihedral =
         on_boundary ? criteria_.min_boundary_dihedral_angle : criteria_.min_dihedral_angle;
     return dh >= min_dihedral && cr <= criteria_.max_face_angle;
@@ -486,7 +471,8 @@ std::vector<Candidate> find_candidates_exhaustive(const TetMesh& mesh, const Tet
                                                   const ProgressCallback& progress) {
   threads = std::max(1, threads);
   const QuadPairs pairs(mesh, topology, criteria.min_dihedral_angle,
-                        criteria.min_boundary_dihedral_angle, criteria.max_face_angle, threads);
+                        criteria.min_boundary_dihedral_angle, criteria.max_face_angle, threads,
+                        criteria.respect_regions);
   const QuadIndex index(mesh, pairs, threads);
 
   const index_t nq = static_cast<index_t>(index.size());

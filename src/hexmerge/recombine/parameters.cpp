@@ -79,7 +79,8 @@ std::vector<ParameterInfo> make_table() {
        "Largest accepted corner angle of a quad face (90 = rectangle)"},
       {"min_scaled_jacobian", "float", number(d.min_scaled_jacobian), "", -1, 1, {},
        "Min. scaled Jacobian",
-       "Smallest accepted scaled Jacobian (Verdict) of a new hex, prism or pyramid (1 = ideal)"},
+       "Smallest accepted scaled Jacobian (Verdict) of a new hex, prism or pyramid (1 = ideal; "
+       "below 1e-9 counts as 1e-9: no element is ever flat or inverted)"},
       {"make_hexahedra", "bool", flag(d.make_hexahedra), "", 0, 1, {}, "Hexahedra",
        "Merge tetrahedra into hexahedra"},
       {"make_prisms", "bool", flag(d.make_prisms), "", 0, 1, {}, "Prisms",

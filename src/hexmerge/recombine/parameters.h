@@ -65,7 +65,9 @@ struct RecombineParameters {
   /// geometry (a fold there changes the domain's volume)
   double min_boundary_dihedral_angle = 179.0;
   double max_face_angle = 150.0;      ///< degrees, [90, 180]: the paper's fangle
-  double min_scaled_jacobian = 0.3;   ///< [-1, 1]: Verdict scaled Jacobian of every new element
+  /// [-1, 1]: Verdict scaled Jacobian of every new element; recombine() never goes below
+  /// kMinElementScaledJacobian, whatever this says
+  double min_scaled_jacobian = 0.3;
   bool make_hexahedra = true;
   bool make_prisms = true;
   bool make_pyramids = true;
@@ -87,6 +89,10 @@ struct RecombineParameters {
   bool optimality_bound = false;
   double bound_time_limit = 30.0;     ///< seconds, [1, 3600]: time limit of that solve
 };
+
+/// The floor under min_scaled_jacobian: an element at or below 0 would be flat or inverted (the
+/// checker refuses it), so recombine() accepts none below this, whatever the option says.
+constexpr double kMinElementScaledJacobian = 1e-9;
 
 /// One row of the parameter table.
 struct ParameterInfo {

@@ -47,9 +47,11 @@ struct Entry {
 class Builder {
  public:
   Builder(const TetMesh& mesh, const TetTopology& topology, const std::vector<float>& normals,
-          double min_dihedral, double min_boundary_dihedral, double max_corner)
+          double min_dihedral, double min_boundary_dihedral, double max_corner,
+          bool region_interfaces_are_boundary)
       : mesh_(mesh),
         topo_(topology),
+        regions_(region_interfaces_are_boundary && !mesh.regions.empty()),
         normals_(normals),
         min_dihedral_(min_dihedral),
         min_boundary_dihedral_(min_boundary_dihedral),
@@ -132,7 +134,7 @@ class Builder {
     const double* b = mesh_.point(q[1]);
     const double* c = mesh_.point(q[2]);
     const double* d = mesh_.point(q[3]);
-    const bool on_boundary = topo_.on_boundary(t, f) && topo_.on_boundary(s, g);
+    const bool on_boundary = is_boundary(t, f) && is_boundary(s, g);
     if (quad_dihedral_angle_below(a, b, c, d,
                                   on_boundary ? min_boundary_dihedral_ : min_dihedral_)) {
       return false;
@@ -142,8 +144,15 @@ class Builder {
     return true;
   }
 
+  // Face f of tet t on the domain's boundary, or on a region interface when those count.
+  bool is_boundary(index_t t, int f) const {
+    if (topo_.on_boundary(t, f)) return true;
+    return regions_ && mesh_.region(t) != mesh_.region(topo_.neighbor(t, f));
+  }
+
   const TetMesh& mesh_;
   const TetTopology& topo_;
+  bool regions_;
   const std::vector<float>& normals_;  // 4 outward unit normals per tet
   AngleBound min_dihedral_, min_boundary_dihedral_, max_corner_;
   double min_cos_;
@@ -173,11 +182,12 @@ std::vector<float> unit_normals(const TetMesh& mesh, int threads) {
 }  // namespace
 
 QuadPairs::QuadPairs(const TetMesh& mesh, const TetTopology& topology, double min_dihedral_angle,
-                     double min_boundary_dihedral_angle, double max_face_angle, int threads) {
+                     double min_boundary_dihedral_angle, double max_face_angle, int threads,
+                     bool region_interfaces_are_boundary) {
   const index_t nt = mesh.nb_tets();
   const std::vector<float> normals = unit_normals(mesh, threads);
   const Builder builder(mesh, topology, normals, min_dihedral_angle, min_boundary_dihedral_angle,
-                        max_face_angle);
+                        max_face_angle, region_interfaces_are_boundary);
   constexpr index_t kChunk = 4096;  // small enough for the threads to finish together
   std::vector<std::vector<Entry>> per_chunk((nt + kChunk - 1) / kChunk);
   parallel_chunks(nt, kChunk, threads, [&](index_t chunk, index_t begin, index_t end) {

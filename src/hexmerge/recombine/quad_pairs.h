@@ -37,14 +37,22 @@ class QuadPairs {
   ///                                         domain boundary
   /// @param[in] max_face_angle               degrees, the paper's fangle
   /// @param[in] threads                      worker threads (>= 1)
+  /// @param[in] region_interfaces_are_boundary  a face between tets of two regions takes the
+  ///                                         boundary's dangle (when regions are kept apart,
+  ///                                         the interface is each region's boundary: a bent
+  ///                                         quad there would move volume between regions)
   QuadPairs(const TetMesh& mesh, const TetTopology& topology, double min_dihedral_angle,
-            double min_boundary_dihedral_angle, double max_face_angle, int threads);
+            double min_boundary_dihedral_angle, double max_face_angle, int threads,
+            bool region_interfaces_are_boundary);
 
+  /// The partners of face f of tet t: [begin, end). Pointer arithmetic on data(), never
+  /// operator[]: end() of the last face is one past the last partner, and `partners_` may be
+  /// empty.
   const QuadPartner* begin(index_t t, int f) const {
-    return &partners_[offsets_[4 * std::size_t(t) + f]];
+    return partners_.data() + offsets_[4 * std::size_t(t) + f];
   }
   const QuadPartner* end(index_t t, int f) const {
-    return &partners_[0] + offsets_[4 * std::size_t(t) + f + 1];
+    return partners_.data() + offsets_[4 * std::size_t(t) + f + 1];
   }
   /// Bit f set when face f of tet t has at least one partner.
   unsigned char mask(index_t t) const { return masks_[t]; }

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <thread>
 
 #include "hexmerge/core/error.h"
@@ -10,8 +11,8 @@
 #include "hexmerge/recombine/bound_selection.h"
 #include "hexmerge/recombine/find_candidates.h"
 #include "hexmerge/recombine/find_candidates_exhaustive.h"
-#include "hexmerge/recombine/rf_graph.h"
 #include "hexmerge/recombine/prune_candidates.h"
+#include "hexmerge/recombine/rf_graph.h"
 #include "hexmerge/recombine/select_candidates.h"
 
 namespace hexmerge {
@@ -147,16 +148,29 @@ MixedMesh recombine(const TetMesh& input, const RecombineParameters& parameters,
   PhaseTimer timer(report);
   validate_parameters(parameters);
   if (parameters.optimality_bound) require_selection_bound();
-  validate_tet_mesh(input);
+  // Scale-free: far from 1, every geometric test runs on the points scaled by a power of two
+  // (exact: each product and quotient rounds as before, none under- or overflows); the output
+  // keeps the input's points, and the report's volumes are scaled back.
+  const int exponent = normalising_exponent(input.points);
+  TetMesh scaled;
+  if (exponent != 0) {
+    scaled = input;
+    for (double& c : scaled.points) c = std::ldexp(c, exponent);
+  }
+  const TetMesh& mesh = exponent != 0 ? scaled : input;
+  validate_tet_mesh(mesh);
   report_progress(progress, "topology", 0.0);
-  const TetTopology topology(input);
+  const TetTopology topology(mesh);
   timer.lap("topology");
 
   AcceptanceCriteria criteria;
   criteria.min_dihedral_angle = parameters.min_dihedral_angle;
   criteria.min_boundary_dihedral_angle = parameters.min_boundary_dihedral_angle;
   criteria.max_face_angle = parameters.max_face_angle;
-  criteria.min_scaled_jacobian = parameters.min_scaled_jacobian;
+  // A hard floor under the option: whatever it says (down to -1), no element is made flat or
+  // inverted.
+  criteria.min_scaled_jacobian =
+      std::max(parameters.min_scaled_jacobian, kMinElementScaledJacobian);
   criteria.respect_regions = parameters.respect_regions;
   criteria.types[static_cast<int>(CellType::Hex)] = parameters.make_hexahedra;
   criteria.types[static_cast<int>(CellType::Prism)] = parameters.make_prisms;
@@ -164,9 +178,9 @@ MixedMesh recombine(const TetMesh& input, const RecombineParameters& parameters,
   const int threads = thread_count(parameters.threads);
   std::vector<Candidate> candidates =
       parameters.finder == Finder::Exhaustive
-          ? find_candidates_exhaustive(input, topology, criteria, threads, progress)
-          : find_candidates(input, topology, criteria, threads, progress);
-  drop_boundary_pyramids(input, topology, parameters.pyramid_placement, candidates);
+          ? find_candidates_exhaustive(mesh, topology, criteria, threads, progress)
+          : find_candidates(mesh, topology, criteria, threads, progress);
+  drop_boundary_pyramids(mesh, topology, parameters.pyramid_placement, candidates);
   timer.lap("candidates");
   // Templates by name; the exhaustive finder's candidates count as "exhaustive_<type>".
   std::vector<std::array<std::size_t, NB_CELL_TYPES>> counts(256);
@@ -185,11 +199,11 @@ MixedMesh recombine(const TetMesh& input, const RecombineParameters& parameters,
   report.candidates_total = candidates.size();
   if (parameters.conformity == Conformity::Conforming) {
     candidates =
-        prune_unclosable(input, topology, candidates, report.candidates_unclosable, threads);
+        prune_unclosable(mesh, topology, candidates, report.candidates_unclosable, threads);
     timer.lap("pruning");
   }
 
-  const Selection selection = select_candidates(input, topology, candidates, parameters, progress);
+  const Selection selection = select_candidates(mesh, topology, candidates, parameters, progress);
   report.nonconforming_quads = selection.nonconforming_quads;
   report.block_hexahedra = selection.block_hexahedra;
   report.closing_pyramids = selection.closing_pyramids;
@@ -201,8 +215,10 @@ MixedMesh recombine(const TetMesh& input, const RecombineParameters& parameters,
   report.selection_strategy = selection.strategy;
   timer.lap("selection");
 
-  MixedMesh out = build_output(input, candidates, selection);
-  fill_report(input, out, report);
+  MixedMesh out = build_output(mesh, candidates, selection);
+  fill_report(mesh, out, report);
+  report.input_volume = std::ldexp(report.input_volume, -3 * exponent);
+  if (exponent != 0) out.points = input.points;
   timer.lap("output");
 
   if (parameters.optimality_bound) {
@@ -211,8 +227,8 @@ MixedMesh recombine(const TetMesh& input, const RecombineParameters& parameters,
     // selections, which is what this mode's output is measured against.
     const bool conforming = parameters.conformity == Conformity::Conforming;
     const SelectionBound bound = bound_selection(
-        input.nb_tets(), candidates, selection.elements, parameters.bound_time_limit,
-        conforming ? conformity_rows(input, topology, candidates) : std::vector<ConformityRow>{});
+        mesh.nb_tets(), candidates, selection.elements, parameters.bound_time_limit,
+        conforming ? conformity_rows(mesh, topology, candidates) : std::vector<ConformityRow>{});
     report.bound_computed = true;
     report.bound_conforming = conforming;
     report.bound_elements = bound.bound_elements;
@@ -223,8 +239,8 @@ MixedMesh recombine(const TetMesh& input, const RecombineParameters& parameters,
                           static_cast<double>(bound.bound_elements)) /
                          static_cast<double>(bound.bound_elements);
     // The candidates are pruned in conforming mode, so this bounds the conforming selections.
-    const VolumeBound hex_bound = bound_hex_volume(input, candidates, parameters.bound_time_limit);
-    report.hex_volume_bound = hex_bound.bound;
+    const VolumeBound hex_bound = bound_hex_volume(mesh, candidates, parameters.bound_time_limit);
+    report.hex_volume_bound = std::ldexp(hex_bound.bound, -3 * exponent);
     report.hex_volume_bound_proved = hex_bound.proved;
     timer.lap("bound");
   }

@@ -169,6 +169,7 @@ class Selector {
     report_progress(progress, "selection", 0.75);
     close_quads();
     if (params_.local_search) local_search();
+    if (params_.conformity != Conformity::Conforming) release_cracks();
     report_progress(progress, "selection", 1.0);
     for (index_t ci = 0; ci < cands_.size(); ++ci) {
       if (chosen_[ci]) result_.elements.push_back(ci);
@@ -750,6 +751,70 @@ class Selector {
       if (violations(e) > 0) return false;
     }
     return true;
+  }
+
+  // Where quads may meet triangles (allow, last_resort), chosen elements can still leave a
+  // crack: (1) a quad face half on the domain boundary, half inside (nothing can cover it);
+  // (2) two elements capping one free tet from its two sides, each with a quad face on two of
+  // the tet's faces: two quads on the same four corners with the other diagonal, the tet
+  // sandwiched between; (3) an element capping a free tet whose other two faces are on the
+  // domain boundary (the quad has the boundary's corners). Releases the element in (1) and (3),
+  // and in (2) the one that saves fewer tets (the later one on ties): a release only leaves tets,
+  // so no new crack appears.
+  void release_cracks() {
+    for (index_t ci = 0; ci < cands_.size(); ++ci) {
+      if (!chosen_[ci]) continue;
+      const Candidate& c = cands_[ci];
+      const Sides s = sides(ci);
+      const CellDescriptor& d = descriptor(c.type);
+      for (int f = 0; f < d.nb_faces && chosen_[ci]; ++f) {
+        if (d.face_size[f] != 4) continue;
+        const auto n = tets_behind(s, f);
+        if ((n[0] == NO_CELL) != (n[1] == NO_CELL)) {
+          release(ci);
+          ++result_.released_elements;
+        }
+      }
+    }
+    auto drop_one = [&](index_t a, index_t b) {
+      const int ga = gain(cands_[a]), gb = gain(cands_[b]);
+      release(ga > gb || (ga == gb && a < b) ? b : a);
+      ++result_.released_elements;
+    };
+    // The complementary pairs of a tet's faces: faces (p, q) form one quad on the tet's
+    // corners, the other two faces the same quad with the other diagonal.
+    static constexpr int kPairs[3][4] = {{0, 1, 2, 3}, {0, 2, 1, 3}, {0, 3, 1, 2}};
+    for (index_t t = 0; t < mesh_.nb_tets(); ++t) {
+      if (!is_free(t)) continue;
+      std::array<std::pair<index_t, int>, 4> quad_of{};  // per face: (element, its quad face)
+      for (int f = 0; f < 4; ++f) {
+        quad_of[f] = {NO_INDEX, -1};
+        const index_t n = topo_.neighbor(t, f);
+        if (n == NO_CELL || is_free(n)) continue;
+        const int ef = cell_face_at(owner_[n], n, topo_.neighbor_face(t, f));
+        if (ef >= 0 && is_quad(cands_[owner_[n]], ef)) quad_of[f] = {owner_[n], ef};
+      }
+      for (const auto& p : kPairs) {
+        for (int side = 0; side < 2; ++side) {
+          // An element's quad on two faces of t, t's other two faces on the domain boundary: the
+          // quad has the boundary's corners, and a face matching takes it for the boundary.
+          const int* q = p + 2 * side;
+          const int* r = p + 2 - 2 * side;
+          const auto a = quad_of[q[0]];
+          if (a.first != NO_INDEX && quad_of[q[1]] == a && topo_.on_boundary(t, r[0]) &&
+              topo_.on_boundary(t, r[1])) {
+            release(a.first);
+            ++result_.released_elements;
+            quad_of[q[0]] = quad_of[q[1]] = {NO_INDEX, -1};
+          }
+        }
+        const auto a = quad_of[p[0]], b = quad_of[p[2]];
+        if (a.first == NO_INDEX || b.first == NO_INDEX || a.first == b.first) continue;
+        if (quad_of[p[1]] != a || quad_of[p[3]] != b) continue;
+        drop_one(a.first, b.first);
+        break;
+      }
+    }
   }
 
   // Tets in breadth-first order from the boundary tets (then any tet not reached, in order).

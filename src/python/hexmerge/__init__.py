@@ -25,6 +25,7 @@ from ._shape import mesh_parameters, mesh_shape
 
 InputError = _core.InputError
 Cancelled = _core.Cancelled
+ResourceError = _core.ResourceError
 
 __version__ = "0.1.0"
 
@@ -33,6 +34,7 @@ __all__ = [
     "CellBlock",
     "InputError",
     "MixedMesh",
+    "ResourceError",
     "WITH_OPENCASCADE",
     "cell_types",
     "check",

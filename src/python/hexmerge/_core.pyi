@@ -14,6 +14,9 @@ class InputError(ValueError):
 class Cancelled(Exception):
     """The run was cancelled from the progress callback."""
 
+class ResourceError(MemoryError):
+    """The machine cannot give the run what it needs (threads, memory)."""
+
 def recombine(
     points: npt.NDArray[np.float64],
     cells: npt.NDArray[np.uint32],

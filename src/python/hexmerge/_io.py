@@ -6,7 +6,11 @@ second-order cells, for one) when reading and writing.
 
 from __future__ import annotations
 
+import contextlib
+import io
 import os
+import re
+import stat
 import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -47,17 +51,147 @@ class TetFile:
     ignored: dict[str, int] = field(default_factory=dict)  # lower-dimensional cells left out
 
 
+#: Text formats with no end marker and no counts, whose writers end the last line with a newline:
+#: a file cut short inside a line is refused (an .inp cut inside a node id would give an element
+#: a wrong node). (.msh has $End markers and counts, legacy .vtk counts: checked otherwise.)
+_TEXT_SUFFIXES = {".inp"}
+#: Largest node tag accepted for n nodes, and at all: meshio maps tags through an array as long
+#: as the largest tag (sparse tags near 1e12 needed 8 GB), in 32 bits for Gmsh 2.2.
+_MAX_TAG_FACTOR = 64
+_MAX_TAG_FLOOR = 1 << 20
+_MAX_TAG_GMSH22 = (1 << 31) - 2
+
+
+def _is_text(head: bytes) -> bool:
+    return b"\0" not in head and all(b >= 9 for b in head[:4096])
+
+
+def _check_gmsh_nodes(path: Path, data: bytes) -> None:
+    """Refuses an ASCII Gmsh file cut short (a section not closed) or whose node tags meshio
+    cannot map: tags that are not positive whole numbers, or so sparse that its tag table would
+    not fit in memory."""
+    start = data.find(b"$MeshFormat")
+    nodes = data.find(b"$Nodes")
+    end = data.find(b"$EndNodes", nodes)
+    if start < 0 or nodes < 0 or end < 0:
+        return  # meshio reports what is missing
+    version = data[start:].split(None, 3)[1:3]
+    if len(version) < 2 or version[1] != b"0":
+        return  # binary: meshio checks the tags itself
+    # Every section closed: a file cut short loses its last $End... line.
+    opened = None
+    for name in re.findall(rb"(?m)^\$(\w+)\s*$", data):
+        if opened is None:
+            opened = name
+        elif name == b"End" + opened:
+            opened = None
+        else:
+            break
+    if opened is not None:
+        raise MeshFileError(f"{path}: section ${opened.decode()} is not closed: the file is cut short or damaged")
+    words = data[nodes + len(b"$Nodes") : end].split()
+    try:
+        if version[0].startswith(b"2"):
+            count = int(words[0])
+            tags = [words[1 + 4 * i] for i in range(count)]
+        else:  # 4.x: numEntityBlocks numNodes minTag maxTag, then per block dim tag param n
+            count, tags, i = int(words[1]), [], 4
+            while i < len(words) and len(tags) < count:
+                n = int(words[i + 3])
+                tags += words[i + 4 : i + 4 + n]
+                i += 4 + n + 3 * n
+    except (ValueError, IndexError):
+        return  # malformed: meshio reports it
+    largest = 0
+    for word in tags:
+        try:
+            tag = int(word)
+        except ValueError:
+            raise MeshFileError(f"{path}: node tag {word.decode(errors='replace')} is not a whole number") from None
+        if tag <= 0:
+            raise MeshFileError(f"{path}: node tag {tag} is not positive (Gmsh numbers nodes from 1)")
+        largest = max(largest, tag)
+    limit = max(_MAX_TAG_FACTOR * len(tags), _MAX_TAG_FLOOR)
+    if version[0].startswith(b"2"):
+        limit = min(limit, _MAX_TAG_GMSH22)
+    if largest > limit:
+        raise MeshFileError(
+            f"{path}: node tags are too sparse to read (largest {largest} for {len(tags)} nodes; "
+            f"at most {limit}): renumber the nodes"
+        )
+
+
+def _check_vtk_counts(path: Path, data: bytes, mesh: Any) -> None:
+    """A legacy ASCII .vtk file declares how many points and cells it has: fewer read means the
+    file was cut short."""
+    head = data[:1024].split(b"\n")
+    if len(head) < 3 or head[2].strip().upper() != b"ASCII":
+        return
+    for keyword, got, what in (
+        (rb"\bPOINTS\s+(\d+)", len(mesh.points), "points"),
+        (rb"\bCELLS\s+(\d+)", sum(len(b.data) for b in mesh.cells), "cells"),
+    ):
+        m = re.search(keyword, data)
+        if m and int(m.group(1)) != got:
+            raise MeshFileError(
+                f"{path}: the file declares {int(m.group(1))} {what} but holds {got}: it is cut short or damaged"
+            )
+
+
 def read(path: str | os.PathLike[str], file_format: str | None = None) -> Any:
+    """The meshio mesh in a file. Refuses, in our words, what meshio would read wrongly (a text
+    file cut inside a line, a legacy .vtk with fewer points or cells than it declares, Gmsh node
+    tags too sparse to map) or fail on with its own text."""
     meshio = _meshio()
 
-    if not Path(path).is_file():
+    path = Path(path)
+    if not path.is_file():
         raise MeshFileError(f"{path}: no such file")
+    with open(path, "rb") as f:
+        data = f.read()
+    suffix = path.suffix.lower()
+    if suffix in _TEXT_SUFFIXES and data and _is_text(data[:4096]) and not data.endswith((b"\n", b"\r")):
+        raise MeshFileError(f"{path}: the file ends inside a line: it is cut short")
+    if suffix == ".msh" or (file_format or "").startswith("gmsh"):
+        _check_gmsh_nodes(path, data)
+    if suffix == ".mesh" and _is_text(data[:4096]) and data.split()[-1:] != [b"End"]:
+        # Medit ends with the keyword End: without it the file was cut short.
+        raise MeshFileError(f"{path}: the file does not end with the keyword End: it is cut short")
+    del data
+    said = io.StringIO()
     try:
-        return meshio.read(path, file_format=file_format)
+        with contextlib.redirect_stdout(said), contextlib.redirect_stderr(said):
+            mesh = meshio.read(path, file_format=file_format)
     except SystemExit:  # meshio 5.0 prints its error and calls sys.exit(1) when no reader fits
-        raise MeshFileError(f"{path}: cannot read the mesh (see meshio's message above)") from None
+        text = " ".join(said.getvalue().split()) or "no reader fits"
+        raise MeshFileError(f"{path}: cannot read the mesh ({text})") from None
+    except MemoryError:
+        raise MeshFileError(f"{path}: cannot read the mesh: out of memory") from None
     except Exception as e:  # meshio raises ReadError, KeyError, ValueError... for bad files
-        raise MeshFileError(f"{path}: cannot read the mesh: {type(e).__name__}: {e}") from None
+        raise MeshFileError(f"{path}: cannot read the mesh: {_reader_error(e)}") from None
+    if suffix == ".vtk":
+        with open(path, "rb") as f:
+            _check_vtk_counts(path, f.read(), mesh)
+    for block in mesh.cells:
+        data = np.asarray(block.data)
+        if data.size and (data.min() < 0 or data.max() >= len(mesh.points)):
+            raise MeshFileError(
+                f"{path}: a {block.type} cell refers to a node the file does not define"
+            )
+    return mesh
+
+
+def _reader_error(e: Exception) -> str:
+    """meshio's exception as a sentence: its own messages are kept, its internals (a KeyError on
+    a missing node id, numpy's 'need at least one array to concatenate') are said plainly."""
+    if isinstance(e, KeyError):
+        return f"it refers to {e.args[0] if e.args else 'an id'}, which the file does not define"
+    text = str(e)
+    if "need at least one array to concatenate" in text:
+        return "it has no cells"
+    if isinstance(e, (ValueError, IndexError)) and ("reshape" in text or "index" in text):
+        return "it is cut short or damaged"
+    return f"{type(e).__name__}: {text}" if text else f"{type(e).__name__} (damaged file?)"
 
 
 def _block_regions(mesh: Any, b: int) -> tuple[str | None, np.ndarray | None]:
@@ -159,10 +293,12 @@ def read_mixed(path: str | os.PathLike[str], file_format: str | None = None) -> 
     have_regions = True
     for b, block in enumerate(mesh.cells):
         if block.type in _cells.BY_MESHIO_NAME:
-            blocks.append((block.type, block.data))
             _, r = _block_regions(mesh, b)
             have_regions = have_regions and r is not None
-            region_parts.append(r)
+            for name, rows in _uncollapsed_pyramids(block.type, np.asarray(block.data)):
+                data = np.asarray(block.data)[rows]
+                blocks.append((name, data[:, :5] if name != block.type else data))
+                region_parts.append(None if r is None else r[rows])
         elif block.type in _cells.OTHER_VOLUME_NAMES:
             raise MeshFileError(f"{path}: unsupported cell type {block.type!r} ({len(block.data)} cells)")
     if not blocks:
@@ -174,23 +310,94 @@ def read_mixed(path: str | os.PathLike[str], file_format: str | None = None) -> 
     return mixed, mesh
 
 
-def format_of(path: str | os.PathLike[str], file_format: str | None) -> str:
-    """The meshio format name for writing `path`."""
-    if file_format:
-        return file_format
-    suffix = Path(path).suffix.lower()
-    if suffix in PREFERRED_FORMAT:
-        return PREFERRED_FORMAT[suffix]
-    _meshio()
-    from meshio._helpers import _filetypes_from_path  # meshio's own extension table
+#: meshio formats that hold points, lines and surface cells only: a mixed volume mesh written
+#: to them would lose every cell (meshio writes such files without a word).
+SURFACE_ONLY_FORMATS = {"stl", "obj", "off", "ply", "wkt", "svg", "neuroglancer"}
 
+
+def format_of(path: str | os.PathLike[str], file_format: str | None) -> str:
+    """The meshio format name for writing `path`; surface-only formats are refused."""
+    if file_format:
+        fmt = file_format
+    elif Path(path).suffix.lower() in PREFERRED_FORMAT:
+        fmt = PREFERRED_FORMAT[Path(path).suffix.lower()]
+    else:
+        _meshio()
+        from meshio._helpers import _filetypes_from_path  # meshio's own extension table
+
+        try:
+            types = _filetypes_from_path(Path(path))
+        except Exception:
+            types = []
+        if not types:
+            raise MeshFileError(f"{path}: unknown mesh file extension; give the format with --output-format")
+        fmt = types[0]
+    if fmt in SURFACE_ONLY_FORMATS:
+        raise MeshFileError(
+            f"{path}: the {fmt} format holds surfaces only and would lose every volume cell; "
+            "write a volume format (.vtu, .msh, .inp, .mesh, .med)"
+        )
+    return fmt
+
+
+def _identity(path: Path) -> tuple[int, int] | None:
+    """(device, inode) of the file `path` names (through symlinks), None when there is none."""
     try:
-        types = _filetypes_from_path(Path(path))
-    except Exception:
-        types = []
-    if not types:
-        raise MeshFileError(f"{path}: unknown mesh file extension; give the format with --output-format")
-    return types[0]
+        st = path.stat()
+    except OSError:
+        return None
+    return st.st_dev, st.st_ino
+
+
+def check_targets(targets: dict[str, str | os.PathLike[str] | None], inputs: list[str | os.PathLike[str]]) -> None:
+    """Refuses, before any work, output paths (label -> path; None: not asked for) that are not
+    regular files, that name an input, or that name each other (by inode for files that exist,
+    by real path for files to be made): writing never overwrites an input, never replaces a
+    device node, a FIFO or a symlink, and never writes two outputs over one another."""
+    seen: dict[object, str] = {}
+    for path in inputs:
+        ident = _identity(Path(path))
+        if ident is not None:
+            seen[ident] = f"the input {path}"
+        seen[os.path.realpath(path)] = f"the input {path}"
+    for label, path in targets.items():
+        if path is None:
+            continue
+        p = Path(path)
+        folder = p.parent if str(p.parent) else Path(".")
+        if not folder.is_dir():
+            raise MeshFileError(f"{path} ({label}): the folder {folder} does not exist")
+        try:
+            st = p.lstat()
+        except FileNotFoundError:
+            st = None
+        if st is not None:
+            if stat.S_ISLNK(st.st_mode):
+                raise MeshFileError(
+                    f"{path} ({label}): is a symbolic link; hexmerge writes regular files only "
+                    "(name the file it points to, or another path)"
+                )
+            if not stat.S_ISREG(st.st_mode):
+                kind = _FILE_KINDS.get(stat.S_IFMT(st.st_mode), "not a regular file")
+                raise MeshFileError(f"{path} ({label}): is {kind}; hexmerge writes regular files only")
+        keys = [os.path.realpath(p)]
+        ident = _identity(p)
+        if ident is not None:
+            keys.append(ident)
+        for key in keys:
+            if key in seen:
+                raise MeshFileError(f"{path} ({label}): is also {seen[key]}; give another path")
+        for key in keys:
+            seen[key] = f"the {label} {path}"
+
+
+_FILE_KINDS = {
+    stat.S_IFDIR: "a folder",
+    stat.S_IFCHR: "a character device",
+    stat.S_IFBLK: "a block device",
+    stat.S_IFIFO: "a FIFO (named pipe)",
+    stat.S_IFSOCK: "a socket",
+}
 
 
 def _collapsed_pyramids(blocks: list[tuple[str, np.ndarray]]) -> list[tuple[str, np.ndarray]]:
@@ -201,6 +408,21 @@ def _collapsed_pyramids(blocks: list[tuple[str, np.ndarray]]) -> list[tuple[str,
         if name == "pyramid":
             name, data = "hexahedron", data[:, [0, 1, 2, 3, 4, 4, 4, 4]]
         out.append((name, data))
+    return out
+
+
+def _uncollapsed_pyramids(name: str, data: np.ndarray) -> list[tuple[str, np.ndarray]]:
+    """The rows of a cell block by type: hexahedra written as pyramids (base, then the apex four
+    times, as --collapse-pyramids writes them for CalculiX) are pyramids again; other rows keep
+    their type."""
+    if name != "hexahedron" or len(data) == 0:
+        return [(name, np.arange(len(data)))]
+    apex = (data[:, 4:8] == data[:, 4:5]).all(axis=1)
+    out = []
+    if (~apex).any():
+        out.append((name, np.flatnonzero(~apex)))
+    if apex.any():
+        out.append(("pyramid", np.flatnonzero(apex)))
     return out
 
 
@@ -275,25 +497,52 @@ def to_meshio(
     )
 
 
-def write_atomic(path: str | os.PathLike[str], mesh: Any, fmt: str, **kwargs: Any) -> None:
-    """Writes through a temporary file in the same folder, renamed over `path` only on success:
-    a failed write never leaves a partial or stale output."""
-    meshio = _meshio()
-
-    path = Path(path)
+def _temp_beside(path: Path) -> Path:
+    """A new empty temporary file in `path`'s folder (so that renaming it over `path` is atomic)."""
     folder = path.parent if str(path.parent) else Path(".")
     if not folder.is_dir():
         raise MeshFileError(f"{path}: the folder {folder} does not exist")
     fd, tmp = tempfile.mkstemp(dir=folder, prefix=f".{path.stem}.", suffix=".tmp" + "".join(path.suffixes))
     os.close(fd)
+    umask = os.umask(0)
+    os.umask(umask)
+    os.chmod(tmp, 0o666 & ~umask)  # mkstemp makes it private; give it a normal file's mode
+    return Path(tmp)
+
+
+def write_atomic(
+    path: str | os.PathLike[str],
+    mesh: Any,
+    fmt: str,
+    *,
+    text_files: dict[str | os.PathLike[str], str] | None = None,
+    **kwargs: Any,
+) -> None:
+    """Writes the mesh and the text files (path -> text) through temporary files in their
+    folders, renamed over their paths only once every one is written: a failed write leaves no
+    output, partial or stale."""
+    meshio = _meshio()
+
+    path = Path(path)
+    temps: list[tuple[Path, Path]] = []
     try:
-        meshio.write(tmp, mesh, file_format=fmt, **kwargs)
-        umask = os.umask(0)
-        os.umask(umask)
-        os.chmod(tmp, 0o666 & ~umask)  # mkstemp makes it private; give it a normal file's mode
-        os.replace(tmp, path)
-    except BaseException as e:
-        Path(tmp).unlink(missing_ok=True)
-        if isinstance(e, Exception) and not isinstance(e, MeshFileError):
+        temps.append((_temp_beside(path), path))
+        try:
+            meshio.write(temps[0][0], mesh, file_format=fmt, **kwargs)
+        except Exception as e:
             raise MeshFileError(f"{path}: cannot write the mesh as {fmt}: {type(e).__name__}: {e}") from None
+        for target, text in (text_files or {}).items():
+            target = Path(target)
+            temps.append((_temp_beside(target), target))
+            try:
+                temps[-1][0].write_text(text)
+            except OSError as e:
+                raise MeshFileError(f"{target}: cannot write: {e.strerror or e}") from None
+        while temps:
+            tmp, target = temps[0]
+            os.replace(tmp, target)
+            temps.pop(0)
+    except BaseException:
+        for tmp, _ in temps:
+            tmp.unlink(missing_ok=True)
         raise

@@ -246,6 +246,13 @@ def mesh_shape(
         raise _core.InputError(f"tetgen must be the TetGen program's name or path, got {tetgen!r}")
     if work_directory is not None and not isinstance(work_directory, (str, os.PathLike)):
         raise _core.InputError(f"work_directory must be a folder's path, got {work_directory!r}")
+    if work_directory is not None and os.fspath(work_directory):
+        # Made when missing; the first part of the path that exists must be a folder.
+        for part in (Path(work_directory), *Path(work_directory).parents):
+            if part.exists():
+                if not part.is_dir():
+                    raise _core.InputError(f"work_directory {work_directory}: {part} is not a folder")
+                break
     if recombine:
         _validate.options_text(recombine_options)  # unknown options fail before the meshing
     elif recombine_options:

@@ -116,11 +116,19 @@ def option_text(name: str, value: Any, row: Mapping[str, Any]) -> str:
         )
         if not is_number:
             raise ValueError(f"option {name!r} must be a number, got {value!r}")
+        try:
+            number = float(value)
+        except OverflowError:  # a Python int beyond any float
+            number = float("inf") if value > 0 else float("-inf")
+        if not np.isfinite(number):
+            raise ValueError(
+                f"option {name!r} must be a finite number in [{row['min']}, {row['max']}], got {value!r}"
+            )
         if kind == "int":
-            if float(value) != int(value):
+            if number != int(number):
                 raise ValueError(f"option {name!r} must be a whole number, got {value!r}")
             return str(int(value))
-        return repr(float(value))
+        return repr(number)
     if kind == "choice":
         if not isinstance(value, str):
             raise ValueError(

@@ -245,11 +245,11 @@ def _given(args: argparse.Namespace, rows: list[dict[str, Any]]) -> dict[str, An
     return {k: v for k, v in options.items() if v is not None}
 
 
-def _output_format(args: argparse.Namespace) -> str:
-    """OUT's format, and the --stats folder checked, before any work."""
+def _output_format(args: argparse.Namespace, source: str) -> str:
+    """OUT's format, and OUT and --stats checked against the input and each other, before any
+    work."""
     fmt = _io.format_of(args.output, args.output_format)
-    if args.stats and not Path(args.stats).resolve().parent.is_dir():
-        raise _io.MeshFileError(f"{args.stats}: the folder does not exist")
+    _io.check_targets({"output": args.output, "--stats file": args.stats}, [source])
     return fmt
 
 
@@ -261,19 +261,18 @@ def _progress_printer(args: argparse.Namespace) -> ProgressPrinter | None:
 def _write_output(
     args: argparse.Namespace, fmt: str, mesh: _api.MixedMesh, stats: dict[str, Any], **to_meshio: Any
 ) -> None:
-    """Writes OUT (atomically) and the --stats file."""
+    """Writes OUT and the --stats file, both or neither."""
     out_mesh = _io.to_meshio(mesh, fmt, collapse_pyramids=args.collapse_pyramids, **to_meshio)
     kwargs: dict[str, Any] = {}
     if args.ascii and fmt in ("gmsh", "gmsh22", "vtu", "vtk"):
         kwargs["binary"] = False
-    _io.write_atomic(args.output, out_mesh, fmt, **kwargs)
-    if args.stats:
-        Path(args.stats).write_text(json.dumps(_jsonable(stats), indent=2) + "\n")
+    text_files = {args.stats: json.dumps(_jsonable(stats), indent=2) + "\n"} if args.stats else {}
+    _io.write_atomic(args.output, out_mesh, fmt, text_files=text_files, **kwargs)
 
 
 def cmd_recombine(args: argparse.Namespace) -> int:
     options = _given(args, _api.parameters())
-    fmt = _output_format(args)
+    fmt = _output_format(args, args.input)
     tets = _io.read_tets(args.input, args.input_format)
     printer = _progress_printer(args)
     start = time.perf_counter()
@@ -327,7 +326,7 @@ def cmd_mesh(args: argparse.Namespace) -> int:
             "--tets-only writes the tets without merging them: leave out the engine options "
             f"({', '.join(option_name(n) for n in options)})"
         )
-    fmt = _output_format(args)
+    fmt = _output_format(args, args.shape)
     printer = _progress_printer(args)
     start = time.perf_counter()
     try:
@@ -395,6 +394,11 @@ def _print_check(report: dict[str, Any]) -> None:
         f"volume {report['output_volume']:.9g} against {report['input_volume']:.9g} "
         f"(relative difference {report['relative_volume_difference']:.3g})"
     )
+    if report.get("worst_region") is not None:
+        print(
+            f"largest region volume difference {report['max_region_volume_difference']:.3g} "
+            f"(region {report['worst_region']})"
+        )
     for line in report["problems"]:
         print(f"  {line}")
     print("valid" if report["valid"] else "INVALID")
@@ -455,6 +459,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         return EXIT_USAGE
     except _core.Cancelled:
         print("hexmerge: cancelled; nothing written", file=sys.stderr)
+        return EXIT_ERROR
+    except MemoryError as e:  # ResourceError (threads) is one too
+        detail = str(e) if isinstance(e, _core.ResourceError) or str(e).startswith("out of memory") else "out of memory"
+        print(f"hexmerge: error: {detail}; nothing written", file=sys.stderr)
         return EXIT_ERROR
     except (ValueError, OSError) as e:  # InputError and MeshFileError are ValueErrors
         where = ""

@@ -2,8 +2,10 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <map>
 #include <utility>
+#include <vector>
 
 #include "fixtures.h"
 #include "hexmerge/core/error.h"
@@ -143,6 +145,68 @@ TEST(quadratic_cells, one_edge_with_two_mid_nodes_is_an_input_error) {
     EXPECT_EQ(e.entity(), Entity::Element);
     EXPECT_LT(e.id(), linear.nb_tets());
     EXPECT_NE(std::string(e.what()).find("two different mid nodes"), std::string::npos) << e.what();
+  }
+}
+
+void expect_tet10_error(const Tet10Mesh& tet10, const std::string& words) {
+  try {
+    validate_tet10_mesh(tet10);
+    FAIL() << "no InputError for " << words;
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.entity(), Entity::Element);
+    EXPECT_NE(std::string(e.what()).find(words), std::string::npos) << e.what();
+  }
+}
+
+TEST(validate_tet10_mesh, mid_nodes_must_be_distinct_near_their_edges_and_no_corners) {
+  const Tet10Mesh good = add_mid_nodes(kuhn_grid(2));
+  EXPECT_NO_THROW(validate_tet10_mesh(good));
+  {  // every mid node of tet 0 the same node (in every tet, so each edge keeps one mid node)
+    Tet10Mesh tet10 = good;
+    const std::vector<index_t> mids(tet10.tets10.begin() + 4, tet10.tets10.begin() + 10);
+    for (index_t& v : tet10.tets10) {
+      if (std::find(mids.begin(), mids.end(), v) != mids.end()) v = mids[0];
+    }
+    expect_tet10_error(tet10, "is the mid node of two edges");
+  }
+  {  // one node the mid node of two edges of two tets
+    Tet10Mesh tet10 = good;
+    index_t other = NO_INDEX;
+    for (std::size_t i = 10; i < tet10.tets10.size() && other == NO_INDEX; ++i) {
+      const bool in_tet0 = std::find(tet10.tets10.begin() + 4, tet10.tets10.begin() + 10,
+                                     tet10.tets10[i]) != tet10.tets10.begin() + 10;
+      if (i % 10 >= 4 && !in_tet0) other = tet10.tets10[i];
+    }
+    const index_t mid = tet10.tets10[4];
+    for (index_t& v : tet10.tets10) {
+      if (v == mid) v = other;
+    }
+    expect_tet10_error(tet10, "is the mid node of two edges");
+  }
+  {  // a mid node 1e6 off its edge
+    Tet10Mesh tet10 = good;
+    tet10.points[3 * tet10.tets10[7] + 1] += 1e6;
+    expect_tet10_error(tet10, "from the edge's midpoint");
+  }
+  {  // a mid node at the position of an end of its edge (the reader fuzzer's case: -0 for 0)
+    Tet10Mesh tet10 = good;
+    const index_t end = tet10.tets10[0];  // edge 0 runs from corner 0 to corner 1
+    for (int c = 0; c < 3; ++c) tet10.points[3 * tet10.tets10[4] + c] = tet10.points[3 * end + c];
+    expect_tet10_error(tet10, "middle half of its edge");
+  }
+  {  // a mid node that is a corner of another tet
+    Tet10Mesh tet10 = good;
+    const index_t mid = tet10.tets10[4];
+    const index_t corner = tet10.tets10[10 * (tet10.nb_tets() - 1)];
+    for (index_t& v : tet10.tets10) {
+      if (v == mid) v = corner;
+    }
+    EXPECT_THROW(validate_tet10_mesh(tet10), InputError);
+  }
+  {  // a curved edge (the mid node off the chord by a quarter of the edge) passes
+    Tet10Mesh tet10 = good;
+    tet10.points[3 * tet10.tets10[4] + 2] += 0.25;
+    EXPECT_NO_THROW(validate_tet10_mesh(tet10));
   }
 }
 

@@ -98,6 +98,19 @@ TEST(validate_tet_mesh, duplicate_tets_name_both) {
   EXPECT_NE(what.find("duplicate"), std::string::npos) << what;
 }
 
+TEST(validate_tet_mesh, a_tet_flat_to_round_off_is_named_at_any_scale) {
+  // Node 4 on the plane of nodes 0, 1, 2 but for the last bits: the volume is positive noise.
+  for (const double scale : {1e-60, 1e-3, 1.0, 1e5, 1e60}) {
+    TetMesh mesh = two_tets();
+    mesh.points[3 * 4 + 2] = -1e-15;
+    for (double& c : mesh.points) c *= scale;
+    expect_names(expect_input_error(mesh), Entity::Element, 1, "flat to round-off");
+    // A thin but real tet passes, at the same scale.
+    mesh.points[3 * 4 + 2] = -1e-6 * scale;
+    EXPECT_NO_THROW(validate_tet_mesh(mesh)) << scale;
+  }
+}
+
 TEST(validate_tet_mesh, array_sizes) {
   TetMesh mesh = two_tets();
   mesh.points.pop_back();

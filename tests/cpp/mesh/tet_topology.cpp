@@ -85,9 +85,27 @@ TEST(TetTopology, three_tets_on_one_face_is_an_input_error) {
     EXPECT_LT(e.id(), 3u);
     EXPECT_NE(std::string(e.what()).find("3 tetrahedra"), std::string::npos) << e.what();
   }
-  // Two of them are fine.
-  mesh.tets.resize(8);
+  // One above and one below are fine.
+  mesh.tets.erase(mesh.tets.begin() + 4, mesh.tets.begin() + 8);
   EXPECT_EQ(TetTopology(mesh).nb_boundary_faces(), 6u);
+}
+
+TEST(TetTopology, two_tets_on_the_same_side_of_their_face_are_an_input_error) {
+  // Both positively oriented, both above face (0,1,2): they overlap (a fold), and validation,
+  // which looks at one tet at a time, passes them.
+  const TetMesh mesh = make_tet_mesh({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {0.2, 0.2, 1}},
+                                     {{0, 1, 2, 3}, {0, 1, 2, 4}});
+  validate_tet_mesh(mesh);
+  try {
+    TetTopology topo(mesh);
+    FAIL() << "no InputError";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.entity(), Entity::Element);
+    EXPECT_EQ(e.id(), 1u);
+    EXPECT_NE(std::string(e.what()).find("same side of their shared face (nodes 0, 1, 2)"),
+              std::string::npos)
+        << e.what();
+  }
 }
 
 }  // namespace
