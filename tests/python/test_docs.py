@@ -69,7 +69,8 @@ def test_relative_links_resolve(page: Path):
 
 def test_link_pattern_finds_links():
     # The checker itself: it sees links and images, and not what is inside code.
-    text = "See [a](x.md), ![img](y.png) and [b](https://e.org).\n`[c](z.md)`\n```\n[d](w.md)\n```\n"
+    text = ("See [a](x.md), ![img](y.png) and [b](https://e.org).\n"
+            "`[c](z.md)`\n```\n[d](w.md)\n```\n")
     assert LINK.findall(prose(text)) == ["x.md", "y.png", "https://e.org"]
     assert slug("How much? (`bench/hex_ceiling.py`)") == "how-much-benchhex_ceilingpy"
 
