@@ -416,7 +416,7 @@ py::tuple run_mesh_shape(const std::string& brep, double size, int boundary_laye
   d["nb_unrefined_faces"] = report.nb_unrefined_faces;
   d["nb_shared_faces"] = report.nb_shared_faces;
   if (second_order) {
-    d["nb_curved_mid_nodes"] = report.nb_curved_mid_nodes;
+    d["nb_projected_mid_nodes"] = report.nb_projected_mid_nodes;
     d["nb_straight_mid_nodes"] = report.nb_straight_mid_nodes;
   }
   d["strategy"] = report.strategy;
@@ -583,7 +583,7 @@ Returns (solids, report): solids int32 (M,), 0-based solid index in TopExp::MapS
 See MeshShapeParameters (src/occ/hexmerge/occ/mesh_shape.h) for the options.
 Returns (points float64 (N, 3), tets (M, 4), regions int32 (M,), report dict); with
 second_order, tets (M, 10) in VTK's Tet10 order, the boundary mid-edge nodes on the CAD
-(mesh_shape_tet10), and report["nb_curved_mid_nodes"], report["nb_straight_mid_nodes"].)doc");
+(mesh_shape_tet10), and report["nb_projected_mid_nodes"], report["nb_straight_mid_nodes"].)doc");
   m.def("read_shape_file", &read_shape_file, py::arg("path"),
         R"doc(The shape in a STEP, BREP or IGES file, as BREP text.)doc");
 #else

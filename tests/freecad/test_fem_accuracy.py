@@ -105,7 +105,7 @@ class SecondOrderFromShape(unittest.TestCase):
         job.run()
         femmesh, report = job.finish()
         self.assertEqual(report["meshing"]["nb_straight_mid_nodes"], 0)
-        self.assertGreater(report["meshing"]["nb_curved_mid_nodes"], 0)
+        self.assertGreater(report["meshing"]["nb_projected_mid_nodes"], 0)
         mesh.FemMesh = femmesh
         result, inp, _ = bench.solve(doc)
         with open(inp) as f:

@@ -788,7 +788,7 @@ def test_second_order_boundary_mid_nodes_on_the_cad(shapes) -> None:
         assert np.array_equal(mids[~on_boundary], straight[~on_boundary])
         # On the boundary: on the CAD, none kept straight on this shape.
         assert meshing["nb_straight_mid_nodes"] == 0
-        assert meshing["nb_curved_mid_nodes"] == int(on_boundary.sum())
+        assert meshing["nb_projected_mid_nodes"] == int(on_boundary.sum())
         assert SURFACES["cylinder"](mids[on_boundary]).max() < 1e-6 * 20
         r_ends = np.hypot(points[ends[:, 0], 0], points[ends[:, 0], 1]), np.hypot(points[ends[:, 1], 0],
                                                                                     points[ends[:, 1], 1])

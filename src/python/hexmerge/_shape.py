@@ -194,7 +194,7 @@ def mesh_shape(
         Tet10 with a node on every edge, so the recombined mesh is quadratic (Hexa20, Wedge15,
         Pyramid13, Tet10): inside at the edge's midpoint, on the boundary on the CAD face (or
         CAD edge) the edge lies on, except where that would invert a tet or leave the edge's
-        middle half (counted in the report's ``nb_straight_mid_nodes``; ``nb_curved_mid_nodes``
+        middle half (counted in the report's ``nb_straight_mid_nodes``; ``nb_projected_mid_nodes``
         were put on the CAD).
     recombine : bool
         Merge the tets (default). False returns the tet mesh itself.

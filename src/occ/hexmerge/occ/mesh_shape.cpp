@@ -202,8 +202,7 @@ TetMesh mesh_shape_impl(const std::string& brep, const MeshShapeParameters& para
     MeshShapeReport attempt = report;
     const auto attempt_start = PhaseClock::Clock::now();
     try {
-      TetMesh mesh =
-          mesh_attempt(shape, frame, regions_brep, parameters, strategy, attempt, tet10);
+      TetMesh mesh = mesh_attempt(shape, frame, regions_brep, parameters, strategy, attempt, tet10);
       attempt.strategy = strategy.name;
       attempt.phase_seconds["shape"] = shape_seconds;
       if (failed_seconds > 0) attempt.phase_seconds["failed attempts"] = failed_seconds;
@@ -363,9 +362,9 @@ TetMesh mesh_attempt(const Shape& shape, const Frame& frame, const std::string& 
   // 14. Second order: the boundary mid-edge nodes on the CAD.
   if (tet10) {
     SecondOrderReport second;
-    *tet10 = second_order_mesh(shape, mesh, vertex_face, tets.boundary, boundary_face, 1e-9 * h,
-                               second);
-    report.nb_curved_mid_nodes = second.nb_curved;
+    *tet10 =
+        second_order_mesh(shape, mesh, vertex_face, tets.boundary, boundary_face, 1e-9 * h, second);
+    report.nb_projected_mid_nodes = second.nb_projected;
     report.nb_straight_mid_nodes = second.nb_straight;
     clock.lap("second order");
   }

@@ -123,8 +123,9 @@ struct MeshShapeReport {
   /// than h remain on them)
   std::size_t nb_unrefined_faces = 0;
   std::size_t nb_shared_faces = 0;  ///< faces between two solids (touching solids glued)
-  /// mesh_shape_tet10(): boundary mid-edge nodes put on their CAD face or edge
-  std::size_t nb_curved_mid_nodes = 0;
+  /// mesh_shape_tet10(): boundary mid-edge nodes projected onto their CAD face or edge (on a
+  /// plane: the midpoint itself)
+  std::size_t nb_projected_mid_nodes = 0;
   /// mesh_shape_tet10(): boundary mid-edge nodes kept at their edge's midpoint, because on the
   /// CAD they would have made a Tet10's Jacobian at a corner non-positive or left the middle
   /// half of their edge

@@ -56,8 +56,9 @@ bool corners_positive(const std::vector<double>& points, const index_t* q) {
   return true;
 }
 
-// Within the middle half of edge ab along it and within half its length of its midpoint, with a
-// margin (validate_tet10_mesh's rules).
+// Within the middle half of edge ab along it and within half its length of its midpoint
+// (validate_tet10_mesh's rules), with a margin: at most 0.2 of its length along it from the
+// midpoint and 0.45 of its length away from the midpoint.
 bool near_middle(const Vec3& a, const Vec3& b, const Vec3& m) {
   const Vec3 d = m - (a + b) * 0.5;
   const Vec3 e = b - a;
@@ -92,11 +93,14 @@ Tet10Mesh second_order_mesh(const Shape& shape, const TetMesh& mesh,
   out.regions = mesh.regions;
   out.points = mesh.points;
   out.points.resize(3 * (nv + keys.size()));
-  for (std::size_t e = 0; e < keys.size(); ++e) {
-    const Vec3 m = (point(mesh.points, keys[e] >> 32) + point(mesh.points, keys[e] & 0xffffffffu)) * 0.5;
-    out.points[3 * (nv + e)] = m.x, out.points[3 * (nv + e) + 1] = m.y,
-                          out.points[3 * (nv + e) + 2] = m.z;
-  }
+  auto midpoint = [&](std::size_t e) {
+    return (point(mesh.points, keys[e] >> 32) + point(mesh.points, keys[e] & 0xffffffffu)) * 0.5;
+  };
+  auto set_mid = [&](std::size_t e, const Vec3& m) {
+    double* q = &out.points[3 * (nv + e)];
+    q[0] = m.x, q[1] = m.y, q[2] = m.z;
+  };
+  for (std::size_t e = 0; e < keys.size(); ++e) set_mid(e, midpoint(e));
   out.tets10.resize(10 * static_cast<std::size_t>(nt));
   for (index_t t = 0; t < nt; ++t) {
     const index_t* v = mesh.tet(t);
@@ -160,7 +164,7 @@ Tet10Mesh second_order_mesh(const Shape& shape, const TetMesh& mesh,
   std::vector<std::size_t> moved;
   for (const auto& [e, faces] : edge_faces) {
     const Vec3 a = point(mesh.points, keys[e] >> 32), b = point(mesh.points, keys[e] & 0xffffffffu);
-    const Vec3 mid = (a + b) * 0.5;
+    const Vec3 mid = midpoint(e);
     const gp_Pnt p(mid.x, mid.y, mid.z);
     std::optional<Vec3> on;
     if (faces.size() == 1 && faces[0] >= 0) {
@@ -184,8 +188,8 @@ Tet10Mesh second_order_mesh(const Shape& shape, const TetMesh& mesh,
         if (curve.IsNull()) continue;
         gp_Pnt projected;
         double parameter = 0;
-        const double distance = ShapeAnalysis_Curve().Project(curve, p, tolerance, projected,
-                                                              parameter, first, last);
+        const double distance =
+            ShapeAnalysis_Curve().Project(curve, p, tolerance, projected, parameter, first, last);
         if (distance < best) best = distance, on = of(projected);
       }
     }
@@ -193,8 +197,7 @@ Tet10Mesh second_order_mesh(const Shape& shape, const TetMesh& mesh,
       if (on) ++report.nb_straight;
       continue;
     }
-    out.points[3 * (nv + e)] = on->x, out.points[3 * (nv + e) + 1] = on->y,
-                          out.points[3 * (nv + e) + 2] = on->z;
+    set_mid(e, *on);
     moved.push_back(e);
   }
 
@@ -210,17 +213,14 @@ Tet10Mesh second_order_mesh(const Shape& shape, const TetMesh& mesh,
       for (int k = 0; k < 6; ++k) {
         const std::size_t e = q[4 + k] - nv;
         if (!is_moved[e]) continue;
-        const Vec3 m =
-            (point(mesh.points, keys[e] >> 32) + point(mesh.points, keys[e] & 0xffffffffu)) * 0.5;
-        out.points[3 * (nv + e)] = m.x, out.points[3 * (nv + e) + 1] = m.y,
-                              out.points[3 * (nv + e) + 2] = m.z;
+        set_mid(e, midpoint(e));
         is_moved[e] = 0;
         ++report.nb_straight;
         changed = true;
       }
     }
   }
-  report.nb_curved = static_cast<std::size_t>(std::count(is_moved.begin(), is_moved.end(), 1));
+  report.nb_projected = static_cast<std::size_t>(std::count(is_moved.begin(), is_moved.end(), 1));
   return out;
 }
 

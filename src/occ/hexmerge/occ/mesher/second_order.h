@@ -17,7 +17,8 @@ struct Shape;
 
 /// What second_order_mesh() did.
 struct SecondOrderReport {
-  std::size_t nb_curved = 0;  ///< boundary mid nodes moved onto their CAD face or edge
+  /// boundary mid nodes projected onto their CAD face or edge (on a plane: the midpoint itself)
+  std::size_t nb_projected = 0;
   /// Boundary mid nodes kept at their edge's midpoint: on the CAD they would have made a Tet10's
   /// Jacobian at a corner non-positive or left the middle half of their edge
   std::size_t nb_straight = 0;
