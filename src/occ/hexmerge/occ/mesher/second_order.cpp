@@ -152,6 +152,7 @@ Tet10Mesh second_order_mesh(const Shape& shape, const TetMesh& mesh,
             break;
           }
       }
+      if (face < 0) continue;  // on no known face: its edges are placed by their other side
       for (int c = 0; c < 3; ++c) {
         std::vector<int>& faces = edge_faces[edge_of(tri[c], tri[(c + 1) % 3])];
         if (std::find(faces.begin(), faces.end(), face) == faces.end()) faces.push_back(face);
@@ -167,14 +168,14 @@ Tet10Mesh second_order_mesh(const Shape& shape, const TetMesh& mesh,
     const Vec3 mid = midpoint(e);
     const gp_Pnt p(mid.x, mid.y, mid.z);
     std::optional<Vec3> on;
-    if (faces.size() == 1 && faces[0] >= 0) {
+    if (faces.size() == 1) {
       const int face = faces[0];
       if (!surfaces[face]) {
         const TopoDS_Face& f = TopoDS::Face(shape.faces(face + 1));
         surfaces[face] = std::make_unique<ShapeAnalysis_Surface>(BRep_Tool::Surface(f));
       }
       on = of(surfaces[face]->Value(surfaces[face]->ValueOfUV(p, tolerance)));
-    } else if (faces.size() == 2 && faces[0] >= 0 && faces[1] >= 0) {
+    } else if (faces.size() == 2) {
       // On the CAD edge between the two faces, the nearest when they share several.
       double best = std::numeric_limits<double>::infinity();
       for (int c = 0; c < static_cast<int>(shape.edge_faces.size()); ++c) {
