@@ -365,7 +365,7 @@ py::tuple run_mesh_shape(const std::string& brep, double size, int boundary_laye
                          double layer_thickness, double lattice_margin, double surface_deflection,
                          const std::string& frame, bool sweep, double tetgen_time_limit,
                          double memory_limit, const std::string& tetgen,
-                         const std::string& work_directory) {
+                         const std::string& work_directory, bool second_order) {
   MeshShapeParameters parameters;
   parameters.size = size;
   parameters.boundary_layers = boundary_layers;
@@ -380,9 +380,13 @@ py::tuple run_mesh_shape(const std::string& brep, double size, int boundary_laye
   parameters.work_directory = work_directory;
   MeshShapeReport report;
   TetMesh mesh;
+  Tet10Mesh tet10;
   {
     py::gil_scoped_release released;
-    mesh = mesh_shape(brep, parameters, report);
+    if (second_order)
+      tet10 = mesh_shape_tet10(brep, parameters, report);
+    else
+      mesh = mesh_shape(brep, parameters, report);
   }
   py::dict d;
   d["nb_solids"] = report.nb_solids;
@@ -411,12 +415,23 @@ py::tuple run_mesh_shape(const std::string& brep, double size, int boundary_laye
   d["estimated_tets"] = report.estimated_tets;
   d["nb_unrefined_faces"] = report.nb_unrefined_faces;
   d["nb_shared_faces"] = report.nb_shared_faces;
+  if (second_order) {
+    d["nb_projected_mid_nodes"] = report.nb_projected_mid_nodes;
+    d["nb_straight_mid_nodes"] = report.nb_straight_mid_nodes;
+  }
   d["strategy"] = report.strategy;
   py::list failed;
   for (const std::string& f : report.failed_strategies) failed.append(f);
   d["failed_strategies"] = failed;
   d["tetgen_command"] = report.tetgen_command;
   d["phase_seconds"] = phases_dict(report.phase_seconds);
+  if (second_order) {
+    const auto nb_points = static_cast<py::ssize_t>(tet10.points.size() / 3);
+    const auto nb_tets = static_cast<py::ssize_t>(tet10.tets10.size() / 10);
+    return py::make_tuple(to_numpy(std::move(tet10.points), {nb_points, 3}),
+                          to_numpy(std::move(tet10.tets10), {nb_tets, 10}),
+                          to_numpy(std::move(tet10.regions)), d);
+  }
   const auto nb_points = static_cast<py::ssize_t>(mesh.points.size() / 3);
   const auto nb_tets = static_cast<py::ssize_t>(mesh.tets.size() / 4);
   return py::make_tuple(to_numpy(std::move(mesh.points), {nb_points, 3}),
@@ -562,10 +577,13 @@ Returns (solids, report): solids int32 (M,), 0-based solid index in TopExp::MapS
         py::arg("lattice_margin") = 0.3, py::arg("surface_deflection") = 0.02,
         py::arg("frame") = "auto", py::arg("sweep") = true, py::arg("tetgen_time_limit") = 0.0,
         py::arg("memory_limit") = 0.0, py::arg("tetgen") = "tetgen", py::arg("work_directory") = "",
+        py::arg("second_order") = false,
         R"doc(Lattice-seeded tets of a solid shape (BREP text) with OpenCASCADE and TetGen.
 
 See MeshShapeParameters (src/occ/hexmerge/occ/mesh_shape.h) for the options.
-Returns (points float64 (N, 3), tets (M, 4), regions int32 (M,), report dict).)doc");
+Returns (points float64 (N, 3), tets (M, 4), regions int32 (M,), report dict); with
+second_order, tets (M, 10) in VTK's Tet10 order, the boundary mid-edge nodes on the CAD
+(mesh_shape_tet10), and report["nb_projected_mid_nodes"], report["nb_straight_mid_nodes"].)doc");
   m.def("read_shape_file", &read_shape_file, py::arg("path"),
         R"doc(The shape in a STEP, BREP or IGES file, as BREP text.)doc");
 #else

@@ -417,13 +417,15 @@ def test_second_order(shapes) -> None:
     assert mesh.order == 2
     assert {b.type for b in mesh} <= {"tetra10", "pyramid13", "wedge15", "hexahedron20"}
     assert "hexahedron20" in {b.type for b in mesh}
-    # Straight edges: every mid-edge node is the midpoint of its edge (VTK order).
+    # Every mid-edge node is the midpoint of its edge (VTK order) or, on the boundary, on the CAD.
     for m in (mesh, tets10):
         for block in m:
             n = block.data.shape[1] - len(EDGES[block.type])
             for k, (a, b) in enumerate(EDGES[block.type]):
                 ends = 0.5 * (m.points[block.data[:, a]] + m.points[block.data[:, b]])
-                assert np.allclose(m.points[block.data[:, n + k]], ends, atol=1e-12)
+                mid = m.points[block.data[:, n + k]]
+                straight = np.all(np.abs(mid - ends) <= 1e-12, axis=1)
+                assert np.all(straight | (SURFACES["bracket"](mid) < 1e-6 * h))
     # One node per edge, shared by the tets around it.
     corners = len(np.unique(cells10[:, :4]))
     edges = {tuple(sorted(e)) for t in cells10[:, :4] for e in t[[[0, 1], [1, 2], [2, 0], [0, 3], [1, 3], [2, 3]]]}
@@ -732,3 +734,88 @@ def test_cli_parameters_mesh(capsys) -> None:
     assert [r["name"] for r in rows] == [r["name"] for r in hexmerge.mesh_parameters()]
     assert cli.main(["parameters", "--mesh"]) == 0
     assert "--layers:" in capsys.readouterr().out
+
+
+def quadratic_volume(points: np.ndarray, tets10: np.ndarray) -> float:
+    """Volume of a Tet10 mesh with curved edges: (1/3) of the flux of x through its boundary
+    Tri6 faces (x . (x_u x x_v) is of degree 4 in the face's parameters; a degree-4 rule is exact)."""
+    faces = np.concatenate([tets10[:, [1, 2, 3, 5, 9, 8]], tets10[:, [0, 3, 2, 7, 9, 6]],
+                            tets10[:, [0, 1, 3, 4, 8, 7]], tets10[:, [0, 2, 1, 6, 5, 4]]])
+    key = np.sort(faces[:, :3], axis=1)
+    _, first, count = np.unique(key, axis=0, return_index=True, return_counts=True)
+    x = points[faces[first[count == 1]]]  # (F, 6, 3): corners a b c, mids ab bc ca
+    a, b = 0.445948490915965, 0.091576213509771
+    rule = [(a, a, 0.223381589678011), (1 - 2 * a, a, 0.223381589678011), (a, 1 - 2 * a, 0.223381589678011),
+            (b, b, 0.109951743655322), (1 - 2 * b, b, 0.109951743655322), (b, 1 - 2 * b, 0.109951743655322)]
+    flux = 0.0
+    for u, v, w in rule:
+        s = 1 - u - v  # Tri6 shape functions in (u, v): corner a at u = v = 0, b at u = 1, c at v = 1
+        n = [s * (2 * s - 1), u * (2 * u - 1), v * (2 * v - 1), 4 * s * u, 4 * u * v, 4 * v * s]
+        du = [-(4 * s - 1), 4 * u - 1, 0, 4 * (s - u), 4 * v, -4 * v]
+        dv = [-(4 * s - 1), 0, 4 * v - 1, -4 * u, 4 * u, 4 * (s - v)]
+        p = np.einsum("k,fkc->fc", n, x)
+        pu = np.einsum("k,fkc->fc", du, x)
+        pv = np.einsum("k,fkc->fc", dv, x)
+        flux += 0.5 * w * np.einsum("fc,fc->", p, np.cross(pu, pv))
+    return flux / 3.0
+
+
+@needs_tetgen
+def test_second_order_boundary_mid_nodes_on_the_cad(shapes) -> None:
+    """Second order from CAD: every boundary mid-edge node of the cylinder (r 20, height 100) lies
+    on its surface (the wall: at the radius), the inner ones at their edges' midpoints; the
+    volume is nearer the cylinder's than with straight edges; the recombined mesh checks."""
+    for h, options in ((5.0, {}), (5.0, {"sweep": False})):
+        tets10, report = hexmerge.mesh_shape(shapes["cylinder"], h, recombine=False, second_order=True,
+                                             **options)
+        meshing = report["meshing"]
+        cells = tets10.cells("tetra10").astype(np.int64)
+        points = tets10.points
+        faces = np.sort(np.concatenate([cells[:, [1, 2, 3]], cells[:, [0, 3, 2]], cells[:, [0, 1, 3]],
+                                        cells[:, [0, 2, 1]]]), axis=1)
+        unique, count = np.unique(faces, axis=0, return_counts=True)
+        outer = unique[count == 1]
+        boundary_edges = {tuple(sorted(e)) for f in outer for e in ((f[0], f[1]), (f[1], f[2]), (f[0], f[2]))}
+        mid_of = {}
+        for k, (i, j) in enumerate(EDGES["tetra10"]):
+            for a, b, m in zip(cells[:, i], cells[:, j], cells[:, 4 + k]):
+                mid_of[(min(a, b), max(a, b))] = m
+        on_boundary = np.array([e in boundary_edges for e in mid_of])
+        ends = np.array(list(mid_of.keys()))
+        mids = points[np.array(list(mid_of.values()))]
+        straight = 0.5 * (points[ends[:, 0]] + points[ends[:, 1]])
+        # Inside: the midpoint, exactly.
+        assert np.array_equal(mids[~on_boundary], straight[~on_boundary])
+        # On the boundary: on the CAD, none kept straight on this shape.
+        assert meshing["nb_straight_mid_nodes"] == 0
+        assert meshing["nb_projected_mid_nodes"] == int(on_boundary.sum())
+        assert SURFACES["cylinder"](mids[on_boundary]).max() < 1e-6 * 20
+        r_ends = np.hypot(points[ends[:, 0], 0], points[ends[:, 0], 1]), np.hypot(points[ends[:, 1], 0],
+                                                                                    points[ends[:, 1], 1])
+        z = mids[:, 2]
+        wall = on_boundary & (np.abs(r_ends[0] - 20) < 1e-9) & (np.abs(r_ends[1] - 20) < 1e-9) \
+            & (np.abs(z) > 1e-9) & (np.abs(z - 100) > 1e-9)
+        assert wall.sum() > 100
+        assert np.allclose(np.hypot(mids[wall, 0], mids[wall, 1]), 20, rtol=1e-6, atol=0)
+        # The straight midpoints of the wall's edges around it are inside (chords): those moved.
+        assert (np.hypot(straight[wall, 0], straight[wall, 1]) < 20 - 1e-3).sum() > 100
+        # Volume: the curved Tet10 mesh is nearer the cylinder's than the straight one.
+        exact = np.pi * 20**2 * 100
+        straight_points = points.copy()
+        straight_points[np.array(list(mid_of.values()))] = straight
+        curved_error = abs(quadratic_volume(points, cells) - exact)
+        straight_error = abs(quadratic_volume(straight_points, cells) - exact)
+        assert curved_error < 0.1 * straight_error, (curved_error, straight_error)
+        # The same corners and tets as in first order.
+        linear, _ = hexmerge.mesh_shape(shapes["cylinder"], h, recombine=False, **options)
+        corners = linear.nb_points
+        assert np.array_equal(points[:corners], linear.points)
+        assert np.array_equal(cells[:, :4], linear.cell_vertices.reshape(-1, 4))
+        # Recombined: quadratic cells on the same nodes, passing the checker.
+        mesh, _ = hexmerge.mesh_shape(shapes["cylinder"], h, second_order=True, **options)
+        assert mesh.order == 2 and "hexahedron20" in {b.type for b in mesh}
+        assert np.array_equal(mesh.points, points[mesh.point_map])  # the nodes it uses, unmoved
+        result = hexmerge.check(mesh, points, cells, tets10.regions)
+        assert result["valid"], result["problems"]
+        assert result["nonconforming_quads"] == 0 and result["cracks"] == 0
+        assert result["inverted_cells"] == 0

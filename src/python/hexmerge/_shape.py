@@ -154,22 +154,6 @@ def _flag(name: str, value: Any, error: type[Exception] = ValueError) -> bool:
     return bool(value)
 
 
-#: The six edges of a tet in VTK's Tet10 order (mid-edge node k of a tetra10 is on edge k).
-TET10_EDGES = np.array([(0, 1), (1, 2), (2, 0), (0, 3), (1, 3), (2, 3)])
-
-
-def tet10(points: np.ndarray, tets: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Tet10 from Tet4 with straight edges: one node at the midpoint of every edge (shared by
-    the tets around it), appended after the corners. Returns (points, (M, 10) cells)."""
-    tets = np.asarray(tets, dtype=np.int64)
-    ends = tets[:, TET10_EDGES]  # (M, 6, 2)
-    keys = np.sort(ends.reshape(-1, 2), axis=1)
-    edges, which = np.unique(keys, axis=0, return_inverse=True)
-    mids = 0.5 * (points[edges[:, 0]] + points[edges[:, 1]])
-    cells = np.hstack([tets, len(points) + which.reshape(-1, 6)])
-    return np.vstack([points, mids]), cells
-
-
 def mesh_shape(
     shape: str | bytes | os.PathLike[str],
     size: float,
@@ -207,8 +191,11 @@ def mesh_shape(
     work_directory : path, optional
         Keep TetGen's files there; default: a temporary folder, removed.
     second_order : bool
-        Tet10 with a node at the midpoint of every edge (straight edges), so the recombined
-        mesh is quadratic (Hexa20, Wedge15, Pyramid13, Tet10).
+        Tet10 with a node on every edge, so the recombined mesh is quadratic (Hexa20, Wedge15,
+        Pyramid13, Tet10): inside at the edge's midpoint, on the boundary on the CAD face (or
+        CAD edge) the edge lies on, except where that would invert a tet or leave the edge's
+        middle half (counted in the report's ``nb_straight_mid_nodes``; ``nb_projected_mid_nodes``
+        were put on the CAD).
     recombine : bool
         Merge the tets (default). False returns the tet mesh itself.
     progress : callable(phase: str, fraction: float) -> bool | None, optional
@@ -266,7 +253,8 @@ def mesh_shape(
     start = time.perf_counter()
     points, tets, regions, meshing = _core.mesh_shape(
         brep, size, tetgen=os.fspath(tetgen),
-        work_directory="" if work_directory is None else os.fspath(work_directory), **options)
+        work_directory="" if work_directory is None else os.fspath(work_directory),
+        second_order=second_order, **options)
     meshing = dict(meshing)
     meshing["seconds"] = time.perf_counter() - start
     meshing["tets"] = int(len(tets))
@@ -276,8 +264,6 @@ def mesh_shape(
         raise _core.Cancelled("cancelled")
 
     cells = np.asarray(tets)
-    if second_order:
-        points, cells = tet10(points, cells)
     if not recombine:
         name = "tetra10" if second_order else "tetra"
         mesh = _api.MixedMesh.from_blocks(points, [(name, cells)], [regions])

@@ -122,8 +122,8 @@ def build_parser() -> argparse.ArgumentParser:
     msh.add_argument(
         "--second-order",
         action="store_true",
-        help="quadratic elements: a node at the midpoint of every tet edge (straight edges), so "
-        "the output is Tet10 / Pyramid13 / Wedge15 / Hexa20",
+        help="quadratic elements: a node on every tet edge (on the boundary on the CAD face or edge, "
+        "inside at the midpoint), so the output is Tet10 / Pyramid13 / Wedge15 / Hexa20",
     )
     msh.add_argument("--tetgen", metavar="PROGRAM", default="tetgen", help="the TetGen program (default: tetgen on PATH)")
     msh.add_argument("--work-directory", metavar="DIR", help="keep TetGen's files in DIR (default: a temporary folder)")

@@ -16,6 +16,7 @@
 #include "hexmerge/occ/mesher/improve.h"
 #include "hexmerge/occ/mesher/lattice.h"
 #include "hexmerge/occ/mesher/layers.h"
+#include "hexmerge/occ/mesher/second_order.h"
 #include "hexmerge/occ/mesher/shape.h"
 #include "hexmerge/occ/mesher/size_estimate.h"
 #include "hexmerge/occ/mesher/surface.h"
@@ -126,15 +127,34 @@ constexpr Strategy kStrategies[] = {
     {"surface only", 1.0, false, false, false},
 };
 
-// One attempt: steps 3 to 12 of mesh_shape() with one strategy.
+// One attempt: steps 3 to 14 of mesh_shape() with one strategy; the Tet10 mesh too when
+// `tet10` is given.
 TetMesh mesh_attempt(const Shape& shape, const Frame& frame, const std::string& regions_brep,
                      const MeshShapeParameters& parameters, const Strategy& strategy,
-                     MeshShapeReport& report);
+                     MeshShapeReport& report, Tet10Mesh* tet10);
+
+// mesh_shape() and, with `tet10`, mesh_shape_tet10().
+TetMesh mesh_shape_impl(const std::string& brep, const MeshShapeParameters& parameters,
+                        MeshShapeReport& report, Tet10Mesh* tet10);
 
 }  // namespace
 
 TetMesh mesh_shape(const std::string& brep, const MeshShapeParameters& parameters,
                    MeshShapeReport& report) {
+  return mesh_shape_impl(brep, parameters, report, nullptr);
+}
+
+Tet10Mesh mesh_shape_tet10(const std::string& brep, const MeshShapeParameters& parameters,
+                           MeshShapeReport& report) {
+  Tet10Mesh tet10;
+  mesh_shape_impl(brep, parameters, report, &tet10);
+  return tet10;
+}
+
+namespace {
+
+TetMesh mesh_shape_impl(const std::string& brep, const MeshShapeParameters& parameters,
+                        MeshShapeReport& report, Tet10Mesh* tet10) {
   check_parameters(parameters);
   report = MeshShapeReport{};
   const auto start = PhaseClock::Clock::now();
@@ -182,7 +202,7 @@ TetMesh mesh_shape(const std::string& brep, const MeshShapeParameters& parameter
     MeshShapeReport attempt = report;
     const auto attempt_start = PhaseClock::Clock::now();
     try {
-      TetMesh mesh = mesh_attempt(shape, frame, regions_brep, parameters, strategy, attempt);
+      TetMesh mesh = mesh_attempt(shape, frame, regions_brep, parameters, strategy, attempt, tet10);
       attempt.strategy = strategy.name;
       attempt.phase_seconds["shape"] = shape_seconds;
       if (failed_seconds > 0) attempt.phase_seconds["failed attempts"] = failed_seconds;
@@ -200,11 +220,9 @@ TetMesh mesh_shape(const std::string& brep, const MeshShapeParameters& parameter
                    failures + ")");
 }
 
-namespace {
-
 TetMesh mesh_attempt(const Shape& shape, const Frame& frame, const std::string& regions_brep,
                      const MeshShapeParameters& parameters, const Strategy& strategy,
-                     MeshShapeReport& report) {
+                     MeshShapeReport& report, Tet10Mesh* tet10) {
   PhaseClock clock(report.phase_seconds);
   const double h = parameters.size * strategy.size_factor;
   TetrahedralizeParameters tetgen_parameters;
@@ -340,6 +358,16 @@ TetMesh mesh_attempt(const Shape& shape, const Frame& frame, const std::string& 
   vertex_face.insert(vertex_face.end(), inserted.face.begin(), inserted.face.end());
   report.max_boundary_distance = max_boundary_distance(shape, mesh, vertex_face, 1e-6 * h);
   clock.lap("check");
+
+  // 14. Second order: the boundary mid-edge nodes on the CAD.
+  if (tet10) {
+    SecondOrderReport second;
+    *tet10 =
+        second_order_mesh(shape, mesh, vertex_face, tets.boundary, boundary_face, 1e-9 * h, second);
+    report.nb_projected_mid_nodes = second.nb_projected;
+    report.nb_straight_mid_nodes = second.nb_straight;
+    clock.lap("second order");
+  }
   return mesh;
 }
 

@@ -50,6 +50,7 @@
 #include <string>
 #include <vector>
 
+#include "hexmerge/mesh/second_order.h"
 #include "hexmerge/mesh/tet_mesh.h"
 
 namespace hexmerge {
@@ -122,6 +123,13 @@ struct MeshShapeReport {
   /// than h remain on them)
   std::size_t nb_unrefined_faces = 0;
   std::size_t nb_shared_faces = 0;  ///< faces between two solids (touching solids glued)
+  /// mesh_shape_tet10(): boundary mid-edge nodes projected onto their CAD face or edge (on a
+  /// plane: the midpoint itself)
+  std::size_t nb_projected_mid_nodes = 0;
+  /// mesh_shape_tet10(): boundary mid-edge nodes kept at their edge's midpoint, because on the
+  /// CAD they would have made a Tet10's Jacobian at a corner non-positive or left the middle
+  /// half of their edge
+  std::size_t nb_straight_mid_nodes = 0;
   /// How the points were placed: "lattice" (lattice points, lattice faces, boundary layers),
   /// then, where TetGen failed on that, "lattice at 0.95 of the size", "lattice at 1.1 of the
   /// size", "lattice without lattice
@@ -148,6 +156,17 @@ struct MeshShapeReport {
 ///         failing (with its output)
 TetMesh mesh_shape(const std::string& brep, const MeshShapeParameters& parameters,
                    MeshShapeReport& report);
+
+/// As mesh_shape(), in second order: a Tet10 mesh (VTK order) with a mid node on every edge,
+/// numbered after the corners by edge (smaller node first, in increasing order). Mid nodes inside
+/// are their edges' midpoints; on the boundary they are projected from the midpoint onto the CAD
+/// face the edge lies on, or onto the CAD edge where the edge lies on one, so that curved faces
+/// stay on the CAD (loads applied to a face find its nodes) -- except where that would make a
+/// tet's Jacobian at a corner non-positive or put the node outside the middle half of its edge:
+/// those stay at the midpoint, counted in report.nb_straight_mid_nodes. The corners and tets are
+/// mesh_shape()'s.
+Tet10Mesh mesh_shape_tet10(const std::string& brep, const MeshShapeParameters& parameters,
+                           MeshShapeReport& report);
 
 /// The shape in a STEP (.step, .stp), BREP (.brep, .brp) or IGES (.iges, .igs) file, as BREP text.
 /// @throws InputError when the file is missing, of another kind, or unreadable
