@@ -584,8 +584,20 @@ See MeshShapeParameters (src/occ/hexmerge/occ/mesh_shape.h) for the options.
 Returns (points float64 (N, 3), tets (M, 4), regions int32 (M,), report dict); with
 second_order, tets (M, 10) in VTK's Tet10 order, the boundary mid-edge nodes on the CAD
 (mesh_shape_tet10), and report["nb_projected_mid_nodes"], report["nb_straight_mid_nodes"].)doc");
-  m.def("read_shape_file", &read_shape_file, py::arg("path"),
-        R"doc(The shape in a STEP, BREP or IGES file, as BREP text.)doc");
+  m.def(
+      "read_shape_file",
+      [](const std::string& path, bool with_unit) -> py::object {
+        std::string unit, brep;
+        {
+          py::gil_scoped_release released;
+          brep = read_shape_file(path, &unit);
+        }
+        if (with_unit) return py::make_tuple(brep, unit);
+        return py::str(brep);
+      },
+      py::arg("path"), py::arg("with_unit") = false,
+      R"doc(The shape in a STEP, BREP or IGES file, as BREP text (in millimetres for STEP and IGES);
+with_unit=True: (BREP text, the length unit the file declares, "" when none).)doc");
 #else
   m.attr("with_opencascade") = false;
 #endif

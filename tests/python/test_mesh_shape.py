@@ -819,3 +819,40 @@ def test_second_order_boundary_mid_nodes_on_the_cad(shapes) -> None:
         assert result["valid"], result["problems"]
         assert result["nonconforming_quads"] == 0 and result["cracks"] == 0
         assert result["inverted_cells"] == 0
+
+
+INCH_UNIT = ("#9000 = ( LENGTH_UNIT() NAMED_UNIT(*) SI_UNIT(.MILLI.,.METRE.) );\n"
+             "#9001 = LENGTH_MEASURE_WITH_UNIT(LENGTH_MEASURE(25.4),#9000);\n"
+             "#9002 = DIMENSIONAL_EXPONENTS(1.,0.,0.,0.,0.,0.,0.);\n")
+
+
+@needs_tetgen
+def test_a_step_file_in_inches_is_said_to_be_read_in_millimetres(tmp_path, capsys) -> None:
+    """OpenCASCADE reads STEP files in millimetres whatever unit they declare; the report, the
+    CLI and any error about the size say so (a user thinking in inches gave -h in inches)."""
+    if shutil.which("gmsh") is None:
+        pytest.skip("gmsh is not installed")
+    mm = tmp_path / "box.step"
+    subprocess.run(["gmsh", "-0", str(GEOMETRY / "box.geo"), "-o", str(mm)], check=True, capture_output=True)
+    text = mm.read_text()
+    unit = re.search(r"^(#\d+) = \( LENGTH_UNIT\(\) NAMED_UNIT\(\*\) SI_UNIT\(\.MILLI\.,\.METRE\.\) \);$", text, re.M)
+    assert unit, "Gmsh's STEP length unit line not found"
+    inch = tmp_path / "box_inch.step"
+    inch.write_text(text.replace(unit.group(0), f"{unit.group(1)} = ( CONVERSION_BASED_UNIT('INCH',#9001) "
+                                 "LENGTH_UNIT() NAMED_UNIT(#9002) );\n" + INCH_UNIT))
+    assert _core.read_shape_file(str(mm), with_unit=True)[1].lower() == "millimetre"
+    assert _core.read_shape_file(str(inch), with_unit=True)[1] == "INCH"
+    tets, report = hexmerge.mesh_shape(mm, 10.0, recombine=False)
+    assert not report["meshing"]["converted_to_millimetres"]
+    box_mm = tets.points.max(axis=0) - tets.points.min(axis=0)
+    tets, report = hexmerge.mesh_shape(inch, 254.0, recombine=False)
+    assert report["meshing"]["file_length_unit"] == "INCH" and report["meshing"]["converted_to_millimetres"]
+    np.testing.assert_allclose(tets.points.max(axis=0) - tets.points.min(axis=0), 25.4 * box_mm, rtol=1e-9)
+    with pytest.raises(hexmerge.InputError, match=r"the file declares its lengths in INCH: the shape is read "
+                       r"in millimetres, and so is the size"):
+        hexmerge.mesh_shape(inch, 0.5)
+    capsys.readouterr()
+    assert main(["mesh", str(inch), "-h", "254", "-o", str(tmp_path / "b.vtu"), "--tets-only"]) == 0
+    err = capsys.readouterr().err
+    assert "note: the file declares its lengths in INCH: the shape is read in millimetres" in err, err
+

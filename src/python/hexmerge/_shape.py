@@ -92,13 +92,22 @@ def is_brep_text(text: str) -> bool:
 
 def shape_text(shape: str | bytes | os.PathLike[str]) -> str:
     """BREP text from BREP text (str or bytes) or from the path of a STEP, BREP or IGES file."""
+    return _shape_text_and_unit(shape)[0]
+
+
+#: Length units that need no word: OpenCASCADE reads STEP and IGES files in millimetres.
+_MILLIMETRES = ("", "mm", "millimetre", "millimeter", "millimetres", "millimeters")
+
+
+def _shape_text_and_unit(shape: str | bytes | os.PathLike[str]) -> tuple[str, str]:
+    """shape_text() and the length unit a STEP or IGES file declares ("" otherwise)."""
     if isinstance(shape, bytes):
         shape = shape.decode("utf-8", errors="replace")
         if not is_brep_text(shape):
             raise _core.InputError("the bytes are no BREP text (no 'CASCADE Topology' header)")
-        return shape
+        return shape, ""
     if isinstance(shape, str) and is_brep_text(shape):
-        return shape
+        return shape, ""
     if isinstance(shape, (str, os.PathLike)):
         path = os.fspath(shape)
         if not isinstance(path, str) or not path.strip():
@@ -109,7 +118,7 @@ def shape_text(shape: str | bytes | os.PathLike[str]) -> str:
             )
         if not Path(path).is_file():
             raise _core.InputError(f"{path}: no such file")
-        return _core.read_shape_file(path)
+        return _core.read_shape_file(path, with_unit=True)
     raise _core.InputError(
         "shape must be BREP text (str or bytes) or the path of a STEP, BREP or IGES file, got "
         f"{type(shape).__name__}"
@@ -246,17 +255,26 @@ def mesh_shape(
         raise ValueError(
             f"engine options ({', '.join(recombine_options)}) need recombine=True"
         )
-    brep = shape_text(shape)
+    brep, file_unit = _shape_text_and_unit(shape)
 
     if fn is not None and fn("mesh shape", 0.0) is False:
         raise _core.Cancelled("cancelled")
     start = time.perf_counter()
-    points, tets, regions, meshing = _core.mesh_shape(
-        brep, size, tetgen=os.fspath(tetgen),
-        work_directory="" if work_directory is None else os.fspath(work_directory),
-        second_order=second_order, **options)
+    try:
+        points, tets, regions, meshing = _core.mesh_shape(
+            brep, size, tetgen=os.fspath(tetgen),
+            work_directory="" if work_directory is None else os.fspath(work_directory),
+            second_order=second_order, **options)
+    except _core.InputError as e:
+        if file_unit.lower() in _MILLIMETRES:
+            raise
+        raise _core.InputError(f"{e} (the file declares its lengths in {file_unit}: the shape is read "
+                               "in millimetres, and so is the size)") from None
     meshing = dict(meshing)
     meshing["seconds"] = time.perf_counter() - start
+    # STEP and IGES files are read in millimetres, whatever unit they declare: say which.
+    meshing["file_length_unit"] = file_unit
+    meshing["converted_to_millimetres"] = file_unit.lower() not in _MILLIMETRES
     meshing["tets"] = int(len(tets))
     meshing["points"] = int(len(points))
     meshing["parameters"] = dict(size=size, **options, second_order=second_order)

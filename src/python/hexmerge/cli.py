@@ -366,7 +366,11 @@ def _mesh_notes(meshing: dict[str, Any]) -> list[str]:
     """What the user should know about how the tets were made: the ways of placing points that
     TetGen failed on (the mesh comes from a simpler one, with fewer hexahedra), faces left
     coarser than h."""
-    notes = [f"TetGen failed with the points placed by {failure}" for failure in meshing["failed_strategies"]]
+    notes = []
+    if meshing.get("converted_to_millimetres"):
+        notes.append(f"the file declares its lengths in {meshing['file_length_unit']}: the shape is "
+                     "read in millimetres, and -h and the report's lengths are millimetres")
+    notes += [f"TetGen failed with the points placed by {failure}" for failure in meshing["failed_strategies"]]
     if notes:
         notes.append(f"the tets were made with the points placed by {meshing['strategy']}")
     if meshing["nb_unrefined_faces"]:

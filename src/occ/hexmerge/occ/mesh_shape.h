@@ -169,7 +169,10 @@ Tet10Mesh mesh_shape_tet10(const std::string& brep, const MeshShapeParameters& p
                            MeshShapeReport& report);
 
 /// The shape in a STEP (.step, .stp), BREP (.brep, .brp) or IGES (.iges, .igs) file, as BREP text.
+/// OpenCASCADE gives STEP and IGES shapes in millimetres whatever their file's unit; when
+/// `length_unit` is given, it is set to the length unit the file declares (as the file names it,
+/// e.g. "INCH"; "" for BREP files, which have none).
 /// @throws InputError when the file is missing, of another kind, or unreadable
-std::string read_shape_file(const std::string& path);
+std::string read_shape_file(const std::string& path, std::string* length_unit = nullptr);
 
 }  // namespace hexmerge

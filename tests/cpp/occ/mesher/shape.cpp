@@ -8,6 +8,7 @@
 #include <BRep_Builder.hxx>
 #include <TopExp.hxx>
 #include <TopoDS.hxx>
+#include <TopoDS_Compound.hxx>
 #include <TopoDS_Shell.hxx>
 #include <TopoDS_Solid.hxx>
 #include <cmath>
@@ -46,6 +47,24 @@ TEST(load_shape, face_between_two_solids_counts_twice) {
   int shared = 0;
   for (int count : s.face_solid_count) shared += count == 2;
   EXPECT_EQ(shared, 1);
+}
+
+TEST(load_shape, an_empty_solid_is_an_input_error_naming_it) {
+  // A box, then a solid with no shell at all (its extent used to come out as -inf).
+  TopoDS_Solid empty;
+  BRep_Builder builder;
+  builder.MakeSolid(empty);
+  TopoDS_Compound both;
+  builder.MakeCompound(both);
+  builder.Add(both, occ_box(0, 0, 0, 1, 1, 1));
+  builder.Add(both, empty);
+  try {
+    load(both);
+    FAIL() << "an empty solid was loaded";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("solid 1 of the shape is empty"), std::string::npos)
+        << e.what();
+  }
 }
 
 TEST(load_shape, no_solid_and_open_shell_are_input_errors) {

@@ -8,6 +8,7 @@
 #include <GProp_GProps.hxx>
 #include <GProp_PrincipalProps.hxx>
 #include <TopExp.hxx>
+#include <TopExp_Explorer.hxx>
 #include <TopTools_IndexedDataMapOfShapeListOfShape.hxx>
 #include <TopTools_ListOfShape.hxx>
 #include <TopoDS.hxx>
@@ -32,6 +33,10 @@ Shape load_shape(const std::string& brep, double glue_tolerance, GlueSolidsRepor
     throw InputError(
         "the shape holds no solid (a face, a shell or a wire cannot be meshed "
         "into tets): give a closed solid");
+  for (int i = 1; i <= s.solids.Extent(); ++i)
+    if (!TopExp_Explorer(s.solids(i), TopAbs_FACE).More())
+      throw InputError("solid " + std::to_string(i - 1) +
+                       " of the shape is empty (it has no faces): give closed solids");
   s.shape = glue_solids(s.shape, glue_tolerance, glue);
   s.solids.Clear();
   TopExp::MapShapes(s.shape, TopAbs_SOLID, s.solids);
