@@ -3,11 +3,13 @@
 - geo_to_cad: a Gmsh .geo (OpenCASCADE kernel) to a CAD file (BREP or STEP) with `gmsh -0`.
 - rescaled_size: the size h that should give the wanted tet count, from one measured count.
 - jsonable: numpy scalars and arrays, objects and odd values to plain JSON types.
+- compare_hashes: output hashes against an earlier run's (mesher_hashes.py, output_hashes.py).
 - run_worker: one run of a worker command in a fresh subprocess (a session of its own), with a
   timeout and an optional memory limit; the worker prints its result as one JSON line after
   RESULT_MARKER. kill_session, stop_workers_on_signals: leave no worker behind.
 - git_commit, machine: what a results file is headed by.
 """
+import json
 import os
 import platform
 import resource
@@ -69,6 +71,26 @@ def jsonable(x):
     if hasattr(x, "__dict__"):
         return {k: jsonable(v) for k, v in vars(x).items() if not k.startswith("_")}
     return repr(x)
+
+
+def compare_hashes(results: dict, path: str) -> int:
+    """Compare {case: {"sha1", "report", ...}} with the same written earlier to `path`: print each
+    case whose hash or report differs (with the report's changed fields), then the count; 1 when
+    any differs, else 0."""
+    with open(path) as f:
+        old = json.load(f)
+    bad = 0
+    for key, new in results.items():
+        if key not in old:
+            print(f"{key}: not in {path}")
+            continue
+        before, after = old[key].get("report", {}), new.get("report", {})
+        if old[key]["sha1"] != new["sha1"] or before != after:
+            bad += 1
+            diff = {k: (before.get(k), v) for k, v in after.items() if before.get(k) != v}
+            print(f"{key}: DIFFERENT sha1 {old[key]['sha1'][:12]} -> {new['sha1'][:12]} {diff}")
+    print(f"{len(results) - bad} of {len(results)} identical to {path}")
+    return 1 if bad else 0
 
 
 def run_worker(cmd, timeout, env=None, memory_bytes=None):

@@ -20,13 +20,15 @@ import argparse
 import hashlib
 import json
 import os
-import subprocess
 import sys
 import tempfile
 import time
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.dirname(HERE)
 GEOMETRY = os.path.join(ROOT, "bench", "geometry")
+sys.path.insert(0, HERE)
+import benchlib  # noqa: E402
 
 # Shapes beyond bench/geometry (Gmsh .geo text, OpenCASCADE kernel): straight edges across the
 # lattice (hexagonal prism, swept; notched trapezoid, not swept), fillets meeting lattice faces,
@@ -121,21 +123,8 @@ def shape_text(shape: str, work: str, cad: str) -> str | None:
             f.write(GEO_TEXTS[shape])
     brep = os.path.join(work, shape + ".brep")
     if not os.path.exists(brep):
-        subprocess.run(["gmsh", "-0", geo, "-o", brep], check=True, capture_output=True)
+        benchlib.geo_to_cad(geo, brep)
     return _core.read_shape_file(brep)
-
-
-def jsonable(x):
-    import numpy as np
-    if isinstance(x, dict):
-        return {k: jsonable(v) for k, v in x.items()}
-    if isinstance(x, (list, tuple)):
-        return [jsonable(v) for v in x]
-    if isinstance(x, np.ndarray):
-        return jsonable(x.tolist())
-    if isinstance(x, np.generic):
-        return x.item()
-    return x
 
 
 def fingerprint(points, tets, regions, report: dict, work: str) -> tuple[str, dict]:
@@ -145,7 +134,7 @@ def fingerprint(points, tets, regions, report: dict, work: str) -> tuple[str, di
         a = np.ascontiguousarray(a)
         h.update(name.encode() + str(a.dtype).encode() + str(a.shape).encode())
         h.update(a.tobytes())
-    rep = {k: v for k, v in jsonable(dict(report)).items() if k != "phase_seconds"}
+    rep = {k: v for k, v in benchlib.jsonable(dict(report)).items() if k != "phase_seconds"}
     if "tetgen_command" in rep:
         rep["tetgen_command"] = rep["tetgen_command"].replace(work, "<work>")
     h.update(json.dumps(rep, sort_keys=True).encode())
@@ -198,21 +187,7 @@ def main() -> int:
             json.dump(results, f, indent=1)
     if not args.compare:
         return 0
-    with open(args.compare) as f:
-        old = json.load(f)
-    bad = 0
-    for name, new in results.items():
-        if name not in old:
-            print(f"{name}: not in {args.compare}")
-            continue
-        if old[name]["sha1"] != new["sha1"]:
-            bad += 1
-            before, after = old[name].get("report", {}), new.get("report", {})
-            diff = {k: (before.get(k), v) for k, v in after.items() if before.get(k) != v}
-            print(f"{name}: DIFFERENT sha1 {old[name]['sha1'][:12]} -> {new['sha1'][:12]} {diff}")
-    print(f"{len(results) - bad} of {len(results)} identical to {args.compare}")
-    return 1 if bad else 0
-
+    return benchlib.compare_hashes(results, args.compare)
 
 if __name__ == "__main__":
     sys.exit(main())

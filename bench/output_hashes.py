@@ -77,21 +77,7 @@ def main():
 
     if not args.compare:
         return 0
-    with open(args.compare) as f:
-        old = json.load(f)
-    bad = 0
-    for key, new in results.items():
-        if key not in old:
-            print(f"{key}: not in {args.compare}")
-            continue
-        if old[key]["sha1"] != new["sha1"] or old[key]["report"] != new["report"]:
-            bad += 1
-            diff = {k: (old[key]["report"].get(k), v) for k, v in new["report"].items()
-                    if old[key]["report"].get(k) != v}
-            print(f"{key}: DIFFERENT sha1 {old[key]['sha1'][:12]} -> {new['sha1'][:12]} {diff}")
-    print(f"{len(results) - bad} of {len(results)} identical")
-    return 1 if bad else 0
-
+    return benchlib.compare_hashes(results, args.compare)
 
 if __name__ == "__main__":
     sys.exit(main())
