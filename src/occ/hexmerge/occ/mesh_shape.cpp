@@ -1,6 +1,7 @@
 #include "hexmerge/occ/mesh_shape.h"
 
 #include <algorithm>
+#include <limits>
 #include <chrono>
 #include <cmath>
 #include <iterator>
@@ -268,9 +269,11 @@ TetMesh mesh_attempt(const Shape& shape, const Frame& frame, const std::string& 
   if (sweep) {
     report.sweep_axis = sweep->axis;
   } else {
+    // BRepMesh's caps go first: bisecting their sides makes flat triangles.
+    collapse_sides(surface, h, std::numeric_limits<double>::infinity(), lattice.lattice_face);
     refine(shape, surface, h, lattice.lattice_face, lattice.lattice_edge);
     report.nb_unrefined_faces = surface.unrefined_faces.size();
-    collapse_short_sides(surface, h, lattice.lattice_face);
+    collapse_sides(surface, h, h, lattice.lattice_face);
   }
   const int sweep_axis = report.sweep_axis;
   clock.lap("surface");

@@ -18,7 +18,7 @@ TEST(place_layers, around_the_curved_faces_at_their_depths) {
     SCOPED_TRACE(layers);
     Prepared p = prepare(occ_plate_with_hole(), h);
     mesher::refine(p.shape, p.surface, h, p.lattice.lattice_face, p.lattice.lattice_edge);
-    mesher::collapse_short_sides(p.surface, h, p.lattice.lattice_face);
+    mesher::collapse_sides(p.surface, h, h, p.lattice.lattice_face);
     const std::vector<Vec3> nodes =
         mesher::frame_nodes(p.shape, p.surface, p.lattice, -1, mesher::SweptSurface{});
     mesher::Surroundings around(nodes, p.surface, p.lattice, h);

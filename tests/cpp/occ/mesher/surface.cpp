@@ -81,7 +81,7 @@ TEST(refine, sides_at_most_h_on_the_cad) {
   EXPECT_GT(checked, 100u);  // the hole's wall
 
   const std::size_t before = p.surface.nodes.size();
-  mesher::collapse_short_sides(p.surface, h, lattice.lattice_face);
+  mesher::collapse_sides(p.surface, h, h, lattice.lattice_face);
   expect_sound_surface(p, p.surface, volume, 0.01, 1e-6 * h);
   ASSERT_EQ(p.surface.seed.size(), p.surface.nodes.size());
   for (std::size_t n = 1; n < p.surface.seed.size(); ++n)

@@ -53,7 +53,7 @@ struct Surface {
   std::vector<int> node_face;              ///< a face the node lies on
   std::vector<SurfaceTriangle> triangles;  ///< oriented outward (as the face is in its solid)
   std::unordered_map<std::uint64_t, EdgeSegment> segments;  ///< by pair_key of their nodes
-  /// Per node, its index before collapse_short_sides() (seeds the layers' depths, so that a
+  /// Per node, its index before collapse_sides() (seeds the layers' depths, so that a
   /// collapse does not change them everywhere).
   std::vector<int> seed;
   /// Faces whose refinement to the target size did not converge and was given up (refine()).

@@ -39,6 +39,9 @@ constexpr double kNeedleAngle = 20.0 * M_PI / 180;
 constexpr double kNeedleNearest = 0.125;
 // Sides shorter than this fraction of h inside one face are collapsed after the refinement.
 constexpr double kCollapseSide = 0.25;
+// Triangles with a smaller angle than this (radians, 5 degrees) have their nodes inside a face
+// collapsed away where that makes no triangle worse.
+constexpr double kCapAngle = 5.0 * M_PI / 180;
 
 gp_Pnt2d point2d(const UV& uv) { return gp_Pnt2d(uv.u, uv.v); }
 
@@ -341,14 +344,19 @@ void refine(const Shape& s, Surface& surface, double target, const std::vector<b
   }
 }
 
-// Collapses the short sides that bisection and smoothing leave inside a face (not on a CAD edge,
-// not on a lattice face): one end goes to the other, which stays where it is (so on its face),
-// where the link condition holds, no triangle turns more than 20 degrees from the surface's
-// normal at the removed node, no side gets longer than `target`, and the smallest angle of the
-// triangles around both ends does not get worse. Runs of nodes 0.1 to 0.3 h apart (cylinder at
-// h 2.7: twenty in a line on the side face) otherwise make triangles of 179 degrees, and tets on
-// them of scaled Jacobian 0.003. The removed nodes are dropped and the rest renumbered.
-void collapse_short_sides(Surface& surface, double target, const std::vector<bool>& lattice_face) {
+// Removes nodes inside faces (not on a CAD edge, not on a lattice face) by collapsing one of
+// their sides: one end goes to the other, which stays where it is (so on its face), where the
+// link condition holds, no triangle turns more than 20 degrees from the surface's normal at the
+// removed node, no side gets longer than `max_side`, and the smallest angle of the triangles
+// around both ends does not get worse. The sides tried are those of needles and caps (triangles
+// with an angle under kCapAngle: worst first) and then the sides shorter than kCollapseSide h
+// (shortest first). Runs of nodes 0.1 to 0.3 h apart (cylinder at h 2.7: twenty in a line on the
+// side face) otherwise make triangles of 179 degrees, and tets on them of scaled Jacobian 0.003;
+// BRepMesh leaves nodes a few thousandths of h from a CAD edge on B-spline faces (gmsh_t20_data),
+// and bisecting the sides of such a cap makes triangles whose three nodes lie on one line. The
+// removed nodes are dropped and the rest renumbered.
+void collapse_sides(Surface& surface, double target, double max_side,
+                    const std::vector<bool>& lattice_face) {
   std::vector<SurfaceTriangle>& tris = surface.triangles;
   const std::vector<Vec3>& nodes = surface.nodes;
   const int nb_nodes = static_cast<int>(nodes.size());
@@ -398,7 +406,7 @@ void collapse_short_sides(Surface& surface, double target, const std::vector<boo
       for (int& n : v)
         if (n == r) n = k;
       for (int n : v)
-        if ((nodes[n] - nodes[k]).norm() > target) return -1.0;
+        if ((nodes[n] - nodes[k]).norm() > max_side) return -1.0;
       const Vec3 now = normal_of(v);
       if (turned_over(now, reference)) return -1.0;
       after = std::min(after, smallest_angle(v));
@@ -429,14 +437,18 @@ void collapse_short_sides(Surface& surface, double target, const std::vector<boo
   };
   for (bool changed = true; changed;) {
     changed = false;
+    // Needles' and caps' sides first (priority below 0: their smallest angle minus pi), then the
+    // short sides (priority: their length).
     std::vector<std::pair<double, std::uint64_t>> sides;
     for (int ti = 0; ti < static_cast<int>(tris.size()); ++ti) {
       if (dead[ti] || lattice_face[tris[ti].face]) continue;
+      const double angle = smallest_angle(tris[ti].node);
       for (int c = 0; c < 3; ++c) {
         const int a = tris[ti].node[c], b = tris[ti].node[(c + 1) % 3];
+        if (surface.segments.count(pair_key(a, b))) continue;
         const double l = (nodes[a] - nodes[b]).norm();
-        if (a < b && l < kCollapseSide * target && !surface.segments.count(pair_key(a, b)))
-          sides.push_back({l, pair_key(a, b)});
+        if (angle < kCapAngle) sides.push_back({angle - M_PI, pair_key(a, b)});
+        if (a < b && l < kCollapseSide * target) sides.push_back({l, pair_key(a, b)});
       }
     }
     std::sort(sides.begin(), sides.end());
@@ -468,6 +480,7 @@ void collapse_short_sides(Surface& surface, double target, const std::vector<boo
     for (int& n : t.node) n = renumber[n];
     out.triangles.push_back(t);
   }
+  out.unrefined_faces = surface.unrefined_faces;
   for (const auto& [key, segment] : surface.segments)
     out.segments[pair_key(renumber[key >> 32], renumber[key & 0xffffffffu])] = segment;
   surface = std::move(out);

@@ -25,10 +25,12 @@ struct Shape;
 void refine(const Shape& s, Surface& surface, double target, const std::vector<bool>& lattice_face,
             const std::vector<bool>& lattice_edge);
 
-/// Collapses the short sides (under target / 4) that bisection and smoothing leave inside a face
-/// (not on a CAD edge, not on a lattice face) where no triangle gets worse; the removed nodes
-/// are dropped, the rest renumbered, and Surface::seed gives each node's index before.
-void collapse_short_sides(Surface& surface, double target, const std::vector<bool>& lattice_face);
+/// Collapses the sides of needles and caps (an angle under 5 degrees) and the short sides (under
+/// target / 4) inside a face (not on a CAD edge, not on a lattice face) where no triangle gets
+/// worse and no side gets longer than `max_side`; the removed nodes are dropped, the rest
+/// renumbered, and Surface::seed gives each node's index before.
+void collapse_sides(Surface& surface, double target, double max_side,
+                    const std::vector<bool>& lattice_face);
 
 /// Puts the nodes (frame coordinates, `nodes`, numbered as `surface`'s) of each straight CAD
 /// edge that bounds a lattice face and runs across two frame axes exactly on one line.
