@@ -31,6 +31,11 @@ namespace {
 // A bisection point on a face further than this fraction of the side from the side's middle
 // means the parametrisation is distorted there: the middle is projected on the face instead.
 constexpr double kDistortedMiddle = 0.25;
+// A side is not split where its middle on the CAD is nearer than this fraction of the side to
+// one of its ends.
+constexpr double kSplitEnd = 0.1;
+// No flip makes a triangle with a smaller angle than this (radians, about 0.06 degrees).
+constexpr double kFlatAngle = 1e-3;
 constexpr int kSmoothingRounds = 5;
 // Surface nodes with a smaller angle than this (radians, 20 degrees) in their triangles are
 // smoothed.
@@ -152,11 +157,30 @@ void refine(const Shape& s, Surface& surface, double target, const std::vector<b
     surface.node_face.push_back(t.face);
     return static_cast<int>(surface.nodes.size()) - 1;
   };
+  // Sides whose middle on the CAD falls on one of their ends (a face's pole or collapsed side:
+  // splitting them again and again stacked 1,054 nodes on one point of gmsh_917_fusee's face 60).
+  std::unordered_set<std::uint64_t> unsplittable;
   // Splits side (a, b) in every triangle that has it; the halves of an edge segment stay one.
+  // Returns the sides around the new node, or nothing when the side cannot be split.
   auto split_side = [&](int a, int b) {
     const std::uint64_t key = pair_key(a, b);
     const std::vector<int> around = at_edge[key];
     int m = -1;
+    if (!around.empty()) {
+      const int t0 = around.front();
+      UV uv;
+      m = midpoint(t0, side_with_key(tris[t0], key), -1, uv);
+      const double side = length(a, b);
+      if (length(m, a) < kSplitEnd * side || length(m, b) < kSplitEnd * side) {
+        surface.nodes.pop_back();
+        surface.node_face.pop_back();
+        unsplittable.insert(key);
+        std::vector<int>& listed = surface.unrefined_faces;
+        if (std::find(listed.begin(), listed.end(), tris[t0].face) == listed.end())
+          listed.push_back(tris[t0].face);
+        return std::vector<std::uint64_t>{};
+      }
+    }
     for (int ti : around) {
       const SurfaceTriangle t = tris[ti];
       const int c = side_with_key(t, key);
@@ -212,6 +236,15 @@ void refine(const Shape& s, Surface& surface, double target, const std::vector<b
       // Off the plane the test can fail both ways: flip only to a strictly better pair.
       const double now = angle_at(m, p, q) + angle_at(x, q, p);
       if (now <= M_PI * (1 + 1e-9) || angle_at(p, x, m) + angle_at(q, m, x) >= now - 1e-9) continue;
+      // Off the plane the test can also pass where the flip makes a flat triangle (a side's
+      // ends and the node that split it: gmsh_917_fusee's B-spline faces), which the next split
+      // stacks a node on: a flip must not make the pair's smallest angle smaller.
+      const double least_before = std::min(mesher::smallest_angle(surface.nodes, a.node),
+                                           mesher::smallest_angle(surface.nodes, b.node));
+      const double least_after =
+          std::min(mesher::smallest_angle(surface.nodes, std::array<int, 3>{m, p, x}),
+                   mesher::smallest_angle(surface.nodes, std::array<int, 3>{x, q, m}));
+      if (least_after < least_before || least_after < kFlatAngle) continue;
       const Vec3 before = normal_of(p, q, m) + normal_of(q, p, x);
       // Nor across the surface's curvature: both new triangles within 20 degrees of the old.
       const Vec3 n1 = normal_of(m, p, x), n2 = normal_of(x, q, m);
@@ -239,7 +272,7 @@ void refine(const Shape& s, Surface& surface, double target, const std::vector<b
     const int a = tris[ti].node[c], b = tris[ti].node[(c + 1) % 3];
     auto seg = surface.segments.find(pair_key(a, b));
     if (seg != surface.segments.end() && lattice_edge[seg->second.edge]) return false;
-    return length(a, b) > target;
+    return length(a, b) > target && !unsplittable.count(pair_key(a, b));
   };
   // Splits the longest side of triangle ti (in every triangle that has it), then restores the
   // Delaunay property around the new node.
@@ -263,7 +296,8 @@ void refine(const Shape& s, Surface& surface, double target, const std::vector<b
       added[face] += surface.nodes.size() - before;
       if (added[face] > 20 * face_area[face] / (target * target) + 200) {
         given_up[face] = 1;
-        surface.unrefined_faces.push_back(face);
+        std::vector<int>& listed = surface.unrefined_faces;
+        if (std::find(listed.begin(), listed.end(), face) == listed.end()) listed.push_back(face);
       }
     }
 
