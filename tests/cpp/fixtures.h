@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "hexmerge/check/validate_tet_mesh.h"
 #include "hexmerge/core/index.h"
 #include "hexmerge/mesh/tet_mesh.h"
 #include "hexmerge/recombine/find_candidates.h"
