@@ -10,7 +10,6 @@ import unittest
 import numpy as np
 
 import FreeCAD
-import Fem
 
 import helpers
 import freecad.hexmerge as hm
