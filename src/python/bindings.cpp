@@ -26,6 +26,7 @@
 #include "hexmerge/mesh/tet_topology.h"
 #include "hexmerge/recombine/parameters.h"
 #include "hexmerge/recombine/recombine.h"
+#include "hexmerge/tetgen/tetrahedralize.h"
 #ifdef HEXMERGE_WITH_OCC
 #include "hexmerge/occ/mesh_shape.h"
 #include "hexmerge/occ/read_shape_file.h"
@@ -330,6 +331,58 @@ void run_validate(const PointsIn& points, const IndexIn& cells, const py::object
   const TetTopology topology(input);  // faces shared by three tets, folded tets
 }
 
+// TetGen through the library's one interface (tetgen/tetrahedralize.h), for the benchmarks'
+// mesh generator: surface triangles (each a facet) and isolated points in, tets out.
+py::tuple run_tetrahedralize(const PointsIn& points, const IndexIn& triangles,
+                             py::ssize_t first_isolated, const std::string& program,
+                             double time_limit, int restarts) {
+  const std::vector<double> xyz = flat(points, 3, "points");
+  const std::vector<index_t> corners = flat(triangles, 3, "triangles");
+  const std::size_t nb_points = xyz.size() / 3;
+  if (first_isolated < 0 || static_cast<std::size_t>(first_isolated) > nb_points) {
+    throw InputError("first_isolated must be between 0 and the number of points",
+                     Entity::Parameter);
+  }
+  tetgen::TetrahedralizeInput input;
+  for (std::size_t i = 0; i < nb_points; ++i) {
+    input.points.push_back({xyz[3 * i], xyz[3 * i + 1], xyz[3 * i + 2]});
+  }
+  for (std::size_t f = 0; f < corners.size() / 3; ++f) {
+    tetgen::Facet facet;
+    facet.polygons.push_back({});
+    for (int k = 0; k < 3; ++k) {
+      const index_t v = corners[3 * f + k];
+      if (v >= nb_points) {
+        throw InputError("triangle " + std::to_string(f) + " refers to point " + std::to_string(v) +
+                             ", but there are " + std::to_string(nb_points) + " points",
+                         Entity::Element, static_cast<index_t>(f));
+      }
+      facet.polygons.back().push_back(static_cast<int>(v));
+    }
+    facet.marker = 1;
+    input.facets.push_back(std::move(facet));
+  }
+  input.first_isolated = static_cast<std::size_t>(first_isolated);
+  tetgen::TetrahedralizeParameters parameters;
+  parameters.program = program;
+  parameters.time_limit = time_limit;
+  parameters.restarts = restarts;
+  tetgen::TetrahedralizeOutput out;
+  {
+    py::gil_scoped_release released;
+    try {
+      const tetgen::Tetrahedralizer tetgen(parameters);
+      out = tetgen.run(std::move(input));
+    } catch (const tetgen::TetrahedralizeFailure& e) {
+      throw InputError(e.what());
+    }
+  }
+  const auto nb_out = static_cast<py::ssize_t>(out.points.size() / 3);
+  const auto nb_tets = static_cast<py::ssize_t>(out.tets.size() / 4);
+  return py::make_tuple(to_numpy(std::move(out.points), {nb_out, 3}),
+                        to_numpy(std::move(out.tets), {nb_tets, 4}), out.command);
+}
+
 #ifdef HEXMERGE_WITH_OCC
 py::tuple run_regions_by_solid(const std::string& brep, const PointsIn& points, const IndexIn& cells,
                                double tolerance, int samples_per_piece, bool classify_every_tet,
@@ -548,6 +601,20 @@ Returns the CheckReport as a dict; `valid` is True when the mesh passes.)doc");
         R"doc(Raises InputError naming the first node or element that the engine cannot process.
 
 points float64 (N, 3); cells (M, 4); regions int32 (M,) or None.)doc");
+
+  m.def("tetrahedralize", &run_tetrahedralize, py::arg("points"), py::arg("triangles"),
+        py::arg("first_isolated") = 0, py::arg("tetgen") = "tetgen", py::arg("time_limit") = 0.0,
+        py::arg("restarts") = 5,
+        R"doc(Tets of a closed triangulated surface with TetGen (tetgen -pY: the surface kept).
+
+points          float64 (N, 3): the surface's nodes, then isolated points inside.
+triangles       (F, 3) ids into points: the surface (an empty (0, 3) array: the Delaunay
+                tetrahedralisation of the points).
+first_isolated  points from this index on are isolated interior vertices.
+tetgen          the TetGen program; time_limit seconds per run (0: 30 s + 1 ms per point);
+                restarts: runs made again after one that does not finish.
+Returns (points float64 (P, 3): the input's, then TetGen's own; tets (M, 4), orientation as
+TetGen makes them; the command run). TetGen's failures raise InputError.)doc");
 
 #ifdef HEXMERGE_WITH_OCC
   m.attr("with_opencascade") = true;

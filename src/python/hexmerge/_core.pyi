@@ -42,6 +42,14 @@ def validate_tet_mesh(
     regions: npt.NDArray[np.int32] | None = None,
 ) -> None: ...
 def parameter_table() -> list[dict[str, Any]]: ...
+def tetrahedralize(
+    points: npt.NDArray[np.float64],
+    triangles: npt.NDArray[np.uint32],
+    first_isolated: int = 0,
+    tetgen: str = "tetgen",
+    time_limit: float = 0.0,
+    restarts: int = 5,
+) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.uint32], str]: ...
 def cell_types() -> list[dict[str, Any]]: ...
 
 # Present only in a module built with OpenCASCADE (with_opencascade is True).

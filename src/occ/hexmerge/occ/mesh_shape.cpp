@@ -24,13 +24,14 @@
 #include "hexmerge/occ/mesher/surface.h"
 #include "hexmerge/occ/mesher/surface_repair.h"
 #include "hexmerge/occ/mesher/sweep.h"
-#include "hexmerge/occ/mesher/tetrahedralize.h"
 #include "hexmerge/occ/regions_by_solid.h"
+#include "hexmerge/tetgen/tetrahedralize.h"
 
 namespace hexmerge {
 namespace {
 
 using namespace mesher;
+using namespace tetgen;
 
 // Times TetGen is run again, its lattice faces' loops started elsewhere, when it does not finish.
 constexpr int kTetgenRestarts = 5;
