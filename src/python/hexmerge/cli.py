@@ -124,6 +124,8 @@ def build_parser() -> argparse.ArgumentParser:
         "inside at the midpoint), so the output is Tet10 / Pyramid13 / Wedge15 / Hexa20",
     )
     add_output_options(msh)
+    if not _shape.mesh_parameters():  # a module built without OpenCASCADE: cmd_mesh says so
+        msh.add_argument("-h", "--size", metavar="H", type=_positive_length, help="target element size")
     add_parameter_options(
         msh, _shape.mesh_parameters(), "mesher options (from hexmerge.mesh_parameters(); h: the size H)",
         # The size is also -h (as Gmsh's -clmax), required, checked before any work.
@@ -316,6 +318,11 @@ def _mesh_summary(args: argparse.Namespace, mesh: _api.MixedMesh, report: dict[s
 
 
 def cmd_mesh(args: argparse.Namespace) -> int:
+    try:
+        _shape._require_opencascade()
+    except RuntimeError as e:
+        print(f"hexmerge mesh: error: {e}", file=sys.stderr)
+        return EXIT_ERROR
     mesher = _given(args, _shape.mesh_parameters())
     size = mesher.pop("size")
     options = _given(args, _api.parameters())
