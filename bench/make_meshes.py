@@ -108,7 +108,9 @@ def make_tetgen_lattice(shape, h, out, timeout=3600):
     """Substitute for Gmsh's lattice-point mesher (which crashes in Debian's build): Gmsh's
     surface mesh (-clmax h), plus the points of an axis-aligned cubic lattice of spacing h
     (cell centres of the bounding box grid) lying at least 0.6 h inside, tetrahedralised by
-    TetGen keeping the surface mesh (tetgen -pY). Written as msh 4.1 through meshio."""
+    TetGen keeping the surface mesh (tetgen -pY), through the library's TetGen interface
+    (hexmerge._core.tetrahedralize: the module must be importable, e.g. PYTHONPATH=src/python).
+    Written as msh 4.1 through meshio."""
     import numpy as np
     import meshio
     log = []
@@ -130,25 +132,18 @@ def make_tetgen_lattice(shape, h, out, timeout=3600):
         axes = [np.arange(lo[i] + h / 2, hi[i], h) for i in range(3)]
         g = np.stack(np.meshgrid(*axes, indexing="ij"), -1).reshape(-1, 3)
         g = g[signed_distance(shape, g) > 0.6 * h]
-        # A PLC whose node list holds the surface nodes and the lattice points: TetGen keeps
-        # isolated nodes as interior vertices. (tetgen -i with an .a.node file crashes here.)
+        # A PLC of the surface triangles whose point list also holds the lattice points: TetGen
+        # keeps them as isolated interior vertices. (tetgen -i with an .a.node file crashes here.)
+        from hexmerge import _core
         pts = np.vstack([surface.points[used], g])
-        with open(os.path.join(tmp, "s.smesh"), "w") as f:
-            f.write(f"{len(pts)} 3 0 0\n")
-            f.writelines(f"{i + 1} {q[0]:.17g} {q[1]:.17g} {q[2]:.17g}\n" for i, q in enumerate(pts))
-            f.write(f"{len(tri)} 0\n")
-            f.writelines(f"3 {a + 1} {b + 1} {c + 1}\n" for a, b, c in tri)
-            f.write("0\n0\n")
-        tcmd = ["tetgen", "-pYQ", "s.smesh"]
-        p = subprocess.run(tcmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
-                           timeout=timeout, cwd=tmp)
-        log.append(p.stdout)
-        cmd = cmd + ["&&", "(lattice points)", "&&"] + tcmd
-        if p.returncode != 0 or not os.path.exists(os.path.join(tmp, "s.1.ele")):
-            return False, p.returncode, time.perf_counter() - t0, "\n".join(log), cmd
-        pts = np.loadtxt(os.path.join(tmp, "s.1.node"), skiprows=1, comments="#")[:, 1:4]
-        tets = np.loadtxt(os.path.join(tmp, "s.1.ele"), skiprows=1, comments="#",
-                          dtype=np.int64)[:, 1:5] - 1
+        try:
+            pts, tets, tcmd = _core.tetrahedralize(pts, tri, first_isolated=len(used),
+                                                   time_limit=timeout, restarts=0)
+        except ValueError as e:  # hexmerge.InputError: TetGen failed, in our words
+            log.append(str(e))
+            return False, 1, time.perf_counter() - t0, "\n".join(log), cmd
+        cmd = cmd + ["&&", "(lattice points)", "&&", tcmd]
+        tets = np.array(tets, dtype=np.int64)
         a, b, c, d = (pts[tets[:, i]] for i in range(4))
         neg = np.einsum("ij,ij->i", np.cross(b - a, c - a), d - a) < 0
         tets[neg] = tets[neg][:, [0, 2, 1, 3]]

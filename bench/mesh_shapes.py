@@ -47,10 +47,10 @@ PROBE_SIZE = {"box": 4.0, "cylinder": 3.0, "bracket": 3.0, "fem-plate-with-hole"
 def run(name: str, brep: str, tets_wanted: int) -> dict:
     size = PROBE_SIZE[name]
     for _ in range(2):  # the count goes about as h^-3; twice, to land near the wanted count
-        _, probe, _, rep = _core.mesh_shape(brep, size)
+        _, probe, _, rep = _core.mesh_shape(brep, {"size": repr(float(size))})
         size = benchlib.rescaled_size(size, len(probe), tets_wanted)
     start = time.perf_counter()
-    pts, tets, regions, rep = _core.mesh_shape(brep, size)
+    pts, tets, regions, rep = _core.mesh_shape(brep, {"size": repr(float(size))})
     mesh_s = time.perf_counter() - start
     start = time.perf_counter()
     mesh, report = hexmerge.recombine(pts, tets, regions=regions)

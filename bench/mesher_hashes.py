@@ -141,6 +141,13 @@ def fingerprint(points, tets, regions, report: dict, work: str) -> tuple[str, di
     return h.hexdigest(), rep
 
 
+def option_texts(options: dict) -> dict:
+    """The mesher's options as the text its compiled table parses (hexmerge._validate)."""
+    from hexmerge import _shape, _validate
+    rows = {row["name"]: row for row in _shape.mesh_parameters()}
+    return {name: _validate.option_text(name, value, rows[name]) for name, value in options.items()}
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--cases", help="comma-separated case names (default: all)")
@@ -168,8 +175,8 @@ def main() -> int:
             run_dir = os.path.join(work, "run")
             start = time.perf_counter()
             try:
-                points, tets, regions, report = _core.mesh_shape(
-                    brep, size, tetgen=args.tetgen, work_directory=run_dir, **options)
+                given = dict(options, size=size, tetgen=args.tetgen, work_directory=run_dir)
+                points, tets, regions, report = _core.mesh_shape(brep, option_texts(given))
             except ValueError as e:  # InputError: the failure's message is the fingerprint
                 sha = hashlib.sha1(("error: " + str(e).replace(run_dir, "<work>")).encode()).hexdigest()
                 results[name] = {"sha1": sha, "error": str(e).splitlines()[0]}

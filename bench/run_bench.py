@@ -21,7 +21,6 @@ Usage (after building the module, see bench/README.md):
 import argparse
 import datetime
 import gc
-import glob
 import json
 import os
 import platform

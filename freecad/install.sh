@@ -3,29 +3,18 @@
 # FreeCAD's user Mod folder, so a rebuild of the engine module is picked up. Idempotent.
 #   freecad/install.sh            apt packages + link
 #   freecad/install.sh --no-apt   link only
-#   HEXMERGE_TEST_DEPS=1 ...      also what tests/freecad/run.sh needs (Xvfb, ImageMagick, Netgen)
+#   HEXMERGE_TEST_DEPS=1 ...      also what the tests need (scripts/common.sh's HEXMERGE_TEST_PACKAGES)
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 
 if [[ "${1:-}" != "--no-apt" ]]; then
-  # The OpenCASCADE -dev packages build the engine's regions by solid (hexmerge.regions_by_solid);
-  # Debian 12 puts one header they need in libocct-visualization-dev, and their CMake targets
-  # link libtbb-dev's libraries. TetGen: the mesher of the shape mode (hexmerge.mesh_shape).
-  pkgs=(freecad calculix-ccx gmsh tetgen python3-numpy
-        libocct-foundation-dev libocct-modeling-data-dev libocct-modeling-algorithms-dev
-        libocct-visualization-dev libtbb-dev)
+  # One package list for every script: scripts/common.sh.
+  source "$root/scripts/common.sh"
+  pkgs=("${HEXMERGE_BASE_PACKAGES[@]}" "${HEXMERGE_FREECAD_PACKAGES[@]}")
   if [[ "${HEXMERGE_TEST_DEPS:-0}" == 1 ]]; then
-    pkgs+=(xvfb xauth imagemagick python3-netgen)
+    pkgs+=("${HEXMERGE_TEST_PACKAGES[@]}")
   fi
-  missing=()
-  for p in "${pkgs[@]}"; do
-    dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
-  done
-  if ((${#missing[@]})); then
-    sudo=""; [[ $(id -u) -ne 0 ]] && sudo="sudo"
-    $sudo apt-get update
-    DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y --no-install-recommends "${missing[@]}"
-  fi
+  ensure_packages "${pkgs[@]}"
 fi
 
 mod="${HOME}/.local/share/FreeCAD/Mod"

@@ -1,4 +1,5 @@
-# Shared by scripts/example.sh and scripts/test.sh: Debian packages and the build.
+# Shared by scripts/example.sh, scripts/test.sh, scripts/fuzz.sh and freecad/install.sh: the one
+# list of Debian packages, and the build.
 # Sourced, not run. Idempotent: packages already installed are not touched; the build is
 # incremental.
 
@@ -8,8 +9,10 @@ HEXMERGE_BUILD="${HEXMERGE_BUILD:-$HEXMERGE_ROOT/build}"
 HEXMERGE_PYTHON=/usr/bin/python3.11
 
 # The packages every use needs: compiler, CMake, pybind11, numpy, meshio (mesh files), Gmsh and
-# TetGen (test meshes), GoogleTest, OpenCASCADE (regions by solid: src/occ; Debian 12 ships one
-# header it needs in libocct-visualization-dev, and OCCT's CMake targets link libtbb-dev's files).
+# TetGen (test meshes; TetGen is also the CAD mesher's tetrahedraliser), GoogleTest, OpenCASCADE
+# (src/occ: the mesher from CAD and regions by solid; STEP and IGES need
+# libocct-data-exchange-dev; Debian 12 ships one header OCCT needs in libocct-visualization-dev,
+# and OCCT's CMake targets link libtbb-dev's files), GLPK (the optimality bound).
 HEXMERGE_BASE_PACKAGES=(g++ cmake make pybind11-dev python3-dev python3-numpy python3-meshio
                         gmsh tetgen libgtest-dev
                         libocct-foundation-dev libocct-modeling-data-dev
@@ -18,6 +21,14 @@ HEXMERGE_BASE_PACKAGES=(g++ cmake make pybind11-dev python3-dev python3-numpy py
 
 # scripts/fuzz.sh: clang with its sanitizer runtimes (AddressSanitizer, UBSan).
 HEXMERGE_FUZZ_PACKAGES=(clang)
+
+# freecad/install.sh: FreeCAD and CalculiX for the add-on (with the base packages, which build
+# the engine module it imports).
+HEXMERGE_FREECAD_PACKAGES=(freecad calculix-ccx)
+
+# scripts/test.sh: pytest, the lint step (pyflakes, clang-format), and what tests/freecad/run.sh
+# needs (Xvfb and ImageMagick for the GUI test, Netgen for a test mesh).
+HEXMERGE_TEST_PACKAGES=(python3-pytest pyflakes3 clang-format xvfb xauth imagemagick python3-netgen)
 
 # Installs the Debian packages given that are not installed yet (apt-get update first, once).
 ensure_packages() {

@@ -24,7 +24,7 @@ cmake -S "$HEXMERGE_ROOT" -B "$ASAN_BUILD" -DCMAKE_BUILD_TYPE=RelWithDebInfo \
       -DCMAKE_CXX_COMPILER=clang++ \
       -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g $SANITIZE -D_GLIBCXX_ASSERTIONS" \
       -DCMAKE_EXE_LINKER_FLAGS="$SANITIZE" \
-      -DHEXMERGE_WITH_PYTHON=OFF -DHEXMERGE_WITH_OCC=OFF -DHEXMERGE_BUILD_BENCH=OFF >/dev/null
+      -DHEXMERGE_WITH_PYTHON=OFF -DHEXMERGE_WITH_OCC=OFF >/dev/null
 cmake --build "$ASAN_BUILD" -j"$(nproc)" --target hexmerge_tests hexmerge_fuzz
 
 export ASAN_OPTIONS="detect_leaks=1:abort_on_error=0"

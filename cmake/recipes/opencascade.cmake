@@ -12,7 +12,8 @@ endif()
 find_package(OpenCASCADE CONFIG QUIET
   COMPONENTS FoundationClasses ModelingData ModelingAlgorithms)
 if(NOT OpenCASCADE_FOUND OR NOT TARGET TKTopAlgo OR NOT TARGET TKShHealing OR NOT TARGET TKMesh)
-  message(STATUS "OpenCASCADE not found: hexmerge_occ (regions by solid) is not built "
+  message(STATUS "OpenCASCADE not found: hexmerge_occ (the mesher from CAD, `hexmerge mesh`, "
+                 "and regions by solid) is not built "
                  "(Debian: libocct-foundation-dev libocct-modeling-data-dev "
                  "libocct-modeling-algorithms-dev libocct-data-exchange-dev libocct-visualization-dev "
                  "libtbb-dev)")
@@ -61,4 +62,5 @@ target_include_directories(OpenCASCADE::OpenCASCADE SYSTEM INTERFACE ${OpenCASCA
 target_link_libraries(OpenCASCADE::OpenCASCADE INTERFACE
   TKernel TKMath TKG2d TKG3d TKGeomBase TKBRep TKGeomAlgo TKTopAlgo TKShHealing TKMesh
   ${_hexmerge_occ_exchange})
-message(STATUS "OpenCASCADE ${OpenCASCADE_VERSION}: building hexmerge_occ")
+message(STATUS "OpenCASCADE ${OpenCASCADE_VERSION}: building hexmerge_occ (the mesher from CAD "
+               "and regions by solid)")

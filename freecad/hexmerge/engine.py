@@ -13,7 +13,8 @@ PYRAMIDS_AS_HEXAHEDRA_DOC = (
     "pyramid is stored as a collapsed hexahedron (base, apex four times), which the writer emits "
     "as C3D8 (C3D20 for quadratic meshes), so the solver sees every element.")
 
-TABLE_KEYS = ("name", "type", "default", "unit", "min", "max", "choices", "label", "doc")
+TABLE_KEYS = ("name", "type", "default", "unit", "min", "max", "min_exclusive", "choices", "label",
+              "doc", "cli_flag", "freecad_property")
 
 # Engine options whose table default is not the accurate choice for CalculiX (issue 15,
 # docs/fem-accuracy.md). CalculiX has no pyramid element: a pyramid goes out as a collapsed
@@ -36,6 +37,7 @@ def module():
     """The hexmerge Python module, with a clear message when it is not built or not importable."""
     try:
         import hexmerge
+        return hexmerge
     except ImportError:
         # A checkout linked into FreeCAD's Mod folder: the module is built into src/python.
         built = os.path.join(ROOT, "src", "python")
@@ -61,7 +63,7 @@ def parameter_table():
 
 
 def mesh_parameter_table():
-    """The mesher's options (hexmerge.mesh_parameters()), in parameter_table()'s row format."""
+    """The mesher's parameters (hexmerge.mesh_parameters()), in parameter_table()'s row format."""
     return [{k: r.get(k) for k in TABLE_KEYS} for r in module().mesh_parameters()]
 
 

@@ -1,15 +1,19 @@
 # SPDX-License-Identifier: LGPL-2.1-or-later
 """Document-object properties built from the engine's parameter table (and the add-on's own).
 
-Each engine parameter becomes one property: its name in CamelCase, its group from GROUPS, its
-tooltip the table's doc (with the unit and range), its type from the table's type and unit:
-float with unit "deg" -> App::PropertyAngle, other float -> App::PropertyFloatConstraint,
-int -> App::PropertyIntegerConstraint, bool -> App::PropertyBool, choice ->
-App::PropertyEnumeration. A parameter added to the engine appears here with no change.
+Each engine parameter becomes one property: its name the table's ``freecad_property``, its group
+from GROUPS, its tooltip the table's doc (with the unit and range), its type from the table's
+type and unit: float with unit "deg" -> App::PropertyAngle, float with unit "mm" ->
+App::PropertyLength, other float -> App::PropertyFloatConstraint, int ->
+App::PropertyIntegerConstraint, bool -> App::PropertyBool, choice -> App::PropertyEnumeration.
+A parameter added to the engine appears here with no change.
 
-The mesher's options (hexmerge.mesh_parameters(): used when the source is a shape) are built
-the same way into the group "Shape meshing", with the target size (a length) and SecondOrder.
+The mesher's parameters (hexmerge.mesh_parameters(): used when the source is a shape) are built
+the same way into the group "Shape meshing" (those whose ``freecad_property`` is empty, the
+TetGen program and its work folder, are not shown), with the add-on's SecondOrder.
 """
+
+import math
 
 from . import engine
 
@@ -68,10 +72,6 @@ class PropertySpec:
         return v
 
 
-def camel(name):
-    return "".join(part[:1].upper() + part[1:] for part in name.split("_"))
-
-
 def _step(row):
     span = float(row["max"]) - float(row["min"])
     return 0.05 if span <= 2 else 1.0
@@ -80,9 +80,12 @@ def _step(row):
 def _doc(row):
     doc = row.get("doc") or ""
     unit = row.get("unit") or ""
-    if row["type"] in ("float", "int"):
-        doc += " [{} .. {}{}]".format(_num(row["min"]), _num(row["max"]),
-                                      " " + unit if unit else "")
+    if row["type"] in ("float", "int") and math.isinf(float(row["max"])):
+        doc += " [{} {}{}]".format("above" if row.get("min_exclusive") else "at least",
+                                   _num(row["min"]), " " + unit if unit else "")
+    elif row["type"] in ("float", "int"):
+        doc += " [{}{} .. {}{}]".format(_num(row["min"]), " excluded" if row.get("min_exclusive") else "",
+                                        _num(row["max"]), " " + unit if unit else "")
     elif row["type"] == "choice":
         doc += " (one of: {})".format(", ".join(row["choices"]))
     return doc + " Default: {}.".format(row["default"])
@@ -104,39 +107,35 @@ def _default(row):
     return str(d)
 
 
+KINDS = {"int": "App::PropertyIntegerConstraint", "bool": "App::PropertyBool",
+         "choice": "App::PropertyEnumeration"}
+FLOAT_KINDS = {"deg": "App::PropertyAngle", "mm": "App::PropertyLength"}
+
+
+def _spec(row, group):
+    kind = (FLOAT_KINDS.get(row.get("unit"), "App::PropertyFloatConstraint")
+            if row["type"] == "float" else KINDS[row["type"]])
+    return PropertySpec(kind, row["freecad_property"], group, _doc(row), _default(row),
+                        row["name"], row)
+
+
 def engine_specs():
     specs = []
     for row in engine.parameter_table():
         # The add-on meshes for CalculiX: its defaults where they differ from the engine's.
         row = dict(row, default=engine.CALCULIX_DEFAULTS.get(row["name"], row["default"]))
-        kind = {
-            "float": "App::PropertyAngle" if row.get("unit") == "deg" else "App::PropertyFloatConstraint",
-            "int": "App::PropertyIntegerConstraint",
-            "bool": "App::PropertyBool",
-            "choice": "App::PropertyEnumeration",
-        }[row["type"]]
-        specs.append(PropertySpec(kind, camel(row["name"]), GROUPS.get(row["name"], "Engine"),
-                                  _doc(row), _default(row), row["name"], row))
+        specs.append(_spec(row, GROUPS.get(row["name"], "Engine")))
     return specs
 
 
 SHAPE_GROUP = "Shape meshing"
-# Property names of mesher options where camel(name) would be unclear on a mesh object.
-MESHER_NAMES = {"frame": "LatticeFrame"}
 
 
 def mesher_specs():
-    """The target size, the mesher's table (hexmerge.mesh_parameters()) and SecondOrder: the
-    options of the shape mode."""
-    specs = [PropertySpec("App::PropertyLength", "TargetSize", SHAPE_GROUP,
-                          "Target element size h when the source is a shape: the lattice spacing "
-                          "and the surface's longest edge (must be smaller than the shape)", 0.0,
-                          "size", {"name": "size", "label": "Target size"})]
-    for row in engine.mesh_parameter_table():
-        kind = {"float": "App::PropertyFloatConstraint", "int": "App::PropertyIntegerConstraint",
-                "bool": "App::PropertyBool", "choice": "App::PropertyEnumeration"}[row["type"]]
-        specs.append(PropertySpec(kind, MESHER_NAMES.get(row["name"], camel(row["name"])),
-                                  SHAPE_GROUP, _doc(row), _default(row), row["name"], row))
+    """The mesher's table (hexmerge.mesh_parameters(); the rows with a FreeCAD property) and
+    SecondOrder: the options of the shape mode."""
+    specs = [_spec(row, SHAPE_GROUP) for row in engine.mesh_parameter_table()
+             if row["freecad_property"]]
     specs.append(PropertySpec("App::PropertyBool", "SecondOrder", SHAPE_GROUP,
                               "When the source is a shape: quadratic elements (a node at the "
                               "midpoint of every tet edge, so hexahedra become Hexa20)", True,

@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "hexmerge/check/check_mesh.h"
+#include "hexmerge/check/validate_tet_mesh.h"
 #include "hexmerge/core/error.h"
 #include "hexmerge/core/progress.h"
 #include "hexmerge/mesh/cell_type.h"
@@ -25,8 +26,10 @@
 #include "hexmerge/mesh/tet_topology.h"
 #include "hexmerge/recombine/parameters.h"
 #include "hexmerge/recombine/recombine.h"
+#include "hexmerge/tetgen/tetrahedralize.h"
 #ifdef HEXMERGE_WITH_OCC
 #include "hexmerge/occ/mesh_shape.h"
+#include "hexmerge/occ/read_shape_file.h"
 #include "hexmerge/occ/regions_by_solid.h"
 #endif
 
@@ -155,9 +158,8 @@ class Progress {
   std::exception_ptr error_;
 };
 
-// Wall time per phase (name, seconds pairs: a map or an ordered vector) as a dict.
-template <typename Phases>
-py::dict phases_dict(const Phases& phases) {
+// Wall time per phase as a dict, in the order the phases ran.
+py::dict phases_dict(const PhaseSeconds& phases) {
   py::dict d;
   for (const auto& [name, seconds] : phases) d[name.c_str()] = seconds;
   return d;
@@ -280,24 +282,22 @@ py::tuple run_recombine(const PointsIn& points, const IndexIn& cells, const py::
   const RecombineParameters parameters = make_parameters(options);
   Progress watcher(progress);
   RecombineReport report;
-  MixedMesh mesh;
-  QuadraticCells second;
+  QuadraticMixedMesh mesh;
   try {
     py::gil_scoped_release released;
     if (quadratic) {
-      input = corner_mesh(tet10);
-      validate_tet10_mesh(tet10);  // before the run, not after it
+      mesh = recombine(tet10, parameters, report, watcher.callback());
+    } else {
+      mesh.linear = recombine(input, parameters, report, watcher.callback());
     }
-    mesh = recombine(input, parameters, report, watcher.callback());
-    if (quadratic) second = quadratic_cells(mesh, tet10);
   } catch (const Cancelled&) {
     watcher.rethrow_python_error();
     throw;
   }
-  py::dict out = mesh_to_dict(std::move(mesh));
+  py::dict out = mesh_to_dict(std::move(mesh.linear));
   if (quadratic) {
-    out["quadratic_offsets"] = to_numpy(std::move(second.offsets));
-    out["quadratic_nodes"] = to_numpy(std::move(second.nodes));
+    out["quadratic_offsets"] = to_numpy(std::move(mesh.quadratic.offsets));
+    out["quadratic_nodes"] = to_numpy(std::move(mesh.quadratic.nodes));
   }
   return py::make_tuple(out, report_to_dict(report));
 }
@@ -331,6 +331,58 @@ void run_validate(const PointsIn& points, const IndexIn& cells, const py::object
   const TetTopology topology(input);  // faces shared by three tets, folded tets
 }
 
+// TetGen through the library's one interface (tetgen/tetrahedralize.h), for the benchmarks'
+// mesh generator: surface triangles (each a facet) and isolated points in, tets out.
+py::tuple run_tetrahedralize(const PointsIn& points, const IndexIn& triangles,
+                             py::ssize_t first_isolated, const std::string& program,
+                             double time_limit, int restarts) {
+  const std::vector<double> xyz = flat(points, 3, "points");
+  const std::vector<index_t> corners = flat(triangles, 3, "triangles");
+  const std::size_t nb_points = xyz.size() / 3;
+  if (first_isolated < 0 || static_cast<std::size_t>(first_isolated) > nb_points) {
+    throw InputError("first_isolated must be between 0 and the number of points",
+                     Entity::Parameter);
+  }
+  tetgen::TetrahedralizeInput input;
+  for (std::size_t i = 0; i < nb_points; ++i) {
+    input.points.push_back({xyz[3 * i], xyz[3 * i + 1], xyz[3 * i + 2]});
+  }
+  for (std::size_t f = 0; f < corners.size() / 3; ++f) {
+    tetgen::Facet facet;
+    facet.polygons.push_back({});
+    for (int k = 0; k < 3; ++k) {
+      const index_t v = corners[3 * f + k];
+      if (v >= nb_points) {
+        throw InputError("triangle " + std::to_string(f) + " refers to point " + std::to_string(v) +
+                             ", but there are " + std::to_string(nb_points) + " points",
+                         Entity::Element, static_cast<index_t>(f));
+      }
+      facet.polygons.back().push_back(static_cast<int>(v));
+    }
+    facet.marker = 1;
+    input.facets.push_back(std::move(facet));
+  }
+  input.first_isolated = static_cast<std::size_t>(first_isolated);
+  tetgen::TetrahedralizeParameters parameters;
+  parameters.program = program;
+  parameters.time_limit = time_limit;
+  parameters.restarts = restarts;
+  tetgen::TetrahedralizeOutput out;
+  {
+    py::gil_scoped_release released;
+    try {
+      const tetgen::Tetrahedralizer tetgen(parameters);
+      out = tetgen.run(std::move(input));
+    } catch (const tetgen::TetrahedralizeFailure& e) {
+      throw InputError(e.what());
+    }
+  }
+  const auto nb_out = static_cast<py::ssize_t>(out.points.size() / 3);
+  const auto nb_tets = static_cast<py::ssize_t>(out.tets.size() / 4);
+  return py::make_tuple(to_numpy(std::move(out.points), {nb_out, 3}),
+                        to_numpy(std::move(out.tets), {nb_tets, 4}), out.command);
+}
+
 #ifdef HEXMERGE_WITH_OCC
 py::tuple run_regions_by_solid(const std::string& brep, const PointsIn& points, const IndexIn& cells,
                                double tolerance, int samples_per_piece, bool classify_every_tet,
@@ -361,23 +413,12 @@ py::tuple run_regions_by_solid(const std::string& brep, const PointsIn& points, 
   return py::make_tuple(to_numpy(std::move(regions)), d);
 }
 
-py::tuple run_mesh_shape(const std::string& brep, double size, int boundary_layers,
-                         double layer_thickness, double lattice_margin, double surface_deflection,
-                         const std::string& frame, bool sweep, double tetgen_time_limit,
-                         double memory_limit, const std::string& tetgen,
-                         const std::string& work_directory, bool second_order) {
+py::tuple run_mesh_shape(const std::string& brep, const std::map<std::string, std::string>& options,
+                         bool second_order) {
   MeshShapeParameters parameters;
-  parameters.size = size;
-  parameters.boundary_layers = boundary_layers;
-  parameters.layer_thickness = layer_thickness;
-  parameters.lattice_margin = lattice_margin;
-  parameters.surface_deflection = surface_deflection;
-  parameters.frame = frame;
-  parameters.sweep = sweep;
-  parameters.tetgen_time_limit = tetgen_time_limit;
-  parameters.memory_limit = memory_limit;
-  parameters.tetgen = tetgen;
-  parameters.work_directory = work_directory;
+  for (const auto& [name, value] : options) {
+    mesh_shape_parameter_table().set(parameters, name, value);
+  }
   MeshShapeReport report;
   TetMesh mesh;
   Tet10Mesh tet10;
@@ -440,9 +481,10 @@ py::tuple run_mesh_shape(const std::string& brep, double size, int boundary_laye
 }
 #endif
 
-py::list table() {
+// A parameter table's rows as dicts (the front ends' format, see parameter_table's doc).
+py::list table_rows(const std::vector<ParameterInfo>& table) {
   py::list rows;
-  for (const ParameterInfo& p : parameter_table()) {
+  for (const ParameterInfo& p : table) {
     py::dict row;
     row["name"] = p.name;
     row["type"] = p.type;
@@ -450,9 +492,12 @@ py::list table() {
     row["unit"] = p.unit;
     row["min"] = p.min;
     row["max"] = p.max;
+    row["min_exclusive"] = p.min_exclusive;
     row["choices"] = p.choices;
     row["label"] = p.label;
     row["doc"] = p.doc;
+    row["cli_flag"] = p.cli_flag;
+    row["freecad_property"] = p.freecad_property;
     rows.append(row);
   }
   return rows;
@@ -557,6 +602,20 @@ Returns the CheckReport as a dict; `valid` is True when the mesh passes.)doc");
 
 points float64 (N, 3); cells (M, 4); regions int32 (M,) or None.)doc");
 
+  m.def("tetrahedralize", &run_tetrahedralize, py::arg("points"), py::arg("triangles"),
+        py::arg("first_isolated") = 0, py::arg("tetgen") = "tetgen", py::arg("time_limit") = 0.0,
+        py::arg("restarts") = 5,
+        R"doc(Tets of a closed triangulated surface with TetGen (tetgen -pY: the surface kept).
+
+points          float64 (N, 3): the surface's nodes, then isolated points inside.
+triangles       (F, 3) ids into points: the surface (an empty (0, 3) array: the Delaunay
+                tetrahedralisation of the points).
+first_isolated  points from this index on are isolated interior vertices.
+tetgen          the TetGen program; time_limit seconds per run (0: 30 s + 1 ms per point);
+                restarts: runs made again after one that does not finish.
+Returns (points float64 (P, 3): the input's, then TetGen's own; tets (M, 4), orientation as
+TetGen makes them; the command run). TetGen's failures raise InputError.)doc");
+
 #ifdef HEXMERGE_WITH_OCC
   m.attr("with_opencascade") = true;
   m.def("regions_by_solid", &run_regions_by_solid, py::arg("brep"), py::arg("points"),
@@ -572,18 +631,17 @@ samples_per_piece, classify_every_tet, nb_threads: see RegionsBySolidParameters.
 
 Returns (solids, report): solids int32 (M,), 0-based solid index in TopExp::MapShapes order
 (FreeCAD's Shape.Solids) or -1; report a dict of counts and phase_seconds.)doc");
-  m.def("mesh_shape", &run_mesh_shape, py::arg("brep"), py::arg("size"),
-        py::arg("boundary_layers") = 1, py::arg("layer_thickness") = 0.3,
-        py::arg("lattice_margin") = 0.3, py::arg("surface_deflection") = 0.02,
-        py::arg("frame") = "auto", py::arg("sweep") = true, py::arg("tetgen_time_limit") = 0.0,
-        py::arg("memory_limit") = 0.0, py::arg("tetgen") = "tetgen", py::arg("work_directory") = "",
+  m.def("mesh_shape", &run_mesh_shape, py::arg("brep"), py::arg("options"),
         py::arg("second_order") = false,
         R"doc(Lattice-seeded tets of a solid shape (BREP text) with OpenCASCADE and TetGen.
 
-See MeshShapeParameters (src/occ/hexmerge/occ/mesh_shape.h) for the options.
+options  {parameter name: value as text}; see mesh_parameter_table() ("size" is required).
 Returns (points float64 (N, 3), tets (M, 4), regions int32 (M,), report dict); with
 second_order, tets (M, 10) in VTK's Tet10 order, the boundary mid-edge nodes on the CAD
 (mesh_shape_tet10), and report["nb_projected_mid_nodes"], report["nb_straight_mid_nodes"].)doc");
+  m.def(
+      "mesh_parameter_table", [] { return table_rows(mesh_shape_parameter_table().info()); },
+      R"doc(The mesher's parameters (MeshShapeParameters), in parameter_table()'s format.)doc");
   m.def(
       "read_shape_file",
       [](const std::string& path, bool with_unit) -> py::object {
@@ -602,9 +660,12 @@ with_unit=True: (BREP text, the length unit the file declares, "" when none).)do
   m.attr("with_opencascade") = false;
 #endif
 
-  m.def("parameter_table", &table,
-        R"doc(The engine's parameters, in display order: a list of dicts with name, type ("float",
-"int", "bool", "choice"), default (text), unit, min, max, choices, label and doc.)doc");
+  m.def(
+      "parameter_table", [] { return table_rows(parameter_table()); },
+      R"doc(The engine's parameters, in display order: a list of dicts with name, type ("float",
+"int", "bool", "choice", "text"), default (text), unit, min, max, min_exclusive (the range is
+(min, max]), choices, label, doc, cli_flag (the command-line option) and freecad_property (the
+FreeCAD property; "" when the add-on does not show it).)doc");
 
   m.def("cell_types", &cell_types,
         R"doc(The linear cell types, by value: a list of dicts with value, name, nb_vertices,

@@ -1,18 +1,16 @@
 #include "fixtures.h"
 
-#include <unistd.h>
-
 #include <algorithm>
 #include <cmath>
-#include <cstdlib>
-#include <fstream>
 #include <map>
 #include <numeric>
+#include <optional>
 #include <stdexcept>
 #include <string>
 
 #include "hexmerge/geometry/quality.h"
 #include "hexmerge/geometry/vec3.h"
+#include "hexmerge/tetgen/tetrahedralize.h"
 
 namespace hexmerge::test {
 namespace {
@@ -127,32 +125,22 @@ double min_quality(const TetMesh& mesh) {
 }
 
 TetMesh tetgen_mesh(const std::vector<Point>& points) {
-  char dir[] = "/tmp/hexmerge-tetgen-XXXXXX";
-  if (!mkdtemp(dir)) return {};
-  const std::string base = std::string(dir) + "/points";
-  {
-    std::ofstream node(base + ".node");
-    node.precision(17);
-    node << points.size() << " 3 0 0\n";
-    for (std::size_t v = 0; v < points.size(); ++v) {
-      node << v << ' ' << points[v][0] << ' ' << points[v][1] << ' ' << points[v][2] << '\n';
-    }
+  std::optional<tetgen::Tetrahedralizer> tetgen;
+  try {
+    tetgen.emplace(tetgen::TetrahedralizeParameters{});  // the tetgen program on the PATH
+  } catch (const InputError&) {
+    return {};  // not installed: the callers skip
   }
-  TetMesh mesh;
-  if (std::system(("tetgen -Q " + base + ".node > /dev/null 2>&1").c_str()) == 0) {
-    std::ifstream ele(base + ".1.ele");
-    std::size_t nb = 0;
-    int per = 0, attr = 0;
-    ele >> nb >> per >> attr;
-    std::vector<Tet> tets(nb);
-    for (std::size_t t = 0; t < nb; ++t) {
-      index_t id;
-      ele >> id >> tets[t][0] >> tets[t][1] >> tets[t][2] >> tets[t][3];
-    }
-    mesh = make_tet_mesh(points, tets);
-    orient_positively(mesh);
+  tetgen::TetrahedralizeInput input;  // no facets: the Delaunay tetrahedralisation
+  for (const Point& p : points) input.points.push_back({p[0], p[1], p[2]});
+  const tetgen::TetrahedralizeOutput out = tetgen->run(std::move(input));
+  if (out.points.size() != 3 * points.size()) throw std::runtime_error("TetGen added points");
+  std::vector<Tet> tets(out.tets.size() / 4);
+  for (std::size_t t = 0; t < tets.size(); ++t) {
+    for (int k = 0; k < 4; ++k) tets[t][k] = out.tets[4 * t + k];
   }
-  std::system(("rm -rf " + std::string(dir)).c_str());
+  TetMesh mesh = make_tet_mesh(points, tets);  // the points exactly as given
+  orient_positively(mesh);
   return mesh;
 }
 

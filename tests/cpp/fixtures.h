@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "hexmerge/check/validate_tet_mesh.h"
 #include "hexmerge/core/index.h"
 #include "hexmerge/mesh/tet_mesh.h"
 #include "hexmerge/recombine/find_candidates.h"
@@ -24,8 +25,9 @@ using Tet = std::array<index_t, 4>;
 TetMesh make_tet_mesh(const std::vector<Point>& points, const std::vector<Tet>& tets,
                       const std::vector<std::int32_t>& regions = {});
 
-/// The Delaunay tetrahedralisation of `points` by the tetgen program (no Steiner points: the
-/// points keep their order), positively oriented. Empty when tetgen is not installed.
+/// The Delaunay tetrahedralisation of `points` by the tetgen program, through the library's
+/// TetGen interface (tetgen/tetrahedralize.h, no facets; no Steiner points: the points keep
+/// their order), positively oriented. Empty when tetgen is not installed.
 TetMesh tetgen_mesh(const std::vector<Point>& points);
 
 /// A lattice of n x n x n unit cells, its points jittered by up to `jitter` per coordinate,

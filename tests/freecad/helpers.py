@@ -1,7 +1,6 @@
 # SPDX-License-Identifier: LGPL-2.1-or-later
 """Shared set-up for the FreeCAD tests: Gmsh meshes of FreeCAD's FEM examples, CalculiX runs."""
 
-import os
 import re
 import tempfile
 

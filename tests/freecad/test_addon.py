@@ -10,7 +10,6 @@ import unittest
 import numpy as np
 
 import FreeCAD
-import Fem
 
 import helpers
 import freecad.hexmerge as hm
@@ -218,6 +217,26 @@ class ShapeMode(unittest.TestCase):
         self.assertEqual(inp_count(obj.FemMesh), obj.FemMesh.VolumeCount)
         blocks = fa.femmesh_to_arrays(obj.FemMesh).blocks
         self.assertTrue(all(name in ("tetra10", "wedge15", "hexahedron20") for name, _ in blocks), blocks)
+
+    def test_properties_are_the_compiled_tables(self):
+        """The object's options are exactly the rows of the engine's and the mesher's compiled
+        tables that name a FreeCAD property, with the tables' defaults, plus the add-on's own."""
+        import hexmerge
+        doc, box = self.box()
+        obj = hm.make_hexdominant_mesh(doc, box, recompute=False)
+        rows = [r for r in hexmerge.parameters() + hexmerge.mesh_parameters() if r["freecad_property"]]
+        own = {"SourceMesh", "Part", "PyramidsAsHexahedra", "SecondOrder"}
+        report_group = {p for p in obj.PropertiesList if obj.getGroupOfProperty(p) == "Report"}
+        fem_mesh = set(doc.addObject("Fem::FemMeshObjectPython", "Plain").PropertiesList)
+        ours = set(obj.PropertiesList) - fem_mesh - report_group
+        self.assertEqual(ours, {r["freecad_property"] for r in rows} | own)
+        for r in rows:
+            value = getattr(obj, r["freecad_property"])
+            if r["type"] in ("int", "bool") or (r["type"] == "float" and r["unit"] not in ("deg", "mm")):
+                self.assertEqual(value, r["default"], r["name"])
+            elif r["type"] == "choice" and r["name"] != "pyramid_placement":  # CalculiX's default
+                self.assertEqual(value, r["default"], r["name"])
+            self.assertTrue(obj.getDocumentationOfProperty(r["freecad_property"]).startswith(r["doc"]))
 
     def test_save_reopen(self):
         doc, box = self.box()

@@ -137,7 +137,6 @@ class FemMeshRoundTrip(unittest.TestCase):
         self.assertNotIn("C3D", open(path).read().split("** Volume elements")[-1][:200])
 
     def test_boundary_faces_of_two_tets(self):
-        p = np.array([(0, 0, 0), (1, 0, 0), (0, 1, 0), (0, 0, 1), (1, 1, 1)], float)
         cells = np.array([[0, 1, 2, 3], [1, 2, 3, 4]])
         faces = fa.boundary_faces([("tetra", cells)])
         self.assertEqual(len(faces[3]), 6)  # 8 faces, the shared one removed

@@ -1,6 +1,7 @@
 #pragma once
 /// @file
-/// The engine's input: a linear tetrahedral mesh as flat arrays (structure of arrays).
+/// The engine's input: a linear tetrahedral mesh as flat arrays (structure of arrays). Its
+/// validation, which needs geometry, is check/validate_tet_mesh.h.
 
 #include <cstdint>
 #include <vector>
@@ -29,17 +30,5 @@ struct TetMesh {
 /// scaled points give the answers they give at a moderate scale, where no product of
 /// coordinates under- or overflows.
 int normalising_exponent(const std::vector<double>& points);
-
-/// Smallest scaled Jacobian of an input tet (scale-free): below it a tet is flat to round-off,
-/// its orientation noise.
-constexpr double kMinInputScaledJacobian = 1e-12;
-
-/// Checks a TetMesh for everything the engine cannot process and throws InputError naming the
-/// first node or element at fault: an empty mesh, array sizes that do not match, NaN or infinite
-/// coordinates, vertex ids out of range, a tet with a repeated vertex, an inverted or zero-volume
-/// tet, a tet flat to round-off (scaled Jacobian <= kMinInputScaledJacobian), two tets on the
-/// same four vertices. (Faces shared by three or more tets and folded tets, two on the same side
-/// of their shared face, are found by TetTopology.) The mesh is never modified.
-void validate_tet_mesh(const TetMesh& mesh);
 
 }  // namespace hexmerge

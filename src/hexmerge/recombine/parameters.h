@@ -3,10 +3,13 @@
 /// The engine's parameters and the one table that documents them for every front end.
 ///
 /// The CLI's options, the FreeCAD object's properties and the task panel's widgets are all built
-/// from parameter_table() (exported by the Python module), so defaults never drift apart.
+/// from recombine_parameter_table() (exported by the Python module), so names, ranges and
+/// defaults never drift apart.
 
 #include <string>
 #include <vector>
+
+#include "hexmerge/core/parameter_table.h"
 
 namespace hexmerge {
 
@@ -94,20 +97,11 @@ struct RecombineParameters {
 /// checker refuses it), so recombine() accepts none below this, whatever the option says.
 constexpr double kMinElementScaledJacobian = 1e-9;
 
-/// One row of the parameter table.
-struct ParameterInfo {
-  std::string name;     ///< field name, also the Python keyword and the CLI option (--min-...)
-  std::string type;     ///< "float", "int", "bool" or "choice"
-  std::string default_value;  ///< as text: "160", "true", "last_resort"
-  std::string unit;     ///< "deg", "" when dimensionless
-  double min = 0.0;     ///< for float and int
-  double max = 0.0;
-  std::vector<std::string> choices;  ///< for "choice"
-  std::string label;    ///< short human label for GUIs
-  std::string doc;      ///< one-line documentation
-};
+/// The table of every engine parameter (core/parameter_table.h), in display order; its
+/// defaults are RecombineParameters{}'s. A parameter is added by one row in parameters.cpp.
+const ParameterTable<RecombineParameters>& recombine_parameter_table();
 
-/// The table of every engine parameter, in display order, with RecombineParameters{}'s defaults.
+/// recombine_parameter_table().info(): the rows as the front ends see them.
 const std::vector<ParameterInfo>& parameter_table();
 
 /// Sets one parameter from text (as given on a command line or in a property); throws
@@ -116,7 +110,8 @@ const std::vector<ParameterInfo>& parameter_table();
 void set_parameter(RecombineParameters& parameters, const std::string& name,
                    const std::string& value);
 
-/// Checks every parameter against its range; throws InputError naming the first bad one.
+/// Checks every parameter against its row of the table, and that some element type is enabled;
+/// throws InputError naming the first bad one.
 void validate_parameters(const RecombineParameters& parameters);
 
 /// Text of an enum value as used in the table ("conforming", "last_resort", "allow", ...).

@@ -5,7 +5,9 @@
 #include <cmath>
 #include <thread>
 
+#include "hexmerge/check/validate_tet_mesh.h"
 #include "hexmerge/core/error.h"
+#include "hexmerge/core/phase_timer.h"
 #include "hexmerge/geometry/quality.h"
 #include "hexmerge/mesh/tet_topology.h"
 #include "hexmerge/recombine/bound_selection.h"
@@ -17,21 +19,6 @@
 
 namespace hexmerge {
 namespace {
-
-class PhaseTimer {
- public:
-  explicit PhaseTimer(RecombineReport& report) : report_(report), start_(Clock::now()) {}
-  void lap(const std::string& phase) {
-    const auto now = Clock::now();
-    report_.phase_seconds.emplace_back(phase, std::chrono::duration<double>(now - start_).count());
-    start_ = now;
-  }
-
- private:
-  using Clock = std::chrono::steady_clock;
-  RecombineReport& report_;
-  Clock::time_point start_;
-};
 
 int thread_count(int requested) {
   if (requested > 0) return requested;
@@ -145,7 +132,7 @@ void fill_report(const TetMesh& input, const MixedMesh& out, RecombineReport& re
 MixedMesh recombine(const TetMesh& input, const RecombineParameters& parameters,
                     RecombineReport& report, const ProgressCallback& progress) {
   report = RecombineReport{};
-  PhaseTimer timer(report);
+  PhaseTimer timer(report.phase_seconds);
   validate_parameters(parameters);
   if (parameters.optimality_bound) require_selection_bound();
   // Scale-free: far from 1, every geometric test runs on the points scaled by a power of two

@@ -8,8 +8,10 @@
 #include <string>
 #include <vector>
 
+#include "hexmerge/core/phase_timer.h"
 #include "hexmerge/core/progress.h"
 #include "hexmerge/mesh/mixed_mesh.h"
+#include "hexmerge/mesh/second_order.h"
 #include "hexmerge/mesh/tet_mesh.h"
 #include "hexmerge/recombine/parameters.h"
 
@@ -39,7 +41,7 @@ struct RecombineReport {
   /// Conforming mode: candidates no conforming selection can hold, removed before the selection
   /// (prune_unclosable).
   std::size_t candidates_unclosable = 0;
-  std::vector<std::pair<std::string, double>> phase_seconds;  ///< wall time per phase, in order
+  PhaseSeconds phase_seconds;  ///< wall time per phase, in order
   /// The optimality bound (parameter optimality_bound, bound_selection.h); the fields below are
   /// set only when it ran. In conforming mode the program has the conformity rows and bounds the
   /// conforming selections; in the other modes it is plain set packing and bounds every selection.
@@ -65,5 +67,24 @@ struct RecombineReport {
 ///         positively oriented in the local order of cell_type.h, in the region of its tets.
 MixedMesh recombine(const TetMesh& input, const RecombineParameters& parameters,
                     RecombineReport& report, const ProgressCallback& progress = {});
+
+/// A recombined second-order mesh: the linear cells and, on the same cells, their quadratic
+/// nodes (corners, then the input's mid-edge nodes).
+struct QuadraticMixedMesh {
+  MixedMesh linear;          ///< recombine() of the corner mesh, on all the input's points
+  QuadraticCells quadratic;  ///< quadratic_cells(linear, input): Pyramid13, Wedge15, Hexa20, Tet10
+};
+
+/// Merges the tetrahedra of a Tet10 mesh: its corner mesh (corner_mesh) is checked
+/// (validate_tet10_mesh, before any work) and recombined, then every cell gets the input's
+/// mid-edge nodes of its edges (quadratic_cells).
+///
+/// @param[in]  input       Tet10 mesh (VTK order); its mid-edge nodes stay where they are
+/// @param[in]  parameters  as for the linear recombine()
+/// @param[out] report      statistics of the run (of the corner mesh)
+/// @param[in]  progress    optional progress callback (may cancel)
+/// @throws InputError as the linear recombine(), corner_mesh() and validate_tet10_mesh()
+QuadraticMixedMesh recombine(const Tet10Mesh& input, const RecombineParameters& parameters,
+                             RecombineReport& report, const ProgressCallback& progress = {});
 
 }  // namespace hexmerge

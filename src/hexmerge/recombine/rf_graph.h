@@ -67,7 +67,8 @@ std::vector<std::vector<int>> root_orbits(const RFGraph& graph);
 /// LINKs closing a cycle, then QUADs with earlier nodes.
 std::vector<SearchProgram> compile_search_programs(const RFGraph& graph, int graph_index);
 
-/// Every program of every graph (15 for the hexahedra, 1 prism, 1 pyramid), compiled once.
+/// Every program of every graph (15 for the hexahedra, 2 for the prism, 1 for the pyramid),
+/// compiled once.
 const std::vector<SearchProgram>& search_programs();
 
 }  // namespace hexmerge

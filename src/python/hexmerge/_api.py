@@ -304,18 +304,22 @@ def _typed_default(row: dict[str, Any]) -> Any:
     return text
 
 
+def typed_row(row: dict[str, Any]) -> dict[str, Any]:
+    """A row of a compiled parameter table with its default typed (``default``) and as text
+    (``default_text``)."""
+    row = dict(row)
+    row["default_text"] = row["default"]
+    row["default"] = _typed_default(row)
+    return row
+
+
 def parameters() -> list[dict[str, Any]]:
     """The engine's parameter table, in display order: one dict per parameter with ``name``
-    (the keyword of recombine() and, with dashes, the CLI option), ``type`` ("float", "int",
-    "bool", "choice"), ``default`` (typed), ``default_text``, ``unit`` ("deg" or ""), ``min``,
-    ``max``, ``choices``, ``label`` (for GUIs) and ``doc``."""
-    rows = []
-    for row in _core.parameter_table():
-        row = dict(row)
-        row["default_text"] = row["default"]
-        row["default"] = _typed_default(row)
-        rows.append(row)
-    return rows
+    (the keyword of recombine()), ``type`` ("float", "int", "bool", "choice"), ``default``
+    (typed), ``default_text``, ``unit`` ("deg" or ""), ``min``, ``max``, ``min_exclusive``
+    (the range is (min, max]), ``choices``, ``label`` (for GUIs), ``doc``, ``cli_flag`` (the
+    command-line option) and ``freecad_property`` (the FreeCAD add-on's property)."""
+    return [typed_row(row) for row in _core.parameter_table()]
 
 
 def cell_types() -> list[dict[str, Any]]:

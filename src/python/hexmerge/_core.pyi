@@ -1,6 +1,6 @@
 """Types of the compiled module hexmerge._core (src/python/bindings.cpp)."""
 
-from typing import Any, Callable, Mapping
+from typing import Any, Callable, Literal, Mapping, overload
 
 import numpy as np
 import numpy.typing as npt
@@ -42,6 +42,14 @@ def validate_tet_mesh(
     regions: npt.NDArray[np.int32] | None = None,
 ) -> None: ...
 def parameter_table() -> list[dict[str, Any]]: ...
+def tetrahedralize(
+    points: npt.NDArray[np.float64],
+    triangles: npt.NDArray[np.uint32],
+    first_isolated: int = 0,
+    tetgen: str = "tetgen",
+    time_limit: float = 0.0,
+    restarts: int = 5,
+) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.uint32], str]: ...
 def cell_types() -> list[dict[str, Any]]: ...
 
 # Present only in a module built with OpenCASCADE (with_opencascade is True).
@@ -56,3 +64,15 @@ def regions_by_solid(
     classify_every_tet: bool = False,
     nb_threads: int = 0,
 ) -> tuple[npt.NDArray[np.int32], dict[str, Any]]: ...
+def mesh_shape(
+    brep: str,
+    options: Mapping[str, str],
+    second_order: bool = False,
+) -> tuple[
+    npt.NDArray[np.float64], npt.NDArray[np.uint32], npt.NDArray[np.int32], dict[str, Any]
+]: ...
+def mesh_parameter_table() -> list[dict[str, Any]]: ...
+@overload
+def read_shape_file(path: str, with_unit: Literal[False] = False) -> str: ...
+@overload
+def read_shape_file(path: str, with_unit: Literal[True]) -> tuple[str, str]: ...

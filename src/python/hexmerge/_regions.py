@@ -63,7 +63,8 @@ def regions_by_solid(
         raise RuntimeError(
             "hexmerge was built without OpenCASCADE, so regions_by_solid() is not available: "
             "install libocct-foundation-dev libocct-modeling-data-dev "
-            "libocct-modeling-algorithms-dev libocct-visualization-dev libtbb-dev and rebuild"
+            "libocct-modeling-algorithms-dev libocct-data-exchange-dev libocct-visualization-dev "
+            "libtbb-dev and rebuild"
         )
     if isinstance(brep, bytes):
         brep = brep.decode("utf-8", errors="replace")

@@ -18,62 +18,22 @@ import numpy as np
 from . import _api, _core, _validate
 from ._regions import WITH_OPENCASCADE
 
-#: The mesher's options, in the row format of parameters() (name, type, default, unit, min,
-#: max, choices, label, doc). Lengths are fractions of the target size h (unit "h"). The
-#: compiled mesher checks every value again; tests/python/test_mesh_shape.py checks that these
-#: defaults are the compiled function's.
-_MESH_TABLE: tuple[dict[str, Any], ...] = (
-    dict(name="boundary_layers", type="int", default=1, unit="", min=0, max=3, choices=[],
-         label="Boundary layers",
-         doc="Layers of points offset from the curved and unaligned faces along the inward "
-         "normal, so that the boundary becomes prisms"),
-    dict(name="layer_thickness", type="float", default=0.3, unit="h", min=0.1, max=1.0, choices=[],
-         label="Layer thickness",
-         doc="Thickness of one boundary layer, as a fraction of the target size h"),
-    dict(name="lattice_margin", type="float", default=0.3, unit="h", min=0.1, max=2.0, choices=[],
-         label="Lattice margin",
-         doc="Lattice points nearer than this to a face off the lattice planes (or to the "
-         "outermost boundary layer) are dropped; a fraction of h"),
-    dict(name="surface_deflection", type="float", default=0.02, unit="h", min=0.001, max=0.5,
-         choices=[], label="Surface deflection",
-         doc="Chord deflection of the surface triangulation on curved faces, as a fraction of h"),
-    dict(name="frame", type="choice", default="auto", unit="", min=0, max=0,
-         choices=["auto", "principal", "global"], label="Lattice frame",
-         doc="Orientation of the lattice: auto (normals of the largest planar faces, else the "
-         "principal axes of inertia), principal (principal axes of inertia), global (x, y, z)"),
-    dict(name="sweep", type="bool", default=True, unit="", min=0, max=1, choices=[],
-         label="Sweep extrusions",
-         doc="Where the shape is one cross-section extruded along a lattice axis between two planar "
-         "caps (plates with holes, cylinders, profiles; one solid or several), sweep the tets "
-         "too: the same cross-section on every lattice plane, so that they recombine into "
-         "hexahedra and prisms only"),
-    dict(name="tetgen_time_limit", type="float", default=0.0, unit="s", min=0.0, max=86400.0,
-         choices=[], label="TetGen time limit",
-         doc="Time limit of one TetGen run (0: 30 s plus 1 ms per point); a run past it, or one "
-         "that leaves no tet, is restarted with the lattice faces' loops started elsewhere, up to "
-         "5 times, then the meshing fails"),
-    dict(name="memory_limit", type="float", default=0.0, unit="GB", min=0.0, max=1e6, choices=[],
-         label="Memory limit",
-         doc="Memory the meshing and recombination may take (0: what the system has available); "
-         "a size whose estimated tets would need more is refused before any work"),
-)
-
 #: File name endings read_shape_file() takes.
 SHAPE_SUFFIXES = (".step", ".stp", ".brep", ".brp", ".iges", ".igs")
 
 
 def mesh_parameters() -> list[dict[str, Any]]:
-    """The options of mesh_shape() besides the size, in parameters()'s row format (name, type,
-    default, default_text, unit, min, max, choices, label, doc). Unit "h": a fraction of the
-    target size."""
-    rows = []
-    for row in _MESH_TABLE:
-        row = dict(row, choices=list(row["choices"]))
-        d = row["default"]
-        row["default_text"] = (d if isinstance(d, str) else str(d).lower() if isinstance(d, bool)
-                               else f"{d:g}")
-        rows.append(row)
-    return rows
+    """The mesher's parameters (the compiled MeshShapeParameters table: size, the options, the
+    TetGen program and work folder), in parameters()'s row format (name, type, default,
+    default_text, unit, min, max, min_exclusive, choices, label, doc, cli_flag,
+    freecad_property). Unit "h": a fraction of the target size. Empty without OpenCASCADE."""
+    if not hasattr(_core, "mesh_parameter_table"):
+        return []
+    return [_api.typed_row(row) for row in _core.mesh_parameter_table()]
+
+
+def _mesher_names() -> set[str]:
+    return {row["name"] for row in mesh_parameters()}
 
 
 def _require_opencascade() -> None:
@@ -81,7 +41,7 @@ def _require_opencascade() -> None:
         raise RuntimeError(
             "hexmerge was built without OpenCASCADE, so mesh_shape() is not available: install "
             "libocct-foundation-dev libocct-modeling-data-dev libocct-modeling-algorithms-dev "
-            "libocct-visualization-dev libtbb-dev tetgen and rebuild"
+            "libocct-data-exchange-dev libocct-visualization-dev libtbb-dev tetgen and rebuild"
         )
 
 
@@ -125,36 +85,19 @@ def _shape_text_and_unit(shape: str | bytes | os.PathLike[str]) -> tuple[str, st
     )
 
 
-def _number(name: str, value: Any) -> float:
-    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.integer, np.floating)):
-        raise _core.InputError(f"{name} must be a number, got {value!r}")
-    value = float(value)
-    if not np.isfinite(value):
-        raise _core.InputError(f"{name} must be finite, got {value!r}")
-    return value
-
-
-def _options(size: Any, given: dict[str, Any]) -> tuple[float, dict[str, Any]]:
-    """The size and the mesher's table options, type-checked (the core checks the ranges)."""
-    size = _number("size", size)
-    if size <= 0:
-        raise _core.InputError(f"size must be a positive length, got {size:g}")
+def _options(size: Any, given: dict[str, Any]) -> dict[str, str]:
+    """The mesher's options (size included) as the text the compiled table parses, type-checked
+    here; the table checks the ranges and choices."""
+    table = {row["name"]: row for row in mesh_parameters()}
+    given = dict(given, size=size)
+    if given.get("work_directory") is None:
+        given["work_directory"] = ""
     out = {}
-    for row in _MESH_TABLE:
-        name, value = row["name"], given[row["name"]]
-        if row["type"] == "int":
-            if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)):
-                raise _core.InputError(f"{name} must be a whole number, got {value!r}")
-            out[name] = int(value)
-        elif row["type"] == "float":
-            out[name] = _number(name, value)
-        elif row["type"] == "bool":
-            out[name] = _flag(name, value, _core.InputError)
-        elif not isinstance(value, str) or value not in row["choices"]:
-            raise _core.InputError(f"{name} must be one of {', '.join(row['choices'])}, got {value!r}")
-        else:
-            out[name] = value
-    return size, out
+    for name, value in given.items():
+        if table[name]["type"] == "text" and isinstance(value, os.PathLike):
+            value = os.fspath(value)
+        out[name] = _validate.option_text(name, value, table[name], _core.InputError)
+    return out
 
 
 def _flag(name: str, value: Any, error: type[Exception] = ValueError) -> bool:
@@ -167,20 +110,10 @@ def mesh_shape(
     shape: str | bytes | os.PathLike[str],
     size: float,
     *,
-    boundary_layers: int = 1,
-    layer_thickness: float = 0.3,
-    lattice_margin: float = 0.3,
-    surface_deflection: float = 0.02,
-    frame: str = "auto",
-    sweep: bool = True,
-    tetgen_time_limit: float = 0.0,
-    memory_limit: float = 0.0,
-    tetgen: str = "tetgen",
-    work_directory: str | os.PathLike[str] | None = None,
     second_order: bool = False,
     recombine: bool = True,
     progress: Callable[[str, float], Any] | None = None,
-    **recombine_options: Any,
+    **options: Any,
 ) -> tuple[_api.MixedMesh, dict[str, Any]]:
     """A hex-dominant mesh of a solid CAD shape: lattice-seeded tets, then recombine().
 
@@ -192,13 +125,6 @@ def mesh_shape(
     size : float
         Target element size h in the shape's units: the lattice spacing and the surface's
         longest edge. Positive and not larger than the shape.
-    boundary_layers, layer_thickness, lattice_margin, surface_deflection, frame, sweep,
-    tetgen_time_limit, memory_limit
-        The mesher's options, see mesh_parameters() (fractions of h where they are lengths).
-    tetgen : str
-        The TetGen program (a name on PATH or a path).
-    work_directory : path, optional
-        Keep TetGen's files there; default: a temporary folder, removed.
     second_order : bool
         Tet10 with a node on every edge, so the recombined mesh is quadratic (Hexa20, Wedge15,
         Pyramid13, Tet10): inside at the edge's midpoint, on the boundary on the CAD face (or
@@ -210,8 +136,13 @@ def mesh_shape(
     progress : callable(phase: str, fraction: float) -> bool | None, optional
         As for recombine(); called before and after meshing (phase "mesh shape"), then by the
         engine. Returning False cancels (hexmerge.Cancelled).
-    **recombine_options
-        Engine parameters, see parameters(); the engine's defaults (conforming) otherwise.
+    **options
+        The mesher's parameters (mesh_parameters(): boundary_layers, layer_thickness,
+        lattice_margin, surface_deflection, frame, sweep, tetgen_time_limit, memory_limit,
+        tetgen (the TetGen program, a name on PATH or a path), work_directory (keep TetGen's
+        files there; default: a temporary folder, removed); fractions of h where they are
+        lengths) and the engine's (parameters(); the engine's defaults (conforming)
+        otherwise), by name.
 
     Returns
     -------
@@ -234,14 +165,12 @@ def mesh_shape(
     second_order = _flag("second_order", second_order)
     recombine = _flag("recombine", recombine)
     fn = _validate.progress_function(progress)
-    size, options = _options(size, dict(
-        boundary_layers=boundary_layers, layer_thickness=layer_thickness,
-        lattice_margin=lattice_margin, surface_deflection=surface_deflection, frame=frame,
-        sweep=sweep, tetgen_time_limit=tetgen_time_limit, memory_limit=memory_limit))
-    if not isinstance(tetgen, (str, os.PathLike)) or not os.fspath(tetgen):
-        raise _core.InputError(f"tetgen must be the TetGen program's name or path, got {tetgen!r}")
+    mesher_names = _mesher_names()
+    recombine_options = {k: v for k, v in options.items() if k not in mesher_names}
+    work_directory = options.get("work_directory")
     if work_directory is not None and not isinstance(work_directory, (str, os.PathLike)):
         raise _core.InputError(f"work_directory must be a folder's path, got {work_directory!r}")
+    mesher_options = _options(size, {k: v for k, v in options.items() if k in mesher_names})
     if work_directory is not None and os.fspath(work_directory):
         # Made when missing; the first part of the path that exists must be a folder.
         for part in (Path(work_directory), *Path(work_directory).parents):
@@ -261,10 +190,7 @@ def mesh_shape(
         raise _core.Cancelled("cancelled")
     start = time.perf_counter()
     try:
-        points, tets, regions, meshing = _core.mesh_shape(
-            brep, size, tetgen=os.fspath(tetgen),
-            work_directory="" if work_directory is None else os.fspath(work_directory),
-            second_order=second_order, **options)
+        points, tets, regions, meshing = _core.mesh_shape(brep, mesher_options, second_order)
     except _core.InputError as e:
         if file_unit.lower() in _MILLIMETRES:
             raise
@@ -277,7 +203,10 @@ def mesh_shape(
     meshing["converted_to_millimetres"] = file_unit.lower() not in _MILLIMETRES
     meshing["tets"] = int(len(tets))
     meshing["points"] = int(len(points))
-    meshing["parameters"] = dict(size=size, **options, second_order=second_order)
+    shown = {row["name"]: row["default"] for row in mesh_parameters()
+             if row["name"] not in ("tetgen", "work_directory")}
+    shown.update({k: v for k, v in options.items() if k in shown}, size=float(size))
+    meshing["parameters"] = dict(shown, second_order=second_order)
     if fn is not None and fn("mesh shape", 1.0) is False:
         raise _core.Cancelled("cancelled")
 

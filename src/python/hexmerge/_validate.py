@@ -101,41 +101,45 @@ def _table() -> dict[str, dict[str, Any]]:
     return {row["name"]: row for row in _core.parameter_table()}
 
 
-def option_text(name: str, value: Any, row: Mapping[str, Any]) -> str:
-    """One option as the text the core parses; the core checks ranges and choices."""
+def option_text(name: str, value: Any, row: Mapping[str, Any],
+                error: type[Exception] = ValueError) -> str:
+    """One option as the text the core parses; the core checks ranges and choices. A value of
+    the wrong type raises `error`."""
     kind = row["type"]
     if kind == "bool":
         if isinstance(value, (bool, np.bool_)):
             return "true" if value else "false"
         if isinstance(value, str) and value.lower() in ("true", "false"):
             return value.lower()
-        raise ValueError(f"option {name!r} must be True or False, got {value!r}")
+        raise error(f"option {name!r} must be True or False, got {value!r}")
     if kind in ("float", "int"):
         is_number = isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(
             value, (bool, np.bool_)
         )
         if not is_number:
-            raise ValueError(f"option {name!r} must be a number, got {value!r}")
+            raise error(f"option {name!r} must be a number, got {value!r}")
         try:
             number = float(value)
         except OverflowError:  # a Python int beyond any float
             number = float("inf") if value > 0 else float("-inf")
         if not np.isfinite(number):
-            raise ValueError(
+            raise error(
                 f"option {name!r} must be a finite number in [{row['min']}, {row['max']}], got {value!r}"
             )
         if kind == "int":
             if number != int(number):
-                raise ValueError(f"option {name!r} must be a whole number, got {value!r}")
+                raise error(f"option {name!r} must be a whole number, got {value!r}")
             return str(int(value))
         return repr(number)
     if kind == "choice":
         if not isinstance(value, str):
-            raise ValueError(
+            raise error(
                 f"option {name!r} must be one of {', '.join(row['choices'])}, got {value!r}"
             )
         return value
-    return str(value)
+    if not isinstance(value, str):
+        raise error(f"option {name!r} must be text, got {value!r}")
+    return value
 
 
 def options_text(options: Mapping[str, Any]) -> dict[str, str]:

@@ -13,7 +13,6 @@ import json
 import math
 import sys
 import time
-from pathlib import Path
 from typing import Any, Sequence, TextIO
 
 import numpy as np
@@ -34,46 +33,49 @@ class UsageError(Exception):
     """Options that do not go together (exit code 2, like argparse's own errors)."""
 
 
-def option_name(name: str) -> str:
-    return "--" + name.replace("_", "-")
-
-
 def _help(row: dict[str, Any]) -> str:
     unit = f" {row['unit']}" if row["unit"] else ""
     if row["type"] in ("float", "int"):
         lo, hi = (f"{v:g}" for v in (row["min"], row["max"]))
-        extra = f"range {lo} to {hi}{unit}; default: {row['default_text']}{unit}"
+        if math.isinf(row["max"]):
+            span = f"{'above' if row['min_exclusive'] else 'at least'} {lo}{unit}"
+        else:
+            span = f"range {lo}{' (excluded)' if row['min_exclusive'] else ''} to {hi}{unit}"
+        extra = f"{span}; default: {row['default_text']}{unit}"
     elif row["type"] == "choice":
         extra = f"one of {', '.join(row['choices'])}; default: {row['default_text']}"
+    elif row["type"] == "text":
+        extra = f"default: {row['default_text'] or 'none'}"
     else:
         extra = f"default: {'on' if row['default'] else 'off'}"
     return f"{row['doc']} ({extra})".replace("%", "%%")
-
-
-#: CLI names of mesher options that differ from the Python keyword.
-MESH_OPTION_NAMES = {"boundary_layers": "--layers"}
 
 
 def add_parameter_options(
     parser: argparse.ArgumentParser,
     rows: list[dict[str, Any]] | None = None,
     title: str = "engine parameters (from hexmerge.parameters())",
-    names: dict[str, str] | None = None,
+    extra: dict[str, dict[str, Any]] | None = None,
 ) -> None:
-    """One option per row of a parameter table (the engine's by default); unset options keep
-    the default."""
+    """One option per row of a parameter table (the engine's by default), named by the row's
+    ``cli_flag``; unset options keep the default. `extra` gives some rows more argparse
+    arguments (``flags``: further option names)."""
     group = parser.add_argument_group(title)
     for row in _api.parameters() if rows is None else rows:
-        flag = (names or {}).get(row["name"], option_name(row["name"]))
+        more = dict((extra or {}).get(row["name"], {}))
+        flags = [*more.pop("flags", []), row["cli_flag"]]
         common = dict(dest=row["name"], default=None, help=_help(row))
         if row["type"] == "bool":
-            group.add_argument(flag, action=argparse.BooleanOptionalAction, **common)
+            group.add_argument(*flags, action=argparse.BooleanOptionalAction, **common, **more)
         elif row["type"] == "choice":
-            group.add_argument(flag, choices=row["choices"], **common)
+            group.add_argument(*flags, choices=row["choices"], **common, **more)
         elif row["type"] == "int":
-            group.add_argument(flag, type=int, metavar="N", **common)
+            group.add_argument(*flags, **{"type": int, "metavar": "N", **common, **more})
+        elif row["type"] == "text":
+            group.add_argument(*flags, **{"metavar": row["name"].upper(), **common, **more})
         else:
-            group.add_argument(flag, type=float, metavar=(row["unit"].upper() or "X"), **common)
+            metavar = row["unit"].upper() or "X"
+            group.add_argument(*flags, **{"type": float, "metavar": metavar, **common, **more})
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -114,10 +116,6 @@ def build_parser() -> argparse.ArgumentParser:
     )
     msh.add_argument("--help", action="help", help="show this help message and exit")
     msh.add_argument("shape", metavar="SHAPE", help="CAD file: .step/.stp, .brep/.brp or .iges/.igs")
-    msh.add_argument(
-        "-h", "--size", metavar="H", required=True, type=_positive_length,
-        help="target element size (lattice spacing, longest surface edge), in the shape's units",
-    )
     msh.add_argument("--tets-only", action="store_true", help="write the tet mesh, without merging")
     msh.add_argument(
         "--second-order",
@@ -125,12 +123,13 @@ def build_parser() -> argparse.ArgumentParser:
         help="quadratic elements: a node on every tet edge (on the boundary on the CAD face or edge, "
         "inside at the midpoint), so the output is Tet10 / Pyramid13 / Wedge15 / Hexa20",
     )
-    msh.add_argument("--tetgen", metavar="PROGRAM", default="tetgen", help="the TetGen program (default: tetgen on PATH)")
-    msh.add_argument("--work-directory", metavar="DIR", help="keep TetGen's files in DIR (default: a temporary folder)")
     add_output_options(msh)
+    if not _shape.mesh_parameters():  # a module built without OpenCASCADE: cmd_mesh says so
+        msh.add_argument("-h", "--size", metavar="H", type=_positive_length, help="target element size")
     add_parameter_options(
         msh, _shape.mesh_parameters(), "mesher options (from hexmerge.mesh_parameters(); h: the size H)",
-        MESH_OPTION_NAMES,
+        # The size is also -h (as Gmsh's -clmax), required, checked before any work.
+        {"size": dict(flags=["-h"], required=True, type=_positive_length, metavar="H")},
     )
     add_parameter_options(msh)
 
@@ -319,20 +318,25 @@ def _mesh_summary(args: argparse.Namespace, mesh: _api.MixedMesh, report: dict[s
 
 
 def cmd_mesh(args: argparse.Namespace) -> int:
+    try:
+        _shape._require_opencascade()
+    except RuntimeError as e:
+        print(f"hexmerge mesh: error: {e}", file=sys.stderr)
+        return EXIT_ERROR
     mesher = _given(args, _shape.mesh_parameters())
+    size = mesher.pop("size")
     options = _given(args, _api.parameters())
     if args.tets_only and options:
         raise UsageError(
             "--tets-only writes the tets without merging them: leave out the engine options "
-            f"({', '.join(option_name(n) for n in options)})"
+            f"({', '.join(r['cli_flag'] for r in _api.parameters() if r['name'] in options)})"
         )
     fmt = _output_format(args, args.shape)
     printer = _progress_printer(args)
     start = time.perf_counter()
     try:
         mesh, report = _shape.mesh_shape(
-            args.shape, args.size, tetgen=args.tetgen, work_directory=args.work_directory,
-            second_order=args.second_order, recombine=not args.tets_only, progress=printer,
+            args.shape, size, second_order=args.second_order, recombine=not args.tets_only, progress=printer,
             **mesher, **options,
         )
     finally:
@@ -436,8 +440,7 @@ def cmd_parameters(args: argparse.Namespace) -> int:
         print(json.dumps(_jsonable(rows), indent=2))
         return EXIT_OK
     for row in rows:
-        flag = MESH_OPTION_NAMES.get(row["name"], option_name(row["name"])) if args.mesh else option_name(row["name"])
-        print(f"{flag}: {_help(row).replace('%%', '%')}")
+        print(f"{row['cli_flag']}: {_help(row).replace('%%', '%')}")
     return EXIT_OK
 
 

@@ -10,7 +10,9 @@
 #include <utility>
 #include <vector>
 
+#include "hexmerge/check/validate_tet_mesh.h"
 #include "hexmerge/core/error.h"
+#include "hexmerge/core/phase_timer.h"
 #include "hexmerge/occ/brep_text.h"
 #include "hexmerge/occ/mesher/boundary_distance.h"
 #include "hexmerge/occ/mesher/facets.h"
@@ -23,53 +25,17 @@
 #include "hexmerge/occ/mesher/surface.h"
 #include "hexmerge/occ/mesher/surface_repair.h"
 #include "hexmerge/occ/mesher/sweep.h"
-#include "hexmerge/occ/mesher/tetrahedralize.h"
 #include "hexmerge/occ/regions_by_solid.h"
+#include "hexmerge/tetgen/tetrahedralize.h"
 
 namespace hexmerge {
 namespace {
 
 using namespace mesher;
-
-// Wall time of consecutive phases, written into the report. (The engine's PhaseTimer in
-// recombine.cpp keeps its phases in order in a vector; this report's are a map.)
-class PhaseClock {
- public:
-  using Clock = std::chrono::steady_clock;
-  explicit PhaseClock(std::map<std::string, double>& out) : out_(out), start_(Clock::now()) {}
-  void lap(const char* phase) {
-    const auto now = Clock::now();
-    out_[phase] = std::chrono::duration<double>(now - start_).count();
-    start_ = now;
-  }
-
- private:
-  std::map<std::string, double>& out_;
-  Clock::time_point start_;
-};
+using namespace tetgen;
 
 // Times TetGen is run again, its lattice faces' loops started elsewhere, when it does not finish.
 constexpr int kTetgenRestarts = 5;
-
-void check_parameters(const MeshShapeParameters& p) {
-  auto bad = [](const std::string& what) {
-    throw InputError("mesh_shape: " + what, Entity::Parameter);
-  };
-  if (!(p.size > 0) || !std::isfinite(p.size)) bad("size must be a positive length");
-  if (p.boundary_layers < 0 || p.boundary_layers > 3) bad("boundary_layers must be in [0, 3]");
-  if (!(p.layer_thickness >= 0.1 && p.layer_thickness <= 1))
-    bad("layer_thickness must be in [0.1, 1]");
-  if (!(p.lattice_margin >= 0.1 && p.lattice_margin <= 2))
-    bad("lattice_margin must be in [0.1, 2]");
-  if (!(p.surface_deflection > 0 && p.surface_deflection <= 0.5))
-    bad("surface_deflection must be in (0, 0.5]");
-  if (p.frame != "auto" && p.frame != "principal" && p.frame != "global")
-    bad("frame must be \"auto\", \"principal\" or \"global\"");
-  if (p.tetgen.empty()) bad("tetgen must name the TetGen program");
-  if (!(p.tetgen_time_limit >= 0 && p.tetgen_time_limit <= 86400))
-    bad("tetgen_time_limit must be in [0, 86400] seconds");
-  if (!(p.memory_limit >= 0 && p.memory_limit <= 1e6)) bad("memory_limit must be in [0, 10^6] GB");
-}
 
 // The tet mesh from the tetrahedraliser's output (frame coordinates): tets oriented positive,
 // points in the world, the surface's nodes at their exact CAD positions, regions by solid.
@@ -156,12 +122,10 @@ namespace {
 
 TetMesh mesh_shape_impl(const std::string& brep, const MeshShapeParameters& parameters,
                         MeshShapeReport& report, Tet10Mesh* tet10) {
-  check_parameters(parameters);
+  validate_mesh_shape_parameters(parameters);
   report = MeshShapeReport{};
-  const auto start = PhaseClock::Clock::now();
-  const auto seconds_since = [](PhaseClock::Clock::time_point t) {
-    return std::chrono::duration<double>(PhaseClock::Clock::now() - t).count();
-  };
+  const auto start = PhaseTimer::Clock::now();
+  const auto seconds_since = PhaseTimer::seconds_since;
   {
     TetrahedralizeParameters program;
     program.program = parameters.tetgen;
@@ -201,12 +165,13 @@ TetMesh mesh_shape_impl(const std::string& brep, const MeshShapeParameters& para
   double failed_seconds = 0;
   for (const Strategy& strategy : kStrategies) {
     MeshShapeReport attempt = report;
-    const auto attempt_start = PhaseClock::Clock::now();
+    const auto attempt_start = PhaseTimer::Clock::now();
     try {
       TetMesh mesh = mesh_attempt(shape, frame, regions_brep, parameters, strategy, attempt, tet10);
       attempt.strategy = strategy.name;
-      attempt.phase_seconds["shape"] = shape_seconds;
-      if (failed_seconds > 0) attempt.phase_seconds["failed attempts"] = failed_seconds;
+      add_phase_seconds(attempt.phase_seconds, "shape", shape_seconds);
+      if (failed_seconds > 0)
+        add_phase_seconds(attempt.phase_seconds, "failed attempts", failed_seconds);
       report = std::move(attempt);
       return mesh;
     } catch (const TetrahedralizeFailure& e) {
@@ -224,7 +189,7 @@ TetMesh mesh_shape_impl(const std::string& brep, const MeshShapeParameters& para
 TetMesh mesh_attempt(const Shape& shape, const Frame& frame, const std::string& regions_brep,
                      const MeshShapeParameters& parameters, const Strategy& strategy,
                      MeshShapeReport& report, Tet10Mesh* tet10) {
-  PhaseClock clock(report.phase_seconds);
+  PhaseTimer clock(report.phase_seconds);
   const double h = parameters.size * strategy.size_factor;
   TetrahedralizeParameters tetgen_parameters;
   tetgen_parameters.program = parameters.tetgen;

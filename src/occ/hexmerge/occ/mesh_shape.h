@@ -46,16 +46,18 @@
 
 #include <array>
 #include <cstddef>
-#include <map>
 #include <string>
 #include <vector>
 
+#include "hexmerge/core/parameter_table.h"
+#include "hexmerge/core/phase_timer.h"
 #include "hexmerge/mesh/second_order.h"
 #include "hexmerge/mesh/tet_mesh.h"
 
 namespace hexmerge {
 
-/// How mesh_shape() works. Lengths are in the shape's units.
+/// How mesh_shape() works. Lengths are in the shape's units. Every field is a row of
+/// mesh_shape_parameter_table() with its unit and range.
 struct MeshShapeParameters {
   /// Target element size h: the lattice spacing (adjusted per axis so that the bounding box holds
   /// a whole number of cells, at least one) and the surface's longest edge. > 0 and not larger
@@ -70,7 +72,7 @@ struct MeshShapeParameters {
   /// the outermost boundary layer) are dropped. In [0.1, 2].
   double lattice_margin = 0.3;
   /// Chord deflection of the surface triangulation on curved faces, as a fraction of h.
-  /// In (0, 0.5].
+  /// In [0.001, 0.5].
   double surface_deflection = 0.02;
   /// Lattice orientation: "auto" (normals of the largest planar faces, else principal axes of
   /// inertia), "principal" (principal axes of inertia), "global" (x, y, z).
@@ -94,6 +96,15 @@ struct MeshShapeParameters {
   /// A directory for TetGen's files, kept afterwards; empty: a temporary one, removed.
   std::string work_directory;
 };
+
+/// The table of MeshShapeParameters' fields (core/parameter_table.h), in display order, with
+/// MeshShapeParameters{}'s defaults; the Python module, the CLI and the FreeCAD add-on build the
+/// mesher's options from it.
+const ParameterTable<MeshShapeParameters>& mesh_shape_parameter_table();
+
+/// Checks every field against its row of mesh_shape_parameter_table(), and that `tetgen` names a
+/// program. @throws InputError (Entity::Parameter) naming the first bad one
+void validate_mesh_shape_parameters(const MeshShapeParameters& parameters);
 
 /// What mesh_shape() did.
 struct MeshShapeReport {
@@ -138,13 +149,13 @@ struct MeshShapeReport {
   std::string strategy;
   std::vector<std::string> failed_strategies;  ///< the ways tried before, each with its failure
   std::string tetgen_command;          ///< the command line run
-  std::map<std::string, double> phase_seconds;  ///< wall time per phase
+  PhaseSeconds phase_seconds;          ///< wall time per phase, in order
 };
 
 /// Tetrahedralises a solid shape with lattice-seeded points, ready for recombine().
 ///
 /// @param[in]  brep        the shape as BREP text (one or more solids; FreeCAD:
-///                         `Shape.exportBrepToString()`, files: read_shape_file())
+///                         `Shape.exportBrepToString()`, files: read_shape_file.h)
 /// @param[in]  parameters  see MeshShapeParameters
 /// @param[out] report      counts, the frame, timings
 /// @return a valid tet mesh (validate_tet_mesh), regions = the index of the solid holding each
@@ -167,12 +178,5 @@ TetMesh mesh_shape(const std::string& brep, const MeshShapeParameters& parameter
 /// mesh_shape()'s.
 Tet10Mesh mesh_shape_tet10(const std::string& brep, const MeshShapeParameters& parameters,
                            MeshShapeReport& report);
-
-/// The shape in a STEP (.step, .stp), BREP (.brep, .brp) or IGES (.iges, .igs) file, as BREP text.
-/// OpenCASCADE gives STEP and IGES shapes in millimetres whatever their file's unit; when
-/// `length_unit` is given, it is set to the length unit the file declares (as the file names it,
-/// e.g. "INCH"; "" for BREP files, which have none).
-/// @throws InputError when the file is missing, of another kind, or unreadable
-std::string read_shape_file(const std::string& path, std::string* length_unit = nullptr);
 
 }  // namespace hexmerge

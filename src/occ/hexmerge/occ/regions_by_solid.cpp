@@ -20,6 +20,7 @@
 #include <chrono>
 #include <cmath>
 #include <exception>
+#include <map>
 #include <memory>
 #include <mutex>
 #include <numeric>
@@ -32,11 +33,8 @@
 namespace hexmerge {
 namespace {
 
-using Clock = std::chrono::steady_clock;
-
-double seconds_since(Clock::time_point start) {
-  return std::chrono::duration<double>(Clock::now() - start).count();
-}
+using Clock = PhaseTimer::Clock;
+const auto seconds_since = PhaseTimer::seconds_since;
 
 // Runs body(begin, end, thread) over [0, n) in contiguous chunks, one per thread. OpenCASCADE
 // reads one shape from several threads safely as long as each thread owns its algorithms
@@ -300,7 +298,7 @@ std::vector<std::int32_t> classify_mesh(const std::string& brep, const TetMesh& 
   Bnd_Box whole = bounding_box(shape, 0.0);
   const double diagonal = whole.IsVoid() ? 1.0 : std::sqrt(whole.SquareExtent());
   const double tolerance = parameters.tolerance * diagonal;
-  report.phase_seconds["read shape"] = seconds_since(start);
+  add_phase_seconds(report.phase_seconds, "read shape", seconds_since(start));
 
   const index_t m = mesh.nb_tets();
   std::vector<std::int32_t> region(m, NO_SOLID);
@@ -314,12 +312,12 @@ std::vector<std::int32_t> classify_mesh(const std::string& brep, const TetMesh& 
     start = Clock::now();
     const std::vector<SharedFace> faces = shared_faces(solids, tolerance);
     report.nb_shared_faces = faces.size();
-    report.phase_seconds["shared faces"] = seconds_since(start);
+    add_phase_seconds(report.phase_seconds, "shared faces", seconds_since(start));
 
     start = Clock::now();
     const std::vector<char> interface = interface_nodes(mesh, faces, nb_threads);
     report.nb_interface_nodes = static_cast<std::size_t>(std::count(interface.begin(), interface.end(), 1));
-    report.phase_seconds["interface nodes"] = seconds_since(start);
+    add_phase_seconds(report.phase_seconds, "interface nodes", seconds_since(start));
 
     start = Clock::now();
     const std::vector<index_t> piece = pieces_of(mesh, interface, report.nb_pieces);
@@ -342,7 +340,7 @@ std::vector<std::int32_t> classify_mesh(const std::string& brep, const TetMesh& 
       }
       sample_first.push_back(static_cast<index_t>(samples.size()));
     }
-    report.phase_seconds["pieces"] = seconds_since(start);
+    add_phase_seconds(report.phase_seconds, "pieces", seconds_since(start));
 
     start = Clock::now();
     const std::vector<std::int32_t> sample_solid = classifier.classify(mesh, samples);
@@ -359,14 +357,14 @@ std::vector<std::int32_t> classify_mesh(const std::string& brep, const TetMesh& 
         per_tet.insert(per_tet.end(), members.begin() + first[p], members.begin() + first[p + 1]);
       }
     }
-    report.phase_seconds["classify samples"] = seconds_since(start);
+    add_phase_seconds(report.phase_seconds, "classify samples", seconds_since(start));
   }
 
   if (!per_tet.empty()) {
     start = Clock::now();
     const std::vector<std::int32_t> solid = classifier.classify(mesh, per_tet);
     for (std::size_t i = 0; i < per_tet.size(); ++i) region[per_tet[i]] = solid[i];
-    report.phase_seconds["classify tets"] = seconds_since(start);
+    add_phase_seconds(report.phase_seconds, "classify tets", seconds_since(start));
   }
   report.nb_classified_points = classifier.nb_queries();
   report.nb_unassigned_tets = static_cast<std::size_t>(std::count(region.begin(), region.end(), NO_SOLID));

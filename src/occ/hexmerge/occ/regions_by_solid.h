@@ -7,10 +7,10 @@
 
 #include <cstddef>
 #include <cstdint>
-#include <map>
 #include <string>
 #include <vector>
 
+#include "hexmerge/core/phase_timer.h"
 #include "hexmerge/mesh/tet_mesh.h"
 
 namespace hexmerge {
@@ -42,7 +42,7 @@ struct RegionsBySolidReport {
   std::size_t nb_split_pieces = 0;      ///< pieces whose samples disagreed (classified per tet)
   std::size_t nb_classified_points = 0; ///< point-in-solid queries made
   std::size_t nb_unassigned_tets = 0;   ///< tets in no solid (NO_SOLID)
-  std::map<std::string, double> phase_seconds;  ///< wall time per phase
+  PhaseSeconds phase_seconds;           ///< wall time per phase, in order
 };
 
 /// The solid of a shape that holds each tet of a mesh.

@@ -10,9 +10,11 @@
 #include "hexmerge/geometry/vec3.h"
 #include "hexmerge/occ/mesher/frame.h"
 #include "hexmerge/occ/mesher/surface.h"
-#include "hexmerge/occ/mesher/tetrahedralize.h"
+#include "hexmerge/tetgen/tetrahedralize.h"
 
 namespace hexmerge::mesher {
+
+using tetgen::Facet;
 
 /// The facets: every triangle of the faces that are not lattice faces as it is (kept by the
 /// tetrahedraliser); a lattice face as its boundary loops only (with a hole point inside each

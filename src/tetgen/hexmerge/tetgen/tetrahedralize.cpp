@@ -1,4 +1,4 @@
-#include "hexmerge/occ/mesher/tetrahedralize.h"
+#include "hexmerge/tetgen/tetrahedralize.h"
 
 #include <sys/wait.h>
 
@@ -12,7 +12,7 @@
 
 #include "hexmerge/core/error.h"
 
-namespace hexmerge::mesher {
+namespace hexmerge::tetgen {
 namespace {
 
 namespace fs = std::filesystem;
@@ -187,7 +187,7 @@ class WorkDirectory {
 Tetrahedralizer::Tetrahedralizer(const TetrahedralizeParameters& parameters)
     : parameters_(parameters), program_(find_program(parameters.program)) {
   if (program_.empty())
-    throw InputError("mesh_shape needs TetGen: \"" + parameters.program +
+    throw InputError("TetGen is needed: \"" + parameters.program +
                          "\" is not found (Debian: apt install tetgen)",
                      Entity::Parameter);
 }
@@ -203,7 +203,9 @@ TetrahedralizeOutput Tetrahedralizer::run(TetrahedralizeInput input) const {
   const auto to_world = [&](const Vec3& p) { return input.to_world ? input.to_world(p) : p; };
   TetrahedralizeOutput output;
   WorkDirectory work(parameters_.work_directory);
-  const fs::path poly = work.path() / "shape.poly";
+  // No facets: the points alone, in a .node file (TetGen's Delaunay tetrahedralisation).
+  const bool delaunay = facets.empty();
+  const fs::path poly = work.path() / (delaunay ? "shape.node" : "shape.poly");
   auto write_poly = [&] {
     std::ofstream out(poly);
     out.precision(17);
@@ -211,6 +213,10 @@ TetrahedralizeOutput Tetrahedralizer::run(TetrahedralizeInput input) const {
     for (std::size_t i = 0; i < points.size(); ++i) {
       const Vec3& p = points[i];
       out << i << ' ' << p.x << ' ' << p.y << ' ' << p.z << '\n';
+    }
+    if (delaunay) {
+      if (!out) throw InputError("cannot write TetGen's input in " + work.path().string());
+      return;
     }
     out << facets.size() << " 1\n";
     for (const Facet& f : facets) {
@@ -229,8 +235,9 @@ TetrahedralizeOutput Tetrahedralizer::run(TetrahedralizeInput input) const {
   write_poly();
   const fs::path log = work.path() / "tetgen.log";
   // Not quiet: on failure, its last lines say why (read by failure_text()).
-  output.command = shell_quote(program_) + (parameters_.quality ? " -pYzq1.5 " : " -pYz ") +
-                   shell_quote(poly.string());
+  const std::string switches =
+      std::string(delaunay ? " -z" : " -pYz") + (parameters_.quality ? "q1.5 " : " ");
+  output.command = shell_quote(program_) + switches + shell_quote(poly.string());
   const std::size_t given = points.size();
   std::vector<double> frame_points;
   // TetGen 1.5 can fail to triangulate a lattice face from its loops: it never ends, or leaves
@@ -307,7 +314,7 @@ TetrahedralizeOutput Tetrahedralizer::run(TetrahedralizeInput input) const {
       which += " " + std::to_string(i) + " at (" + std::to_string(p.x) + ", " +
                std::to_string(p.y) + ", " + std::to_string(p.z) + ")";
     }
-    if (nudged || dropped.empty() || dropped.front() < input.first_isolated)
+    if (nudged || dropped.empty() || dropped.front() < input.first_isolated || delaunay)
       throw TetrahedralizeFailure(
           "TetGen left out " + std::to_string(dropped.size()) +
           " of the points given (too close together or to a face):" + which);
@@ -323,15 +330,17 @@ TetrahedralizeOutput Tetrahedralizer::run(TetrahedralizeInput input) const {
     output.tets.push_back(static_cast<index_t>(v));
   }
   // The boundary faces and the facets' markers they carry.
+  // (With no facets: the convex hull's triangles, marker 0.)
+  const int per_face = delaunay ? 3 : 4;
   const std::vector<long long> faces =
-      read_tetgen_table<long long>(work.path() / "shape.1.face", 1, 4);
-  for (std::size_t i = 0; i + 3 < faces.size(); i += 4) {
+      read_tetgen_table<long long>(work.path() / "shape.1.face", delaunay ? 0 : 1, per_face);
+  for (std::size_t i = 0; i + per_face - 1 < faces.size(); i += per_face) {
     output.boundary.push_back({static_cast<index_t>(faces[i]), static_cast<index_t>(faces[i + 1]),
                                static_cast<index_t>(faces[i + 2])});
-    output.boundary_marker.push_back(static_cast<int>(faces[i + 3]));
+    output.boundary_marker.push_back(delaunay ? 0 : static_cast<int>(faces[i + 3]));
   }
   output.points = std::move(frame_points);
   return output;
 }
 
-}  // namespace hexmerge::mesher
+}  // namespace hexmerge::tetgen

@@ -1,8 +1,10 @@
 #pragma once
 /// @file
-/// The tetrahedraliser behind one interface (internal header of mesh_shape(); no OpenCASCADE,
-/// no TetGen types): a piecewise linear complex (points, facets with markers) in, tets and the
-/// boundary faces with their markers out, the surface kept as it is (no point added on it).
+/// TetGen behind one interface (no OpenCASCADE, no TetGen types), used by the mesher from CAD
+/// (mesh_shape()), the C++ test fixtures and, through the Python module, the benchmarks' mesh
+/// generator: a piecewise linear complex (points, facets with markers) in, tets and the
+/// boundary faces with their markers out, the surface kept as it is (no point added on it); or,
+/// with no facets, the Delaunay tetrahedralisation of the points.
 ///
 /// Today's implementation runs the `tetgen` program (TetGen 1.5, `-pYz`) through its files,
 /// under a time limit, restarting it with the facets' polygons started at other vertices when a
@@ -20,7 +22,7 @@
 #include "hexmerge/core/index.h"
 #include "hexmerge/geometry/vec3.h"
 
-namespace hexmerge::mesher {
+namespace hexmerge::tetgen {
 
 /// A facet of the complex: polygons (closed loops of point indices: a face's outer and inner
 /// boundary loops, or one triangle; a polygon of one point is a single point inside the facet),
@@ -32,7 +34,8 @@ struct Facet {
 };
 
 /// What to tetrahedralise. Points are in any consistent coordinates; the facets must bound a
-/// closed volume (or several touching ones, faces between them included).
+/// closed volume (or several touching ones, faces between them included). With no facets, the
+/// points' Delaunay tetrahedralisation (of their convex hull) is made, every point kept.
 struct TetrahedralizeInput {
   std::vector<Vec3> points;   ///< the facets' vertices, then the isolated points
   std::vector<Facet> facets;  ///< the boundary, kept as it is
@@ -102,4 +105,4 @@ class Tetrahedralizer {
   std::string program_;  // the program's path
 };
 
-}  // namespace hexmerge::mesher
+}  // namespace hexmerge::tetgen

@@ -1,4 +1,4 @@
-#include "hexmerge/mesh/tet_mesh.h"
+#include "hexmerge/check/validate_tet_mesh.h"
 
 #include <gtest/gtest.h>
 

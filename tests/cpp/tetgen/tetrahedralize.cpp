@@ -1,4 +1,4 @@
-#include "hexmerge/occ/mesher/tetrahedralize.h"
+#include "hexmerge/tetgen/tetrahedralize.h"
 
 #include <gtest/gtest.h>
 
@@ -12,11 +12,11 @@
 namespace hexmerge::test {
 namespace {
 
-using mesher::Facet;
-using mesher::TetrahedralizeInput;
-using mesher::TetrahedralizeOutput;
-using mesher::TetrahedralizeParameters;
-using mesher::Tetrahedralizer;
+using tetgen::Facet;
+using tetgen::TetrahedralizeInput;
+using tetgen::TetrahedralizeOutput;
+using tetgen::TetrahedralizeParameters;
+using tetgen::Tetrahedralizer;
 
 bool have_tetgen() {
   try {
@@ -117,6 +117,40 @@ TEST(Tetrahedralizer, keeps_its_files_in_the_work_directory) {
   EXPECT_TRUE(std::filesystem::exists(folder / "shape.poly"));
   EXPECT_TRUE(std::filesystem::exists(folder / "shape.1.ele"));
   std::filesystem::remove_all(folder);
+}
+
+// No facets: the Delaunay tetrahedralisation of the points. The cube's corners and three inner
+// points fill the cube (its convex hull) with every point kept in order and no point added; the
+// boundary is the hull, 12 triangles of total area 24, marker 0. As the fixtures use it.
+TEST(Tetrahedralizer, no_facets_is_the_delaunay_tetrahedralisation_of_the_points) {
+  if (!have_tetgen()) GTEST_SKIP() << "the tetgen program is not installed";
+  TetrahedralizeInput in = cube({{1, 1, 1}, {0.5, 0.7, 1.3}, {1.4, 0.6, 0.5}});
+  in.facets.clear();
+  in.first_isolated = 0;
+  const TetrahedralizeOutput out = Tetrahedralizer(TetrahedralizeParameters{}).run(in);
+  ASSERT_EQ(out.points.size(), 3 * in.points.size()) << "TetGen added points";
+  for (std::size_t i = 0; i < in.points.size(); ++i)
+    EXPECT_EQ((Vec3::of(&out.points[3 * i]) - in.points[i]).norm(), 0.0) << "point " << i;
+  std::vector<int> used(in.points.size(), 0);
+  double total = 0;
+  const double first = signed_volume(out, 0);
+  for (std::size_t t = 0; t < out.tets.size() / 4; ++t) {
+    const double v = signed_volume(out, t);
+    EXPECT_GT(v * first, 1e-9) << "tet " << t;
+    total += std::abs(v);
+    for (int k = 0; k < 4; ++k) used.at(out.tets[4 * t + k]) = 1;
+  }
+  EXPECT_NEAR(total, 8.0, 1e-12);
+  EXPECT_EQ(used, std::vector<int>(in.points.size(), 1));
+  double area = 0;
+  for (std::size_t i = 0; i < out.boundary.size(); ++i) {
+    const auto p = [&](int k) { return Vec3::of(&out.points[3 * out.boundary[i][k]]); };
+    area += 0.5 * (p(1) - p(0)).cross(p(2) - p(0)).norm();
+    EXPECT_EQ(out.boundary_marker[i], 0);
+  }
+  EXPECT_EQ(out.boundary.size(), 12u);
+  EXPECT_NEAR(area, 24.0, 1e-12);
+  EXPECT_NE(out.command.find(" -z "), std::string::npos) << out.command;
 }
 
 TEST(Tetrahedralizer, missing_program_is_an_input_error) {
