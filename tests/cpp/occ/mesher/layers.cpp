@@ -24,9 +24,9 @@ TEST(place_layers, around_the_curved_faces_at_their_depths) {
     mesher::Surroundings around(nodes, p.surface, p.lattice, h);
     const mesher::Parity parity(nodes, p.surface, p.shape.face_solid_count, around, h);
     mesher::InsertedPoints inserted;
-    const std::size_t placed =
-        mesher::place_layers(nodes, p.surface, p.shape.face_solid_count, p.lattice, -1,
-                             mesher::SweptSurface{}, layers, thickness, parity, around, inserted);
+    const std::size_t placed = mesher::place_layers(nodes, p.surface, p.shape.face_solid_count,
+                                                    p.lattice, -1, mesher::SweptSurface{}, layers,
+                                                    thickness, 0.3 * h, parity, around, inserted);
     ASSERT_EQ(inserted.points.size(), placed);
     ASSERT_EQ(inserted.face.size(), placed);
     EXPECT_GT(placed, 50u * layers);
