@@ -32,8 +32,8 @@ _MESH_TABLE: tuple[dict[str, Any], ...] = (
          doc="Thickness of one boundary layer, as a fraction of the target size h"),
     dict(name="lattice_margin", type="float", default=0.3, unit="h", min=0.1, max=2.0, choices=[],
          label="Lattice margin",
-         doc="Lattice points nearer than this to a face off the lattice planes are dropped, "
-         "and boundary-layer points keep this far from the lattice points; a fraction of h"),
+         doc="Lattice points nearer than this to a face off the lattice planes (or to the "
+         "outermost boundary layer) are dropped; a fraction of h"),
     dict(name="surface_deflection", type="float", default=0.02, unit="h", min=0.001, max=0.5,
          choices=[], label="Surface deflection",
          doc="Chord deflection of the surface triangulation on curved faces, as a fraction of h"),

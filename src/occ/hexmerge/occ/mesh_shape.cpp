@@ -281,13 +281,16 @@ TetMesh mesh_attempt(const Shape& shape, const Frame& frame, const std::string& 
   report.nb_surface_triangles = surface.triangles.size();
   Surroundings around(nodes, surface, lattice, h);
 
-  // 7. The lattice points kept: inside, lattice_margin from the faces that are not lattice faces
-  // (the boundary layers, placed after the core, keep out of its way).
+  // 7. The lattice points kept: inside, far enough from the faces that are not lattice faces.
+  // (Kept down to lattice_margin alone, 0.3 h, with the layers keeping out of the core, the core
+  // had 30-60 % more hex volume on real parts, but gap tets of scaled Jacobian 0.15.)
   const Parity parity(nodes, surface, shape.face_solid_count, around, h);
   InsertedPoints inserted;
   const int nb_layers = strategy.layers ? parameters.boundary_layers : 0;
-  const KeptPoints kept = keep_lattice_points(
-      lattice, around, parity, parameters.lattice_margin * h, parameters.lattice_margin * h);
+  const KeptPoints kept =
+      keep_lattice_points(lattice, around, parity,
+                          (nb_layers * parameters.layer_thickness + parameters.lattice_margin) * h,
+                          parameters.lattice_margin * h);
   clock.lap("lattice");
 
   // 8. The hexahedral core and its closing pyramids' apexes.

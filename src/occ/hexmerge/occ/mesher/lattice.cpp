@@ -282,13 +282,22 @@ CoreCounts add_core(const Lattice& lattice, Surroundings& around, const Parity& 
     // Swept: the prisms and hexahedra of the slab close the core's sides.
     if (sweep_axis >= 0 && axis != sweep_axis) return state = 1;
     int n[3];
-    const bool in_range = across(i, j, k, dir, n);
-    const Vec3 face_centre =
-        cell_centre(i, j, k) + Vec3{axis == 0 ? side * 0.5 * lattice.spacing[0] : 0,
-                                    axis == 1 ? side * 0.5 * lattice.spacing[1] : 0,
-                                    axis == 2 ? side * 0.5 * lattice.spacing[2] : 0};
-    const Vec3 apex = in_range ? cell_centre(n[0], n[1], n[2]) : face_centre;
-    if (!in_range || !parity.inside(apex)) return state = 1;
+    if (!across(i, j, k, dir, n)) return state = 1;  // on the lattice's box: on the boundary
+    const Vec3 apex = cell_centre(n[0], n[1], n[2]);
+    if (!parity.inside(apex)) {
+      // The cell across is outside: the face needs no pyramid when it lies on the boundary (its
+      // corners on lattice faces); else the surface passes between the face and the apex, and
+      // the tets of that gap would leave the face open.
+      const int plane = (side > 0) + (axis == 0 ? i : axis == 1 ? j : k);
+      const int u = (axis + 1) % 3, v = (axis + 2) % 3;
+      for (int corner = 0; corner < 4; ++corner) {
+        int c[3] = {i, j, k};
+        c[axis] = plane;
+        c[u] += corner & 1, c[v] += corner >> 1;
+        if (kept_points.face[point_index(c[0], c[1], c[2])] < 0) return state = 3;
+      }
+      return state = 1;
+    }
     const auto [centre, r] = pyramid_sphere(i, j, k, dir);
     const bool ok = around.ball_is_empty(centre, r) &&
                     !around.surface_points.any_within(apex, 0.25 * h) &&
