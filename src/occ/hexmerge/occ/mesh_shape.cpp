@@ -283,7 +283,8 @@ TetMesh mesh_attempt(const Shape& shape, const Frame& frame, const std::string& 
 
   // 7. The lattice points kept: inside, far enough from the faces that are not lattice faces.
   // (Kept down to lattice_margin alone, 0.3 h, with the layers keeping out of the core, the core
-  // had 30-60 % more hex volume on real parts, but gap tets of scaled Jacobian 0.15.)
+  // had 30-60 % more hex volume on real parts, but boundary tets of scaled Jacobian 0.15: three
+  // surface nodes and a layer point, where the layer points by the core are left out.)
   const Parity parity(nodes, surface, shape.face_solid_count, around, h);
   InsertedPoints inserted;
   const int nb_layers = strategy.layers ? parameters.boundary_layers : 0;
