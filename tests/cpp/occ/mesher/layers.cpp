@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <utility>
 
 #include "hexmerge/occ/mesher/surface_repair.h"
 #include "mesher_fixtures.h"
@@ -24,9 +25,9 @@ TEST(place_layers, around_the_curved_faces_at_their_depths) {
     mesher::Surroundings around(nodes, p.surface, p.lattice, h);
     const mesher::Parity parity(nodes, p.surface, p.shape.face_solid_count, around, h);
     mesher::InsertedPoints inserted;
-    const std::size_t placed =
-        mesher::place_layers(nodes, p.surface, p.shape.face_solid_count, p.lattice, -1,
-                             mesher::SweptSurface{}, layers, thickness, parity, around, inserted);
+    const std::size_t placed = mesher::place_layers(nodes, p.surface, p.shape.face_solid_count,
+                                                    p.lattice, -1, mesher::SweptSurface{}, layers,
+                                                    thickness, 0.3 * h, parity, around, inserted);
     ASSERT_EQ(inserted.points.size(), placed);
     ASSERT_EQ(inserted.face.size(), placed);
     EXPECT_GT(placed, 50u * layers);
@@ -48,6 +49,57 @@ TEST(place_layers, around_the_curved_faces_at_their_depths) {
     }
     EXPECT_EQ(deepest, static_cast<std::size_t>(layers));
   }
+}
+
+// The core laid first, then the layers (mesh_shape()'s order): the layers keep out of the core
+// cells' and closing pyramids' circumspheres and `core_margin` from its points, so that the core
+// laid again over the layers is the same core; laid before the core (the former order), the
+// same layers cost it cells.
+TEST(place_layers, keep_out_of_the_core_laid_first) {
+  const double h = 2.0, thickness = 0.3 * h, margin = 0.3 * h;
+  const int layers = 2;
+  Prepared p = prepare(occ_plate_with_hole(), h);
+  mesher::refine(p.shape, p.surface, h, p.lattice.lattice_face, p.lattice.lattice_edge);
+  mesher::collapse_short_sides(p.surface, h, p.lattice.lattice_face);
+  const std::vector<Vec3> nodes =
+      mesher::frame_nodes(p.shape, p.surface, p.lattice, -1, mesher::SweptSurface{});
+  const auto core_then_layers = [&](bool core_first, mesher::CoreCounts& core,
+                                    mesher::InsertedPoints& inserted) {
+    mesher::Surroundings around(nodes, p.surface, p.lattice, h);
+    const mesher::Parity parity(nodes, p.surface, p.shape.face_solid_count, around, h);
+    const auto lay = [&] {
+      return mesher::place_layers(nodes, p.surface, p.shape.face_solid_count, p.lattice, -1,
+                                  mesher::SweptSurface{}, layers, thickness, margin, parity, around,
+                                  inserted);
+    };
+    std::size_t placed = core_first ? 0 : lay();
+    const mesher::KeptPoints kept =
+        mesher::keep_lattice_points(p.lattice, around, parity, margin, margin);
+    core = mesher::add_core(p.lattice, around, parity, kept, -1, h, inserted);
+    if (core_first) placed = lay();
+    // The core laid again over the layers.
+    mesher::InsertedPoints again;
+    const mesher::CoreCounts second =
+        mesher::add_core(p.lattice, around, parity, kept, -1, h, again);
+    return std::make_pair(placed, second);
+  };
+  mesher::CoreCounts core, former_core;
+  mesher::InsertedPoints inserted, former_inserted;
+  const auto [placed, again] = core_then_layers(true, core, inserted);
+  EXPECT_GT(core.nb_core_cells, 100u);
+  EXPECT_GT(placed, 100u);
+  EXPECT_EQ(again.nb_core_cells, core.nb_core_cells);
+  EXPECT_EQ(again.nb_apex_points, core.nb_apex_points);
+  // The layer points (after the core's) are margin from every core point.
+  const std::size_t nb_core = core.nb_lattice_points + core.nb_apex_points;
+  ASSERT_EQ(inserted.points.size(), nb_core + placed);
+  for (std::size_t i = nb_core; i < inserted.points.size(); ++i)
+    for (std::size_t j = 0; j < nb_core; ++j)
+      ASSERT_GE((inserted.points[i] - inserted.points[j]).norm(), margin) << i << " " << j;
+  // Layers first: the core loses cells to them.
+  const auto former = core_then_layers(false, former_core, former_inserted);
+  EXPECT_GT(former.first, 100u);
+  EXPECT_LT(former_core.nb_core_cells, core.nb_core_cells);
 }
 
 }  // namespace

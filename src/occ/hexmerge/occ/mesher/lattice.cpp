@@ -119,6 +119,8 @@ Surroundings::Surroundings(const std::vector<Vec3>& nodes, const Surface& surfac
       every_face(nodes, box_lo, box_hi, h),
       surface_points(box_lo, box_hi, h),
       layer_points(box_lo, box_hi, h),
+      core_points(box_lo, box_hi, h),
+      core_balls(box_lo, box_hi, h),
       nodes_(nodes) {
   for (const SurfaceTriangle& t : surface.triangles) {
     if (!lattice.lattice_face[t.face]) curved.add(t.node);
@@ -216,7 +218,7 @@ KeptPoints keep_lattice_points(const Lattice& lattice, const Surroundings& aroun
   return out;
 }
 
-CoreCounts add_core(const Lattice& lattice, const Surroundings& around, const Parity& parity,
+CoreCounts add_core(const Lattice& lattice, Surroundings& around, const Parity& parity,
                     const KeptPoints& kept_points, int sweep_axis, double h,
                     InsertedPoints& inserted) {
   // The hexahedral core: cells with 8 kept corners whose circumsphere holds nothing else; then
@@ -256,6 +258,20 @@ CoreCounts add_core(const Lattice& lattice, const Surroundings& around, const Pa
         if (!parity.inside(centre) || !around.ball_is_empty(centre, half_diagonal)) continue;
         core[cell_index(i, j, k)] = 1;
       }
+  // The sphere through the corners of face dir of cell (i, j, k) and the apex of its closing
+  // pyramid (the centre of the cell across).
+  auto pyramid_sphere = [&](int i, int j, int k, int dir) {
+    const int axis = dir / 2, side = dir % 2 ? 1 : -1;
+    const double a = 0.5 * lattice.spacing[axis];
+    double rho2 = 0;
+    for (int b = 0; b < 3; ++b)
+      if (b != axis) rho2 += 0.25 * lattice.spacing[b] * lattice.spacing[b];
+    const double c = (a * a - rho2) / (2 * a);
+    Vec3 towards{0, 0, 0};
+    set_coord(towards, axis, side * a);  // from the face's centre to the apex
+    const Vec3 face_centre = cell_centre(i, j, k) + towards;
+    return std::pair<Vec3, double>{face_centre + towards * (c / a), a - c};
+  };
   // Per directed face (cell, direction 0..5): 0 unknown, 1 boundary (no pyramid needed),
   // 2 pyramid possible, 3 impossible.
   std::vector<std::uint8_t> face_state(core.size() * 6, 0);
@@ -266,22 +282,23 @@ CoreCounts add_core(const Lattice& lattice, const Surroundings& around, const Pa
     // Swept: the prisms and hexahedra of the slab close the core's sides.
     if (sweep_axis >= 0 && axis != sweep_axis) return state = 1;
     int n[3];
-    const bool in_range = across(i, j, k, dir, n);
-    const Vec3 face_centre =
-        cell_centre(i, j, k) + Vec3{axis == 0 ? side * 0.5 * lattice.spacing[0] : 0,
-                                    axis == 1 ? side * 0.5 * lattice.spacing[1] : 0,
-                                    axis == 2 ? side * 0.5 * lattice.spacing[2] : 0};
-    const Vec3 apex = in_range ? cell_centre(n[0], n[1], n[2]) : face_centre;
-    if (!in_range || !parity.inside(apex)) return state = 1;
-    // The sphere through the face's corners and the apex.
-    const double a = 0.5 * lattice.spacing[axis];
-    double rho2 = 0;
-    for (int b = 0; b < 3; ++b)
-      if (b != axis) rho2 += 0.25 * lattice.spacing[b] * lattice.spacing[b];
-    const double c = (a * a - rho2) / (2 * a);
-    const Vec3 towards = apex - face_centre;
-    const Vec3 centre = face_centre + towards * (c / a);
-    const double r = a - c;
+    if (!across(i, j, k, dir, n)) return state = 1;  // on the lattice's box: on the boundary
+    const Vec3 apex = cell_centre(n[0], n[1], n[2]);
+    if (!parity.inside(apex)) {
+      // The cell across is outside: the face needs no pyramid when it lies on the boundary (its
+      // corners on lattice faces); else the surface passes between the face and the apex, and
+      // the tets of that gap would leave the face open.
+      const int plane = (side > 0) + (axis == 0 ? i : axis == 1 ? j : k);
+      const int u = (axis + 1) % 3, v = (axis + 2) % 3;
+      for (int corner = 0; corner < 4; ++corner) {
+        int c[3] = {i, j, k};
+        c[axis] = plane;
+        c[u] += corner & 1, c[v] += corner >> 1;
+        if (kept_points.face[point_index(c[0], c[1], c[2])] < 0) return state = 3;
+      }
+      return state = 1;
+    }
+    const auto [centre, r] = pyramid_sphere(i, j, k, dir);
     const bool ok = around.ball_is_empty(centre, r) &&
                     !around.surface_points.any_within(apex, 0.25 * h) &&
                     !around.layer_points.any_within(apex, 0.25 * h);
@@ -313,8 +330,12 @@ CoreCounts add_core(const Lattice& lattice, const Surroundings& around, const Pa
         for (int dir = 0; dir < 6; ++dir) {
           int n[3];
           if (!across(i, j, k, dir, n) || core[cell_index(n[0], n[1], n[2])]) continue;
-          if (face_kind(i, j, k, dir) == 2) apex_cell[cell_index(n[0], n[1], n[2])] = 1;
+          if (face_kind(i, j, k, dir) != 2) continue;
+          apex_cell[cell_index(n[0], n[1], n[2])] = 1;
+          const auto [centre, r] = pyramid_sphere(i, j, k, dir);
+          around.core_balls.add(centre, r);
         }
+        around.core_balls.add(cell_centre(i, j, k), half_diagonal);
       }
   for (int k = 0; k < n2; ++k)
     for (int j = 0; j < n1; ++j)
@@ -324,6 +345,7 @@ CoreCounts add_core(const Lattice& lattice, const Surroundings& around, const Pa
         if (around.surface_points.any_within(q, 1e-6 * h)) continue;  // already a surface node
         inserted.points.push_back(q);
         inserted.face.push_back(kept_points.face[point_index(i, j, k)]);
+        around.core_points.add(q);
         ++counts.nb_lattice_points;
       }
   for (int k = 0; k < c2; ++k)
@@ -332,6 +354,7 @@ CoreCounts add_core(const Lattice& lattice, const Surroundings& around, const Pa
         if (apex_cell[cell_index(i, j, k)]) {
           inserted.points.push_back(cell_centre(i, j, k));
           inserted.face.push_back(-1);
+          around.core_points.add(cell_centre(i, j, k));
           ++counts.nb_apex_points;
         }
   return counts;

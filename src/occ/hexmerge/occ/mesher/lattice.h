@@ -68,6 +68,26 @@ struct InsertedPoints {
   std::vector<int> face;
 };
 
+/// Balls (centre, radius), with "does one hold q" queries, over the box [lo, hi].
+class BallSet {
+ public:
+  BallSet(const Vec3& lo, const Vec3& hi, double cell) : grid_(lo, hi, cell) {}
+  void add(const Vec3& centre, double r) {
+    grid_.add(static_cast<int>(balls_.size()), centre - Vec3{r, r, r}, centre + Vec3{r, r, r});
+    balls_.emplace_back(centre, r);
+  }
+  /// Whether q lies in a ball grown by `slack` (a length).
+  bool holds(const Vec3& q, double slack) const {
+    return grid_.any_in(
+        q, q, [&](int i) { return (balls_[i].first - q).norm() < balls_[i].second + slack; });
+  }
+  std::size_t size() const { return balls_.size(); }
+
+ private:
+  BucketGrid grid_;
+  std::vector<std::pair<Vec3, double>> balls_;
+};
+
 /// What lies near a point (frame coordinates, within 2 h of the lattice's box): the triangles of
 /// the faces that are not lattice faces, the surface's nodes, the boundary-layer points placed so
 /// far; and which lattice face holds a point on a lattice plane. Keeps references to `nodes` and
@@ -87,6 +107,11 @@ class Surroundings {
   TriangleSet every_face;     ///< triangles of every face
   PointSet surface_points;    ///< the surface's nodes
   PointSet layer_points;      ///< boundary-layer points (place_layers() adds them)
+  /// The hexahedral core's points (lattice points and apexes) and the circumspheres of its cells
+  /// and closing pyramids (add_core() adds them): boundary-layer points placed after the core
+  /// keep out of them, so that TetGen's Delaunay tets keep the core's cells and pyramids.
+  PointSet core_points;
+  BallSet core_balls;
 
  private:
   const std::vector<Vec3>& nodes_;
@@ -136,8 +161,9 @@ struct CoreCounts {
 /// quad face between the core and another cell inside needs a closing pyramid whose apex is
 /// that cell's centre and whose circumsphere holds nothing else, or the core cell goes (swept,
 /// sweep_axis >= 0: only across the axis). Appends the kept lattice points that are no surface
-/// node, then the apexes, to `inserted`.
-CoreCounts add_core(const Lattice& lattice, const Surroundings& around, const Parity& parity,
+/// node, then the apexes, to `inserted`; the points inserted to around.core_points and the
+/// circumspheres of the core's cells and closing pyramids to around.core_balls.
+CoreCounts add_core(const Lattice& lattice, Surroundings& around, const Parity& parity,
                     const KeptPoints& kept, int sweep_axis, double h, InsertedPoints& inserted);
 
 /// Reorders `inserted` so that the points on lattice faces come first (stable); returns their

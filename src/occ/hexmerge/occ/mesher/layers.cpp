@@ -12,13 +12,17 @@ namespace {
 constexpr double kLayerJitter = 0.1;
 // A boundary-layer point stays at least this fraction of its depth from every face.
 constexpr double kLayerClearance = 0.5;
+// A boundary-layer point stays out of the core's circumspheres grown by this fraction of a
+// layer's depth.
+constexpr double kCoreSlack = 0.05;
 
 }  // namespace
 
 std::size_t place_layers(const std::vector<Vec3>& nodes, const Surface& surface,
                          const std::vector<int>& face_solid_count, const Lattice& lattice,
                          int sweep_axis, const SweptSurface& swept, int layers, double thickness,
-                         const Parity& parity, Surroundings& around, InsertedPoints& inserted) {
+                         double core_margin, const Parity& parity, Surroundings& around,
+                         InsertedPoints& inserted) {
   // Boundary layers: surface nodes of the other faces where the surface is smooth, moved along
   // the inward normal, where there is room.
   std::vector<Vec3> normal(nodes.size(), Vec3{0, 0, 0});
@@ -87,6 +91,12 @@ std::size_t place_layers(const std::vector<Vec3>& nodes, const Surface& surface,
     }
   }
   const double layer = thickness;
+  // Out of the core's circumspheres (by a little more than round-off: a point on one makes its
+  // cell or pyramid cospherical with it) and its points' margin.
+  const auto clear_of_core = [&](const Vec3& q) {
+    return !around.core_balls.holds(q, kCoreSlack * layer) &&
+           !around.core_points.any_within(q, core_margin);
+  };
   std::size_t placed = 0;
   for (int k = 1; k <= layers; ++k)
     for (std::size_t i = 0; i < nodes.size(); ++i)
@@ -121,6 +131,7 @@ std::size_t place_layers(const std::vector<Vec3>& nodes, const Surface& surface,
             const int face = around.on_lattice_face(r, index);  // a cap it lies in, on any plane
             if (face < 0 && (level == 0 || level == lattice.cells[a]))
               break;  // outside: none anywhere
+            if (!clear_of_core(r)) break;
             repeats.emplace_back(r, face);
           }
           if (repeats.size() != column[i].size()) continue;
@@ -135,6 +146,7 @@ std::size_t place_layers(const std::vector<Vec3>& nodes, const Surface& surface,
         // Inside the shape and clear of every face, lattice faces too: points offset from a
         // curved face next to a planar one went through the planar one, and TetGen left them out.
         if (!parity.inside(q) || around.every_face.any_within(q, kLayerClearance * depth)) continue;
+        if (!clear_of_core(q)) continue;
         around.layer_points.add(q);
         inserted.points.push_back(q);
         inserted.face.push_back(-1);

@@ -18,16 +18,20 @@ namespace hexmerge::mesher {
 /// Nodes of lattice faces and of faces between two solids get none (swept: the walls between
 /// two solids get layers on both sides); depths vary by up to 10 % per node (from
 /// Surface::seed) so that the layers' sides are not cocircular quads. A point is placed only
-/// inside the shape (`parity`) and clear of every face by half its depth.
+/// inside the shape (`parity`) and clear of every face by half its depth; when the core is laid
+/// first (add_core()), out of its cells' and closing pyramids' circumspheres and at least
+/// `core_margin` from its points.
 /// @param[in] nodes             the surface's nodes in frame coordinates
 /// @param[in] face_solid_count  per face, the solids it bounds
 /// @param[in] sweep_axis        the sweep's axis, -1: not swept (then `swept` is unused)
 /// @param[in] layers            number of layers (0 to 3)
 /// @param[in] thickness         one layer's depth (a length)
+/// @param[in] core_margin       the least distance from a core point (a length)
 /// @return the number of points placed
 std::size_t place_layers(const std::vector<Vec3>& nodes, const Surface& surface,
                          const std::vector<int>& face_solid_count, const Lattice& lattice,
                          int sweep_axis, const SweptSurface& swept, int layers, double thickness,
-                         const Parity& parity, Surroundings& around, InsertedPoints& inserted);
+                         double core_margin, const Parity& parity, Surroundings& around,
+                         InsertedPoints& inserted);
 
 }  // namespace hexmerge::mesher

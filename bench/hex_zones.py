@@ -1,0 +1,148 @@
+#!/usr/bin/python3.11
+"""Where the non-hexahedral volume of a mesh_shape mesh lies: volume per element type by the
+distance of the element's centroid from the boundary, in units of h (issue 13, item 3).
+
+For each part (real_parts.py's names; sizes from bench/results/real-parts-sizes.json) the tets
+are made with hexmerge.mesh_shape(..., recombine=False) and the given mesher options, recombined
+with the defaults (conforming), and the volume of each type is summed per distance band (0-0.5 h,
+0.5-1 h, ...). The distance is to the tet mesh's boundary triangles (sampled at their corners,
+edge middles and centroids: accurate to about h / 4, enough for bands of h / 2). Also printed:
+the mesher's counts (core cells, lattice and layer points, lattice faces, sweep axis).
+
+Usage:
+  PYTHONPATH=src/python /usr/bin/python3.11 bench/hex_zones.py --parts gmsh_t20_data,holed_plate
+  ... --option lattice_margin=0.2 --option layer_thickness=0.25
+"""
+import argparse
+import json
+import os
+import sys
+import tempfile
+import time
+
+import numpy as np
+
+import benchlib
+import real_parts
+
+TET_SPLIT = {  # each type split into tets (its volume: the sum of their absolute volumes)
+    0: [(0, 1, 2, 3)],
+    1: [(0, 1, 2, 4), (0, 2, 3, 4)],
+    2: [(0, 1, 2, 5), (0, 1, 5, 4), (0, 4, 5, 3)],
+    3: [(0, 1, 3, 4), (1, 2, 3, 6), (1, 4, 5, 6), (3, 6, 7, 4), (1, 3, 4, 6)],
+}
+NAMES = ("tet", "pyramid", "prism", "hex")
+BANDS = [0, 0.5, 1.0, 1.5, 2.0, 3.0, 1e9]
+
+
+def cell_volumes_and_centroids(mesh):
+    vol = np.zeros(mesh.nb_cells)
+    cen = np.zeros((mesh.nb_cells, 3))
+    for t in range(4):
+        cells = np.flatnonzero(mesh.types == t)
+        if len(cells) == 0:
+            continue
+        n = real_parts.NB_VERTICES[t]
+        p = mesh.points[mesh.cell_vertices[mesh.offsets[cells][:, None] + np.arange(n)]]
+        cen[cells] = p.mean(axis=1)
+        for a, b, c, d in TET_SPLIT[t]:
+            e1, e2, e3 = p[:, b] - p[:, a], p[:, c] - p[:, a], p[:, d] - p[:, a]
+            vol[cells] += np.abs(np.einsum("ij,ij->i", e1, np.cross(e2, e3))) / 6
+    return vol, cen
+
+
+def boundary_samples(points, tets):
+    faces = np.concatenate([tets[:, [1, 2, 3]], tets[:, [0, 2, 3]], tets[:, [0, 1, 3]], tets[:, [0, 1, 2]]])
+    key = np.sort(faces, axis=1)
+    _, inverse, counts = np.unique(key, axis=0, return_inverse=True, return_counts=True)
+    boundary = key[counts[inverse.ravel()] == 1]
+    p = points[boundary]
+    samples = [p[:, 0], p[:, 1], p[:, 2], p.mean(axis=1), (p[:, 0] + p[:, 1]) / 2, (p[:, 1] + p[:, 2]) / 2,
+               (p[:, 2] + p[:, 0]) / 2]
+    return np.concatenate(samples)
+
+
+def analyse(path: str, h: float, options: dict) -> dict:
+    import hexmerge
+    from hexmerge import _core
+    from scipy.spatial import cKDTree
+
+    brep = _core.read_shape_file(path)
+    start = time.perf_counter()
+    tets, rep = hexmerge.mesh_shape(brep, h, recombine=False, **options)
+    meshing = rep["meshing"]
+    points = tets.points
+    cells = tets.cell_vertices.reshape(-1, 4).astype(np.int64)
+    mesh, report = hexmerge.recombine(points, cells, tets.regions)
+    seconds = time.perf_counter() - start
+    check = hexmerge.check(mesh, points, cells, tets.regions)
+    sj = real_parts.scaled_jacobians(mesh)
+    vol, cen = cell_volumes_and_centroids(mesh)
+    dist, _ = cKDTree(boundary_samples(points, cells)).query(cen)
+    dist /= h
+    total = vol.sum()
+    table = []
+    for lo, hi in zip(BANDS[:-1], BANDS[1:]):
+        inband = (dist >= lo) & (dist < hi)
+        table.append([float(vol[inband & (mesh.types == t)].sum() / total) for t in range(4)])
+    return {
+        "seconds": seconds, "tets": len(cells), "valid": check["valid"],
+        "nonconforming_quads": check["nonconforming_quads"], "cracks": check["cracks"],
+        "min_sj": check["min_scaled_jacobian"], "below_0.2": int((sj < 0.2).sum()),
+        "boundary_distance_h": meshing["max_boundary_distance"] / h, "strategy": meshing["strategy"],
+        "volume_fraction": report["volume_fraction"], "bands": table,
+        "counts": {k: meshing[k] for k in ("nb_core_cells", "nb_lattice_points", "nb_apex_points",
+                                           "nb_layer_points", "nb_lattice_faces", "nb_faces", "sweep_axis",
+                                           "nb_surface_nodes")},
+    }
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--parts", required=True, help="comma-separated part names")
+    ap.add_argument("--size", default="50k")
+    ap.add_argument("--option", action="append", default=[], help="NAME=VALUE, a mesh_shape option")
+    ap.add_argument("--cad", default=real_parts.DEFAULT_CAD)
+    ap.add_argument("--json", help="write the rows there")
+    args = ap.parse_args()
+    options = {}
+    for o in args.option:
+        k, v = o.split("=", 1)
+        options[k] = int(v) if v.isdigit() else (float(v) if v.replace(".", "", 1).isdigit() else v)
+    sizes = json.load(open(real_parts.SIZES_FILE))["parts"]
+    rows = {}
+    with tempfile.TemporaryDirectory() as work:
+        for name in args.parts.split(","):
+            if name in real_parts.GENERATED:
+                path = benchlib.geo_to_cad(os.path.join(benchlib.ROOT, "bench", "geometry", name + ".geo"),
+                                           os.path.join(work, name + ".step"))
+            else:
+                path = next(os.path.join(args.cad, f) for f in sorted(os.listdir(args.cad))
+                            if os.path.splitext(f)[0] == name)
+            h = sizes[name][args.size]["h"]
+            try:
+                row = analyse(path, h, options)
+            except Exception as e:  # the failure is the row
+                row = {"error": str(e).splitlines()[0][:300]}
+            rows[name] = row
+            if "error" in row:
+                print(f"{name} h {h:.4g}: error: {row['error']}")
+                continue
+            vf = row["volume_fraction"]
+            print(f"{name} h {h:.4g}: {row['tets']} tets {row['seconds']:.1f} s hex {100 * vf['hex']:.1f} % "
+                  f"prism {100 * vf['prism']:.1f} pyr {100 * vf['pyramid']:.1f} tet {100 * vf['tet']:.1f}; "
+                  f"min SJ {row['min_sj']:.2g} (<0.2: {row['below_0.2']}) valid {row['valid']} "
+                  f"nc {row['nonconforming_quads']} cracks {row['cracks']} bd/h {row['boundary_distance_h']:.1e} "
+                  f"{row['strategy']}")
+            print("   ", row["counts"])
+            for (lo, hi), band in zip(zip(BANDS[:-1], BANDS[1:]), row["bands"]):
+                print(f"    d/h {lo:>3}-{hi if hi < 1e8 else 'inf':<4}: vol {100 * sum(band):5.1f} %  " +
+                      "  ".join(f"{NAMES[t]} {100 * band[t]:5.1f}" for t in range(4)))
+    if args.json:
+        with open(args.json, "w") as f:
+            json.dump({"options": options, "size": args.size, "rows": rows}, f, indent=1)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
