@@ -187,6 +187,16 @@ py::dict report_to_dict(const RecombineReport& r) {
   d["candidates_per_template"] = templates;
   d["candidates_total"] = r.candidates_total;
   d["candidates_unclosable"] = r.candidates_unclosable;
+  d["post_merge"] = r.post_merge;
+  d["census_hex_candidates"] = r.census_hex_candidates;
+  d["census_closable"] = r.census_closable;
+  d["census_hex_candidates_after"] = r.census_hex_candidates_after;
+  d["census_closable_after"] = r.census_closable_after;
+  d["post_merge_attempted"] = r.post_merge_attempted;
+  d["post_merge_closed"] = r.post_merge_closed;
+  d["flips_23"] = r.flips_23;
+  d["flips_32"] = r.flips_32;
+  d["flips_44"] = r.flips_44;
   d["phase_seconds"] = phases_dict(r.phase_seconds);
   // None unless the optimality bound ran (parameter optimality_bound).
   const auto bound_field = [&](auto value) {
@@ -277,7 +287,11 @@ py::tuple run_recombine(const PointsIn& points, const IndexIn& cells, const py::
     input.tets = flat(cells, 4, "cells");
     input.regions = regions_of(regions, "regions");
   }
-  const RecombineParameters parameters = make_parameters(options);
+  RecombineParameters parameters = make_parameters(options);
+  // The post-merge stage's flips make edges that have no mid-edge node in a Tet10 mesh: it is
+  // off for quadratic input, and the report says so.
+  const bool post_merge_refused = quadratic && !parameters.same_nodes;
+  if (post_merge_refused) parameters.same_nodes = true;
   Progress watcher(progress);
   RecombineReport report;
   MixedMesh mesh;
@@ -289,6 +303,7 @@ py::tuple run_recombine(const PointsIn& points, const IndexIn& cells, const py::
       validate_tet10_mesh(tet10);  // before the run, not after it
     }
     mesh = recombine(input, parameters, report, watcher.callback());
+    if (post_merge_refused) report.post_merge = "off: Tet10 input";
     if (quadratic) second = quadratic_cells(mesh, tet10);
   } catch (const Cancelled&) {
     watcher.rethrow_python_error();

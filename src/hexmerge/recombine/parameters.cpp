@@ -138,6 +138,11 @@ std::vector<ParameterInfo> make_table() {
        "Bound time limit",
        "Time limit of each of the optimality bound's two integer programs; past it the best "
        "bound so far is reported"},
+      {"same_nodes", "bool", flag(d.same_nodes), "", 0, 1, {}, "Same tets",
+       "Keep the input's tetrahedra: every output cell is a union of them. Off, in conforming "
+       "mode, a post-merge stage flips tets (2-3, 3-2, 4-4; nodes kept) so that pyramids close "
+       "the open quad faces of more hexahedra, and the selection is run again on the new tets "
+       "(kept only when it has fewer elements); the cells then list no source tets"},
   };
 }
 
@@ -213,6 +218,8 @@ void set_parameter(RecombineParameters& p, const std::string& name, const std::s
     p.optimality_bound = parse_bool(name, value);
   } else if (name == "bound_time_limit") {
     p.bound_time_limit = parse_number(name, value, row->min, row->max);
+  } else if (name == "same_nodes") {
+    p.same_nodes = parse_bool(name, value);
   } else {
     HEXMERGE_ASSERT(false, "parameter in the table without a setter");
   }
