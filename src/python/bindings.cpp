@@ -193,6 +193,7 @@ py::dict report_to_dict(const RecombineReport& r) {
   d["census_hex_candidates_after"] = r.census_hex_candidates_after;
   d["census_closable_after"] = r.census_closable_after;
   d["post_merge_attempted"] = r.post_merge_attempted;
+  d["post_merge_rounds"] = r.post_merge_rounds;
   d["post_merge_closed"] = r.post_merge_closed;
   d["flips_23"] = r.flips_23;
   d["flips_32"] = r.flips_32;

@@ -143,6 +143,11 @@ std::vector<ParameterInfo> make_table() {
        "mode, a post-merge stage flips tets (2-3, 3-2, 4-4; nodes kept) so that pyramids close "
        "the open quad faces of more hexahedra, and the selection is run again on the new tets "
        "(kept only when it has fewer elements); the cells then list no source tets"},
+      {"post_merge_rounds", "int", number(d.post_merge_rounds), "", 1, 10, {},
+       "Post-merge rounds",
+       "Rounds of the post-merge stage (same_nodes off): each closes more quads around the "
+       "last selection and selects again; the stage stops at the first round that does not "
+       "lower the element count"},
   };
 }
 
@@ -220,6 +225,8 @@ void set_parameter(RecombineParameters& p, const std::string& name, const std::s
     p.bound_time_limit = parse_number(name, value, row->min, row->max);
   } else if (name == "same_nodes") {
     p.same_nodes = parse_bool(name, value);
+  } else if (name == "post_merge_rounds") {
+    p.post_merge_rounds = parse_int(name, value, row->min, row->max);
   } else {
     HEXMERGE_ASSERT(false, "parameter in the table without a setter");
   }
@@ -236,6 +243,7 @@ void validate_parameters(const RecombineParameters& p) {
   set_parameter(scratch, "local_search_radius", number(p.local_search_radius));
   set_parameter(scratch, "local_search_nodes", number(p.local_search_nodes));
   set_parameter(scratch, "bound_time_limit", number(p.bound_time_limit));
+  set_parameter(scratch, "post_merge_rounds", number(p.post_merge_rounds));
   if (!p.make_hexahedra && !p.make_prisms && !p.make_pyramids) {
     throw InputError("no element type is enabled: enable hexahedra, prisms or pyramids",
                      Entity::Parameter);

@@ -238,7 +238,8 @@ MixedMesh recombine(const TetMesh& input, const RecombineParameters& parameters,
   timer.lap("selection");
 
   // 6. Post-merge stage: flips that close the open quads of hexahedron candidates, then the
-  // selection again on the new tets, kept when it has fewer elements.
+  // selection again on the new tets, kept when it has fewer elements; repeated on the kept
+  // result (the new selection's hexahedra stay) for at most post_merge_rounds rounds.
   TetMesh flipped;
   if (!parameters.same_nodes) report.post_merge = conforming ? "not kept" : "off: conformity mode";
   if (post_merge) {
@@ -250,33 +251,42 @@ MixedMesh recombine(const TetMesh& input, const RecombineParameters& parameters,
     const QuadCensus before = quad_census(mesh, found, options);
     report.census_hex_candidates = report.census_hex_candidates_after = before.hex_candidates;
     report.census_closable = report.census_closable_after = before.closable;
-    PostMergeResult stage = close_open_quads(mesh, found, candidates, selection, options);
-    report.post_merge_attempted = stage.attempted;
-    report.post_merge_closed = stage.closed;
-    timer.lap("post_merge");
-    if (stage.closed > 0) {
+    timer.lap("census");
+    for (int round = 0; round < parameters.post_merge_rounds; ++round) {
+      const TetMesh& current = report.post_merge == "kept" ? flipped : mesh;
+      PostMergeResult stage = close_open_quads(current, found, candidates, selection, options);
+      report.post_merge_attempted += stage.attempted;
+      timer.lap("post_merge");
+      if (stage.closed == 0) break;
       const TetTopology new_topology(stage.tets);
-      const std::vector<Candidate> new_found = find(stage.tets, new_topology);
-      const QuadCensus after = quad_census(stage.tets, new_found, options);
-      report.census_hex_candidates_after = after.hex_candidates;
-      report.census_closable_after = after.closable;
+      std::vector<Candidate> new_found = find(stage.tets, new_topology);
       std::size_t unclosable = 0;
       std::vector<Candidate> new_candidates =
           prune_unclosable(stage.tets, new_topology, new_found, unclosable, threads);
       Selection new_selection =
           select_candidates(stage.tets, new_topology, new_candidates, parameters, progress);
-      if (output_cells(stage.tets.nb_tets(), new_candidates, new_selection) <
-          output_cells(mesh.nb_tets(), candidates, selection)) {
-        report.post_merge = "kept";
-        report.flips_23 = stage.flips.flips_23;
-        report.flips_32 = stage.flips.flips_32;
-        report.flips_44 = stage.flips.flips_44;
-        report.candidates_unclosable = unclosable;
-        flipped = std::move(stage.tets);
-        candidates = std::move(new_candidates);
-        selection = std::move(new_selection);
-      }
       timer.lap("post_merge_selection");
+      if (output_cells(stage.tets.nb_tets(), new_candidates, new_selection) >=
+          output_cells(current.nb_tets(), candidates, selection)) {
+        break;
+      }
+      report.post_merge = "kept";
+      ++report.post_merge_rounds;
+      report.post_merge_closed += stage.closed;
+      report.flips_23 += stage.flips.flips_23;
+      report.flips_32 += stage.flips.flips_32;
+      report.flips_44 += stage.flips.flips_44;
+      report.candidates_unclosable = unclosable;
+      flipped = std::move(stage.tets);
+      found = std::move(new_found);
+      candidates = std::move(new_candidates);
+      selection = std::move(new_selection);
+    }
+    if (report.post_merge == "kept") {
+      const QuadCensus after = quad_census(flipped, found, options);
+      report.census_hex_candidates_after = after.hex_candidates;
+      report.census_closable_after = after.closable;
+      timer.lap("census");
     }
   }
   copy_selection_report(selection, report);

@@ -50,6 +50,7 @@ struct RecombineReport {
   /// The same on the tets after the stage's flips.
   std::size_t census_hex_candidates_after = 0;
   std::size_t census_closable_after = 0;
+  std::size_t post_merge_rounds = 0;     ///< rounds of the stage kept
   std::size_t post_merge_closed = 0;     ///< hex candidates whose open quads the flips closed
   std::size_t post_merge_attempted = 0;  ///< hex candidates the flips were tried on
   std::size_t flips_23 = 0;              ///< flips the stage kept, by kind

@@ -293,10 +293,24 @@ PostMergeResult close_open_quads(const TetMesh& mesh, const std::vector<Candidat
   for (index_t i = 0; i < static_cast<index_t>(candidates.size()); ++i) {
     if (candidates[i].type == CellType::Hex) order.push_back(i);
   }
+  // Fewest flips first (the fan lengths beyond two tets, summed over the faces; a face whose
+  // fan cannot be followed counts max_fan), then best scaled Jacobian.
+  std::vector<int> effort(candidates.size(), 0);
+  std::vector<QuadFace> faces;
+  std::vector<index_t> fan_vertices, fan_tets;
+  for (index_t i : order) {
+    if (!stage.quad_faces(candidates[i], faces)) continue;
+    for (const QuadFace& q : faces) {
+      if (stage.on_boundary(q)) continue;
+      effort[i] += stage.fan(q, candidates[i], fan_vertices, fan_tets)
+                       ? static_cast<int>(fan_tets.size()) - 2
+                       : options.max_fan;
+    }
+  }
   std::stable_sort(order.begin(), order.end(), [&](index_t x, index_t y) {
+    if (effort[x] != effort[y]) return effort[x] < effort[y];
     return candidates[x].quality > candidates[y].quality;
   });
-  std::vector<QuadFace> faces;
   std::vector<index_t> locked_here;
   for (int pass = 0; pass < 2; ++pass) {
     for (index_t i : order) {
