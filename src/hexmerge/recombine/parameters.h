@@ -91,7 +91,7 @@ struct RecombineParameters {
   /// true: every output cell is a union of the input's tets (no post-merge stage); false
   /// (conforming mode): the post-merge stage may flip tets behind open quad faces
   /// (recombine/postmerge/postmerge.h), nodes kept
-  bool same_nodes = false;
+  bool same_nodes = true;
   int post_merge_rounds = 3;  ///< [1, 10]: rounds of the post-merge stage (each kept only if it helps)
 };
 
