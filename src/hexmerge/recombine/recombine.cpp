@@ -251,12 +251,13 @@ MixedMesh recombine(const TetMesh& input, const RecombineParameters& parameters,
     const QuadCensus before = quad_census(mesh, found, options);
     report.census_hex_candidates = report.census_hex_candidates_after = before.hex_candidates;
     report.census_closable = report.census_closable_after = before.closable;
-    timer.lap("census");
+    timer.lap("census_before");
     for (int round = 0; round < parameters.post_merge_rounds; ++round) {
       const TetMesh& current = report.post_merge == "kept" ? flipped : mesh;
       PostMergeResult stage = close_open_quads(current, found, candidates, selection, options);
       report.post_merge_attempted += stage.attempted;
-      timer.lap("post_merge");
+      const std::string suffix = "_" + std::to_string(round + 1);
+      timer.lap("post_merge_flips" + suffix);
       if (stage.closed == 0) break;
       const TetTopology new_topology(stage.tets);
       std::vector<Candidate> new_found = find(stage.tets, new_topology);
@@ -265,7 +266,7 @@ MixedMesh recombine(const TetMesh& input, const RecombineParameters& parameters,
           prune_unclosable(stage.tets, new_topology, new_found, unclosable, threads);
       Selection new_selection =
           select_candidates(stage.tets, new_topology, new_candidates, parameters, progress);
-      timer.lap("post_merge_selection");
+      timer.lap("post_merge_selection" + suffix);
       if (output_cells(stage.tets.nb_tets(), new_candidates, new_selection) >=
           output_cells(current.nb_tets(), candidates, selection)) {
         break;
@@ -286,7 +287,7 @@ MixedMesh recombine(const TetMesh& input, const RecombineParameters& parameters,
       const QuadCensus after = quad_census(flipped, found, options);
       report.census_hex_candidates_after = after.hex_candidates;
       report.census_closable_after = after.closable;
-      timer.lap("census");
+      timer.lap("census_after");
     }
   }
   copy_selection_report(selection, report);
