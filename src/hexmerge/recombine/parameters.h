@@ -92,7 +92,8 @@ struct RecombineParameters {
   /// (conforming mode): the post-merge stage may flip tets behind open quad faces
   /// (recombine/postmerge/postmerge.h), nodes kept
   bool same_nodes = true;
-  int post_merge_rounds = 1;  ///< [1, 10]: rounds of the post-merge stage (each kept only if it helps)
+  /// [1, 10]: rounds of the post-merge stage (each kept only if it helps)
+  int post_merge_rounds = 1;
 };
 
 /// The floor under min_scaled_jacobian: an element at or below 0 would be flat or inverted (the

@@ -319,10 +319,10 @@ MixedMesh recombine(const TetMesh& input, const RecombineParameters& parameters,
       kept_topology = std::make_unique<TetTopology>(tets);
       bound_topology = kept_topology.get();
     }
-    const SelectionBound bound = bound_selection(
-        tets.nb_tets(), candidates, selection.elements, parameters.bound_time_limit,
-        conforming ? conformity_rows(tets, *bound_topology, candidates)
-                   : std::vector<ConformityRow>{});
+    const SelectionBound bound =
+        bound_selection(tets.nb_tets(), candidates, selection.elements, parameters.bound_time_limit,
+                        conforming ? conformity_rows(tets, *bound_topology, candidates)
+                                   : std::vector<ConformityRow>{});
     report.bound_computed = true;
     report.bound_conforming = conforming;
     report.bound_elements = bound.bound_elements;

@@ -43,8 +43,9 @@ struct RecombineReport {
   /// nodes), "off: conformity mode" (it closes quads for conforming mode only), "kept" (the output
   /// is on the flipped tets), "not kept" (the reselection had no fewer elements).
   std::string post_merge = "off";
-  /// Census (conforming mode, post-merge on): hexahedron candidates on the input's tets, and those
-  /// whose every quad face lies on the boundary or is closed by a pyramid of the two tets behind it.
+  /// Census (conforming mode, post-merge on): hexahedron candidates on the input's tets, and
+  /// those whose every quad face lies on the boundary or is closed by a pyramid of the two tets
+  /// behind it.
   std::size_t census_hex_candidates = 0;
   std::size_t census_closable = 0;
   /// The same on the tets after the stage's flips.

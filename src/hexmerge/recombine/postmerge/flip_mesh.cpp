@@ -39,7 +39,8 @@ void FlipMesh::tets_with_edge(index_t a, index_t b, std::vector<index_t>& out) c
 
 index_t FlipMesh::tet_with_face(index_t a, index_t b, index_t c, index_t except) const {
   for (index_t t : incidence_[a]) {
-    if (t != except && t < nb_slots() && alive_[t] && holds(tet(t), a) && holds(tet(t), b) && holds(tet(t), c)) {
+    if (t != except && t < nb_slots() && alive_[t] && holds(tet(t), a) && holds(tet(t), b) &&
+        holds(tet(t), c)) {
       return t;
     }
   }
@@ -77,8 +78,7 @@ bool FlipMesh::replace(const std::vector<index_t>& old_tets,
     alive_[t] = 0;
     journal_.push_back({t, false, 0});
   }
-  const std::uint8_t kind =
-      old_tets.size() == 2 ? 23 : (old_tets.size() == 3 ? 32 : 44);
+  const std::uint8_t kind = old_tets.size() == 2 ? 23 : (old_tets.size() == 3 ? 32 : 44);
   for (const auto& q : new_tets) {
     const index_t t = nb_slots();
     tets_.insert(tets_.end(), q.begin(), q.end());

@@ -80,7 +80,7 @@ class FlipMesh {
   std::vector<std::vector<index_t>> incidence_;
   struct Entry {
     index_t tet;
-    bool created;  ///< created (undo kills it) or killed (undo revives it)
+    bool created;       ///< created (undo kills it) or killed (undo revives it)
     std::uint8_t kind;  ///< 0: none, else the flip counted (23, 32, 44) on its first entry
   };
   std::vector<Entry> journal_;

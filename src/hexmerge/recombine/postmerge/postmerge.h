@@ -46,10 +46,10 @@ QuadCensus quad_census(const TetMesh& mesh, const std::vector<Candidate>& candid
                        const PostMergeOptions& options);
 
 struct PostMergeResult {
-  TetMesh tets;                  ///< the tets after the flips (same points, compact)
-  FlipCounts flips;              ///< flips kept
-  std::size_t attempted = 0;     ///< hexahedron candidates worked on (each once)
-  std::size_t closed = 0;        ///< of them: every quad face closed, by at least one flip
+  TetMesh tets;                    ///< the tets after the flips (same points, compact)
+  FlipCounts flips;                ///< flips kept
+  std::size_t attempted = 0;       ///< hexahedron candidates worked on (each once)
+  std::size_t closed = 0;          ///< of them: every quad face closed, by at least one flip
   std::size_t already_closed = 0;  ///< of them: every quad face closed as the tets were
 };
 

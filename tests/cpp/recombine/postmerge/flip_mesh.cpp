@@ -84,7 +84,7 @@ TetMesh bipyramid(const Point& below) {
 // Four tets around the axis 4-5 of an octahedron on the square 0-1-2-3.
 TetMesh octahedron() {
   TetMesh mesh;
-  const std::vector<Point> points = {{1, 0, 0}, {0, 1, 0},  {-1, 0, 0},
+  const std::vector<Point> points = {{1, 0, 0},  {0, 1, 0}, {-1, 0, 0},
                                      {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
   for (const Point& p : points) mesh.points.insert(mesh.points.end(), p.begin(), p.end());
   for (index_t i = 0; i < 4; ++i) add_tet(mesh, 4, 5, i, (i + 1) % 4);

@@ -78,7 +78,8 @@ std::vector<Point> spaced_points(unsigned seed, double side, std::size_t count) 
     const Point p = {u(rng), u(rng), 0.5 * u(rng)};
     const bool spaced = std::none_of(points.begin(), points.end(), [&](const Point& q) {
       return (p[0] - q[0]) * (p[0] - q[0]) + (p[1] - q[1]) * (p[1] - q[1]) +
-                 (p[2] - q[2]) * (p[2] - q[2]) < 0.75 * 0.75;
+                 (p[2] - q[2]) * (p[2] - q[2]) <
+             0.75 * 0.75;
     });
     if (spaced) points.push_back(p);
   }
@@ -92,17 +93,6 @@ PostMergeOptions loose_options() {
   return options;
 }
 
-double total_volume(const TetMesh& mesh) {
-  double sum = 0.0;
-  for (index_t t = 0; t < mesh.nb_tets(); ++t) {
-    const index_t* q = mesh.tet(t);
-    const double v = tet_volume(mesh.point(q[0]), mesh.point(q[1]), mesh.point(q[2]),
-                                mesh.point(q[3]));
-    EXPECT_GT(v, 0.0) << "tet " << t;
-    sum += v;
-  }
-  return sum;
-}
 
 // The top diagonal's end points of the Kuhn cube and its two other top corners, by position:
 // cap apexes are put over the corners, each apex nearer its own corner.
@@ -142,8 +132,7 @@ TEST(post_merge, the_census_counts_the_cube_closed_by_one_apex_and_not_by_two) {
   QuadCensus census = quad_census(closed, candidates_of(closed, 0.05), loose_options());
   EXPECT_GE(census.hex_candidates, 1u);
   EXPECT_EQ(census.closable, 1u);
-  const TetMesh open =
-      capped_cube({over(face.corner0, 0.4, 1.6), over(face.corner1, 0.4, 1.6)});
+  const TetMesh open = capped_cube({over(face.corner0, 0.4, 1.6), over(face.corner1, 0.4, 1.6)});
   census = quad_census(open, candidates_of(open, 0.05), loose_options());
   EXPECT_GE(census.hex_candidates, 1u);
   EXPECT_EQ(census.closable, 0u);
@@ -151,16 +140,16 @@ TEST(post_merge, the_census_counts_the_cube_closed_by_one_apex_and_not_by_two) {
 
 TEST(post_merge, a_flip_takes_one_apex_out_of_the_fan_and_the_cube_closes) {
   const TopFace face = top_face();
-  const TetMesh mesh =
-      capped_cube({over(face.corner0, 0.4, 1.6), over(face.corner1, 0.4, 1.6)});
+  const TetMesh mesh = capped_cube({over(face.corner0, 0.4, 1.6), over(face.corner1, 0.4, 1.6)});
   const std::vector<Candidate> candidates = candidates_of(mesh, 0.05);
-  const PostMergeResult result = close_open_quads(mesh, candidates, {}, Selection{},
-                                                  loose_options());
+  const PostMergeResult result =
+      close_open_quads(mesh, candidates, {}, Selection{}, loose_options());
   EXPECT_EQ(result.closed, 1u);
   EXPECT_EQ(result.flips.flips_23 + result.flips.flips_32 + result.flips.flips_44, 1u);
   // Same nodes, same volume, every tet positive, one tet more (2-3) or fewer (3-2).
   EXPECT_EQ(result.tets.points, mesh.points);
-  EXPECT_NEAR(total_volume(result.tets), total_volume(mesh), 1e-12);
+  EXPECT_NEAR(test::total_volume(result.tets), test::total_volume(mesh), 1e-12);
+  EXPECT_GT(test::min_quality(result.tets), 0.05);  // every tet positive, above the floor
   const QuadCensus after =
       quad_census(result.tets, candidates_of(result.tets, 0.05), loose_options());
   EXPECT_EQ(after.closable, 1u);
@@ -168,8 +157,7 @@ TEST(post_merge, a_flip_takes_one_apex_out_of_the_fan_and_the_cube_closes) {
 
 TEST(post_merge, recombine_takes_the_cube_with_its_closing_pyramid_after_the_flip) {
   const TopFace face = top_face();
-  const TetMesh mesh =
-      capped_cube({over(face.corner0, 0.4, 1.6), over(face.corner1, 0.4, 1.6)});
+  const TetMesh mesh = capped_cube({over(face.corner0, 0.4, 1.6), over(face.corner1, 0.4, 1.6)});
   RecombineParameters parameters;
   parameters.min_scaled_jacobian = 0.05;
   parameters.same_nodes = true;
