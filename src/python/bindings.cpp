@@ -189,6 +189,17 @@ py::dict report_to_dict(const RecombineReport& r) {
   d["candidates_per_template"] = templates;
   d["candidates_total"] = r.candidates_total;
   d["candidates_unclosable"] = r.candidates_unclosable;
+  d["post_merge"] = r.post_merge;
+  d["census_hex_candidates"] = r.census_hex_candidates;
+  d["census_closable"] = r.census_closable;
+  d["census_hex_candidates_after"] = r.census_hex_candidates_after;
+  d["census_closable_after"] = r.census_closable_after;
+  d["post_merge_attempted"] = r.post_merge_attempted;
+  d["post_merge_rounds"] = r.post_merge_rounds;
+  d["post_merge_closed"] = r.post_merge_closed;
+  d["flips_23"] = r.flips_23;
+  d["flips_32"] = r.flips_32;
+  d["flips_44"] = r.flips_44;
   d["phase_seconds"] = phases_dict(r.phase_seconds);
   // None unless the optimality bound ran (parameter optimality_bound).
   const auto bound_field = [&](auto value) {

@@ -80,6 +80,15 @@ ParameterTable<RecombineParameters> make_table() {
       number(&P::bound_time_limit, "bound_time_limit", "s", 1, 3600, "Bound time limit",
              "Time limit of each of the optimality bound's two integer programs; past it the "
              "best bound so far is reported"),
+      flag(&P::same_nodes, "same_nodes", "Same tets",
+           "Keep the input's tetrahedra: every output cell is a union of them. Off, in conforming "
+           "mode, a post-merge stage flips tets (2-3, 3-2, 4-4; nodes kept) so that pyramids "
+           "close the open quad faces of more hexahedra, and the selection is run again on the "
+           "new tets (kept only when it has fewer elements); the cells then list no source tets"),
+      whole(&P::post_merge_rounds, "post_merge_rounds", "", 1, 10, "Post-merge rounds",
+            "Rounds of the post-merge stage (same_nodes off): each closes more quads around the "
+            "last selection and selects again; the stage stops at the first round that does not "
+            "lower the element count"),
   });
 }
 

@@ -91,6 +91,12 @@ struct RecombineParameters {
   /// also solve the selection as an integer program (bound_selection.h) and report the gap
   bool optimality_bound = false;
   double bound_time_limit = 30.0;     ///< seconds, [1, 3600]: time limit of that solve
+  /// true: every output cell is a union of the input's tets (no post-merge stage); false
+  /// (conforming mode): the post-merge stage may flip tets behind open quad faces
+  /// (recombine/postmerge/postmerge.h), nodes kept
+  bool same_nodes = true;
+  /// [1, 10]: rounds of the post-merge stage (each kept only if it helps)
+  int post_merge_rounds = 1;
 };
 
 /// The floor under min_scaled_jacobian: an element at or below 0 would be flat or inverted (the

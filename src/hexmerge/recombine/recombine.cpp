@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <memory>
 #include <thread>
 
 #include "hexmerge/check/validate_tet_mesh.h"
@@ -13,6 +14,7 @@
 #include "hexmerge/recombine/bound_selection.h"
 #include "hexmerge/recombine/find_candidates.h"
 #include "hexmerge/recombine/find_candidates_exhaustive.h"
+#include "hexmerge/recombine/postmerge/postmerge.h"
 #include "hexmerge/recombine/prune_candidates.h"
 #include "hexmerge/recombine/rf_graph.h"
 #include "hexmerge/recombine/select_candidates.h"
@@ -127,6 +129,26 @@ void fill_report(const TetMesh& input, const MixedMesh& out, RecombineReport& re
   }
 }
 
+// Cells of the output of a selection on nb_tets tets.
+std::size_t output_cells(index_t nb_tets, const std::vector<Candidate>& candidates,
+                         const Selection& selection) {
+  std::size_t cells = nb_tets;
+  for (index_t e : selection.elements) cells -= candidates[e].nb_tets - 1;
+  return cells;
+}
+
+void copy_selection_report(const Selection& selection, RecombineReport& report) {
+  report.nonconforming_quads = selection.nonconforming_quads;
+  report.block_hexahedra = selection.block_hexahedra;
+  report.closing_pyramids = selection.closing_pyramids;
+  report.released_elements = selection.released_elements;
+  report.local_moves = selection.local_moves;
+  report.swap_moves = selection.swap_moves;
+  report.reselection_moves = selection.reselection_moves;
+  report.local_search_saved = selection.local_search_saved;
+  report.selection_strategy = selection.strategy;
+}
+
 }  // namespace
 
 MixedMesh recombine(const TetMesh& input, const RecombineParameters& parameters,
@@ -163,11 +185,15 @@ MixedMesh recombine(const TetMesh& input, const RecombineParameters& parameters,
   criteria.types[static_cast<int>(CellType::Prism)] = parameters.make_prisms;
   criteria.types[static_cast<int>(CellType::Pyramid)] = parameters.make_pyramids;
   const int threads = thread_count(parameters.threads);
-  std::vector<Candidate> candidates =
-      parameters.finder == Finder::Exhaustive
-          ? find_candidates_exhaustive(mesh, topology, criteria, threads, progress)
-          : find_candidates(mesh, topology, criteria, threads, progress);
-  drop_boundary_pyramids(mesh, topology, parameters.pyramid_placement, candidates);
+  const auto find = [&](const TetMesh& tets, const TetTopology& faces) {
+    std::vector<Candidate> found =
+        parameters.finder == Finder::Exhaustive
+            ? find_candidates_exhaustive(tets, faces, criteria, threads, progress)
+            : find_candidates(tets, faces, criteria, threads, progress);
+    drop_boundary_pyramids(tets, faces, parameters.pyramid_placement, found);
+    return found;
+  };
+  std::vector<Candidate> candidates = find(mesh, topology);
   timer.lap("candidates");
   // Templates by name; the exhaustive finder's candidates count as "exhaustive_<type>".
   std::vector<std::array<std::size_t, NB_CELL_TYPES>> counts(256);
@@ -184,38 +210,106 @@ MixedMesh recombine(const TetMesh& input, const RecombineParameters& parameters,
     }
   }
   report.candidates_total = candidates.size();
-  if (parameters.conformity == Conformity::Conforming) {
-    candidates =
+  const bool conforming = parameters.conformity == Conformity::Conforming;
+  const bool post_merge = !parameters.same_nodes && conforming;
+  std::vector<Candidate> found;  // before the pruning, for the post-merge stage
+  if (conforming) {
+    std::vector<Candidate> pruned =
         prune_unclosable(mesh, topology, candidates, report.candidates_unclosable, threads);
+    if (post_merge) found = std::move(candidates);
+    candidates = std::move(pruned);
     timer.lap("pruning");
   }
 
-  const Selection selection = select_candidates(mesh, topology, candidates, parameters, progress);
-  report.nonconforming_quads = selection.nonconforming_quads;
-  report.block_hexahedra = selection.block_hexahedra;
-  report.closing_pyramids = selection.closing_pyramids;
-  report.released_elements = selection.released_elements;
-  report.local_moves = selection.local_moves;
-  report.swap_moves = selection.swap_moves;
-  report.reselection_moves = selection.reselection_moves;
-  report.local_search_saved = selection.local_search_saved;
-  report.selection_strategy = selection.strategy;
+  Selection selection = select_candidates(mesh, topology, candidates, parameters, progress);
   timer.lap("selection");
 
-  MixedMesh out = build_output(mesh, candidates, selection);
-  fill_report(mesh, out, report);
+  // 6. Post-merge stage: flips that close the open quads of hexahedron candidates, then the
+  // selection again on the new tets, kept when it has fewer elements; repeated on the kept
+  // result (the new selection's hexahedra stay) for at most post_merge_rounds rounds.
+  TetMesh flipped;
+  if (!parameters.same_nodes) report.post_merge = conforming ? "not kept" : "off: conformity mode";
+  if (post_merge) {
+    report_progress(progress, "post_merge", 0.0);
+    PostMergeOptions options;
+    options.min_pyramid_quality = criteria.min_scaled_jacobian;
+    options.min_tet_quality = criteria.min_scaled_jacobian;
+    options.placement = parameters.pyramid_placement;
+    const QuadCensus before = quad_census(mesh, found, options);
+    report.census_hex_candidates = report.census_hex_candidates_after = before.hex_candidates;
+    report.census_closable = report.census_closable_after = before.closable;
+    timer.lap("census_before");
+    for (int round = 0; round < parameters.post_merge_rounds; ++round) {
+      const TetMesh& current = report.post_merge == "kept" ? flipped : mesh;
+      PostMergeResult stage = close_open_quads(current, found, candidates, selection, options);
+      report.post_merge_attempted += stage.attempted;
+      const std::string suffix = "_" + std::to_string(round + 1);
+      timer.lap("post_merge_flips" + suffix);
+      if (stage.closed == 0) break;
+      const TetTopology new_topology(stage.tets);
+      std::vector<Candidate> new_found = find(stage.tets, new_topology);
+      std::size_t unclosable = 0;
+      std::vector<Candidate> new_candidates =
+          prune_unclosable(stage.tets, new_topology, new_found, unclosable, threads);
+      Selection new_selection =
+          select_candidates(stage.tets, new_topology, new_candidates, parameters, progress);
+      timer.lap("post_merge_selection" + suffix);
+      if (output_cells(stage.tets.nb_tets(), new_candidates, new_selection) >=
+          output_cells(current.nb_tets(), candidates, selection)) {
+        break;
+      }
+      report.post_merge = "kept";
+      ++report.post_merge_rounds;
+      report.post_merge_closed += stage.closed;
+      report.flips_23 += stage.flips.flips_23;
+      report.flips_32 += stage.flips.flips_32;
+      report.flips_44 += stage.flips.flips_44;
+      report.candidates_unclosable = unclosable;
+      flipped = std::move(stage.tets);
+      found = std::move(new_found);
+      candidates = std::move(new_candidates);
+      selection = std::move(new_selection);
+    }
+    if (report.post_merge == "kept") {
+      const QuadCensus after = quad_census(flipped, found, options);
+      report.census_hex_candidates_after = after.hex_candidates;
+      report.census_closable_after = after.closable;
+      timer.lap("census_after");
+    }
+  }
+  copy_selection_report(selection, report);
+  const bool kept = report.post_merge == "kept";
+  const TetMesh& tets = kept ? flipped : mesh;
+  const TetTopology* bound_topology = &topology;
+  std::unique_ptr<TetTopology> kept_topology;
+
+  MixedMesh out = build_output(tets, candidates, selection);
+  fill_report(tets, out, report);
   report.input_volume = std::ldexp(report.input_volume, -3 * exponent);
   if (exponent != 0) out.points = input.points;
+  if (kept) {
+    // The cells are unions of the stage's tets, not of the input's: no source tets.
+    out.source_offsets.clear();
+    out.source_tets.clear();
+    // The output's tets are the stage's: the report counts the input's.
+    report.input_tets = input.nb_tets();
+    report.element_reduction_percent =
+        100.0 * (1.0 - static_cast<double>(out.nb_cells()) / static_cast<double>(input.nb_tets()));
+  }
   timer.lap("output");
 
   if (parameters.optimality_bound) {
     report_progress(progress, "bound", 0.0);
     // In conforming mode the program gets the conformity rows too: a bound on the conforming
     // selections, which is what this mode's output is measured against.
-    const bool conforming = parameters.conformity == Conformity::Conforming;
-    const SelectionBound bound = bound_selection(
-        mesh.nb_tets(), candidates, selection.elements, parameters.bound_time_limit,
-        conforming ? conformity_rows(mesh, topology, candidates) : std::vector<ConformityRow>{});
+    if (kept) {
+      kept_topology = std::make_unique<TetTopology>(tets);
+      bound_topology = kept_topology.get();
+    }
+    const SelectionBound bound =
+        bound_selection(tets.nb_tets(), candidates, selection.elements, parameters.bound_time_limit,
+                        conforming ? conformity_rows(tets, *bound_topology, candidates)
+                                   : std::vector<ConformityRow>{});
     report.bound_computed = true;
     report.bound_conforming = conforming;
     report.bound_elements = bound.bound_elements;
@@ -226,7 +320,7 @@ MixedMesh recombine(const TetMesh& input, const RecombineParameters& parameters,
                           static_cast<double>(bound.bound_elements)) /
                          static_cast<double>(bound.bound_elements);
     // The candidates are pruned in conforming mode, so this bounds the conforming selections.
-    const VolumeBound hex_bound = bound_hex_volume(mesh, candidates, parameters.bound_time_limit);
+    const VolumeBound hex_bound = bound_hex_volume(tets, candidates, parameters.bound_time_limit);
     report.hex_volume_bound = std::ldexp(hex_bound.bound, -3 * exponent);
     report.hex_volume_bound_proved = hex_bound.proved;
     timer.lap("bound");

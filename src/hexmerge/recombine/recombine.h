@@ -41,6 +41,24 @@ struct RecombineReport {
   /// Conforming mode: candidates no conforming selection can hold, removed before the selection
   /// (prune_unclosable).
   std::size_t candidates_unclosable = 0;
+  /// The post-merge stage (parameter same_nodes; recombine/postmerge/postmerge.h): "off" (same
+  /// nodes), "off: conformity mode" (it closes quads for conforming mode only), "kept" (the output
+  /// is on the flipped tets), "not kept" (the reselection had no fewer elements).
+  std::string post_merge = "off";
+  /// Census (conforming mode, post-merge on): hexahedron candidates on the input's tets, and
+  /// those whose every quad face lies on the boundary or is closed by a pyramid of the two tets
+  /// behind it.
+  std::size_t census_hex_candidates = 0;
+  std::size_t census_closable = 0;
+  /// The same on the tets after the stage's flips.
+  std::size_t census_hex_candidates_after = 0;
+  std::size_t census_closable_after = 0;
+  std::size_t post_merge_rounds = 0;     ///< rounds of the stage kept
+  std::size_t post_merge_closed = 0;     ///< hex candidates whose open quads the flips closed
+  std::size_t post_merge_attempted = 0;  ///< hex candidates the flips were tried on
+  std::size_t flips_23 = 0;              ///< flips the stage kept, by kind
+  std::size_t flips_32 = 0;
+  std::size_t flips_44 = 0;
   PhaseSeconds phase_seconds;  ///< wall time per phase, in order
   /// The optimality bound (parameter optimality_bound, bound_selection.h); the fields below are
   /// set only when it ran. In conforming mode the program has the conformity rows and bounds the

@@ -1,0 +1,206 @@
+#include "hexmerge/recombine/postmerge/flip_mesh.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "hexmerge/core/error.h"
+#include "hexmerge/geometry/quality.h"
+
+namespace hexmerge {
+namespace {
+
+bool holds(const index_t* q, index_t v) { return q[0] == v || q[1] == v || q[2] == v || q[3] == v; }
+
+}  // namespace
+
+FlipMesh::FlipMesh(const TetMesh& mesh)
+    : points_(mesh.points),
+      with_regions_(!mesh.regions.empty()),
+      tets_(mesh.tets),
+      alive_(mesh.nb_tets(), 1),
+      locked_(mesh.nb_tets(), 0),
+      incidence_(mesh.nb_vertices()) {
+  regions_.resize(mesh.nb_tets());
+  for (index_t t = 0; t < mesh.nb_tets(); ++t) {
+    regions_[t] = mesh.region(t);
+    for (int i = 0; i < 4; ++i) incidence_[mesh.tet(t)[i]].push_back(t);
+  }
+}
+
+void FlipMesh::tets_with_edge(index_t a, index_t b, std::vector<index_t>& out) const {
+  out.clear();
+  for (index_t t : incidence_[a]) {
+    if (t < nb_slots() && alive_[t] && holds(tet(t), a) && holds(tet(t), b) &&
+        std::find(out.begin(), out.end(), t) == out.end()) {
+      out.push_back(t);
+    }
+  }
+}
+
+index_t FlipMesh::tet_with_face(index_t a, index_t b, index_t c, index_t except) const {
+  for (index_t t : incidence_[a]) {
+    if (t != except && t < nb_slots() && alive_[t] && holds(tet(t), a) && holds(tet(t), b) &&
+        holds(tet(t), c)) {
+      return t;
+    }
+  }
+  return NO_CELL;
+}
+
+index_t FlipMesh::opposite(index_t t, index_t a, index_t b, index_t c) const {
+  for (int i = 0; i < 4; ++i) {
+    const index_t v = tet(t)[i];
+    if (v != a && v != b && v != c) return v;
+  }
+  return NO_VERTEX;
+}
+
+bool FlipMesh::replace(const std::vector<index_t>& old_tets,
+                       const std::vector<std::array<index_t, 4>>& new_tets, double min_quality) {
+  const std::int32_t region = regions_[old_tets[0]];
+  double old_volume = 0.0;
+  for (index_t t : old_tets) {
+    if (!alive_[t] || locked_[t] || regions_[t] != region) return false;
+    const index_t* q = tet(t);
+    old_volume += tet_volume(point(q[0]), point(q[1]), point(q[2]), point(q[3]));
+  }
+  double new_volume = 0.0;
+  for (const auto& q : new_tets) {
+    const double volume = tet_volume(point(q[0]), point(q[1]), point(q[2]), point(q[3]));
+    if (!(volume > 0.0)) return false;
+    if (scaled_jacobian(CellType::Tet, points_.data(), q.data()) < min_quality) return false;
+    new_volume += volume;
+  }
+  // The new tets have the old ones' boundary, consistently oriented, so their signed volumes add
+  // up to the union's: this only guards the construction against rounding.
+  if (std::fabs(new_volume - old_volume) > 1e-9 * old_volume) return false;
+  for (index_t t : old_tets) {
+    alive_[t] = 0;
+    journal_.push_back({t, false, 0});
+  }
+  const std::uint8_t kind = old_tets.size() == 2 ? 23 : (old_tets.size() == 3 ? 32 : 44);
+  for (const auto& q : new_tets) {
+    const index_t t = nb_slots();
+    tets_.insert(tets_.end(), q.begin(), q.end());
+    regions_.push_back(region);
+    alive_.push_back(1);
+    locked_.push_back(0);
+    for (index_t v : q) incidence_[v].push_back(t);
+    journal_.push_back({t, true, 0});
+  }
+  journal_.back().kind = kind;
+  if (kind == 23) ++counts_.flips_23;
+  if (kind == 32) ++counts_.flips_32;
+  if (kind == 44) ++counts_.flips_44;
+  return true;
+}
+
+bool FlipMesh::flip_23(index_t t0, index_t t1, double min_quality) {
+  if (t0 == t1 || !alive_[t0] || !alive_[t1]) return false;
+  // The shared face (a, b, c), ordered so that (a, b, c, p) is positive, p the apex in t0.
+  std::array<index_t, 3> face{};
+  int n = 0;
+  index_t p = NO_VERTEX;
+  for (int i = 0; i < 4; ++i) {
+    const index_t v = tet(t0)[i];
+    if (holds(tet(t1), v)) {
+      if (n == 3) return false;
+      face[n++] = v;
+    } else {
+      p = v;
+    }
+  }
+  if (n != 3) return false;
+  const index_t q = opposite(t1, face[0], face[1], face[2]);
+  const index_t a = face[0];
+  index_t b = face[1], c = face[2];
+  if (tet_volume(point(a), point(b), point(c), point(p)) < 0.0) std::swap(b, c);
+  return replace({t0, t1}, {{{a, b, q, p}}, {{b, c, q, p}}, {{c, a, q, p}}}, min_quality);
+}
+
+bool FlipMesh::remove_edge(index_t u, index_t v, int diagonal, double min_quality) {
+  std::vector<index_t> around;
+  tets_with_edge(u, v, around);
+  if (around.size() != 3 && around.size() != 4) return false;
+  // The ring: the other two vertices of each tet, chained into one cycle.
+  std::vector<std::array<index_t, 2>> pairs;
+  for (index_t t : around) {
+    std::array<index_t, 2> pair{};
+    int n = 0;
+    for (int i = 0; i < 4; ++i) {
+      const index_t w = tet(t)[i];
+      if (w != u && w != v) pair[n++] = w;
+    }
+    pairs.push_back(pair);
+  }
+  std::vector<index_t> ring = {pairs[0][0], pairs[0][1]};
+  std::vector<char> used(pairs.size(), 0);
+  used[0] = 1;
+  while (ring.size() < pairs.size()) {
+    bool grown = false;
+    for (std::size_t k = 0; k < pairs.size() && !grown; ++k) {
+      if (used[k]) continue;
+      for (int s = 0; s < 2; ++s) {
+        if (pairs[k][s] == ring.back()) {
+          ring.push_back(pairs[k][1 - s]);
+          used[k] = 1;
+          grown = true;
+          break;
+        }
+      }
+    }
+    if (!grown) return false;  // an open ring: (u, v) is on the boundary
+  }
+  // Closed: the last unused pair joins the ends.
+  const auto last = std::find(used.begin(), used.end(), 0) - used.begin();
+  const auto& closing = pairs[static_cast<std::size_t>(last)];
+  const bool closes = (closing[0] == ring.back() && closing[1] == ring.front()) ||
+                      (closing[1] == ring.back() && closing[0] == ring.front());
+  if (!closes) return false;
+  if (tet_volume(point(u), point(v), point(ring[0]), point(ring[1])) < 0.0) {
+    std::reverse(ring.begin(), ring.end());
+  }
+  std::vector<std::array<index_t, 4>> made;
+  if (ring.size() == 3) {
+    made = {{{ring[0], ring[1], ring[2], v}}, {{ring[0], ring[2], ring[1], u}}};
+  } else {
+    const int s = diagonal == 0 ? 0 : 1;
+    const index_t r0 = ring[s], r1 = ring[s + 1], r2 = ring[s + 2], r3 = ring[(s + 3) % 4];
+    made = {{{r0, r1, r2, v}}, {{r0, r2, r3, v}}, {{r0, r2, r1, u}}, {{r0, r3, r2, u}}};
+  }
+  return replace(around, made, min_quality);
+}
+
+void FlipMesh::undo(std::size_t mark) {
+  HEXMERGE_ASSERT(mark <= journal_.size(), "undo past the journal");
+  while (journal_.size() > mark) {
+    const Entry e = journal_.back();
+    journal_.pop_back();
+    if (e.kind == 23) --counts_.flips_23;
+    if (e.kind == 32) --counts_.flips_32;
+    if (e.kind == 44) --counts_.flips_44;
+    if (e.created) {
+      // Created last, so it is the last slot: drop it (its incidence entries go stale).
+      HEXMERGE_ASSERT(e.tet + 1 == nb_slots(), "journal out of order");
+      alive_.pop_back();
+      locked_.pop_back();
+      regions_.pop_back();
+      tets_.resize(tets_.size() - 4);
+    } else {
+      alive_[e.tet] = 1;
+    }
+  }
+}
+
+TetMesh FlipMesh::compact() const {
+  TetMesh out;
+  out.points = points_;
+  for (index_t t = 0; t < nb_slots(); ++t) {
+    if (!alive_[t]) continue;
+    out.tets.insert(out.tets.end(), tet(t), tet(t) + 4);
+    if (with_regions_) out.regions.push_back(regions_[t]);
+  }
+  return out;
+}
+
+}  // namespace hexmerge

@@ -1,0 +1,90 @@
+#pragma once
+/// @file
+/// A tet mesh that can be changed by flips (2-3, 3-2, 4-4), with an undo journal: the
+/// post-merge stage's working copy of the tets (postmerge.h).
+///
+/// Tets are never changed in place: a flip kills its old tets and appends new ones, so a tet id
+/// names the same four vertices for as long as it is alive. Every flip replaces a set of tets by
+/// another tiling of the same union (same boundary triangles, same nodes), all of one region,
+/// every new tet positively oriented with a scaled Jacobian of at least the given floor; a flip
+/// that cannot satisfy that changes nothing.
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "hexmerge/core/index.h"
+#include "hexmerge/mesh/tet_mesh.h"
+
+namespace hexmerge {
+
+/// Counts of the flips done (and not undone).
+struct FlipCounts {
+  std::size_t flips_23 = 0;  ///< two tets sharing a face -> three around a new edge
+  std::size_t flips_32 = 0;  ///< three tets around an edge -> two sharing a face
+  std::size_t flips_44 = 0;  ///< four tets around an edge -> four around another edge
+};
+
+class FlipMesh {
+ public:
+  /// Copies the tets and regions of `mesh`; its points are used in place (they must outlive this).
+  explicit FlipMesh(const TetMesh& mesh);
+
+  index_t nb_slots() const { return static_cast<index_t>(alive_.size()); }
+  bool alive(index_t t) const { return alive_[t] != 0; }
+  const index_t* tet(index_t t) const { return &tets_[4 * static_cast<std::size_t>(t)]; }
+  std::int32_t region(index_t t) const { return regions_[t]; }
+  const double* point(index_t v) const { return &points_[3 * static_cast<std::size_t>(v)]; }
+
+  /// Locked tets are never flipped (the tets of elements the stage keeps).
+  bool locked(index_t t) const { return locked_[t] != 0; }
+  void set_locked(index_t t, bool value) { locked_[t] = value ? 1 : 0; }
+
+  /// The alive tets holding both vertices (appended to `out`, which is cleared first).
+  void tets_with_edge(index_t a, index_t b, std::vector<index_t>& out) const;
+  /// The alive tet holding the three vertices other than `except`, or NO_CELL.
+  index_t tet_with_face(index_t a, index_t b, index_t c, index_t except) const;
+  /// The vertex of alive tet t that is none of a, b, c.
+  index_t opposite(index_t t, index_t a, index_t b, index_t c) const;
+
+  /// 2-3 flip of the face shared by tets t0 and t1: three tets around the edge joining their
+  /// opposite vertices. False (nothing changed) when they do not share a face, a tet is locked
+  /// or dead, their regions differ, or a new tet would fall below `min_quality`.
+  bool flip_23(index_t t0, index_t t1, double min_quality);
+  /// Removes interior edge (u, v) when exactly 3 tets (3-2 flip) or 4 tets (4-4 flip, `diagonal`
+  /// 0 or 1 picks the new edge between ring vertices 0-2 or 1-3) surround it. Same conditions as
+  /// flip_23.
+  bool remove_edge(index_t u, index_t v, int diagonal, double min_quality);
+
+  /// The undo journal: undo(mark()) restores the mesh as it was at the mark, counts included.
+  std::size_t mark() const { return journal_.size(); }
+  void undo(std::size_t mark);
+
+  const FlipCounts& counts() const { return counts_; }
+
+  /// The alive tets as a compact tet mesh on the same points (tets in slot order).
+  TetMesh compact() const;
+
+ private:
+  bool replace(const std::vector<index_t>& old_tets,
+               const std::vector<std::array<index_t, 4>>& new_tets, double min_quality);
+
+  const std::vector<double>& points_;
+  bool with_regions_;
+  std::vector<index_t> tets_;
+  std::vector<std::int32_t> regions_;
+  std::vector<char> alive_;
+  std::vector<char> locked_;
+  /// Tets that held each vertex at some time (dead and stale ids included; filtered on use).
+  std::vector<std::vector<index_t>> incidence_;
+  struct Entry {
+    index_t tet;
+    bool created;       ///< created (undo kills it) or killed (undo revives it)
+    std::uint8_t kind;  ///< 0: none, else the flip counted (23, 32, 44) on its first entry
+  };
+  std::vector<Entry> journal_;
+  FlipCounts counts_;
+};
+
+}  // namespace hexmerge

@@ -1,0 +1,356 @@
+#include "hexmerge/recombine/postmerge/postmerge.h"
+
+#include <algorithm>
+#include <array>
+#include <set>
+
+#include "hexmerge/geometry/quality.h"
+#include "hexmerge/mesh/cell_type.h"
+
+namespace hexmerge {
+namespace {
+
+bool holds(const index_t* q, index_t v) { return q[0] == v || q[1] == v || q[2] == v || q[3] == v; }
+
+bool holds3(const index_t* q, index_t a, index_t b, index_t c) {
+  return holds(q, a) && holds(q, b) && holds(q, c);
+}
+
+/// One quad face of a candidate, split by its tets on diagonal a-c into (a, b, c) and (a, c, d),
+/// with the candidate's tets behind the two triangles.
+struct QuadFace {
+  index_t a, b, c, d;
+  index_t inner_abc, inner_acd;
+};
+
+class Stage {
+ public:
+  Stage(FlipMesh& mesh, const PostMergeOptions& options) : m_(mesh), options_(options) {
+    if (options.placement == PyramidPlacement::NoBoundaryNode) {
+      boundary_vertex_.assign(mesh.nb_slots() == 0 ? 0 : max_vertex() + 1, 0);
+      for (index_t t = 0; t < m_.nb_slots(); ++t) {
+        for (int f = 0; f < 4; ++f) {
+          if (!face_on_boundary(t, f)) continue;
+          for (int i = 0; i < 4; ++i) {
+            if (i != f) boundary_vertex_[m_.tet(t)[i]] = 1;
+          }
+        }
+      }
+    }
+  }
+
+  /// The candidate's quad faces with their diagonals; false when a face's split is not found
+  /// among its tets (cannot happen for a candidate of the finders).
+  bool quad_faces(const Candidate& cand, std::vector<QuadFace>& faces) const {
+    faces.clear();
+    const CellDescriptor& desc = descriptor(cand.type);
+    for (int f = 0; f < desc.nb_faces; ++f) {
+      if (desc.face_size[f] != 4) continue;
+      std::array<index_t, 4> v{};
+      for (int i = 0; i < 4; ++i) v[i] = cand.vertices[desc.face[f][i]];
+      bool found = false;
+      for (int s = 0; s < 2 && !found; ++s) {
+        const index_t a = v[s], b = v[s + 1], c = v[s + 2], d = v[(s + 3) % 4];
+        const index_t abc = inner_tet(cand, a, b, c), acd = inner_tet(cand, a, c, d);
+        if (abc != NO_CELL && acd != NO_CELL) {
+          faces.push_back({a, b, c, d, abc, acd});
+          found = true;
+        }
+      }
+      if (!found) return false;
+    }
+    return true;
+  }
+
+  /// Both triangles on the domain boundary.
+  bool on_boundary(const QuadFace& q) const {
+    return m_.tet_with_face(q.a, q.b, q.c, q.inner_abc) == NO_CELL &&
+           m_.tet_with_face(q.a, q.c, q.d, q.inner_acd) == NO_CELL;
+  }
+
+  /// The fan of tets behind the face around its diagonal: vertices b, x1, ..., xk, d and the
+  /// k + 1 tets between them. False when the fan leaves the mesh, runs into the candidate, or is
+  /// longer than max_fan tets.
+  bool fan(const QuadFace& q, const Candidate& cand, std::vector<index_t>& vertices,
+           std::vector<index_t>& tets) const {
+    vertices.assign(1, q.b);
+    tets.clear();
+    index_t cur = m_.tet_with_face(q.a, q.b, q.c, q.inner_abc);
+    index_t prev = q.b;
+    while (true) {
+      if (cur == NO_CELL || in_candidate(cand, cur)) return false;
+      const index_t x = m_.opposite(cur, q.a, q.c, prev);
+      vertices.push_back(x);
+      tets.push_back(cur);
+      if (x == q.d) return true;
+      if (static_cast<int>(tets.size()) >= options_.max_fan) return false;
+      const index_t next = m_.tet_with_face(q.a, q.c, x, cur);
+      prev = x;
+      cur = next;
+    }
+  }
+
+  /// The pyramid on the face with apex `apex` made of tets t0 (holding b) and t1 (holding d)
+  /// passes the acceptance.
+  bool pyramid_ok(const QuadFace& q, index_t apex, index_t t0, index_t t1) const {
+    if (m_.region(t0) != m_.region(t1)) return false;
+    if (pyramid_quality(q, apex) < options_.min_pyramid_quality) return false;
+    if (options_.placement == PyramidPlacement::NoBoundaryFace) {
+      for (index_t t : {t0, t1}) {
+        for (int f = 0; f < 4; ++f) {
+          if (face_on_boundary(t, f)) return false;
+        }
+      }
+    } else if (options_.placement == PyramidPlacement::NoBoundaryNode) {
+      for (index_t v : {q.a, q.b, q.c, q.d, apex}) {
+        if (boundary_vertex_[v]) return false;
+      }
+    }
+    return true;
+  }
+
+  double pyramid_quality(const QuadFace& q, index_t apex) const {
+    const std::array<index_t, 5> up{{q.a, q.b, q.c, q.d, apex}};
+    const std::array<index_t, 5> down{{q.a, q.d, q.c, q.b, apex}};
+    const double* points = m_.point(0);
+    return std::max(scaled_jacobian(CellType::Pyramid, points, up.data()),
+                    scaled_jacobian(CellType::Pyramid, points, down.data()));
+  }
+
+  /// The face is closed by the tets as they are; on success, the pyramid's tets.
+  bool closed(const QuadFace& q, const Candidate& cand, std::array<index_t, 2>& pyramid) const {
+    std::vector<index_t> vertices, tets;
+    if (!fan(q, cand, vertices, tets) || tets.size() != 2) return false;
+    pyramid = {tets[0], tets[1]};
+    return pyramid_ok(q, vertices[1], tets[0], tets[1]);
+  }
+
+  /// Closes the face by flips (none when it is closed already); on failure nothing is changed.
+  bool close(const QuadFace& q, const Candidate& cand, std::array<index_t, 2>& pyramid) {
+    std::vector<index_t> vertices, tets;
+    if (!fan(q, cand, vertices, tets)) return false;
+    if (tets.size() == 2) {
+      pyramid = {tets[0], tets[1]};
+      return pyramid_ok(q, vertices[1], tets[0], tets[1]);
+    }
+    // Apexes by the quality of their pyramid, best first.
+    std::vector<std::pair<double, index_t>> apexes;
+    for (std::size_t i = 1; i + 1 < vertices.size(); ++i) {
+      const double quality = pyramid_quality(q, vertices[i]);
+      if (quality >= options_.min_pyramid_quality) apexes.emplace_back(-quality, vertices[i]);
+    }
+    std::sort(apexes.begin(), apexes.end());
+    for (const auto& [unused, apex] : apexes) {
+      const std::size_t start = m_.mark();
+      if (reduce_fan(q, cand, apex, vertices.size()) && fan(q, cand, vertices, tets) &&
+          tets.size() == 2 && vertices[1] == apex && pyramid_ok(q, apex, tets[0], tets[1])) {
+        pyramid = {tets[0], tets[1]};
+        return true;
+      }
+      m_.undo(start);
+      fan(q, cand, vertices, tets);
+    }
+    return false;
+  }
+
+ private:
+  /// Takes every fan vertex but `apex` out of the fan, one flip at a time.
+  bool reduce_fan(const QuadFace& q, const Candidate& cand, index_t apex, std::size_t length) {
+    std::vector<index_t> vertices, tets;
+    while (true) {
+      if (!fan(q, cand, vertices, tets)) return false;
+      if (tets.size() == 2) return true;
+      bool progress = false;
+      for (std::size_t i = 1; i + 1 < vertices.size() && !progress; ++i) {
+        if (vertices[i] == apex) continue;
+        progress = remove_from_fan(q, cand, apex, vertices, tets, i);
+      }
+      if (!progress) return false;
+      if (vertices.size() >= length) return false;  // guards against a cycle of flips
+      length = vertices.size();
+    }
+  }
+
+  /// One flip that takes vertices[i] out of the fan (kept only if the fan gets shorter and still
+  /// holds the apex).
+  bool remove_from_fan(const QuadFace& q, const Candidate& cand, index_t apex,
+                       std::vector<index_t>& vertices, std::vector<index_t>& tets, std::size_t i) {
+    const std::size_t before = vertices.size();
+    const index_t x = vertices[i];
+    const auto kept = [&]() {
+      std::vector<index_t> v2, t2;
+      if (fan(q, cand, v2, t2) && v2.size() < before &&
+          std::find(v2.begin(), v2.end(), apex) != v2.end()) {
+        vertices.swap(v2);
+        tets.swap(t2);
+        return true;
+      }
+      return false;
+    };
+    const double floor = options_.min_tet_quality;
+    const std::size_t start = m_.mark();
+    if (m_.flip_23(tets[i - 1], tets[i], floor)) {
+      if (kept()) return true;
+      m_.undo(start);
+    }
+    for (index_t end : {q.a, q.c}) {
+      for (int diagonal = 0; diagonal < 2; ++diagonal) {
+        if (!m_.remove_edge(end, x, diagonal, floor)) continue;
+        if (kept()) return true;
+        m_.undo(start);
+      }
+    }
+    return false;
+  }
+
+  index_t inner_tet(const Candidate& cand, index_t a, index_t b, index_t c) const {
+    for (int i = 0; i < cand.nb_tets; ++i) {
+      if (m_.alive(cand.tets[i]) && holds3(m_.tet(cand.tets[i]), a, b, c)) return cand.tets[i];
+    }
+    return NO_CELL;
+  }
+
+  static bool in_candidate(const Candidate& cand, index_t t) {
+    return std::find(cand.tets.begin(), cand.tets.begin() + cand.nb_tets, t) !=
+           cand.tets.begin() + cand.nb_tets;
+  }
+
+  bool face_on_boundary(index_t t, int f) const {
+    std::array<index_t, 3> v{};
+    int n = 0;
+    for (int i = 0; i < 4; ++i) {
+      if (i != f) v[n++] = m_.tet(t)[i];
+    }
+    return m_.tet_with_face(v[0], v[1], v[2], t) == NO_CELL;
+  }
+
+  index_t max_vertex() const {
+    index_t most = 0;
+    for (index_t t = 0; t < m_.nb_slots(); ++t) {
+      for (int i = 0; i < 4; ++i) most = std::max(most, m_.tet(t)[i]);
+    }
+    return most;
+  }
+
+  FlipMesh& m_;
+  const PostMergeOptions& options_;
+  std::vector<char> boundary_vertex_;
+};
+
+bool all_alive(const FlipMesh& m, const Candidate& cand) {
+  for (int i = 0; i < cand.nb_tets; ++i) {
+    if (!m.alive(cand.tets[i]) || m.locked(cand.tets[i])) return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+QuadCensus quad_census(const TetMesh& mesh, const std::vector<Candidate>& candidates,
+                       const PostMergeOptions& options) {
+  FlipMesh m(mesh);
+  Stage stage(m, options);
+  QuadCensus census;
+  std::vector<QuadFace> faces;
+  std::array<index_t, 2> pyramid{};
+  for (const Candidate& cand : candidates) {
+    if (cand.type != CellType::Hex) continue;
+    ++census.hex_candidates;
+    if (!stage.quad_faces(cand, faces)) continue;
+    const bool closable = std::all_of(faces.begin(), faces.end(), [&](const QuadFace& q) {
+      return stage.on_boundary(q) || stage.closed(q, cand, pyramid);
+    });
+    if (closable) ++census.closable;
+  }
+  return census;
+}
+
+PostMergeResult close_open_quads(const TetMesh& mesh, const std::vector<Candidate>& candidates,
+                                 const std::vector<Candidate>& selected_from,
+                                 const Selection& selection, const PostMergeOptions& options) {
+  FlipMesh m(mesh);
+  Stage stage(m, options);
+  PostMergeResult result;
+  // The selection's hexahedra and the elements on their quad faces stay as they are.
+  std::set<FaceKey> hex_quads;
+  for (index_t e : selection.elements) {
+    const Candidate& c = selected_from[e];
+    if (c.type != CellType::Hex) continue;
+    for (int f = 0; f < 6; ++f) hex_quads.insert(face_key(c, f));
+  }
+  for (index_t e : selection.elements) {
+    const Candidate& c = selected_from[e];
+    bool keep = c.type == CellType::Hex;
+    for (int f = 0; f < descriptor(c.type).nb_faces && !keep; ++f) {
+      keep = descriptor(c.type).face_size[f] == 4 && hex_quads.count(face_key(c, f)) != 0;
+    }
+    if (!keep) continue;
+    for (int i = 0; i < c.nb_tets; ++i) m.set_locked(c.tets[i], true);
+  }
+  // Hexahedron candidates: first those whose faces are closed as the tets are, then the others,
+  // best scaled Jacobian first (ties by index: deterministic).
+  std::vector<index_t> order;
+  for (index_t i = 0; i < static_cast<index_t>(candidates.size()); ++i) {
+    if (candidates[i].type == CellType::Hex) order.push_back(i);
+  }
+  // Fewest flips first (the fan lengths beyond two tets, summed over the faces; a face whose
+  // fan cannot be followed counts max_fan), then best scaled Jacobian.
+  std::vector<int> effort(candidates.size(), 0);
+  std::vector<QuadFace> faces;
+  std::vector<index_t> fan_vertices, fan_tets;
+  for (index_t i : order) {
+    if (!stage.quad_faces(candidates[i], faces)) continue;
+    for (const QuadFace& q : faces) {
+      if (stage.on_boundary(q)) continue;
+      effort[i] += stage.fan(q, candidates[i], fan_vertices, fan_tets)
+                       ? static_cast<int>(fan_tets.size()) - 2
+                       : options.max_fan;
+    }
+  }
+  std::stable_sort(order.begin(), order.end(), [&](index_t x, index_t y) {
+    if (effort[x] != effort[y]) return effort[x] < effort[y];
+    return candidates[x].quality > candidates[y].quality;
+  });
+  std::vector<index_t> locked_here;
+  for (int pass = 0; pass < 2; ++pass) {
+    for (index_t i : order) {
+      const Candidate& cand = candidates[i];
+      if (!all_alive(m, cand) || !stage.quad_faces(cand, faces)) continue;
+      if (pass == 1) ++result.attempted;
+      const std::size_t start = m.mark();
+      locked_here.clear();
+      for (int k = 0; k < cand.nb_tets; ++k) {
+        m.set_locked(cand.tets[k], true);
+        locked_here.push_back(cand.tets[k]);
+      }
+      bool ok = true;
+      for (const QuadFace& q : faces) {
+        if (stage.on_boundary(q)) continue;
+        std::array<index_t, 2> pyramid{};
+        ok = pass == 0 ? stage.closed(q, cand, pyramid) : stage.close(q, cand, pyramid);
+        if (!ok) break;
+        for (index_t t : pyramid) {
+          m.set_locked(t, true);
+          locked_here.push_back(t);
+        }
+      }
+      if (ok) {
+        if (pass == 0) {
+          ++result.already_closed;
+        } else {
+          ++result.closed;
+        }
+        continue;
+      }
+      for (index_t t : locked_here) {
+        if (t < m.nb_slots()) m.set_locked(t, false);
+      }
+      m.undo(start);
+    }
+  }
+  result.flips = m.counts();
+  result.tets = m.compact();
+  return result;
+}
+
+}  // namespace hexmerge

@@ -1,0 +1,67 @@
+#pragma once
+/// @file
+/// The post-merge stage (Meshkat & Talmor, section 4.3: transformations that change the tet mesh
+/// under a merged mesh): flips that close the open quad faces of hexahedron candidates, so that
+/// a conforming selection can take them, and the census of the candidates that can be closed.
+///
+/// A quad face of a hexahedron candidate is *closed by the tets* when it lies on the domain
+/// boundary (both triangles), or when the two tets behind its triangles share their fourth vertex
+/// and so form a pyramid that passes the acceptance (one region, scaled Jacobian, the pyramid
+/// placement). Otherwise the tets behind it turn around its diagonal a-c in a fan b, x1, ..., xk,
+/// d (k >= 2). Each xi but one (the apex kept) is taken out of the fan by one flip of tets outside
+/// the candidate: a 2-3 flip of face (a, c, xi), a 3-2 flip of edge (a, xi) or (c, xi), or a 4-4
+/// flip of one of those edges. Flips keep every node and every boundary triangle; every new tet
+/// is positively oriented, in the region of the tets it replaces, with a scaled Jacobian of at
+/// least the floor given.
+
+#include <cstddef>
+#include <vector>
+
+#include "hexmerge/mesh/tet_mesh.h"
+#include "hexmerge/mesh/tet_topology.h"
+#include "hexmerge/recombine/find_candidates.h"
+#include "hexmerge/recombine/parameters.h"
+#include "hexmerge/recombine/postmerge/flip_mesh.h"
+#include "hexmerge/recombine/select_candidates.h"
+
+namespace hexmerge {
+
+struct PostMergeOptions {
+  double min_pyramid_quality = 0.3;  ///< scaled Jacobian of a closing pyramid
+  double min_tet_quality = 0.3;      ///< scaled Jacobian of every tet a flip makes
+  PyramidPlacement placement = PyramidPlacement::Anywhere;
+  /// Longest fan of tets behind a quad face that is worked on (k + 1 tets): bounds the flips per
+  /// face to max_fan - 2 and the apexes tried to max_fan - 1.
+  int max_fan = 6;
+};
+
+/// Hexahedron candidates, and those whose every quad face the tets close as they are.
+struct QuadCensus {
+  std::size_t hex_candidates = 0;
+  std::size_t closable = 0;
+};
+
+/// The census on `mesh` (candidates found on it; their tet ids are the mesh's).
+QuadCensus quad_census(const TetMesh& mesh, const std::vector<Candidate>& candidates,
+                       const PostMergeOptions& options);
+
+struct PostMergeResult {
+  TetMesh tets;                    ///< the tets after the flips (same points, compact)
+  FlipCounts flips;                ///< flips kept
+  std::size_t attempted = 0;       ///< hexahedron candidates worked on (each once)
+  std::size_t closed = 0;          ///< of them: every quad face closed, by at least one flip
+  std::size_t already_closed = 0;  ///< of them: every quad face closed as the tets were
+};
+
+/// Works on the hexahedron candidates of `candidates` (found on `mesh`, any pruning), best
+/// scaled Jacobian first, after those already closed: the tets of `selection`'s hexahedra
+/// (indices into `selected_from`) and of the elements on their quad faces are kept as they are;
+/// for each other candidate whose tets are all still there, each open quad face is closed by
+/// flips of tets that no kept candidate or closing pyramid holds. When every face closes, its
+/// tets and pyramids are kept; otherwise every flip made for it is undone and it is not tried
+/// again. Work: at most (max_fan - 1)^2 flips tried per face.
+PostMergeResult close_open_quads(const TetMesh& mesh, const std::vector<Candidate>& candidates,
+                                 const std::vector<Candidate>& selected_from,
+                                 const Selection& selection, const PostMergeOptions& options);
+
+}  // namespace hexmerge

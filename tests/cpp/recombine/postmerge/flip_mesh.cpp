@@ -1,0 +1,196 @@
+// FlipMesh: 2-3, 3-2 and 4-4 flips keep the union of the tets they replace, and undo restores.
+#include "hexmerge/recombine/postmerge/flip_mesh.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <array>
+#include <map>
+#include <vector>
+
+#include "fixtures.h"
+#include "hexmerge/geometry/quality.h"
+
+namespace hexmerge {
+namespace {
+
+using test::add_tet;
+using test::Point;
+
+using Triangle = std::array<index_t, 3>;
+
+std::vector<index_t> alive_tets(const FlipMesh& m) {
+  std::vector<index_t> out;
+  for (index_t t = 0; t < m.nb_slots(); ++t) {
+    if (m.alive(t)) out.push_back(t);
+  }
+  return out;
+}
+
+// The triangles that bound the union of the alive tets (faces held by one tet), sorted.
+std::vector<Triangle> boundary_triangles(const FlipMesh& m) {
+  std::map<Triangle, int> count;
+  for (index_t t : alive_tets(m)) {
+    for (int f = 0; f < 4; ++f) {
+      Triangle tri{};
+      int n = 0;
+      for (int i = 0; i < 4; ++i) {
+        if (i != f) tri[n++] = m.tet(t)[i];
+      }
+      std::sort(tri.begin(), tri.end());
+      ++count[tri];
+    }
+  }
+  std::vector<Triangle> out;
+  for (const auto& [tri, n] : count) {
+    EXPECT_LE(n, 2) << "a face held by three tets";
+    if (n == 1) out.push_back(tri);
+  }
+  return out;
+}
+
+double volume(const FlipMesh& m, bool& all_positive) {
+  double sum = 0.0;
+  all_positive = true;
+  for (index_t t : alive_tets(m)) {
+    const index_t* q = m.tet(t);
+    const double v = tet_volume(m.point(q[0]), m.point(q[1]), m.point(q[2]), m.point(q[3]));
+    all_positive = all_positive && v > 0.0;
+    sum += v;
+  }
+  return sum;
+}
+
+// Checks that the alive tets tile the same union as before: same boundary triangles, same volume,
+// every tet positive.
+void expect_same_union(const FlipMesh& m, const std::vector<Triangle>& boundary, double vol) {
+  bool positive = false;
+  EXPECT_NEAR(volume(m, positive), vol, 1e-12 * vol);
+  EXPECT_TRUE(positive);
+  EXPECT_EQ(boundary_triangles(m), boundary);
+}
+
+// Two tets on triangle (0, 1, 2) with apexes 3 above and 4 below: a convex bipyramid whose axis
+// 3-4 crosses the triangle.
+TetMesh bipyramid(const Point& below) {
+  TetMesh mesh;
+  const std::vector<Point> points = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0.3, 0.3, 1}, below};
+  for (const Point& p : points) mesh.points.insert(mesh.points.end(), p.begin(), p.end());
+  add_tet(mesh, 0, 1, 2, 3);
+  add_tet(mesh, 0, 1, 2, 4);
+  return mesh;
+}
+
+// Four tets around the axis 4-5 of an octahedron on the square 0-1-2-3.
+TetMesh octahedron() {
+  TetMesh mesh;
+  const std::vector<Point> points = {{1, 0, 0},  {0, 1, 0}, {-1, 0, 0},
+                                     {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+  for (const Point& p : points) mesh.points.insert(mesh.points.end(), p.begin(), p.end());
+  for (index_t i = 0; i < 4; ++i) add_tet(mesh, 4, 5, i, (i + 1) % 4);
+  return mesh;
+}
+
+TEST(flip_mesh, a_2_3_flip_keeps_the_union_and_its_3_2_flip_gives_back_the_two_tets) {
+  const TetMesh mesh = bipyramid({0.3, 0.3, -1});
+  FlipMesh m(mesh);
+  const auto boundary = boundary_triangles(m);
+  bool positive = false;
+  const double vol = volume(m, positive);
+  ASSERT_TRUE(positive);
+  ASSERT_TRUE(m.flip_23(0, 1, 0.0));
+  EXPECT_EQ(alive_tets(m).size(), 3u);
+  EXPECT_EQ(m.counts().flips_23, 1u);
+  expect_same_union(m, boundary, vol);
+  std::vector<index_t> around;
+  m.tets_with_edge(3, 4, around);
+  EXPECT_EQ(around.size(), 3u);  // the new edge joins the two apexes
+  // The 3-2 flip of that edge: two tets on triangle (0, 1, 2) again.
+  ASSERT_TRUE(m.remove_edge(3, 4, 0, 0.0));
+  EXPECT_EQ(alive_tets(m).size(), 2u);
+  EXPECT_EQ(m.counts().flips_32, 1u);
+  expect_same_union(m, boundary, vol);
+  EXPECT_NE(m.tet_with_face(0, 1, 2, NO_CELL), NO_CELL);
+}
+
+TEST(flip_mesh, a_2_3_flip_whose_new_edge_misses_the_face_changes_nothing) {
+  // The lower apex is far to the side: the segment between the apexes passes outside triangle
+  // (0, 1, 2), so the three new tets would not tile the union.
+  const TetMesh mesh = bipyramid({2.0, 2.0, -0.2});
+  FlipMesh m(mesh);
+  const auto boundary = boundary_triangles(m);
+  EXPECT_FALSE(m.flip_23(0, 1, 0.0));
+  EXPECT_EQ(alive_tets(m), (std::vector<index_t>{0, 1}));
+  EXPECT_EQ(m.counts().flips_23, 0u);
+  EXPECT_EQ(boundary_triangles(m), boundary);
+}
+
+TEST(flip_mesh, the_quality_floor_locks_and_regions_refuse_a_flip) {
+  TetMesh mesh = bipyramid({0.3, 0.3, -1});
+  {
+    FlipMesh m(mesh);
+    EXPECT_FALSE(m.flip_23(0, 1, 0.99));  // no tet of the three is near regular
+    m.set_locked(1, true);
+    EXPECT_FALSE(m.flip_23(0, 1, 0.0));
+    EXPECT_EQ(alive_tets(m).size(), 2u);
+  }
+  mesh.regions = {1, 2};
+  FlipMesh m(mesh);
+  EXPECT_FALSE(m.flip_23(0, 1, 0.0));
+}
+
+TEST(flip_mesh, a_4_4_flip_turns_the_octahedron_axis_into_either_diagonal) {
+  const TetMesh mesh = octahedron();
+  std::vector<int> made;  // per diagonal choice: 0 for the new edge 0-2, 1 for 1-3
+  for (int diagonal = 0; diagonal < 2; ++diagonal) {
+    FlipMesh m(mesh);
+    const auto boundary = boundary_triangles(m);
+    bool positive = false;
+    const double vol = volume(m, positive);
+    ASSERT_TRUE(m.remove_edge(4, 5, diagonal, 0.0));
+    EXPECT_EQ(m.counts().flips_44, 1u);
+    expect_same_union(m, boundary, vol);
+    std::vector<index_t> around, across;
+    m.tets_with_edge(4, 5, around);
+    EXPECT_TRUE(around.empty());
+    // The new edge joins opposite square corners: 0-2 or 1-3, held by all four tets.
+    m.tets_with_edge(0, 2, around);
+    m.tets_with_edge(1, 3, across);
+    EXPECT_EQ(around.size() + across.size(), 4u);
+    EXPECT_TRUE(around.size() == 4u || across.size() == 4u);
+    made.push_back(around.size() == 4u ? 0 : 1);
+  }
+  EXPECT_NE(made[0], made[1]);  // the two choices give the two diagonals
+}
+
+TEST(flip_mesh, a_boundary_edge_is_not_removed) {
+  // Three of the octahedron's four tets: the ring around 4-5 is open.
+  TetMesh mesh = octahedron();
+  mesh.tets.resize(12);
+  FlipMesh m(mesh);
+  EXPECT_FALSE(m.remove_edge(4, 5, 0, 0.0));
+  EXPECT_EQ(alive_tets(m).size(), 3u);
+}
+
+TEST(flip_mesh, undo_restores_the_tets_and_the_counts_after_several_flips) {
+  const TetMesh mesh = octahedron();
+  FlipMesh m(mesh);
+  const std::size_t start = m.mark();
+  ASSERT_TRUE(m.remove_edge(4, 5, 0, 0.0));
+  std::vector<index_t> around;
+  m.tets_with_edge(0, 2, around);
+  const index_t u = around.size() == 4u ? 0 : 1;
+  m.tets_with_edge(u, u + 2, around);
+  ASSERT_EQ(around.size(), 4u);
+  ASSERT_TRUE(m.remove_edge(u, u + 2, 0, 0.0) || m.remove_edge(u, u + 2, 1, 0.0));
+  EXPECT_EQ(m.counts().flips_44, 2u);
+  m.undo(start);
+  EXPECT_EQ(m.counts().flips_44, 0u);
+  const TetMesh back = m.compact();
+  EXPECT_EQ(back.tets, mesh.tets);
+  m.tets_with_edge(4, 5, around);
+  EXPECT_EQ(around.size(), 4u);
+}
+
+}  // namespace
+}  // namespace hexmerge

@@ -1,0 +1,259 @@
+// The post-merge stage: the census of closable hexahedron candidates, flips that close open quad
+// faces, and recombine() with same_nodes = false checked by the independent checker.
+#include "hexmerge/recombine/postmerge/postmerge.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <array>
+#include <cstdlib>
+#include <random>
+#include <vector>
+
+#include "fixtures.h"
+#include "hexmerge/check/check_mesh.h"
+#include "hexmerge/geometry/quality.h"
+#include "hexmerge/recombine/recombine.h"
+
+namespace hexmerge {
+namespace {
+
+using test::kuhn_grid;
+using test::orient_positively;
+using test::Point;
+
+// The unit cube in six Kuhn tets, with tets on its top face (z = 1) whose apexes are `apexes`:
+// one apex: a pyramid on the face; two: a fan of three tets around the face's diagonal (the
+// second tet between the two apexes), which no pyramid closes until a flip takes one apex out.
+TetMesh capped_cube(const std::vector<Point>& apexes) {
+  TetMesh mesh = kuhn_grid(1);
+  // The top triangles and the diagonal they share.
+  std::vector<std::array<index_t, 3>> top;
+  for (index_t t = 0; t < mesh.nb_tets(); ++t) {
+    for (int f = 0; f < 4; ++f) {
+      std::array<index_t, 3> tri{};
+      int k = 0;
+      for (int i = 0; i < 4; ++i) {
+        if (i != f) tri[k++] = mesh.tet(t)[i];
+      }
+      if (mesh.point(tri[0])[2] == 1 && mesh.point(tri[1])[2] == 1 && mesh.point(tri[2])[2] == 1) {
+        top.push_back(tri);
+      }
+    }
+  }
+  EXPECT_EQ(top.size(), 2u);
+  std::vector<index_t> diagonal, corner;
+  for (index_t v : top[0]) {
+    (std::count(top[1].begin(), top[1].end(), v) ? diagonal : corner).push_back(v);
+  }
+  for (index_t v : top[1]) {
+    if (!std::count(top[0].begin(), top[0].end(), v)) corner.push_back(v);
+  }
+  const index_t first = mesh.nb_vertices();
+  for (const Point& p : apexes) mesh.points.insert(mesh.points.end(), p.begin(), p.end());
+  // Apex i is on the side of corner i (apexes are given in that order).
+  const index_t a0 = first, a1 = first + static_cast<index_t>(apexes.size()) - 1;
+  mesh.tets.insert(mesh.tets.end(), {diagonal[0], diagonal[1], corner[0], a0});
+  if (a1 != a0) mesh.tets.insert(mesh.tets.end(), {diagonal[0], diagonal[1], a0, a1});
+  mesh.tets.insert(mesh.tets.end(), {diagonal[0], diagonal[1], corner[1], a1});
+  orient_positively(mesh);
+  validate_tet_mesh(mesh);
+  return mesh;
+}
+
+std::vector<Candidate> candidates_of(const TetMesh& mesh, double min_sj) {
+  const TetTopology topology(mesh);
+  AcceptanceCriteria criteria;
+  criteria.min_scaled_jacobian = min_sj;
+  return find_candidates(mesh, topology, criteria, 1);
+}
+
+// Well-spaced random points in a box of side `side` (half as high), none nearer than 0.75 to
+// another, like a mesher's nodes: their Delaunay tets are the benchmark meshes' kind.
+std::vector<Point> spaced_points(unsigned seed, double side, std::size_t count) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(0.0, side);
+  std::vector<Point> points;
+  for (int i = 0; i < 40000 && points.size() < count; ++i) {
+    const Point p = {u(rng), u(rng), 0.5 * u(rng)};
+    const bool spaced = std::none_of(points.begin(), points.end(), [&](const Point& q) {
+      return (p[0] - q[0]) * (p[0] - q[0]) + (p[1] - q[1]) * (p[1] - q[1]) +
+                 (p[2] - q[2]) * (p[2] - q[2]) <
+             0.75 * 0.75;
+    });
+    if (spaced) points.push_back(p);
+  }
+  return points;
+}
+
+PostMergeOptions loose_options() {
+  PostMergeOptions options;
+  options.min_pyramid_quality = 0.05;
+  options.min_tet_quality = 0.05;
+  return options;
+}
+
+
+// The top diagonal's end points of the Kuhn cube and its two other top corners, by position:
+// cap apexes are put over the corners, each apex nearer its own corner.
+struct TopFace {
+  Point corner0, corner1;
+};
+
+TopFace top_face() {
+  const TetMesh mesh = capped_cube({{0.5, 0.5, 1.6}});
+  TopFace face{};
+  int n = 0;
+  // The apex's two tets: their vertices off the diagonal and off the apex are the corners.
+  const index_t apex = 8;
+  std::vector<index_t> seen;
+  for (index_t t = 0; t < mesh.nb_tets(); ++t) {
+    const index_t* q = mesh.tet(t);
+    if (!std::count(q, q + 4, apex)) continue;
+    for (int i = 0; i < 4; ++i) seen.push_back(q[i]);
+  }
+  for (index_t v : seen) {
+    if (v == apex || std::count(seen.begin(), seen.end(), v) != 1) continue;
+    const double* p = mesh.point(v);
+    (n++ == 0 ? face.corner0 : face.corner1) = {p[0], p[1], p[2]};
+  }
+  EXPECT_EQ(n, 2);
+  return face;
+}
+
+// A point over the top face, `lean` of the way from its centre toward `corner`, at height h.
+Point over(const Point& corner, double lean, double h) {
+  return {0.5 + lean * (corner[0] - 0.5), 0.5 + lean * (corner[1] - 0.5), h};
+}
+
+TEST(post_merge, the_census_counts_the_cube_closed_by_one_apex_and_not_by_two) {
+  const TopFace face = top_face();
+  const TetMesh closed = capped_cube({{0.5, 0.5, 1.6}});
+  QuadCensus census = quad_census(closed, candidates_of(closed, 0.05), loose_options());
+  EXPECT_GE(census.hex_candidates, 1u);
+  EXPECT_EQ(census.closable, 1u);
+  const TetMesh open = capped_cube({over(face.corner0, 0.4, 1.6), over(face.corner1, 0.4, 1.6)});
+  census = quad_census(open, candidates_of(open, 0.05), loose_options());
+  EXPECT_GE(census.hex_candidates, 1u);
+  EXPECT_EQ(census.closable, 0u);
+}
+
+TEST(post_merge, a_flip_takes_one_apex_out_of_the_fan_and_the_cube_closes) {
+  const TopFace face = top_face();
+  const TetMesh mesh = capped_cube({over(face.corner0, 0.4, 1.6), over(face.corner1, 0.4, 1.6)});
+  const std::vector<Candidate> candidates = candidates_of(mesh, 0.05);
+  const PostMergeResult result =
+      close_open_quads(mesh, candidates, {}, Selection{}, loose_options());
+  EXPECT_EQ(result.closed, 1u);
+  EXPECT_EQ(result.flips.flips_23 + result.flips.flips_32 + result.flips.flips_44, 1u);
+  // Same nodes, same volume, every tet positive, one tet more (2-3) or fewer (3-2).
+  EXPECT_EQ(result.tets.points, mesh.points);
+  EXPECT_NEAR(test::total_volume(result.tets), test::total_volume(mesh), 1e-12);
+  EXPECT_GT(test::min_quality(result.tets), 0.05);  // every tet positive, above the floor
+  const QuadCensus after =
+      quad_census(result.tets, candidates_of(result.tets, 0.05), loose_options());
+  EXPECT_EQ(after.closable, 1u);
+}
+
+TEST(post_merge, recombine_takes_the_cube_with_its_closing_pyramid_after_the_flip) {
+  const TopFace face = top_face();
+  const TetMesh mesh = capped_cube({over(face.corner0, 0.4, 1.6), over(face.corner1, 0.4, 1.6)});
+  RecombineParameters parameters;
+  parameters.min_scaled_jacobian = 0.05;
+  parameters.same_nodes = true;
+  RecombineReport before, after;
+  const MixedMesh same = recombine(mesh, parameters, before);
+  EXPECT_EQ(before.post_merge, "off");
+  EXPECT_EQ(before.output_counts[static_cast<int>(CellType::Hex)], 0u);
+  parameters.same_nodes = false;
+  const MixedMesh out = recombine(mesh, parameters, after);
+  EXPECT_EQ(after.post_merge, "kept");
+  EXPECT_EQ(after.census_closable, 0u);
+  EXPECT_EQ(after.census_closable_after, 1u);
+  EXPECT_EQ(after.output_counts[static_cast<int>(CellType::Hex)], 1u);
+  EXPECT_EQ(after.output_counts[static_cast<int>(CellType::Pyramid)], 1u);
+  EXPECT_LT(out.nb_cells(), same.nb_cells());
+  const CheckReport check = check_mesh(out, mesh);
+  EXPECT_TRUE(check.valid());
+  EXPECT_EQ(check.nonconforming_quads, 0u);
+  EXPECT_EQ(check.moved_nodes, 0u);
+  EXPECT_LT(std::abs(check.relative_volume_difference), 1e-12);
+  EXPECT_TRUE(out.source_tets.empty());  // the cells are unions of the flipped tets
+}
+
+TEST(post_merge, same_nodes_or_another_conformity_mode_leaves_the_output_as_it_was) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(0.0, 4.0);
+  std::vector<Point> points;
+  for (int i = 0; i < 400; ++i) points.push_back({u(rng), u(rng), u(rng)});
+  const TetMesh mesh = test::tetgen_mesh(points);
+  if (mesh.nb_tets() == 0) GTEST_SKIP() << "no tetgen";
+  for (Conformity mode : {Conformity::LastResort, Conformity::Allow}) {
+    RecombineParameters parameters;
+    parameters.conformity = mode;
+    parameters.same_nodes = true;
+    RecombineReport r0, r1;
+    const MixedMesh a = recombine(mesh, parameters, r0);
+    parameters.same_nodes = false;
+    const MixedMesh b = recombine(mesh, parameters, r1);
+    EXPECT_EQ(r1.post_merge, "off: conformity mode");
+    EXPECT_EQ(a.cell_vertices, b.cell_vertices);
+    EXPECT_EQ(a.source_tets, b.source_tets);
+  }
+}
+
+// A Delaunay mesh of random points, as the benchmark meshes are: the stage keeps every node,
+// the boundary and the volume, and makes no element worse than the floors.
+TEST(post_merge, on_a_delaunay_mesh_the_stage_adds_hexahedra_and_the_checker_passes_it) {
+  const TetMesh mesh = test::tetgen_mesh(spaced_points(11, 12.0, 2500));
+  if (mesh.nb_tets() == 0) GTEST_SKIP() << "no tetgen";
+  RecombineParameters parameters;
+  parameters.same_nodes = true;
+  RecombineReport before, after;
+  const MixedMesh same = recombine(mesh, parameters, before);
+  parameters.same_nodes = false;
+  const MixedMesh out = recombine(mesh, parameters, after);
+  ASSERT_EQ(after.post_merge, "kept");
+  EXPECT_GT(after.census_closable_after, after.census_closable);
+  EXPECT_GT(after.flips_23 + after.flips_32 + after.flips_44, 0u);
+  EXPECT_LT(out.nb_cells(), same.nb_cells());
+  EXPECT_GT(after.volume_fraction[static_cast<int>(CellType::Hex)],
+            before.volume_fraction[static_cast<int>(CellType::Hex)]);
+  const CheckReport check = check_mesh(out, mesh);
+  EXPECT_TRUE(check.valid()) << (check.problems.empty() ? "" : check.problems[0]);
+  EXPECT_EQ(check.nonconforming_quads, 0u);
+  EXPECT_EQ(check.cracks, 0u);  // the boundary is the input's triangles
+  EXPECT_EQ(check.moved_nodes, 0u);
+  EXPECT_EQ(check.unused_input_nodes, 0u);
+  EXPECT_LT(std::abs(check.relative_volume_difference), 1e-9);
+  // New elements at least the acceptance floor; every element at least the input's worst tet.
+  for (CellType type : {CellType::Hex, CellType::Prism, CellType::Pyramid}) {
+    if (after.output_counts[static_cast<int>(type)] == 0) continue;
+    EXPECT_GE(after.min_scaled_jacobian[static_cast<int>(type)], 0.3);
+  }
+  EXPECT_GE(check.min_scaled_jacobian, test::min_quality(mesh) - 1e-12);
+}
+
+TEST(post_merge, regions_are_kept_region_by_region) {
+  TetMesh mesh = test::tetgen_mesh(spaced_points(5, 8.0, 1500));
+  if (mesh.nb_tets() == 0) GTEST_SKIP() << "no tetgen";
+  // Two regions split by the tets' centroids: a ragged interface.
+  for (index_t t = 0; t < mesh.nb_tets(); ++t) {
+    double x = 0.0;
+    for (int i = 0; i < 4; ++i) x += mesh.point(mesh.tet(t)[i])[0] / 4.0;
+    mesh.regions.push_back(x < 4.0 ? 1 : 2);
+  }
+  RecombineParameters parameters;
+  parameters.same_nodes = false;
+  RecombineReport report;
+  const MixedMesh out = recombine(mesh, parameters, report);
+  EXPECT_EQ(report.post_merge, "kept");
+  const CheckReport check = check_mesh(out, mesh);
+  EXPECT_TRUE(check.valid()) << (check.problems.empty() ? "" : check.problems[0]);
+  EXPECT_EQ(check.nonconforming_quads, 0u);
+  EXPECT_EQ(check.region_mismatches, 0u);
+  EXPECT_LT(check.max_region_volume_difference, 1e-6);
+}
+
+}  // namespace
+}  // namespace hexmerge
