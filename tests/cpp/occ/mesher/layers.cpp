@@ -60,7 +60,7 @@ TEST(place_layers, keep_out_of_the_core_laid_first) {
   const int layers = 2;
   Prepared p = prepare(occ_plate_with_hole(), h);
   mesher::refine(p.shape, p.surface, h, p.lattice.lattice_face, p.lattice.lattice_edge);
-  mesher::collapse_short_sides(p.surface, h, p.lattice.lattice_face);
+  mesher::collapse_sides(p.surface, h, h, p.lattice.lattice_face);
   const std::vector<Vec3> nodes =
       mesher::frame_nodes(p.shape, p.surface, p.lattice, -1, mesher::SweptSurface{});
   const auto core_then_layers = [&](bool core_first, mesher::CoreCounts& core,
