@@ -3,8 +3,6 @@
 #include <algorithm>
 #include <array>
 #include <cstdint>
-#include <exception>
-#include <thread>
 
 #include "hexmerge/core/error.h"
 #include "hexmerge/core/work_queue.h"
@@ -1394,54 +1392,18 @@ Selection select_candidates(const TetMesh& mesh, const TetTopology& topology,
                             const std::vector<Candidate>& candidates,
                             const RecombineParameters& parameters,
                             const ProgressCallback& progress) {
-  // Conforming mode has two ways to keep quads conforming, each best on its own kind of mesh:
-  // "safe pyramids" (every pending quad has a closing pyramid reserved: never releases, best on
-  // unstructured meshes) and "closable" (a pending quad needs only some candidate that could
-  // close it; elements that end up unclosed are released: best where hexes tile, as in
-  // structured regions). Both are run on the same candidates; the one with fewer elements wins,
-  // then the one with more hexahedra. The report names the winner.
+  // Conforming mode with pyramids: "safe pyramids" (a pending quad face only where a closing
+  // pyramid is reserved for it; never releases). Without pyramids, and in the other modes:
+  // "closable" (a pending quad needs only some candidate that could close it; in conforming mode
+  // the elements that end up unclosed are released). Until issue 18 both ran in conforming mode
+  // and the better was kept: "closable" never won on a benchmark mesh (docs/benchmarks.md).
   const CandidateIndex index(mesh, topology, candidates, parameters.respect_regions);
-  const bool strict = parameters.conformity == Conformity::Conforming && parameters.make_pyramids;
-  if (!strict) {
-    Selection only = Selector(mesh, topology, candidates, index, parameters, false).run(progress);
-    only.strategy = parameters.conformity == Conformity::Conforming ? "closable" : "";
-    return only;
-  }
-  // The two selections share only read-only data: the second runs on its own thread.
-  Selection other;
-  std::exception_ptr other_error;
-  std::thread second([&] {
-    try {
-      other = Selector(mesh, topology, candidates, index, parameters, false).run({});
-    } catch (...) {
-      other_error = std::current_exception();
-    }
-  });
-  Selection best;
-  try {
-    best = Selector(mesh, topology, candidates, index, parameters, true).run(progress);
-  } catch (...) {
-    second.join();
-    throw;
-  }
-  second.join();
-  if (other_error) std::rethrow_exception(other_error);
-  best.strategy = "safe_pyramids";
-  other.strategy = "closable";
-  auto cells = [&](const Selection& s) {
-    std::size_t merged = 0, hex_tets = 0;
-    for (index_t ci : s.elements) {
-      merged += candidates[ci].nb_tets - 1;
-      if (candidates[ci].type == CellType::Hex) hex_tets += candidates[ci].nb_tets;
-    }
-    return std::make_pair(mesh.nb_tets() - merged, hex_tets);
-  };
-  const auto [best_cells, best_hex] = cells(best);
-  const auto [other_cells, other_hex] = cells(other);
-  if (other_cells < best_cells || (other_cells == best_cells && other_hex > best_hex)) {
-    return other;
-  }
-  return best;
+  const bool conforming = parameters.conformity == Conformity::Conforming;
+  const bool safe_pyramids = conforming && parameters.make_pyramids;
+  Selection selection =
+      Selector(mesh, topology, candidates, index, parameters, safe_pyramids).run(progress);
+  selection.strategy = safe_pyramids ? "safe_pyramids" : conforming ? "closable" : "";
+  return selection;
 }
 
 }  // namespace hexmerge

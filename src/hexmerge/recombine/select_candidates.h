@@ -62,9 +62,10 @@ struct Selection {
 ///    The bound of the branch and bound: each undecided tet saves at most (n - 1) / n, n the
 ///    size of the largest pool candidate that takes it and has no decided tet.
 ///
-/// In conforming mode two selections are made and the better kept (see the .cpp): pending quad
-/// faces either only where a closing pyramid is reserved, or wherever some candidate could close
-/// them, with the unclosed ones released at the end.
+/// Pending quad faces (a chosen element's quad facing two free tets): in conforming mode with
+/// pyramids, only where a closing pyramid is reserved ("safe_pyramids"); otherwise wherever some
+/// candidate could close them ("closable"), the unclosed ones released at the end in conforming
+/// mode.
 ///
 /// A quad face conforms when it lies on the domain boundary or on the identical quad face of
 /// another element. The Conformity parameter decides whether a candidate that would break that
