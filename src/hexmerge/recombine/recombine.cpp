@@ -13,7 +13,7 @@
 #include "hexmerge/recombine/find_candidates_exhaustive.h"
 #include "hexmerge/recombine/prune_candidates.h"
 #include "hexmerge/recombine/rf_graph.h"
-#include "hexmerge/recombine/select_candidates.h"
+#include "hexmerge/recombine/select/select_candidates.h"
 
 namespace hexmerge {
 namespace {
