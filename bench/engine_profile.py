@@ -4,12 +4,14 @@ tet, wall time per phase and thread scaling, printed as the table the issue asks
 
 - Instructions: callgrind (valgrind) on one thread, counted from the engine's entry
   (hexmerge::recombine) down, per phase by the inclusive cost of the phase's function:
-  candidate search = find_candidates minus the quad pairs (QuadPairs' constructor), pruning =
-  prune_unclosable, selection = select_candidates plus every other thread of the process (with
-  threads=1 and OpenBLAS on one thread, the only other thread is the second selection strategy's,
-  which select_candidates started on a std::thread up to commit 1ba8402), the rest of hexmerge::recombine = validation, adjacency, output. Instruction counts do
-  not depend on the machine's load. The mesh is handed over as a .npz, so that callgrind runs
-  neither meshio nor the mesh parsing; valgrind runs about 50x slower than the program.
+  candidate search = find_candidates minus the quad pairs (QuadPairs' constructor); pruning =
+  prune_unclosable; selection = select_candidates plus
+  every other thread of the process (with threads=1 and OpenBLAS on one thread, the only other
+  thread is the second selection strategy's, which select_candidates started on a std::thread
+  up to commit 1ba8402); the rest of hexmerge::recombine = validation, adjacency, output.
+  Instruction counts do not depend on the machine's load. The mesh is handed over as a .npz, so
+  that callgrind runs neither meshio nor the mesh parsing; valgrind runs 50-100x slower than the
+  program.
 - Peak memory and wall time: run_bench.py's worker (a fresh process per run; peak = high-water
   mark of the resident set during the call minus the resident set before it), once per thread
   count. The wall times depend on the load of the machine: run on a quiet machine to compare.
@@ -187,6 +189,8 @@ def main():
     ap.add_argument("--threads", default="1,2")
     ap.add_argument("--timeout", type=float, default=900, help="seconds per timed run")
     ap.add_argument("--output", help="JSON file to write")
+    ap.add_argument("--commit", help="the commit of the module measured, when it is not the "
+                                     "checkout's HEAD (a module on PYTHONPATH built elsewhere)")
     ap.add_argument("--table", metavar="JSON", help="print the table of an earlier output")
     ap.add_argument("--callgrind-worker", nargs=2, help=argparse.SUPPRESS)
     args = ap.parse_args()
@@ -199,7 +203,7 @@ def main():
         return 0
 
     import datetime
-    data = {"git": benchlib.git_commit(), "machine": benchlib.machine(),
+    data = {"git": args.commit or benchlib.git_commit(), "machine": benchlib.machine(),
             "date": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC"),
             "instructions": {}, "timing": {}}
 
