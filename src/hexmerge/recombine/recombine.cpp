@@ -17,7 +17,7 @@
 #include "hexmerge/recombine/postmerge/postmerge.h"
 #include "hexmerge/recombine/prune_candidates.h"
 #include "hexmerge/recombine/rf_graph.h"
-#include "hexmerge/recombine/select_candidates.h"
+#include "hexmerge/recombine/select/select_candidates.h"
 
 namespace hexmerge {
 namespace {

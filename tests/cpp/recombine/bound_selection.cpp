@@ -12,7 +12,7 @@
 #include "hexmerge/core/error.h"
 #include "hexmerge/mesh/tet_topology.h"
 #include "hexmerge/recombine/recombine.h"
-#include "hexmerge/recombine/select_candidates.h"
+#include "hexmerge/recombine/select/select_candidates.h"
 
 namespace hexmerge::test {
 namespace {

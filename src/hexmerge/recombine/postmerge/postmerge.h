@@ -22,7 +22,7 @@
 #include "hexmerge/recombine/find_candidates.h"
 #include "hexmerge/recombine/parameters.h"
 #include "hexmerge/recombine/postmerge/flip_mesh.h"
-#include "hexmerge/recombine/select_candidates.h"
+#include "hexmerge/recombine/select/select_candidates.h"
 
 namespace hexmerge {
 

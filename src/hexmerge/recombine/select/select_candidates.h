@@ -31,17 +31,23 @@ struct Selection {
   std::string strategy;                 ///< conforming mode: "safe_pyramids" or "closable"
 };
 
-/// Chooses disjoint candidates.
+/// Chooses disjoint candidates, on the calling thread, in these steps (Selector::run; each
+/// step's code is named in select/selector.h):
 ///
+/// 0. The block (conforming mode only): the near-perfect hexahedra (scaled Jacobian >= 0.9) and
+///    the hexahedra and prisms with planar quad faces that can all be kept together, every open
+///    quad face of them closable by a pyramid no other quad needs, chosen at once.
 /// 1. Exhaustive-greedy over boundary tets (tets with a face on the domain boundary or, when
-///    regions are respected, on a region boundary): hexes, then prisms, then pyramids; each time
-///    the boundary tet with the fewest remaining candidates first, and at that tet the candidate
-///    with the fewest non-conformities, then the best scaled Jacobian.
-/// 2. Local optimisation (section 4.2) at every boundary tet left unmatched: take one of its
-///    candidates in place of the elements in the way, refill the freed tets greedily, keep the
-///    change only when it removes more elements.
+///    regions are respected, on a region boundary): hexes, then prisms, then pyramids. With
+///    boundary_order = quality (the default) every candidate holding a boundary tet, best scaled
+///    Jacobian first; with fewest_matches (the paper's) the boundary tet with the fewest
+///    remaining candidates first, and there the candidate with the fewest non-conformities, then
+///    the best scaled Jacobian.
+/// 2. Local optimisation (section 4.2, parameter local_optimisation) at every boundary tet left
+///    unmatched: take one of its candidates in place of the elements in the way, refill the
+///    freed tets greedily, keep the change only when it removes more elements.
 /// 3. Greedy over the interior, in breadth-first order from the boundary: hexes, prisms,
-///    pyramids.
+///    pyramids (in last_resort mode then again, non-conforming ones allowed).
 /// 4. Quad faces of chosen elements that face free tets are closed by the candidate that covers
 ///    them (a pyramid, usually); in conforming mode an element whose quad cannot be closed is
 ///    released back to tets.
@@ -61,10 +67,13 @@ struct Selection {
 ///    by (tets + moves) x nodes (every accepted move lowers the count).
 ///    The bound of the branch and bound: each undecided tet saves at most (n - 1) / n, n the
 ///    size of the largest pool candidate that takes it and has no decided tet.
+/// 6. Outside conforming mode, elements that would leave a crack are released.
 ///
-/// In conforming mode two selections are made and the better kept (see the .cpp): pending quad
-/// faces either only where a closing pyramid is reserved, or wherever some candidate could close
-/// them, with the unclosed ones released at the end.
+/// Pending quad faces (a chosen element's quad facing two free tets), the strategy named in
+/// Selection::strategy: in conforming mode with pyramids, only where a closing pyramid is
+/// reserved for it ("safe_pyramids": nothing is released in step 4); otherwise wherever some
+/// available candidate could close it ("closable"; in conforming mode the unclosed ones are
+/// released in step 4; the other modes name no strategy).
 ///
 /// A quad face conforms when it lies on the domain boundary or on the identical quad face of
 /// another element. The Conformity parameter decides whether a candidate that would break that

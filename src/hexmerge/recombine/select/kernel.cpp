@@ -1,0 +1,257 @@
+// Selection kernel: the candidate index, a candidate's conformity against what is chosen, the
+// closers of pending quad faces, the ranking at a tet, and the move journal.
+#include "hexmerge/core/error.h"
+#include "hexmerge/recombine/select/selector.h"
+
+namespace hexmerge::select {
+namespace {
+const CellDescriptor& kTet = descriptor(CellType::Tet);
+
+// Face of the cell of `c` that contains the three vertices, or -1.
+int cell_face_of(const Candidate& c, const std::array<index_t, 3>& tri) {
+  const CellDescriptor& d = descriptor(c.type);
+  for (int f = 0; f < d.nb_faces; ++f) {
+    int hits = 0;
+    for (int i = 0; i < d.face_size[f]; ++i) {
+      const index_t v = c.vertices[d.face[f][i]];
+      hits += (v == tri[0]) + (v == tri[1]) + (v == tri[2]);
+    }
+    if (hits == 3) return f;
+  }
+  return -1;
+}
+
+}  // namespace
+
+CandidateIndex::CandidateIndex(const TetMesh& mesh, const TetTopology& topo,
+                               const std::vector<Candidate>& cands, bool respect_regions) {
+  const index_t nt = mesh.nb_tets();
+  offsets.assign(static_cast<std::size_t>(nt) + 1, 0);
+  first_face.assign(cands.size() + 1, 0);
+  for (index_t ci = 0; ci < cands.size(); ++ci) {
+    const Candidate& c = cands[ci];
+    for (int i = 0; i < c.nb_tets; ++i) ++offsets[c.tets[i] + 1];
+    first_face[ci + 1] = first_face[ci] + 4 * static_cast<std::size_t>(c.nb_tets);
+  }
+  for (index_t t = 0; t < nt; ++t) offsets[t + 1] += offsets[t];
+  ids.resize(offsets[nt]);
+  std::vector<index_t> fill(offsets.begin(), offsets.end() - 1);
+  cell_face.assign(first_face.back(), -1);
+  for (index_t ci = 0; ci < cands.size(); ++ci) {
+    const Candidate& c = cands[ci];
+    for (int i = 0; i < c.nb_tets; ++i) {
+      const index_t t = c.tets[i];
+      ids[fill[t]++] = ci;
+      const index_t* q = mesh.tet(t);
+      for (int f = 0; f < 4; ++f) {
+        const index_t n = topo.neighbor(t, f);
+        if (n != NO_CELL && std::find(c.tets.begin(), c.tets.begin() + c.nb_tets, n) !=
+                                c.tets.begin() + c.nb_tets) {
+          continue;  // internal face of the candidate
+        }
+        const std::array<index_t, 3> tri{q[kTet.face[f][0]], q[kTet.face[f][1]],
+                                         q[kTet.face[f][2]]};
+        const int cf = cell_face_of(c, tri);
+        HEXMERGE_ASSERT(cf >= 0, "a candidate's boundary triangle is not on its cell");
+        cell_face[first_face[ci] + 4 * i + f] = static_cast<signed char>(cf);
+      }
+    }
+  }
+  is_boundary.assign(nt, 0);
+  for (index_t t = 0; t < nt; ++t) {
+    for (int f = 0; f < 4; ++f) {
+      const index_t n = topo.neighbor(t, f);
+      if (n == NO_CELL || (respect_regions && mesh.region(n) != mesh.region(t))) {
+        is_boundary[t] = 1;
+      }
+    }
+  }
+}
+
+Sides Selector::sides(index_t ci) const {
+  const Candidate& c = cands_[ci];
+  Sides s;
+  for (int i = 0; i < c.nb_tets; ++i) {
+    for (int f = 0; f < 4; ++f) {
+      const int cf = index_.cell_face[index_.first_face[ci] + 4 * i + f];
+      if (cf < 0) continue;
+      const index_t n = topo_.neighbor(c.tets[i], f);
+      s.side[s.count++] = {n, n == NO_CELL ? -1 : topo_.neighbor_face(c.tets[i], f), cf};
+    }
+  }
+  return s;
+}
+
+// Quad faces of chosen elements that touch free tet t through one of its faces: their keys
+// must all be quad faces of whatever element takes t.
+void Selector::required_quads(index_t t, QuadKeys& keys) const {
+  for (int f = 0; f < 4; ++f) {
+    const index_t n = topo_.neighbor(t, f);
+    if (n == NO_CELL || is_free(n)) continue;
+    const Candidate& e = cands_[owner_[n]];
+    const int ef = cell_face_at(owner_[n], n, topo_.neighbor_face(t, f));
+    if (ef >= 0 && is_quad(e, ef)) keys.add(face_key(e, ef));
+  }
+}
+
+bool Selector::has_quad(const Candidate& x, const QuadKey& key) const {
+  const CellDescriptor& d = descriptor(x.type);
+  for (int f = 0; f < d.nb_faces; ++f) {
+    if (d.face_size[f] == 4 && face_key(x, f) == key) return true;
+  }
+  return false;
+}
+
+// The best available candidate that takes free tets n1 and n2, avoids the tets of `exclude`
+// (may be null) and has every quad face the chosen elements and `extra` ask of n1 and n2 —
+// the element that would close a pending quad face. NO_INDEX when there is none.
+index_t Selector::closer(index_t n1, index_t n2, const QuadKey* extra,
+                         const Candidate* exclude) const {
+  if (strict_) return closing_pyramid(n1, n2, extra);
+  QuadKeys keys;
+  if (extra) keys.add(*extra);
+  required_quads(n1, keys);
+  required_quads(n2, keys);
+  index_t best = NO_INDEX;
+  for (index_t k = offsets_[n1]; k < offsets_[n1 + 1]; ++k) {
+    const index_t xi = ids_[k];
+    const Candidate& x = cands_[xi];
+    if (!contains(x, n2) || !available(xi)) continue;
+    if (exclude) {
+      bool overlap = false;
+      for (int i = 0; i < x.nb_tets && !overlap; ++i) overlap = contains(*exclude, x.tets[i]);
+      if (overlap) continue;
+    }
+    bool all = true;
+    for (const QuadKey& key : keys) all = all && has_quad(x, key);
+    if (!all) continue;
+    if (best == NO_INDEX || better(x, 0, cands_[best], 0)) best = xi;
+  }
+  return best;
+}
+
+// A pending quad face is safe when the two free tets behind it form a pyramid with that quad
+// as its base and no other chosen quad face touches them: nothing chosen later can take
+// either tet without matching the quad, so the pyramid is certain to be there at the end.
+index_t Selector::closing_pyramid(index_t n1, index_t n2, const QuadKey* key) const {
+  QuadKeys keys;
+  if (key) keys.add(*key);
+  required_quads(n1, keys);
+  required_quads(n2, keys);
+  return keys.count == 1 ? pyramid_on(n1, n2, keys.key[0]) : NO_INDEX;
+}
+
+// An available pyramid of tets n1 and n2 with base `key`, or NO_INDEX.
+index_t Selector::pyramid_on(index_t n1, index_t n2, const QuadKey& key) const {
+  for (index_t k = offsets_[n1]; k < offsets_[n1 + 1]; ++k) {
+    const index_t xi = ids_[k];
+    const Candidate& x = cands_[xi];
+    if (x.type == CellType::Pyramid && contains(x, n2) && available(xi) && face_key(x, 0) == key) {
+      return xi;
+    }
+  }
+  return NO_INDEX;
+}
+
+// Quad faces of candidate ci that would not conform if it were (or, when it is, as it is)
+// chosen now. A quad facing two free tets conforms while some available candidate can close
+// it; with `pending_ok` false (the final count) it does not.
+std::size_t Selector::violations(index_t ci, bool pending_ok, bool count_triangles) const {
+  const Candidate& c = cands_[ci];
+  const Sides s = sides(ci);
+  std::size_t bad = 0;
+  const CellDescriptor& d = descriptor(c.type);
+  for (int f = 0; f < d.nb_faces; ++f) {
+    const Side* half[2] = {nullptr, nullptr};
+    int nh = 0;
+    for (int i = 0; i < s.count; ++i) {
+      if (s.side[i].cell_face == f && nh < 2) half[nh++] = &s.side[i];
+    }
+    if (d.face_size[f] == 3) {
+      // Our triangle must not meet half of a chosen element's quad (counted once, on the
+      // quad's side, in the final count).
+      const index_t n = half[0]->neighbor;
+      if (!count_triangles) continue;
+      if (n != NO_CELL && !is_free(n)) {
+        const Candidate& e = cands_[owner_[n]];
+        if (is_quad(e, cell_face_at(owner_[n], n, half[0]->neighbor_face))) ++bad;
+      }
+      continue;
+    }
+    HEXMERGE_ASSERT(nh == 2, "a quad face of a candidate is not two triangles");
+    const index_t n1 = half[0]->neighbor, n2 = half[1]->neighbor;
+    if (n1 == NO_CELL && n2 == NO_CELL) continue;
+    if (n1 == NO_CELL || n2 == NO_CELL) {
+      ++bad;
+      continue;
+    }
+    if (!is_free(n1) || !is_free(n2)) {
+      if (owner_[n1] != owner_[n2]) {
+        ++bad;
+        continue;
+      }
+      const Candidate& e = cands_[owner_[n1]];
+      const int ef = cell_face_at(owner_[n1], n1, half[0]->neighbor_face);
+      if (!is_quad(e, ef) || face_key(e, ef) != face_key(c, f)) ++bad;
+      continue;
+    }
+    if (!pending_ok) {
+      ++bad;
+      continue;
+    }
+    const QuadKey key = face_key(c, f);
+    if (closer(n1, n2, &key, chosen_[ci] ? nullptr : &c) == NO_INDEX) ++bad;
+  }
+  return bad;
+}
+
+// Pending quad faces of candidate ci (not chosen) that are not safe (closing_pyramid).
+std::size_t Selector::risky_quads(index_t ci) const {
+  const Candidate& c = cands_[ci];
+  const Sides s = sides(ci);
+  const CellDescriptor& d = descriptor(c.type);
+  std::size_t risky = 0;
+  for (int f = 0; f < d.nb_faces; ++f) {
+    if (d.face_size[f] != 4) continue;
+    const auto n = tets_behind(s, f);
+    if (n[0] == NO_CELL || n[1] == NO_CELL || !is_free(n[0]) || !is_free(n[1])) continue;
+    const QuadKey key = face_key(c, f);
+    if (closing_pyramid(n[0], n[1], &key) == NO_INDEX) ++risky;
+  }
+  return risky;
+}
+
+// The best available candidate of `stage` that takes tet t, or NO_INDEX.
+index_t Selector::best_at(index_t t, const Stage& stage) const {
+  index_t best = NO_INDEX;
+  std::size_t best_v = 0;
+  for (index_t k = offsets_[t]; k < offsets_[t + 1]; ++k) {
+    const index_t ci = ids_[k];
+    const Candidate& c = cands_[ci];
+    if (c.type != stage.type || !available(ci)) continue;
+    std::size_t v = violations(ci);
+    if (v > 0 && !stage.allow_nonconforming) continue;
+    if (v == 0 && params_.conformity == Conformity::Conforming && !strict_) v = risky_quads(ci);
+    if (best == NO_INDEX || better(c, v, cands_[best], best_v)) {
+      best = ci;
+      best_v = v;
+    }
+  }
+  return best;
+}
+
+void Selector::begin_move() {
+  journaling_ = true;
+  journal_.clear();
+  chosen_journal_.clear();
+}
+
+void Selector::rollback() {
+  for (auto it = journal_.rbegin(); it != journal_.rend(); ++it) owner_[it->first] = it->second;
+  for (auto it = chosen_journal_.rbegin(); it != chosen_journal_.rend(); ++it) {
+    chosen_[it->first] = it->second;
+  }
+  journaling_ = false;
+}
+
+}  // namespace hexmerge::select

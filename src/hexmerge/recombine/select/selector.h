@@ -1,0 +1,272 @@
+#pragma once
+/// @file
+/// The selection's internals: one Selector, whose member functions live in one file per stage
+/// (the order in which Selector::run calls them):
+/// - select_candidates.cpp: the entry (select_candidates, the strategy) and Selector::run;
+/// - kernel.cpp: conformity of a candidate against what is chosen (violations, closers), the
+///   ranking at a tet, and the move journal (begin_move, rollback); ownership and choose/release
+///   are inline here;
+/// - block.cpp: the block of near-perfect and planar-quad hexahedra and prisms (step 0);
+/// - greedy.cpp: the boundary and interior greedy stages, the closing of quad faces (step 4)
+///   and, outside conforming mode, the release of cracks;
+/// - local_optimisation.cpp: the paper's local optimisation at unmatched boundary tets (4.2);
+/// - local_search.cpp: swaps and exact re-selection in neighbourhoods (step 5).
+/// What runs, in which order, is described in select_candidates.h.
+
+#include <algorithm>
+#include <array>
+#include <cstdint>
+#include <utility>
+#include <vector>
+
+#include "hexmerge/core/index.h"
+#include "hexmerge/core/progress.h"
+#include "hexmerge/mesh/cell_type.h"
+#include "hexmerge/mesh/tet_mesh.h"
+#include "hexmerge/mesh/tet_topology.h"
+#include "hexmerge/recombine/find_candidates.h"
+#include "hexmerge/recombine/parameters.h"
+#include "hexmerge/recombine/select/select_candidates.h"
+
+namespace hexmerge::select {
+
+using QuadKey = FaceKey;  // sorted vertices of a quad face
+
+// The quad faces asked of the element that takes two tets: the open quad itself and at most one
+// per face of each tet.
+struct QuadKeys {
+  std::array<QuadKey, 9> key;
+  int count = 0;
+  void add(const QuadKey& k) {
+    for (int i = 0; i < count; ++i) {
+      if (key[i] == k) return;
+    }
+    key[count++] = k;
+  }
+  const QuadKey* begin() const { return key.data(); }
+  const QuadKey* end() const { return key.data() + count; }
+};
+
+inline int gain(const Candidate& c) { return c.nb_tets - 1; }  // elements saved by merging
+
+// One boundary triangle of a candidate: the tet face it is, the tet across it, and the face of
+// the candidate's cell that it lies in.
+struct Side {
+  index_t neighbor;   // NO_CELL on the domain boundary
+  int neighbor_face;  // local face of the neighbour across it
+  int cell_face;
+};
+
+struct Sides {
+  std::array<Side, 12> side;
+  int count = 0;
+};
+
+inline bool is_quad(const Candidate& c, int f) { return descriptor(c.type).face_size[f] == 4; }
+
+// A stage of a greedy phase: which element type, and whether non-conforming ones may be taken.
+struct Stage {
+  CellType type;
+  bool allow_nonconforming;
+};
+
+// What every selection reads and none changes, built once: tet -> candidates, the cell face
+// each tet face of a candidate lies in, the boundary tets.
+struct CandidateIndex {
+  CandidateIndex(const TetMesh& mesh, const TetTopology& topo, const std::vector<Candidate>& cands,
+                 bool respect_regions);
+
+  std::vector<index_t> offsets, ids;    // tet -> candidates (CSR)
+  std::vector<std::size_t> first_face;  // candidate -> first entry of cell_face
+  std::vector<signed char> cell_face;   // per candidate, tet i, face f: its cell face, or -1
+  std::vector<char> is_boundary;
+};
+
+class Selector {
+ public:
+  Selector(const TetMesh& mesh, const TetTopology& topology,
+           const std::vector<Candidate>& candidates, const CandidateIndex& index,
+           const RecombineParameters& parameters, bool strict)
+      : mesh_(mesh),
+        topo_(topology),
+        cands_(candidates),
+        params_(parameters),
+        strict_(strict),
+        owner_(mesh.nb_tets(), NO_INDEX),
+        chosen_(candidates.size(), 0),
+        offsets_(index.offsets),
+        ids_(index.ids),
+        index_(index),
+        is_boundary_(index.is_boundary) {}
+
+  // ---- select/select_candidates.cpp
+  Selection run(const ProgressCallback& progress);
+
+ private:
+  bool is_free(index_t t) const { return owner_[t] == NO_INDEX; }
+
+  bool available(index_t ci) const {
+    const Candidate& c = cands_[ci];
+    for (int i = 0; i < c.nb_tets; ++i) {
+      if (!is_free(c.tets[i])) return false;
+    }
+    return true;
+  }
+
+  bool contains(const Candidate& c, index_t t) const {
+    return std::find(c.tets.begin(), c.tets.begin() + c.nb_tets, t) != c.tets.begin() + c.nb_tets;
+  }
+
+  // ---- select/kernel.cpp
+  Sides sides(index_t ci) const;
+  void required_quads(index_t t, QuadKeys& keys) const;
+  bool has_quad(const Candidate& x, const QuadKey& key) const;
+  index_t closer(index_t n1, index_t n2, const QuadKey* extra, const Candidate* exclude) const;
+  index_t closing_pyramid(index_t n1, index_t n2, const QuadKey* key) const;
+  index_t pyramid_on(index_t n1, index_t n2, const QuadKey& key) const;
+  std::size_t violations(index_t ci, bool pending_ok = true, bool count_triangles = true) const;
+  std::size_t risky_quads(index_t ci) const;
+  index_t best_at(index_t t, const Stage& stage) const;
+  void begin_move();
+  void rollback();
+
+  // The tets across the two triangles of quad face f (NO_CELL on the domain boundary).
+  static std::array<index_t, 2> tets_behind(const Sides& s, int f) {
+    std::array<index_t, 2> n{NO_CELL, NO_CELL};
+    int nh = 0;
+    for (int i = 0; i < s.count; ++i) {
+      if (s.side[i].cell_face == f && nh < 2) n[nh++] = s.side[i].neighbor;
+    }
+    return n;
+  }
+
+  // The cell face of candidate ei that face f of its tet t lies in (-1: inside the cell).
+  int cell_face_at(index_t ei, index_t t, int f) const {
+    const Candidate& e = cands_[ei];
+    const int i =
+        static_cast<int>(std::find(e.tets.begin(), e.tets.begin() + e.nb_tets, t) - e.tets.begin());
+    return index_.cell_face[index_.first_face[ei] + 4 * i + f];
+  }
+
+  // Ranking at one tet: element type, then fewer non-conformities (in conforming mode: fewer
+  // pending quads without a safe closing pyramid), then quality.
+  static bool better(const Candidate& a, std::size_t va, const Candidate& b, std::size_t vb) {
+    if (a.type != b.type) return static_cast<int>(a.type) > static_cast<int>(b.type);
+    if (va != vb) return va < vb;
+    return a.quality > b.quality;
+  }
+
+  void set_owner(index_t t, index_t ci) {
+    if (journaling_) journal_.push_back({t, owner_[t]});
+    owner_[t] = ci;
+  }
+
+  void choose(index_t ci) {
+    const Candidate& c = cands_[ci];
+    for (int i = 0; i < c.nb_tets; ++i) set_owner(c.tets[i], ci);
+    if (journaling_) chosen_journal_.push_back({ci, chosen_[ci]});
+    chosen_[ci] = 1;
+  }
+
+  void release(index_t ci) {
+    const Candidate& c = cands_[ci];
+    for (int i = 0; i < c.nb_tets; ++i) set_owner(c.tets[i], NO_INDEX);
+    if (journaling_) chosen_journal_.push_back({ci, chosen_[ci]});
+    chosen_[ci] = 0;
+  }
+
+  void commit() { journaling_ = false; }
+
+  // ---- select/block.cpp
+  bool planar_quads(const Candidate& c) const;
+  void select_block();
+
+  // ---- select/greedy.cpp
+  void boundary_stage_by_quality(const Stage& stage);
+  void boundary_stage(const Stage& stage);
+  void release_cracks();
+  std::vector<index_t> breadth_first_order() const;
+  void interior_stage(const Stage& stage, const std::vector<index_t>& order);
+  void close_quads();
+  template <class Touch>
+  void close_pending(index_t ci, Touch* touch);
+
+  // ---- select/local_optimisation.cpp
+  void local_optimisation();
+  void try_move(index_t ci);
+  bool neighbourhood_conforms(index_t ci, const std::vector<index_t>& freed) const;
+
+  // ---- Local search (step 5): swaps and exact re-selection in neighbourhoods -----------------
+
+  // Local state of one neighbourhood's branch and bound. Tets of the neighbourhood get local
+  // numbers (local_[t]); `state` is UNDECIDED, LEFT_FREE or the pool entry that covers the tet.
+  static constexpr int UNDECIDED = -1;
+  static constexpr int LEFT_FREE = -2;
+
+  struct Hood {
+    std::vector<index_t> tets;        // the neighbourhood, local order
+    std::vector<index_t> released;    // the elements it held
+    std::vector<index_t> pool;        // candidates wholly inside it that fit the outside
+    std::vector<int> at_offsets, at;  // local tet -> pool entries that take it (best first)
+    std::vector<char> must_cover;     // local tet: an outside element's quad face ends on it
+    std::vector<int> state;
+    // The bound: each undecided tet can save at most (n - 1) / n, n the size of the largest
+    // open pool entry (no tet of it decided) that takes it. `closed` counts the decided tets of
+    // each entry; `open_sizes` counts, per local tet and size n, its open entries; bit n of
+    // `sizes` is set while that count is not zero.
+    std::vector<int> closed;
+    std::vector<std::uint16_t> open_sizes;
+    std::vector<std::uint32_t> sizes;
+    std::vector<int> current, best;  // pool entries chosen
+    int best_saved = 0;
+    long long nodes = 0;
+    bool stopped = false;
+  };
+
+  bool checks_conformity() const { return params_.conformity != Conformity::Allow; }
+
+  // ---- select/local_search.cpp
+  bool faces_match(index_t x, int xf, index_t y, index_t n, int nf) const;
+  bool fits_outside(index_t ci) const;
+  bool fits_inside(const Hood& h, index_t ci) const;
+  bool may_stay_free(const Hood& h, index_t t) const;
+  bool reselect(Hood& h);
+  static long long share_of(const Hood& h, int l);
+  long long close_entries(Hood& h, const int* ls, int k, long long before);
+  void reopen_entries(Hood& h, const int* ls, int k);
+  void branch(Hood& h, std::size_t pos, int saved, long long rest);
+  void hood_add(Hood& h, index_t t);
+  void hood_add_element(Hood& h, index_t e);
+  void hood_clear_marks(Hood& h);
+  bool try_swap(Hood& h, index_t e);
+  bool try_reselection(Hood& h, index_t s);
+  void local_search();
+
+  // Savings per tet in units of 1 / 720720 (the least common multiple of 2..16), so that the
+  // bound is exact in integers: a tet in an element of n tets saves (n - 1) / n.
+  static constexpr long long UNIT = 720720;
+  static long long share_units(int n) { return (n - 1) * UNIT / n; }
+
+  const TetMesh& mesh_;
+  const TetTopology& topo_;
+  const std::vector<Candidate>& cands_;
+  const RecombineParameters& params_;
+  const bool strict_;  // pending quads only where a safe closing pyramid waits (closing_pyramid)
+  std::vector<index_t> owner_;           // per tet: the chosen candidate that holds it, or NO_INDEX
+  std::vector<char> chosen_;             // per candidate
+  const std::vector<index_t>& offsets_;  // tet -> candidates
+  const std::vector<index_t>& ids_;
+  const CandidateIndex& index_;
+  const std::vector<char>& is_boundary_;
+  std::vector<char> was_closer_ = std::vector<char>(cands_.size(), 0);
+
+  bool journaling_ = false;
+  std::vector<std::pair<index_t, index_t>> journal_;      // (tet, previous owner)
+  std::vector<std::pair<index_t, char>> chosen_journal_;  // (candidate, previous flag)
+  std::vector<int> local_;          // local search: per tet, its number in the neighbourhood
+  std::vector<unsigned> stamp_of_;  // local search: per candidate, last neighbourhood seen
+  unsigned stamp_ = 0;
+  Selection result_;
+};
+
+}  // namespace hexmerge::select
