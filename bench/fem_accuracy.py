@@ -67,7 +67,7 @@ VARIANTS = [
     ("no pyramids", {"make_pyramids": False}, None),
 ]
 LINEAR_ONLY_VARIANTS = [
-    ("defaults, hexahedra as C3D8I", {}, "c3d8i"),
+    ("defaults, hexahedra as C3D8I", {}, {"C3D8": "C3D8I"}),
 ]
 
 
@@ -162,7 +162,9 @@ def mesh_object(doc):
     return [o for o in doc.Analysis.Group if o.isDerivedFrom("Fem::FemMeshObject")][0]
 
 
-def gmsh(mesh_obj, size, order):
+def gmsh(mesh_obj, size, order="1st"):
+    """Meshes a MeshGmsh object with Gmsh through FreeCAD (first or second order tets of the
+    given largest size); returns its FemMesh. The FreeCAD tests use it too (tests/freecad)."""
     from femmesh.gmshtools import GmshTools
     mesh_obj.CharacteristicLengthMax = size
     mesh_obj.CharacteristicLengthMin = 0
@@ -171,6 +173,7 @@ def gmsh(mesh_obj, size, order):
     error = GmshTools(mesh_obj).create_mesh()
     if error:
         raise RuntimeError("Gmsh failed: {}".format(error))
+    return mesh_obj.FemMesh
 
 
 # CalculiX faces by corner positions (1-based in the manual, 0-based here).
@@ -180,11 +183,9 @@ CCX_FACES = {
 }
 CCX_FACES["C3D20"] = CCX_FACES["C3D8"]
 CCX_FACES["C3D15"] = CCX_FACES["C3D6"]
-CCX_NODES = {"C3D4": 4, "C3D6": 6, "C3D8": 8, "C3D8I": 8, "C3D10": 10, "C3D15": 15, "C3D20": 20}
-
-
 def read_inp_elements(lines):
     """[(first line, last line + 1, type, [(id, nodes)])] of the .inp's volume element blocks."""
+    from freecad.hexmerge.calculix import NODES as CCX_NODES
     blocks = []
     i = 0
     while i < len(lines):
@@ -259,12 +260,16 @@ def read_inp_nodes(lines):
 
 def postprocess_inp(path, mode):
     """Rewrites the .inp: mode "wedge" writes collapsed pyramids as degenerate wedges (and moves
-    their face loads to the wedge's faces); "c3d8i" writes true (not collapsed) 8-node hexahedra
-    as C3D8I. Returns how many elements changed."""
+    their face loads to the wedge's faces); a dict {written type: type} retypes the true (not
+    collapsed) hexahedra as the add-on does for its own mesh objects (calculix.retype_file:
+    {"C3D8": "C3D8I"}, {"C3D20": "C3D20R"}). Returns how many elements changed."""
+    if isinstance(mode, dict):
+        from freecad.hexmerge import calculix
+        return sum(calculix.retype_file(path, mode).values())
     with open(path) as f:
         lines = f.read().split("\n")
     blocks = read_inp_elements(lines)
-    points = read_inp_nodes(lines) if mode == "wedge" else None
+    points = read_inp_nodes(lines)
     changed = {}
     out = []
     last = 0
@@ -278,10 +283,6 @@ def postprocess_inp(path, mode):
                 new_kind, wedge = as_wedge(kind, nodes, points)
                 moved.append((eid, wedge))
                 changed[eid] = (kind, nodes, new_kind, wedge)
-            elif mode == "c3d8i" and kind == "C3D8" and not collapsed_pyramid(nodes):
-                new_kind = "C3D8I"
-                moved.append((eid, nodes))
-                changed[eid] = (kind, nodes, new_kind, nodes)
             else:
                 keep.append((eid, nodes))
         header = lines[first]
@@ -402,7 +403,7 @@ def volume_fractions(report):
 def worker(job):
     """One case and one source mesh (Gmsh tets, then every recombination) or one shape mesh."""
     import FreeCAD
-    from freecad.hexmerge import engine, jobs
+    from freecad.hexmerge import calculix, engine, jobs
     case = job["case"]
     doc, mesh = build_case(case)
     rows = []
@@ -438,14 +439,19 @@ def worker(job):
         femmesh, report = sj.finish()
         mesh.FemMesh = femmesh
         label = "from shape {:g} mm, {} order".format(job["size"], "second" if second else "first")
-        result, inp, seconds = solve(doc)
-        rows.append(row(case, label, femmesh, result, inp, seconds,
-                        {"source": label, "volume %": volume_fractions(report)}))
-        if not second:
-            result, inp, seconds = solve(doc, "c3d8i")
-            rows.append(row(case, label + ", C3D8I", femmesh, result, inp, seconds,
+        # As FreeCAD's writer writes it (C3D8 / C3D20), then each other hexahedron type the
+        # add-on offers, retyped as the add-on's writer hook does (freecad/hexmerge/calculix.py).
+        written = "C3D20" if second else "C3D8"
+        offered = calculix.QUADRATIC_HEXAHEDRON if second else calculix.LINEAR_HEXAHEDRON
+        for kind in [written] + [k for k in offered if k != written]:
+            post = None if kind == written else {written: kind}
+            name = label if kind == written else "{}, hexahedra as {}".format(label, kind)
+            if kind == offered[0]:
+                name += " (the add-on's default)"
+            result, inp, seconds = solve(doc, post)
+            rows.append(row(case, name, femmesh, result, inp, seconds,
                             {"source": label, "volume %": volume_fractions(report),
-                             "post": "c3d8i"}))
+                             "post": post}))
     FreeCAD.closeDocument(doc.Name)
     return rows
 

@@ -11,6 +11,7 @@ The mesher's options (hexmerge.mesh_parameters(): used when the source is a shap
 the same way into the group "Shape meshing", with the target size (a length) and SecondOrder.
 """
 
+from . import calculix
 from . import engine
 
 # Property groups, by parameter name; parameters not listed go to "Engine".
@@ -30,7 +31,8 @@ class PropertySpec:
     """One data property: FreeCAD type, name, group, doc, default, and the engine parameter it
     feeds (None for the add-on's own)."""
 
-    def __init__(self, kind, name, group, doc, default, parameter=None, row=None):
+    def __init__(self, kind, name, group, doc, default, parameter=None, row=None,
+                 output=False):
         self.kind = kind
         self.name = name
         self.group = group
@@ -38,12 +40,14 @@ class PropertySpec:
         self.default = default
         self.parameter = parameter
         self.row = row
+        self.output = output  # a change does not touch the object (nothing to recompute)
 
     def add_to(self, obj):
-        if self.name in obj.PropertiesList:
-            return
-        obj.addProperty(self.kind, self.name, self.group, self.doc)
-        self.reset(obj)
+        if self.name not in obj.PropertiesList:
+            obj.addProperty(self.kind, self.name, self.group, self.doc)
+            self.reset(obj)
+        if self.output:
+            obj.setPropertyStatus(self.name, "Output")
 
     def reset(self, obj):
         if self.kind == "App::PropertyEnumeration":
@@ -152,6 +156,18 @@ def addon_specs():
                      "recombine (never modified)", None),
         PropertySpec("App::PropertyBool", "PyramidsAsHexahedra", "CalculiX",
                      engine.PYRAMIDS_AS_HEXAHEDRA_DOC, True),
+        # Element types of the .inp (calculix.py rewrites what FreeCAD 0.20's writer writes).
+        PropertySpec("App::PropertyEnumeration", "LinearHexahedron", "CalculiX",
+                     calculix.LINEAR_HEXAHEDRON_DOC, calculix.LINEAR_HEXAHEDRON[0],
+                     "linear_hexahedron", {"name": "linear_hexahedron", "label": "Linear hexahedra",
+                                           "choices": calculix.LINEAR_HEXAHEDRON},
+                     output=True),
+        PropertySpec("App::PropertyEnumeration", "QuadraticHexahedron", "CalculiX",
+                     calculix.QUADRATIC_HEXAHEDRON_DOC, calculix.QUADRATIC_HEXAHEDRON[0],
+                     "quadratic_hexahedron", {"name": "quadratic_hexahedron",
+                                              "label": "Quadratic hexahedra",
+                                              "choices": calculix.QUADRATIC_HEXAHEDRON},
+                     output=True),
     ]
 
 
