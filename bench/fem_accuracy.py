@@ -418,7 +418,8 @@ def worker(job):
         seen = set()
         for name, options, post in variants:
             effective = tuple(sorted(dict(defaults, **{k: str(v).lower() for k, v in
-                                                       options.items()}).items())) + (post,)
+                                                       options.items()}).items())) \
+                + (json.dumps(post, sort_keys=True),)
             if effective in seen:
                 continue
             seen.add(effective)
@@ -443,11 +444,12 @@ def worker(job):
         # add-on offers, retyped as the add-on's writer hook does (freecad/hexmerge/calculix.py).
         written = "C3D20" if second else "C3D8"
         offered = calculix.QUADRATIC_HEXAHEDRON if second else calculix.LINEAR_HEXAHEDRON
+        if written == offered[0]:
+            label += " (the add-on's default)"
         for kind in [written] + [k for k in offered if k != written]:
             post = None if kind == written else {written: kind}
-            name = label if kind == written else "{}, hexahedra as {}".format(label, kind)
-            if kind == offered[0]:
-                name += " (the add-on's default)"
+            name = label if kind == written else "{}, hexahedra as {}".format(
+                label, kind + (" (the add-on's default)" if kind == offered[0] else ""))
             result, inp, seconds = solve(doc, post)
             rows.append(row(case, name, femmesh, result, inp, seconds,
                             {"source": label, "volume %": volume_fractions(report),
