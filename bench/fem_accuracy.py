@@ -460,14 +460,13 @@ def worker(job):
 
 # ---- the driver ------------------------------------------------------------------------------
 
-def jobs_for(cases):
+def jobs_for(cases, kinds=("gmsh", "shape"), orders=("1st", "2nd")):
     jobs = []
     for case in cases:
         for size in SIZES[case]:
-            for order in ("1st", "2nd"):
-                jobs.append({"case": case, "kind": "gmsh", "size": size, "order": order})
-            for order in ("1st", "2nd"):
-                jobs.append({"case": case, "kind": "shape", "size": size, "order": order})
+            for kind in kinds:
+                for order in orders:
+                    jobs.append({"case": case, "kind": kind, "size": size, "order": order})
     return jobs
 
 
@@ -589,6 +588,9 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--cases", default="cantilever,plate,cylinder")
     parser.add_argument("--sizes", help="case:size[,size] overrides, e.g. plate:10")
+    parser.add_argument("--kinds", default="gmsh,shape",
+                        help="source meshes: gmsh (Gmsh tets and their recombinations), shape")
+    parser.add_argument("--orders", default="1st,2nd")
     parser.add_argument("--timeout", type=float, default=900.0, help="seconds per job")
     parser.add_argument("--no-doc", action="store_true", help="do not write docs/fem-accuracy.md")
     parser.add_argument("--table", help="print the table of an earlier JSON run")
@@ -606,7 +608,7 @@ def main():
     rows = []
     t = time.perf_counter()
     os.makedirs(os.path.join(ROOT, "bench", "results"), exist_ok=True)
-    for job in jobs_for(cases):
+    for job in jobs_for(cases, args.kinds.split(","), args.orders.split(",")):
         try:
             rows += run_job(job, args.timeout)
         except (RuntimeError, subprocess.TimeoutExpired) as e:
