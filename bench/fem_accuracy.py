@@ -458,6 +458,57 @@ def worker(job):
     return rows
 
 
+def patch_test(kind, shift, workdir=None):
+    """CalculiX's patch test of a hexahedron type: 2 x 2 x 2 unit hexahedra under uniform tension
+    (100 MPa on x = 2, rollers on x = 0, y = 0, z = 0), the middle node moved by shift x (0.3,
+    0.2, 0.25). Returns (the largest calculix.distortion() of the eight, the largest error of
+    the integration-point stresses in % of 100 MPa). A type that passes gives 0 whatever the
+    shift."""
+    import itertools
+    from freecad.hexmerge import calculix
+    workdir = workdir or tempfile.mkdtemp(prefix="hexmerge_patch_")
+    ids, points = {}, []
+    for k, j, i in itertools.product(range(3), repeat=3):
+        p = [float(i), float(j), float(k)]
+        if (i, j, k) == (1, 1, 1):
+            p = [p[0] + 0.3 * shift, p[1] + 0.2 * shift, p[2] + 0.25 * shift]
+        ids[(i, j, k)] = len(points) + 1
+        points.append(p)
+    hexes = []
+    for k, j, i in itertools.product(range(2), repeat=3):
+        hexes.append([ids[c] for c in ((i, j, k), (i + 1, j, k), (i + 1, j + 1, k), (i, j + 1, k),
+                                       (i, j, k + 1), (i + 1, j, k + 1), (i + 1, j + 1, k + 1),
+                                       (i, j + 1, k + 1))])
+    lines = ["*NODE"] + ["{},{!r},{!r},{!r}".format(n + 1, *p) for n, p in enumerate(points)]
+    lines += ["*ELEMENT,TYPE={},ELSET=EALL".format(kind)]
+    lines += [",".join(str(x) for x in [e + 1] + h) for e, h in enumerate(hexes)]
+    for axis, name in enumerate("XYZ"):
+        lines += ["*NSET,NSET={}0".format(name),
+                  ",".join(str(n) for c, n in ids.items() if c[axis] == 0)]
+    lines += ["*MATERIAL,NAME=STEEL", "*ELASTIC", "210000,0.3",
+              "*SOLID SECTION,ELSET=EALL,MATERIAL=STEEL", "*STEP", "*STATIC", "*BOUNDARY",
+              "X0,1,1", "Y0,2,2", "Z0,3,3", "*DLOAD"]
+    # face 4 of a C3D8 (corners 2 3 7 6) is its +x face
+    lines += ["{},P4,-100".format(e + 1) for e, h in enumerate(hexes) if points[h[1] - 1][0] == 2]
+    lines += ["*EL PRINT,ELSET=EALL", "S", "*END STEP"]
+    with open(os.path.join(workdir, "patch.inp"), "w") as f:
+        f.write("\n".join(lines) + "\n")
+    subprocess.run(["ccx", "patch"], cwd=workdir, stdout=subprocess.DEVNULL,
+                   stderr=subprocess.DEVNULL, check=True)
+    error = None
+    with open(os.path.join(workdir, "patch.dat")) as f:
+        for line in f:
+            parts = line.split()
+            if len(parts) == 8 and re.match(r"^-?\d", parts[2]):
+                stress = [float(x) for x in parts[2:]]
+                e = max([abs(stress[0] - 100.0)] + [abs(x) for x in stress[1:]])
+                error = e if error is None else max(error, e)
+    if error is None:
+        raise RuntimeError("CalculiX wrote no stresses in " + workdir)
+    worst = max(calculix.distortion([points[n - 1] for n in h]) for h in hexes)
+    return worst, error
+
+
 # ---- the driver ------------------------------------------------------------------------------
 
 def jobs_for(cases, kinds=("gmsh", "shape"), orders=("1st", "2nd")):
