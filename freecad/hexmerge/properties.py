@@ -31,8 +31,7 @@ class PropertySpec:
     """One data property: FreeCAD type, name, group, doc, default, and the engine parameter it
     feeds (None for the add-on's own)."""
 
-    def __init__(self, kind, name, group, doc, default, parameter=None, row=None,
-                 output=False):
+    def __init__(self, kind, name, group, doc, default, parameter=None, row=None):
         self.kind = kind
         self.name = name
         self.group = group
@@ -40,14 +39,12 @@ class PropertySpec:
         self.default = default
         self.parameter = parameter
         self.row = row
-        self.output = output  # a change does not touch the object (nothing to recompute)
 
     def add_to(self, obj):
-        if self.name not in obj.PropertiesList:
-            obj.addProperty(self.kind, self.name, self.group, self.doc)
-            self.reset(obj)
-        if self.output:
-            obj.setPropertyStatus(self.name, "Output")
+        if self.name in obj.PropertiesList:
+            return
+        obj.addProperty(self.kind, self.name, self.group, self.doc)
+        self.reset(obj)
 
     def reset(self, obj):
         if self.kind == "App::PropertyEnumeration":
@@ -160,14 +157,12 @@ def addon_specs():
         PropertySpec("App::PropertyEnumeration", "LinearHexahedron", "CalculiX",
                      calculix.LINEAR_HEXAHEDRON_DOC, calculix.LINEAR_HEXAHEDRON[0],
                      "linear_hexahedron", {"name": "linear_hexahedron", "label": "Linear hexahedra",
-                                           "choices": calculix.LINEAR_HEXAHEDRON},
-                     output=True),
+                                           "choices": calculix.LINEAR_HEXAHEDRON}),
         PropertySpec("App::PropertyEnumeration", "QuadraticHexahedron", "CalculiX",
                      calculix.QUADRATIC_HEXAHEDRON_DOC, calculix.QUADRATIC_HEXAHEDRON[0],
                      "quadratic_hexahedron", {"name": "quadratic_hexahedron",
                                               "label": "Quadratic hexahedra",
-                                              "choices": calculix.QUADRATIC_HEXAHEDRON},
-                     output=True),
+                                              "choices": calculix.QUADRATIC_HEXAHEDRON}),
     ]
 
 
