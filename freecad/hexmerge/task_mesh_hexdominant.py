@@ -23,12 +23,8 @@ COMMON = {
     "TargetSize": "mesh", "SecondOrder": "mesh", "MakeHexahedra": "mesh", "MakePrisms": "mesh",
     "MakePyramids": "mesh", "Conformity": "mesh",
     "RespectRegions": "materials", "PyramidsAsHexahedra": "materials",
+    "LinearHexahedron": "materials", "QuadraticHexahedron": "materials",
 }
-# Properties without a widget (the property editor and the macro API set them). The CalculiX
-# element types were in "materials" as two combo boxes; with them the GUI test aborted FreeCAD
-# (free(): invalid size) in 3 of 6 runs, in its Cancel or OK-while-running steps, and in none of
-# 5 runs without them (cause not found; docs/freecad.md).
-NO_WIDGET = ("SourceMesh", "LinearHexahedron", "QuadraticHexahedron")
 TOLERANCES = ("MinDihedralAngle", "MinBoundaryDihedralAngle", "MaxFaceAngle", "MinScaledJacobian")
 LABELS = {"PyramidsAsHexahedra": "Pyramids as hexahedra",
           "SecondOrder": "Second order (Tet10, Hexa20, ...)",
@@ -91,7 +87,7 @@ class TaskPanelHexDominant(base_taskpanel.TransactionTaskPanel):
     # -- widgets <-> properties ---------------------------------------------------------------
     def build_parameter_widgets(self):
         for spec in properties.all_specs():
-            if spec.name in NO_WIDGET or spec.name not in self.obj.PropertiesList:
+            if spec.name == "SourceMesh" or spec.name not in self.obj.PropertiesList:
                 continue
             if spec.name in COMMON:
                 layout = getattr(self.form, "fl_" + COMMON[spec.name])
