@@ -67,7 +67,7 @@ VARIANTS = [
     ("no pyramids", {"make_pyramids": False}, None),
 ]
 LINEAR_ONLY_VARIANTS = [
-    ("defaults, hexahedra as C3D8I", {}, "c3d8i"),
+    ("defaults, hexahedra as C3D8I", {}, {"C3D8": "C3D8I"}),
 ]
 
 
@@ -162,7 +162,9 @@ def mesh_object(doc):
     return [o for o in doc.Analysis.Group if o.isDerivedFrom("Fem::FemMeshObject")][0]
 
 
-def gmsh(mesh_obj, size, order):
+def gmsh(mesh_obj, size, order="1st"):
+    """Meshes a MeshGmsh object with Gmsh through FreeCAD (first or second order tets of the
+    given largest size); returns its FemMesh. The FreeCAD tests use it too (tests/freecad)."""
     from femmesh.gmshtools import GmshTools
     mesh_obj.CharacteristicLengthMax = size
     mesh_obj.CharacteristicLengthMin = 0
@@ -171,6 +173,7 @@ def gmsh(mesh_obj, size, order):
     error = GmshTools(mesh_obj).create_mesh()
     if error:
         raise RuntimeError("Gmsh failed: {}".format(error))
+    return mesh_obj.FemMesh
 
 
 # CalculiX faces by corner positions (1-based in the manual, 0-based here).
@@ -180,11 +183,9 @@ CCX_FACES = {
 }
 CCX_FACES["C3D20"] = CCX_FACES["C3D8"]
 CCX_FACES["C3D15"] = CCX_FACES["C3D6"]
-CCX_NODES = {"C3D4": 4, "C3D6": 6, "C3D8": 8, "C3D8I": 8, "C3D10": 10, "C3D15": 15, "C3D20": 20}
-
-
 def read_inp_elements(lines):
     """[(first line, last line + 1, type, [(id, nodes)])] of the .inp's volume element blocks."""
+    from freecad.hexmerge.calculix import NODES as CCX_NODES
     blocks = []
     i = 0
     while i < len(lines):
@@ -259,12 +260,16 @@ def read_inp_nodes(lines):
 
 def postprocess_inp(path, mode):
     """Rewrites the .inp: mode "wedge" writes collapsed pyramids as degenerate wedges (and moves
-    their face loads to the wedge's faces); "c3d8i" writes true (not collapsed) 8-node hexahedra
-    as C3D8I. Returns how many elements changed."""
+    their face loads to the wedge's faces); a dict {written type: type} retypes the true (not
+    collapsed) hexahedra as the add-on does for its own mesh objects (calculix.retype_file:
+    {"C3D8": "C3D8I"}, {"C3D20": "C3D20R"}). Returns how many elements changed."""
+    if isinstance(mode, dict):
+        from freecad.hexmerge import calculix
+        return sum(calculix.retype_file(path, mode).values())
     with open(path) as f:
         lines = f.read().split("\n")
     blocks = read_inp_elements(lines)
-    points = read_inp_nodes(lines) if mode == "wedge" else None
+    points = read_inp_nodes(lines)
     changed = {}
     out = []
     last = 0
@@ -278,10 +283,6 @@ def postprocess_inp(path, mode):
                 new_kind, wedge = as_wedge(kind, nodes, points)
                 moved.append((eid, wedge))
                 changed[eid] = (kind, nodes, new_kind, wedge)
-            elif mode == "c3d8i" and kind == "C3D8" and not collapsed_pyramid(nodes):
-                new_kind = "C3D8I"
-                moved.append((eid, nodes))
-                changed[eid] = (kind, nodes, new_kind, nodes)
             else:
                 keep.append((eid, nodes))
         header = lines[first]
@@ -402,7 +403,7 @@ def volume_fractions(report):
 def worker(job):
     """One case and one source mesh (Gmsh tets, then every recombination) or one shape mesh."""
     import FreeCAD
-    from freecad.hexmerge import engine, jobs
+    from freecad.hexmerge import calculix, engine, jobs
     case = job["case"]
     doc, mesh = build_case(case)
     rows = []
@@ -417,7 +418,8 @@ def worker(job):
         seen = set()
         for name, options, post in variants:
             effective = tuple(sorted(dict(defaults, **{k: str(v).lower() for k, v in
-                                                       options.items()}).items())) + (post,)
+                                                       options.items()}).items())) \
+                + (json.dumps(post, sort_keys=True),)
             if effective in seen:
                 continue
             seen.add(effective)
@@ -438,28 +440,84 @@ def worker(job):
         femmesh, report = sj.finish()
         mesh.FemMesh = femmesh
         label = "from shape {:g} mm, {} order".format(job["size"], "second" if second else "first")
-        result, inp, seconds = solve(doc)
-        rows.append(row(case, label, femmesh, result, inp, seconds,
-                        {"source": label, "volume %": volume_fractions(report)}))
-        if not second:
-            result, inp, seconds = solve(doc, "c3d8i")
-            rows.append(row(case, label + ", C3D8I", femmesh, result, inp, seconds,
+        # As FreeCAD's writer writes it (C3D8 / C3D20), then each other hexahedron type the
+        # add-on offers, retyped as the add-on's writer hook does (freecad/hexmerge/calculix.py).
+        written = "C3D20" if second else "C3D8"
+        offered = calculix.QUADRATIC_HEXAHEDRON if second else calculix.LINEAR_HEXAHEDRON
+        if written == offered[0]:
+            label += " (the add-on's default)"
+        for kind in [written] + [k for k in offered if k != written]:
+            post = None if kind == written else {written: kind}
+            name = label if kind == written else "{}, hexahedra as {}".format(
+                label, kind + (" (the add-on's default)" if kind == offered[0] else ""))
+            result, inp, seconds = solve(doc, post)
+            rows.append(row(case, name, femmesh, result, inp, seconds,
                             {"source": label, "volume %": volume_fractions(report),
-                             "post": "c3d8i"}))
+                             "post": post}))
     FreeCAD.closeDocument(doc.Name)
     return rows
 
 
+def patch_test(kind, shift, workdir=None):
+    """CalculiX's patch test of a hexahedron type: 2 x 2 x 2 unit hexahedra under uniform tension
+    (100 MPa on x = 2, rollers on x = 0, y = 0, z = 0), the middle node moved by shift x (0.3,
+    0.2, 0.25). Returns (the largest calculix.distortion() of the eight, the largest error of
+    the integration-point stresses in % of 100 MPa). A type that passes gives 0 whatever the
+    shift."""
+    import itertools
+    from freecad.hexmerge import calculix
+    workdir = workdir or tempfile.mkdtemp(prefix="hexmerge_patch_")
+    ids, points = {}, []
+    for k, j, i in itertools.product(range(3), repeat=3):
+        p = [float(i), float(j), float(k)]
+        if (i, j, k) == (1, 1, 1):
+            p = [p[0] + 0.3 * shift, p[1] + 0.2 * shift, p[2] + 0.25 * shift]
+        ids[(i, j, k)] = len(points) + 1
+        points.append(p)
+    hexes = []
+    for k, j, i in itertools.product(range(2), repeat=3):
+        hexes.append([ids[c] for c in ((i, j, k), (i + 1, j, k), (i + 1, j + 1, k), (i, j + 1, k),
+                                       (i, j, k + 1), (i + 1, j, k + 1), (i + 1, j + 1, k + 1),
+                                       (i, j + 1, k + 1))])
+    lines = ["*NODE"] + ["{},{!r},{!r},{!r}".format(n + 1, *p) for n, p in enumerate(points)]
+    lines += ["*ELEMENT,TYPE={},ELSET=EALL".format(kind)]
+    lines += [",".join(str(x) for x in [e + 1] + h) for e, h in enumerate(hexes)]
+    for axis, name in enumerate("XYZ"):
+        lines += ["*NSET,NSET={}0".format(name),
+                  ",".join(str(n) for c, n in ids.items() if c[axis] == 0)]
+    lines += ["*MATERIAL,NAME=STEEL", "*ELASTIC", "210000,0.3",
+              "*SOLID SECTION,ELSET=EALL,MATERIAL=STEEL", "*STEP", "*STATIC", "*BOUNDARY",
+              "X0,1,1", "Y0,2,2", "Z0,3,3", "*DLOAD"]
+    # face 4 of a C3D8 (corners 2 3 7 6) is its +x face
+    lines += ["{},P4,-100".format(e + 1) for e, h in enumerate(hexes) if points[h[1] - 1][0] == 2]
+    lines += ["*EL PRINT,ELSET=EALL", "S", "*END STEP"]
+    with open(os.path.join(workdir, "patch.inp"), "w") as f:
+        f.write("\n".join(lines) + "\n")
+    subprocess.run(["ccx", "patch"], cwd=workdir, stdout=subprocess.DEVNULL,
+                   stderr=subprocess.DEVNULL, check=True)
+    error = None
+    with open(os.path.join(workdir, "patch.dat")) as f:
+        for line in f:
+            parts = line.split()
+            if len(parts) == 8 and re.match(r"^-?\d", parts[2]):
+                stress = [float(x) for x in parts[2:]]
+                e = max([abs(stress[0] - 100.0)] + [abs(x) for x in stress[1:]])
+                error = e if error is None else max(error, e)
+    if error is None:
+        raise RuntimeError("CalculiX wrote no stresses in " + workdir)
+    worst = max(calculix.distortion([points[n - 1] for n in h]) for h in hexes)
+    return worst, error
+
+
 # ---- the driver ------------------------------------------------------------------------------
 
-def jobs_for(cases):
+def jobs_for(cases, kinds=("gmsh", "shape"), orders=("1st", "2nd")):
     jobs = []
     for case in cases:
         for size in SIZES[case]:
-            for order in ("1st", "2nd"):
-                jobs.append({"case": case, "kind": "gmsh", "size": size, "order": order})
-            for order in ("1st", "2nd"):
-                jobs.append({"case": case, "kind": "shape", "size": size, "order": order})
+            for kind in kinds:
+                for order in orders:
+                    jobs.append({"case": case, "kind": kind, "size": size, "order": order})
     return jobs
 
 
@@ -581,6 +639,9 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--cases", default="cantilever,plate,cylinder")
     parser.add_argument("--sizes", help="case:size[,size] overrides, e.g. plate:10")
+    parser.add_argument("--kinds", default="gmsh,shape",
+                        help="source meshes: gmsh (Gmsh tets and their recombinations), shape")
+    parser.add_argument("--orders", default="1st,2nd")
     parser.add_argument("--timeout", type=float, default=900.0, help="seconds per job")
     parser.add_argument("--no-doc", action="store_true", help="do not write docs/fem-accuracy.md")
     parser.add_argument("--table", help="print the table of an earlier JSON run")
@@ -598,7 +659,7 @@ def main():
     rows = []
     t = time.perf_counter()
     os.makedirs(os.path.join(ROOT, "bench", "results"), exist_ok=True)
-    for job in jobs_for(cases):
+    for job in jobs_for(cases, args.kinds.split(","), args.orders.split(",")):
         try:
             rows += run_job(job, args.timeout)
         except (RuntimeError, subprocess.TimeoutExpired) as e:

@@ -20,7 +20,9 @@ def make_hexdominant_mesh(doc, source, name="HexDominantMesh", analysis=None, **
     object with a solid Shape -- meshed with HexMerge's mesher (hexmerge.mesh_shape) at
     target_size, then recombined.
     options: engine parameters by name (min_dihedral_angle=150, conformity="conforming", ...;
-    see hexmerge.parameters()) or property name, pyramids_as_hexahedra (default True); for a
+    see hexmerge.parameters()) or property name, pyramids_as_hexahedra (default True),
+    linear_hexahedron ("C3D8I if parallelepiped", "C3D8I", "C3D8") and quadratic_hexahedron
+    ("C3D20", "C3D20R"): the CalculiX element of the hexahedra in the .inp; for a
     shape also target_size (default: a quarter of the shape's thinnest side), second_order
     (default True) and the mesher's options (boundary_layers=1, ...; hexmerge.mesh_parameters()).
     If a source mesh is a member of an analysis, the new object takes its place there (an

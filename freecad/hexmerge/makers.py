@@ -56,6 +56,7 @@ def default_target_size(shape):
 def set_options(obj, options):
     """Sets properties from engine parameter names, mesher keywords or property names."""
     by_param = {s.parameter: s.name for s in properties.engine_specs() + properties.mesher_specs()}
+    by_param.update({s.parameter: s.name for s in properties.addon_specs() if s.parameter})
     by_param["pyramids_as_hexahedra"] = "PyramidsAsHexahedra"
     for key, value in options.items():
         name = by_param.get(key, key)

@@ -13,6 +13,7 @@ import json
 
 import FreeCAD
 
+from . import calculix
 from . import jobs
 from . import properties
 from . import regions as regions_mod
@@ -29,6 +30,8 @@ class MeshHexDominant:
     def __init__(self, obj):
         obj.Proxy = self
         self.add_properties(obj)
+        # The .inp gets the element types of LinearHexahedron / QuadraticHexahedron.
+        calculix.install_writer_hook()
 
     @staticmethod
     def add_properties(obj):
@@ -52,6 +55,7 @@ class MeshHexDominant:
         # New engine parameters (or add-on options) get their default on old documents.
         self.add_properties(obj)
         link_part(obj)
+        calculix.install_writer_hook()
 
     def onChanged(self, obj, prop):
         if prop == "SourceMesh":

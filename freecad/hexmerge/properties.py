@@ -15,6 +15,7 @@ TetGen program and its work folder, are not shown), with the add-on's SecondOrde
 
 import math
 
+from . import calculix
 from . import engine
 
 # Property groups, by parameter name; parameters not listed go to "Engine".
@@ -151,6 +152,16 @@ def addon_specs():
                      "recombine (never modified)", None),
         PropertySpec("App::PropertyBool", "PyramidsAsHexahedra", "CalculiX",
                      engine.PYRAMIDS_AS_HEXAHEDRA_DOC, True),
+        # Element types of the .inp (calculix.py rewrites what FreeCAD 0.20's writer writes).
+        PropertySpec("App::PropertyEnumeration", "LinearHexahedron", "CalculiX",
+                     calculix.LINEAR_HEXAHEDRON_DOC, calculix.LINEAR_HEXAHEDRON[0],
+                     "linear_hexahedron", {"name": "linear_hexahedron", "label": "Linear hexahedra",
+                                           "choices": calculix.LINEAR_HEXAHEDRON}),
+        PropertySpec("App::PropertyEnumeration", "QuadraticHexahedron", "CalculiX",
+                     calculix.QUADRATIC_HEXAHEDRON_DOC, calculix.QUADRATIC_HEXAHEDRON[0],
+                     "quadratic_hexahedron", {"name": "quadratic_hexahedron",
+                                              "label": "Quadratic hexahedra",
+                                              "choices": calculix.QUADRATIC_HEXAHEDRON}),
     ]
 
 

@@ -23,6 +23,7 @@ COMMON = {
     "TargetSize": "mesh", "SecondOrder": "mesh", "MakeHexahedra": "mesh", "MakePrisms": "mesh",
     "MakePyramids": "mesh", "Conformity": "mesh",
     "RespectRegions": "materials", "PyramidsAsHexahedra": "materials",
+    "LinearHexahedron": "materials", "QuadraticHexahedron": "materials",
 }
 TOLERANCES = ("MinDihedralAngle", "MinBoundaryDihedralAngle", "MaxFaceAngle", "MinScaledJacobian")
 LABELS = {"PyramidsAsHexahedra": "Pyramids as hexahedra",

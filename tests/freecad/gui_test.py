@@ -307,7 +307,7 @@ def main():
 
     # second-order tets recombined: Tet10, Pyra13 (as collapsed Hexa20), Penta15, Hexa20
     mesh2 = doc.getObject("BoxMesh")
-    helpers.gmsh_mesh(mesh2, 8.0, "2nd")
+    helpers.bench.gmsh(mesh2, 8.0, "2nd")
     import freecad.hexmerge as hm
     quad = hm.make_hexdominant_mesh(doc, mesh2, name="Quadratic", make_pyramids=True)
     wait(lambda: False, 0.5)

@@ -1,7 +1,8 @@
 # SPDX-License-Identifier: LGPL-2.1-or-later
 """Shared set-up for the FreeCAD tests: Gmsh meshes of FreeCAD's FEM examples, CalculiX runs."""
 
-import re
+import importlib.util
+import os
 import tempfile
 
 import FreeCAD
@@ -10,24 +11,25 @@ import ObjectsFem
 BEAM_THEORY_TIP_MM = 88.84  # ccx_cantilever_faceload, Timoshenko beam with shear (DESIGN.md)
 
 
-def gmsh_mesh(mesh_obj, size, order="1st"):
-    """Meshes a MeshGmsh object with Gmsh (first or second order); returns the FemMesh."""
-    from femmesh.gmshtools import GmshTools
-    mesh_obj.CharacteristicLengthMax = size
-    mesh_obj.CharacteristicLengthMin = 0
-    mesh_obj.ElementOrder = order
-    mesh_obj.SecondOrderLinear = False
-    error = GmshTools(mesh_obj).create_mesh()
-    if error:
-        raise RuntimeError("Gmsh failed: {}".format(error))
-    return mesh_obj.FemMesh
+def load_bench():
+    """bench/fem_accuracy.py as a module: the FreeCAD tests take its cases, its Gmsh meshing
+    (bench.gmsh) and its CalculiX runs and measures from there."""
+    spec = importlib.util.spec_from_file_location(
+        "fem_accuracy", os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..",
+                                     "bench", "fem_accuracy.py"))
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+bench = load_bench()
 
 
 def cantilever(order="1st", size=200.0):
     """FreeCAD's ccx_cantilever_faceload with its mesh remade by Gmsh; returns the document."""
     from femexamples.ccx_cantilever_faceload import setup
     doc = setup()
-    gmsh_mesh(doc.getObject(mesh_name(doc)), size, order)
+    bench.gmsh(doc.getObject(mesh_name(doc)), size, order)
     doc.recompute()
     return doc
 
@@ -73,25 +75,6 @@ def solve(doc, workdir=None):
     return fea.inp_file_name, results[-1]
 
 
-NODES_PER_CCX_ELEMENT = {"C3D4": 4, "C3D6": 6, "C3D8": 8, "C3D10": 10, "C3D15": 15, "C3D20": 20}
-
-
-def inp_element_count(path):
-    """Number of volume elements in a CalculiX .inp file, by element type. An element may take
-    several lines (C3D20), so the numbers are counted: id + nodes per element."""
-    numbers = {}
-    kind = None
-    with open(path) as f:
-        for line in f:
-            if line.startswith("*"):
-                m = re.match(r"\*ELEMENT\s*,\s*TYPE\s*=\s*(\w+)", line, re.I)
-                kind = m.group(1).upper() if m else None
-                continue
-            if kind in NODES_PER_CCX_ELEMENT:
-                numbers[kind] = numbers.get(kind, 0) + len(re.findall(r"\d+", line))
-    return {k: n // (NODES_PER_CCX_ELEMENT[k] + 1) for k, n in numbers.items()}
-
-
 def tip_displacement(result):
     """Largest displacement magnitude of a result (the cantilever's tip), mm."""
     return max(result.DisplacementLengths)
@@ -107,5 +90,5 @@ def box_doc(order="1st", size=10.0, name="HexMergeBox"):
     mesh = ObjectsFem.makeMeshGmsh(doc, "BoxMesh")
     mesh.Part = box
     doc.recompute()
-    gmsh_mesh(mesh, size, order)
+    bench.gmsh(mesh, size, order)
     return doc, mesh

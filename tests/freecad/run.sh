@@ -29,7 +29,7 @@ run_suite() {  # module, per-suite timeout (s)
 run_suite test_femmesh_arrays 120
 run_suite test_addon 480
 run_suite test_modules 240
-run_suite test_fem_accuracy 240
+run_suite test_fem_accuracy 600
 if [[ "${1:-}" != "--no-gui" ]]; then
   out="$log.gui.txt"
   (cd "$here" && QTWEBENGINE_DISABLE_SANDBOX=1 timeout 300 xvfb-run -a -s "-screen 0 1600x1000x24" \

@@ -31,7 +31,7 @@ box_doc = helpers.box_doc
 def inp_count(femmesh):
     path = os.path.join(tempfile.mkdtemp(), "m.inp")
     femmesh.writeABAQUS(path, 1, False)
-    return sum(helpers.inp_element_count(path).values())
+    return sum(helpers.bench.inp_counts(path)[0].values())
 
 
 class Box(unittest.TestCase):
@@ -82,7 +82,7 @@ class Cantilever(unittest.TestCase):
         src = doc.getObject(helpers.mesh_name(doc))
         inp, res = helpers.solve(doc)
         tet_tip = helpers.tip_displacement(res)
-        self.assertEqual(sum(helpers.inp_element_count(inp).values()), src.FemMesh.VolumeCount)
+        self.assertEqual(sum(helpers.bench.inp_counts(inp)[0].values()), src.FemMesh.VolumeCount)
         for o in list(doc.Analysis.Group):
             if o.isDerivedFrom("Fem::FemResultObject"):
                 doc.removeObject(o.Name)
@@ -90,7 +90,7 @@ class Cantilever(unittest.TestCase):
         self.assertIn(obj, doc.Analysis.Group)
         self.assertNotIn(src, doc.Analysis.Group)
         inp, res = helpers.solve(doc)
-        counts = helpers.inp_element_count(inp)
+        counts = helpers.bench.inp_counts(inp)[0]
         self.assertEqual(sum(counts.values()), obj.FemMesh.VolumeCount)
         hex_tip = helpers.tip_displacement(res)
         FreeCAD.Console.PrintMessage(
@@ -117,7 +117,7 @@ class CantileverFromShape(unittest.TestCase):
         report = mesh_hexdominant.report_dict(obj)
         self.assertLessEqual(report["meshing"]["max_boundary_distance"], 1e-3 * obj.TargetSize.Value)
         inp, res = helpers.solve(doc)
-        counts = helpers.inp_element_count(inp)
+        counts = helpers.bench.inp_counts(inp)[0]
         self.assertEqual(sum(counts.values()), obj.FemMesh.VolumeCount)
         self.assertIn("C3D20", counts)  # second order: Hexa20
         tip = helpers.tip_displacement(res)
@@ -343,7 +343,7 @@ class MultiMaterial(unittest.TestCase):
         from femexamples.material_multiple_bendingbeam_fiveboxes import setup
         doc = setup()
         src = doc.getObject(helpers.mesh_name(doc))
-        helpers.gmsh_mesh(src, 4.0, "1st")
+        helpers.bench.gmsh(src, 4.0, "1st")
         obj = hm.make_hexdominant_mesh(doc, src)
         report = mesh_hexdominant.report_dict(obj)
         self.assertEqual(report["freecad"]["region_count"], 5)
@@ -366,7 +366,7 @@ class MultiMaterial(unittest.TestCase):
                 xs = [m.getNodeById(n).x for n in m.getElementNodes(eid)]
                 self.assertEqual(expected[int(np.mean(xs) // 20)] + "_Solids", name)
         inp, res = helpers.solve(doc)
-        self.assertEqual(sum(helpers.inp_element_count(inp).values()), m.VolumeCount)
+        self.assertEqual(sum(helpers.bench.inp_counts(inp)[0].values()), m.VolumeCount)
         self.assertGreater(helpers.tip_displacement(res), 0)
 
 
@@ -395,7 +395,7 @@ class SaveReopen(unittest.TestCase):
         self.assertTrue(mesh_hexdominant.report_dict(obj))
         self.assertEqual(obj.SourceMesh.Name, mesh_name)
         # a new source mesh marks the object for recompute, and recompute uses it
-        helpers.gmsh_mesh(doc.getObject(mesh_name), 6.0, "1st")
+        helpers.bench.gmsh(doc.getObject(mesh_name), 6.0, "1st")
         doc.recompute()
         self.assertNotEqual(obj.FemMesh.VolumeCount, count)
         self.assertEqual(mesh_hexdominant.report_dict(obj)["input_tets"],

@@ -14,7 +14,7 @@ ROOT = os.path.dirname(os.path.dirname(HERE))
 PACKAGE = os.path.join(ROOT, "freecad", "hexmerge")
 GUI_MODULES = {"FreeCADGui", "PySide", "PySide2", "pivy", "FemGui"}
 # Modules that must not import FreeCAD's GUI nor Qt (engine access, jobs, results, colours...).
-HEADLESS = ("resources", "engine", "regions", "femmesh_arrays", "results", "colors", "jobs",
+HEADLESS = ("resources", "calculix", "engine", "regions", "femmesh_arrays", "results", "colors", "jobs",
             "properties", "mesh_hexdominant", "makers")
 
 
