@@ -50,10 +50,14 @@ PyObject* g_input_error = nullptr;
 
 const char* entity_name(Entity entity) {
   switch (entity) {
-    case Entity::Node: return "node";
-    case Entity::Element: return "element";
-    case Entity::Parameter: return "parameter";
-    case Entity::None: break;
+    case Entity::Node:
+      return "node";
+    case Entity::Element:
+      return "element";
+    case Entity::Parameter:
+      return "parameter";
+    case Entity::None:
+      break;
   }
   return nullptr;
 }
@@ -248,7 +252,8 @@ py::dict mesh_to_dict(MixedMesh&& m) {
   d["types"] = to_numpy(std::move(types));
   d["offsets"] = to_numpy(std::move(m.offsets));
   d["cell_vertices"] = to_numpy(std::move(m.cell_vertices));
-  d["regions"] = m.regions.empty() ? py::object(py::none()) : py::object(to_numpy(std::move(m.regions)));
+  d["regions"] =
+      m.regions.empty() ? py::object(py::none()) : py::object(to_numpy(std::move(m.regions)));
   d["source_offsets"] = to_numpy(std::move(m.source_offsets));
   d["source_tets"] = to_numpy(std::move(m.source_tets));
   return d;
@@ -318,8 +323,8 @@ py::dict run_check(const PointsIn& points, const TypesIn& types, const IndexIn& 
                    const py::object& source_offsets, const py::object& source_tets,
                    const PointsIn& input_points, const IndexIn& input_tets,
                    const py::object& input_regions) {
-  const MixedMesh mesh = mesh_from_arrays(points, types, offsets, cell_vertices, regions,
-                                          source_offsets, source_tets);
+  const MixedMesh mesh =
+      mesh_from_arrays(points, types, offsets, cell_vertices, regions, source_offsets, source_tets);
   TetMesh input;
   input.points = flat(input_points, 3, "input_points");
   input.tets = flat(input_tets, 4, "input_tets");
@@ -395,9 +400,9 @@ py::tuple run_tetrahedralize(const PointsIn& points, const IndexIn& triangles,
 }
 
 #ifdef HEXMERGE_WITH_OCC
-py::tuple run_regions_by_solid(const std::string& brep, const PointsIn& points, const IndexIn& cells,
-                               double tolerance, int samples_per_piece, bool classify_every_tet,
-                               int nb_threads) {
+py::tuple run_regions_by_solid(const std::string& brep, const PointsIn& points,
+                               const IndexIn& cells, double tolerance, int samples_per_piece,
+                               bool classify_every_tet, int nb_threads) {
   TetMesh mesh;
   mesh.points = flat(points, 3, "points");
   mesh.tets = flat(cells, 4, "cells");
@@ -576,7 +581,8 @@ invariant raises RuntimeError.)doc";
                       "smaller mesh, fewer threads or more memory)");
     } catch (const InternalError& e) {
       PyErr_SetString(PyExc_RuntimeError, (std::string("HexMerge internal error: ") + e.what() +
-                                           " (please report this bug)").c_str());
+                                           " (please report this bug)")
+                                              .c_str());
     }
   });
 

@@ -347,7 +347,8 @@ TetMesh grid(int n, Split split) {
           return grid_node(n, i + (b & 1), j + ((b >> 1) & 1), k + ((b >> 2) & 1));
         };
         for (const std::array<int, 4>& t : split(i, j, k)) {
-          mesh.tets.insert(mesh.tets.end(), {corner(t[0]), corner(t[1]), corner(t[2]), corner(t[3])});
+          mesh.tets.insert(mesh.tets.end(),
+                           {corner(t[0]), corner(t[1]), corner(t[2]), corner(t[3])});
         }
       }
     }
@@ -398,8 +399,8 @@ void random_affine_map(TetMesh& mesh, std::mt19937& rng, double spread) {
     for (int r = 0; r < 3; ++r) {
       for (int c = 0; c < 3; ++c) a[r][c] = (r == c ? 1.0 : 0.0) + spread * u(rng);
     }
-    const double det = det3({a[0][0], a[1][0], a[2][0]}, {a[0][1], a[1][1], a[2][1]},
-                            {a[0][2], a[1][2], a[2][2]});
+    const double det =
+        det3({a[0][0], a[1][0], a[2][0]}, {a[0][1], a[1][1], a[2][1]}, {a[0][2], a[1][2], a[2][2]});
     if (det >= 0.2) break;
   }
   const double b[3] = {u(rng), u(rng), u(rng)};
@@ -419,7 +420,8 @@ void random_perturbation(TetMesh& mesh, std::mt19937& rng, double amplitude) {
     bool valid = true;
     for (index_t t = 0; t < mesh.nb_tets() && valid; ++t) {
       const index_t* q = mesh.tet(t);
-      valid = tet_volume(mesh.point(q[0]), mesh.point(q[1]), mesh.point(q[2]), mesh.point(q[3])) > 0;
+      valid =
+          tet_volume(mesh.point(q[0]), mesh.point(q[1]), mesh.point(q[2]), mesh.point(q[3])) > 0;
     }
     if (valid) return;
   }
@@ -452,8 +454,6 @@ Thresholds permissive_thresholds() {
 
 AcceptanceCriteria permissive_criteria() { return permissive_thresholds<AcceptanceCriteria>(); }
 
-RecombineParameters permissive_parameters() {
-  return permissive_thresholds<RecombineParameters>();
-}
+RecombineParameters permissive_parameters() { return permissive_thresholds<RecombineParameters>(); }
 
 }  // namespace hexmerge::test

@@ -1,11 +1,12 @@
 // Tests of the shared fixtures themselves: the enumerations the engine tests rely on must be
 // complete and right before they can judge the engine.
+#include "fixtures.h"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <set>
 
-#include "fixtures.h"
 #include "hexmerge/mesh/tet_mesh.h"
 #include "hexmerge/mesh/tet_topology.h"
 

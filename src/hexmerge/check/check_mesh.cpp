@@ -199,7 +199,8 @@ CheckReport check_at_scale(const MixedMesh& mesh, const TetMesh& input) {
     const int type = static_cast<int>(mesh.types[c]);
     if (type < 0 || type >= NB_CELL_TYPES) {
       ++report.malformed_cells;
-      log.add(kMalformed, "cell " + std::to_string(c) + " has unknown type " + std::to_string(type));
+      log.add(kMalformed,
+              "cell " + std::to_string(c) + " has unknown type " + std::to_string(type));
       continue;
     }
     const CellDescriptor& desc = descriptor(mesh.types[c]);
@@ -244,8 +245,8 @@ CheckReport check_at_scale(const MixedMesh& mesh, const TetMesh& input) {
   for (index_t t = 0; t < nt; ++t) {
     const index_t* q = input.tet(t);
     if (q[0] < nv_in && q[1] < nv_in && q[2] < nv_in && q[3] < nv_in) {
-      report.input_volume += tet_volume(input.point(q[0]), input.point(q[1]),
-                                        input.point(q[2]), input.point(q[3]));
+      report.input_volume +=
+          tet_volume(input.point(q[0]), input.point(q[1]), input.point(q[2]), input.point(q[3]));
     }
   }
   if (report.input_volume != 0.0) {
@@ -320,10 +321,10 @@ CheckReport check_at_scale(const MixedMesh& mesh, const TetMesh& input) {
                          " entries for " + std::to_string(nc) + " cells");
   }
   if (!mesh.source_offsets.empty()) {
-    const bool sources_ok =
-        mesh.source_offsets.size() == static_cast<std::size_t>(nc) + 1 &&
-        mesh.source_offsets[0] == 0 && mesh.source_offsets[nc] == mesh.source_tets.size() &&
-        std::is_sorted(mesh.source_offsets.begin(), mesh.source_offsets.end());
+    const bool sources_ok = mesh.source_offsets.size() == static_cast<std::size_t>(nc) + 1 &&
+                            mesh.source_offsets[0] == 0 &&
+                            mesh.source_offsets[nc] == mesh.source_tets.size() &&
+                            std::is_sorted(mesh.source_offsets.begin(), mesh.source_offsets.end());
     if (!sources_ok) {
       ++report.source_errors;
       log.add(kSource, "the source offsets do not describe the source tet array");
@@ -363,8 +364,7 @@ CheckReport check_at_scale(const MixedMesh& mesh, const TetMesh& input) {
         if (own != corners) {
           ++report.source_errors;
           log.add(kSource, cell_name(mesh, c) + ": its corners are not the corners of its " +
-                               std::to_string(mesh.source_offsets[c + 1] -
-                                              mesh.source_offsets[c]) +
+                               std::to_string(mesh.source_offsets[c + 1] - mesh.source_offsets[c]) +
                                " source tets");
         }
       }
@@ -414,8 +414,8 @@ CheckReport check_at_scale(const MixedMesh& mesh, const TetMesh& input) {
       const bool quad = r.d != NO_VERTEX;
       if (j - i >= 3) {
         ++report.overshared_faces;
-        log.add(kOvershared, "a face is shared by " + std::to_string(j - i) + " cells: " +
-                                 join_cells(mesh, faces, i, j));
+        log.add(kOvershared, "a face is shared by " + std::to_string(j - i) +
+                                 " cells: " + join_cells(mesh, faces, i, j));
       } else if (j - i == 2) {
         index_t f0[4], f1[4];
         face_vertices(faces.record(i), f0);

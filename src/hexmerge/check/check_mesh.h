@@ -22,36 +22,36 @@ constexpr std::size_t kMaxProblemsPerKind = 10;
 struct CheckReport {
   std::size_t nb_cells = 0;
   std::array<std::size_t, NB_CELL_TYPES> counts{};
-  std::size_t inverted_cells = 0;         ///< scaled Jacobian <= 0
-  double min_scaled_jacobian = 0.0;       ///< over all cells
-  index_t worst_cell = NO_INDEX;          ///< the cell with the minimum scaled Jacobian
-  std::size_t nonconforming_quads = 0;    ///< unpaired quads whose halves on one diagonal are
-                                          ///< faces of other cells: two triangles, or a
-                                          ///< triangle or two halves of other quads
-  std::size_t cracks = 0;                 ///< interior faces with no partner at all
-  std::size_t overshared_faces = 0;       ///< faces shared by three or more cells
-  std::size_t unused_input_nodes = 0;     ///< corner nodes of the input missing from the output
-  std::size_t moved_nodes = 0;            ///< nodes whose coordinates differ from the input's
-  std::size_t region_mismatches = 0;      ///< cells whose region differs from a source tet's
-  std::size_t malformed_cells = 0;        ///< wrong vertex count, vertex id out of range, repeated vertex
-  std::size_t mismatched_faces = 0;       ///< shared faces whose two cells disagree (same side, or
-                                          ///< one vertex set on two different quads)
-  std::size_t source_errors = 0;          ///< source tets that are not a partition of the input,
-                                          ///< or a cell whose corners are not its tets' corners
+  std::size_t inverted_cells = 0;       ///< scaled Jacobian <= 0
+  double min_scaled_jacobian = 0.0;     ///< over all cells
+  index_t worst_cell = NO_INDEX;        ///< the cell with the minimum scaled Jacobian
+  std::size_t nonconforming_quads = 0;  ///< unpaired quads whose halves on one diagonal are
+                                        ///< faces of other cells: two triangles, or a
+                                        ///< triangle or two halves of other quads
+  std::size_t cracks = 0;               ///< interior faces with no partner at all
+  std::size_t overshared_faces = 0;     ///< faces shared by three or more cells
+  std::size_t unused_input_nodes = 0;   ///< corner nodes of the input missing from the output
+  std::size_t moved_nodes = 0;          ///< nodes whose coordinates differ from the input's
+  std::size_t region_mismatches = 0;    ///< cells whose region differs from a source tet's
+  std::size_t malformed_cells = 0;  ///< wrong vertex count, vertex id out of range, repeated vertex
+  std::size_t mismatched_faces = 0;  ///< shared faces whose two cells disagree (same side, or
+                                     ///< one vertex set on two different quads)
+  std::size_t source_errors = 0;     ///< source tets that are not a partition of the input,
+                                     ///< or a cell whose corners are not its tets' corners
   double input_volume = 0.0;
-  double output_volume = 0.0;             ///< with bilinear quad faces
+  double output_volume = 0.0;  ///< with bilinear quad faces
   double relative_volume_difference = 0.0;
   /// Per region (when both meshes have regions): the largest |output - input| / input volume,
   /// and the region it is in (0 and -1 without regions). Volume moved from one material to
   /// another through a bent region interface shows here, not in the total.
   double max_region_volume_difference = 0.0;
   std::int32_t worst_region = -1;
-  std::vector<std::string> problems;      ///< human-readable, one line each, first few of each kind
+  std::vector<std::string> problems;  ///< human-readable, one line each, first few of each kind
 
   bool valid() const {
-    return inverted_cells == 0 && cracks == 0 && overshared_faces == 0 &&
-           unused_input_nodes == 0 && moved_nodes == 0 && region_mismatches == 0 &&
-           malformed_cells == 0 && mismatched_faces == 0 && source_errors == 0;
+    return inverted_cells == 0 && cracks == 0 && overshared_faces == 0 && unused_input_nodes == 0 &&
+           moved_nodes == 0 && region_mismatches == 0 && malformed_cells == 0 &&
+           mismatched_faces == 0 && source_errors == 0;
   }
 };
 

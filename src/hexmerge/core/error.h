@@ -56,9 +56,9 @@ class InternalError : public std::logic_error {
 }  // namespace hexmerge
 
 /// Always-on assertion for internal invariants (geogram's geo_assert).
-#define HEXMERGE_ASSERT(condition, message)                                     \
-  do {                                                                          \
-    if (!(condition)) {                                                         \
-      ::hexmerge::assertion_failed(#condition, (message), __FILE__, __LINE__);  \
-    }                                                                           \
+#define HEXMERGE_ASSERT(condition, message)                                    \
+  do {                                                                         \
+    if (!(condition)) {                                                        \
+      ::hexmerge::assertion_failed(#condition, (message), __FILE__, __LINE__); \
+    }                                                                          \
   } while (false)

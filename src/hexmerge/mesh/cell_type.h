@@ -33,13 +33,13 @@ constexpr int NB_CELL_TYPES = 4;
 
 /// Per-type topology: counts, faces, edges, corner frames for Jacobians.
 struct CellDescriptor {
-  const char* name;                        ///< "tet", "pyramid", "prism", "hex"
-  int nb_vertices;                         ///< 4, 5, 6, 8
-  int nb_faces;                            ///< 4, 5, 5, 6
-  std::array<int, 6> face_size;            ///< 3 or 4 per face
-  std::array<std::array<int, 4>, 6> face;  ///< outward-oriented face vertices (-1 past size)
-  int nb_edges;                            ///< 6, 8, 9, 12
-  std::array<std::array<int, 2>, 12> edge; ///< VTK quadratic mid-edge order
+  const char* name;                         ///< "tet", "pyramid", "prism", "hex"
+  int nb_vertices;                          ///< 4, 5, 6, 8
+  int nb_faces;                             ///< 4, 5, 5, 6
+  std::array<int, 6> face_size;             ///< 3 or 4 per face
+  std::array<std::array<int, 4>, 6> face;   ///< outward-oriented face vertices (-1 past size)
+  int nb_edges;                             ///< 6, 8, 9, 12
+  std::array<std::array<int, 2>, 12> edge;  ///< VTK quadratic mid-edge order
   /// Corners used by the scaled Jacobian: corner[k] = {v, a, b, c}: the frame (a-v, b-v, c-v)
   /// is right-handed in a valid cell. Pyramids use their 4 base corners only (Verdict).
   int nb_corners;

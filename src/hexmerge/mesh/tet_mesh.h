@@ -13,8 +13,8 @@ namespace hexmerge {
 /// A tetrahedral mesh. Tet t has vertices tets[4t .. 4t+3] in VTK order (positive volume:
 /// det(p1-p0, p2-p0, p3-p0) > 0). Coordinates of vertex v: points[3v .. 3v+2].
 struct TetMesh {
-  std::vector<double> points;    ///< #V by 3, row-major
-  std::vector<index_t> tets;     ///< #T by 4, row-major
+  std::vector<double> points;         ///< #V by 3, row-major
+  std::vector<index_t> tets;          ///< #T by 4, row-major
   std::vector<std::int32_t> regions;  ///< #T region ids (material / solid), or empty: one region
 
   index_t nb_vertices() const { return static_cast<index_t>(points.size() / 3); }

@@ -202,8 +202,7 @@ std::vector<ConformityRow> conformity_rows(const TetMesh& mesh, const TetTopolog
       for (std::size_t j = begin; j < end; ++j) {
         if (quads[j].candidate != row.candidate) row.partners.push_back(quads[j].candidate);
       }
-      row.partners.erase(std::unique(row.partners.begin(), row.partners.end()),
-                         row.partners.end());
+      row.partners.erase(std::unique(row.partners.begin(), row.partners.end()), row.partners.end());
       rows.push_back(std::move(row));
     }
   }
@@ -254,9 +253,9 @@ SelectionBound bound_selection(index_t nb_tets, const std::vector<Candidate>& ca
   for (index_t ci : initial) chosen[ci] = 1;
   std::vector<const ConformityRow*> kept;
   for (const ConformityRow& row : conformity) {
-    const bool broken = chosen[row.candidate] &&
-                        std::none_of(row.partners.begin(), row.partners.end(),
-                                     [&](index_t p) { return chosen[p] != 0; });
+    const bool broken =
+        chosen[row.candidate] && std::none_of(row.partners.begin(), row.partners.end(),
+                                              [&](index_t p) { return chosen[p] != 0; });
     if (broken) {
       ++result.dropped_rows;
     } else {

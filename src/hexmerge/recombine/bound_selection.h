@@ -28,11 +28,11 @@ struct SelectionBound {
   std::size_t bound_elements = 0;
   /// Elements of the best selection the solver found (at least as good as `initial`'s).
   std::size_t best_elements = 0;
-  std::vector<index_t> best;     ///< that selection, as candidate indices; tet sets disjoint
-  bool proved = false;           ///< the solver finished: best_elements == bound_elements
-  std::size_t conformity_rows = 0;   ///< conformity rows in the program
-  std::size_t dropped_rows = 0;      ///< conformity rows left out because `initial` breaks them
-  double seconds = 0.0;          ///< wall time of the solve
+  std::vector<index_t> best;        ///< that selection, as candidate indices; tet sets disjoint
+  bool proved = false;              ///< the solver finished: best_elements == bound_elements
+  std::size_t conformity_rows = 0;  ///< conformity rows in the program
+  std::size_t dropped_rows = 0;     ///< conformity rows left out because `initial` breaks them
+  double seconds = 0.0;             ///< wall time of the solve
 };
 
 /// One conformity row: choosing `candidate` needs one of `partners` chosen as well

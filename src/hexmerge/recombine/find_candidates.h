@@ -27,7 +27,7 @@ struct Candidate {
   std::uint8_t graph;  ///< index into rf_graphs() of the template that found it, or
                        ///< EXHAUSTIVE_GRAPH (find_candidates_exhaustive.h)
   std::uint8_t nb_tets;
-  float quality;                    ///< scaled Jacobian
+  float quality;  ///< scaled Jacobian
 };
 
 /// The sorted vertices of a face of a candidate's cell (NO_VERTEX past a triangle's three): equal

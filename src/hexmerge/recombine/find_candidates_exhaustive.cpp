@@ -277,10 +277,10 @@ class CellBuilder {
   bool cap_accepted(index_t t, int f1, int f2) const {
     std::array<index_t, 4> q;
     if (!quad_from_triangles(tet_face(mesh_, t, f1), tet_face(mesh_, t, f2), q)) return false;
-    const double dh = quad_dihedral_angle(mesh_.point(q[0]), mesh_.point(q[1]),
-                                          mesh_.point(q[2]), mesh_.point(q[3]));
-    const double cr = quad_max_corner_angle(mesh_.point(q[0]), mesh_.point(q[1]),
-                                            mesh_.point(q[2]), mesh_.point(q[3]));
+    const double dh = quad_dihedral_angle(mesh_.point(q[0]), mesh_.point(q[1]), mesh_.point(q[2]),
+                                          mesh_.point(q[3]));
+    const double cr = quad_max_corner_angle(mesh_.point(q[0]), mesh_.point(q[1]), mesh_.point(q[2]),
+                                            mesh_.point(q[3]));
     const bool on_boundary = boundary_face(t, f1) && boundary_face(t, f2);
     const double min_dihedral =
         on_boundary ? criteria_.min_boundary_dihedral_angle : criteria_.min_dihedral_angle;
@@ -305,8 +305,7 @@ class CellBuilder {
       const index_t na = topo_.neighbor(a / 4, a % 4), nb = topo_.neighbor(b / 4, b % 4);
       if (na != NO_CELL && na == nb && nb_ + nb_caps < kMaxGroup &&
           (!criteria_.respect_regions || mesh_.region(na) == mesh_.region(group_[0])) &&
-          cap_on_face(na, g) &&
-          cap_accepted(na, other_face(a, b, 0), other_face(a, b, 1))) {
+          cap_on_face(na, g) && cap_accepted(na, other_face(a, b, 0), other_face(a, b, 1))) {
         cap = nb_caps;
         caps[nb_caps++] = na;
       }
@@ -451,9 +450,8 @@ class Searcher {
       if (apex == apex_tried) continue;
       apex_tried = apex;
       if (apex == q.v[0] || apex == q.v[1] || apex == q.v[2] || apex == q.v[3]) continue;
-      builder_.build(CellType::Pyramid, {q.v[0], q.v[3], q.v[2], q.v[1], apex, NO_VERTEX,
-                                         NO_VERTEX, NO_VERTEX},
-                     seed);
+      builder_.build(CellType::Pyramid,
+                     {q.v[0], q.v[3], q.v[2], q.v[1], apex, NO_VERTEX, NO_VERTEX, NO_VERTEX}, seed);
     }
   }
 

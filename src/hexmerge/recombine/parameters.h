@@ -67,7 +67,7 @@ struct RecombineParameters {
   /// degrees, [90, 180]: dangle for quad faces on the domain boundary, which must follow the
   /// geometry (a fold there changes the domain's volume)
   double min_boundary_dihedral_angle = 179.0;
-  double max_face_angle = 150.0;      ///< degrees, [90, 180]: the paper's fangle
+  double max_face_angle = 150.0;  ///< degrees, [90, 180]: the paper's fangle
   /// [-1, 1]: Verdict scaled Jacobian of every new element; recombine() never goes below
   /// kMinElementScaledJacobian, whatever this says
   double min_scaled_jacobian = 0.3;
@@ -76,21 +76,21 @@ struct RecombineParameters {
   bool make_pyramids = true;
   PyramidPlacement pyramid_placement = PyramidPlacement::Anywhere;
   Conformity conformity = Conformity::Conforming;
-  bool respect_regions = true;        ///< never merge tets of different regions
-  bool local_optimisation = true;     ///< the paper's section 4.2
+  bool respect_regions = true;     ///< never merge tets of different regions
+  bool local_optimisation = true;  ///< the paper's section 4.2
   /// after the selection: swaps and exact re-selection around unmatched tets (select_candidates.h)
   bool local_search = true;
   /// [0, 4]: face hops around a tet within which the elements are released and re-selected;
   /// 0: swaps only
   int local_search_radius = 0;
-  int local_search_nodes = 2000;      ///< [1, 1e6]: branch-and-bound nodes per neighbourhood
+  int local_search_nodes = 2000;  ///< [1, 1e6]: branch-and-bound nodes per neighbourhood
   LocalSearchSeeds local_search_seeds = LocalSearchSeeds::Unmatched;
   BoundaryOrder boundary_order = BoundaryOrder::Quality;
   Finder finder = Finder::Programs;
-  int threads = 0;                    ///< candidate search threads; 0: all hardware threads
+  int threads = 0;  ///< candidate search threads; 0: all hardware threads
   /// also solve the selection as an integer program (bound_selection.h) and report the gap
   bool optimality_bound = false;
-  double bound_time_limit = 30.0;     ///< seconds, [1, 3600]: time limit of that solve
+  double bound_time_limit = 30.0;  ///< seconds, [1, 3600]: time limit of that solve
   /// true: every output cell is a union of the input's tets (no post-merge stage); false
   /// (conforming mode): the post-merge stage may flip tets behind open quad faces
   /// (recombine/postmerge/postmerge.h), nodes kept

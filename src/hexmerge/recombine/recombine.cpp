@@ -44,7 +44,8 @@ MixedMesh build_output(const TetMesh& input, const std::vector<Candidate>& candi
       if (c.type != type) continue;
       out.types.push_back(type);
       const int nv = nb_vertices(type);
-      out.cell_vertices.insert(out.cell_vertices.end(), c.vertices.begin(), c.vertices.begin() + nv);
+      out.cell_vertices.insert(out.cell_vertices.end(), c.vertices.begin(),
+                               c.vertices.begin() + nv);
       out.offsets.push_back(static_cast<index_t>(out.cell_vertices.size()));
       out.source_tets.insert(out.source_tets.end(), c.tets.begin(), c.tets.begin() + c.nb_tets);
       out.source_offsets.push_back(static_cast<index_t>(out.source_tets.size()));
@@ -104,8 +105,8 @@ void fill_report(const TetMesh& input, const MixedMesh& out, RecombineReport& re
   report.input_volume = 0.0;
   for (index_t t = 0; t < input.nb_tets(); ++t) {
     const index_t* q = input.tet(t);
-    tet_volume_of[t] = tet_volume(input.point(q[0]), input.point(q[1]), input.point(q[2]),
-                                  input.point(q[3]));
+    tet_volume_of[t] =
+        tet_volume(input.point(q[0]), input.point(q[1]), input.point(q[2]), input.point(q[3]));
     report.input_volume += tet_volume_of[t];
   }
   std::array<double, NB_CELL_TYPES> volume{}, sum_sj{};
@@ -315,10 +316,10 @@ MixedMesh recombine(const TetMesh& input, const RecombineParameters& parameters,
     report.bound_elements = bound.bound_elements;
     report.bound_best_elements = bound.best_elements;
     report.bound_proved = bound.proved;
-    report.gap_percent = 100.0 *
-                         (static_cast<double>(report.output_cells) -
-                          static_cast<double>(bound.bound_elements)) /
-                         static_cast<double>(bound.bound_elements);
+    report.gap_percent =
+        100.0 *
+        (static_cast<double>(report.output_cells) - static_cast<double>(bound.bound_elements)) /
+        static_cast<double>(bound.bound_elements);
     // The candidates are pruned in conforming mode, so this bounds the conforming selections.
     const VolumeBound hex_bound = bound_hex_volume(tets, candidates, parameters.bound_time_limit);
     report.hex_volume_bound = std::ldexp(hex_bound.bound, -3 * exponent);

@@ -18,9 +18,9 @@ namespace hexmerge {
 
 /// One extended RF-graph: a template of a decomposition into tets.
 struct RFGraph {
-  std::string name;      ///< "pyramid", "prism", "hex5", "hex6_cycle6", ...
-  CellType type;         ///< the element it makes
-  int nb_nodes;          ///< number of tets
+  std::string name;                        ///< "pyramid", "prism", "hex5", "hex6_cycle6", ...
+  CellType type;                           ///< the element it makes
+  int nb_nodes;                            ///< number of tets
   std::vector<std::pair<int, int>> links;  ///< solid edges: shared internal faces
   std::vector<std::pair<int, int>> quads;  ///< dashed edges: quadrilateral pairs
   /// One decomposition with this graph: tets on the corners of the reference cell (local
@@ -45,8 +45,8 @@ struct Instruction {
 
 /// A search tree compiled into a program (section 3, figure 10).
 struct SearchProgram {
-  int graph;                     ///< index into rf_graphs()
-  int root;                      ///< the graph node that is the program's node 0
+  int graph;  ///< index into rf_graphs()
+  int root;   ///< the graph node that is the program's node 0
   CellType type;
   int nb_nodes;
   std::vector<Instruction> code;

@@ -110,12 +110,12 @@ TEST(check_mesh, passes_tet_meshes_against_themselves_and_hex_grids) {
         const index_t cube = static_cast<index_t>(i + n * (j + n * k));
         std::vector<index_t> src;
         for (index_t t = 6 * cube; t < 6 * cube + 6; ++t) src.push_back(t);
-        hexes.push_back({CellType::Hex,
-                         {grid_node(n, i, j, k), grid_node(n, i + 1, j, k),
-                          grid_node(n, i + 1, j + 1, k), grid_node(n, i, j + 1, k),
-                          grid_node(n, i, j, k + 1), grid_node(n, i + 1, j, k + 1),
-                          grid_node(n, i + 1, j + 1, k + 1), grid_node(n, i, j + 1, k + 1)},
-                         src});
+        hexes.push_back(
+            {CellType::Hex,
+             {grid_node(n, i, j, k), grid_node(n, i + 1, j, k), grid_node(n, i + 1, j + 1, k),
+              grid_node(n, i, j + 1, k), grid_node(n, i, j, k + 1), grid_node(n, i + 1, j, k + 1),
+              grid_node(n, i + 1, j + 1, k + 1), grid_node(n, i, j + 1, k + 1)},
+             src});
       }
     }
   }
@@ -190,11 +190,11 @@ TEST(check_mesh, counts_a_hex_next_to_tets_as_non_conforming) {
   // Cube (0,0,0) of a 2x2x2 Kuhn grid as a hex, the other seven cubes left as tets: its three
   // inner quads each meet two triangles.
   const TetMesh input = kuhn_grid(2);
-  std::vector<Cell> cells = {{CellType::Hex,
-                              {grid_node(2, 0, 0, 0), grid_node(2, 1, 0, 0), grid_node(2, 1, 1, 0),
-                               grid_node(2, 0, 1, 0), grid_node(2, 0, 0, 1), grid_node(2, 1, 0, 1),
-                               grid_node(2, 1, 1, 1), grid_node(2, 0, 1, 1)},
-                              {0, 1, 2, 3, 4, 5}}};
+  std::vector<Cell> cells = {
+      {CellType::Hex,
+       {grid_node(2, 0, 0, 0), grid_node(2, 1, 0, 0), grid_node(2, 1, 1, 0), grid_node(2, 0, 1, 0),
+        grid_node(2, 0, 0, 1), grid_node(2, 1, 0, 1), grid_node(2, 1, 1, 1), grid_node(2, 0, 1, 1)},
+       {0, 1, 2, 3, 4, 5}}};
   const std::vector<Cell> tets = tets_as_cells(input);
   cells.insert(cells.end(), tets.begin() + 6, tets.end());
   const CheckReport r = check_mesh(make_mixed(input, cells), input);

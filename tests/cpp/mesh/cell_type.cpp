@@ -56,7 +56,8 @@ Vec3 centroid(const ReferenceCell& cell, const int* ids, int n) {
 /// Newell's normal of a polygon (exact for planar ones, any size).
 Vec3 polygon_normal(const ReferenceCell& cell, const int* ids, int n) {
   Vec3 normal{0, 0, 0};
-  for (int i = 0; i < n; ++i) normal = normal + point(cell, ids[i]).cross(point(cell, ids[(i + 1) % n]));
+  for (int i = 0; i < n; ++i)
+    normal = normal + point(cell, ids[i]).cross(point(cell, ids[(i + 1) % n]));
   return normal;
 }
 
@@ -165,7 +166,17 @@ TEST(descriptor, edges_follow_vtk_quadratic_order) {
       {{0, 1}, {1, 2}, {2, 0}, {0, 3}, {1, 3}, {2, 3}},
       {{0, 1}, {1, 2}, {2, 3}, {3, 0}, {0, 4}, {1, 4}, {2, 4}, {3, 4}},
       {{0, 1}, {1, 2}, {2, 0}, {3, 4}, {4, 5}, {5, 3}, {0, 3}, {1, 4}, {2, 5}},
-      {{0, 1}, {1, 2}, {2, 3}, {3, 0}, {4, 5}, {5, 6}, {6, 7}, {7, 4}, {0, 4}, {1, 5}, {2, 6},
+      {{0, 1},
+       {1, 2},
+       {2, 3},
+       {3, 0},
+       {4, 5},
+       {5, 6},
+       {6, 7},
+       {7, 4},
+       {0, 4},
+       {1, 5},
+       {2, 6},
        {3, 7}}};
   for (CellType type : kTypes) {
     const CellDescriptor& d = descriptor(type);

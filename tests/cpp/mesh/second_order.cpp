@@ -30,7 +30,8 @@ Tet10Mesh add_mid_nodes(const TetMesh& linear) {
       if (it == mid.end()) {
         const index_t id = static_cast<index_t>(out.points.size() / 3);
         for (int c = 0; c < 3; ++c) {
-          out.points.push_back(0.5 * (linear.points[3 * q[e[0]] + c] + linear.points[3 * q[e[1]] + c]));
+          out.points.push_back(0.5 *
+                               (linear.points[3 * q[e[0]] + c] + linear.points[3 * q[e[1]] + c]));
         }
         it = mid.emplace(key, id).first;
       }

@@ -75,8 +75,9 @@ TEST(TetTopology, boundary_faces_of_structured_grids) {
 
 TEST(TetTopology, three_tets_on_one_face_is_an_input_error) {
   // Face (0,1,2) in the plane z = 0 carries a tet below it and two above it.
-  TetMesh mesh = make_tet_mesh({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {0.2, 0.2, 1}, {0, 0, -1}},
-                               {{0, 1, 2, 3}, {0, 1, 2, 4}, {0, 2, 1, 5}});
+  TetMesh mesh =
+      make_tet_mesh({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {0.2, 0.2, 1}, {0, 0, -1}},
+                    {{0, 1, 2, 3}, {0, 1, 2, 4}, {0, 2, 1, 5}});
   try {
     TetTopology topo(mesh);
     FAIL() << "no InputError";

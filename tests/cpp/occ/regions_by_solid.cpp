@@ -14,7 +14,6 @@
 #include <TopTools_ListOfShape.hxx>
 #include <TopoDS_Compound.hxx>
 #include <gp_Ax2.hxx>
-
 #include <set>
 #include <sstream>
 

@@ -30,23 +30,21 @@ Candidate group(std::vector<index_t> tets, CellType type = CellType::Hex) {
   return c;
 }
 
-#define SKIP_WITHOUT_GLPK()                                               \
+#define SKIP_WITHOUT_GLPK() \
   if (!selection_bound_available()) GTEST_SKIP() << "built without GLPK"
 
 TEST(bound_selection, two_disjoint_hexes_beat_the_one_that_overlaps_both) {
   SKIP_WITHOUT_GLPK();
   // A takes tets 0-5; B and C each share three of them with A and are disjoint from each other.
-  const std::vector<Candidate> candidates = {group({0, 1, 2, 3, 4, 5}),
-                                             group({0, 1, 2, 10, 11, 12}),
-                                             group({3, 4, 5, 13, 14, 15})};
+  const std::vector<Candidate> candidates = {
+      group({0, 1, 2, 3, 4, 5}), group({0, 1, 2, 10, 11, 12}), group({3, 4, 5, 13, 14, 15})};
   // Started from the greedy-looking choice {A}: the solver must still find {B, C}.
   for (const std::vector<index_t>& initial : {std::vector<index_t>{}, std::vector<index_t>{0}}) {
     const SelectionBound bound = bound_selection(16, candidates, initial, 10.0);
     EXPECT_TRUE(bound.proved);
     EXPECT_EQ(bound.bound_elements, 6u);  // 16 tets - 2 x 5 saved
     EXPECT_EQ(bound.best_elements, 6u);
-    EXPECT_EQ(std::set<index_t>(bound.best.begin(), bound.best.end()),
-              (std::set<index_t>{1, 2}));
+    EXPECT_EQ(std::set<index_t>(bound.best.begin(), bound.best.end()), (std::set<index_t>{1, 2}));
   }
 }
 
@@ -66,9 +64,8 @@ TEST(bound_selection, an_odd_cycle_of_conflicts_is_solved_past_its_fractional_re
 TEST(bound_selection, a_conformity_row_forbids_a_quad_face_left_open) {
   SKIP_WITHOUT_GLPK();
   // Hexes A and C, and pyramid B that closes A's quad face but overlaps C.
-  const std::vector<Candidate> candidates = {group({0, 1, 2, 3, 4, 5}),
-                                             group({6, 7}, CellType::Pyramid),
-                                             group({7, 8, 9, 10, 11, 12})};
+  const std::vector<Candidate> candidates = {
+      group({0, 1, 2, 3, 4, 5}), group({6, 7}, CellType::Pyramid), group({7, 8, 9, 10, 11, 12})};
   const SelectionBound packing = bound_selection(13, candidates, {}, 10.0);
   EXPECT_EQ(packing.bound_elements, 3u);  // A and C
   const std::vector<ConformityRow> rows = {{0, {1}}};
@@ -98,7 +95,8 @@ TEST(bound_selection, conforming_selections_keep_every_conformity_row) {
     const Selection selection = select_candidates(mesh, topology, candidates, p);
     const std::vector<ConformityRow> rows = conformity_rows(mesh, topology, candidates);
     EXPECT_FALSE(rows.empty());
-    const SelectionBound packing = bound_selection(mesh.nb_tets(), candidates, selection.elements, 2.0);
+    const SelectionBound packing =
+        bound_selection(mesh.nb_tets(), candidates, selection.elements, 2.0);
     const SelectionBound conforming =
         bound_selection(mesh.nb_tets(), candidates, selection.elements, 2.0, rows);
     EXPECT_EQ(conforming.dropped_rows, 0u);

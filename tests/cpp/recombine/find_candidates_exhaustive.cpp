@@ -47,8 +47,8 @@ CellKey key_of(const Candidate& c) {
     std::sort(face.begin(), face.end());
     faces.insert(face);
   }
-  return {static_cast<int>(c.type), std::vector<index_t>(c.tets.begin(), c.tets.begin() + c.nb_tets),
-          faces};
+  return {static_cast<int>(c.type),
+          std::vector<index_t>(c.tets.begin(), c.tets.begin() + c.nb_tets), faces};
 }
 
 /// Independent check that `tets` fill the cell of `type` on `v` (local order): every face of a
@@ -56,8 +56,7 @@ CellKey key_of(const Candidate& c) {
 /// gets two triangles on one diagonal, each triangular face one triangle; and the tets' volume
 /// equals the volume that the cell's faces, triangulated that way and oriented by the cell's
 /// local order, enclose. (Brute force: no adjacency, no orientation taken from the tets.)
-bool fills(const TetMesh& mesh, const std::vector<index_t>& tets, CellType type,
-           const index_t* v) {
+bool fills(const TetMesh& mesh, const std::vector<index_t>& tets, CellType type, const index_t* v) {
   const CellDescriptor& d = descriptor(type);
   std::map<std::set<index_t>, int> face_count;
   for (index_t t : tets) {
@@ -115,7 +114,8 @@ bool fills(const TetMesh& mesh, const std::vector<index_t>& tets, CellType type,
   double volume = 0.0;
   for (index_t t : tets) {
     const index_t* q = mesh.tet(t);
-    volume += std::abs(tet_volume(mesh.point(q[0]), mesh.point(q[1]), mesh.point(q[2]), mesh.point(q[3])));
+    volume += std::abs(
+        tet_volume(mesh.point(q[0]), mesh.point(q[1]), mesh.point(q[2]), mesh.point(q[3])));
   }
   return std::abs(volume - enclosed) <= 1e-9 * std::max(1.0, std::abs(volume));
 }
@@ -227,9 +227,9 @@ TEST(find_candidates_exhaustive, respects_regions) {
 TetMesh seven_tet_cube(double e) {
   std::vector<Point> p = unit_cube().corners;
   p[4] = {e, 0.0, 1.0};
-  const std::vector<Tet> tets = {{0, 4, 6, 7}, {0, 2, 3, 7}, {0, 2, 7, 6},   // x <= y
-                                 {0, 1, 3, 4}, {1, 3, 4, 7}, {1, 4, 5, 7},   // x >= y
-                                 {0, 3, 4, 7}};                              // the sliver
+  const std::vector<Tet> tets = {{0, 4, 6, 7}, {0, 2, 3, 7}, {0, 2, 7, 6},  // x <= y
+                                 {0, 1, 3, 4}, {1, 3, 4, 7}, {1, 4, 5, 7},  // x >= y
+                                 {0, 3, 4, 7}};                             // the sliver
   TetMesh mesh = make_tet_mesh(p, tets);
   orient_positively(mesh);
   return mesh;
@@ -247,12 +247,13 @@ TEST(find_candidates_exhaustive, finds_a_hex_of_seven_tets_around_a_flat_tet) {
     ASSERT_TRUE(fills(mesh, all, CellType::Hex, cube_hex().data())) << "bad fixture";
     const auto found = compare(mesh, permissive_criteria());
     ASSERT_EQ(count_type(found, CellType::Hex), 1u);
-    const Candidate& hex = *std::find_if(found.begin(), found.end(),
-                                         [](const Candidate& c) { return c.type == CellType::Hex; });
+    const Candidate& hex = *std::find_if(
+        found.begin(), found.end(), [](const Candidate& c) { return c.type == CellType::Hex; });
     EXPECT_EQ(hex.nb_tets, 7);
     // The programs know only 5- and 6-tet hexahedra.
     const TetTopology topology(mesh);
-    EXPECT_EQ(count_type(find_candidates(mesh, topology, permissive_criteria(), 1), CellType::Hex), 0u);
+    EXPECT_EQ(count_type(find_candidates(mesh, topology, permissive_criteria(), 1), CellType::Hex),
+              0u);
   }
   // Through the engine: one hexahedron, valid.
   RecombineParameters p;
@@ -321,10 +322,9 @@ TEST(find_candidates_exhaustive, agrees_cell_by_cell_with_a_brute_force_oracle_o
       for (int k = 0; k < n; ++k) {
         for (int j = 0; j < n; ++j) {
           for (int i = 0; i < n; ++i) {
-            const std::array<index_t, 8> v = {id(i, j, k),     id(i + 1, j, k),
-                                              id(i + 1, j + 1, k), id(i, j + 1, k),
-                                              id(i, j, k + 1), id(i + 1, j, k + 1),
-                                              id(i + 1, j + 1, k + 1), id(i, j + 1, k + 1)};
+            const std::array<index_t, 8> v = {
+                id(i, j, k),     id(i + 1, j, k),     id(i + 1, j + 1, k),     id(i, j + 1, k),
+                id(i, j, k + 1), id(i + 1, j, k + 1), id(i + 1, j + 1, k + 1), id(i, j + 1, k + 1)};
             // The oracle: the tets with all four corners among the cell's 8 vertices...
             std::vector<index_t> inside;
             for (index_t t = 0; t < mesh.nb_tets(); ++t) {
@@ -385,9 +385,10 @@ TEST(find_candidates_exhaustive, agrees_cell_by_cell_with_a_brute_force_oracle_o
   RecordProperty("cells_filled_by_all_their_tets", static_cast<int>(strict_filled));
   RecordProperty("hexes_not_lattice_cells", static_cast<int>(hexes_elsewhere));
   RecordProperty("cells_with_more_than_3_caps", static_cast<int>(many_caps));
-  std::printf("[ lattice  ] %zu of %d cells filled (%zu by all their tets, %zu with > 3 caps), "
-              "%zu other hexes\n",
-              cells_filled, 6 * 64, strict_filled, many_caps, hexes_elsewhere);
+  std::printf(
+      "[ lattice  ] %zu of %d cells filled (%zu by all their tets, %zu with > 3 caps), "
+      "%zu other hexes\n",
+      cells_filled, 6 * 64, strict_filled, many_caps, hexes_elsewhere);
 }
 
 }  // namespace

@@ -148,7 +148,6 @@ void expect_same_as_sweeps(const TetMesh& mesh, const std::vector<Candidate>& al
   }
 }
 
-
 TEST(PruneUnclosable, KeepsEveryCellOfAGrid) {
   // Every quad face of a grid cell is on the boundary or shared with the next cell.
   const TetMesh mesh = kuhn_grid(3);
@@ -248,7 +247,8 @@ TEST(PruneUnclosable, KeepsWhatTheDefinitionKeepsWithAFlatTetOnAQuad) {
     TetMesh mesh = test::make_tet_mesh(p, with_cap);
     orient_positively(mesh);
     const TetTopology topology(mesh);
-    const std::vector<Candidate> all = find_candidates_exhaustive(mesh, topology, test::permissive_criteria(), 1);
+    const std::vector<Candidate> all =
+        find_candidates_exhaustive(mesh, topology, test::permissive_criteria(), 1);
     ASSERT_GE(count_type(all, CellType::Hex), 2u);  // with and without the flat tet
     expect_same_as_sweeps(mesh, all);
   }

@@ -1,10 +1,10 @@
 #include "hexmerge/occ/mesh_shape.h"
 
 #include <algorithm>
-#include <limits>
 #include <chrono>
 #include <cmath>
 #include <iterator>
+#include <limits>
 #include <optional>
 #include <sstream>
 #include <utility>

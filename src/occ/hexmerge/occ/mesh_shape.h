@@ -119,11 +119,11 @@ struct MeshShapeReport {
   std::size_t nb_layer_points = 0;       ///< boundary-layer points inserted
   std::size_t nb_steiner_points = 0;     ///< points TetGen added
   std::size_t nb_nudged_points = 0;  ///< lattice points TetGen left out, moved by 1e-7 h, run again
-  std::size_t nb_tetgen_restarts = 0;    ///< TetGen runs that failed on a lattice face, restarted
-  double min_tet_quality_before = 0.0;   ///< smallest scaled Jacobian of TetGen's tets
-  std::size_t nb_face_flips = 0;         ///< 2-3 flips taking out slivers (remove_slivers)
-  std::size_t nb_edge_flips = 0;         ///< edge removals (3-2, 4-4, ...) taking out slivers
-  std::size_t nb_boundary_swaps = 0;     ///< of which on the boundary, inside one planar face
+  std::size_t nb_tetgen_restarts = 0;   ///< TetGen runs that failed on a lattice face, restarted
+  double min_tet_quality_before = 0.0;  ///< smallest scaled Jacobian of TetGen's tets
+  std::size_t nb_face_flips = 0;        ///< 2-3 flips taking out slivers (remove_slivers)
+  std::size_t nb_edge_flips = 0;        ///< edge removals (3-2, 4-4, ...) taking out slivers
+  std::size_t nb_boundary_swaps = 0;    ///< of which on the boundary, inside one planar face
   std::size_t nb_node_moves = 0;  ///< moves of boundary-layer and Steiner points (smooth_nodes)
   int sweep_axis = -1;  ///< the lattice axis the tets are swept along (0..2), -1: not swept
   std::array<std::array<double, 3>, 3> frame{};  ///< lattice axes (rows), unit vectors
@@ -148,8 +148,8 @@ struct MeshShapeReport {
   /// few hexahedra).
   std::string strategy;
   std::vector<std::string> failed_strategies;  ///< the ways tried before, each with its failure
-  std::string tetgen_command;          ///< the command line run
-  PhaseSeconds phase_seconds;          ///< wall time per phase, in order
+  std::string tetgen_command;                  ///< the command line run
+  PhaseSeconds phase_seconds;                  ///< wall time per phase, in order
 };
 
 /// Tetrahedralises a solid shape with lattice-seeded points, ready for recombine().

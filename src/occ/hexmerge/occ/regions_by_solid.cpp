@@ -10,16 +10,15 @@
 #include <ShapeAnalysis_Surface.hxx>
 #include <Standard_Failure.hxx>
 #include <TopExp.hxx>
+#include <TopTools_IndexedMapOfShape.hxx>
 #include <TopoDS.hxx>
 #include <TopoDS_Face.hxx>
 #include <TopoDS_Shape.hxx>
-#include <TopTools_IndexedMapOfShape.hxx>
-#include <gp_Pnt.hxx>
-
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <exception>
+#include <gp_Pnt.hxx>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -27,8 +26,8 @@
 #include <thread>
 
 #include "hexmerge/core/error.h"
-#include "hexmerge/occ/brep_text.h"
 #include "hexmerge/mesh/tet_topology.h"
+#include "hexmerge/occ/brep_text.h"
 
 namespace hexmerge {
 namespace {
@@ -41,7 +40,8 @@ const auto seconds_since = PhaseTimer::seconds_since;
 // (classifiers, projectors): the bodies below keep theirs per thread.
 template <class Body>
 void parallel_for(std::size_t n, int nb_threads, Body body) {
-  const std::size_t threads = std::max<std::size_t>(1, std::min<std::size_t>(nb_threads, n / 64 + 1));
+  const std::size_t threads =
+      std::max<std::size_t>(1, std::min<std::size_t>(nb_threads, n / 64 + 1));
   if (threads == 1) {
     body(std::size_t{0}, n, 0);
     return;
@@ -118,7 +118,8 @@ std::vector<SharedFace> shared_faces(const TopTools_IndexedMapOfShape& solids, d
   for (int a = 0; a < nb_faces; ++a) {
     if (shared[a] || owners[a].size() != 1) continue;
     for (int b = a + 1; b < nb_faces; ++b) {
-      if (owners[b].size() != 1 || owners[b][0] == owners[a][0] || boxes[a].IsOut(boxes[b])) continue;
+      if (owners[b].size() != 1 || owners[b][0] == owners[a][0] || boxes[a].IsOut(boxes[b]))
+        continue;
       double a0[6], b0[6];
       boxes[a].Get(a0[0], a0[1], a0[2], a0[3], a0[4], a0[5]);
       boxes[b].Get(b0[0], b0[1], b0[2], b0[3], b0[4], b0[5]);
@@ -231,8 +232,9 @@ class Classifier {
   std::size_t nb_queries() const { return queries_; }
 
  private:
-  std::int32_t classify(const TetMesh& mesh, index_t t,
-                        std::vector<std::unique_ptr<BRepClass3d_SolidClassifier>>& classifiers) const {
+  std::int32_t classify(
+      const TetMesh& mesh, index_t t,
+      std::vector<std::unique_ptr<BRepClass3d_SolidClassifier>>& classifiers) const {
     double c[3] = {0, 0, 0};
     for (int k = 0; k < 4; ++k) {
       const double* p = mesh.point(mesh.tet(t)[k]);
@@ -242,7 +244,8 @@ class Classifier {
     std::int32_t on = NO_SOLID;
     for (std::size_t s = 0; s < solids_.size(); ++s) {
       if (boxes_[s].IsOut(point)) continue;
-      if (!classifiers[s]) classifiers[s] = std::make_unique<BRepClass3d_SolidClassifier>(solids_[s]);
+      if (!classifiers[s])
+        classifiers[s] = std::make_unique<BRepClass3d_SolidClassifier>(solids_[s]);
       classifiers[s]->Perform(point, tolerance_);
       const TopAbs_State state = classifiers[s]->State();
       if (state == TopAbs_IN) return static_cast<std::int32_t>(s);
@@ -260,7 +263,8 @@ class Classifier {
 
 void check_mesh_arrays(const TetMesh& mesh) {
   if (mesh.points.size() % 3 != 0 || mesh.tets.size() % 4 != 0) {
-    throw InputError("the mesh arrays have a size that is not a multiple of 3 (points) or 4 (tets)");
+    throw InputError(
+        "the mesh arrays have a size that is not a multiple of 3 (points) or 4 (tets)");
   }
   const index_t n = mesh.nb_vertices();
   for (index_t t = 0; t < mesh.nb_tets(); ++t) {
@@ -316,7 +320,8 @@ std::vector<std::int32_t> classify_mesh(const std::string& brep, const TetMesh& 
 
     start = Clock::now();
     const std::vector<char> interface = interface_nodes(mesh, faces, nb_threads);
-    report.nb_interface_nodes = static_cast<std::size_t>(std::count(interface.begin(), interface.end(), 1));
+    report.nb_interface_nodes =
+        static_cast<std::size_t>(std::count(interface.begin(), interface.end(), 1));
     add_phase_seconds(report.phase_seconds, "interface nodes", seconds_since(start));
 
     start = Clock::now();
@@ -367,7 +372,8 @@ std::vector<std::int32_t> classify_mesh(const std::string& brep, const TetMesh& 
     add_phase_seconds(report.phase_seconds, "classify tets", seconds_since(start));
   }
   report.nb_classified_points = classifier.nb_queries();
-  report.nb_unassigned_tets = static_cast<std::size_t>(std::count(region.begin(), region.end(), NO_SOLID));
+  report.nb_unassigned_tets =
+      static_cast<std::size_t>(std::count(region.begin(), region.end(), NO_SOLID));
   return region;
 }
 

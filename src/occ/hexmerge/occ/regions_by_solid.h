@@ -36,13 +36,13 @@ struct RegionsBySolidParameters {
 /// What regions_by_solid() did.
 struct RegionsBySolidReport {
   std::size_t nb_solids = 0;
-  std::size_t nb_shared_faces = 0;      ///< faces of the shape between two solids
-  std::size_t nb_interface_nodes = 0;   ///< mesh nodes found on a shared face
-  std::size_t nb_pieces = 0;            ///< connected pieces of tets, cut at shared faces
-  std::size_t nb_split_pieces = 0;      ///< pieces whose samples disagreed (classified per tet)
-  std::size_t nb_classified_points = 0; ///< point-in-solid queries made
-  std::size_t nb_unassigned_tets = 0;   ///< tets in no solid (NO_SOLID)
-  PhaseSeconds phase_seconds;           ///< wall time per phase, in order
+  std::size_t nb_shared_faces = 0;       ///< faces of the shape between two solids
+  std::size_t nb_interface_nodes = 0;    ///< mesh nodes found on a shared face
+  std::size_t nb_pieces = 0;             ///< connected pieces of tets, cut at shared faces
+  std::size_t nb_split_pieces = 0;       ///< pieces whose samples disagreed (classified per tet)
+  std::size_t nb_classified_points = 0;  ///< point-in-solid queries made
+  std::size_t nb_unassigned_tets = 0;    ///< tets in no solid (NO_SOLID)
+  PhaseSeconds phase_seconds;            ///< wall time per phase, in order
 };
 
 /// The solid of a shape that holds each tet of a mesh.

@@ -93,7 +93,6 @@ PostMergeOptions loose_options() {
   return options;
 }
 
-
 // The top diagonal's end points of the Kuhn cube and its two other top corners, by position:
 // cap apexes are put over the corners, each apex nearer its own corner.
 struct TopFace {
