@@ -18,7 +18,9 @@ from conftest import ROOT
 with_occ = pytest.mark.skipif(not _core.with_opencascade, reason="built without OpenCASCADE")
 
 # The add-on's own properties and the CLI's own options of `mesh`: not parameters of a table.
-ADDON_PROPERTIES = {"SourceMesh", "PyramidsAsHexahedra", "SecondOrder"}
+# The add-on's own: the input, how pyramids reach FreeCAD, the order, the CalculiX element types.
+ADDON_PROPERTIES = {"SourceMesh", "PyramidsAsHexahedra", "SecondOrder", "LinearHexahedron",
+                    "QuadraticHexahedron"}
 
 
 def tables() -> list[tuple[str, list[dict]]]:

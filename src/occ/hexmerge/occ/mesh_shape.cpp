@@ -180,7 +180,7 @@ TetMesh mesh_shape_impl(const std::string& brep, const MeshShapeParameters& para
       failed_seconds += seconds_since(attempt_start);
     }
   }
-  throw InputError("mesh_shape: TetGen could not tetrahedralise the shape at size " +
+  throw InputError("mesh_shape: could not tetrahedralise the shape at size " +
                    std::to_string(parameters.size) + " in any of " +
                    std::to_string(std::size(kStrategies)) + " ways of placing the points (" +
                    failures + ")");
@@ -322,7 +322,13 @@ TetMesh mesh_attempt(const Shape& shape, const Frame& frame, const std::string& 
   report.nb_boundary_swaps = improved.boundary_swaps;
   report.nb_node_moves = improved.node_moves;
   clock.lap("slivers");
-  validate_tet_mesh(mesh);
+  // A tet the flips and moves left flat or folded (gmsh_Block at h 1.18: scaled Jacobian
+  // 1e-13) fails this way of placing the points, not the whole run: the next way is tried.
+  try {
+    validate_tet_mesh(mesh);
+  } catch (const InputError& e) {
+    throw TetrahedralizeFailure(std::string("the tets made are not all valid (") + e.what() + ")");
+  }
 
   // 13. How far the boundary nodes are from the CAD faces they lie on.
   std::vector<int> vertex_face = surface.node_face;

@@ -4,8 +4,8 @@
 #include <cmath>
 #include <map>
 
-#include "hexmerge/geometry/remove_slivers.h"
-#include "hexmerge/geometry/smooth_nodes.h"
+#include "hexmerge/occ/mesher/remove_slivers.h"
+#include "hexmerge/occ/mesher/smooth_nodes.h"
 
 namespace hexmerge::mesher {
 namespace {

@@ -1,4 +1,4 @@
-#include "hexmerge/geometry/smooth_nodes.h"
+#include "hexmerge/occ/mesher/smooth_nodes.h"
 
 #include <gtest/gtest.h>
 

@@ -1,4 +1,4 @@
-#include "hexmerge/geometry/remove_slivers.h"
+#include "hexmerge/occ/mesher/remove_slivers.h"
 
 #include <algorithm>
 #include <array>
