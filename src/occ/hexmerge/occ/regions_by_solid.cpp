@@ -21,11 +21,11 @@
 #include <gp_Pnt.hxx>
 #include <map>
 #include <memory>
-#include <mutex>
 #include <numeric>
 #include <thread>
 
 #include "hexmerge/core/error.h"
+#include "hexmerge/core/parallel.h"
 #include "hexmerge/mesh/tet_topology.h"
 #include "hexmerge/occ/brep_text.h"
 
@@ -35,34 +35,23 @@ namespace {
 using Clock = PhaseTimer::Clock;
 const auto seconds_since = PhaseTimer::seconds_since;
 
-// Runs body(begin, end, thread) over [0, n) in contiguous chunks, one per thread. OpenCASCADE
-// reads one shape from several threads safely as long as each thread owns its algorithms
-// (classifiers, projectors): the bodies below keep theirs per thread.
+// Runs body(begin, end, chunk) over [0, n) in contiguous chunks, at most one per thread, with
+// the project's thread helper (core/parallel.h). OpenCASCADE reads one shape from several threads
+// safely as long as each thread owns its algorithms (classifiers, projectors): the bodies below
+// keep theirs per chunk, and a chunk runs on one thread.
 template <class Body>
 void parallel_for(std::size_t n, int nb_threads, Body body) {
   const std::size_t threads =
       std::max<std::size_t>(1, std::min<std::size_t>(nb_threads, n / 64 + 1));
-  if (threads == 1) {
+  if (threads == 1 || n == 0) {
     body(std::size_t{0}, n, 0);
     return;
   }
-  std::vector<std::thread> workers;
-  std::exception_ptr error;
-  std::mutex error_mutex;
-  for (std::size_t k = 0; k < threads; ++k) {
-    const std::size_t begin = n * k / threads;
-    const std::size_t end = n * (k + 1) / threads;
-    workers.emplace_back([&, begin, end, k] {
-      try {
-        body(begin, end, static_cast<int>(k));
-      } catch (...) {
-        std::lock_guard<std::mutex> lock(error_mutex);
-        if (!error) error = std::current_exception();
-      }
-    });
-  }
-  for (auto& w : workers) w.join();
-  if (error) std::rethrow_exception(error);
+  const index_t chunk = static_cast<index_t>((n + threads - 1) / threads);
+  parallel_chunks(static_cast<index_t>(n), chunk, static_cast<int>(threads),
+                  [&](index_t c, index_t begin, index_t end) {
+                    body(std::size_t{begin}, std::size_t{end}, static_cast<int>(c));
+                  });
 }
 
 Bnd_Box bounding_box(const TopoDS_Shape& shape, double enlarge) {
