@@ -47,6 +47,8 @@ constexpr double kCollapseSide = 0.25;
 // Triangles with a smaller angle than this (radians, 5 degrees) have their nodes inside a face
 // collapsed away where that makes no triangle worse.
 constexpr double kCapAngle = 5.0 * M_PI / 180;
+// Collapsing a cap's node may leave sides up to this many times h.
+constexpr double kCapSide = 2.0;
 
 gp_Pnt2d point2d(const UV& uv) { return gp_Pnt2d(uv.u, uv.v); }
 
@@ -409,7 +411,7 @@ void collapse_sides(Surface& surface, double target, double max_side,
     return t.node[0] == n || t.node[1] == n || t.node[2] == n;
   };
   // The smallest angle after moving node r onto node k, or -1 when that is not allowed.
-  auto try_collapse = [&](int r, int k) {
+  auto try_collapse = [&](int r, int k, double limit) {
     if (on_edge[r] || around[r].empty()) return -1.0;
     const int face = tris[around[r].front()].face;
     if (lattice_face[face]) return -1.0;
@@ -440,7 +442,7 @@ void collapse_sides(Surface& surface, double target, double max_side,
       for (int& n : v)
         if (n == r) n = k;
       for (int n : v)
-        if ((nodes[n] - nodes[k]).norm() > max_side) return -1.0;
+        if ((nodes[n] - nodes[k]).norm() > limit) return -1.0;
       const Vec3 now = normal_of(v);
       if (turned_over(now, reference)) return -1.0;
       after = std::min(after, smallest_angle(v));
@@ -486,11 +488,13 @@ void collapse_sides(Surface& surface, double target, double max_side,
       }
     }
     std::sort(sides.begin(), sides.end());
-    for (const auto& [l, key] : sides) {
-      (void)l;
+    for (const auto& [priority, key] : sides) {
       const int a = static_cast<int>(key >> 32), b = static_cast<int>(key & 0xffffffffu);
       if (removed[a] || removed[b]) continue;
-      const double ab = try_collapse(a, b), ba = try_collapse(b, a);
+      // A cap's node may leave sides up to twice the target: a long side is better than a flat
+      // triangle.
+      const double limit = priority < 0 ? std::max(max_side, kCapSide * target) : max_side;
+      const double ab = try_collapse(a, b, limit), ba = try_collapse(b, a, limit);
       if (ab < 0 && ba < 0) continue;
       if (ab >= ba)
         collapse(a, b);
