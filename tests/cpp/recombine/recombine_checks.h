@@ -13,6 +13,7 @@
 #include "hexmerge/check/check_mesh.h"
 #include "hexmerge/geometry/quality.h"
 #include "hexmerge/recombine/recombine.h"
+#include "hexmerge/recombine/select/select_candidates.h"
 
 namespace hexmerge::test {
 
@@ -81,6 +82,19 @@ inline Outcome recombine_and_check(const TetMesh& input, const RecombineParamete
     EXPECT_EQ(run.report.output_counts[t], run.check.counts[t]);
   EXPECT_EQ(run.report.input_tets, input.nb_tets());
   return run;
+}
+
+// The cells a selection makes (its elements and the tets it leaves); owners gets, per tet, how
+// many chosen elements hold it.
+inline std::size_t selection_cells(const TetMesh& mesh, const std::vector<Candidate>& candidates,
+                                   const Selection& s, std::vector<int>& owners) {
+  owners.assign(mesh.nb_tets(), 0);
+  std::size_t taken = 0;
+  for (index_t ci : s.elements) {
+    for (int i = 0; i < candidates[ci].nb_tets; ++i) ++owners[candidates[ci].tets[i]];
+    taken += static_cast<std::size_t>(candidates[ci].nb_tets);
+  }
+  return s.elements.size() + (mesh.nb_tets() - taken);
 }
 
 inline std::size_t hexes(const Outcome& run) {

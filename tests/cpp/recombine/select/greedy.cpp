@@ -13,21 +13,10 @@
 #include "hexmerge/recombine/parameters.h"
 #include "hexmerge/recombine/prune_candidates.h"
 #include "hexmerge/recombine/select/select_candidates.h"
+#include "recombine/recombine_checks.h"
 
 namespace hexmerge::test {
 namespace {
-
-// The number of output cells a selection makes: its elements and the tets it leaves.
-std::size_t cells_of(const TetMesh& mesh, const std::vector<Candidate>& candidates,
-                     const Selection& s, std::vector<int>& owners) {
-  owners.assign(mesh.nb_tets(), 0);
-  std::size_t taken = 0;
-  for (index_t ci : s.elements) {
-    for (int i = 0; i < candidates[ci].nb_tets; ++i) ++owners[candidates[ci].tets[i]];
-    taken += static_cast<std::size_t>(candidates[ci].nb_tets);
-  }
-  return s.elements.size() + (mesh.nb_tets() - taken);
-}
 
 // In allow mode the block does not run: the greedy stages alone turn every cube of a Kuhn grid
 // into one hexahedron (hexahedra first, every cube's quality 1).
@@ -61,7 +50,7 @@ TEST(select_greedy, both_boundary_orders_give_a_disjoint_conforming_selection) {
     p.boundary_order = order;
     const Selection s = select_candidates(mesh, topology, all, p);
     std::vector<int> owners;
-    const std::size_t cells = cells_of(mesh, all, s, owners);
+    const std::size_t cells = selection_cells(mesh, all, s, owners);
     for (index_t t = 0; t < mesh.nb_tets(); ++t) EXPECT_LE(owners[t], 1) << "tet " << t;
     EXPECT_EQ(s.nonconforming_quads, 0u);
     EXPECT_LT(cells, std::size_t(mesh.nb_tets()));

@@ -12,6 +12,7 @@
 #include "hexmerge/recombine/find_candidates.h"
 #include "hexmerge/recombine/parameters.h"
 #include "hexmerge/recombine/select/select_candidates.h"
+#include "recombine/recombine_checks.h"
 
 namespace hexmerge::test {
 namespace {
@@ -38,14 +39,9 @@ TEST(select_local_optimisation, moves_never_add_cells_and_keep_the_selection_dis
       p.local_optimisation = on;
       p.local_search = false;
       const Selection s = select_candidates(mesh, topology, all, p);
-      std::vector<int> owners(mesh.nb_tets(), 0);
-      std::size_t taken = 0;
-      for (index_t ci : s.elements) {
-        for (int i = 0; i < all[ci].nb_tets; ++i) ++owners[all[ci].tets[i]];
-        taken += static_cast<std::size_t>(all[ci].nb_tets);
-      }
+      std::vector<int> owners;
+      cells[on] = selection_cells(mesh, all, s, owners);
       for (index_t t = 0; t < mesh.nb_tets(); ++t) EXPECT_LE(owners[t], 1) << "tet " << t;
-      cells[on] = s.elements.size() + (mesh.nb_tets() - taken);
       if (on) moves += s.local_moves;
       if (!on) EXPECT_EQ(s.local_moves, 0u);
     }

@@ -162,6 +162,11 @@ void refine(const Shape& s, Surface& surface, double target, const std::vector<b
   // Sides whose middle on the CAD falls on one of their ends (a face's pole or collapsed side:
   // splitting them again and again stacked 1,054 nodes on one point of gmsh_917_fusee's face 60).
   std::unordered_set<std::uint64_t> unsplittable;
+  // Faces not brought to the target size everywhere, each listed once.
+  auto list_unrefined = [&](int face) {
+    std::vector<int>& listed = surface.unrefined_faces;
+    if (std::find(listed.begin(), listed.end(), face) == listed.end()) listed.push_back(face);
+  };
   // Splits side (a, b) in every triangle that has it; the halves of an edge segment stay one.
   // Returns the sides around the new node, or nothing when the side cannot be split.
   auto split_side = [&](int a, int b) {
@@ -177,9 +182,7 @@ void refine(const Shape& s, Surface& surface, double target, const std::vector<b
         surface.nodes.pop_back();
         surface.node_face.pop_back();
         unsplittable.insert(key);
-        std::vector<int>& listed = surface.unrefined_faces;
-        if (std::find(listed.begin(), listed.end(), tris[t0].face) == listed.end())
-          listed.push_back(tris[t0].face);
+        list_unrefined(tris[t0].face);
         return std::vector<std::uint64_t>{};
       }
     }
@@ -298,8 +301,7 @@ void refine(const Shape& s, Surface& surface, double target, const std::vector<b
       added[face] += surface.nodes.size() - before;
       if (added[face] > 20 * face_area[face] / (target * target) + 200) {
         given_up[face] = 1;
-        std::vector<int>& listed = surface.unrefined_faces;
-        if (std::find(listed.begin(), listed.end(), face) == listed.end()) listed.push_back(face);
+        list_unrefined(face);
       }
     }
 
