@@ -7,6 +7,7 @@
 #include "hexmerge/core/parallel.h"
 #include "hexmerge/geometry/quality.h"
 #include "hexmerge/mesh/spatial_order.h"
+#include "hexmerge/recombine/parameters.h"
 #include "hexmerge/recombine/quad_pairs.h"
 #include "hexmerge/recombine/rf_graph.h"
 
@@ -458,7 +459,7 @@ class Matcher {
       return;
     }
     const double sj = scaled_jacobian(c.type, mesh_.points.data(), c.vertices.data());
-    if (sj < criteria_.min_scaled_jacobian) return;
+    if (!good_enough(criteria_, mesh_, c.type, sj, group.data(), nb_assigned_)) return;
     c.quality = static_cast<float>(sj);
     found.push_back(c);
   }
@@ -538,6 +539,17 @@ std::vector<Candidate> find_candidates(const TetMesh& mesh, const TetTopology& t
       },
       [&](double fraction) { return !progress || progress("candidates", fraction); });
   return in_root_order(per_chunk, nt);
+}
+
+bool good_enough(const AcceptanceCriteria& criteria, const TetMesh& mesh, CellType type, double sj,
+                 const index_t* tets, int nb_tets) {
+  if (sj >= criteria.min_scaled_jacobian) return true;
+  // Pyramids are not: CalculiX gets them as collapsed hexahedra (docs/fem-accuracy.md).
+  if (type != CellType::Hex && type != CellType::Prism) return false;
+  if (sj < std::max(criteria.lowest_scaled_jacobian, kMinElementScaledJacobian)) return false;
+  for (int i = 0; i < nb_tets; ++i)
+    if (sj < scaled_jacobian(CellType::Tet, mesh.points.data(), mesh.tet(tets[i]))) return false;
+  return true;
 }
 
 FaceKey face_key(const Candidate& c, int f) {

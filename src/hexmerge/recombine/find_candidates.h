@@ -41,9 +41,19 @@ struct AcceptanceCriteria {
   double min_boundary_dihedral_angle = 179.0;  ///< degrees, quads on the domain boundary
   double max_face_angle = 150.0;               ///< degrees
   double min_scaled_jacobian = 0.3;
+  /// Between this and min_scaled_jacobian, a hex or prism at least as good as the worst tet it
+  /// replaces passes
+  double lowest_scaled_jacobian = 0.1;
   bool respect_regions = true;
   std::array<bool, NB_CELL_TYPES> types{{false, true, true, true}};  ///< by CellType
 };
+
+/// Whether a new element of type `type` and scaled Jacobian `sj` made of the tets `tets`
+/// (nb_tets of them, ids into `mesh`) is good enough: at least min_scaled_jacobian, or, a hex or
+/// prism, at least lowest_scaled_jacobian (and kMinElementScaledJacobian) and the worst of its
+/// tets' scaled Jacobians.
+bool good_enough(const AcceptanceCriteria& criteria, const TetMesh& mesh, CellType type, double sj,
+                 const index_t* tets, int nb_tets);
 
 /// Runs every search program (rf_graph.h) from every tet.
 ///

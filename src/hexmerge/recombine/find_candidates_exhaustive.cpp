@@ -292,7 +292,7 @@ class CellBuilder {
   // caps when there are at most kMaxCapSubsets of them, otherwise none and all.
   void emit() {
     const double sj = scaled_jacobian(type_, mesh_.points.data(), v_.data());
-    if (sj < criteria_.min_scaled_jacobian) return;
+    if (!good_enough(criteria_, mesh_, type_, sj, group_, nb_)) return;
     std::array<int, 6> cap_of_quad;  // per quad face: index into caps, or -1
     std::array<index_t, 6> caps;
     int nb_caps = 0, nb_quads = 0;

@@ -71,6 +71,9 @@ struct RecombineParameters {
   /// [-1, 1]: Verdict scaled Jacobian of every new element; recombine() never goes below
   /// kMinElementScaledJacobian, whatever this says
   double min_scaled_jacobian = 0.3;
+  /// [0, 1]: between this and min_scaled_jacobian, a new hex or prism at least as good as the
+  /// worst tet it replaces is accepted (it never lowers the quality where it merges)
+  double lowest_scaled_jacobian = 0.1;
   bool make_hexahedra = true;
   bool make_prisms = true;
   bool make_pyramids = true;

@@ -181,6 +181,7 @@ MixedMesh recombine(const TetMesh& input, const RecombineParameters& parameters,
   // inverted.
   criteria.min_scaled_jacobian =
       std::max(parameters.min_scaled_jacobian, kMinElementScaledJacobian);
+  criteria.lowest_scaled_jacobian = parameters.lowest_scaled_jacobian;
   criteria.respect_regions = parameters.respect_regions;
   criteria.types[static_cast<int>(CellType::Hex)] = parameters.make_hexahedra;
   criteria.types[static_cast<int>(CellType::Prism)] = parameters.make_prisms;

@@ -186,6 +186,7 @@ TEST(find_candidates, stricter_acceptance_keeps_a_subset) {
     for (const Candidate& c : loose) loose_keys.insert(key_of(c));
     AcceptanceCriteria strict = permissive_criteria();
     strict.min_scaled_jacobian = 0.6;
+    strict.lowest_scaled_jacobian = 0.6;
     strict.min_dihedral_angle = 170.0;
     strict.max_face_angle = 120.0;
     const auto kept = find(mesh, strict);
@@ -195,6 +196,30 @@ TEST(find_candidates, stricter_acceptance_keeps_a_subset) {
       EXPECT_GE(c.quality, 0.6 - 1e-6);
     }
   }
+}
+
+// Below min_scaled_jacobian, down to lowest_scaled_jacobian, only hexes and prisms at least as
+// good as their worst tet pass.
+TEST(find_candidates, below_the_minimum_only_hexes_and_prisms_better_than_their_tets) {
+  std::size_t relaxed = 0;
+  for (const auto& [name, mesh] : meshes()) {
+    SCOPED_TRACE(name);
+    AcceptanceCriteria criteria = permissive_criteria();
+    criteria.min_scaled_jacobian = 0.6;
+    criteria.lowest_scaled_jacobian = 0.1;
+    for (const Candidate& c : find(mesh, criteria)) {
+      if (c.quality >= 0.6 - 1e-6) continue;
+      ++relaxed;
+      EXPECT_TRUE(c.type == CellType::Hex || c.type == CellType::Prism);
+      EXPECT_GE(c.quality, 0.1 - 1e-6);
+      for (index_t t : c.tets) {
+        if (t == NO_CELL) break;
+        EXPECT_GE(c.quality,
+                  scaled_jacobian(CellType::Tet, mesh.points.data(), mesh.tet(t)) - 1e-6);
+      }
+    }
+  }
+  EXPECT_GT(relaxed, 0u);  // the rule is exercised
 }
 
 TEST(find_candidates, finds_each_cube_of_a_grid_and_only_enabled_types) {

@@ -293,13 +293,18 @@ TetMesh mesh_attempt(const Shape& shape, const Frame& frame, const std::string& 
   input.first_isolated = nodes.size() + nb_on_faces;
   const std::size_t given = input.points.size();
   input.to_world = [&](const Vec3& p) { return lattice.frame.to_world(p); };
-  const TetrahedralizeOutput tets = tetgen.run(std::move(input));
+  TetrahedralizeOutput tets = tetgen.run(std::move(input));
   report.tetgen_command = tets.command;
   report.nb_tetgen_restarts = tets.nb_restarts;
   report.nb_nudged_points = tets.nb_nudged;
   const std::size_t made = tets.points.size() / 3;
   report.nb_steiner_points = made > given ? made - given : 0;
   clock.lap("tetgen");
+
+  // 10b. Swept: the tets rebuilt as columns over the first plane's triangles.
+  if (sweep_axis >= 0)
+    report.nb_extruded_triangles =
+        extrude_tets(sweep_axis, lattice.spacing[sweep_axis], given, tets);
 
   // 11. The tets in the world, regions by solid.
   TetMesh mesh = world_mesh(regions_brep, shape, surface, lattice.frame, tets);

@@ -126,6 +126,9 @@ struct MeshShapeReport {
   std::size_t nb_boundary_swaps = 0;    ///< of which on the boundary, inside one planar face
   std::size_t nb_node_moves = 0;  ///< moves of boundary-layer and Steiner points (smooth_nodes)
   int sweep_axis = -1;  ///< the lattice axis the tets are swept along (0..2), -1: not swept
+  /// Swept: the cross-section's triangles whose columns of prisms make the tets (0: TetGen's
+  /// tets kept, see mesher::extrude_tets()).
+  std::size_t nb_extruded_triangles = 0;
   std::array<std::array<double, 3>, 3> frame{};  ///< lattice axes (rows), unit vectors
   std::array<double, 3> spacing{};               ///< lattice spacing along each axis
   double max_boundary_distance = 0.0;  ///< largest distance of a boundary node to the shape

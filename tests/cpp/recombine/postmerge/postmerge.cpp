@@ -208,6 +208,7 @@ TEST(post_merge, on_a_delaunay_mesh_the_stage_adds_hexahedra_and_the_checker_pas
   if (mesh.nb_tets() == 0) GTEST_SKIP() << "no tetgen";
   RecombineParameters parameters;
   parameters.same_nodes = true;
+  parameters.lowest_scaled_jacobian = 0.3;  // every new element at least 0.3 (issue 19)
   RecombineReport before, after;
   const MixedMesh same = recombine(mesh, parameters, before);
   parameters.same_nodes = false;

@@ -13,7 +13,9 @@
 #include <gp_Cylinder.hxx>
 #include <gp_Lin.hxx>
 #include <gp_Pln.hxx>
+#include <limits>
 #include <map>
+#include <set>
 #include <unordered_map>
 #include <unordered_set>
 #include <utility>
@@ -314,6 +316,158 @@ std::optional<SweptSurface> sweep_surface(const Shape& s, const Sweep& sweep, co
     }
   surface = std::move(swept);
   return result;
+}
+
+namespace {
+
+constexpr index_t kNoIndex = std::numeric_limits<index_t>::max();
+constexpr int kNoLevel = std::numeric_limits<int>::min();
+
+}  // namespace
+
+std::size_t extrude_tets(int axis, double spacing, std::size_t given,
+                         tetgen::TetrahedralizeOutput& tets) {
+  const std::vector<double>& points = tets.points;
+  const std::size_t nb_points = points.size() / 3;
+  if (nb_points != given || nb_points == 0) return 0;
+  // Per point: its plane (level) and its place across the axis (the bits of its two other
+  // coordinates: the sweep repeats them exactly).
+  const int u = (axis + 1) % 3, v = (axis + 2) % 3;
+  std::vector<int> level(nb_points);
+  std::map<std::pair<double, double>, int> place_of;
+  std::vector<int> place(nb_points);
+  int lowest = std::numeric_limits<int>::max(), highest = std::numeric_limits<int>::min();
+  for (std::size_t i = 0; i < nb_points; ++i) {
+    const double* p = &points[3 * i];
+    const double k = std::round(p[axis] / spacing);
+    if (std::abs(p[axis] - k * spacing) > 1e-7 * spacing) return 0;
+    level[i] = static_cast<int>(k);
+    lowest = std::min(lowest, level[i]), highest = std::max(highest, level[i]);
+    place[i] = place_of.emplace(std::make_pair(p[u], p[v]), static_cast<int>(place_of.size()))
+                   .first->second;
+  }
+  const int nb_levels = highest - lowest + 1;
+  if (nb_levels < 2) return 0;
+  std::vector<index_t> at(place_of.size() * static_cast<std::size_t>(nb_levels), kNoIndex);
+  for (std::size_t i = 0; i < nb_points; ++i) {
+    index_t& slot = at[static_cast<std::size_t>(place[i]) * nb_levels + (level[i] - lowest)];
+    if (slot != kNoIndex) return 0;  // two points at one place
+    slot = static_cast<index_t>(i);
+  }
+  if (std::find(at.begin(), at.end(), kNoIndex) != at.end()) return 0;
+  auto point_at = [&](int where, int l) {
+    return at[static_cast<std::size_t>(where) * nb_levels + (l - lowest)];
+  };
+  auto frame_point = [&](index_t i) { return Vec3::of(&points[3 * i]); };
+  auto volume = [&](index_t a, index_t b, index_t c, index_t d) {
+    const Vec3 p = frame_point(a);
+    return det3(frame_point(b) - p, frame_point(c) - p, frame_point(d) - p) / 6;
+  };
+  auto level_of_triangle = [&](const std::array<index_t, 3>& t) {
+    return level[t[0]] == level[t[1]] && level[t[1]] == level[t[2]] ? level[t[0]] : kNoLevel;
+  };
+  // The cross-section: TetGen's boundary triangles on the first plane, as places.
+  std::vector<std::array<int, 3>> section;
+  for (const auto& t : tets.boundary)
+    if (level_of_triangle(t) == lowest) section.push_back({place[t[0]], place[t[1]], place[t[2]]});
+  // Prisms split by the smallest index (Dompierre et al. 1999): rotated so that the smallest is
+  // vertex 0; the quad 1-2-5-4 is cut through its own smallest.
+  static constexpr int kRotation[6][6] = {{0, 1, 2, 3, 4, 5}, {1, 2, 0, 4, 5, 3},
+                                          {2, 0, 1, 5, 3, 4}, {3, 5, 4, 0, 2, 1},
+                                          {4, 3, 5, 1, 0, 2}, {5, 4, 3, 2, 1, 0}};
+  std::vector<index_t> made;
+  made.reserve(section.size() * 3 * 4 * static_cast<std::size_t>(nb_levels - 1));
+  double before = 0, after = 0;
+  for (std::size_t t = 0; t < tets.tets.size() / 4; ++t) {
+    const index_t* w = &tets.tets[4 * t];
+    before += std::abs(volume(w[0], w[1], w[2], w[3]));
+  }
+  for (const auto& tri : section)
+    for (int l = lowest; l < highest; ++l) {
+      const index_t prism[6] = {point_at(tri[0], l),     point_at(tri[1], l),
+                                point_at(tri[2], l),     point_at(tri[0], l + 1),
+                                point_at(tri[1], l + 1), point_at(tri[2], l + 1)};
+      const int first = static_cast<int>(std::min_element(prism, prism + 6) - prism);
+      index_t r[6];
+      for (int k = 0; k < 6; ++k) r[k] = prism[kRotation[first][k]];
+      const index_t cut[3][4] = {
+          {r[0], r[1], r[2], r[5]}, {r[0], r[1], r[5], r[4]}, {r[0], r[4], r[5], r[3]}};
+      const index_t other[3][4] = {
+          {r[0], r[1], r[2], r[4]}, {r[0], r[4], r[2], r[5]}, {r[0], r[4], r[5], r[3]}};
+      const auto& split = std::min(r[1], r[5]) < std::min(r[2], r[4]) ? cut : other;
+      for (const auto& tet : split) {
+        index_t q[4] = {tet[0], tet[1], tet[2], tet[3]};
+        double vol = volume(q[0], q[1], q[2], q[3]);
+        if (vol < 0) std::swap(q[1], q[2]), vol = -vol;
+        if (!(vol > 0)) return 0;
+        after += vol;
+        made.insert(made.end(), q, q + 4);
+      }
+    }
+  if (std::abs(after - before) > 1e-9 * before) return 0;
+  // The boundary triangles: where TetGen had boundary triangles over the same quad (walls,
+  // faces between solids) or over the same part of a plane (caps), with their markers.
+  std::map<std::array<index_t, 3>, int> marker_of;   // sorted corners
+  std::map<int, std::vector<std::size_t>> on_level;  // TetGen's triangles on each plane
+  for (std::size_t i = 0; i < tets.boundary.size(); ++i) {
+    std::array<index_t, 3> key = tets.boundary[i];
+    std::sort(key.begin(), key.end());
+    marker_of[key] = tets.boundary_marker[i];
+    const int l = level_of_triangle(tets.boundary[i]);
+    if (l != kNoLevel) on_level[l].push_back(i);
+  }
+  std::vector<std::array<index_t, 3>> boundary;
+  std::vector<int> markers;
+  // The quad's triangles cut through its smallest corner, when TetGen had one of its triangles.
+  auto add_quad = [&](index_t a, index_t b, index_t c, index_t d) {  // a b c d around
+    const index_t q[4] = {a, b, c, d};
+    int marker = -1;
+    for (int skip = 0; skip < 4 && marker < 0; ++skip) {
+      std::array<index_t, 3> key{};
+      for (int k = 0, n = 0; k < 4; ++k)
+        if (k != skip) key[n++] = q[k];
+      std::sort(key.begin(), key.end());
+      const auto it = marker_of.find(key);
+      if (it != marker_of.end()) marker = it->second;
+    }
+    if (marker < 0) return;
+    const int s = static_cast<int>(std::min_element(q, q + 4) - q);
+    const index_t p0 = q[s], p1 = q[(s + 1) % 4], p2 = q[(s + 2) % 4], p3 = q[(s + 3) % 4];
+    boundary.push_back({p0, p1, p2});
+    boundary.push_back({p0, p2, p3});
+    markers.push_back(marker);
+    markers.push_back(marker);
+  };
+  std::set<std::pair<int, int>> sides;
+  for (const auto& tri : section)
+    for (int c = 0; c < 3; ++c) sides.insert(std::minmax(tri[c], tri[(c + 1) % 3]));
+  for (const auto& [a, b] : sides)
+    for (int l = lowest; l < highest; ++l)
+      add_quad(point_at(a, l), point_at(b, l), point_at(b, l + 1), point_at(a, l + 1));
+  // Caps: the marker of TetGen's triangle on that plane holding the triangle's centroid.
+  for (const auto& [l, list] : on_level)
+    for (const auto& tri : section) {
+      const std::array<index_t, 3> corners{point_at(tri[0], l), point_at(tri[1], l),
+                                           point_at(tri[2], l)};
+      Vec3 centroid =
+          (frame_point(corners[0]) + frame_point(corners[1]) + frame_point(corners[2])) * (1.0 / 3);
+      for (std::size_t i : list) {
+        const auto& t = tets.boundary[i];
+        double s, r;
+        if (!coordinates_across(centroid, frame_point(t[0]), frame_point(t[1]), frame_point(t[2]),
+                                axis, s, r))
+          continue;
+        if (s < -1e-9 || r < -1e-9 || s + r > 1 + 1e-9) continue;
+        boundary.push_back(corners);
+        markers.push_back(tets.boundary_marker[i]);
+        break;
+      }
+    }
+  const std::size_t extruded = section.size();
+  tets.tets = std::move(made);
+  tets.boundary = std::move(boundary);
+  tets.boundary_marker = std::move(markers);
+  return extruded;
 }
 
 }  // namespace hexmerge::mesher

@@ -16,6 +16,7 @@
 #include "hexmerge/geometry/vec3.h"
 #include "hexmerge/occ/mesher/frame.h"
 #include "hexmerge/occ/mesher/surface.h"
+#include "hexmerge/tetgen/tetrahedralize.h"
 
 namespace hexmerge::mesher {
 
@@ -66,5 +67,23 @@ std::optional<SweptSurface> sweep_surface(const Shape& s, const Sweep& sweep, co
                                           const Vec3& step, int levels, double target,
                                           double deflection, const std::vector<bool>& lattice_face,
                                           Surface& surface);
+
+/// Rebuilds a swept shape's tets as columns over one cross-section: the triangles TetGen made on
+/// the first plane, each extruded through every slab as a prism of three tets (split by the
+/// smallest point index, so that neighbours agree on every quad's diagonal), and the boundary
+/// triangles (caps, walls, faces between solids) where TetGen's were, with their markers.
+/// TetGen's own tets of a slab are the constrained Delaunay tets of its points, which form such
+/// columns only where the caps' triangulation is Delaunay: on a plate with a grid of holes
+/// (h 3.4) they did not, and a third of the volume recombined into pyramids.
+/// The tets are left as they are (and 0 returned) when a point lies off the lattice planes, a
+/// point has no repeat on some plane, TetGen added points, or the columns' volume differs from
+/// the tets' (1e-9).
+/// @param[in]     axis     the sweep's frame axis
+/// @param[in]     spacing  the lattice spacing along it
+/// @param[in,out] tets     TetGen's output, in frame coordinates
+/// @param[in]     given    the number of points given to TetGen
+/// @return the number of triangles extruded (0: left as they are)
+std::size_t extrude_tets(int axis, double spacing, std::size_t given,
+                         tetgen::TetrahedralizeOutput& tets);
 
 }  // namespace hexmerge::mesher
