@@ -43,7 +43,7 @@ struct AcceptanceCriteria {
   double min_scaled_jacobian = 0.3;
   /// Between this and min_scaled_jacobian, a hex or prism at least as good as the worst tet it
   /// replaces passes
-  double lowest_scaled_jacobian = 0.1;
+  double lowest_scaled_jacobian = 0.0;
   bool respect_regions = true;
   std::array<bool, NB_CELL_TYPES> types{{false, true, true, true}};  ///< by CellType
 };

@@ -34,7 +34,7 @@ ParameterTable<RecombineParameters> make_table() {
              "A new hex or prism between this and the min. scaled Jacobian is accepted when it is "
              "at least as good as the worst tet it replaces (it never lowers the quality where it "
              "merges; a poor prism left as tets turns its neighbours into pyramids: a swept "
-             "plate with holes had 40 % hex volume at 0.3, 87 % at 0.1); at or above the min. "
+             "plate with holes had 40 % hex volume at 0.3, 87 % at 0); at or above the min. "
              "scaled Jacobian: none"),
       flag(&P::make_hexahedra, "make_hexahedra", "Hexahedra", "Merge tetrahedra into hexahedra"),
       flag(&P::make_prisms, "make_prisms", "Prisms", "Merge tetrahedra into prisms (pentahedra)"),

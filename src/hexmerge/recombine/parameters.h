@@ -73,7 +73,7 @@ struct RecombineParameters {
   double min_scaled_jacobian = 0.3;
   /// [0, 1]: between this and min_scaled_jacobian, a new hex or prism at least as good as the
   /// worst tet it replaces is accepted (it never lowers the quality where it merges)
-  double lowest_scaled_jacobian = 0.1;
+  double lowest_scaled_jacobian = 0.0;
   bool make_hexahedra = true;
   bool make_prisms = true;
   bool make_pyramids = true;
