@@ -70,6 +70,7 @@ class TaskPanelHexDominant(base_taskpanel.TransactionTaskPanel):
         self.wheel_guard = base_taskpanel.WheelGuard(self.form)
         self.loader = FreeCADGui.UiLoader()  # kept: its widgets die with it
         self.widgets = {}  # property name -> (spec, widget)
+        self.quantity_boxes = []  # the Gui::QuantitySpinBox wrappers, see release_quantity_boxes
         self.shape_only = []  # widgets shown only for a shape source
         self.build_parameter_widgets()
         self.set_up_results_table()
@@ -77,8 +78,7 @@ class TaskPanelHexDominant(base_taskpanel.TransactionTaskPanel):
         self.show_advanced(False)
         self.form.pb_apply.clicked.connect(self.apply)
         self.form.pb_stop.clicked.connect(self.stop)
-        # However the panel goes (OK, Cancel, the document closed), its timer and thread stop.
-        self.form.destroyed.connect(self.shut_down)
+        self.form.destroyed.connect(self.form_destroyed)
         self.show_source()
         report = mesh_hexdominant.report_dict(obj)
         if report:
@@ -114,6 +114,7 @@ class TaskPanelHexDominant(base_taskpanel.TransactionTaskPanel):
             label += " (s)"
         if spec.kind in ("App::PropertyLength", "App::PropertyAngle"):
             w = self.loader.createWidget("Gui::QuantitySpinBox")
+            self.quantity_boxes.append(w)
             w.setObjectName("qsb_" + spec.name)
             length = spec.kind == "App::PropertyLength"
             w.setProperty("unit", "mm" if length else "deg")
@@ -263,19 +264,32 @@ class TaskPanelHexDominant(base_taskpanel.TransactionTaskPanel):
             self.run.stop()
             self.set_status("Stopping...")
 
-    def shut_down(self, *args):
+    def shut_down(self):
         """Stops the run and its timer for good (the panel is closing)."""
         if self.run is not None:
             self.run.cancel()
 
+    def form_destroyed(self, *args):
+        """However the panel goes (OK, Cancel, the document closed), its run stops and PySide
+        lets go of its quantity boxes."""
+        self.shut_down()
+        self.release_quantity_boxes()
+
     def release_quantity_boxes(self):
-        """Deletes the Gui::QuantitySpinBox widgets through PySide before the form goes. They
-        come from FreeCAD's UiLoader, so PySide is not told when Qt deletes them, and a later
-        panel's box at the same address would get the dead one's wrapper ("already deleted")."""
+        """Detaches PySide from the Gui::QuantitySpinBox widgets before the form goes; Qt deletes
+        the widgets with the form. They come from FreeCAD's UiLoader, so PySide is not told when
+        Qt deletes them, and a later panel's box at the same address would get the dead one's
+        wrapper ("already deleted"). shiboken2.invalidate marks each wrapper dead and drops it
+        from PySide's address table without touching the widget.
+
+        Not shiboken2.delete: PySide2 5.15 leaves the "this is the QApplication" bit of such a
+        wrapper uninitialised (heap garbage), and delete() on a wrapper with the bit set deletes
+        FreeCAD's QApplication instead of the widget: the intermittent abort "free(): invalid
+        size" (docs/freecad.md)."""
         import shiboken2
-        for spec, w in self.widgets.values():
-            if w.objectName().startswith("qsb_") and shiboken2.isValid(w):
-                shiboken2.delete(w)
+        for w in self.quantity_boxes:
+            shiboken2.invalidate(w)
+        self.quantity_boxes = []
 
     def on_progress(self, fraction, phase):
         if not phase:

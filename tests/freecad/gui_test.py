@@ -2,7 +2,8 @@
 """GUI test in a real FreeCAD window (run by run.sh under Xvfb): FEM's Mesh menu entries; the
 panel at the combo view's default width (no value cut off) and its wheel guard; Apply and OK on
 a tet mesh and a shape; colours of first- and second-order meshes checked triangle by triangle;
-Cancel during the engine leaves no timer and no error; OK without Apply runs in the background;
+Cancel during the engine (three times) leaves no timer and no error, and closing a panel lets go of
+its quantity boxes without deleting through PySide (flag_as_qapp); OK without Apply runs in the background;
 save and reopen print no error. Takes screenshots of the panel and of a coloured Hexa20 mesh."""
 
 import os
@@ -243,10 +244,35 @@ def finished(panel):
     return lambda: panel.run is not None and not panel.run.running() and panel.form.pb_apply.isEnabled()
 
 
+def flag_as_qapp(panel):
+    """Sets, in every quantity box's PySide wrapper, the "this is the QApplication" bit that
+    PySide2 5.15 leaves uninitialised in wrappers of widgets made by FreeCAD's UiLoader: the
+    state the intermittent abort came from (shiboken2.delete on such a wrapper deleted FreeCAD's
+    QApplication, "free(): invalid size"). Closing the panel must then still not abort. The
+    layout (SbkObject.d at 0x20; SbkObjectPrivate: cptr, then the flag bits hasOwnership,
+    containsCppWrapper, validCppObject, cppObjectCreated, isQAppSingleton) is checked first."""
+    import ctypes
+    import shiboken2
+    assert shiboken2.__version__.startswith("5.15."), shiboken2.__version__
+    boxes = panel.quantity_boxes
+    assert boxes, "no quantity boxes in the panel"
+    for w in boxes:
+        d = ctypes.c_void_p.from_address(id(w) + 0x20).value
+        cptr = ctypes.c_void_p.from_address(ctypes.c_void_p.from_address(d).value).value
+        flags = ctypes.c_ubyte.from_address(d + 8)
+        assert cptr == shiboken2.getCppPointer(w)[0], "unknown shiboken2 layout (pointer)"
+        assert bool(flags.value & 4) == shiboken2.isValid(w) and \
+            bool(flags.value & 1) == shiboken2.ownedByPython(w), \
+            "unknown shiboken2 layout (flags 0x{:02x})".format(flags.value)
+        flags.value |= 0x10
+    return boxes
+
+
 def main():
     import FreeCAD
     import FreeCADGui
     from PySide import QtCore, QtGui
+    import shiboken2
     import helpers
     from freecad.hexmerge import commands, mesh_hexdominant
 
@@ -297,7 +323,9 @@ def main():
     wait(lambda: False, 1.0)
     subprocess.run(["import", "-window", "root", SHOT], check=True)
     check_colors(obj.ViewObject, "first order, mixed")
+    boxes = flag_as_qapp(panel)
     panel.accept()
+    assert not any(shiboken2.isValid(w) for w in boxes), "OK left a quantity box wrapper valid"
     wait(lambda: False, 0.5)
     assert doc.getObject(obj.Name) is not None, "OK did not keep the object"
     assert abs(obj.MinScaledJacobian - 0.35) < 1e-9
@@ -331,23 +359,35 @@ def main():
     subprocess.run(["import", "-window", "root", SHOT_COLORS], check=True)
     swept.ViewObject.Visibility = False
 
-    # Cancel during the engine: no timer left, no error in the Report view afterwards
+    # Cancel during the engine, three times: no timer left, no error in the Report view
+    # afterwards, the quantity boxes let go of without deleting anything through PySide (their
+    # wrappers flagged as the QApplication: see flag_as_qapp), the next panel's boxes usable
     FreeCADGui.Selection.clearSelection()
     big_doc, big = helpers.box_doc("1st", 2.5, name="HexMergeCancel")
-    panel = open_panel("HexMerge_MeshHexDominant", big)
-    panel.apply()
-    assert wait(lambda: panel.run.message in ("candidates", "selection"), 60), \
-        "the engine never reached its candidates or selection (message {!r})".format(panel.run.message)
-    errors_before = len(report_view_errors())
-    run = panel.run
-    panel.reject()
-    assert not run.timer.isActive(), "the progress timer still runs after Cancel"
-    assert not run.running(), "the engine thread still runs after Cancel"
-    wait(lambda: False, 3.0)
-    new_errors = report_view_errors()[errors_before:]
-    assert not new_errors, "errors after Cancel: {}".format(new_errors[:3])
-    assert not [o for o in big_doc.Objects if o.Name.startswith("HexDominant")], "Cancel kept it"
-    print("Cancel during '{}': timer stopped, thread ended, no error in 3 s".format(run.message))
+    for attempt in range(3):
+        panel = open_panel("HexMerge_MeshHexDominant", big)
+        for spec, w in panel.widgets.values():
+            if w.objectName().startswith("qsb_"):
+                assert shiboken2.isValid(w) and \
+                    abs(w.property("rawValue") - spec.value(panel.obj)) < 1e-9, \
+                    "quantity box {} unusable in a new panel".format(w.objectName())
+        panel.apply()
+        assert wait(lambda: panel.run.message in ("candidates", "selection"), 60), \
+            "the engine never reached its candidates or selection (message {!r})".format(
+                panel.run.message)
+        errors_before = len(report_view_errors())
+        run = panel.run
+        boxes = flag_as_qapp(panel)
+        panel.reject()
+        assert not run.timer.isActive(), "the progress timer still runs after Cancel"
+        assert not run.running(), "the engine thread still runs after Cancel"
+        assert not any(shiboken2.isValid(w) for w in boxes), "Cancel left a box wrapper valid"
+        wait(lambda: False, 3.0 if attempt == 0 else 1.0)
+        new_errors = report_view_errors()[errors_before:]
+        assert not new_errors, "errors after Cancel: {}".format(new_errors[:3])
+        assert not [o for o in big_doc.Objects if o.Name.startswith("HexDominant")], "Cancel kept it"
+        print("Cancel {} during '{}': timer stopped, thread ended, no error".format(
+            attempt + 1, run.message))
     FreeCAD.closeDocument(big_doc.Name)
     FreeCAD.setActiveDocument(doc.Name)
 
