@@ -129,7 +129,9 @@ def build_parser() -> argparse.ArgumentParser:
     add_parameter_options(
         msh, _shape.mesh_parameters(), "mesher options (from hexmerge.mesh_parameters(); h: the size H)",
         # The size is also -h (as Gmsh's -clmax), required, checked before any work.
-        {"size": dict(flags=["-h"], required=True, type=_positive_length, metavar="H")},
+        {"size": dict(flags=["-h"], required=True, type=_positive_length, metavar="H"),
+         # Repeatable: one ITEMS:SIZE per option (or several, separated by ';').
+         "local_sizes": dict(action="append", metavar="ITEMS:SIZE")},
     )
     add_parameter_options(msh)
 
