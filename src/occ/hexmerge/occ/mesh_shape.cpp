@@ -302,7 +302,7 @@ TetMesh mesh_attempt(const Shape& shape, const Frame& frame, const std::string& 
   for (std::size_t e = 0; e < lattice.lattice_edge.size(); ++e)
     for (const int f : shape.edge_faces[e])
       if (!lattice.lattice_face[f] || items_at_h.edge_size[e] < h) lattice.lattice_edge[e] = false;
-  const SizeField field = make_size_field(surface, items_at_h, h, kLocalGrading, shape.diagonal);
+  const SizeField field = make_size_field(surface, items_at_h, h, kLocalGrading, deflection, shape.diagonal);
   const SizeField* local = field.empty() ? nullptr : &field;
   for (int a = 0; a < 3; ++a) {
     report.spacing[a] = lattice.spacing[a];
@@ -419,8 +419,12 @@ TetMesh mesh_attempt(const Shape& shape, const Frame& frame, const std::string& 
   std::vector<std::int32_t> boundary_face(tets.boundary_marker.size());
   for (std::size_t i = 0; i < boundary_face.size(); ++i)
     boundary_face[i] = static_cast<std::int32_t>(tets.boundary_marker[i]) - 1;
+  // The faces with a local size keep their triangles (a swap lengthens a side past the size).
+  std::vector<std::int32_t> swappable = boundary_face;
+  for (std::int32_t& face : swappable)
+    if (face >= 0 && items_at_h.face_size[static_cast<std::size_t>(face)] < h) face = -1;
   ImproveReport improved;
-  improve_tets(mesh, tets.points, tets.boundary, boundary_face, improve, improved);
+  improve_tets(mesh, tets.points, tets.boundary, swappable, improve, improved);
   report.min_tet_quality_before = improved.min_quality_before;
   report.nb_face_flips = improved.face_flips;
   report.nb_edge_flips = improved.edge_flips;

@@ -24,8 +24,14 @@ constexpr int kMaxLevels = 10;
 
 }  // namespace
 
-SizeField::SizeField(double h, double grading, const Vec3& lo, const Vec3& hi)
-    : h_(h), grading_(grading), smallest_(h), items_lo_(hi), items_hi_(lo), grid_(lo, hi, h) {}
+SizeField::SizeField(double h, double grading, double slack, const Vec3& lo, const Vec3& hi)
+    : h_(h),
+      grading_(grading),
+      slack_(slack),
+      smallest_(h),
+      items_lo_(hi),
+      items_hi_(lo),
+      grid_(lo, hi, h) {}
 
 void SizeField::add(const Vec3& a, const Vec3& b, const Vec3& c, double size) {
   const Vec3 lo = vmin(a, vmin(b, c)), hi = vmax(a, vmax(b, c));
@@ -39,7 +45,7 @@ void SizeField::add(const Vec3& a, const Vec3& b, const Vec3& c, double size) {
 double SizeField::at(const Vec3& p) const {
   if (items_.empty()) return h_;
   // Only items nearer than (h - smallest) / grading can give less than h.
-  const double reach = (h_ - smallest_) / grading_;
+  const double reach = (h_ - smallest_) / grading_ + slack_;
   const Vec3 r{reach, reach, reach};
   double best = h_;
   grid_.any_in(p - r, p + r, [&](int i) {
@@ -47,26 +53,26 @@ double SizeField::at(const Vec3& p) const {
     const double d2 = it.b.x == it.c.x && it.b.y == it.c.y && it.b.z == it.c.z
                           ? squared_distance_to_segment(p, it.a, it.b)
                           : squared_distance_to_triangle(p, it.a, it.b, it.c);
-    best = std::min(best, it.size + grading_ * std::sqrt(d2));
+    best = std::min(best, it.size + grading_ * std::max(0.0, std::sqrt(d2) - slack_));
     return false;
   });
   return best;
 }
 
 void SizeField::graded_box(Vec3& lo, Vec3& hi) const {
-  const double reach = (h_ - smallest_) / grading_;
+  const double reach = (h_ - smallest_) / grading_ + slack_;
   lo = items_lo_ - Vec3{reach, reach, reach};
   hi = items_hi_ + Vec3{reach, reach, reach};
 }
 
 SizeField make_size_field(const Surface& surface, const LocalSizeItems& items, double h,
-                          double grading, double diagonal) {
+                          double grading, double deflection, double diagonal) {
   Vec3 lo{std::numeric_limits<double>::max(), std::numeric_limits<double>::max(),
           std::numeric_limits<double>::max()};
   Vec3 hi = lo * -1.0;
   for (const Vec3& p : surface.nodes) lo = vmin(lo, p), hi = vmax(hi, p);
   const Vec3 grow{0.01 * diagonal, 0.01 * diagonal, 0.01 * diagonal};
-  SizeField field(h, grading, lo - grow, hi + grow);
+  SizeField field(h, grading, deflection, lo - grow, hi + grow);
   for (const SurfaceTriangle& t : surface.triangles) {
     const double size = items.face_size[t.face];
     if (size < h)

@@ -15,15 +15,18 @@
 
 namespace hexmerge::mesher {
 
-/// The size wanted at a point: min(h, size_i + grading * distance to item i) over the triangles
-/// and segments given a local size (world coordinates).
+/// The size wanted at a point: min(h, size_i + grading * max(0, distance to item i - slack))
+/// over the triangles and segments given a local size (world coordinates). The slack is the
+/// chord deflection of the triangulation the items come from: points on the curved face itself
+/// are that far from its triangles, and get its size.
 class SizeField {
  public:
   /// @param[in] h        the target size (the field's largest value)
   /// @param[in] grading  how fast the size grows with the distance (0.5: by half the distance)
   /// @param[in] lo, hi   a box holding every item and query (queries outside are clamped by the
   ///                     grid, not by the field)
-  SizeField(double h, double grading, const Vec3& lo, const Vec3& hi);
+  /// @param[in] slack    distances count from this much off the items
+  SizeField(double h, double grading, double slack, const Vec3& lo, const Vec3& hi);
   /// A triangle (or a segment: c == b) of size `size` < h.
   void add(const Vec3& a, const Vec3& b, const Vec3& c, double size);
   /// The size wanted at p, in (0, h].
@@ -41,7 +44,7 @@ class SizeField {
     Vec3 a, b, c;
     double size;
   };
-  double h_, grading_, smallest_;
+  double h_, grading_, slack_, smallest_;
   Vec3 items_lo_, items_hi_;
   BucketGrid grid_;
   std::vector<Item> items_;
@@ -55,8 +58,9 @@ struct LocalSizeItems {
 
 /// The size field of the triangles (world coordinates) of the faces, and the segments of the
 /// edges, with a local size below h.
+/// @param[in] deflection  the chord deflection of `surface` (the field's slack)
 SizeField make_size_field(const Surface& surface, const LocalSizeItems& items, double h,
-                          double grading, double diagonal);
+                          double grading, double deflection, double diagonal);
 
 /// Points of the lattices of spacing lattice.spacing / 2^l (l = 1, 2, ...) filling the graded
 /// zone inside the shape (frame coordinates): a point first on level l is placed where the size

@@ -323,17 +323,22 @@ void refine(const Shape& s, Surface& surface, double target, const std::vector<b
   }
   std::vector<std::size_t> added(s.faces.Extent(), 0);
   std::vector<char> given_up(s.faces.Extent(), 0);
-  for (int ti = 0; ti < static_cast<int>(tris.size()); ++ti)
-    for (int c = -1; !given_up[tris[ti].face] && (c = side_to_split(ti)) >= 0;) {
-      const int face = tris[ti].face;
-      const std::size_t before = surface.nodes.size();
-      split(ti, c);
-      added[face] += surface.nodes.size() - before;
-      if (added[face] > 20 * face_area[face] / (face_target[face] * face_target[face]) + 200) {
-        given_up[face] = 1;
-        list_unrefined(face);
+  // With local sizes, passes until no side is longer than wanted: a flip after a split can
+  // make a side of a triangle passed before longer (a few of them, by under 1 %).
+  for (int pass = 0, splits = 1; splits > 0 && pass < (field ? 4 : 1); ++pass) {
+    splits = 0;
+    for (int ti = 0; ti < static_cast<int>(tris.size()); ++ti)
+      for (int c = -1; !given_up[tris[ti].face] && (c = side_to_split(ti)) >= 0; ++splits) {
+        const int face = tris[ti].face;
+        const std::size_t before = surface.nodes.size();
+        split(ti, c);
+        added[face] += surface.nodes.size() - before;
+        if (added[face] > 20 * face_area[face] / (face_target[face] * face_target[face]) + 200) {
+          given_up[face] = 1;
+          list_unrefined(face);
+        }
       }
-    }
+  }
 
   // Bisection leaves nodes very near a seam or an edge (needles, and a tet on a needle is no
   // better than its smallest angle). Each node inside a face that is not a lattice face moves to
@@ -348,6 +353,13 @@ void refine(const Shape& s, Surface& surface, double target, const std::vector<b
       for (int m : tris[ti].node)
         if (m != n) shortest = std::min(shortest, length(n, m));
     return shortest;
+  };
+  auto longest_around = [&](int n) {
+    double most = 0;
+    for (int ti : around[n])
+      for (int m : tris[ti].node)
+        if (m != n) most = std::max(most, length(n, m));
+    return most;
   };
   auto smallest_angle = [&](int n) {
     double worst = M_PI;
@@ -383,6 +395,8 @@ void refine(const Shape& s, Surface& surface, double target, const std::vector<b
       for (int ti : around[n])
         reference = reference + normal_of(tris[ti].node[0], tris[ti].node[1], tris[ti].node[2]);
       const double before = smallest_angle(n), shortest = shortest_side(n);
+      // With local sizes, no side grows past the size wanted (unless it already was longer).
+      const double longest_before = field ? std::max(longest_around(n), size_at(n)) : 0.0;
       // To the centroid, else half or a quarter of the way, put back on the surface: better
       // angles, no triangle turned more than 20 degrees from the reference, and no nearer than
       // h / 8 to a neighbour (unless it was already): nodes must not gather (TetGen drops points
@@ -396,7 +410,8 @@ void refine(const Shape& s, Surface& surface, double target, const std::vector<b
             analysis[face]->ValueOfUV(gp_Pnt(goal.x, goal.y, goal.z), 1e-9 * target);
         surface.nodes[n] = of(analysis[face]->Value(uv));
         keep = smallest_angle(n) > before &&
-               shortest_side(n) >= std::min(shortest, kNeedleNearest * size_at(n));
+               shortest_side(n) >= std::min(shortest, kNeedleNearest * size_at(n)) &&
+               (!field || longest_around(n) <= longest_before);
         for (std::size_t k = 0; k < around[n].size() && keep; ++k) {
           const auto& v = tris[around[n][k]].node;
           keep = !turned_over(normal_of(v[0], v[1], v[2]), reference);
