@@ -209,7 +209,7 @@ TetMesh mesh_shape_impl(const std::string& brep, const MeshShapeParameters& para
   const Frame frame = choose_frame(shape, parameters.frame);
   // Local sizes naming faces or edges the shape does not have, or coarser than h, fail now.
   const std::vector<LocalSize> local_sizes = parse_local_sizes(parameters.local_sizes);
-  local_size_items(shape, local_sizes, parameters.size);
+  const LocalSizeItems local_items = local_size_items(shape, local_sizes, parameters.size);
   // Gluing touching solids makes new faces and edges: the numbers given would name others.
   if (glue.glued && !local_sizes.empty())
     throw InputError(
@@ -219,7 +219,13 @@ TetMesh mesh_shape_impl(const std::string& brep, const MeshShapeParameters& para
   const std::string regions_brep = glue.glued ? write_brep(shape.shape) : brep;
 
   // 2. A size whose mesh would not fit in memory is refused before any work.
-  const SizeEstimate estimate = estimate_size(shape.shape, parameters.size);
+  SizeEstimate estimate = estimate_size(shape.shape, parameters.size);
+  if (!local_sizes.empty()) {
+    const double extra = estimate_local_tets(shape.faces, shape.edges, local_items.face_size,
+                                             local_items.edge_size, parameters.size, kLocalGrading);
+    estimate.tets += extra;
+    estimate.bytes += extra * kBytesPerTet;
+  }
   report.estimated_tets = estimate.tets;
   const double limit = parameters.memory_limit > 0 ? parameters.memory_limit * 1e9
                                                    : static_cast<double>(available_memory());

@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "hexmerge/occ/mesher/surface_repair.h"
+#include "hexmerge/occ/mesher/sweep.h"
 #include "mesher_fixtures.h"
 
 namespace hexmerge::test {
@@ -62,9 +63,9 @@ TEST(refine, to_the_local_sizes) {
   mesher::collapse_sides(p.surface, h, h, p.lattice.lattice_face, &field);
   ASSERT_TRUE(p.surface.unrefined_faces.empty());
   std::string problem;
-  EXPECT_TRUE(mesher::closed_and_oriented(p.surface.triangles, problem)) << problem;
-  EXPECT_NEAR(mesher::enclosed_volume(p.surface.nodes, p.surface.triangles),
-              60 * 40 * 10 - M_PI * 64 * 10, 0.01 * M_PI * 64 * 10);
+  EXPECT_TRUE(closed_and_oriented(p.surface.triangles, problem)) << problem;
+  EXPECT_NEAR(enclosed_volume(p.surface.nodes, p.surface.triangles), 60 * 40 * 10 - M_PI * 64 * 10,
+              0.01 * M_PI * 64 * 10);
   std::size_t on_hole = 0;
   for (const mesher::SurfaceTriangle& t : p.surface.triangles) {
     if (p.lattice.lattice_face[t.face]) continue;
