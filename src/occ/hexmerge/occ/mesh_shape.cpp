@@ -308,7 +308,8 @@ TetMesh mesh_attempt(const Shape& shape, const Frame& frame, const std::string& 
   for (std::size_t e = 0; e < lattice.lattice_edge.size(); ++e)
     for (const int f : shape.edge_faces[e])
       if (!lattice.lattice_face[f] || items_at_h.edge_size[e] < h) lattice.lattice_edge[e] = false;
-  const SizeField field = make_size_field(surface, items_at_h, h, kLocalGrading, deflection, shape.diagonal);
+  const SizeField field =
+      make_size_field(surface, items_at_h, h, kLocalGrading, deflection, shape.diagonal);
   const SizeField* local = field.empty() ? nullptr : &field;
   for (int a = 0; a < 3; ++a) {
     report.spacing[a] = lattice.spacing[a];
