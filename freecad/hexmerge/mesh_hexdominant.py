@@ -4,7 +4,8 @@
 It links a source: a tetrahedral FEM mesh object, whose FemMesh recompute recombines, or a
 solid (a Part feature, any object with a solid Shape), which recompute meshes with HexMerge's
 mesher (hexmerge.mesh_shape: lattice-seeded tets, OpenCASCADE and TetGen) at TargetSize and then
-recombines ("shape mode"). The result goes into the object's own FemMesh property; the source
+recombines ("shape mode"; FEM mesh regions on the shape give local sizes, see mesh_regions). The
+result goes into the object's own FemMesh property; the source
 is never modified. Because the link is an ordinary App::PropertyLink, a change to the source
 (a new mesh, a new shape) marks this object for recompute.
 """
@@ -15,6 +16,7 @@ import FreeCAD
 
 from . import calculix
 from . import jobs
+from . import mesh_regions
 from . import properties
 from . import regions as regions_mod
 from . import results
@@ -47,6 +49,13 @@ class MeshHexDominant:
                             "The shape this mesh is made from (set from the source: the shape "
                             "itself, or the source mesh's shape); read by FreeCAD's solver "
                             "writers", 0, True)
+        for name, what in (("MeshRegionList", "mesh regions (Fem::MeshRegion)"),
+                           ("MeshBoundaryLayerList", "boundary layer objects")):
+            if name not in obj.PropertiesList:
+                # As Gmsh's mesh object: ObjectsFem.makeMeshRegion(doc, this object) fills it.
+                obj.addProperty("App::PropertyLinkList", name, "Source",
+                                "Shape mode: the {} of this mesh (those of its analysis count "
+                                "too)".format(what))
         if "Summary" not in obj.PropertiesList:
             obj.addProperty("App::PropertyString", "Summary", "Report",
                             "One-line summary of the last recompute", 8, True)
@@ -119,6 +128,17 @@ def link_part(obj):
         obj.Part = part
 
 
+def found_mesh_regions(obj):
+    """(lines, warnings) of the mesh regions a shape-mode object honours (for the task panel)."""
+    source = obj.SourceMesh
+    if not is_shape_source(source):
+        return [], []
+    analysis = containing_analysis(obj) or containing_analysis(source)
+    _, found, warnings = mesh_regions.local_sizes(
+        obj, source, analysis, float(properties.mesher_values(obj).get("size") or 0.0))
+    return found, warnings
+
+
 def containing_analysis(obj):
     for o in obj.InList:
         if o.isDerivedFrom("Fem::FemAnalysis"):
@@ -132,10 +152,17 @@ def prepare(obj):
     source = source_of(obj)
     analysis = containing_analysis(obj) or containing_analysis(source)
     if is_shape_source(source):
-        return jobs.ShapeJob.prepare(
-            source.Shape, properties.mesher_values(obj), properties.engine_values(obj),
+        mesher = properties.mesher_values(obj)
+        entries, _, warnings = mesh_regions.local_sizes(
+            obj, source, analysis, float(mesher.get("size") or 0.0))
+        if entries:
+            mesher["local_sizes"] = "; ".join(entries)
+        job = jobs.ShapeJob.prepare(
+            source.Shape, mesher, properties.engine_values(obj),
             material_names=regions_mod.material_solids(analysis, source),
             pyramids_as_hexahedra=obj.PyramidsAsHexahedra)
+        job.warnings.extend(warnings)
+        return job
     part = source_shape(source)
     options = properties.engine_values(obj)
     regions = "auto" if options.get("respect_regions", True) else "none"

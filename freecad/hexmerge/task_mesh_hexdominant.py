@@ -213,6 +213,11 @@ class TaskPanelHexDominant(base_taskpanel.TransactionTaskPanel):
                 "then recombined")
             text = ("Regions: the {} solids.".format(nsolids) if nsolids > 1
                     else "One region (a single solid).")
+            found, not_honoured = mesh_hexdominant.found_mesh_regions(self.obj)
+            if found:
+                text += "\nMesh regions (local sizes): " + "; ".join(found)
+            if not_honoured:
+                text += "\nNot honoured: " + "; ".join(not_honoured)
             self.form.l_regions.setText(text)
             return
         m = src.FemMesh

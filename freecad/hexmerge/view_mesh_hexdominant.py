@@ -82,7 +82,10 @@ class VPMeshHexDominant:
 
     def claimChildren(self):
         src = getattr(self.Object, "SourceMesh", None)
-        return [src] if src is not None else []
+        # Its mesh regions and boundary layer objects under it, as under a Gmsh mesh.
+        own = [o for name in ("MeshRegionList", "MeshBoundaryLayerList")
+               for o in (getattr(self.Object, name, None) or [])]
+        return ([src] if src is not None else []) + own
 
     def updateData(self, obj, prop):
         # FreeCAD calls this proxy before the C++ view provider, which then rebuilds the drawn

@@ -473,6 +473,16 @@ py::tuple run_mesh_shape(const std::string& brep, const std::map<std::string, st
   d["nb_unrefined_faces"] = report.nb_unrefined_faces;
   d["nb_extruded_triangles"] = report.nb_extruded_triangles;
   d["nb_shared_faces"] = report.nb_shared_faces;
+  py::list local_sizes;
+  for (const LocalSizeApplied& l : report.local_sizes) {
+    py::dict e;
+    e["faces"] = l.faces, e["edges"] = l.edges, e["size"] = l.size;
+    e["nb_triangles"] = l.nb_triangles, e["nb_segments"] = l.nb_segments;
+    e["max_side"] = l.max_side;
+    local_sizes.append(e);
+  }
+  d["local_sizes"] = local_sizes;
+  d["nb_graded_points"] = report.nb_graded_points;
   if (second_order) {
     d["nb_projected_mid_nodes"] = report.nb_projected_mid_nodes;
     d["nb_straight_mid_nodes"] = report.nb_straight_mid_nodes;

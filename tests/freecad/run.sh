@@ -28,6 +28,7 @@ run_suite() {  # module, per-suite timeout (s)
 
 run_suite test_femmesh_arrays 120
 run_suite test_addon 480
+run_suite test_mesh_regions 240
 run_suite test_modules 240
 run_suite test_fem_accuracy 600
 if [[ "${1:-}" != "--no-gui" ]]; then

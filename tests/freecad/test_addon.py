@@ -226,7 +226,7 @@ class ShapeMode(unittest.TestCase):
         obj = hm.make_hexdominant_mesh(doc, box, recompute=False)
         rows = [r for r in hexmerge.parameters() + hexmerge.mesh_parameters() if r["freecad_property"]]
         own = {"SourceMesh", "Part", "PyramidsAsHexahedra", "SecondOrder", "LinearHexahedron",
-               "QuadraticHexahedron"}
+               "QuadraticHexahedron", "MeshRegionList", "MeshBoundaryLayerList"}
         report_group = {p for p in obj.PropertiesList if obj.getGroupOfProperty(p) == "Report"}
         fem_mesh = set(doc.addObject("Fem::FemMeshObjectPython", "Plain").PropertiesList)
         ours = set(obj.PropertiesList) - fem_mesh - report_group

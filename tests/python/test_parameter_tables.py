@@ -140,6 +140,8 @@ def test_python_keywords_are_the_tables() -> None:
         ("size", "0", r"parameter 'size' must be greater than 0 mm"),
         ("size", "inf", r"parameter 'size' must be greater than 0 mm"),
         ("tetgen", "", r"parameter 'tetgen' must name the TetGen program"),
+        ("local_sizes", "5-2", r"parameter 'local_sizes': entry '5-2' is not ITEMS:SIZE"),
+        ("local_sizes", "Face5:x", r"parameter 'local_sizes': entry 'Face5:x' has size 'x'"),
         ("no_such_option", "1", r"unknown parameter 'no_such_option' \(the parameters are: size, "),
     ],
 )
@@ -186,6 +188,7 @@ def test_freecad_properties_are_the_tables() -> None:
             assert (spec.row["min"], spec.row["max"]) == (row["min"], row["max"])
         if spec.kind != "App::PropertyEnumeration" and row["name"] not in ("pyramid_placement",):
             assert spec.default == row["default"] or math.isclose(spec.default, row["default"]), name
-    # Rows the add-on does not show are the TetGen program and its work folder only.
+    # Rows the add-on does not show are the TetGen program and its work folder, and the local
+    # sizes (from the analysis' mesh regions, freecad/hexmerge/mesh_regions.py) only.
     hidden = {r["name"] for _, rows in tables() for r in rows if not r["freecad_property"]}
-    assert hidden <= {"tetgen", "work_directory"}
+    assert hidden <= {"tetgen", "work_directory", "local_sizes"}

@@ -85,6 +85,43 @@ def _shape_text_and_unit(shape: str | bytes | os.PathLike[str]) -> tuple[str, st
     )
 
 
+def local_sizes_text(value: Any) -> str:
+    """The mesher's ``local_sizes`` text from what Python users give: the text itself
+    ("5,6:1.5; Edge3:0.5"), or a list of entries, each such a text, a dict
+    ``{"faces": [5, 6], "edges": [3], "size": 1.5}`` or a pair ``(items, size)`` with items a
+    face number, "FaceN"/"EdgeN", or a list of those. Faces and edges are numbered from 1."""
+    if isinstance(value, str):
+        return value
+    if isinstance(value, dict) or not isinstance(value, (list, tuple)):
+        value = [value]
+    entries = []
+    for entry in value:
+        if isinstance(entry, str):
+            entries.append(entry)
+            continue
+        if isinstance(entry, dict):
+            unknown = set(entry) - {"faces", "edges", "size"}
+            if unknown or "size" not in entry:
+                raise _core.InputError(
+                    f"local_sizes: entry {entry!r} must have 'size' and 'faces' and/or 'edges' "
+                    "(lists of numbers from 1)"
+                )
+            items = [str(f) for f in entry.get("faces", [])] + [f"Edge{e}" for e in entry.get("edges", [])]
+            size = entry["size"]
+        elif isinstance(entry, tuple) and len(entry) == 2:
+            items, size = entry
+            items = [str(i) for i in (items if isinstance(items, (list, tuple)) else [items])]
+        else:
+            raise _core.InputError(
+                f"local_sizes: entry {entry!r} is not ITEMS:SIZE text, a dict with faces/edges and "
+                "size, or a pair (items, size)"
+            )
+        if isinstance(size, bool) or not isinstance(size, (int, float, np.floating, np.integer)):
+            raise _core.InputError(f"local_sizes: entry {entry!r} has size {size!r}: it must be a number")
+        entries.append(f"{','.join(items)}:{float(size)!r}")
+    return "; ".join(entries)
+
+
 def _options(size: Any, given: dict[str, Any]) -> dict[str, str]:
     """The mesher's options (size included) as the text the compiled table parses, type-checked
     here; the table checks the ranges and choices."""
@@ -93,6 +130,8 @@ def _options(size: Any, given: dict[str, Any]) -> dict[str, str]:
     if given.get("work_directory") is None:
         given["work_directory"] = ""
     out = {}
+    if "local_sizes" in given:
+        given["local_sizes"] = local_sizes_text(given["local_sizes"])
     for name, value in given.items():
         if table[name]["type"] == "text" and isinstance(value, os.PathLike):
             value = os.fspath(value)
@@ -140,8 +179,9 @@ def mesh_shape(
         The mesher's parameters (mesh_parameters(): boundary_layers, layer_thickness,
         lattice_margin, surface_deflection, frame, sweep, tetgen_time_limit, memory_limit,
         tetgen (the TetGen program, a name on PATH or a path), work_directory (keep TetGen's
-        files there; default: a temporary folder, removed); fractions of h where they are
-        lengths) and the engine's (parameters(); the engine's defaults (conforming)
+        files there; default: a temporary folder, removed), local_sizes (finer sizes on faces
+        and edges numbered from 1: "5,6:1.5; Edge3:0.5", or a list, see local_sizes_text();
+        reported in the report's ``local_sizes``); fractions of h where they are lengths) and the engine's (parameters(); the engine's defaults (conforming)
         otherwise), by name.
 
     Returns

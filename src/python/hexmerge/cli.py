@@ -129,7 +129,9 @@ def build_parser() -> argparse.ArgumentParser:
     add_parameter_options(
         msh, _shape.mesh_parameters(), "mesher options (from hexmerge.mesh_parameters(); h: the size H)",
         # The size is also -h (as Gmsh's -clmax), required, checked before any work.
-        {"size": dict(flags=["-h"], required=True, type=_positive_length, metavar="H")},
+        {"size": dict(flags=["-h"], required=True, type=_positive_length, metavar="H"),
+         # Repeatable: one ITEMS:SIZE per option (or several, separated by ';').
+         "local_sizes": dict(action="append", metavar="ITEMS:SIZE")},
     )
     add_parameter_options(msh)
 
@@ -380,6 +382,11 @@ def _mesh_notes(meshing: dict[str, Any]) -> list[str]:
     if meshing["nb_unrefined_faces"]:
         notes.append(f"the surface of {meshing['nb_unrefined_faces']} face(s) did not refine to h "
                      "(a distorted parametrisation): sides longer than h remain there")
+    for applied in meshing.get("local_sizes", []):
+        if applied["max_side"] > applied["size"] * (1 + 1e-6):
+            items = [f"Face{f}" for f in applied["faces"]] + [f"Edge{e}" for e in applied["edges"]]
+            notes.append(f"local size {applied['size']:g} on {','.join(items)}: sides up to "
+                         f"{applied['max_side']:.3g} remain there (a face that did not refine)")
     return notes
 
 

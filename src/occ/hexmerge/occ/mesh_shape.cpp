@@ -19,6 +19,7 @@
 #include "hexmerge/occ/mesher/improve.h"
 #include "hexmerge/occ/mesher/lattice.h"
 #include "hexmerge/occ/mesher/layers.h"
+#include "hexmerge/occ/mesher/local_size.h"
 #include "hexmerge/occ/mesher/second_order.h"
 #include "hexmerge/occ/mesher/shape.h"
 #include "hexmerge/occ/mesher/size_estimate.h"
@@ -36,6 +37,73 @@ using namespace tetgen;
 
 // Times TetGen is run again, its lattice faces' loops started elsewhere, when it does not finish.
 constexpr int kTetgenRestarts = 5;
+// Around a local size, the size wanted grows by this fraction of the distance, up to h.
+constexpr double kLocalGrading = 0.5;
+// The finer lattices' points around a local size stay this fraction of the size wanted there
+// from the faces and the other points.
+constexpr double kGradedClearance = 0.5;
+// The smallest local size, as a fraction of h (finer lattices down to h / 1024).
+constexpr double kSmallestLocalSize = 1e-3;
+
+// The local sizes per face and edge (0-based; h where none), checked against the shape.
+LocalSizeItems local_size_items(const Shape& shape, const std::vector<LocalSize>& sizes, double h) {
+  LocalSizeItems items;
+  items.face_size.assign(static_cast<std::size_t>(shape.faces.Extent()), h);
+  items.edge_size.assign(static_cast<std::size_t>(shape.edges.Extent()), h);
+  auto fail = [&](const std::string& why) {
+    throw InputError("parameter 'local_sizes': " + why, Entity::Parameter);
+  };
+  for (const LocalSize& local : sizes) {
+    const std::string what = "local size " + parameter_number_text(local.size);
+    if (local.size > h)
+      fail(what + " is larger than the size " + parameter_number_text(h) +
+           ": local sizes refine, give one of at most the size");
+    if (local.size < kSmallestLocalSize * h)
+      fail(what + " is smaller than the size / 1000 (" +
+           parameter_number_text(kSmallestLocalSize * h) + ")");
+    for (const int f : local.faces) {
+      if (f > shape.faces.Extent())
+        fail(what + ": Face" + std::to_string(f) + " does not exist (the shape has " +
+             std::to_string(shape.faces.Extent()) + " faces, Face1 to Face" +
+             std::to_string(shape.faces.Extent()) + ")");
+      items.face_size[f - 1] = std::min(items.face_size[f - 1], local.size);
+    }
+    for (const int e : local.edges) {
+      if (e > shape.edges.Extent())
+        fail(what + ": Edge" + std::to_string(e) + " does not exist (the shape has " +
+             std::to_string(shape.edges.Extent()) + " edges, Edge1 to Edge" +
+             std::to_string(shape.edges.Extent()) + ")");
+      items.edge_size[e - 1] = std::min(items.edge_size[e - 1], local.size);
+    }
+  }
+  return items;
+}
+
+// What the local sizes gave: per entry, the surface's triangles on its faces and segments on
+// its edges, and their longest side.
+std::vector<LocalSizeApplied> local_sizes_applied(const std::vector<LocalSize>& sizes,
+                                                  const Surface& surface) {
+  std::vector<LocalSizeApplied> out;
+  for (const LocalSize& local : sizes) {
+    LocalSizeApplied applied{local.faces, local.edges, local.size, 0, 0, 0.0};
+    auto side = [&](int a, int b) {
+      applied.max_side = std::max(applied.max_side, (surface.nodes[a] - surface.nodes[b]).norm());
+    };
+    for (const SurfaceTriangle& t : surface.triangles)
+      if (std::find(local.faces.begin(), local.faces.end(), t.face + 1) != local.faces.end()) {
+        ++applied.nb_triangles;
+        for (int c = 0; c < 3; ++c) side(t.node[c], t.node[(c + 1) % 3]);
+      }
+    for (const auto& [key, segment] : surface.segments)
+      if (std::find(local.edges.begin(), local.edges.end(), segment.edge + 1) !=
+          local.edges.end()) {
+        ++applied.nb_segments;
+        side(static_cast<int>(key >> 32), static_cast<int>(key & 0xffffffffu));
+      }
+    out.push_back(applied);
+  }
+  return out;
+}
 
 // The tet mesh from the tetrahedraliser's output (frame coordinates): tets oriented positive,
 // points in the world, the surface's nodes at their exact CAD positions, regions by solid.
@@ -139,10 +207,25 @@ TetMesh mesh_shape_impl(const std::string& brep, const MeshShapeParameters& para
   report.nb_faces = static_cast<std::size_t>(shape.faces.Extent());
   report.nb_shared_faces = glue.nb_shared_faces;
   const Frame frame = choose_frame(shape, parameters.frame);
+  // Local sizes naming faces or edges the shape does not have, or coarser than h, fail now.
+  const std::vector<LocalSize> local_sizes = parse_local_sizes(parameters.local_sizes);
+  const LocalSizeItems local_items = local_size_items(shape, local_sizes, parameters.size);
+  // Gluing touching solids makes new faces and edges: the numbers given would name others.
+  if (glue.glued && !local_sizes.empty())
+    throw InputError(
+        "parameter 'local_sizes': the shape's solids touch and were glued into shared faces, "
+        "which renumbers its faces and edges; local sizes are not supported on such shapes yet",
+        Entity::Parameter);
   const std::string regions_brep = glue.glued ? write_brep(shape.shape) : brep;
 
   // 2. A size whose mesh would not fit in memory is refused before any work.
-  const SizeEstimate estimate = estimate_size(shape.shape, parameters.size);
+  SizeEstimate estimate = estimate_size(shape.shape, parameters.size);
+  if (!local_sizes.empty()) {
+    const double extra = estimate_local_tets(shape.faces, shape.edges, local_items.face_size,
+                                             local_items.edge_size, parameters.size, kLocalGrading);
+    estimate.tets += extra;
+    estimate.bytes += extra * kBytesPerTet;
+  }
   report.estimated_tets = estimate.tets;
   const double limit = parameters.memory_limit > 0 ? parameters.memory_limit * 1e9
                                                    : static_cast<double>(available_memory());
@@ -207,7 +290,27 @@ TetMesh mesh_attempt(const Shape& shape, const Frame& frame, const std::string& 
   // Nodes nearer than TetGen's own tolerance (1e-8 of the input's size) are one node: TetGen
   // would merge them itself and renumber the points after them.
   Surface surface = triangulate(shape, deflection, 1e-9 * h + 2e-8 * shape.diagonal + 1e-12);
-  const Lattice lattice = lay_lattice(shape, frame, surface.nodes, h, strategy.lattice_faces);
+  Lattice lattice = lay_lattice(shape, frame, surface.nodes, h, strategy.lattice_faces);
+  // Local sizes (the attempts at other sizes keep them, up to their h): their faces are no
+  // lattice faces (refined like curved ones), their edges and those faces' edges no lattice
+  // edges; the size field from the surface as BRepMesh made it.
+  const std::vector<LocalSize> local_sizes = parse_local_sizes(parameters.local_sizes);
+  const LocalSizeItems local_items = local_size_items(
+      shape, local_sizes, std::max(h, parameters.size));  // checked at the size asked for
+  LocalSizeItems items_at_h = local_items;
+  for (double& size : items_at_h.face_size) size = std::min(size, h);
+  for (double& size : items_at_h.edge_size) size = std::min(size, h);
+  for (std::size_t f = 0; f < items_at_h.face_size.size(); ++f)
+    if (items_at_h.face_size[f] < h && lattice.lattice_face[f]) {
+      lattice.lattice_face[f] = false;
+      --lattice.nb_lattice_faces;
+    }
+  for (std::size_t e = 0; e < lattice.lattice_edge.size(); ++e)
+    for (const int f : shape.edge_faces[e])
+      if (!lattice.lattice_face[f] || items_at_h.edge_size[e] < h) lattice.lattice_edge[e] = false;
+  const SizeField field =
+      make_size_field(surface, items_at_h, h, kLocalGrading, deflection, shape.diagonal);
+  const SizeField* local = field.empty() ? nullptr : &field;
   for (int a = 0; a < 3; ++a) {
     report.spacing[a] = lattice.spacing[a];
     report.frame[a] = {lattice.frame.axis[a].x, lattice.frame.axis[a].y, lattice.frame.axis[a].z};
@@ -217,7 +320,7 @@ TetMesh mesh_attempt(const Shape& shape, const Frame& frame, const std::string& 
   // 5. The surface at size h: swept when the shape is an extrusion along a lattice axis, else
   // refined and cleaned.
   std::optional<Sweep> sweep;
-  if (parameters.sweep && strategy.lattice_faces)
+  if (parameters.sweep && strategy.lattice_faces && !local)
     sweep = find_sweep(shape, lattice.frame, lattice.face_plane, lattice.lattice_face,
                        lattice.cells, lattice.spacing, h);
   SweptSurface swept;
@@ -235,10 +338,11 @@ TetMesh mesh_attempt(const Shape& shape, const Frame& frame, const std::string& 
     report.sweep_axis = sweep->axis;
   } else {
     // BRepMesh's caps go first: bisecting their sides makes flat triangles.
-    collapse_sides(surface, h, std::numeric_limits<double>::infinity(), lattice.lattice_face);
-    refine(shape, surface, h, lattice.lattice_face, lattice.lattice_edge);
+    collapse_sides(surface, h, std::numeric_limits<double>::infinity(), lattice.lattice_face,
+                   local);
+    refine(shape, surface, h, lattice.lattice_face, lattice.lattice_edge, local);
     report.nb_unrefined_faces = surface.unrefined_faces.size();
-    collapse_sides(surface, h, h, lattice.lattice_face);
+    collapse_sides(surface, h, h, lattice.lattice_face, local);
   }
   const int sweep_axis = report.sweep_axis;
   clock.lap("surface");
@@ -272,9 +376,17 @@ TetMesh mesh_attempt(const Shape& shape, const Frame& frame, const std::string& 
   clock.lap("core");
 
   // 9. Boundary layers, inside the shape (by ray parity), clear of the faces and of the core.
-  report.nb_layer_points = place_layers(nodes, surface, shape.face_solid_count, lattice, sweep_axis,
-                                        swept, nb_layers, parameters.layer_thickness * h,
-                                        parameters.lattice_margin * h, parity, around, inserted);
+  // None where a local size wants finer than h: finer lattices' points fill that zone.
+  std::vector<char> no_layers;
+  if (local)
+    for (const Vec3& p : surface.nodes) no_layers.push_back(field.at(p) < h ? 1 : 0);
+  report.nb_layer_points =
+      place_layers(nodes, surface, shape.face_solid_count, lattice, sweep_axis, swept, nb_layers,
+                   parameters.layer_thickness * h, parameters.lattice_margin * h, parity, around,
+                   inserted, local ? &no_layers : nullptr);
+  if (local)
+    report.nb_graded_points =
+        place_graded_points(field, lattice, parity, around, kGradedClearance, inserted);
   const std::size_t nb_on_faces = face_points_first(inserted);
   clock.lap("layers");
 
@@ -319,8 +431,12 @@ TetMesh mesh_attempt(const Shape& shape, const Frame& frame, const std::string& 
   std::vector<std::int32_t> boundary_face(tets.boundary_marker.size());
   for (std::size_t i = 0; i < boundary_face.size(); ++i)
     boundary_face[i] = static_cast<std::int32_t>(tets.boundary_marker[i]) - 1;
+  // The faces with a local size keep their triangles (a swap lengthens a side past the size).
+  std::vector<std::int32_t> swappable = boundary_face;
+  for (std::int32_t& face : swappable)
+    if (face >= 0 && items_at_h.face_size[static_cast<std::size_t>(face)] < h) face = -1;
   ImproveReport improved;
-  improve_tets(mesh, tets.points, tets.boundary, boundary_face, improve, improved);
+  improve_tets(mesh, tets.points, tets.boundary, swappable, improve, improved);
   report.min_tet_quality_before = improved.min_quality_before;
   report.nb_face_flips = improved.face_flips;
   report.nb_edge_flips = improved.edge_flips;
@@ -339,6 +455,7 @@ TetMesh mesh_attempt(const Shape& shape, const Frame& frame, const std::string& 
   std::vector<int> vertex_face = surface.node_face;
   vertex_face.insert(vertex_face.end(), inserted.face.begin(), inserted.face.end());
   report.max_boundary_distance = max_boundary_distance(shape, mesh, vertex_face, 1e-6 * h);
+  report.local_sizes = local_sizes_applied(local_sizes, surface);
   clock.lap("check");
 
   // 14. Second order: the boundary mid-edge nodes on the CAD.

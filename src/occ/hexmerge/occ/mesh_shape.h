@@ -95,6 +95,35 @@ struct MeshShapeParameters {
   std::string tetgen = "tetgen";
   /// A directory for TetGen's files, kept afterwards; empty: a temporary one, removed.
   std::string work_directory;
+  /// Local sizes, finer than h, on some faces and edges (1-based, as FreeCAD's FaceN and EdgeN
+  /// and the report number them): entries "ITEMS:SIZE" separated by ';', ITEMS a comma-separated
+  /// list of "N" or "FaceN" (a face), "EdgeN" (an edge); e.g. "5:1.5; Edge3,Edge4:0.5". The
+  /// surface there is refined to the size (its neighbours grading out by half the distance),
+  /// the lattice and layers keep clear, finer lattices fill the graded zone inside, and the shape
+  /// is not swept. Sizes in (0, h], at least h / 1000. See parse_local_sizes().
+  std::string local_sizes;
+};
+
+/// One entry of MeshShapeParameters::local_sizes.
+struct LocalSize {
+  std::vector<int> faces;  ///< 1-based face numbers
+  std::vector<int> edges;  ///< 1-based edge numbers
+  double size = 0.0;
+};
+
+/// The entries of a local_sizes text ("" : none).
+/// @throws InputError (Entity::Parameter) naming the entry that is not "ITEMS:SIZE", an item
+///         that is not N, FaceN or EdgeN (N >= 1), or a size that is not a number > 0
+std::vector<LocalSize> parse_local_sizes(const std::string& text);
+
+/// What mesh_shape() did with one local size.
+struct LocalSizeApplied {
+  std::vector<int> faces;  ///< 1-based
+  std::vector<int> edges;  ///< 1-based
+  double size = 0.0;
+  std::size_t nb_triangles = 0;  ///< surface triangles on its faces
+  std::size_t nb_segments = 0;   ///< surface segments on its edges
+  double max_side = 0.0;  ///< the longest side of those triangles and segments, after meshing
 };
 
 /// The table of MeshShapeParameters' fields (core/parameter_table.h), in display order, with
@@ -137,6 +166,9 @@ struct MeshShapeReport {
   /// than h remain on them)
   std::size_t nb_unrefined_faces = 0;
   std::size_t nb_shared_faces = 0;  ///< faces between two solids (touching solids glued)
+  /// The local sizes (MeshShapeParameters::local_sizes) as applied, in their order
+  std::vector<LocalSizeApplied> local_sizes;
+  std::size_t nb_graded_points = 0;  ///< points of the finer lattices around local sizes
   /// mesh_shape_tet10(): boundary mid-edge nodes projected onto their CAD face or edge (on a
   /// plane: the midpoint itself)
   std::size_t nb_projected_mid_nodes = 0;
@@ -166,7 +198,8 @@ struct MeshShapeReport {
 ///         `Shape.Solids`)
 /// @throws InputError for BREP text that cannot be read, a shape without solids, an open shell
 ///         (naming the free edge), a size that is not positive or larger than the shape, a
-///         surface refinement that does not converge, bad parameters, or TetGen missing or
+///         surface refinement that does not converge, bad parameters (a local size naming a
+///         face or edge the shape does not have, or larger than the size), or TetGen missing or
 ///         failing (with its output)
 TetMesh mesh_shape(const std::string& brep, const MeshShapeParameters& parameters,
                    MeshShapeReport& report);

@@ -1,4 +1,10 @@
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <cstdlib>
 #include <limits>
+#include <string>
+#include <vector>
 
 #include "hexmerge/core/error.h"
 #include "hexmerge/occ/mesh_shape.h"
@@ -49,7 +55,25 @@ ParameterTable<MeshShapeParameters> make_table() {
            "A folder for TetGen's files, kept afterwards (made when missing); empty: a "
            "temporary one, removed",
            {"", ""}),
+      // The add-on fills it from the analysis' mesh regions: no property of its own.
+      text(&P::local_sizes, "local_sizes", "Local sizes",
+           "Finer sizes on some faces and edges (1-based, as FreeCAD's FaceN, EdgeN): entries "
+           "ITEMS:SIZE separated by ';', ITEMS a comma-separated list of N or FaceN (faces), "
+           "EdgeN (edges); e.g. '5:1.5; Edge3:0.5'. Sizes in (0, size]; the shape is then not "
+           "swept",
+           {"--local-size", ""}),
   });
+}
+
+std::string trimmed(const std::string& text) {
+  std::size_t a = 0, b = text.size();
+  while (a < b && std::isspace(static_cast<unsigned char>(text[a]))) ++a;
+  while (b > a && std::isspace(static_cast<unsigned char>(text[b - 1]))) --b;
+  return text.substr(a, b - a);
+}
+
+InputError bad_local_size(const std::string& entry, const std::string& why) {
+  return InputError("parameter 'local_sizes': entry '" + entry + "' " + why, Entity::Parameter);
 }
 
 }  // namespace
@@ -59,8 +83,60 @@ const ParameterTable<MeshShapeParameters>& mesh_shape_parameter_table() {
   return table;
 }
 
+std::vector<LocalSize> parse_local_sizes(const std::string& text) {
+  std::vector<LocalSize> out;
+  std::size_t start = 0;
+  while (start <= text.size()) {
+    std::size_t end = text.find(';', start);
+    if (end == std::string::npos) end = text.size();
+    const std::string entry = trimmed(text.substr(start, end - start));
+    start = end + 1;
+    if (entry.empty()) continue;
+    const std::size_t colon = entry.rfind(':');
+    if (colon == std::string::npos)
+      throw bad_local_size(entry, "is not ITEMS:SIZE (e.g. '5,6:1.5' or 'Edge3:0.5')");
+    LocalSize local;
+    const std::string size_text = trimmed(entry.substr(colon + 1));
+    char* size_end = nullptr;
+    local.size = std::strtod(size_text.c_str(), &size_end);
+    if (size_text.empty() || *size_end != '\0' || !std::isfinite(local.size) || local.size <= 0)
+      throw bad_local_size(entry, "has size '" + size_text + "': it must be a number > 0");
+    const std::string items = entry.substr(0, colon);
+    std::size_t at = 0;
+    while (at <= items.size()) {
+      std::size_t comma = items.find(',', at);
+      if (comma == std::string::npos) comma = items.size();
+      const std::string item = trimmed(items.substr(at, comma - at));
+      at = comma + 1;
+      std::string lower;
+      for (const char c : item)
+        lower += static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+      std::vector<int>* into = &local.faces;
+      std::size_t digits = 0;
+      if (lower.rfind("face", 0) == 0) {
+        digits = 4;
+      } else if (lower.rfind("edge", 0) == 0) {
+        into = &local.edges, digits = 4;
+      }
+      const std::string number = item.substr(digits);
+      const bool whole = !number.empty() && number.size() < 10 &&
+                         std::all_of(number.begin(), number.end(), [](char c) {
+                           return std::isdigit(static_cast<unsigned char>(c));
+                         });
+      if (!whole || std::stoi(number) < 1)
+        throw bad_local_size(entry, "names '" + item +
+                                        "': items are N or FaceN (a face), EdgeN (an edge), "
+                                        "numbered from 1");
+      into->push_back(std::stoi(number));
+    }
+    out.push_back(local);
+  }
+  return out;
+}
+
 void validate_mesh_shape_parameters(const MeshShapeParameters& parameters) {
   mesh_shape_parameter_table().validate(parameters);
+  parse_local_sizes(parameters.local_sizes);
   if (parameters.tetgen.empty()) {
     throw InputError("parameter 'tetgen' must name the TetGen program (got '')", Entity::Parameter);
   }

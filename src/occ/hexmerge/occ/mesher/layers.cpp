@@ -22,7 +22,7 @@ std::size_t place_layers(const std::vector<Vec3>& nodes, const Surface& surface,
                          const std::vector<int>& face_solid_count, const Lattice& lattice,
                          int sweep_axis, const SweptSurface& swept, int layers, double thickness,
                          double core_margin, const Parity& parity, Surroundings& around,
-                         InsertedPoints& inserted) {
+                         InsertedPoints& inserted, const std::vector<char>* no_layers) {
   // Boundary layers: surface nodes of the other faces where the surface is smooth, moved along
   // the inward normal, where there is room.
   std::vector<Vec3> normal(nodes.size(), Vec3{0, 0, 0});
@@ -37,6 +37,9 @@ std::size_t place_layers(const std::vector<Vec3>& nodes, const Surface& surface,
       if (lattice.lattice_face[t.face] || face_solid_count[t.face] > 1) smooth[c] = false;
     }
   }
+  if (no_layers)
+    for (std::size_t i = 0; i < nodes.size(); ++i)
+      if ((*no_layers)[i]) smooth[i] = false;
   for (auto& n : normal)
     if (n.norm() > 0) n = unit(n);
   for (const SurfaceTriangle& t : surface.triangles) {

@@ -27,11 +27,13 @@ namespace hexmerge::mesher {
 /// @param[in] layers            number of layers (0 to 3)
 /// @param[in] thickness         one layer's depth (a length)
 /// @param[in] core_margin       the least distance from a core point (a length)
+/// @param[in] no_layers         per node, 1 where it gets no layers (null: none such; local sizes:
+///                              the nodes where the size wanted is below h)
 /// @return the number of points placed
 std::size_t place_layers(const std::vector<Vec3>& nodes, const Surface& surface,
                          const std::vector<int>& face_solid_count, const Lattice& lattice,
                          int sweep_axis, const SweptSurface& swept, int layers, double thickness,
                          double core_margin, const Parity& parity, Surroundings& around,
-                         InsertedPoints& inserted);
+                         InsertedPoints& inserted, const std::vector<char>* no_layers = nullptr);
 
 }  // namespace hexmerge::mesher

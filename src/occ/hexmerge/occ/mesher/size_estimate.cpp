@@ -19,6 +19,29 @@ SizeEstimate estimate_size(const TopoDS_Shape& shape, double size) {
   return e;
 }
 
+double estimate_local_tets(const TopTools_IndexedMapOfShape& faces,
+                           const TopTools_IndexedMapOfShape& edges,
+                           const std::vector<double>& face_size,
+                           const std::vector<double>& edge_size, double h, double grading) {
+  double tets = 0;
+  for (int f = 1; f <= faces.Extent(); ++f) {
+    const double s = face_size[f - 1];
+    if (s >= h) continue;
+    GProp_GProps area;
+    BRepGProp::SurfaceProperties(faces(f), area);
+    tets += area.Mass() *
+            (10 / (s * s) + 11 / (2 * grading) * (1 / (s * s) - 1 / (h * h)) - 10 / (h * h));
+  }
+  for (int e = 1; e <= edges.Extent(); ++e) {
+    const double s = edge_size[e - 1];
+    if (s >= h) continue;
+    GProp_GProps length;
+    BRepGProp::LinearProperties(edges(e), length);
+    tets += 11 * M_PI * length.Mass() / (grading * grading * s);
+  }
+  return tets;
+}
+
 std::uint64_t available_memory() {
   std::ifstream in("/proc/meminfo");
   std::string line;

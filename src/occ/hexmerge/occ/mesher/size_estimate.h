@@ -3,8 +3,10 @@
 /// How many tets a shape meshes into at a size, and the memory that takes, before any work
 /// (internal header: includes OpenCASCADE).
 
+#include <TopTools_IndexedMapOfShape.hxx>
 #include <TopoDS_Shape.hxx>
 #include <cstdint>
+#include <vector>
 
 namespace hexmerge::mesher {
 
@@ -19,6 +21,15 @@ struct SizeEstimate {
 /// Tets ≈ 11 V / h³ + 10 A / h² (V the shape's volume, A its area: the lattice inside, the
 /// refined surface and its layers at the boundary), at kBytesPerTet each.
 SizeEstimate estimate_size(const TopoDS_Shape& shape, double size);
+
+/// Tets that local sizes add to estimate_size()'s: per face of local size s < h, its area A times
+/// 10 / s² (its surface) + 11 / (2 g) (1 / s² - 1 / h²) (the zone graded by g inside), less its
+/// 10 A / h²; per edge of length L, 11 π L / (g² s) (the graded zone around it). Faces and edges
+/// as in the maps (`face_size`, `edge_size` per index from 0; h: none).
+double estimate_local_tets(const TopTools_IndexedMapOfShape& faces,
+                           const TopTools_IndexedMapOfShape& edges,
+                           const std::vector<double>& face_size,
+                           const std::vector<double>& edge_size, double h, double grading);
 
 /// Peak bytes per tet of meshing a shape and recombining the tets (TetGen's process, the
 /// engine's candidates and selection on lattice tets, the arrays handed to Python).

@@ -22,6 +22,7 @@
 #include <utility>
 
 #include "hexmerge/core/error.h"
+#include "hexmerge/occ/mesher/local_size.h"
 #include "hexmerge/occ/mesher/shape.h"
 
 namespace hexmerge::mesher {
@@ -59,7 +60,7 @@ gp_Pnt2d point2d(const UV& uv) { return gp_Pnt2d(uv.u, uv.v); }
 // only where a neighbour's side must be. New nodes lie on the CAD edge (sides on an edge) or on
 // the face's surface.
 void refine(const Shape& s, Surface& surface, double target, const std::vector<bool>& lattice_face,
-            const std::vector<bool>& lattice_edge) {
+            const std::vector<bool>& lattice_edge, const SizeField* field) {
   std::vector<std::unique_ptr<BRepAdaptor_Surface>> surfaces(s.faces.Extent());
   std::vector<std::unique_ptr<BRepAdaptor_Curve>> curves(s.edges.Extent());
   // Per face, the pcurves of its edges (a seam has two: one per orientation).
@@ -105,6 +106,17 @@ void refine(const Shape& s, Surface& surface, double target, const std::vector<b
   };
   for (int ti = 0; ti < static_cast<int>(tris.size()); ++ti) link(ti);
   auto length = [&](int a, int b) { return (surface.nodes[a] - surface.nodes[b]).norm(); };
+  // The size wanted at node n (target without local sizes), and at a side: the smaller at its
+  // ends, so that the sides around a finely meshed face grade out from it.
+  std::vector<double> node_size;
+  auto size_at = [&](int n) {
+    if (!field) return target;
+    if (node_size.size() <= static_cast<std::size_t>(n))
+      node_size.resize(surface.nodes.size(), -1.0);
+    if (node_size[n] < 0) node_size[n] = field->at(surface.nodes[n]);
+    return node_size[n];
+  };
+  auto side_target = [&](int a, int b) { return std::min(size_at(a), size_at(b)); };
   // The longest side of triangle ti.
   auto longest = [&](int ti) {
     const SurfaceTriangle& t = tris[ti];
@@ -271,39 +283,62 @@ void refine(const Shape& s, Surface& surface, double target, const std::vector<b
         stack.push_back(k);
     }
   };
-  auto needs_split = [&](int ti) {
-    if (lattice_face[tris[ti].face]) return false;
+  // The side of triangle ti to split (its longest), -1 for none. With local sizes, a lattice
+  // face's sides on CAD edges are split where the size wanted there is below the target (its
+  // inside is cut by the tetrahedraliser, between its boundary and its points).
+  auto side_to_split = [&](int ti) {
+    const SurfaceTriangle& t = tris[ti];
+    if (lattice_face[t.face]) {
+      if (!field) return -1;
+      for (int c = 0; c < 3; ++c) {
+        const int a = t.node[c], b = t.node[(c + 1) % 3];
+        const double wanted = side_target(a, b);
+        if (wanted < target && length(a, b) > wanted && surface.segments.count(pair_key(a, b)) &&
+            !unsplittable.count(pair_key(a, b)))
+          return c;
+      }
+      return -1;
+    }
     const int c = longest(ti);
-    const int a = tris[ti].node[c], b = tris[ti].node[(c + 1) % 3];
+    const int a = t.node[c], b = t.node[(c + 1) % 3];
+    const double wanted = side_target(a, b);
     auto seg = surface.segments.find(pair_key(a, b));
-    if (seg != surface.segments.end() && lattice_edge[seg->second.edge]) return false;
-    return length(a, b) > target && !unsplittable.count(pair_key(a, b));
+    if (seg != surface.segments.end() && lattice_edge[seg->second.edge] && wanted >= target)
+      return -1;
+    return length(a, b) > wanted && !unsplittable.count(pair_key(a, b)) ? c : -1;
   };
-  // Splits the longest side of triangle ti (in every triangle that has it), then restores the
-  // Delaunay property around the new node.
-  auto split_longest = [&](int ti) {
-    const int c = longest(ti);
+  // Splits side c of triangle ti (in every triangle that has it), then restores the Delaunay
+  // property around the new node.
+  auto split = [&](int ti, int c) {
     restore_delaunay(split_side(tris[ti].node[c], tris[ti].node[(c + 1) % 3]));
   };
   // Per face: a face whose refinement adds more nodes than twenty times its area over the
   // target's square (plus 200) is not converging there (a distorted parametrisation, flips that
   // bring long sides back): it is left as it is then, and listed.
-  std::vector<double> face_area(s.faces.Extent(), 0.0);
-  for (const SurfaceTriangle& t : tris)
+  // (With local sizes: over the square of the smallest size wanted at the face's nodes.)
+  std::vector<double> face_area(s.faces.Extent(), 0.0), face_target(s.faces.Extent(), target);
+  for (const SurfaceTriangle& t : tris) {
     face_area[t.face] += 0.5 * normal_of(t.node[0], t.node[1], t.node[2]).norm();
+    for (int n : t.node) face_target[t.face] = std::min(face_target[t.face], size_at(n));
+  }
   std::vector<std::size_t> added(s.faces.Extent(), 0);
   std::vector<char> given_up(s.faces.Extent(), 0);
-  for (int ti = 0; ti < static_cast<int>(tris.size()); ++ti)
-    while (!given_up[tris[ti].face] && needs_split(ti)) {
-      const int face = tris[ti].face;
-      const std::size_t before = surface.nodes.size();
-      split_longest(ti);
-      added[face] += surface.nodes.size() - before;
-      if (added[face] > 20 * face_area[face] / (target * target) + 200) {
-        given_up[face] = 1;
-        list_unrefined(face);
+  // With local sizes, passes until no side is longer than wanted: a flip after a split can
+  // make a side of a triangle passed before longer (a few of them, by under 1 %).
+  for (int pass = 0, splits = 1; splits > 0 && pass < (field ? 4 : 1); ++pass) {
+    splits = 0;
+    for (int ti = 0; ti < static_cast<int>(tris.size()); ++ti)
+      for (int c = -1; !given_up[tris[ti].face] && (c = side_to_split(ti)) >= 0; ++splits) {
+        const int face = tris[ti].face;
+        const std::size_t before = surface.nodes.size();
+        split(ti, c);
+        added[face] += surface.nodes.size() - before;
+        if (added[face] > 20 * face_area[face] / (face_target[face] * face_target[face]) + 200) {
+          given_up[face] = 1;
+          list_unrefined(face);
+        }
       }
-    }
+  }
 
   // Bisection leaves nodes very near a seam or an edge (needles, and a tet on a needle is no
   // better than its smallest angle). Each node inside a face that is not a lattice face moves to
@@ -318,6 +353,13 @@ void refine(const Shape& s, Surface& surface, double target, const std::vector<b
       for (int m : tris[ti].node)
         if (m != n) shortest = std::min(shortest, length(n, m));
     return shortest;
+  };
+  auto longest_around = [&](int n) {
+    double most = 0;
+    for (int ti : around[n])
+      for (int m : tris[ti].node)
+        if (m != n) most = std::max(most, length(n, m));
+    return most;
   };
   auto smallest_angle = [&](int n) {
     double worst = M_PI;
@@ -353,6 +395,8 @@ void refine(const Shape& s, Surface& surface, double target, const std::vector<b
       for (int ti : around[n])
         reference = reference + normal_of(tris[ti].node[0], tris[ti].node[1], tris[ti].node[2]);
       const double before = smallest_angle(n), shortest = shortest_side(n);
+      // With local sizes, no side grows past the size wanted (unless it already was longer).
+      const double longest_before = field ? std::max(longest_around(n), size_at(n)) : 0.0;
       // To the centroid, else half or a quarter of the way, put back on the surface: better
       // angles, no triangle turned more than 20 degrees from the reference, and no nearer than
       // h / 8 to a neighbour (unless it was already): nodes must not gather (TetGen drops points
@@ -366,7 +410,8 @@ void refine(const Shape& s, Surface& surface, double target, const std::vector<b
             analysis[face]->ValueOfUV(gp_Pnt(goal.x, goal.y, goal.z), 1e-9 * target);
         surface.nodes[n] = of(analysis[face]->Value(uv));
         keep = smallest_angle(n) > before &&
-               shortest_side(n) >= std::min(shortest, kNeedleNearest * target);
+               shortest_side(n) >= std::min(shortest, kNeedleNearest * size_at(n)) &&
+               (!field || longest_around(n) <= longest_before);
         for (std::size_t k = 0; k < around[n].size() && keep; ++k) {
           const auto& v = tris[around[n][k]].node;
           keep = !turned_over(normal_of(v[0], v[1], v[2]), reference);
@@ -394,10 +439,14 @@ void refine(const Shape& s, Surface& surface, double target, const std::vector<b
 // and bisecting the sides of such a cap makes triangles whose three nodes lie on one line. The
 // removed nodes are dropped and the rest renumbered.
 void collapse_sides(Surface& surface, double target, double max_side,
-                    const std::vector<bool>& lattice_face) {
+                    const std::vector<bool>& lattice_face, const SizeField* field) {
   std::vector<SurfaceTriangle>& tris = surface.triangles;
   const std::vector<Vec3>& nodes = surface.nodes;
   const int nb_nodes = static_cast<int>(nodes.size());
+  // Per node, the size wanted there over the target (1 without local sizes).
+  std::vector<double> scale(nb_nodes, 1.0);
+  if (field)
+    for (int n = 0; n < nb_nodes; ++n) scale[n] = field->at(nodes[n]) / target;
   const std::vector<char> on_edge = nodes_on_edges(surface);
   std::vector<std::vector<int>> around(nb_nodes);
   for (int ti = 0; ti < static_cast<int>(tris.size()); ++ti)
@@ -486,7 +535,8 @@ void collapse_sides(Surface& surface, double target, double max_side,
         if (surface.segments.count(pair_key(a, b))) continue;
         const double l = (nodes[a] - nodes[b]).norm();
         if (angle < kCapAngle) sides.push_back({angle - M_PI, pair_key(a, b)});
-        if (a < b && l < kCollapseSide * target) sides.push_back({l, pair_key(a, b)});
+        if (a < b && l < kCollapseSide * target * std::min(scale[a], scale[b]))
+          sides.push_back({l, pair_key(a, b)});
       }
     }
     std::sort(sides.begin(), sides.end());
@@ -495,7 +545,9 @@ void collapse_sides(Surface& surface, double target, double max_side,
       if (removed[a] || removed[b]) continue;
       // A cap's node may leave sides up to twice the target: a long side is better than a flat
       // triangle.
-      const double limit = priority < 0 ? std::max(max_side, kCapSide * target) : max_side;
+      const double local = std::min(scale[a], scale[b]);
+      const double limit =
+          (priority < 0 ? std::max(max_side, kCapSide * target) : max_side) * local;
       const double ab = try_collapse(a, b, limit), ba = try_collapse(b, a, limit);
       if (ab < 0 && ba < 0) continue;
       if (ab >= ba)

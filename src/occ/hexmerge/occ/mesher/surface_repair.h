@@ -13,6 +13,7 @@
 namespace hexmerge::mesher {
 
 struct Shape;
+class SizeField;
 
 /// Splits the triangles of the faces that are not lattice faces until no side is longer than
 /// `target` (sides on edges between lattice faces excepted); lattice-face triangles are split
@@ -20,17 +21,20 @@ struct Shape;
 /// the face's surface. Then needles are smoothed on their face and the Delaunay flips redone.
 /// @param[in] lattice_face  per face, whether it is a lattice face (planar, on a lattice plane)
 /// @param[in] lattice_edge  per edge, whether every face it bounds is a lattice face
+/// @param[in] field  local sizes (null: none): a side is split to the smaller of the sizes the
+///                   field gives at its ends, lattice faces' sides on CAD edges too
 /// A face whose refinement adds far more nodes than its area needs (it is not converging) is
 /// left as it is then, and listed in Surface::unrefined_faces.
 void refine(const Shape& s, Surface& surface, double target, const std::vector<bool>& lattice_face,
-            const std::vector<bool>& lattice_edge);
+            const std::vector<bool>& lattice_edge, const SizeField* field = nullptr);
 
 /// Collapses the sides of needles and caps (an angle under 5 degrees) and the short sides (under
 /// target / 4) inside a face (not on a CAD edge, not on a lattice face) where no triangle gets
 /// worse and no side gets longer than `max_side`; the removed nodes are dropped, the rest
-/// renumbered, and Surface::seed gives each node's index before.
+/// renumbered, and Surface::seed gives each node's index before. With local sizes (`field`),
+/// `target` and `max_side` shrink with the size the field gives at the side's nodes.
 void collapse_sides(Surface& surface, double target, double max_side,
-                    const std::vector<bool>& lattice_face);
+                    const std::vector<bool>& lattice_face, const SizeField* field = nullptr);
 
 /// Puts the nodes (frame coordinates, `nodes`, numbered as `surface`'s) of each straight CAD
 /// edge that bounds a lattice face and runs across two frame axes exactly on one line.

@@ -1,0 +1,153 @@
+#include "hexmerge/occ/mesher/local_size.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "hexmerge/occ/mesher/common.h"
+
+namespace hexmerge::mesher {
+namespace {
+
+// Squared distance from p to segment ab.
+double squared_distance_to_segment(const Vec3& p, const Vec3& a, const Vec3& b) {
+  const Vec3 ab = b - a;
+  const double l2 = ab.dot(ab);
+  const double t = l2 > 0 ? std::clamp((p - a).dot(ab) / l2, 0.0, 1.0) : 0.0;
+  const Vec3 d = p - (a + ab * t);
+  return d.dot(d);
+}
+
+// Levels of finer lattices at most (spacing h / 2^10): a local size below h / 1024 is refused
+// before (mesh_shape's validation), so this is never reached for a valid one.
+constexpr int kMaxLevels = 10;
+
+}  // namespace
+
+SizeField::SizeField(double h, double grading, double slack, const Vec3& lo, const Vec3& hi)
+    : h_(h),
+      grading_(grading),
+      slack_(slack),
+      smallest_(h),
+      items_lo_(hi),
+      items_hi_(lo),
+      grid_(lo, hi, h) {}
+
+void SizeField::add(const Vec3& a, const Vec3& b, const Vec3& c, double size) {
+  const Vec3 lo = vmin(a, vmin(b, c)), hi = vmax(a, vmax(b, c));
+  grid_.add(static_cast<int>(items_.size()), lo, hi);
+  items_.push_back({a, b, c, size});
+  smallest_ = std::min(smallest_, size);
+  items_lo_ = vmin(items_lo_, lo);
+  items_hi_ = vmax(items_hi_, hi);
+}
+
+double SizeField::at(const Vec3& p) const {
+  if (items_.empty()) return h_;
+  // Only items nearer than (h - smallest) / grading can give less than h.
+  const double reach = (h_ - smallest_) / grading_ + slack_;
+  const Vec3 r{reach, reach, reach};
+  double best = h_;
+  grid_.any_in(p - r, p + r, [&](int i) {
+    const Item& it = items_[i];
+    const double d2 = it.b.x == it.c.x && it.b.y == it.c.y && it.b.z == it.c.z
+                          ? squared_distance_to_segment(p, it.a, it.b)
+                          : squared_distance_to_triangle(p, it.a, it.b, it.c);
+    best = std::min(best, it.size + grading_ * std::max(0.0, std::sqrt(d2) - slack_));
+    return false;
+  });
+  return best;
+}
+
+void SizeField::graded_box(Vec3& lo, Vec3& hi) const {
+  const double reach = (h_ - smallest_) / grading_ + slack_;
+  lo = items_lo_ - Vec3{reach, reach, reach};
+  hi = items_hi_ + Vec3{reach, reach, reach};
+}
+
+SizeField make_size_field(const Surface& surface, const LocalSizeItems& items, double h,
+                          double grading, double deflection, double diagonal) {
+  Vec3 lo{std::numeric_limits<double>::max(), std::numeric_limits<double>::max(),
+          std::numeric_limits<double>::max()};
+  Vec3 hi = lo * -1.0;
+  for (const Vec3& p : surface.nodes) lo = vmin(lo, p), hi = vmax(hi, p);
+  const Vec3 grow{0.01 * diagonal, 0.01 * diagonal, 0.01 * diagonal};
+  SizeField field(h, grading, deflection, lo - grow, hi + grow);
+  for (const SurfaceTriangle& t : surface.triangles) {
+    const double size = items.face_size[t.face];
+    if (size < h)
+      field.add(surface.nodes[t.node[0]], surface.nodes[t.node[1]], surface.nodes[t.node[2]], size);
+  }
+  for (const auto& [key, segment] : surface.segments) {
+    const double size = items.edge_size[segment.edge];
+    if (size >= h) continue;
+    const Vec3& a = surface.nodes[static_cast<int>(key >> 32)];
+    const Vec3& b = surface.nodes[static_cast<int>(key & 0xffffffffu)];
+    field.add(a, b, b, size);
+  }
+  return field;
+}
+
+std::size_t place_graded_points(const SizeField& field, const Lattice& lattice,
+                                const Parity& parity, const Surroundings& around, double clearance,
+                                InsertedPoints& inserted) {
+  if (field.empty()) return 0;
+  // The graded zone's box in frame coordinates (its world box's corners), within the lattice's.
+  Vec3 wlo, whi;
+  field.graded_box(wlo, whi);
+  Vec3 lo{std::numeric_limits<double>::max(), std::numeric_limits<double>::max(),
+          std::numeric_limits<double>::max()};
+  Vec3 hi = lo * -1.0;
+  for (int corner = 0; corner < 8; ++corner) {
+    const Vec3 w{corner & 1 ? whi.x : wlo.x, corner & 2 ? whi.y : wlo.y,
+                 corner & 4 ? whi.z : wlo.z};
+    const Vec3 q = lattice.frame.to_frame(w);
+    lo = vmin(lo, q), hi = vmax(hi, q);
+  }
+  const double h = field.h();
+  const int levels =
+      std::min(kMaxLevels, static_cast<int>(std::ceil(std::log2(h / field.smallest() - 1e-9))));
+  std::size_t placed = 0;
+  PointSet graded(around.box_lo, around.box_hi, h);
+  for (int level = 1; level <= levels; ++level) {
+    const long scale = 1L << level;
+    long first[3], last[3];
+    for (int a = 0; a < 3; ++a) {
+      const double s = lattice.spacing[a] / static_cast<double>(scale);
+      first[a] = std::max(0L, static_cast<long>(std::floor(coord(lo, a) / s)));
+      last[a] = std::min(static_cast<long>(lattice.cells[a]) * scale,
+                         static_cast<long>(std::ceil(coord(hi, a) / s)));
+    }
+    // The size below which a point of this level is wanted: the spacing of the level before.
+    const double wanted_below = h / static_cast<double>(scale / 2);
+    for (long k = first[2]; k <= last[2]; ++k)
+      for (long j = first[1]; j <= last[1]; ++j)
+        for (long i = first[0]; i <= last[0]; ++i) {
+          if (i % 2 == 0 && j % 2 == 0 && k % 2 == 0) continue;  // a coarser level's point
+          const long ijk[3] = {i, j, k};
+          Vec3 q{};
+          for (int a = 0; a < 3; ++a)
+            set_coord(q, a, ijk[a] * lattice.spacing[a] / static_cast<double>(scale));
+          const double size = field.at(lattice.frame.to_world(q));
+          if (size >= wanted_below) continue;
+          const double room = clearance * size;
+          // On a lattice plane, it may lie in a lattice face: then it is one of its points.
+          int index[3] = {-1, -1, -1};
+          for (int a = 0; a < 3; ++a)
+            if (ijk[a] % scale == 0) index[a] = static_cast<int>(ijk[a] / scale);
+          const int face = around.on_lattice_face(q, index);
+          if (face < 0 && (!parity.inside(q) || around.every_face.any_within(q, room))) continue;
+          if (around.curved.any_within(q, room) || around.surface_points.any_within(q, room) ||
+              around.layer_points.any_within(q, room) || around.core_points.any_within(q, room) ||
+              around.core_balls.holds(q, 0.05 * size) || graded.any_within(q, 0.5 * room))
+            continue;
+          graded.add(q);
+          inserted.points.push_back(q);
+          inserted.face.push_back(face);
+          ++placed;
+        }
+  }
+  return placed;
+}
+
+}  // namespace hexmerge::mesher

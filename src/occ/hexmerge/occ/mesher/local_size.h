@@ -1,0 +1,76 @@
+#pragma once
+/// @file
+/// Local sizes (internal header of mesh_shape(); no OpenCASCADE): the size field that faces and
+/// edges given a finer size than h set around themselves, graded out to h, and the points of
+/// finer lattices that fill the graded zone inside the shape.
+
+#include <array>
+#include <cstddef>
+#include <vector>
+
+#include "hexmerge/geometry/vec3.h"
+#include "hexmerge/occ/mesher/lattice.h"
+#include "hexmerge/occ/mesher/spatial.h"
+#include "hexmerge/occ/mesher/surface.h"
+
+namespace hexmerge::mesher {
+
+/// The size wanted at a point: min(h, size_i + grading * max(0, distance to item i - slack))
+/// over the triangles and segments given a local size (world coordinates). The slack is the
+/// chord deflection of the triangulation the items come from: points on the curved face itself
+/// are that far from its triangles, and get its size.
+class SizeField {
+ public:
+  /// @param[in] h        the target size (the field's largest value)
+  /// @param[in] grading  how fast the size grows with the distance (0.5: by half the distance)
+  /// @param[in] lo, hi   a box holding every item and query (queries outside are clamped by the
+  ///                     grid, not by the field)
+  /// @param[in] slack    distances count from this much off the items
+  SizeField(double h, double grading, double slack, const Vec3& lo, const Vec3& hi);
+  /// A triangle (or a segment: c == b) of size `size` < h.
+  void add(const Vec3& a, const Vec3& b, const Vec3& c, double size);
+  /// The size wanted at p, in (0, h].
+  double at(const Vec3& p) const;
+  /// No item: the field is h everywhere.
+  bool empty() const { return items_.empty(); }
+  double h() const { return h_; }
+  /// The smallest size of an item (h when none).
+  double smallest() const { return smallest_; }
+  /// The box where the field is below h: the items' box grown by (h - smallest) / grading.
+  void graded_box(Vec3& lo, Vec3& hi) const;
+
+ private:
+  struct Item {
+    Vec3 a, b, c;
+    double size;
+  };
+  double h_, grading_, slack_, smallest_;
+  Vec3 items_lo_, items_hi_;
+  BucketGrid grid_;
+  std::vector<Item> items_;
+};
+
+/// The faces and edges given local sizes (0-based), as mesh_shape() applies them.
+struct LocalSizeItems {
+  std::vector<double> face_size;  ///< per face, its local size (h: none)
+  std::vector<double> edge_size;  ///< per edge, its local size (h: none)
+};
+
+/// The size field of the triangles (world coordinates) of the faces, and the segments of the
+/// edges, with a local size below h.
+/// @param[in] deflection  the chord deflection of `surface` (the field's slack)
+SizeField make_size_field(const Surface& surface, const LocalSizeItems& items, double h,
+                          double grading, double deflection, double diagonal);
+
+/// Points of the lattices of spacing lattice.spacing / 2^l (l = 1, 2, ...) filling the graded
+/// zone inside the shape (frame coordinates): a point first on level l is placed where the size
+/// wanted is below the spacing of level l - 1, at least `clearance` times that size from every
+/// face (lattice faces excepted for points on them: those go into the face as face points, with
+/// its index in `inserted.face`), from the surface's nodes, the boundary-layer points and the
+/// core's points, and out of the core's circumspheres. Appended to `inserted`.
+/// @return the number of points placed
+std::size_t place_graded_points(const SizeField& field, const Lattice& lattice,
+                                const Parity& parity, const Surroundings& around, double clearance,
+                                InsertedPoints& inserted);
+
+}  // namespace hexmerge::mesher

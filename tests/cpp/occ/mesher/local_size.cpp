@@ -1,0 +1,133 @@
+#include "hexmerge/occ/mesher/local_size.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "hexmerge/occ/mesher/surface_repair.h"
+#include "hexmerge/occ/mesher/sweep.h"
+#include "mesher_fixtures.h"
+
+namespace hexmerge::test {
+namespace {
+
+// The size field: the item's size on it (within the slack), growing by `grading` per unit of
+// distance beyond the slack, never above h; a segment is an item too; no item, h everywhere.
+TEST(SizeField, grows_from_its_items_up_to_h) {
+  const double h = 4, grading = 0.5, slack = 0.01;
+  mesher::SizeField field(h, grading, slack, Vec3{-10, -10, -10}, Vec3{10, 10, 10});
+  EXPECT_TRUE(field.empty());
+  EXPECT_EQ(field.at(Vec3{0, 0, 0}), h);
+  field.add(Vec3{0, 0, 0}, Vec3{2, 0, 0}, Vec3{0, 2, 0}, 1.0);  // a triangle in z = 0
+  field.add(Vec3{5, 5, 0}, Vec3{5, 5, 3}, Vec3{5, 5, 3}, 0.5);  // a segment along z
+  EXPECT_FALSE(field.empty());
+  EXPECT_EQ(field.smallest(), 0.5);
+  EXPECT_DOUBLE_EQ(field.at(Vec3{0.5, 0.5, 0}), 1.0);
+  EXPECT_DOUBLE_EQ(field.at(Vec3{0.5, 0.5, slack}), 1.0);  // within the slack
+  EXPECT_DOUBLE_EQ(field.at(Vec3{0.5, 0.5, 2}), 1.0 + grading * (2 - slack));
+  EXPECT_DOUBLE_EQ(field.at(Vec3{5, 6, 1}), 0.5 + grading * (1 - slack));
+  EXPECT_DOUBLE_EQ(field.at(Vec3{5, 5, 4}), 0.5 + grading * (1 - slack));  // beyond its end
+  EXPECT_EQ(field.at(Vec3{-9, -9, -9}), h);
+  // The graded box holds every point below h.
+  Vec3 lo, hi;
+  field.graded_box(lo, hi);
+  const double reach = (h - 0.5) / grading + slack;
+  EXPECT_DOUBLE_EQ(lo.x, -reach);
+  EXPECT_DOUBLE_EQ(hi.z, 3 + reach);
+}
+
+// The hole's wall (face of radius 8 about (30, 20)) at a local size: refine() brings its sides to
+// that size and every other side to the size the field gives at its ends (at most h);
+// collapse_sides() keeps them so.
+TEST(refine, to_the_local_sizes) {
+  const double h = 2.0, fine = 0.5;
+  Prepared p = prepare(occ_plate_with_hole(), h);
+  int hole = -1;
+  for (const mesher::SurfaceTriangle& t : p.surface.triangles) {
+    bool on = true;
+    for (int n : t.node)
+      on = on &&
+           std::abs(std::hypot(p.surface.nodes[n].x - 30, p.surface.nodes[n].y - 20) - 8) < 1e-6;
+    if (on) hole = t.face;
+  }
+  ASSERT_GE(hole, 0);
+  ASSERT_FALSE(p.lattice.lattice_face[hole]);
+  mesher::LocalSizeItems items;
+  items.face_size.assign(static_cast<std::size_t>(p.shape.faces.Extent()), h);
+  items.edge_size.assign(static_cast<std::size_t>(p.shape.edges.Extent()), h);
+  items.face_size[hole] = fine;
+  const mesher::SizeField field =
+      mesher::make_size_field(p.surface, items, h, 0.5, 0.02 * h, p.shape.diagonal);
+  mesher::refine(p.shape, p.surface, h, p.lattice.lattice_face, p.lattice.lattice_edge, &field);
+  mesher::collapse_sides(p.surface, h, h, p.lattice.lattice_face, &field);
+  ASSERT_TRUE(p.surface.unrefined_faces.empty());
+  std::string problem;
+  EXPECT_TRUE(closed_and_oriented(p.surface.triangles, problem)) << problem;
+  EXPECT_NEAR(enclosed_volume(p.surface.nodes, p.surface.triangles), 60 * 40 * 10 - M_PI * 64 * 10,
+              0.01 * M_PI * 64 * 10);
+  std::size_t on_hole = 0;
+  for (const mesher::SurfaceTriangle& t : p.surface.triangles) {
+    if (p.lattice.lattice_face[t.face]) continue;
+    for (int c = 0; c < 3; ++c) {
+      const int a = t.node[c], b = t.node[(c + 1) % 3];
+      const double side = (p.surface.nodes[a] - p.surface.nodes[b]).norm();
+      const double wanted = std::min(field.at(p.surface.nodes[a]), field.at(p.surface.nodes[b]));
+      EXPECT_LE(side, wanted * (1 + 1e-9)) << "face " << t.face;
+      if (t.face == hole) EXPECT_LE(side, fine * (1 + 1e-9));
+    }
+    on_hole += t.face == hole;
+  }
+  // The wall is 2 pi 8 x 10: about 500 / (0.5^2 sqrt(3) / 4) triangles of side 0.5.
+  EXPECT_GT(on_hole, 1500u);
+}
+
+// The finer lattices' points around the fine hole: inside, below h where they are, half the
+// size wanted there clear of the surface's nodes, on a lattice of spacing h / 2^l.
+TEST(place_graded_points, fill_the_graded_zone_inside) {
+  const double h = 2.0, fine = 0.5;
+  Prepared p = prepare(occ_plate_with_hole(), h);
+  mesher::LocalSizeItems items;
+  items.face_size.assign(static_cast<std::size_t>(p.shape.faces.Extent()), h);
+  items.edge_size.assign(static_cast<std::size_t>(p.shape.edges.Extent()), h);
+  for (const mesher::SurfaceTriangle& t : p.surface.triangles)
+    if (!p.lattice.lattice_face[t.face]) items.face_size[t.face] = fine;  // the hole's wall
+  const mesher::SizeField field =
+      mesher::make_size_field(p.surface, items, h, 0.5, 0.02 * h, p.shape.diagonal);
+  mesher::refine(p.shape, p.surface, h, p.lattice.lattice_face, p.lattice.lattice_edge, &field);
+  mesher::collapse_sides(p.surface, h, h, p.lattice.lattice_face, &field);
+  const std::vector<Vec3> nodes =
+      mesher::frame_nodes(p.shape, p.surface, p.lattice, -1, mesher::SweptSurface{});
+  mesher::Surroundings around(nodes, p.surface, p.lattice, h);
+  const mesher::Parity parity(nodes, p.surface, p.shape.face_solid_count, around, h);
+  mesher::InsertedPoints inserted;
+  const std::size_t placed =
+      mesher::place_graded_points(field, p.lattice, parity, around, 0.5, inserted);
+  ASSERT_EQ(inserted.points.size(), placed);
+  EXPECT_GT(placed, 100u);
+  std::size_t on_faces = 0;
+  for (std::size_t i = 0; i < placed; ++i) {
+    const Vec3 q = inserted.points[i];
+    const Vec3 world = p.lattice.frame.to_world(q);
+    const double size = field.at(world);
+    EXPECT_LT(size, h) << i;
+    bool on = false;
+    const bool inside = occ_inside(p.shape, world, on);
+    if (inserted.face[i] >= 0) {
+      EXPECT_TRUE(on) << i;  // on the lattice face it was given to
+      ++on_faces;
+    } else {
+      EXPECT_TRUE(inside && !on) << i;
+    }
+    for (const Vec3& n : nodes) ASSERT_GE((n - q).norm(), 0.5 * size * (1 - 1e-9)) << i;
+    // On a finer lattice: each coordinate a multiple of spacing / 2^l, l <= 2 (h / fine = 4).
+    for (int a = 0; a < 3; ++a) {
+      const double steps = mesher::coord(q, a) / (p.lattice.spacing[a] / 4);
+      EXPECT_NEAR(steps, std::round(steps), 1e-9) << i;
+    }
+  }
+  EXPECT_GT(on_faces, 0u);  // the plate's faces around the hole get points of their own
+}
+
+}  // namespace
+}  // namespace hexmerge::test
