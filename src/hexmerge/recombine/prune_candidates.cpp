@@ -99,8 +99,8 @@ CandidateQuads quads_of(const TetMesh& mesh, const TetTopology& topology, const 
 }  // namespace
 
 std::vector<Candidate> prune_unclosable(const TetMesh& mesh, const TetTopology& topology,
-                                        const std::vector<Candidate>& candidates,
-                                        std::size_t& removed, int threads) {
+                                        std::vector<Candidate> candidates, std::size_t& removed,
+                                        int threads) {
   const index_t n = static_cast<index_t>(candidates.size());
   constexpr index_t kChunk = 4096;
   auto go_on = [](double) { return true; };
@@ -300,12 +300,13 @@ std::vector<Candidate> prune_unclosable(const TetMesh& mesh, const TetTopology& 
   std::vector<index_t>().swap(at);
   std::vector<char> keep(n, 0);
   for (index_t l = 0; l < n; ++l) keep[by_local[l]] = viable[l];
-  std::vector<Candidate> kept;
-  kept.reserve(static_cast<std::size_t>(std::count(keep.begin(), keep.end(), 1)));
+  // The kept ones moved up in place: no second array of candidates.
+  std::size_t kept = 0;
   for (index_t ci = 0; ci < n; ++ci)
-    if (keep[ci]) kept.push_back(candidates[ci]);
-  removed = n - kept.size();
-  return kept;
+    if (keep[ci]) candidates[kept++] = candidates[ci];
+  removed = n - kept;
+  candidates.resize(kept);
+  return candidates;
 }
 
 }  // namespace hexmerge
