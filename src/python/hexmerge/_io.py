@@ -18,7 +18,7 @@ from typing import Any
 
 import numpy as np
 
-from . import _cells
+from . import _cells, _vtu
 from ._api import MixedMesh
 from ._meshio import PREFERRED_FORMAT, meshio as _meshio
 
@@ -528,7 +528,10 @@ def write_atomic(
     try:
         temps.append((_temp_beside(path), path))
         try:
-            meshio.write(temps[0][0], mesh, file_format=fmt, **kwargs)
+            if fmt == "vtu" and kwargs.get("binary", True):
+                _vtu.write(temps[0][0], mesh)  # raw binary: meshio's zlib was most of the write
+            else:
+                meshio.write(temps[0][0], mesh, file_format=fmt, **kwargs)
         except Exception as e:
             raise MeshFileError(f"{path}: cannot write the mesh as {fmt}: {type(e).__name__}: {e}") from None
         for target, text in (text_files or {}).items():
