@@ -150,8 +150,8 @@ std::vector<Candidate> prune_unclosable(const TetMesh& mesh, const TetTopology& 
   // The quads in the order of their keys (a counting sort on the rank of the smallest vertex,
   // then each bucket sorted by the other three and the quad), the quads of one key making a
   // group: at[k] is quad k's place in that order, starts[j] whether place j begins a group.
-  // The keys are made twice (to count, then to place) rather than held: this step's tables are
-  // the engine's peak of memory on lattice meshes.
+  // The keys are not held (this step's tables are the engine's peak of memory on lattice
+  // meshes): counted by their smallest vertex, then made where they are placed.
   std::vector<index_t> at(nb_quads);
   std::vector<char> starts(nb_quads);
   {
@@ -163,8 +163,16 @@ std::vector<Candidate> prune_unclosable(const TetMesh& mesh, const TetTopology& 
       }
     };
     std::vector<index_t> bucket(static_cast<std::size_t>(nv) + 1, 0);
-    for (index_t l = 0; l < n; ++l)
-      for_each_key(l, [&](index_t, const QuadKey& key) { ++bucket[vertex_rank[key[0]] + 1]; });
+    for (index_t l = 0; l < n; ++l) {  // counted by the smallest vertex, the key's first
+      const Candidate& c = candidates[by_local[l]];
+      const CellDescriptor& d = descriptor(c.type);
+      for (int f = 0; f < d.nb_faces; ++f) {
+        if (d.face_size[f] != 4) continue;
+        index_t low = c.vertices[d.face[f][0]];
+        for (int i = 1; i < 4; ++i) low = std::min(low, c.vertices[d.face[f][i]]);
+        ++bucket[vertex_rank[low] + 1];
+      }
+    }
     for (index_t v = 0; v < nv; ++v) bucket[v + 1] += bucket[v];
     std::vector<Entry> entries(nb_quads);
     {
