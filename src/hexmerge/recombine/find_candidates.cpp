@@ -315,6 +315,7 @@ class Matcher {
         criteria_(criteria),
         tree_(tree),
         found_(tree.nb_programs()),
+        found_quads_(tree.nb_programs()),
         out_(out) {}
 
   void run_from(index_t root) {
@@ -343,6 +344,7 @@ class Matcher {
       }
       found.clear();
     }
+    for (std::vector<QuadSet>& quads : found_quads_) quads.clear();
   }
 
  private:
@@ -360,7 +362,7 @@ class Matcher {
 
   // The programs ending at `n` have a match; its children continue the others.
   void descend(const SearchTree::Node& n) {
-    for (const int p : n.programs) finish(search_programs()[p], found_[p]);
+    for (const int p : n.programs) finish(search_programs()[p], found_[p], found_quads_[p]);
     for (const int c : n.children) step(tree_.node(c));
   }
 
@@ -448,7 +450,24 @@ class Matcher {
   // cell is assembled.)
   bool internal(index_t neighbor) const { return neighbor != NO_CELL && in_match(neighbor); }
 
-  void finish(const SearchProgram& program, std::vector<Match>& found) {
+  // The quad pairs of a match, each as (smaller face code, larger) in one number, sorted; the
+  // unused slots hold the largest number.
+  using QuadSet = std::array<std::uint64_t, kMaxQuads>;
+  QuadSet quad_set() const {
+    QuadSet set;
+    set.fill(~std::uint64_t{0});
+    for (int q = 0; q < nb_quads_; ++q) {
+      const std::uint64_t a = quad_[q][0], b = quad_[q][1];
+      std::uint64_t key = a < b ? a << 32 | b : b << 32 | a;
+      int j = q;  // insertion sort: at most six
+      for (; j > 0 && set[j - 1] > key; --j) set[j] = set[j - 1];
+      set[j] = key;
+    }
+    return set;
+  }
+
+  void finish(const SearchProgram& program, std::vector<Match>& found,
+              std::vector<QuadSet>& found_quads) {
     if (nb_vertices_ != descriptor(program.type).nb_vertices) return;
     Match c;
     c.type = program.type;
@@ -468,6 +487,13 @@ class Matcher {
       c.tets[j] = id;
       group[j] = node_[i];
     }
+    // The same tets with the same quads, matched again through an automorphism that fixes the
+    // root, make the same cell as a match kept before: run_from would drop it as seen, so it is
+    // dropped before its assembly.
+    const QuadSet quads = quad_set();
+    for (std::size_t i = 0; i < found.size(); ++i) {
+      if (found_quads[i] == quads && found[i].tets == c.tets) return;
+    }
     if (!assemble_cell(mesh_, topology_, program.type, group.data(), nb_assigned_, quad_.data(),
                        nb_quads_, c.vertices)) {
       return;
@@ -476,6 +502,7 @@ class Matcher {
     if (sj < criteria_.min_scaled_jacobian) return;
     c.quality = static_cast<float>(sj);
     found.push_back(c);
+    found_quads.push_back(quads);
   }
 
   // True when a candidate kept from this root (from out_[first_of_root]) is the same cell.
@@ -513,7 +540,8 @@ class Matcher {
   const std::vector<index_t>& input_id_;
   const AcceptanceCriteria& criteria_;
   const SearchTree& tree_;
-  std::vector<std::vector<Match>> found_;  // this root's matches, per program
+  std::vector<std::vector<Match>> found_;          // this root's matches, per program
+  std::vector<std::vector<QuadSet>> found_quads_;  // and their quad_set()s
   std::vector<Match>& out_;
   index_t root_ = 0;
   index_t root_input_id_ = 0;
