@@ -202,12 +202,12 @@ std::vector<Candidate> prune_unclosable(const TetMesh& mesh, const TetTopology& 
     std::array<index_t, 2> behind;  // the tets across its triangles (Quad)
     std::array<index_t, 2> front;   // the candidate's tets on them (Side)
     index_t candidate;              // local id
-    std::uint8_t nb_behind : 2;     // triangles found, at most 2 counted
-    std::uint8_t open : 1;
-    std::uint8_t inner : 1;
-    std::uint8_t exact : 1;
-    std::uint8_t starts_group : 1;
+    std::uint8_t nb_behind;         // triangles found, at most 2 counted
+    bool open;
+    bool inner;
+    bool exact;
   };
+  static_assert(sizeof(QuadFace) == 24, "the record's size is this step's peak of memory");
   std::vector<QuadFace> faces(nb_quads);
   parallel_chunks(
       n, kChunk, threads,
@@ -231,17 +231,15 @@ std::vector<Candidate> prune_unclosable(const TetMesh& mesh, const TetTopology& 
             face.open = q.open;
             face.inner = q.inner;
             face.exact = s.exact;
-            face.starts_group = starts[j] != 0;
           }
         }
       },
       go_on);
-  std::vector<char>().swap(starts);
   // The places [begin, end) of the group of the quad at place j.
   auto group_of = [&](index_t j) {
     index_t begin = j, end = j + 1;
-    while (!faces[begin].starts_group) --begin;
-    while (end < nb_quads && !faces[end].starts_group) ++end;
+    while (!starts[begin]) --begin;
+    while (end < nb_quads && !starts[end]) ++end;
     return std::make_pair(begin, end);
   };
 
@@ -306,6 +304,7 @@ std::vector<Candidate> prune_unclosable(const TetMesh& mesh, const TetTopology& 
   }
   std::vector<QuadFace>().swap(faces);
   std::vector<index_t>().swap(at);
+  std::vector<char>().swap(starts);
   std::vector<char> keep(n, 0);
   for (index_t l = 0; l < n; ++l) keep[by_local[l]] = viable[l];
   // The kept ones moved up in place: no second array of candidates.
