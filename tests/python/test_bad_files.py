@@ -92,6 +92,7 @@ def test_sparse_node_tags(tmp_path: Path, capsys) -> None:
         ([1, 2, 0, 4, 5], "node tag 0 is not positive"),
         ([1, -2, 3, 4, 5], "node tag -2 is not positive"),
         ([1, 2, 3, 4, 10**30], "node tags are too sparse to read (largest 1000000000000000000000000000000"),
+        ([1, 2, "3\0", 4, 5], "node tag 3\0 is not a whole number"),
     ],
 )
 def test_bad_node_tags_are_named(tmp_path: Path, capsys, tags: list, expected: str) -> None:

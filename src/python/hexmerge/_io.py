@@ -120,10 +120,12 @@ def _check_gmsh_nodes(path: Path, data: bytes) -> None:
                 i += 4 + n + 3 * n
     except (ValueError, IndexError):
         return  # malformed: meshio reports it
-    try:
-        values = np.array(tags, dtype=np.bytes_).astype(np.int64)  # int() of each word, in C
-    except (ValueError, OverflowError):
-        values = None
+    values = None
+    if b"\0" not in data[nodes:end]:  # numpy's bytes drop trailing NULs, which int() refuses
+        try:
+            values = np.array(tags, dtype=np.bytes_).astype(np.int64)  # int() of each word, in C
+        except (ValueError, OverflowError):
+            pass
     if values is None or (values.size and values.min() <= 0):
         for word in tags:  # the first word at fault, named
             try:
