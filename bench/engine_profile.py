@@ -15,11 +15,15 @@ tet, wall time per phase and thread scaling, printed as the table the issue asks
 - Peak memory and wall time: run_bench.py's worker (a fresh process per run; peak = high-water
   mark of the resident set during the call minus the resident set before it), once per thread
   count. The wall times depend on the load of the machine: run on a quiet machine to compare.
+- The command line's files (--cli): the steps of `hexmerge recombine IN -o OUT.vtu` timed one
+  by one in one process (hexmerge._io.read_tets, hexmerge.recombine, _io.to_meshio,
+  _io.write_atomic), to see what reading and writing cost against the engine.
 
 Usage (after building the module, see bench/README.md; meshes from make_meshes.py):
   PYTHONPATH=src/python /usr/bin/python3.11 bench/engine_profile.py
   ... engine_profile.py --callgrind box-delaunay-100k,box-tetgen-lattice-100k \\
         --timing box-delaunay-1m,box-tetgen-lattice-1m --threads 1,2 --output /tmp/p.json
+  ... engine_profile.py --callgrind '' --timing '' --cli box-delaunay-1m --cli-threads 2
   ... engine_profile.py --table /tmp/p.json
 """
 import argparse
@@ -130,6 +134,32 @@ def timing(path, threads, timeout):
                                   "phase_seconds", "error")}
 
 
+def cli_steps(path, threads):
+    """Seconds of each step of `hexmerge recombine IN -o OUT.vtu`, and the .vtu's size."""
+    import time
+    src = os.path.join(benchlib.ROOT, "src", "python")
+    if src not in sys.path:
+        sys.path.append(src)
+    from hexmerge import _api, _io
+    out = {}
+    with tempfile.TemporaryDirectory() as tmp:
+        target = os.path.join(tmp, "out.vtu")
+        t = time.perf_counter()
+        tets = _io.read_tets(path, None)
+        out["read_seconds"] = time.perf_counter() - t
+        t = time.perf_counter()
+        mesh, _ = _api.recombine(tets.points, tets.cells, tets.regions, threads=threads)
+        out["engine_seconds"] = time.perf_counter() - t
+        t = time.perf_counter()
+        m = _io.to_meshio(mesh, "vtu", region_key=tets.region_key, region_names=tets.region_names)
+        _io.write_atomic(target, m, "vtu")
+        out["write_seconds"] = time.perf_counter() - t
+        out["vtu_bytes"] = os.path.getsize(target)
+    out["tets"] = int(tets.cells.shape[0])
+    out["threads"] = threads
+    return out
+
+
 def fmt(x, spec=",.0f"):
     return "–" if x is None else format(x, spec)
 
@@ -175,6 +205,15 @@ def table(data):
             ps = rs[0].get("phase_seconds") or {}
             row += [fmt(ps.get(p), ".3f") for p in phases]
             lines.append("| " + " | ".join(row) + " |")
+    cli = data.get("cli", {})
+    if cli:
+        lines += ["", "| mesh | tets | threads | read s | engine s | write .vtu s | .vtu MB | "
+                      "read + write share |", "|---|---|---|---|---|---|---|---|"]
+        for name, r in cli.items():
+            io = r["read_seconds"] + r["write_seconds"]
+            lines.append(f"| {name} | {fmt(r['tets'])} | {r['threads']} | {r['read_seconds']:.2f} | "
+                         f"{r['engine_seconds']:.2f} | {r['write_seconds']:.2f} | "
+                         f"{r['vtu_bytes'] / 1e6:.1f} | {io / (io + r['engine_seconds']):.0%} |")
     return "\n".join(lines)
 
 
@@ -187,6 +226,9 @@ def main():
                                         "box-delaunay-1m,box-tetgen-lattice-1m",
                     help="meshes timed and measured for peak memory; '' for none")
     ap.add_argument("--threads", default="1,2")
+    ap.add_argument("--cli", default="", help="meshes whose `hexmerge recombine -o .vtu` steps are "
+                                              "timed (read, engine, write); '' for none")
+    ap.add_argument("--cli-threads", type=int, default=2)
     ap.add_argument("--timeout", type=float, default=900, help="seconds per timed run")
     ap.add_argument("--output", help="JSON file to write")
     ap.add_argument("--commit", help="the commit of the module measured, when it is not the "
@@ -205,7 +247,7 @@ def main():
     import datetime
     data = {"git": args.commit or benchlib.git_commit(), "machine": benchlib.machine(),
             "date": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC"),
-            "instructions": {}, "timing": {}}
+            "instructions": {}, "timing": {}, "cli": {}}
 
     def mesh_path(name):
         p = os.path.join(args.mesh_dir, name + ".msh")
@@ -234,6 +276,12 @@ def main():
         for t in [int(x) for x in args.threads.split(",")]:
             print(f"{name}: {t} thread(s) ...", file=sys.stderr, flush=True)
             data["timing"][name][str(t)] = timing(path, t, args.timeout)
+            save()
+    for name in [n for n in args.cli.split(",") if n]:
+        path = mesh_path(name)
+        if path:
+            print(f"{name}: command line steps ...", file=sys.stderr, flush=True)
+            data["cli"][name] = cli_steps(path, args.cli_threads)
             save()
     print(table(data))
     return 0

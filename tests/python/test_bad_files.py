@@ -84,6 +84,34 @@ def test_sparse_node_tags(tmp_path: Path, capsys) -> None:
     assert code == 1 and "Traceback" not in err and "KeyError" not in err and len(err.strip().splitlines()) == 1, err
 
 
+@pytest.mark.parametrize(
+    "tags, expected",
+    [
+        ([1, 2, "2.5", 4, 5], "node tag 2.5 is not a whole number"),
+        ([1, 2, "x3", 4, 5], "node tag x3 is not a whole number"),
+        ([1, 2, 0, 4, 5], "node tag 0 is not positive"),
+        ([1, -2, 3, 4, 5], "node tag -2 is not positive"),
+        ([1, 2, 3, 4, 10**30], "node tags are too sparse to read (largest 1000000000000000000000000000000"),
+        ([1, 2, "3\0", 4, 5], "node tag 3\0 is not a whole number"),
+    ],
+)
+def test_bad_node_tags_are_named(tmp_path: Path, capsys, tags: list, expected: str) -> None:
+    path = tmp_path / "tags.msh"
+    path.write_text(gmsh22(tags, [[1, 2, 4, 5]]))
+    one_line_error(capsys, expected, "recombine", path, "-o", tmp_path / "out.vtu")
+    assert not (tmp_path / "out.vtu").exists()
+
+
+def test_gmsh_section_not_closed(tmp_path: Path, capsys) -> None:
+    text = gmsh22([1, 2, 3, 4, 5], [[1, 2, 3, 4]])
+    path = tmp_path / "open.msh"
+    path.write_text(text.replace("$EndElements\n", ""))
+    one_line_error(capsys, "section $Elements is not closed", "recombine", path, "-o", tmp_path / "out.vtu")
+    # With Windows line ends every section is still seen as closed.
+    path.write_text(text.replace("\n", "\r\n"))
+    assert run("recombine", path, "-o", tmp_path / "crlf.vtu", "-q") == 0
+
+
 def test_meshio_internals_do_not_leak(tmp_path: Path, capsys) -> None:
     path = tmp_path / "nothing.msh"
     path.write_text("$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n0\n$EndNodes\n$Elements\n0\n$EndElements\n")

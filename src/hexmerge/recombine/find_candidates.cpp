@@ -208,24 +208,39 @@ bool assemble_cell(const TetMesh& mesh, const TetTopology& topology, CellType ty
 
 namespace {
 
-// The candidates of every chunk, in the order of their roots' input ids (a stable counting sort
-// on the root, each group's smallest tet), each root's own in the order they were found. The
-// permutation is applied in place: no second copy of the candidates.
-std::vector<Candidate> in_root_order(std::vector<std::vector<Candidate>>& per_chunk, index_t nt) {
-  std::vector<Candidate> all = concatenate(per_chunk);
-  std::vector<std::size_t> destination(all.size());
-  {
-    std::vector<std::size_t> start(static_cast<std::size_t>(nt) + 1, 0);
-    for (const Candidate& c : all) ++start[c.tets[0] + 1];
-    for (index_t t = 0; t < nt; ++t) start[t + 1] += start[t];
-    for (std::size_t i = 0; i < all.size(); ++i) destination[i] = start[all[i].tets[0]]++;
-  }
-  for (std::size_t i = 0; i < all.size(); ++i) {
-    while (destination[i] != i) {
-      const std::size_t j = destination[i];
-      std::swap(all[i], all[j]);
-      std::swap(destination[i], destination[j]);
+// A match as the search keeps it until the end: a Candidate with room for the search's groups
+// only (kMaxNodes tets, not MAX_CANDIDATE_TETS): 64 bytes instead of 104, for the per-chunk
+// lists that are held together with the result while it is made.
+struct Match {
+  std::array<index_t, 8> vertices;
+  std::array<index_t, kMaxNodes> tets;  // sorted; first nb_tets used
+  float quality;
+  CellType type;
+  std::uint8_t graph;
+  std::uint8_t nb_tets;
+};
+
+// The matches of every chunk as candidates, in the order of their roots' input ids (a stable
+// counting sort on the root, each group's smallest tet), each root's own in the order they were
+// found. Each chunk's list is freed once its matches are placed.
+std::vector<Candidate> in_root_order(std::vector<std::vector<Match>>& per_chunk, index_t nt) {
+  std::vector<std::size_t> start(static_cast<std::size_t>(nt) + 1, 0);
+  for (const auto& chunk : per_chunk)
+    for (const Match& m : chunk) ++start[m.tets[0] + 1];
+  for (index_t t = 0; t < nt; ++t) start[t + 1] += start[t];
+  std::vector<Candidate> all(start[nt]);
+  for (auto& chunk : per_chunk) {
+    for (const Match& m : chunk) {
+      Candidate& c = all[start[m.tets[0]]++];
+      c.vertices = m.vertices;
+      c.tets.fill(NO_CELL);
+      std::copy_n(m.tets.begin(), m.nb_tets, c.tets.begin());
+      c.type = m.type;
+      c.graph = m.graph;
+      c.nb_tets = m.nb_tets;
+      c.quality = m.quality;
     }
+    std::vector<Match>().swap(chunk);
   }
   return all;
 }
@@ -293,7 +308,7 @@ class Matcher {
   /// @param[in] input_id  the input's id of each tet of `mesh`
   Matcher(const TetMesh& mesh, const TetTopology& topology, const QuadPairs& quad_pairs,
           const std::vector<index_t>& input_id, const AcceptanceCriteria& criteria,
-          const SearchTree& tree, std::vector<Candidate>& out)
+          const SearchTree& tree, std::vector<Match>& out)
       : mesh_(mesh),
         topology_(topology),
         pairs_(quad_pairs),
@@ -301,6 +316,7 @@ class Matcher {
         criteria_(criteria),
         tree_(tree),
         found_(tree.nb_programs()),
+        found_quads_(tree.nb_programs()),
         out_(out) {}
 
   void run_from(index_t root) {
@@ -323,12 +339,13 @@ class Matcher {
     // Program by program, as if each ran alone in turn: the same group may be matched again
     // through an automorphism that fixes the root, and the first match is kept.
     const std::size_t first_of_root = out_.size();
-    for (std::vector<Candidate>& found : found_) {
-      for (const Candidate& c : found) {
+    for (std::vector<Match>& found : found_) {
+      for (const Match& c : found) {
         if (!seen(c, first_of_root)) out_.push_back(c);
       }
       found.clear();
     }
+    for (std::vector<QuadSet>& quads : found_quads_) quads.clear();
   }
 
  private:
@@ -346,7 +363,7 @@ class Matcher {
 
   // The programs ending at `n` have a match; its children continue the others.
   void descend(const SearchTree::Node& n) {
-    for (const int p : n.programs) finish(search_programs()[p], found_[p]);
+    for (const int p : n.programs) finish(search_programs()[p], found_[p], found_quads_[p]);
     for (const int c : n.children) step(tree_.node(c));
   }
 
@@ -434,9 +451,26 @@ class Matcher {
   // cell is assembled.)
   bool internal(index_t neighbor) const { return neighbor != NO_CELL && in_match(neighbor); }
 
-  void finish(const SearchProgram& program, std::vector<Candidate>& found) {
+  // The quad pairs of a match, each as (smaller face code, larger) in one number, sorted; the
+  // unused slots hold the largest number.
+  using QuadSet = std::array<std::uint64_t, kMaxQuads>;
+  QuadSet quad_set() const {
+    QuadSet set;
+    set.fill(~std::uint64_t{0});
+    for (int q = 0; q < nb_quads_; ++q) {
+      const std::uint64_t a = quad_[q][0], b = quad_[q][1];
+      std::uint64_t key = a < b ? a << 32 | b : b << 32 | a;
+      int j = q;  // insertion sort: at most six
+      for (; j > 0 && set[j - 1] > key; --j) set[j] = set[j - 1];
+      set[j] = key;
+    }
+    return set;
+  }
+
+  void finish(const SearchProgram& program, std::vector<Match>& found,
+              std::vector<QuadSet>& found_quads) {
     if (nb_vertices_ != descriptor(program.type).nb_vertices) return;
-    Candidate c;
+    Match c;
     c.type = program.type;
     c.graph = static_cast<std::uint8_t>(program.graph);
     c.nb_tets = static_cast<std::uint8_t>(program.nb_nodes);
@@ -454,6 +488,13 @@ class Matcher {
       c.tets[j] = id;
       group[j] = node_[i];
     }
+    // The same tets with the same quads, matched again through an automorphism that fixes the
+    // root, make the same cell as a match kept before: run_from would drop it as seen, so it is
+    // dropped before its assembly.
+    const QuadSet quads = quad_set();
+    for (std::size_t i = 0; i < found.size(); ++i) {
+      if (found_quads[i] == quads && found[i].tets == c.tets) return;
+    }
     if (!assemble_cell(mesh_, topology_, program.type, group.data(), nb_assigned_, quad_.data(),
                        nb_quads_, c.vertices)) {
       return;
@@ -462,10 +503,11 @@ class Matcher {
     if (!good_enough(criteria_, mesh_, c.type, sj, group.data(), nb_assigned_)) return;
     c.quality = static_cast<float>(sj);
     found.push_back(c);
+    found_quads.push_back(quads);
   }
 
   // True when a candidate kept from this root (from out_[first_of_root]) is the same cell.
-  bool seen(const Candidate& c, std::size_t first_of_root) const {
+  bool seen(const Match& c, std::size_t first_of_root) const {
     for (std::size_t i = first_of_root; i < out_.size(); ++i) {
       if (out_[i].type == c.type && out_[i].tets == c.tets &&
           sorted(out_[i].vertices) == sorted(c.vertices) && same_cell(out_[i], c)) {
@@ -476,7 +518,7 @@ class Matcher {
   }
 
   // Two cells on the same tets and vertices are the same cell when they have the same faces.
-  static bool same_cell(const Candidate& a, const Candidate& b) {
+  static bool same_cell(const Match& a, const Match& b) {
     const CellDescriptor& d = descriptor(a.type);
     for (int f = 0; f < d.nb_faces; ++f) {
       std::array<index_t, 4> fa{NO_VERTEX, NO_VERTEX, NO_VERTEX, NO_VERTEX};
@@ -499,8 +541,9 @@ class Matcher {
   const std::vector<index_t>& input_id_;
   const AcceptanceCriteria& criteria_;
   const SearchTree& tree_;
-  std::vector<std::vector<Candidate>> found_;  // this root's matches, per program
-  std::vector<Candidate>& out_;
+  std::vector<std::vector<Match>> found_;          // this root's matches, per program
+  std::vector<std::vector<QuadSet>> found_quads_;  // and their quad_set()s
+  std::vector<Match>& out_;
   index_t root_ = 0;
   index_t root_input_id_ = 0;
   int nb_assigned_ = 0;
@@ -529,13 +572,15 @@ std::vector<Candidate> find_candidates(const TetMesh& mesh, const TetTopology& t
   // Small chunks: the threads finish together (the search time per root varies a lot).
   constexpr index_t kChunk = 2048;
   const SearchTree tree(criteria.types);
-  std::vector<std::vector<Candidate>> per_chunk((nt + kChunk - 1) / kChunk);
+  std::vector<std::vector<Match>> per_chunk((nt + kChunk - 1) / kChunk);
   parallel_chunks(
       nt, kChunk, std::max(1, threads),
       [&](index_t chunk, index_t begin, index_t end) {
         Matcher matcher(local, local_topology, quad_pairs, input_id, criteria, tree,
                         per_chunk[chunk]);
         for (index_t t = begin; t < end; ++t) matcher.run_from(t);
+        // Without the growth slack: the lists are held until the last chunk is searched.
+        per_chunk[chunk].shrink_to_fit();
       },
       [&](double fraction) { return !progress || progress("candidates", fraction); });
   return in_root_order(per_chunk, nt);

@@ -4,6 +4,7 @@
 #include <array>
 #include <cstdint>
 
+#include "hexmerge/core/error.h"
 #include "hexmerge/core/parallel.h"
 #include "hexmerge/mesh/cell_type.h"
 #include "hexmerge/mesh/spatial_order.h"
@@ -17,10 +18,9 @@ bool holds(const Candidate& c, index_t t) {
   return std::binary_search(c.tets.begin(), c.tets.begin() + c.nb_tets, t);
 }
 
-// A quad face of a candidate: the tets across its triangles, and its key's group of sides.
+// A quad face of a candidate: the tets across its triangles.
 struct Quad {
   std::array<index_t, 2> behind{NO_CELL, NO_CELL};
-  index_t group = 0;           // index into group_start
   std::uint8_t nb_behind = 0;  // triangles found (2 for a proper quad)
   bool open = false;           // some triangle on the boundary
   bool inner = false;          // some triangle with a tet behind
@@ -36,9 +36,8 @@ struct Side {
   bool exact = true;
 };
 
-// The quad faces of a candidate, in face order: their keys, quads and sides.
+// The quad faces of a candidate, in face order: their quads and sides.
 struct CandidateQuads {
-  std::array<QuadKey, 6> key;
   std::array<Quad, 6> quad;
   std::array<Side, 6> side;
   int count = 0;
@@ -52,7 +51,6 @@ CandidateQuads quads_of(const TetMesh& mesh, const TetTopology& topology, const 
   for (int f = 0; f < d.nb_faces; ++f) {
     if (d.face_size[f] != 4) continue;
     for (int i = 0; i < 4; ++i) quads_at[d.face[f][i]] |= static_cast<std::uint8_t>(1 << out.count);
-    out.key[out.count] = face_key(c, f);
     out.side[out.count].candidate = ci;
     ++out.count;
   }
@@ -101,8 +99,8 @@ CandidateQuads quads_of(const TetMesh& mesh, const TetTopology& topology, const 
 }  // namespace
 
 std::vector<Candidate> prune_unclosable(const TetMesh& mesh, const TetTopology& topology,
-                                        const std::vector<Candidate>& candidates,
-                                        std::size_t& removed, int threads) {
+                                        std::vector<Candidate> candidates, std::size_t& removed,
+                                        int threads) {
   const index_t n = static_cast<index_t>(candidates.size());
   constexpr index_t kChunk = 4096;
   auto go_on = [](double) { return true; };
@@ -130,14 +128,87 @@ std::vector<Candidate> prune_unclosable(const TetMesh& mesh, const TetTopology& 
     for (std::size_t i = 0; i < order.size(); ++i) start[i + 1] += start[i];
     for (index_t ci = 0; ci < n; ++ci) by_local[start[rank[candidates[ci].tets[0]]]++] = ci;
   }
-  // Every quad face of every candidate (first: per local id): its key, quad and side.
-  std::vector<std::size_t> first(static_cast<std::size_t>(n) + 1, 0);
-  for (index_t l = 0; l < n; ++l)
-    first[l + 1] = first[l] + descriptor(candidates[by_local[l]].type).nb_quad_faces;
-  const std::size_t nb_quads = first[n];
-  std::vector<Quad> quads(nb_quads);
-  std::vector<Side> own(nb_quads);
-  std::vector<QuadKey> keys(nb_quads);
+  // Quad face k of the candidate of local id l: first[l] <= k < first[l + 1].
+  std::vector<index_t> first(static_cast<std::size_t>(n) + 1, 0);
+  std::size_t total = 0;
+  for (index_t l = 0; l < n; ++l) {
+    total += descriptor(candidates[by_local[l]].type).nb_quad_faces;
+    if (total >= NO_INDEX) {
+      throw ResourceError("prune_unclosable: more than 2^32 - 2 quad faces of candidates");
+    }
+    first[l + 1] = static_cast<index_t>(total);
+  }
+  const index_t nb_quads = first[n];
+  auto for_each_key = [&](index_t l, auto&& fn) {
+    const Candidate& c = candidates[by_local[l]];
+    const CellDescriptor& d = descriptor(c.type);
+    index_t k = first[l];
+    for (int f = 0; f < d.nb_faces; ++f)
+      if (d.face_size[f] == 4) fn(k++, face_key(c, f));
+  };
+
+  // The quads in the order of their keys (a counting sort on the rank of the smallest vertex,
+  // then each bucket sorted by the other three and the quad), the quads of one key making a
+  // group: at[k] is quad k's place in that order, starts[j] whether place j begins a group.
+  // The keys are not held (this step's tables are the engine's peak of memory on lattice
+  // meshes): counted by their smallest vertex, then made where they are placed.
+  std::vector<index_t> at(nb_quads);
+  std::vector<char> starts(nb_quads);
+  {
+    struct Entry {
+      std::array<index_t, 3> rest;
+      index_t quad;
+      bool operator<(const Entry& o) const {
+        return rest != o.rest ? rest < o.rest : quad < o.quad;
+      }
+    };
+    std::vector<index_t> bucket(static_cast<std::size_t>(nv) + 1, 0);
+    for (index_t l = 0; l < n; ++l) {  // counted by the smallest vertex, the key's first
+      const Candidate& c = candidates[by_local[l]];
+      const CellDescriptor& d = descriptor(c.type);
+      for (int f = 0; f < d.nb_faces; ++f) {
+        if (d.face_size[f] != 4) continue;
+        index_t low = c.vertices[d.face[f][0]];
+        for (int i = 1; i < 4; ++i) low = std::min(low, c.vertices[d.face[f][i]]);
+        ++bucket[vertex_rank[low] + 1];
+      }
+    }
+    for (index_t v = 0; v < nv; ++v) bucket[v + 1] += bucket[v];
+    std::vector<Entry> entries(nb_quads);
+    {
+      std::vector<index_t> fill(bucket.begin(), bucket.end() - 1);
+      for (index_t l = 0; l < n; ++l) {
+        for_each_key(l, [&](index_t k, const QuadKey& key) {
+          entries[fill[vertex_rank[key[0]]]++] = {{key[1], key[2], key[3]}, k};
+        });
+      }
+    }
+    parallel_chunks(
+        nv, kChunk, threads,
+        [&](index_t, index_t begin, index_t end) {
+          for (index_t v = begin; v < end; ++v) {
+            std::sort(entries.begin() + bucket[v], entries.begin() + bucket[v + 1]);
+            for (index_t j = bucket[v]; j < bucket[v + 1]; ++j) {
+              starts[j] = j == bucket[v] || entries[j].rest != entries[j - 1].rest;
+              at[entries[j].quad] = j;
+            }
+          }
+        },
+        go_on);
+  }
+
+  // Every quad face of every candidate, at its place: its tets and the candidate's, and flags.
+  struct QuadFace {
+    std::array<index_t, 2> behind;  // the tets across its triangles (Quad)
+    std::array<index_t, 2> front;   // the candidate's tets on them (Side)
+    index_t candidate;              // local id
+    std::uint8_t nb_behind;         // triangles found, at most 2 counted
+    bool open;
+    bool inner;
+    bool exact;
+  };
+  static_assert(sizeof(QuadFace) == 24, "the record's size is this step's peak of memory");
+  std::vector<QuadFace> faces(nb_quads);
   parallel_chunks(
       n, kChunk, threads,
       [&](index_t, index_t begin, index_t end) {
@@ -148,76 +219,34 @@ std::vector<Candidate> prune_unclosable(const TetMesh& mesh, const TetTopology& 
             __builtin_prefetch(ahead + 64);
           }
           const CandidateQuads cq = quads_of(mesh, topology, candidates[by_local[l]], l);
-          std::copy_n(cq.key.begin(), cq.count, keys.begin() + first[l]);
-          std::copy_n(cq.quad.begin(), cq.count, quads.begin() + first[l]);
-          std::copy_n(cq.side.begin(), cq.count, own.begin() + first[l]);
-        }
-      },
-      go_on);
-
-  // The quads grouped by key: a counting sort on the rank of the smallest vertex, then each
-  // bucket sorted by the other three (and the quad).
-  struct Entry {
-    std::array<index_t, 3> rest;
-    index_t quad;
-    bool operator<(const Entry& o) const { return rest != o.rest ? rest < o.rest : quad < o.quad; }
-  };
-  std::vector<std::size_t> bucket(static_cast<std::size_t>(nv) + 1, 0);
-  for (const QuadKey& key : keys) ++bucket[vertex_rank[key[0]] + 1];
-  for (index_t v = 0; v < nv; ++v) bucket[v + 1] += bucket[v];
-  std::vector<Entry> entries(nb_quads);
-  {
-    std::vector<std::size_t> fill(bucket.begin(), bucket.end() - 1);
-    for (std::size_t k = 0; k < nb_quads; ++k)
-      entries[fill[vertex_rank[keys[k][0]]]++] = {{keys[k][1], keys[k][2], keys[k][3]},
-                                                  static_cast<index_t>(k)};
-  }
-  std::vector<QuadKey>().swap(keys);
-  // Groups numbered in key order: each chunk of buckets sorts and counts its own, then numbers
-  // them from where the chunks before it end. sides[group_start[g] .. group_start[g + 1]): the
-  // candidates with the quad of group g, one side each (a cell has no two faces alike).
-  auto new_group = [&](index_t v, std::size_t j) {
-    return j == bucket[v] || entries[j].rest != entries[j - 1].rest;
-  };
-  std::vector<index_t> chunk_groups((nv + kChunk - 1) / kChunk + 1, 0);
-  parallel_chunks(
-      nv, kChunk, threads,
-      [&](index_t chunk, index_t begin, index_t end) {
-        for (index_t v = begin; v < end; ++v) {
-          std::sort(entries.begin() + static_cast<std::ptrdiff_t>(bucket[v]),
-                    entries.begin() + static_cast<std::ptrdiff_t>(bucket[v + 1]));
-          for (std::size_t j = bucket[v]; j < bucket[v + 1]; ++j)
-            chunk_groups[chunk + 1] += new_group(v, j);
-        }
-      },
-      go_on);
-  for (std::size_t c = 0; c + 1 < chunk_groups.size(); ++c) chunk_groups[c + 1] += chunk_groups[c];
-  std::vector<index_t> group_start(chunk_groups.back() + 1);
-  std::vector<Side> sides(nb_quads);
-  std::vector<index_t> side_quad(nb_quads);  // the quad of each side
-  parallel_chunks(
-      nv, kChunk, threads,
-      [&](index_t chunk, index_t begin, index_t end) {
-        index_t g = chunk_groups[chunk];
-        for (index_t v = begin; v < end; ++v) {
-          for (std::size_t j = bucket[v]; j < bucket[v + 1]; ++j) {
-            if (new_group(v, j)) group_start[g++] = static_cast<index_t>(j);
-            quads[entries[j].quad].group = g - 1;
-            sides[j] = own[entries[j].quad];
-            side_quad[j] = entries[j].quad;
+          for (int i = 0; i < cq.count; ++i) {
+            const index_t j = at[first[l] + i];
+            const Quad& q = cq.quad[i];
+            const Side& s = cq.side[i];
+            QuadFace& face = faces[j];
+            face.behind = q.behind;
+            face.front = s.front;
+            face.candidate = s.candidate;
+            face.nb_behind = std::min<std::uint8_t>(q.nb_behind, 2);
+            face.open = q.open;
+            face.inner = q.inner;
+            face.exact = s.exact;
           }
         }
       },
       go_on);
-  group_start.back() = static_cast<index_t>(nb_quads);
-  std::vector<Entry>().swap(entries);
-  std::vector<Side>().swap(own);
-  std::vector<std::size_t>().swap(bucket);
+  // The places [begin, end) of the group of the quad at place j.
+  auto group_of = [&](index_t j) {
+    index_t begin = j, end = j + 1;
+    while (!starts[begin]) --begin;
+    while (end < nb_quads && !starts[end]) ++end;
+    return std::make_pair(begin, end);
+  };
 
   std::vector<char> viable(n, 1);  // by local id
   // Whether the candidate of `s` holds the tets behind q: it is on the quad's other side.
-  auto across = [&](const Quad& q, const Side& s) {
-    for (int i = 0; i < std::min<int>(q.nb_behind, 2); ++i) {
+  auto across = [&](const QuadFace& q, const QuadFace& s) {
+    for (int i = 0; i < q.nb_behind; ++i) {
       const index_t b = q.behind[i];
       if (s.exact ? b != s.front[0] && b != s.front[1]
                   : !holds(candidates[by_local[s.candidate]], b))
@@ -225,17 +254,20 @@ std::vector<Candidate> prune_unclosable(const TetMesh& mesh, const TetTopology& 
     }
     return true;
   };
-  auto closed = [&](std::size_t l, const Quad& q) {
+  // Whether some other viable candidate closes the quad at place j, of candidate l.
+  auto closed = [&](index_t l, index_t j) {
+    const QuadFace& q = faces[j];
     if (q.open) return !q.inner;  // on the boundary, unless half of it is inside
-    for (index_t j = group_start[q.group]; j < group_start[q.group + 1]; ++j) {
-      const Side& s = sides[j];
+    const auto [begin, end] = group_of(j);
+    for (index_t i = begin; i < end; ++i) {
+      const QuadFace& s = faces[i];
       if (s.candidate != l && viable[s.candidate] && across(q, s)) return true;
     }
     return false;
   };
   auto fails = [&](index_t l) {
-    for (std::size_t k = first[l]; k < first[l + 1]; ++k)
-      if (!closed(l, quads[k])) return true;
+    for (index_t k = first[l]; k < first[l + 1]; ++k)
+      if (!closed(l, at[k])) return true;
     return false;
   };
   // The first look at every candidate, against all of them, in parallel. Then each candidate
@@ -258,27 +290,30 @@ std::vector<Candidate> prune_unclosable(const TetMesh& mesh, const TetTopology& 
   while (!to_follow.empty()) {
     const index_t l = to_follow.back();
     to_follow.pop_back();
-    for (std::size_t k = first[l]; k < first[l + 1]; ++k) {
-      const index_t begin = group_start[quads[k].group], end = group_start[quads[k].group + 1];
-      const Side* mine = &sides[begin];
-      while (mine->candidate != l) ++mine;
+    for (index_t k = first[l]; k < first[l + 1]; ++k) {
+      const QuadFace& mine = faces[at[k]];
+      const auto [begin, end] = group_of(at[k]);
       for (index_t j = begin; j < end; ++j) {
-        const index_t p = sides[j].candidate;
-        const Quad& q = quads[side_quad[j]];
-        if (!viable[p] || q.open || !across(q, *mine) || closed(p, q)) continue;
+        const index_t p = faces[j].candidate;
+        const QuadFace& q = faces[j];
+        if (!viable[p] || q.open || !across(q, mine) || closed(p, j)) continue;
         viable[p] = 0;
         to_follow.push_back(p);
       }
     }
   }
+  std::vector<QuadFace>().swap(faces);
+  std::vector<index_t>().swap(at);
+  std::vector<char>().swap(starts);
   std::vector<char> keep(n, 0);
   for (index_t l = 0; l < n; ++l) keep[by_local[l]] = viable[l];
-  std::vector<Candidate> kept;
-  kept.reserve(static_cast<std::size_t>(std::count(keep.begin(), keep.end(), 1)));
+  // The kept ones moved up in place: no second array of candidates.
+  std::size_t kept = 0;
   for (index_t ci = 0; ci < n; ++ci)
-    if (keep[ci]) kept.push_back(candidates[ci]);
-  removed = n - kept.size();
-  return kept;
+    if (keep[ci]) candidates[kept++] = candidates[ci];
+  removed = n - kept;
+  candidates.resize(kept);
+  return candidates;
 }
 
 }  // namespace hexmerge

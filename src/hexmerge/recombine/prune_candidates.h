@@ -23,9 +23,11 @@ namespace hexmerge {
 /// only (two closers may still need the same tet), so the selection keeps its own checks; what it
 /// saves the selection is choosing elements, like hexes that chain into a structured region from
 /// an unstructured one, that can only end up released.
+/// The candidates are taken by value and the kept ones returned in their storage (pass them with
+/// std::move when the caller no longer needs them: no second array is made).
 /// @param[in] threads  worker threads (>= 1); the result does not depend on them
 std::vector<Candidate> prune_unclosable(const TetMesh& mesh, const TetTopology& topology,
-                                        const std::vector<Candidate>& candidates,
-                                        std::size_t& removed, int threads = 1);
+                                        std::vector<Candidate> candidates, std::size_t& removed,
+                                        int threads = 1);
 
 }  // namespace hexmerge

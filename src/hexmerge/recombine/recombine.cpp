@@ -216,10 +216,9 @@ MixedMesh recombine(const TetMesh& input, const RecombineParameters& parameters,
   const bool post_merge = !parameters.same_nodes && conforming;
   std::vector<Candidate> found;  // before the pruning, for the post-merge stage
   if (conforming) {
-    std::vector<Candidate> pruned =
-        prune_unclosable(mesh, topology, candidates, report.candidates_unclosable, threads);
-    if (post_merge) found = std::move(candidates);
-    candidates = std::move(pruned);
+    if (post_merge) found = candidates;
+    candidates = prune_unclosable(mesh, topology, std::move(candidates),
+                                  report.candidates_unclosable, threads);
     timer.lap("pruning");
   }
 
