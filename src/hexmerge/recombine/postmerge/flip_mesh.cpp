@@ -56,7 +56,8 @@ index_t FlipMesh::opposite(index_t t, index_t a, index_t b, index_t c) const {
 }
 
 bool FlipMesh::replace(const std::vector<index_t>& old_tets,
-                       const std::vector<std::array<index_t, 4>>& new_tets, double min_quality) {
+                       const std::vector<std::array<index_t, 4>>& new_tets, double min_quality,
+                       std::uint8_t kind) {
   const std::int32_t region = regions_[old_tets[0]];
   double old_volume = 0.0;
   for (index_t t : old_tets) {
@@ -78,7 +79,6 @@ bool FlipMesh::replace(const std::vector<index_t>& old_tets,
     alive_[t] = 0;
     journal_.push_back({t, false, 0});
   }
-  const std::uint8_t kind = old_tets.size() == 2 ? 23 : (old_tets.size() == 3 ? 32 : 44);
   for (const auto& q : new_tets) {
     const index_t t = nb_slots();
     tets_.insert(tets_.end(), q.begin(), q.end());
@@ -92,6 +92,7 @@ bool FlipMesh::replace(const std::vector<index_t>& old_tets,
   if (kind == 23) ++counts_.flips_23;
   if (kind == 32) ++counts_.flips_32;
   if (kind == 44) ++counts_.flips_44;
+  if (kind == kContraction) ++counts_.contractions;
   return true;
 }
 
@@ -115,7 +116,7 @@ bool FlipMesh::flip_23(index_t t0, index_t t1, double min_quality) {
   const index_t a = face[0];
   index_t b = face[1], c = face[2];
   if (tet_volume(point(a), point(b), point(c), point(p)) < 0.0) std::swap(b, c);
-  return replace({t0, t1}, {{{a, b, q, p}}, {{b, c, q, p}}, {{c, a, q, p}}}, min_quality);
+  return replace({t0, t1}, {{{a, b, q, p}}, {{b, c, q, p}}, {{c, a, q, p}}}, min_quality, 23);
 }
 
 bool FlipMesh::remove_edge(index_t u, index_t v, int diagonal, double min_quality) {
@@ -168,7 +169,40 @@ bool FlipMesh::remove_edge(index_t u, index_t v, int diagonal, double min_qualit
     const index_t r0 = ring[s], r1 = ring[s + 1], r2 = ring[s + 2], r3 = ring[(s + 3) % 4];
     made = {{{r0, r1, r2, v}}, {{r0, r2, r3, v}}, {{r0, r2, r1, u}}, {{r0, r3, r2, u}}};
   }
-  return replace(around, made, min_quality);
+  return replace(around, made, min_quality, ring.size() == 3 ? 32 : 44);
+}
+
+bool FlipMesh::contract(index_t from, index_t onto, double min_quality) {
+  std::vector<index_t> star;
+  tets_with_edge(from, from, star);
+  bool joined = false;
+  for (index_t t : star) {
+    const index_t* q = tet(t);
+    joined = joined || holds(q, onto);
+    // Every face at `from` has a tet on its other side: `from` is inside the domain.
+    for (int f = 0; f < 4; ++f) {
+      if (q[f] == from) continue;
+      std::array<index_t, 3> face{};
+      int n = 0;
+      for (int i = 0; i < 4; ++i) {
+        if (i != f) face[n++] = q[i];
+      }
+      if (tet_with_face(face[0], face[1], face[2], t) == NO_CELL) return false;
+    }
+  }
+  if (!joined) return false;
+  // The star of an inner node is a ball; the cone from `onto` (on its boundary) over the
+  // boundary triangles away from `onto` tiles it exactly when every cone tet is positive
+  // (the winding number argument), which replace() checks with the quality floor.
+  std::vector<std::array<index_t, 4>> made;
+  for (index_t t : star) {
+    const index_t* q = tet(t);
+    if (holds(q, onto)) continue;
+    std::array<index_t, 4> cone{{q[0], q[1], q[2], q[3]}};
+    std::replace(cone.begin(), cone.end(), from, onto);
+    made.push_back(cone);
+  }
+  return replace(star, made, min_quality, kContraction);
 }
 
 void FlipMesh::undo(std::size_t mark) {
@@ -179,6 +213,7 @@ void FlipMesh::undo(std::size_t mark) {
     if (e.kind == 23) --counts_.flips_23;
     if (e.kind == 32) --counts_.flips_32;
     if (e.kind == 44) --counts_.flips_44;
+    if (e.kind == kContraction) --counts_.contractions;
     if (e.created) {
       // Created last, so it is the last slot: drop it (its incidence entries go stale).
       HEXMERGE_ASSERT(e.tet + 1 == nb_slots(), "journal out of order");

@@ -1,4 +1,5 @@
-// FlipMesh: 2-3, 3-2 and 4-4 flips keep the union of the tets they replace, and undo restores.
+// FlipMesh: 2-3, 3-2 and 4-4 flips and contractions keep the union of the tets they replace, and
+// undo restores.
 #include "hexmerge/recombine/postmerge/flip_mesh.h"
 
 #include <gtest/gtest.h>
@@ -9,6 +10,7 @@
 #include <vector>
 
 #include "fixtures.h"
+#include "hexmerge/check/validate_tet_mesh.h"
 #include "hexmerge/geometry/quality.h"
 
 namespace hexmerge {
@@ -190,6 +192,89 @@ TEST(flip_mesh, undo_restores_the_tets_and_the_counts_after_several_flips) {
   EXPECT_EQ(back.tets, mesh.tets);
   m.tets_with_edge(4, 5, around);
   EXPECT_EQ(around.size(), 4u);
+}
+
+// The unit cube's corners (nodes 0-7) and two inner nodes 8 and 9 near its centre, Delaunay
+// tetrahedralised: the nearest pair of points, 8-9 is an edge.
+TetMesh cube_with_two_inner_nodes() {
+  std::vector<Point> points;
+  for (int b = 0; b < 8; ++b) points.push_back({double(b & 1), double(b >> 1 & 1), double(b >> 2)});
+  points.push_back({0.45, 0.5, 0.52});
+  points.push_back({0.6, 0.53, 0.47});
+  return test::tetgen_mesh(points);
+}
+
+bool uses(const FlipMesh& m, index_t v) {
+  for (index_t t : alive_tets(m)) {
+    if (std::count(m.tet(t), m.tet(t) + 4, v)) return true;
+  }
+  return false;
+}
+
+TEST(flip_mesh, a_contraction_takes_an_inner_node_out_and_keeps_the_union) {
+  const TetMesh mesh = cube_with_two_inner_nodes();
+  if (mesh.nb_tets() == 0) GTEST_SKIP() << "no tetgen";
+  FlipMesh m(mesh);
+  const auto boundary = boundary_triangles(m);
+  bool positive = false;
+  const double vol = volume(m, positive);
+  ASSERT_TRUE(positive);
+  std::vector<index_t> joined;
+  m.tets_with_edge(8, 9, joined);
+  ASSERT_FALSE(joined.empty());
+  const std::size_t before = alive_tets(m).size();
+  const std::size_t start = m.mark();
+  ASSERT_TRUE(m.contract(9, 8, 0.0));
+  EXPECT_EQ(m.counts().contractions, 1u);
+  EXPECT_FALSE(uses(m, 9));
+  EXPECT_TRUE(uses(m, 8));
+  EXPECT_EQ(alive_tets(m).size(), before - joined.size());  // the tets around 8-9 are gone
+  expect_same_union(m, boundary, vol);
+  // The compact mesh keeps every point (node 9 unused) and passes the tet mesh checks.
+  const TetMesh out = m.compact();
+  EXPECT_EQ(out.points, mesh.points);
+  EXPECT_NO_THROW(validate_tet_mesh(out));
+  m.undo(start);
+  EXPECT_EQ(m.counts().contractions, 0u);
+  EXPECT_EQ(m.compact().tets, mesh.tets);
+}
+
+TEST(flip_mesh, a_contraction_refuses_boundary_nodes_locks_regions_and_the_floor) {
+  const TetMesh mesh = cube_with_two_inner_nodes();
+  if (mesh.nb_tets() == 0) GTEST_SKIP() << "no tetgen";
+  {
+    FlipMesh m(mesh);
+    // A corner is on the boundary: never contracted, whatever its neighbour.
+    std::vector<index_t> star;
+    m.tets_with_edge(0, 0, star);
+    for (int i = 0; i < 4; ++i) {
+      const index_t other = m.tet(star[0])[i];
+      if (other != 0) {
+        EXPECT_FALSE(m.contract(0, other, 0.0));
+      }
+    }
+    EXPECT_FALSE(m.contract(9, 9, 0.0));   // no edge
+    EXPECT_FALSE(m.contract(9, 8, 0.99));  // no cone tet is near regular
+    m.tets_with_edge(9, 9, star);
+    m.set_locked(star.back(), true);
+    EXPECT_FALSE(m.contract(9, 8, 0.0));
+    EXPECT_EQ(m.counts().contractions, 0u);
+    EXPECT_EQ(m.compact().tets, mesh.tets);
+  }
+  // One of node 9's tets in another region: an interface node stays.
+  TetMesh two = mesh;
+  two.regions.assign(two.nb_tets(), 1);
+  for (index_t t = 0; t < two.nb_tets(); ++t) {
+    if (std::count(two.tet(t), two.tet(t) + 4, 9)) {
+      two.regions[t] = 2;
+      break;
+    }
+  }
+  FlipMesh m(two);
+  EXPECT_FALSE(m.contract(9, 8, 0.0));
+  two.regions.assign(two.nb_tets(), 1);
+  FlipMesh same(two);
+  EXPECT_TRUE(same.contract(9, 8, 0.0));
 }
 
 }  // namespace
