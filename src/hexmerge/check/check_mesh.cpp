@@ -557,7 +557,17 @@ CheckReport check_at_scale(const MixedMesh& mesh, const TetMesh& input) {
   std::unique_ptr<SurfaceGrid> surface;
   std::vector<double> longest_edge;
   std::vector<char> on_output_boundary;
+  // Nodes next to a declared one in the input (its tets' corners): a face there may be new.
+  std::vector<char> near_changed(changed.size(), 0);
   if (with_changes) {
+    for (index_t t = 0; t < nt; ++t) {
+      const index_t* q = input.tet(t);
+      if (!(q[0] < nv_in && q[1] < nv_in && q[2] < nv_in && q[3] < nv_in)) continue;
+      if (changed[q[0]] || changed[q[1]] || changed[q[2]] || changed[q[3]]) {
+        for (int i = 0; i < 4; ++i) near_changed[q[i]] = 1;
+      }
+    }
+    for (index_t v = nv_in; v < changed.size(); ++v) near_changed[v] = changed[v];
     std::vector<std::array<index_t, 3>> triangles;
     for (index_t v = 0; v < nv_in; ++v) {
       for (std::size_t i = input_faces.bucket_begin(v); i < input_faces.bucket_end(v);) {
@@ -590,13 +600,16 @@ CheckReport check_at_scale(const MixedMesh& mesh, const TetMesh& input) {
     return Vec3::of(&mesh.points[3 * static_cast<std::size_t>(v)]);
   };
   // An unpaired triangle is on the domain boundary when it is one of the input's boundary
-  // triangles, or, when it has a declared node, when its corners and centroid lie on them.
+  // triangles, or, when it has a declared node or a node next to one, when its corners and
+  // centroid lie on them.
   auto on_domain_boundary = [&](const index_t* tri) {
     if (tri[0] < nv_in && tri[1] < nv_in && tri[2] < nv_in) {
       const auto range = input_faces.find(tri, 3);
       if (range.second - range.first == 1) return true;
     }
-    if (!with_changes || !(changed[tri[0]] || changed[tri[1]] || changed[tri[2]])) return false;
+    if (!with_changes || !(near_changed[tri[0]] || near_changed[tri[1]] || near_changed[tri[2]])) {
+      return false;
+    }
     const Vec3 a = output_point(tri[0]), b = output_point(tri[1]), c = output_point(tri[2]);
     const double tolerance =
         kBoundaryNodeTolerance * std::max({(b - a).norm(), (c - b).norm(), (a - c).norm()});

@@ -81,8 +81,9 @@ struct CheckReport {
 /// input's, and every region's volume with the input's. Nodes the mesh declares changed
 /// (MixedMesh::changed_nodes) may be moved, unused or added (ids past the input's); then every
 /// declared node on the output's boundary must lie on the input's boundary triangles
-/// (kBoundaryNodeTolerance), an unpaired face with a declared node counts as boundary when its
-/// corners and centroid do, and the total volume and every region's volume must be kept
+/// (kBoundaryNodeTolerance), an unpaired face with a declared node or a node next to one (in an
+/// input tet with a declared node) counts as boundary when its corners and centroid lie on the
+/// input's boundary triangles, and the total volume and every region's volume must be kept
 /// (kChangedVolumeTolerance). With no declared node the checks are exactly those above. Runs on
 /// the points scaled by normalising_exponent (exact), so the answers do not depend on the model's
 /// scale. The domain boundary is the input's boundary triangles: a boundary quad must be covered

@@ -197,14 +197,16 @@ MixedMesh unsourced(const TetMesh& tets, const std::vector<double>& points) {
   return mesh;
 }
 
-/// The unit cube as kuhn_grid(1) plus node 8 at its centre, coned from it over the cube's 12
-/// boundary triangles (12 tets).
-TetMesh coned_cube() {
+/// The unit cube (kuhn_grid(1)) coned from a node 8 at (0.5, 0.5, z) over its boundary
+/// triangles: all twelve (`bottom` true; node 8 inside), or all but the two of its face z = 0
+/// (node 8 at z = 0: that face is then four triangles at node 8).
+TetMesh coned_cube(double z, bool bottom) {
   const TetMesh cube = kuhn_grid(1);
   const TetTopology topology(cube);
   TetMesh coned;
   coned.points = cube.points;
-  coned.points.insert(coned.points.end(), {0.5, 0.5, 0.5});
+  coned.points.insert(coned.points.end(), {0.5, 0.5, z});
+  const auto at_bottom = [&](index_t v) { return cube.points[3 * v + 2] == 0.0; };
   for (index_t t = 0; t < cube.nb_tets(); ++t) {
     for (int f = 0; f < 4; ++f) {
       if (!topology.on_boundary(t, f)) continue;
@@ -213,6 +215,7 @@ TetMesh coned_cube() {
       for (int i = 0; i < 4; ++i) {
         if (i != f) tri[n++] = cube.tet(t)[i];
       }
+      if (!bottom && at_bottom(tri[0]) && at_bottom(tri[1]) && at_bottom(tri[2])) continue;
       add_tet(coned, tri[0], tri[1], tri[2], 8);
     }
   }
@@ -270,7 +273,7 @@ TEST(check_mesh, a_declared_boundary_node_must_stay_on_the_input_boundary_surfac
 }
 
 TEST(check_mesh, accepts_a_declared_removed_node_and_a_declared_added_node) {
-  const TetMesh coned = coned_cube();
+  const TetMesh coned = coned_cube(0.5, true);
   const TetMesh cube = kuhn_grid(1);
   // Removed: the coned cube's centre contracted away, the cube's own 6 tets left.
   MixedMesh mesh = unsourced(cube, coned.points);
@@ -292,30 +295,10 @@ TEST(check_mesh, accepts_a_declared_removed_node_and_a_declared_added_node) {
 }
 
 TEST(check_mesh, new_boundary_triangles_at_an_added_node_must_lie_on_the_input_boundary) {
-  // The unit cube coned from an added node 8 at the centre of its face z = 0 over the other five
-  // faces' triangles: face z = 0 is now four triangles at node 8, none of them the input's.
+  // Node 8 added at the centre of the cube's face z = 0: face z = 0 is four triangles at node 8,
+  // none of them the input's.
   const TetMesh cube = kuhn_grid(1);
-  const TetTopology topology(cube);
-  const auto coned_from = [&](double z) {
-    TetMesh coned;
-    coned.points = cube.points;
-    coned.points.insert(coned.points.end(), {0.5, 0.5, z});
-    for (index_t t = 0; t < cube.nb_tets(); ++t) {
-      for (int f = 0; f < 4; ++f) {
-        if (!topology.on_boundary(t, f)) continue;
-        std::array<index_t, 3> tri{};
-        int n = 0;
-        for (int i = 0; i < 4; ++i) {
-          if (i != f) tri[n++] = cube.tet(t)[i];
-        }
-        const auto at_bottom = [&](index_t v) { return cube.points[3 * v + 2] == 0.0; };
-        if (at_bottom(tri[0]) && at_bottom(tri[1]) && at_bottom(tri[2])) continue;
-        add_tet(coned, tri[0], tri[1], tri[2], 8);
-      }
-    }
-    return coned;
-  };
-  TetMesh on_face = coned_from(0.0);
+  TetMesh on_face = coned_cube(0.0, false);
   MixedMesh mesh = unsourced(on_face, on_face.points);
   mesh.changed_nodes = {8};
   CheckReport r = check_mesh(mesh, cube);
@@ -326,7 +309,7 @@ TEST(check_mesh, new_boundary_triangles_at_an_added_node_must_lie_on_the_input_b
   EXPECT_FALSE(r.valid());
   EXPECT_EQ(r.cracks, 4u);
   // The added node lifted into the cube: its four bottom triangles are off the surface.
-  TetMesh lifted = coned_from(0.05);
+  TetMesh lifted = coned_cube(0.05, false);
   mesh = unsourced(lifted, lifted.points);
   mesh.changed_nodes = {8};
   r = check_mesh(mesh, cube);
@@ -335,8 +318,26 @@ TEST(check_mesh, new_boundary_triangles_at_an_added_node_must_lie_on_the_input_b
   EXPECT_EQ(r.volume_not_kept, 1u);
 }
 
+TEST(check_mesh, new_boundary_triangles_next_to_a_removed_boundary_node_must_lie_on_the_surface) {
+  // The input has node 8 at the centre of face z = 0; the output is the cube's 6 Kuhn tets, node
+  // 8 contracted away: its two bottom triangles are new and have no declared node, but nodes
+  // next to one.
+  const TetMesh input = coned_cube(0.0, false);
+  const TetMesh cube = kuhn_grid(1);
+  MixedMesh mesh = unsourced(cube, input.points);
+  mesh.changed_nodes = {8};
+  CheckReport r = check_mesh(mesh, input);
+  EXPECT_TRUE(r.valid()) << all_problems(r);
+  EXPECT_EQ(r.cracks, 0u);
+  mesh.changed_nodes.clear();
+  r = check_mesh(mesh, input);
+  EXPECT_FALSE(r.valid());
+  EXPECT_EQ(r.unused_input_nodes, 1u);
+  EXPECT_EQ(r.cracks, 2u);
+}
+
 TEST(check_mesh, refuses_a_faulty_changed_node_list) {
-  const TetMesh coned = coned_cube();
+  const TetMesh coned = coned_cube(0.5, true);
   MixedMesh mesh = unsourced(coned, coned.points);
   mesh.changed_nodes = {0};  // declared, not changed: nothing to find
   EXPECT_TRUE(check_mesh(mesh, coned).valid());

@@ -176,10 +176,11 @@ bool FlipMesh::contract(index_t from, index_t onto, double min_quality) {
   std::vector<index_t> star;
   tets_with_edge(from, from, star);
   bool joined = false;
+  // The faces at `from` with no tet on their other side: on the domain boundary.
+  std::vector<std::array<index_t, 3>> boundary;
   for (index_t t : star) {
     const index_t* q = tet(t);
     joined = joined || holds(q, onto);
-    // Every face at `from` has a tet on its other side: `from` is inside the domain.
     for (int f = 0; f < 4; ++f) {
       if (q[f] == from) continue;
       std::array<index_t, 3> face{};
@@ -187,13 +188,16 @@ bool FlipMesh::contract(index_t from, index_t onto, double min_quality) {
       for (int i = 0; i < 4; ++i) {
         if (i != f) face[n++] = q[i];
       }
-      if (tet_with_face(face[0], face[1], face[2], t) == NO_CELL) return false;
+      if (tet_with_face(face[0], face[1], face[2], t) == NO_CELL) boundary.push_back(face);
     }
   }
   if (!joined) return false;
-  // The star of an inner node is a ball; the cone from `onto` (on its boundary) over the
-  // boundary triangles away from `onto` tiles it exactly when every cone tet is positive
-  // (the winding number argument), which replace() checks with the quality floor.
+  if (!boundary.empty() && !flat_boundary(boundary, onto)) return false;
+  // The star of `from` is a ball and `onto` lies on its boundary; the cone from `onto` over the
+  // star's faces away from `from` and `onto` tiles it exactly when every cone tet is positive
+  // (the winding number argument), which replace() checks with the quality floor. On the
+  // domain boundary the star's faces at `from` there are one plane with `onto` in it, so the
+  // cone's faces in that plane tile the same polygon: the boundary surface is kept.
   std::vector<std::array<index_t, 4>> made;
   for (index_t t : star) {
     const index_t* q = tet(t);
@@ -203,6 +207,41 @@ bool FlipMesh::contract(index_t from, index_t onto, double min_quality) {
     made.push_back(cone);
   }
   return replace(star, made, min_quality, kContraction);
+}
+
+bool FlipMesh::flat_boundary(const std::vector<std::array<index_t, 3>>& faces, index_t onto) const {
+  bool holds_onto = false;
+  double longest = 0.0;
+  for (const auto& f : faces) {
+    holds_onto = holds_onto || f[0] == onto || f[1] == onto || f[2] == onto;
+    for (int i = 0; i < 3; ++i) {
+      const double* p = point(f[i]);
+      const double* q = point(f[(i + 1) % 3]);
+      longest = std::max(longest,
+                         std::sqrt((p[0] - q[0]) * (p[0] - q[0]) + (p[1] - q[1]) * (p[1] - q[1]) +
+                                   (p[2] - q[2]) * (p[2] - q[2])));
+    }
+  }
+  if (!holds_onto) return false;
+  // Every corner of every face within a tiny distance of the first face's plane (so the node is
+  // on no edge or corner of the geometry, and `onto` is on its face).
+  const double* a = point(faces[0][0]);
+  const double* b = point(faces[0][1]);
+  const double* c = point(faces[0][2]);
+  const double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+  const double v[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+  double n[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
+  const double norm = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+  if (!(norm > 0.0)) return false;
+  for (double& x : n) x /= norm;
+  for (const auto& f : faces) {
+    for (index_t w : f) {
+      const double* p = point(w);
+      const double distance = n[0] * (p[0] - a[0]) + n[1] * (p[1] - a[1]) + n[2] * (p[2] - a[2]);
+      if (std::fabs(distance) > kFlatTolerance * longest) return false;
+    }
+  }
+  return true;
 }
 
 void FlipMesh::undo(std::size_t mark) {

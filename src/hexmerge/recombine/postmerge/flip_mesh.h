@@ -61,11 +61,12 @@ class FlipMesh {
   /// flip_23.
   bool remove_edge(index_t u, index_t v, int diagonal, double min_quality);
   /// Half-edge contraction of edge (from, onto): node `from` leaves the mesh, the tets holding
-  /// both nodes are gone and in every other tet of `from` it is replaced by `onto`. Only for a
-  /// node inside the domain (no boundary face at it) whose tets are all of one region and
-  /// unlocked, when every tet made is positive with a scaled Jacobian of at least `min_quality`:
-  /// the tets made tile the same union, so the boundary and every region's volume are kept and
-  /// no other node moves. False (nothing changed) otherwise.
+  /// both nodes are gone and in every other tet of `from` it is replaced by `onto`. Only when
+  /// the tets of `from` are all of one region and unlocked, `from` is inside the domain or its
+  /// boundary faces lie in one plane with `onto` on them (a node inside a flat face of the
+  /// geometry), and every tet made is positive with a scaled Jacobian of at least `min_quality`:
+  /// the tets made tile the same union, so the boundary surface and every region's volume are
+  /// kept and no other node moves. False (nothing changed) otherwise.
   bool contract(index_t from, index_t onto, double min_quality);
 
   /// The undo journal: undo(mark()) restores the mesh as it was at the mark, counts included.
@@ -80,6 +81,11 @@ class FlipMesh {
  private:
   /// The journal's kind of a contraction (flips are 23, 32, 44).
   static constexpr std::uint8_t kContraction = 1;
+  /// Boundary faces are one plane when every corner is within this fraction of their longest
+  /// edge from the first face's plane.
+  static constexpr double kFlatTolerance = 1e-12;
+  /// The boundary faces at a node lie in one plane, and `onto` is a corner of one of them.
+  bool flat_boundary(const std::vector<std::array<index_t, 3>>& faces, index_t onto) const;
   bool replace(const std::vector<index_t>& old_tets,
                const std::vector<std::array<index_t, 4>>& new_tets, double min_quality,
                std::uint8_t kind);

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <map>
 #include <vector>
 
@@ -275,6 +276,52 @@ TEST(flip_mesh, a_contraction_refuses_boundary_nodes_locks_regions_and_the_floor
   two.regions.assign(two.nb_tets(), 1);
   FlipMesh same(two);
   EXPECT_TRUE(same.contract(9, 8, 0.0));
+}
+
+TEST(flip_mesh, a_contraction_on_a_flat_face_keeps_the_face) {
+  // Nodes 8 and 9 inside the cube's face z = 0, node 10 inside the cube.
+  std::vector<Point> points;
+  for (int b = 0; b < 8; ++b) points.push_back({double(b & 1), double(b >> 1 & 1), double(b >> 2)});
+  points.push_back({0.55, 0.5, 0.0});
+  points.push_back({0.35, 0.45, 0.0});
+  points.push_back({0.5, 0.5, 0.6});
+  const TetMesh mesh = test::tetgen_mesh(points);
+  if (mesh.nb_tets() == 0) GTEST_SKIP() << "no tetgen";
+  FlipMesh m(mesh);
+  bool positive = false;
+  const double vol = volume(m, positive);
+  std::vector<index_t> joined;
+  m.tets_with_edge(9, 10, joined);
+  // Onto a node off the face: the face would not be kept.
+  if (!joined.empty()) {
+    EXPECT_FALSE(m.contract(9, 10, 0.0));
+  }
+  m.tets_with_edge(8, 9, joined);
+  ASSERT_FALSE(joined.empty());
+  ASSERT_TRUE(m.contract(9, 8, 0.0));
+  EXPECT_FALSE(uses(m, 9));
+  bool still_positive = false;
+  EXPECT_NEAR(volume(m, still_positive), vol, 1e-12 * vol);
+  EXPECT_TRUE(still_positive);
+  // The boundary: the cube's faces, z = 0 now without node 9; every boundary triangle on a face
+  // of the cube, and the ones on z = 0 cover it (area 1).
+  double bottom_area = 0.0;
+  for (const Triangle& tri : boundary_triangles(m)) {
+    std::array<Point, 3> p{};
+    for (int i = 0; i < 3; ++i) p[i] = {m.point(tri[i])[0], m.point(tri[i])[1], m.point(tri[i])[2]};
+    bool on_a_face = false;
+    for (int axis = 0; axis < 3; ++axis) {
+      for (double side : {0.0, 1.0}) {
+        on_a_face = on_a_face || (p[0][axis] == side && p[1][axis] == side && p[2][axis] == side);
+      }
+    }
+    EXPECT_TRUE(on_a_face);
+    if (p[0][2] == 0.0 && p[1][2] == 0.0 && p[2][2] == 0.0) {
+      bottom_area += 0.5 * std::fabs((p[1][0] - p[0][0]) * (p[2][1] - p[0][1]) -
+                                     (p[2][0] - p[0][0]) * (p[1][1] - p[0][1]));
+    }
+  }
+  EXPECT_NEAR(bottom_area, 1.0, 1e-12);
 }
 
 }  // namespace
