@@ -236,6 +236,7 @@ py::dict check_report_to_dict(const CheckReport& r) {
   d["declared_changed_nodes"] = r.declared_changed_nodes;
   d["off_boundary_nodes"] = r.off_boundary_nodes;
   d["volume_not_kept"] = r.volume_not_kept;
+  d["linear_volume_difference"] = r.linear_volume_difference;
   d["region_mismatches"] = r.region_mismatches;
   d["input_volume"] = r.input_volume;
   d["output_volume"] = r.output_volume;

@@ -95,7 +95,7 @@ def test_a_moved_boundary_node_fails_the_check_even_when_declared(delaunay_box) 
 def test_cli_takes_the_contraction_option(delaunay_box, tmp_path: Path) -> None:
     _, _, path = delaunay_box
     out, stats = tmp_path / "out.vtu", tmp_path / "stats.json"
-    cmd = [sys.executable, "-m", "hexmerge", "recombine", str(path), str(out), "--quiet",
+    cmd = [sys.executable, "-m", "hexmerge", "recombine", str(path), "-o", str(out), "--quiet",
            "--stats", str(stats), "--no-same-nodes"]
     env_path = str(ROOT / "src" / "python")
     for flag, expect_contractions in (("--no-post-merge-contractions", False),

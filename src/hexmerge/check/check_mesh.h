@@ -20,8 +20,8 @@ constexpr std::size_t kMaxProblemsPerKind = 10;
 /// A changed node on the output's boundary must lie within this distance of the input's boundary
 /// triangles, relative to the longest output edge at the node.
 constexpr double kBoundaryNodeTolerance = 1e-6;
-/// With changed nodes, the total volume and every region's volume must be the input's to this
-/// relative difference.
+/// With changed nodes, every region's volume (quad faces split into triangles) must be the
+/// input's to this relative difference.
 constexpr double kChangedVolumeTolerance = 1e-6;
 
 /// What the checker found. A mesh is valid when `valid()` holds.
@@ -49,9 +49,12 @@ struct CheckReport {
   /// Declared nodes on the output's boundary farther than kBoundaryNodeTolerance from the input's
   /// boundary triangles, and faulty declarations (an id past the nodes, or not sorted).
   std::size_t off_boundary_nodes = 0;
-  /// With declared changes: 1 when the total volume or a region's volume differs from the
-  /// input's by more than kChangedVolumeTolerance (relative), else 0.
+  /// With declared changes: 1 when a region's volume (the whole mesh's without regions), with
+  /// quad faces split into triangles, differs from the input's by more than
+  /// kChangedVolumeTolerance (relative), else 0.
   std::size_t volume_not_kept = 0;
+  /// With declared changes: that largest relative difference (0 otherwise).
+  double linear_volume_difference = 0.0;
   double input_volume = 0.0;
   double output_volume = 0.0;  ///< with bilinear quad faces
   double relative_volume_difference = 0.0;
@@ -83,13 +86,15 @@ struct CheckReport {
 /// declared node on the output's boundary must lie on the input's boundary triangles
 /// (kBoundaryNodeTolerance), an unpaired face with a declared node or a node next to one (in an
 /// input tet with a declared node) counts as boundary when its corners and centroid lie on the
-/// input's boundary triangles, and the total volume and every region's volume must be kept
-/// (kChangedVolumeTolerance). With no declared node the checks are exactly those above. Runs on
-/// the points scaled by normalising_exponent (exact), so the answers do not depend on the model's
-/// scale. The domain boundary is the input's boundary triangles: a boundary quad must be covered
-/// by two of them on one of its diagonals. Never throws on a bad `mesh`: every fault is counted
-/// and described in CheckReport::problems (at most kMaxProblemsPerKind lines per kind). Runs in
-/// O(#faces log(faces per vertex)) time.
+/// input's boundary triangles, and every region's volume must be kept (kChangedVolumeTolerance),
+/// measured with every quad face split into two triangles (a shared quad on one diagonal for both
+/// its cells, an unpaired one on the triangles covering it), so that a quad's bending, the same
+/// with or without changed nodes, does not count. With no declared node the checks are exactly
+/// those above. Runs on the points scaled by normalising_exponent (exact), so the answers do not
+/// depend on the model's scale. The domain boundary is the input's boundary triangles: a boundary
+/// quad must be covered by two of them on one of its diagonals. Never throws on a bad `mesh`: every
+/// fault is counted and described in CheckReport::problems (at most kMaxProblemsPerKind lines per
+/// kind). Runs in O(#faces log(faces per vertex)) time.
 /// @param[in] mesh   the mixed mesh to check
 /// @param[in] input  the tet mesh it was made from (assumed valid: see validate_tet_mesh)
 CheckReport check_mesh(const MixedMesh& mesh, const TetMesh& input);

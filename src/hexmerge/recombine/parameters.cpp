@@ -91,8 +91,9 @@ ParameterTable<RecombineParameters> make_table() {
             "lower the element count"),
       flag(&P::post_merge_contractions, "post_merge_contractions", "Edge contractions",
            "In the post-merge stage (same_nodes off), where no flip closes an open quad face, "
-           "contract an inner node into its neighbour behind the face (the paper's edge "
-           "contraction): the node leaves the mesh, no node moves, every region's volume is kept"),
+           "contract a node behind it (inside the domain or inside a flat face of it) into its "
+           "neighbour (the paper's edge contraction): the node leaves the mesh, no node moves, "
+           "the boundary and every region's volume are kept"),
   });
 }
 

@@ -97,7 +97,7 @@ struct RecombineParameters {
   bool same_nodes = true;
   /// [1, 10]: rounds of the post-merge stage (each kept only if it helps)
   int post_merge_rounds = 1;
-  /// The post-merge stage may also contract inner nodes away (same_nodes off)
+  /// The post-merge stage may also contract nodes away (same_nodes off; FlipMesh::contract)
   bool post_merge_contractions = true;
 };
 
