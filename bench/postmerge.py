@@ -1,11 +1,13 @@
 #!/usr/bin/env python3
 """The post-merge stage (issue 19) against today's output: each mesh recombined with
-same_nodes=true (the input's tets) and same_nodes=false (flips close open quads, the selection
-runs again), both checked by the independent checker.
+same_nodes=true (the input's tets) and same_nodes=false (flips and edge contractions close open
+quads, the selection runs again; with --flips-only also post_merge_contractions=false), each
+checked by the independent checker (with the nodes the output declares changed: the boundary
+and every region's volume verified).
 
 Prints one Markdown row per mesh and run: cells, reduction, hexahedron volume, the census (hex
 candidates whose every quad face is closed by the tets: on the input, after the stage), the
-flips kept, the stage's time against the engine's, the checker's verdict, its volume differences
+flips and contractions kept, the stage's time against the engine's, the checker's verdict, its volume differences
 and the smallest scaled Jacobians (new elements; every element against the input's tets).
 Writes the results as JSON.
 
@@ -59,6 +61,8 @@ def run(hexmerge, points, tets, options):
         "report": report,
         "check": {k: check[k] for k in ("valid", "inverted_cells", "nonconforming_quads", "cracks",
                                        "moved_nodes", "unused_input_nodes",
+                                       "declared_changed_nodes", "off_boundary_nodes",
+                                       "volume_not_kept",
                                        "relative_volume_difference",
                                        "max_region_volume_difference", "min_scaled_jacobian")},
         "min_new_element_sj": min((report["min_scaled_jacobian"][t] for t in new_types
@@ -72,9 +76,11 @@ def row(name, r, base_cells):
     fewer = 100.0 * (1.0 - rep["output_cells"] / base_cells)
     census = f"{rep['census_closable']} / {rep['census_hex_candidates']}"
     after = f"{rep['census_closable_after']} / {rep['census_hex_candidates_after']}"
-    flips = f"{rep['flips_23']} / {rep['flips_32']} / {rep['flips_44']}"
+    flips = f"{rep['flips_23']} / {rep['flips_32']} / {rep['flips_44']} / {rep['contractions']}"
     same = r["options"].get("same_nodes", True)
-    return (f"| {name} | {'true' if same else 'false'} | {rep['output_cells']:,} | {fewer:.1f} | "
+    run = "true" if same else ("false" if r["options"].get("post_merge_contractions", True)
+                               else "false, flips only")
+    return (f"| {name} | {run} | {rep['output_cells']:,} | {fewer:.1f} | "
             f"{rep['element_reduction_percent']:.1f} | {hexv:.1f} | "
             f"{'' if same else census} | {'' if same else after} | {'' if same else flips} | "
             f"{rep['post_merge']} | {r['engine_seconds']:.2f} | {r['stage_seconds']:.2f} "
@@ -93,6 +99,8 @@ def main():
     ap.add_argument("--kinds", default="delaunay")
     ap.add_argument("--option", action="append", default=[], metavar="NAME=VALUE",
                     help="extra option for both runs")
+    ap.add_argument("--flips-only", action="store_true",
+                    help="also run the stage without contractions (post_merge_contractions=false)")
     ap.add_argument("--output", default=os.path.join(run_bench.RESULTS_DIR, "postmerge.json"))
     args = ap.parse_args()
 
@@ -106,7 +114,7 @@ def main():
     meshes = args.files or run_bench.find_meshes(args.shapes.split(","), args.kinds.split(","),
                                                  args.sizes.split(","), args.mesh_dir)
     print("| mesh | same_nodes | cells | fewer % | reduction % | hex vol. % | census before "
-          "| census after | flips 2-3 / 3-2 / 4-4 | stage | engine s | stage s (flips) | valid "
+          "| census after | flips 2-3 / 3-2 / 4-4 / contractions | stage | engine s | stage s (flips) | valid "
           "| non-conf. | cracks | max region dV | min SJ new | min SJ all |")
     print("|" + "---|" * 18)
     results = {"commit": benchlib.git_commit(), "machine": benchlib.machine(), "meshes": {}}
@@ -116,12 +124,17 @@ def main():
         tets = np.vstack([c.data for c in m.cells if c.type == "tetra"]).astype(np.int64)
         name = os.path.basename(path).rsplit(".", 1)[0]
         base = run(hexmerge, points, tets, dict(extra, same_nodes=True))
-        stage = run(hexmerge, points, tets, dict(extra, same_nodes=False))
         cells = base["report"]["output_cells"]
         print(row(name, base, cells), flush=True)
-        print(row(name, stage, cells), flush=True)
-        results["meshes"][name] = {"input_min_tet_sj": min_tet_scaled_jacobian(points, tets),
-                                   "same_nodes": base, "post_merge": stage}
+        entry = {"input_min_tet_sj": min_tet_scaled_jacobian(points, tets), "same_nodes": base}
+        for key, contract in (("flips_only", False), ("post_merge", True)):
+            if not args.flips_only and not contract:
+                continue
+            r = run(hexmerge, points, tets,
+                    dict(extra, same_nodes=False, post_merge_contractions=contract))
+            print(row(name, r, cells), flush=True)
+            entry[key] = r
+        results["meshes"][name] = entry
     os.makedirs(os.path.dirname(args.output), exist_ok=True)
     with open(args.output, "w") as f:
         json.dump(benchlib.jsonable(results), f, indent=1)

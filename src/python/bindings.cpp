@@ -201,6 +201,7 @@ py::dict report_to_dict(const RecombineReport& r) {
   d["post_merge_attempted"] = r.post_merge_attempted;
   d["post_merge_rounds"] = r.post_merge_rounds;
   d["post_merge_closed"] = r.post_merge_closed;
+  d["contractions"] = r.contractions;
   d["flips_23"] = r.flips_23;
   d["flips_32"] = r.flips_32;
   d["flips_44"] = r.flips_44;
@@ -232,6 +233,10 @@ py::dict check_report_to_dict(const CheckReport& r) {
   d["overshared_faces"] = r.overshared_faces;
   d["unused_input_nodes"] = r.unused_input_nodes;
   d["moved_nodes"] = r.moved_nodes;
+  d["declared_changed_nodes"] = r.declared_changed_nodes;
+  d["off_boundary_nodes"] = r.off_boundary_nodes;
+  d["volume_not_kept"] = r.volume_not_kept;
+  d["linear_volume_difference"] = r.linear_volume_difference;
   d["region_mismatches"] = r.region_mismatches;
   d["input_volume"] = r.input_volume;
   d["output_volume"] = r.output_volume;
@@ -256,6 +261,7 @@ py::dict mesh_to_dict(MixedMesh&& m) {
       m.regions.empty() ? py::object(py::none()) : py::object(to_numpy(std::move(m.regions)));
   d["source_offsets"] = to_numpy(std::move(m.source_offsets));
   d["source_tets"] = to_numpy(std::move(m.source_tets));
+  d["changed_nodes"] = to_numpy(std::move(m.changed_nodes));
   return d;
 }
 
@@ -322,9 +328,12 @@ py::dict run_check(const PointsIn& points, const TypesIn& types, const IndexIn& 
                    const IndexIn& cell_vertices, const py::object& regions,
                    const py::object& source_offsets, const py::object& source_tets,
                    const PointsIn& input_points, const IndexIn& input_tets,
-                   const py::object& input_regions) {
-  const MixedMesh mesh =
+                   const py::object& input_regions, const py::object& changed_nodes) {
+  MixedMesh mesh =
       mesh_from_arrays(points, types, offsets, cell_vertices, regions, source_offsets, source_tets);
+  if (!changed_nodes.is_none()) {
+    mesh.changed_nodes = flat(changed_nodes.cast<IndexIn>(), 0, "changed_nodes");
+  }
   TetMesh input;
   input.points = flat(input_points, 3, "input_points");
   input.tets = flat(input_tets, 4, "input_tets");
@@ -611,17 +620,19 @@ progress callable(phase: str, fraction: float) -> bool | None, called from this 
 
 Returns (mesh, report): mesh is a dict of arrays points (N, 3), types uint8 (C,) (CellType
 values), offsets (C+1,), cell_vertices, regions (C,) or None, source_offsets (C+1,),
-source_tets; for Tet10 input also quadratic_offsets (C+1,) and quadratic_nodes (corners then
+source_tets, changed_nodes (sorted ids of the nodes the engine moved, removed or added); for
+Tet10 input also quadratic_offsets (C+1,) and quadratic_nodes (corners then
 mid-edge nodes in VTK quadratic order, ids of the input's points). report is a dict.)doc");
 
   m.def("check_mesh", &run_check, py::arg("points"), py::arg("types"), py::arg("offsets"),
         py::arg("cell_vertices"), py::arg("regions"), py::arg("source_offsets"),
         py::arg("source_tets"), py::arg("input_points"), py::arg("input_tets"),
-        py::arg("input_regions"),
+        py::arg("input_regions"), py::arg("changed_nodes") = py::none(),
         R"doc(Checks a linear mixed mesh against the tet mesh it came from.
 
 The mixed mesh is given by the arrays of recombine()'s result (source_offsets and source_tets
 may be None: regions are then not traced). The input is a linear tet mesh (input_tets (M, 4)).
+changed_nodes (sorted ids, or None) are the nodes the mesh declares moved, removed or added.
 Returns the CheckReport as a dict; `valid` is True when the mesh passes.)doc");
 
   m.def("validate_tet_mesh", &run_validate, py::arg("points"), py::arg("cells"),

@@ -4,10 +4,13 @@
 #include <cmath>
 #include <cstring>
 #include <map>
+#include <memory>
 #include <string>
 #include <utility>
 
 #include "hexmerge/geometry/quality.h"
+#include "hexmerge/geometry/triangle_distance.h"
+#include "hexmerge/geometry/vec3.h"
 #include "hexmerge/mesh/cell_type.h"
 
 // The checker deliberately shares nothing with the engine beyond the descriptor tables and the
@@ -28,6 +31,7 @@ enum Kind {
   kMoved,
   kRegion,
   kSource,
+  kChanged,
   kNbKinds
 };
 
@@ -163,6 +167,108 @@ std::string face_text(const index_t* f, int n) {
   return out + ")";
 }
 
+/// The input's boundary triangles in a uniform grid, each filed in every grid cell its bounding
+/// box (grown by `margin`) meets: the distance from a point to the surface, where it is at most
+/// `margin`, is found among the triangles of the point's grid cell.
+class SurfaceGrid {
+ public:
+  SurfaceGrid(const TetMesh& input, std::vector<std::array<index_t, 3>> triangles)
+      : input_(input), triangles_(std::move(triangles)) {
+    if (triangles_.empty()) return;
+    Vec3 lo{1e300, 1e300, 1e300}, hi{-1e300, -1e300, -1e300};
+    for (const auto& t : triangles_) {
+      for (index_t v : t) {
+        const double* p = input.point(v);
+        lo = {std::min(lo.x, p[0]), std::min(lo.y, p[1]), std::min(lo.z, p[2])};
+        hi = {std::max(hi.x, p[0]), std::max(hi.y, p[1]), std::max(hi.z, p[2])};
+      }
+    }
+    margin_ = kBoundaryNodeTolerance * (hi - lo).norm();
+    lo_ = lo - Vec3{margin_, margin_, margin_};
+    const Vec3 size = hi - lo + Vec3{2 * margin_, 2 * margin_, 2 * margin_};
+    // About one triangle per grid cell on a closed surface: n^(2/3) cells along the longest side.
+    const double longest = std::max({size.x, size.y, size.z});
+    const double per_side = std::max(1.0, std::cbrt(static_cast<double>(triangles_.size())) * 2);
+    cell_ = longest > 0 ? longest / per_side : 1.0;
+    for (int k = 0; k < 3; ++k) {
+      dims_[k] = std::max(1, static_cast<int>(std::ceil((&size.x)[k] / cell_)));
+    }
+    start_.assign(static_cast<std::size_t>(dims_[0]) * dims_[1] * dims_[2] + 1, 0);
+    for (int pass = 0; pass < 2; ++pass) {
+      std::vector<std::size_t> fill;
+      if (pass == 1) {
+        for (std::size_t i = 1; i < start_.size(); ++i) start_[i] += start_[i - 1];
+        items_.resize(start_.back());
+        fill.assign(start_.begin(), start_.end() - 1);
+      }
+      for (std::size_t t = 0; t < triangles_.size(); ++t) {
+        std::array<int, 3> a{}, b{};
+        box(t, a, b);
+        for (int i = a[0]; i <= b[0]; ++i) {
+          for (int j = a[1]; j <= b[1]; ++j) {
+            for (int k = a[2]; k <= b[2]; ++k) {
+              const std::size_t c = index(i, j, k);
+              if (pass == 0) {
+                ++start_[c + 1];
+              } else {
+                items_[fill[c]++] = static_cast<index_t>(t);
+              }
+            }
+          }
+        }
+      }
+    }
+  }
+
+  /// Distance from p to the nearest boundary triangle when it is at most the grid's margin
+  /// (a fraction kBoundaryNodeTolerance of the surface's bounding-box diagonal), else a larger
+  /// value.
+  double distance(const Vec3& p) const {
+    double best = 1e300;
+    if (triangles_.empty()) return best;
+    std::array<int, 3> c{};
+    for (int k = 0; k < 3; ++k) {
+      const double x = ((&p.x)[k] - (&lo_.x)[k]) / cell_;
+      if (x < 0 || x >= dims_[k]) return best;
+      c[k] = std::min(dims_[k] - 1, static_cast<int>(x));
+    }
+    const std::size_t cell = index(c[0], c[1], c[2]);
+    for (std::size_t i = start_[cell]; i < start_[cell + 1]; ++i) {
+      const auto& t = triangles_[items_[i]];
+      best = std::min(best, squared_distance_to_triangle(p, Vec3::of(input_.point(t[0])),
+                                                         Vec3::of(input_.point(t[1])),
+                                                         Vec3::of(input_.point(t[2]))));
+    }
+    return std::sqrt(best);
+  }
+
+ private:
+  std::size_t index(int i, int j, int k) const {
+    return (static_cast<std::size_t>(k) * dims_[1] + j) * dims_[0] + i;
+  }
+  void box(std::size_t t, std::array<int, 3>& a, std::array<int, 3>& b) const {
+    for (int k = 0; k < 3; ++k) {
+      double lo = 1e300, hi = -1e300;
+      for (index_t v : triangles_[t]) {
+        lo = std::min(lo, input_.point(v)[k]);
+        hi = std::max(hi, input_.point(v)[k]);
+      }
+      const auto at = [&](double x) {
+        return std::clamp(static_cast<int>((x - (&lo_.x)[k]) / cell_), 0, dims_[k] - 1);
+      };
+      a[k] = at(lo - margin_);
+      b[k] = at(hi + margin_);
+    }
+  }
+
+  const TetMesh& input_;
+  std::vector<std::array<index_t, 3>> triangles_;
+  Vec3 lo_{0, 0, 0};
+  double margin_ = 0.0, cell_ = 1.0;
+  std::array<int, 3> dims_{1, 1, 1};
+  std::vector<std::size_t> start_;
+  std::vector<index_t> items_;
+};
 }  // namespace
 
 namespace {
@@ -241,6 +347,22 @@ CheckReport check_at_scale(const MixedMesh& mesh, const TetMesh& input) {
   }
   if (report.worst_cell == NO_INDEX) report.min_scaled_jacobian = 0.0;
 
+  // --- Declared node changes -------------------------------------------------------------------
+  const std::vector<index_t>& declared = mesh.changed_nodes;
+  const bool with_changes = !declared.empty();
+  report.declared_changed_nodes = declared.size();
+  std::vector<char> changed(std::max(nv_out, nv_in), 0);
+  for (std::size_t i = 0; i < declared.size(); ++i) {
+    const index_t v = declared[i];
+    if (v >= changed.size() || (i > 0 && declared[i - 1] >= v)) {
+      ++report.off_boundary_nodes;
+      log.add(kChanged, "the changed-node list names node " + std::to_string(v) +
+                            (v >= changed.size() ? ", past the nodes" : " out of order"));
+      continue;
+    }
+    changed[v] = 1;
+  }
+
   // --- Volumes ---------------------------------------------------------------------------------
   for (index_t t = 0; t < nt; ++t) {
     const index_t* q = input.tet(t);
@@ -280,13 +402,18 @@ CheckReport check_at_scale(const MixedMesh& mesh, const TetMesh& input) {
   }
 
   // --- Nodes -----------------------------------------------------------------------------------
-  if (nv_out != nv_in) {
+  // Nodes past the input's are allowed when every one of them is declared added.
+  const bool added_declared =
+      nv_out > nv_in &&
+      std::all_of(changed.begin() + nv_in, changed.begin() + nv_out, [](char c) { return c != 0; });
+  if (nv_out != nv_in && !added_declared) {
     const index_t diff = nv_out > nv_in ? nv_out - nv_in : nv_in - nv_out;
     report.moved_nodes += diff;
     log.add(kMoved, "the output has " + std::to_string(nv_out) + " nodes, the input " +
                         std::to_string(nv_in));
   }
   for (index_t v = 0; v < std::min(nv_out, nv_in); ++v) {
+    if (changed[v]) continue;
     // Bitwise: the output must carry the input's coordinates untouched (even -0.0 vs 0.0).
     if (std::memcmp(&mesh.points[3 * static_cast<std::size_t>(v)], input.point(v),
                     3 * sizeof(double)) != 0) {
@@ -306,7 +433,7 @@ CheckReport check_at_scale(const MixedMesh& mesh, const TetMesh& input) {
       for (index_t i = 0; i < mesh.cell_size(c); ++i) used_out[mesh.cell(c)[i]] = 1;
     }
     for (index_t v = 0; v < nv_in; ++v) {
-      if (used_in[v] && (v >= nv_out || !used_out[v])) {
+      if (used_in[v] && !changed[v] && (v >= nv_out || !used_out[v])) {
         ++report.unused_input_nodes;
         log.add(kUnused, "input node " + std::to_string(v) + " is used by no output cell");
       }
@@ -389,10 +516,75 @@ CheckReport check_at_scale(const MixedMesh& mesh, const TetMesh& input) {
         return q[0] < nv_in && q[1] < nv_in && q[2] < nv_in && q[3] < nv_in;
       },
       [](index_t) { return CellType::Tet; }, [&](index_t t) { return input.tet(t); });
+  // With declared changes: the input's boundary surface, and the longest output edge at each node
+  // (the scale of the tolerance on a changed node's distance to it).
+  std::unique_ptr<SurfaceGrid> surface;
+  std::vector<double> longest_edge;
+  std::vector<char> on_output_boundary;
+  // Nodes next to a declared one in the input (its tets' corners): a face there may be new.
+  std::vector<char> near_changed(changed.size(), 0);
+  if (with_changes) {
+    for (index_t t = 0; t < nt; ++t) {
+      const index_t* q = input.tet(t);
+      if (!(q[0] < nv_in && q[1] < nv_in && q[2] < nv_in && q[3] < nv_in)) continue;
+      if (changed[q[0]] || changed[q[1]] || changed[q[2]] || changed[q[3]]) {
+        for (int i = 0; i < 4; ++i) near_changed[q[i]] = 1;
+      }
+    }
+    for (index_t v = nv_in; v < changed.size(); ++v) near_changed[v] = changed[v];
+    std::vector<std::array<index_t, 3>> triangles;
+    for (index_t v = 0; v < nv_in; ++v) {
+      for (std::size_t i = input_faces.bucket_begin(v); i < input_faces.bucket_end(v);) {
+        std::size_t j = i + 1;
+        while (j < input_faces.bucket_end(v) &&
+               input_faces.record(j).same_key(input_faces.record(i))) {
+          ++j;
+        }
+        if (j - i == 1) triangles.push_back({v, input_faces.record(i).b, input_faces.record(i).c});
+        i = j;
+      }
+    }
+    surface = std::make_unique<SurfaceGrid>(input, std::move(triangles));
+    longest_edge.assign(nv_out, 0.0);
+    on_output_boundary.assign(nv_out, 0);
+    for (index_t c = 0; c < nc; ++c) {
+      if (!cell_ok[c]) continue;
+      const CellDescriptor& desc = descriptor(mesh.types[c]);
+      for (int e = 0; e < desc.nb_edges; ++e) {
+        const index_t u = mesh.cell(c)[desc.edge[e][0]], w = mesh.cell(c)[desc.edge[e][1]];
+        const double length = (Vec3::of(&mesh.points[3 * static_cast<std::size_t>(u)]) -
+                               Vec3::of(&mesh.points[3 * static_cast<std::size_t>(w)]))
+                                  .norm();
+        longest_edge[u] = std::max(longest_edge[u], length);
+        longest_edge[w] = std::max(longest_edge[w], length);
+      }
+    }
+  }
+  auto output_point = [&](index_t v) {
+    return Vec3::of(&mesh.points[3 * static_cast<std::size_t>(v)]);
+  };
+  // An unpaired triangle is on the domain boundary when it is one of the input's boundary
+  // triangles, or, when it has a declared node or a node next to one, when its corners and
+  // centroid lie on them.
   auto on_domain_boundary = [&](const index_t* tri) {
-    if (tri[0] >= nv_in || tri[1] >= nv_in || tri[2] >= nv_in) return false;
-    const auto range = input_faces.find(tri, 3);
-    return range.second - range.first == 1;
+    if (tri[0] < nv_in && tri[1] < nv_in && tri[2] < nv_in) {
+      const auto range = input_faces.find(tri, 3);
+      if (range.second - range.first == 1) return true;
+    }
+    if (!with_changes || !(near_changed[tri[0]] || near_changed[tri[1]] || near_changed[tri[2]])) {
+      return false;
+    }
+    const Vec3 a = output_point(tri[0]), b = output_point(tri[1]), c = output_point(tri[2]);
+    const double tolerance =
+        kBoundaryNodeTolerance * std::max({(b - a).norm(), (c - b).norm(), (a - c).norm()});
+    for (const Vec3& p : {a, b, c, (a + b + c) * (1.0 / 3.0)}) {
+      if (surface->distance(p) > tolerance) return false;
+    }
+    return true;
+  };
+  auto mark_boundary = [&](const index_t* f, int n) {
+    if (!with_changes) return;
+    for (int i = 0; i < n; ++i) on_output_boundary[f[i]] = 1;
   };
   // The face's vertices in the cell's outward order.
   auto face_vertices = [&](const FaceRecord& r, index_t out[4]) {
@@ -405,6 +597,9 @@ CheckReport check_at_scale(const MixedMesh& mesh, const TetMesh& input) {
 
   enum State : char { kPaired = 0, kOpen = 1, kCovered = 2 };
   std::vector<char> state(faces.size(), kPaired);
+  // The diagonal of an unpaired quad on which the domain boundary or other cells' faces cover it
+  // (0: corners 0-2, 1: corners 1-3), -1 when none.
+  std::vector<signed char> quad_diagonal(faces.size(), -1);
   std::vector<std::size_t> open_quads;
   for (index_t v = 0; v < nv_out; ++v) {
     for (std::size_t i = faces.bucket_begin(v); i < faces.bucket_end(v);) {
@@ -498,10 +693,15 @@ CheckReport check_at_scale(const MixedMesh& mesh, const TetMesh& input) {
       const index_t t1[3] = {q[diag], q[(diag + 2) % 4], q[(diag + 3) % 4]};
       if (on_domain_boundary(t0) && on_domain_boundary(t1)) {
         boundary = !covered;
+        if (boundary) {
+          mark_boundary(q, 4);
+          quad_diagonal[i] = static_cast<signed char>(diag);
+        }
         break;
       }
       const std::size_t c0 = cover(t0, r.cell), c1 = cover(t1, r.cell);
       if (c0 != npos && c1 != npos) {
+        if (!covered) quad_diagonal[i] = static_cast<signed char>(diag);
         covered = true;
         if (c0 < faces.size()) state[c0] = kCovered;
         if (c1 < faces.size()) state[c1] = kCovered;
@@ -524,6 +724,70 @@ CheckReport check_at_scale(const MixedMesh& mesh, const TetMesh& input) {
       ++report.cracks;
       log.add(kCrack, "triangle " + face_text(t, 3) + " of " + cell_name(mesh, r.cell) +
                           " has no neighbour and is not on the domain boundary (crack)");
+    } else {
+      mark_boundary(t, 3);
+    }
+  }
+  // Every declared node on the output's boundary lies on the input's boundary surface.
+  for (index_t v : declared) {
+    if (v >= nv_out || !on_output_boundary[v]) continue;
+    const double distance = surface->distance(output_point(v));
+    if (distance > kBoundaryNodeTolerance * longest_edge[v]) {
+      ++report.off_boundary_nodes;
+      log.add(kChanged, "changed node " + std::to_string(v) +
+                            " is on the boundary but off the input's boundary surface");
+    }
+  }
+  // With declared changes: every region's volume with every quad face split into two triangles
+  // (a shared quad on the same diagonal for both cells, an unpaired one on the triangles that
+  // cover it), by the divergence theorem over the faces. The bending of quads, which is the
+  // same with or without changed nodes, then does not count: what is measured is whether the
+  // cells still tile the input's domain, region by region.
+  if (with_changes) {
+    const bool by_region =
+        !mesh.regions.empty() && mesh.regions.size() == nc && !input.regions.empty();
+    std::map<std::int32_t, std::array<double, 2>> volumes;  // region -> (input, output)
+    for (index_t t = 0; t < nt; ++t) {
+      const index_t* q = input.tet(t);
+      if (q[0] < nv_in && q[1] < nv_in && q[2] < nv_in && q[3] < nv_in) {
+        volumes[by_region ? input.region(t) : 0][0] +=
+            tet_volume(input.point(q[0]), input.point(q[1]), input.point(q[2]), input.point(q[3]));
+      }
+    }
+    const Vec3 origin = nv_in > 0 ? Vec3::of(input.point(0)) : Vec3{0.0, 0.0, 0.0};
+    const auto six_volume = [&](index_t a, index_t b, index_t c) {
+      return det3(output_point(a) - origin, output_point(b) - origin, output_point(c) - origin);
+    };
+    for (std::size_t i = 0; i < faces.size(); ++i) {
+      const FaceRecord& r = faces.record(i);
+      index_t f[4];
+      double six = 0.0;
+      if (face_vertices(r, f) == 3) {
+        six = six_volume(f[0], f[1], f[2]);
+      } else {
+        int d = quad_diagonal[i];
+        if (d < 0) d = static_cast<int>(std::min_element(f, f + 4) - f) % 2;
+        six = six_volume(f[d], f[d + 1], f[(d + 2) % 4]) +
+              six_volume(f[d], f[(d + 2) % 4], f[(d + 3) % 4]);
+      }
+      volumes[by_region ? mesh.region(r.cell) : 0][1] += six / 6.0;
+    }
+    std::int32_t worst = 0;
+    for (const auto& [region, v] : volumes) {
+      const double difference =
+          v[0] != 0.0 ? std::fabs(v[1] - v[0]) / std::fabs(v[0]) : (v[1] != 0.0 ? 1.0 : 0.0);
+      if (difference >= report.linear_volume_difference) {
+        report.linear_volume_difference = difference;
+        worst = region;
+      }
+    }
+    if (report.linear_volume_difference > kChangedVolumeTolerance) {
+      report.volume_not_kept = 1;
+      log.add(kChanged, "with changed nodes the volume is not kept: " +
+                            (by_region ? "region " + std::to_string(worst) + " " : std::string()) +
+                            "differs by " + std::to_string(report.linear_volume_difference) +
+                            " of its volume (allowed " + std::to_string(kChangedVolumeTolerance) +
+                            ")");
     }
   }
   log.finish();

@@ -15,13 +15,17 @@ namespace hexmerge {
 /// (VTK's). Every cell also records the input tets it is the union of
 /// (source_tets[source_offsets[c] .. source_offsets[c+1])), so volumes and regions can be traced.
 struct MixedMesh {
-  std::vector<double> points;           ///< #V by 3 (the input's points, unchanged)
+  std::vector<double> points;           ///< #V by 3 (the input's points; see changed_nodes)
   std::vector<CellType> types;          ///< #C
   std::vector<index_t> offsets;         ///< #C + 1, offsets[0] = 0
   std::vector<index_t> cell_vertices;   ///< concatenated vertex lists
   std::vector<std::int32_t> regions;    ///< #C region ids (empty when the input had none)
   std::vector<index_t> source_offsets;  ///< #C + 1
   std::vector<index_t> source_tets;     ///< input tet ids of each cell
+  /// Nodes the engine changed, sorted: input nodes it moved (points differ from the input's) or
+  /// removed (used by no cell), and nodes it added (ids past the input's). Empty: the input's
+  /// nodes untouched, all used (check_mesh then checks coordinates bit for bit).
+  std::vector<index_t> changed_nodes;
 
   index_t nb_cells() const { return static_cast<index_t>(types.size()); }
   index_t nb_vertices() const { return static_cast<index_t>(points.size() / 3); }

@@ -96,6 +96,11 @@ ParameterTable<RecombineParameters> make_table() {
             "Rounds of the post-merge stage (same_nodes off): each closes more quads around the "
             "last selection and selects again; the stage stops at the first round that does not "
             "lower the element count"),
+      flag(&P::post_merge_contractions, "post_merge_contractions", "Edge contractions",
+           "In the post-merge stage (same_nodes off), where no flip closes an open quad face, "
+           "contract a node behind it (inside the domain or inside a flat face of it) into its "
+           "neighbour (the paper's edge contraction): the node leaves the mesh, no node moves, "
+           "the boundary and every region's volume are kept"),
   });
 }
 

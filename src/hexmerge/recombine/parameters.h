@@ -100,6 +100,8 @@ struct RecombineParameters {
   bool same_nodes = true;
   /// [1, 10]: rounds of the post-merge stage (each kept only if it helps)
   int post_merge_rounds = 1;
+  /// The post-merge stage may also contract nodes away (same_nodes off; FlipMesh::contract)
+  bool post_merge_contractions = true;
 };
 
 /// The floor under min_scaled_jacobian: an element at or below 0 would be flat or inverted (the

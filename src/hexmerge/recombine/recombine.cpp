@@ -236,6 +236,7 @@ MixedMesh recombine(const TetMesh& input, const RecombineParameters& parameters,
     options.min_pyramid_quality = criteria.min_scaled_jacobian;
     options.min_tet_quality = criteria.min_scaled_jacobian;
     options.placement = parameters.pyramid_placement;
+    options.contract_edges = parameters.post_merge_contractions;
     const QuadCensus before = quad_census(mesh, found, options);
     report.census_hex_candidates = report.census_hex_candidates_after = before.hex_candidates;
     report.census_closable = report.census_closable_after = before.closable;
@@ -265,6 +266,7 @@ MixedMesh recombine(const TetMesh& input, const RecombineParameters& parameters,
       report.flips_23 += stage.flips.flips_23;
       report.flips_32 += stage.flips.flips_32;
       report.flips_44 += stage.flips.flips_44;
+      report.contractions += stage.flips.contractions;
       report.candidates_unclosable = unclosable;
       flipped = std::move(stage.tets);
       found = std::move(new_found);
@@ -289,9 +291,19 @@ MixedMesh recombine(const TetMesh& input, const RecombineParameters& parameters,
   report.input_volume = std::ldexp(report.input_volume, -3 * exponent);
   if (exponent != 0) out.points = input.points;
   if (kept) {
-    // The cells are unions of the stage's tets, not of the input's: no source tets.
+    // The cells are unions of the stage's tets, not of the input's: no source tets. The nodes
+    // contractions took out are used by no cell: declared changed (none moves).
     out.source_offsets.clear();
     out.source_tets.clear();
+    std::vector<char> used(input.nb_vertices(), 0);
+    for (index_t v : tets.tets) used[v] = 1;
+    for (index_t v : input.tets) {
+      if (!used[v]) {
+        used[v] = 1;
+        out.changed_nodes.push_back(v);
+      }
+    }
+    std::sort(out.changed_nodes.begin(), out.changed_nodes.end());
     // The output's tets are the stage's: the report counts the input's.
     report.input_tets = input.nb_tets();
     report.element_reduction_percent =

@@ -29,7 +29,9 @@ class MixedMesh:
     one mid-edge node per edge in VTK's quadratic order. Node ids index ``points``.
     ``point_map[i]`` is the input's node id of node ``i`` (None when the mesh was not made
     by recombine()); ``source_offsets``/``source_tets`` list the input tets each cell is the
-    union of.
+    union of. ``changed_nodes`` (sorted ids, None or empty when none) are the nodes recombine()
+    moved, removed (used by no cell) or added (ids past the input's): only the post-merge stage
+    (same_nodes=False) changes nodes, and check() then verifies the boundary and the volumes.
     """
 
     points: np.ndarray
@@ -42,6 +44,7 @@ class MixedMesh:
     quadratic_offsets: np.ndarray | None = None
     quadratic_nodes: np.ndarray | None = None
     point_map: np.ndarray | None = None
+    changed_nodes: np.ndarray | None = None
 
     @property
     def order(self) -> int:
@@ -223,6 +226,7 @@ def recombine(
         source_offsets=raw["source_offsets"],
         source_tets=raw["source_tets"],
         point_map=np.arange(len(p)),
+        changed_nodes=raw["changed_nodes"] if len(raw["changed_nodes"]) else None,
     )
     if c.shape[1] == 10:
         mesh.quadratic_offsets = raw["quadratic_offsets"]
@@ -270,10 +274,19 @@ def check(mesh: MixedMesh, points: Any, cells: Any, regions: Any = None) -> dict
     tet mesh. Returns the report as a dict; ``report["valid"]`` says whether the mesh passes:
     every cell positively oriented, no crack or overshared face, every input corner used at
     its exact coordinates, regions preserved. Volumes and non-conforming quads are reported.
+    Nodes in ``mesh.changed_nodes`` may be moved or unused; then every such node on the
+    boundary must lie on the source's boundary triangles and every region's volume must be kept
+    to 1e-6 (``off_boundary_nodes``, ``volume_not_kept``).
     """
     p, c, r = _tet_input(points, cells, regions)
     corners = np.ascontiguousarray(c[:, :4])
     pts, cell_vertices, problems = _align_points(mesh, p)
+    changed = None
+    if mesh.changed_nodes is not None and len(mesh.changed_nodes):
+        changed = np.asarray(mesh.changed_nodes, dtype=np.int64)
+        if mesh.point_map is not None:
+            changed = np.sort(np.asarray(mesh.point_map, dtype=np.int64)[changed])
+        changed = changed.astype(np.uint32)
     report = _core.check_mesh(
         pts,
         np.ascontiguousarray(mesh.types, dtype=np.uint8),
@@ -285,6 +298,7 @@ def check(mesh: MixedMesh, points: Any, cells: Any, regions: Any = None) -> dict
         p,
         corners,
         r,
+        changed,
     )
     if problems:
         report["problems"] = problems + list(report["problems"])

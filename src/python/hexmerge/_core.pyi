@@ -35,6 +35,7 @@ def check_mesh(
     input_points: npt.NDArray[np.float64],
     input_tets: npt.NDArray[np.uint32],
     input_regions: npt.NDArray[np.int32] | None,
+    changed_nodes: npt.NDArray[np.uint32] | None = None,
 ) -> dict[str, Any]: ...
 def validate_tet_mesh(
     points: npt.NDArray[np.float64],

@@ -186,6 +186,171 @@ TEST(check_mesh, finds_moved_nodes_and_missing_points) {
   EXPECT_TRUE(mentions(r, "11 nodes")) << all_problems(r);
 }
 
+// --- Declared node changes (MixedMesh::changed_nodes) -------------------------------------------
+
+/// The mesh of `input`'s tets as cells, with no source tets (as a post-merge output has).
+MixedMesh unsourced(const TetMesh& tets, const std::vector<double>& points) {
+  MixedMesh mesh = make_mixed(tets, tets_as_cells(tets));
+  mesh.points = points;
+  mesh.source_offsets.clear();
+  mesh.source_tets.clear();
+  return mesh;
+}
+
+/// The unit cube (kuhn_grid(1)) coned from a node 8 at (0.5, 0.5, z) over its boundary
+/// triangles: all twelve (`bottom` true; node 8 inside), or all but the two of its face z = 0
+/// (node 8 at z = 0: that face is then four triangles at node 8).
+TetMesh coned_cube(double z, bool bottom) {
+  const TetMesh cube = kuhn_grid(1);
+  const TetTopology topology(cube);
+  TetMesh coned;
+  coned.points = cube.points;
+  coned.points.insert(coned.points.end(), {0.5, 0.5, z});
+  const auto at_bottom = [&](index_t v) { return cube.points[3 * v + 2] == 0.0; };
+  for (index_t t = 0; t < cube.nb_tets(); ++t) {
+    for (int f = 0; f < 4; ++f) {
+      if (!topology.on_boundary(t, f)) continue;
+      std::array<index_t, 3> tri{};
+      int n = 0;
+      for (int i = 0; i < 4; ++i) {
+        if (i != f) tri[n++] = cube.tet(t)[i];
+      }
+      if (!bottom && at_bottom(tri[0]) && at_bottom(tri[1]) && at_bottom(tri[2])) continue;
+      add_tet(coned, tri[0], tri[1], tri[2], 8);
+    }
+  }
+  return coned;
+}
+
+TEST(check_mesh, accepts_a_declared_inner_node_move_and_refuses_an_undeclared_one) {
+  const TetMesh input = kuhn_grid(2);
+  const index_t centre = grid_node(2, 1, 1, 1);
+  std::vector<double> points = input.points;
+  points[3 * centre] += 0.1;
+  points[3 * centre + 2] -= 0.05;
+  MixedMesh mesh = unsourced(input, points);
+  CheckReport r = check_mesh(mesh, input);
+  EXPECT_FALSE(r.valid());
+  EXPECT_EQ(r.moved_nodes, 1u);
+  mesh.changed_nodes = {centre};
+  r = check_mesh(mesh, input);
+  EXPECT_TRUE(r.valid()) << all_problems(r);
+  EXPECT_EQ(r.moved_nodes, 0u);
+  EXPECT_EQ(r.declared_changed_nodes, 1u);
+  EXPECT_EQ(r.volume_not_kept, 0u);
+  EXPECT_LT(std::abs(r.relative_volume_difference), 1e-14);
+}
+
+TEST(check_mesh, a_declared_boundary_node_must_stay_on_the_input_boundary_surface) {
+  const TetMesh input = kuhn_grid(2);
+  const index_t side = grid_node(2, 1, 1, 0);  // centre of the face z = 0
+  // Slid along its face: valid.
+  std::vector<double> points = input.points;
+  points[3 * side] += 0.2;
+  points[3 * side + 1] -= 0.1;
+  MixedMesh mesh = unsourced(input, points);
+  mesh.changed_nodes = {side};
+  CheckReport r = check_mesh(mesh, input);
+  EXPECT_TRUE(r.valid()) << all_problems(r);
+  EXPECT_EQ(r.off_boundary_nodes, 0u);
+  // Pushed out of the face: off the surface, and the volume grows.
+  points = input.points;
+  points[3 * side + 2] -= 0.1;
+  mesh = unsourced(input, points);
+  mesh.changed_nodes = {side};
+  r = check_mesh(mesh, input);
+  EXPECT_FALSE(r.valid());
+  EXPECT_EQ(r.off_boundary_nodes, 1u);
+  EXPECT_EQ(r.volume_not_kept, 1u);
+  EXPECT_TRUE(mentions(r, "changed node " + std::to_string(side))) << all_problems(r);
+  // Pulled inside, by less than the tolerance of its edges (1e-6 of 1): still on the surface.
+  points = input.points;
+  points[3 * side + 2] += 1e-9;
+  mesh = unsourced(input, points);
+  mesh.changed_nodes = {side};
+  r = check_mesh(mesh, input);
+  EXPECT_EQ(r.off_boundary_nodes, 0u) << all_problems(r);
+}
+
+TEST(check_mesh, accepts_a_declared_removed_node_and_a_declared_added_node) {
+  const TetMesh coned = coned_cube(0.5, true);
+  const TetMesh cube = kuhn_grid(1);
+  // Removed: the coned cube's centre contracted away, the cube's own 6 tets left.
+  MixedMesh mesh = unsourced(cube, coned.points);
+  CheckReport r = check_mesh(mesh, coned);
+  EXPECT_FALSE(r.valid());
+  EXPECT_EQ(r.unused_input_nodes, 1u);
+  mesh.changed_nodes = {8};
+  r = check_mesh(mesh, coned);
+  EXPECT_TRUE(r.valid()) << all_problems(r);
+  EXPECT_EQ(r.unused_input_nodes, 0u);
+  // Added: the cube's tets coned from a new node 8.
+  mesh = unsourced(coned, coned.points);
+  r = check_mesh(mesh, cube);
+  EXPECT_FALSE(r.valid());
+  EXPECT_TRUE(mentions(r, "9 nodes")) << all_problems(r);
+  mesh.changed_nodes = {8};
+  r = check_mesh(mesh, cube);
+  EXPECT_TRUE(r.valid()) << all_problems(r);
+}
+
+TEST(check_mesh, new_boundary_triangles_at_an_added_node_must_lie_on_the_input_boundary) {
+  // Node 8 added at the centre of the cube's face z = 0: face z = 0 is four triangles at node 8,
+  // none of them the input's.
+  const TetMesh cube = kuhn_grid(1);
+  TetMesh on_face = coned_cube(0.0, false);
+  MixedMesh mesh = unsourced(on_face, on_face.points);
+  mesh.changed_nodes = {8};
+  CheckReport r = check_mesh(mesh, cube);
+  EXPECT_TRUE(r.valid()) << all_problems(r);
+  EXPECT_EQ(r.cracks, 0u);
+  mesh.changed_nodes.clear();  // undeclared: the node count differs and face z = 0 is open
+  r = check_mesh(mesh, cube);
+  EXPECT_FALSE(r.valid());
+  EXPECT_EQ(r.cracks, 4u);
+  // The added node lifted into the cube: its four bottom triangles are off the surface.
+  TetMesh lifted = coned_cube(0.05, false);
+  mesh = unsourced(lifted, lifted.points);
+  mesh.changed_nodes = {8};
+  r = check_mesh(mesh, cube);
+  EXPECT_FALSE(r.valid());
+  EXPECT_EQ(r.cracks, 4u);
+  EXPECT_EQ(r.volume_not_kept, 1u);
+}
+
+TEST(check_mesh, new_boundary_triangles_next_to_a_removed_boundary_node_must_lie_on_the_surface) {
+  // The input has node 8 at the centre of face z = 0; the output is the cube's 6 Kuhn tets, node
+  // 8 contracted away: its two bottom triangles are new and have no declared node, but nodes
+  // next to one.
+  const TetMesh input = coned_cube(0.0, false);
+  const TetMesh cube = kuhn_grid(1);
+  MixedMesh mesh = unsourced(cube, input.points);
+  mesh.changed_nodes = {8};
+  CheckReport r = check_mesh(mesh, input);
+  EXPECT_TRUE(r.valid()) << all_problems(r);
+  EXPECT_EQ(r.cracks, 0u);
+  mesh.changed_nodes.clear();
+  r = check_mesh(mesh, input);
+  EXPECT_FALSE(r.valid());
+  EXPECT_EQ(r.unused_input_nodes, 1u);
+  EXPECT_EQ(r.cracks, 2u);
+}
+
+TEST(check_mesh, refuses_a_faulty_changed_node_list) {
+  const TetMesh coned = coned_cube(0.5, true);
+  MixedMesh mesh = unsourced(coned, coned.points);
+  mesh.changed_nodes = {0};  // declared, not changed: nothing to find
+  EXPECT_TRUE(check_mesh(mesh, coned).valid());
+  mesh.changed_nodes = {3, 1};
+  CheckReport bad = check_mesh(mesh, coned);
+  EXPECT_FALSE(bad.valid());
+  EXPECT_TRUE(mentions(bad, "out of order")) << all_problems(bad);
+  mesh.changed_nodes = {99};
+  bad = check_mesh(mesh, coned);
+  EXPECT_FALSE(bad.valid());
+  EXPECT_TRUE(mentions(bad, "past the nodes")) << all_problems(bad);
+}
+
 TEST(check_mesh, counts_a_hex_next_to_tets_as_non_conforming) {
   // Cube (0,0,0) of a 2x2x2 Kuhn grid as a hex, the other seven cubes left as tets: its three
   // inner quads each meet two triangles.

@@ -56,7 +56,8 @@ index_t FlipMesh::opposite(index_t t, index_t a, index_t b, index_t c) const {
 }
 
 bool FlipMesh::replace(const std::vector<index_t>& old_tets,
-                       const std::vector<std::array<index_t, 4>>& new_tets, double min_quality) {
+                       const std::vector<std::array<index_t, 4>>& new_tets, double min_quality,
+                       std::uint8_t kind) {
   const std::int32_t region = regions_[old_tets[0]];
   double old_volume = 0.0;
   for (index_t t : old_tets) {
@@ -78,7 +79,6 @@ bool FlipMesh::replace(const std::vector<index_t>& old_tets,
     alive_[t] = 0;
     journal_.push_back({t, false, 0});
   }
-  const std::uint8_t kind = old_tets.size() == 2 ? 23 : (old_tets.size() == 3 ? 32 : 44);
   for (const auto& q : new_tets) {
     const index_t t = nb_slots();
     tets_.insert(tets_.end(), q.begin(), q.end());
@@ -92,6 +92,7 @@ bool FlipMesh::replace(const std::vector<index_t>& old_tets,
   if (kind == 23) ++counts_.flips_23;
   if (kind == 32) ++counts_.flips_32;
   if (kind == 44) ++counts_.flips_44;
+  if (kind == kContraction) ++counts_.contractions;
   return true;
 }
 
@@ -115,7 +116,7 @@ bool FlipMesh::flip_23(index_t t0, index_t t1, double min_quality) {
   const index_t a = face[0];
   index_t b = face[1], c = face[2];
   if (tet_volume(point(a), point(b), point(c), point(p)) < 0.0) std::swap(b, c);
-  return replace({t0, t1}, {{{a, b, q, p}}, {{b, c, q, p}}, {{c, a, q, p}}}, min_quality);
+  return replace({t0, t1}, {{{a, b, q, p}}, {{b, c, q, p}}, {{c, a, q, p}}}, min_quality, 23);
 }
 
 bool FlipMesh::remove_edge(index_t u, index_t v, int diagonal, double min_quality) {
@@ -168,7 +169,79 @@ bool FlipMesh::remove_edge(index_t u, index_t v, int diagonal, double min_qualit
     const index_t r0 = ring[s], r1 = ring[s + 1], r2 = ring[s + 2], r3 = ring[(s + 3) % 4];
     made = {{{r0, r1, r2, v}}, {{r0, r2, r3, v}}, {{r0, r2, r1, u}}, {{r0, r3, r2, u}}};
   }
-  return replace(around, made, min_quality);
+  return replace(around, made, min_quality, ring.size() == 3 ? 32 : 44);
+}
+
+bool FlipMesh::contract(index_t from, index_t onto, double min_quality) {
+  std::vector<index_t> star;
+  tets_with_edge(from, from, star);
+  bool joined = false;
+  // The faces at `from` with no tet on their other side: on the domain boundary.
+  std::vector<std::array<index_t, 3>> boundary;
+  for (index_t t : star) {
+    const index_t* q = tet(t);
+    joined = joined || holds(q, onto);
+    for (int f = 0; f < 4; ++f) {
+      if (q[f] == from) continue;
+      std::array<index_t, 3> face{};
+      int n = 0;
+      for (int i = 0; i < 4; ++i) {
+        if (i != f) face[n++] = q[i];
+      }
+      if (tet_with_face(face[0], face[1], face[2], t) == NO_CELL) boundary.push_back(face);
+    }
+  }
+  if (!joined) return false;
+  if (!boundary.empty() && !flat_boundary(boundary, onto)) return false;
+  // The star of `from` is a ball and `onto` lies on its boundary; the cone from `onto` over the
+  // star's faces away from `from` and `onto` tiles it exactly when every cone tet is positive
+  // (the winding number argument), which replace() checks with the quality floor. On the
+  // domain boundary the star's faces at `from` there are one plane with `onto` in it, so the
+  // cone's faces in that plane tile the same polygon: the boundary surface is kept.
+  std::vector<std::array<index_t, 4>> made;
+  for (index_t t : star) {
+    const index_t* q = tet(t);
+    if (holds(q, onto)) continue;
+    std::array<index_t, 4> cone{{q[0], q[1], q[2], q[3]}};
+    std::replace(cone.begin(), cone.end(), from, onto);
+    made.push_back(cone);
+  }
+  return replace(star, made, min_quality, kContraction);
+}
+
+bool FlipMesh::flat_boundary(const std::vector<std::array<index_t, 3>>& faces, index_t onto) const {
+  bool holds_onto = false;
+  double longest = 0.0;
+  for (const auto& f : faces) {
+    holds_onto = holds_onto || f[0] == onto || f[1] == onto || f[2] == onto;
+    for (int i = 0; i < 3; ++i) {
+      const double* p = point(f[i]);
+      const double* q = point(f[(i + 1) % 3]);
+      longest = std::max(longest,
+                         std::sqrt((p[0] - q[0]) * (p[0] - q[0]) + (p[1] - q[1]) * (p[1] - q[1]) +
+                                   (p[2] - q[2]) * (p[2] - q[2])));
+    }
+  }
+  if (!holds_onto) return false;
+  // Every corner of every face within a tiny distance of the first face's plane (so the node is
+  // on no edge or corner of the geometry, and `onto` is on its face).
+  const double* a = point(faces[0][0]);
+  const double* b = point(faces[0][1]);
+  const double* c = point(faces[0][2]);
+  const double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+  const double v[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+  double n[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
+  const double norm = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+  if (!(norm > 0.0)) return false;
+  for (double& x : n) x /= norm;
+  for (const auto& f : faces) {
+    for (index_t w : f) {
+      const double* p = point(w);
+      const double distance = n[0] * (p[0] - a[0]) + n[1] * (p[1] - a[1]) + n[2] * (p[2] - a[2]);
+      if (std::fabs(distance) > kFlatTolerance * longest) return false;
+    }
+  }
+  return true;
 }
 
 void FlipMesh::undo(std::size_t mark) {
@@ -179,6 +252,7 @@ void FlipMesh::undo(std::size_t mark) {
     if (e.kind == 23) --counts_.flips_23;
     if (e.kind == 32) --counts_.flips_32;
     if (e.kind == 44) --counts_.flips_44;
+    if (e.kind == kContraction) --counts_.contractions;
     if (e.created) {
       // Created last, so it is the last slot: drop it (its incidence entries go stale).
       HEXMERGE_ASSERT(e.tet + 1 == nb_slots(), "journal out of order");

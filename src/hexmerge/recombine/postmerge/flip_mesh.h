@@ -1,13 +1,14 @@
 #pragma once
 /// @file
-/// A tet mesh that can be changed by flips (2-3, 3-2, 4-4), with an undo journal: the
-/// post-merge stage's working copy of the tets (postmerge.h).
+/// A tet mesh that can be changed by flips (2-3, 3-2, 4-4) and edge contractions, with an undo
+/// journal: the post-merge stage's working copy of the tets (postmerge.h).
 ///
-/// Tets are never changed in place: a flip kills its old tets and appends new ones, so a tet id
-/// names the same four vertices for as long as it is alive. Every flip replaces a set of tets by
-/// another tiling of the same union (same boundary triangles, same nodes), all of one region,
-/// every new tet positively oriented with a scaled Jacobian of at least the given floor; a flip
-/// that cannot satisfy that changes nothing.
+/// Tets are never changed in place: a change kills its old tets and appends new ones, so a tet
+/// id names the same four vertices for as long as it is alive. Every change replaces a set of
+/// tets by another tiling of the same union (same boundary triangles), all of one region, every
+/// new tet positively oriented with a scaled Jacobian of at least the given floor; a change that
+/// cannot satisfy that changes nothing. Flips keep every node; a contraction leaves one inner
+/// node unused (no node ever moves).
 
 #include <array>
 #include <cstddef>
@@ -24,6 +25,9 @@ struct FlipCounts {
   std::size_t flips_23 = 0;  ///< two tets sharing a face -> three around a new edge
   std::size_t flips_32 = 0;  ///< three tets around an edge -> two sharing a face
   std::size_t flips_44 = 0;  ///< four tets around an edge -> four around another edge
+  /// Half-edge contractions: an inner node merged into a neighbour, its tets around the edge
+  /// gone (contract()).
+  std::size_t contractions = 0;
 };
 
 class FlipMesh {
@@ -56,6 +60,14 @@ class FlipMesh {
   /// 0 or 1 picks the new edge between ring vertices 0-2 or 1-3) surround it. Same conditions as
   /// flip_23.
   bool remove_edge(index_t u, index_t v, int diagonal, double min_quality);
+  /// Half-edge contraction of edge (from, onto): node `from` leaves the mesh, the tets holding
+  /// both nodes are gone and in every other tet of `from` it is replaced by `onto`. Only when
+  /// the tets of `from` are all of one region and unlocked, `from` is inside the domain or its
+  /// boundary faces lie in one plane with `onto` on them (a node inside a flat face of the
+  /// geometry), and every tet made is positive with a scaled Jacobian of at least `min_quality`:
+  /// the tets made tile the same union, so the boundary surface and every region's volume are
+  /// kept and no other node moves. False (nothing changed) otherwise.
+  bool contract(index_t from, index_t onto, double min_quality);
 
   /// The undo journal: undo(mark()) restores the mesh as it was at the mark, counts included.
   std::size_t mark() const { return journal_.size(); }
@@ -67,8 +79,16 @@ class FlipMesh {
   TetMesh compact() const;
 
  private:
+  /// The journal's kind of a contraction (flips are 23, 32, 44).
+  static constexpr std::uint8_t kContraction = 1;
+  /// Boundary faces are one plane when every corner is within this fraction of their longest
+  /// edge from the first face's plane.
+  static constexpr double kFlatTolerance = 1e-12;
+  /// The boundary faces at a node lie in one plane, and `onto` is a corner of one of them.
+  bool flat_boundary(const std::vector<std::array<index_t, 3>>& faces, index_t onto) const;
   bool replace(const std::vector<index_t>& old_tets,
-               const std::vector<std::array<index_t, 4>>& new_tets, double min_quality);
+               const std::vector<std::array<index_t, 4>>& new_tets, double min_quality,
+               std::uint8_t kind);
 
   const std::vector<double>& points_;
   bool with_regions_;

@@ -200,6 +200,15 @@ class Stage {
         m_.undo(start);
       }
     }
+    // No flip takes it out: contract it into a neighbour along the fan (the tets between them
+    // go, the fan loses it).
+    if (options_.contract_edges) {
+      for (index_t onto : {vertices[i - 1], vertices[i + 1]}) {
+        if (!m_.contract(x, onto, floor)) continue;
+        if (kept()) return true;
+        m_.undo(start);
+      }
+    }
     return false;
   }
 

@@ -10,9 +10,11 @@
 /// placement). Otherwise the tets behind it turn around its diagonal a-c in a fan b, x1, ..., xk,
 /// d (k >= 2). Each xi but one (the apex kept) is taken out of the fan by one flip of tets outside
 /// the candidate: a 2-3 flip of face (a, c, xi), a 3-2 flip of edge (a, xi) or (c, xi), or a 4-4
-/// flip of one of those edges. Flips keep every node and every boundary triangle; every new tet
-/// is positively oriented, in the region of the tets it replaces, with a scaled Jacobian of at
-/// least the floor given.
+/// flip of one of those edges; failing those (with contract_edges), the paper's edge contraction:
+/// xi, an inner node, merged into its neighbour along the fan. Flips keep every node, a
+/// contraction leaves one inner node unused; both keep every boundary triangle and every region's
+/// volume; every new tet is positively oriented, in the region of the tets it replaces, with a
+/// scaled Jacobian of at least the floor given.
 
 #include <cstddef>
 #include <vector>
@@ -33,6 +35,9 @@ struct PostMergeOptions {
   /// Longest fan of tets behind a quad face that is worked on (k + 1 tets): bounds the flips per
   /// face to max_fan - 2 and the apexes tried to max_fan - 1.
   int max_fan = 6;
+  /// When no flip takes a vertex out of the fan, contract it into a neighbour along the fan
+  /// (FlipMesh::contract: inner nodes only; the node leaves the mesh).
+  bool contract_edges = false;
 };
 
 /// Hexahedron candidates, and those whose every quad face the tets close as they are.
@@ -47,7 +52,7 @@ QuadCensus quad_census(const TetMesh& mesh, const std::vector<Candidate>& candid
 
 struct PostMergeResult {
   TetMesh tets;                    ///< the tets after the flips (same points, compact)
-  FlipCounts flips;                ///< flips kept
+  FlipCounts flips;                ///< flips and contractions kept
   std::size_t attempted = 0;       ///< hexahedron candidates worked on (each once)
   std::size_t closed = 0;          ///< of them: every quad face closed, by at least one flip
   std::size_t already_closed = 0;  ///< of them: every quad face closed as the tets were

@@ -1,14 +1,17 @@
-// FlipMesh: 2-3, 3-2 and 4-4 flips keep the union of the tets they replace, and undo restores.
+// FlipMesh: 2-3, 3-2 and 4-4 flips and contractions keep the union of the tets they replace, and
+// undo restores.
 #include "hexmerge/recombine/postmerge/flip_mesh.h"
 
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <map>
 #include <vector>
 
 #include "fixtures.h"
+#include "hexmerge/check/validate_tet_mesh.h"
 #include "hexmerge/geometry/quality.h"
 
 namespace hexmerge {
@@ -190,6 +193,135 @@ TEST(flip_mesh, undo_restores_the_tets_and_the_counts_after_several_flips) {
   EXPECT_EQ(back.tets, mesh.tets);
   m.tets_with_edge(4, 5, around);
   EXPECT_EQ(around.size(), 4u);
+}
+
+// The unit cube's corners (nodes 0-7) and two inner nodes 8 and 9 near its centre, Delaunay
+// tetrahedralised: the nearest pair of points, 8-9 is an edge.
+TetMesh cube_with_two_inner_nodes() {
+  std::vector<Point> points;
+  for (int b = 0; b < 8; ++b) points.push_back({double(b & 1), double(b >> 1 & 1), double(b >> 2)});
+  points.push_back({0.45, 0.5, 0.52});
+  points.push_back({0.6, 0.53, 0.47});
+  return test::tetgen_mesh(points);
+}
+
+bool uses(const FlipMesh& m, index_t v) {
+  for (index_t t : alive_tets(m)) {
+    if (std::count(m.tet(t), m.tet(t) + 4, v)) return true;
+  }
+  return false;
+}
+
+TEST(flip_mesh, a_contraction_takes_an_inner_node_out_and_keeps_the_union) {
+  const TetMesh mesh = cube_with_two_inner_nodes();
+  if (mesh.nb_tets() == 0) GTEST_SKIP() << "no tetgen";
+  FlipMesh m(mesh);
+  const auto boundary = boundary_triangles(m);
+  bool positive = false;
+  const double vol = volume(m, positive);
+  ASSERT_TRUE(positive);
+  std::vector<index_t> joined;
+  m.tets_with_edge(8, 9, joined);
+  ASSERT_FALSE(joined.empty());
+  const std::size_t before = alive_tets(m).size();
+  const std::size_t start = m.mark();
+  ASSERT_TRUE(m.contract(9, 8, 0.0));
+  EXPECT_EQ(m.counts().contractions, 1u);
+  EXPECT_FALSE(uses(m, 9));
+  EXPECT_TRUE(uses(m, 8));
+  EXPECT_EQ(alive_tets(m).size(), before - joined.size());  // the tets around 8-9 are gone
+  expect_same_union(m, boundary, vol);
+  // The compact mesh keeps every point (node 9 unused) and passes the tet mesh checks.
+  const TetMesh out = m.compact();
+  EXPECT_EQ(out.points, mesh.points);
+  EXPECT_NO_THROW(validate_tet_mesh(out));
+  m.undo(start);
+  EXPECT_EQ(m.counts().contractions, 0u);
+  EXPECT_EQ(m.compact().tets, mesh.tets);
+}
+
+TEST(flip_mesh, a_contraction_refuses_boundary_nodes_locks_regions_and_the_floor) {
+  const TetMesh mesh = cube_with_two_inner_nodes();
+  if (mesh.nb_tets() == 0) GTEST_SKIP() << "no tetgen";
+  {
+    FlipMesh m(mesh);
+    // A corner is on the boundary: never contracted, whatever its neighbour.
+    std::vector<index_t> star;
+    m.tets_with_edge(0, 0, star);
+    for (int i = 0; i < 4; ++i) {
+      const index_t other = m.tet(star[0])[i];
+      if (other != 0) {
+        EXPECT_FALSE(m.contract(0, other, 0.0));
+      }
+    }
+    EXPECT_FALSE(m.contract(9, 9, 0.0));   // no edge
+    EXPECT_FALSE(m.contract(9, 8, 0.99));  // no cone tet is near regular
+    m.tets_with_edge(9, 9, star);
+    m.set_locked(star.back(), true);
+    EXPECT_FALSE(m.contract(9, 8, 0.0));
+    EXPECT_EQ(m.counts().contractions, 0u);
+    EXPECT_EQ(m.compact().tets, mesh.tets);
+  }
+  // One of node 9's tets in another region: an interface node stays.
+  TetMesh two = mesh;
+  two.regions.assign(two.nb_tets(), 1);
+  for (index_t t = 0; t < two.nb_tets(); ++t) {
+    if (std::count(two.tet(t), two.tet(t) + 4, 9)) {
+      two.regions[t] = 2;
+      break;
+    }
+  }
+  FlipMesh m(two);
+  EXPECT_FALSE(m.contract(9, 8, 0.0));
+  two.regions.assign(two.nb_tets(), 1);
+  FlipMesh same(two);
+  EXPECT_TRUE(same.contract(9, 8, 0.0));
+}
+
+TEST(flip_mesh, a_contraction_on_a_flat_face_keeps_the_face) {
+  // Nodes 8 and 9 inside the cube's face z = 0, node 10 inside the cube.
+  std::vector<Point> points;
+  for (int b = 0; b < 8; ++b) points.push_back({double(b & 1), double(b >> 1 & 1), double(b >> 2)});
+  points.push_back({0.55, 0.5, 0.0});
+  points.push_back({0.35, 0.45, 0.0});
+  points.push_back({0.5, 0.5, 0.6});
+  const TetMesh mesh = test::tetgen_mesh(points);
+  if (mesh.nb_tets() == 0) GTEST_SKIP() << "no tetgen";
+  FlipMesh m(mesh);
+  bool positive = false;
+  const double vol = volume(m, positive);
+  std::vector<index_t> joined;
+  m.tets_with_edge(9, 10, joined);
+  // Onto a node off the face: the face would not be kept.
+  if (!joined.empty()) {
+    EXPECT_FALSE(m.contract(9, 10, 0.0));
+  }
+  m.tets_with_edge(8, 9, joined);
+  ASSERT_FALSE(joined.empty());
+  ASSERT_TRUE(m.contract(9, 8, 0.0));
+  EXPECT_FALSE(uses(m, 9));
+  bool still_positive = false;
+  EXPECT_NEAR(volume(m, still_positive), vol, 1e-12 * vol);
+  EXPECT_TRUE(still_positive);
+  // The boundary: the cube's faces, z = 0 now without node 9; every boundary triangle on a face
+  // of the cube, and the ones on z = 0 cover it (area 1).
+  double bottom_area = 0.0;
+  for (const Triangle& tri : boundary_triangles(m)) {
+    std::array<Point, 3> p{};
+    for (int i = 0; i < 3; ++i) p[i] = {m.point(tri[i])[0], m.point(tri[i])[1], m.point(tri[i])[2]};
+    bool on_a_face = false;
+    for (int axis = 0; axis < 3; ++axis) {
+      for (double side : {0.0, 1.0}) {
+        on_a_face = on_a_face || (p[0][axis] == side && p[1][axis] == side && p[2][axis] == side);
+      }
+    }
+    EXPECT_TRUE(on_a_face);
+    if (p[0][2] == 0.0 && p[1][2] == 0.0 && p[2][2] == 0.0) {
+      bottom_area += 0.5 * std::fabs((p[1][0] - p[0][0]) * (p[2][1] - p[0][1]) -
+                                     (p[2][0] - p[0][0]) * (p[1][1] - p[0][1]));
+    }
+  }
+  EXPECT_NEAR(bottom_area, 1.0, 1e-12);
 }
 
 }  // namespace

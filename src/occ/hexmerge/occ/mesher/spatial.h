@@ -9,6 +9,7 @@
 #include <cstddef>
 #include <vector>
 
+#include "hexmerge/geometry/triangle_distance.h"
 #include "hexmerge/geometry/vec3.h"
 #include "hexmerge/occ/mesher/common.h"
 
@@ -62,8 +63,7 @@ class BucketGrid {
   std::vector<std::vector<int>> buckets_;
 };
 
-/// Squared distance from p to triangle abc (Ericson, Real-Time Collision Detection, 5.1.5).
-double squared_distance_to_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c);
+using hexmerge::squared_distance_to_triangle;  // geometry/triangle_distance.h
 
 /// Points, with "is there one within r of q" queries.
 class PointSet {

@@ -1,8 +1,7 @@
-#include "hexmerge/occ/mesher/spatial.h"
+#include "hexmerge/geometry/triangle_distance.h"
 
-namespace hexmerge::mesher {
+namespace hexmerge {
 
-// Squared distance from p to triangle abc (Ericson, Real-Time Collision Detection, 5.1.5).
 double squared_distance_to_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c) {
   const Vec3 ab = b - a, ac = c - a, ap = p - a;
   const double d1 = ab.dot(ap), d2 = ac.dot(ap);
@@ -25,4 +24,4 @@ double squared_distance_to_triangle(const Vec3& p, const Vec3& a, const Vec3& b,
   return sq(p - (a + ab * (vb * denom) + ac * (vc * denom)));
 }
 
-}  // namespace hexmerge::mesher
+}  // namespace hexmerge

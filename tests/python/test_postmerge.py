@@ -1,0 +1,107 @@
+"""The post-merge stage's options (same_nodes, post_merge_contractions) through the Python API and
+the CLI, and the checker's view of the nodes the stage declares changed."""
+
+from __future__ import annotations
+
+import json
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import hexmerge
+from conftest import ROOT
+
+BOX_GEO = """
+SetFactory("OpenCASCADE");
+Box(1) = {0, 0, 0, 4, 4, 2};
+Mesh.CharacteristicLengthMax = 0.33;
+"""
+
+
+@pytest.fixture(scope="module")
+def delaunay_box(tmp_path_factory: pytest.TempPathFactory) -> tuple[np.ndarray, np.ndarray, Path]:
+    """A Gmsh Delaunay tet mesh of a 4 x 4 x 2 box (a few thousand tets), as the benchmarks'."""
+    if shutil.which("gmsh") is None:
+        pytest.skip("gmsh is not installed")
+    import meshio
+
+    folder = tmp_path_factory.mktemp("postmerge")
+    geo = folder / "box.geo"
+    geo.write_text(BOX_GEO)
+    out = folder / "box.msh"
+    subprocess.run(["gmsh", "-3", "-format", "msh22", str(geo), "-o", str(out)], check=True,
+                   capture_output=True)
+    m = meshio.read(out)
+    tets = np.vstack([c.data for c in m.cells if c.type == "tetra"]).astype(np.int64)
+    used = np.unique(tets)
+    renumber = np.full(len(m.points), -1, dtype=np.int64)
+    renumber[used] = np.arange(len(used))
+    return np.asarray(m.points[used], dtype=float), renumber[tets], out
+
+
+def test_contractions_are_declared_and_the_checker_verifies_them(delaunay_box) -> None:
+    points, tets, _ = delaunay_box
+    mesh, report = hexmerge.recombine(points, tets, same_nodes=False)
+    assert report["post_merge"] == "kept"
+    assert report["contractions"] > 0
+    # The declared nodes are exactly the input's nodes no cell uses any more (none moved).
+    unused = np.setdiff1d(np.unique(tets), np.unique(mesh.cell_vertices))
+    assert np.array_equal(np.sort(mesh.changed_nodes), unused)
+    assert len(unused) == report["contractions"]
+    assert np.array_equal(mesh.points, points)
+    check = hexmerge.check(mesh, points, tets)
+    assert check["valid"], check["problems"]
+    assert check["declared_changed_nodes"] == report["contractions"]
+    assert check["off_boundary_nodes"] == 0 and check["volume_not_kept"] == 0
+    assert check["nonconforming_quads"] == 0 and check["cracks"] == 0
+    assert abs(check["relative_volume_difference"]) < 1e-9
+    # Undeclared, the same mesh fails: its contracted nodes are unused input nodes.
+    mesh.changed_nodes = None
+    bare = hexmerge.check(mesh, points, tets)
+    assert not bare["valid"]
+    assert bare["unused_input_nodes"] == report["contractions"]
+
+
+def test_flips_only_and_same_nodes_declare_nothing(delaunay_box) -> None:
+    points, tets, _ = delaunay_box
+    same, r0 = hexmerge.recombine(points, tets)
+    assert r0["post_merge"] == "off" and same.changed_nodes is None
+    flips, r1 = hexmerge.recombine(points, tets, same_nodes=False, post_merge_contractions=False)
+    assert r1["contractions"] == 0 and flips.changed_nodes is None
+    assert hexmerge.check(flips, points, tets)["valid"]
+    both, r2 = hexmerge.recombine(points, tets, same_nodes=False)
+    # Contractions close quads no flip closes: never fewer hexahedra closed than flips alone.
+    assert r2["post_merge_closed"] >= r1["post_merge_closed"]
+    assert r2["output_cells"] < r0["output_cells"]
+
+
+def test_a_moved_boundary_node_fails_the_check_even_when_declared(delaunay_box) -> None:
+    points, tets, _ = delaunay_box
+    mesh, _ = hexmerge.recombine(points, tets)
+    corner = int(np.argmin(points.sum(axis=1)))  # the box corner at the origin
+    mesh.points = mesh.points.copy()
+    mesh.points[corner] -= 0.05
+    mesh.changed_nodes = np.array([corner])
+    check = hexmerge.check(mesh, points, tets)
+    assert not check["valid"]
+    assert check["off_boundary_nodes"] == 1
+    assert check["volume_not_kept"] == 1
+
+
+def test_cli_takes_the_contraction_option(delaunay_box, tmp_path: Path) -> None:
+    _, _, path = delaunay_box
+    out, stats = tmp_path / "out.vtu", tmp_path / "stats.json"
+    cmd = [sys.executable, "-m", "hexmerge", "recombine", str(path), "-o", str(out), "--quiet",
+           "--stats", str(stats), "--no-same-nodes"]
+    env_path = str(ROOT / "src" / "python")
+    for flag, expect_contractions in (("--no-post-merge-contractions", False),
+                                      ("--post-merge-contractions", True)):
+        subprocess.run(cmd + [flag], check=True, capture_output=True,
+                       env={"PYTHONPATH": env_path, "PATH": "/usr/bin:/bin"})
+        report = json.loads(stats.read_text())["report"]
+        assert report["post_merge"] == "kept"
+        assert (report["contractions"] > 0) == expect_contractions
