@@ -41,10 +41,23 @@ PHASES = {
     "done": ("Writing the mesh", 1.0, 1.0),
 }
 SHAPE_MESHING_SHARE = 0.4
+# The mesher's steps ("mesh shape: <step>", then " (<way of placing the points>)" after the
+# first way) -> readable names.
+MESHER_STEPS = {
+    "surface": "surface triangulation", "lattice": "lattice", "core": "hexahedral core",
+    "layers": "boundary layers", "tetgen": "tetrahedra (TetGen)", "regions": "regions",
+    "slivers": "improving the tetrahedra", "check": "boundary check", "second order": "second order",
+}
 
 
 def overall_progress(phase, fraction, shape_mode):
     """(fraction of the whole run in [0, 1], readable phase name) for an engine progress call."""
+    if phase.startswith("mesh shape: "):
+        step, _, way = phase[len("mesh shape: "):].partition(" (")
+        name = f"Meshing the shape: {MESHER_STEPS.get(step, step)}"
+        if way:
+            name += f" ({way}"
+        return SHAPE_MESHING_SHARE * max(0.0, min(1.0, fraction)), name
     name, start, end = PHASES.get(phase, (phase, 0.0, 1.0))
     f = start + (end - start) * max(0.0, min(1.0, fraction))
     if not shape_mode:

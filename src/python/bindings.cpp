@@ -439,7 +439,7 @@ py::tuple run_regions_by_solid(const std::string& brep, const PointsIn& points,
 }
 
 py::tuple run_mesh_shape(const std::string& brep, const std::map<std::string, std::string>& options,
-                         bool second_order) {
+                         bool second_order, const py::object& progress) {
   MeshShapeParameters parameters;
   for (const auto& [name, value] : options) {
     mesh_shape_parameter_table().set(parameters, name, value);
@@ -447,12 +447,16 @@ py::tuple run_mesh_shape(const std::string& brep, const std::map<std::string, st
   MeshShapeReport report;
   TetMesh mesh;
   Tet10Mesh tet10;
-  {
+  Progress watcher(progress);
+  try {
     py::gil_scoped_release released;
     if (second_order)
-      tet10 = mesh_shape_tet10(brep, parameters, report);
+      tet10 = mesh_shape_tet10(brep, parameters, report, watcher.callback());
     else
-      mesh = mesh_shape(brep, parameters, report);
+      mesh = mesh_shape(brep, parameters, report, watcher.callback());
+  } catch (const Cancelled&) {
+    watcher.rethrow_python_error();
+    throw;
   }
   py::dict d;
   d["nb_solids"] = report.nb_solids;
@@ -671,13 +675,15 @@ samples_per_piece, classify_every_tet, nb_threads: see RegionsBySolidParameters.
 Returns (solids, report): solids int32 (M,), 0-based solid index in TopExp::MapShapes order
 (FreeCAD's Shape.Solids) or -1; report a dict of counts and phase_seconds.)doc");
   m.def("mesh_shape", &run_mesh_shape, py::arg("brep"), py::arg("options"),
-        py::arg("second_order") = false,
+        py::arg("second_order") = false, py::arg("progress") = py::none(),
         R"doc(Lattice-seeded tets of a solid shape (BREP text) with OpenCASCADE and TetGen.
 
 options  {parameter name: value as text}; see mesh_parameter_table() ("size" is required).
 Returns (points float64 (N, 3), tets (M, 4), regions int32 (M,), report dict); with
 second_order, tets (M, 10) in VTK's Tet10 order, the boundary mid-edge nodes on the CAD
-(mesh_shape_tet10), and report["nb_projected_mid_nodes"], report["nb_straight_mid_nodes"].)doc");
+(mesh_shape_tet10), and report["nb_projected_mid_nodes"], report["nb_straight_mid_nodes"].
+progress  as for recombine(): called with ("mesh shape: <step>", fraction) after each step;
+returning False cancels between steps (hexmerge.Cancelled).)doc");
   m.def(
       "mesh_parameter_table", [] { return table_rows(mesh_shape_parameter_table().info()); },
       R"doc(The mesher's parameters (MeshShapeParameters), in parameter_table()'s format.)doc");

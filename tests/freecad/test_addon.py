@@ -298,6 +298,15 @@ class Progress(unittest.TestCase):
             self.assertEqual(values[-1], 1.0)
             self.assertGreater(values[3], 0.0)  # the second phase does not restart at 0
 
+    def test_mesher_steps_have_readable_names_within_the_meshing_share(self):
+        from freecad.hexmerge.task_mesh_hexdominant import (MESHER_STEPS, SHAPE_MESHING_SHARE,
+                                                            overall_progress)
+        for step, readable in MESHER_STEPS.items():
+            for way in ("", " (surface only)"):
+                value, name = overall_progress(f"mesh shape: {step}{way}", 0.5, True)
+                self.assertEqual(name, f"Meshing the shape: {readable}{way}")
+                self.assertAlmostEqual(value, 0.5 * SHAPE_MESHING_SHARE)
+
 
 class WriterLink(unittest.TestCase):
     """FreeCAD's CalculiX writer reads the mesh object's shape from its Part (or Shape) link and

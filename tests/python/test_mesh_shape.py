@@ -502,8 +502,26 @@ def test_engine_options_and_progress(shapes) -> None:
     assert report["meshing"]["nb_layer_points"] == 0
     assert report["meshing"]["parameters"]["frame"] == "global"
     assert phases[0] == ("mesh shape", 0.0) and ("mesh shape", 1.0) in phases
+    # The mesher's own steps, in order, each fraction up to 1 before the engine's phases.
+    steps = [p for p, _ in phases if p.startswith("mesh shape: ")]
+    for step in ("surface", "lattice", "core", "layers", "tetgen", "regions", "slivers", "check"):
+        assert f"mesh shape: {step}" in steps
+    assert steps.index("mesh shape: surface") < steps.index("mesh shape: tetgen") < steps.index(
+        "mesh shape: check")
+    fractions = [f for p, f in phases if p.startswith("mesh shape: ")]
+    assert fractions == sorted(fractions) and fractions[-1] == 0.95
     with pytest.raises(hexmerge.Cancelled):
         hexmerge.mesh_shape(shapes["box"], 10.0, progress=lambda phase, fraction: False)
+    # Cancelled inside the mesher: no later step runs.
+    seen = []
+
+    def stop_after_tetgen(phase: str, fraction: float) -> bool:
+        seen.append(phase)
+        return phase != "mesh shape: tetgen"
+
+    with pytest.raises(hexmerge.Cancelled):
+        hexmerge.mesh_shape(shapes["box"], 10.0, progress=stop_after_tetgen)
+    assert seen[-1] == "mesh shape: tetgen"
 
 
 @pytest.mark.parametrize(

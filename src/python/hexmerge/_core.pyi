@@ -69,6 +69,7 @@ def mesh_shape(
     brep: str,
     options: Mapping[str, str],
     second_order: bool = False,
+    progress: Callable[[str, float], bool | None] | None = None,
 ) -> tuple[
     npt.NDArray[np.float64], npt.NDArray[np.uint32], npt.NDArray[np.int32], dict[str, Any]
 ]: ...

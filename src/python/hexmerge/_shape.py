@@ -173,8 +173,11 @@ def mesh_shape(
     recombine : bool
         Merge the tets (default). False returns the tet mesh itself.
     progress : callable(phase: str, fraction: float) -> bool | None, optional
-        As for recombine(); called before and after meshing (phase "mesh shape"), then by the
-        engine. Returning False cancels (hexmerge.Cancelled).
+        As for recombine(); called before meshing (phase "mesh shape"), after each step of the
+        mesher ("mesh shape: surface", ..., "mesh shape: tetgen", "mesh shape: slivers", with
+        the way of placing the points in brackets after the first way, e.g. "mesh shape:
+        tetgen (surface only)"; fraction of that way done), after meshing, then by the engine.
+        Returning False cancels (hexmerge.Cancelled), between the mesher's steps.
     **options
         The mesher's parameters (mesh_parameters(): boundary_layers, layer_thickness,
         lattice_margin, surface_deflection, frame, sweep, tetgen_time_limit, memory_limit,
@@ -230,7 +233,7 @@ def mesh_shape(
         raise _core.Cancelled("cancelled")
     start = time.perf_counter()
     try:
-        points, tets, regions, meshing = _core.mesh_shape(brep, mesher_options, second_order)
+        points, tets, regions, meshing = _core.mesh_shape(brep, mesher_options, second_order, fn)
     except _core.InputError as e:
         if file_unit.lower() in _MILLIMETRES:
             raise

@@ -13,6 +13,7 @@
 #include "hexmerge/check/validate_tet_mesh.h"
 #include "hexmerge/core/error.h"
 #include "hexmerge/core/phase_timer.h"
+#include "hexmerge/core/progress.h"
 #include "hexmerge/occ/brep_text.h"
 #include "hexmerge/occ/mesher/boundary_distance.h"
 #include "hexmerge/occ/mesher/facets.h"
@@ -166,30 +167,32 @@ constexpr Strategy kStrategies[] = {
 // `tet10` is given.
 TetMesh mesh_attempt(const Shape& shape, const Frame& frame, const std::string& regions_brep,
                      const MeshShapeParameters& parameters, const Strategy& strategy,
-                     MeshShapeReport& report, Tet10Mesh* tet10);
+                     MeshShapeReport& report, Tet10Mesh* tet10, const ProgressCallback& progress);
 
 // mesh_shape() and, with `tet10`, mesh_shape_tet10().
 TetMesh mesh_shape_impl(const std::string& brep, const MeshShapeParameters& parameters,
-                        MeshShapeReport& report, Tet10Mesh* tet10);
+                        MeshShapeReport& report, Tet10Mesh* tet10,
+                        const ProgressCallback& progress);
 
 }  // namespace
 
 TetMesh mesh_shape(const std::string& brep, const MeshShapeParameters& parameters,
-                   MeshShapeReport& report) {
-  return mesh_shape_impl(brep, parameters, report, nullptr);
+                   MeshShapeReport& report, const ProgressCallback& progress) {
+  return mesh_shape_impl(brep, parameters, report, nullptr, progress);
 }
 
 Tet10Mesh mesh_shape_tet10(const std::string& brep, const MeshShapeParameters& parameters,
-                           MeshShapeReport& report) {
+                           MeshShapeReport& report, const ProgressCallback& progress) {
   Tet10Mesh tet10;
-  mesh_shape_impl(brep, parameters, report, &tet10);
+  mesh_shape_impl(brep, parameters, report, &tet10, progress);
   return tet10;
 }
 
 namespace {
 
 TetMesh mesh_shape_impl(const std::string& brep, const MeshShapeParameters& parameters,
-                        MeshShapeReport& report, Tet10Mesh* tet10) {
+                        MeshShapeReport& report, Tet10Mesh* tet10,
+                        const ProgressCallback& progress) {
   validate_mesh_shape_parameters(parameters);
   report = MeshShapeReport{};
   const auto start = PhaseTimer::Clock::now();
@@ -250,7 +253,8 @@ TetMesh mesh_shape_impl(const std::string& brep, const MeshShapeParameters& para
     MeshShapeReport attempt = report;
     const auto attempt_start = PhaseTimer::Clock::now();
     try {
-      TetMesh mesh = mesh_attempt(shape, frame, regions_brep, parameters, strategy, attempt, tet10);
+      TetMesh mesh =
+          mesh_attempt(shape, frame, regions_brep, parameters, strategy, attempt, tet10, progress);
       attempt.strategy = strategy.name;
       add_phase_seconds(attempt.phase_seconds, "shape", shape_seconds);
       if (failed_seconds > 0)
@@ -271,8 +275,17 @@ TetMesh mesh_shape_impl(const std::string& brep, const MeshShapeParameters& para
 
 TetMesh mesh_attempt(const Shape& shape, const Frame& frame, const std::string& regions_brep,
                      const MeshShapeParameters& parameters, const Strategy& strategy,
-                     MeshShapeReport& report, Tet10Mesh* tet10) {
+                     MeshShapeReport& report, Tet10Mesh* tet10, const ProgressCallback& progress) {
   PhaseTimer clock(report.phase_seconds);
+  // Each step's end: its time, and the progress of this way of placing the points ("mesh shape:
+  // <step>", the way's name after the first); a callback asking to stop cancels here.
+  const std::string way =
+      strategy.name == kStrategies[0].name ? "" : std::string(" (") + strategy.name + ")";
+  const auto step = [&](const char* name, double fraction) {
+    clock.lap(name);
+    report_progress(progress, std::string("mesh shape: ") + name + way, fraction);
+  };
+  report_progress(progress, "mesh shape: surface" + way, 0.0);
   const double h = parameters.size * strategy.size_factor;
   TetrahedralizeParameters tetgen_parameters;
   tetgen_parameters.program = parameters.tetgen;
@@ -345,7 +358,7 @@ TetMesh mesh_attempt(const Shape& shape, const Frame& frame, const std::string& 
     collapse_sides(surface, h, h, lattice.lattice_face, local);
   }
   const int sweep_axis = report.sweep_axis;
-  clock.lap("surface");
+  step("surface", 0.15);
 
   // 6. Everything below in frame coordinates, the nodes of lattice faces exactly on their planes.
   const std::vector<Vec3> nodes = frame_nodes(shape, surface, lattice, sweep_axis, swept);
@@ -364,7 +377,7 @@ TetMesh mesh_attempt(const Shape& shape, const Frame& frame, const std::string& 
       keep_lattice_points(lattice, around, parity,
                           (nb_layers * parameters.layer_thickness + parameters.lattice_margin) * h,
                           parameters.lattice_margin * h);
-  clock.lap("lattice");
+  step("lattice", 0.2);
 
   // 8. The hexahedral core and its closing pyramids' apexes.
   if (strategy.lattice_points) {
@@ -373,7 +386,7 @@ TetMesh mesh_attempt(const Shape& shape, const Frame& frame, const std::string& 
     report.nb_lattice_points = core.nb_lattice_points;
     report.nb_apex_points = core.nb_apex_points;
   }
-  clock.lap("core");
+  step("core", 0.25);
 
   // 9. Boundary layers, inside the shape (by ray parity), clear of the faces and of the core.
   // None where a local size wants finer than h: finer lattices' points fill that zone.
@@ -388,7 +401,7 @@ TetMesh mesh_attempt(const Shape& shape, const Frame& frame, const std::string& 
     report.nb_graded_points =
         place_graded_points(field, lattice, parity, around, kGradedClearance, inserted);
   const std::size_t nb_on_faces = face_points_first(inserted);
-  clock.lap("layers");
+  step("layers", 0.3);
 
   // 10. TetGen: the surface kept as it is, the lattice faces with their lattice points, the other
   // points as isolated vertices.
@@ -411,7 +424,7 @@ TetMesh mesh_attempt(const Shape& shape, const Frame& frame, const std::string& 
   report.nb_nudged_points = tets.nb_nudged;
   const std::size_t made = tets.points.size() / 3;
   report.nb_steiner_points = made > given ? made - given : 0;
-  clock.lap("tetgen");
+  step("tetgen", 0.6);
 
   // 10b. Swept: the tets rebuilt as columns over the first plane's triangles.
   if (sweep_axis >= 0)
@@ -420,7 +433,7 @@ TetMesh mesh_attempt(const Shape& shape, const Frame& frame, const std::string& 
 
   // 11. The tets in the world, regions by solid.
   TetMesh mesh = world_mesh(regions_brep, shape, surface, lattice.frame, tets);
-  clock.lap("regions");
+  step("regions", 0.65);
 
   // 12. Flips and node moves against slivers.
   ImproveParameters improve;
@@ -442,7 +455,7 @@ TetMesh mesh_attempt(const Shape& shape, const Frame& frame, const std::string& 
   report.nb_edge_flips = improved.edge_flips;
   report.nb_boundary_swaps = improved.boundary_swaps;
   report.nb_node_moves = improved.node_moves;
-  clock.lap("slivers");
+  step("slivers", 0.9);
   // A tet the flips and moves left flat or folded (gmsh_Block at h 1.18: scaled Jacobian
   // 1e-13) fails this way of placing the points, not the whole run: the next way is tried.
   try {
@@ -456,7 +469,7 @@ TetMesh mesh_attempt(const Shape& shape, const Frame& frame, const std::string& 
   vertex_face.insert(vertex_face.end(), inserted.face.begin(), inserted.face.end());
   report.max_boundary_distance = max_boundary_distance(shape, mesh, vertex_face, 1e-6 * h);
   report.local_sizes = local_sizes_applied(local_sizes, surface);
-  clock.lap("check");
+  step("check", 0.95);
 
   // 14. Second order: the boundary mid-edge nodes on the CAD.
   if (tet10) {
@@ -465,7 +478,7 @@ TetMesh mesh_attempt(const Shape& shape, const Frame& frame, const std::string& 
         second_order_mesh(shape, mesh, vertex_face, tets.boundary, boundary_face, 1e-9 * h, second);
     report.nb_projected_mid_nodes = second.nb_projected;
     report.nb_straight_mid_nodes = second.nb_straight;
-    clock.lap("second order");
+    step("second order", 1.0);
   }
   return mesh;
 }

@@ -51,6 +51,7 @@
 
 #include "hexmerge/core/parameter_table.h"
 #include "hexmerge/core/phase_timer.h"
+#include "hexmerge/core/progress.h"
 #include "hexmerge/mesh/second_order.h"
 #include "hexmerge/mesh/tet_mesh.h"
 
@@ -196,13 +197,17 @@ struct MeshShapeReport {
 /// @return a valid tet mesh (validate_tet_mesh), regions = the index of the solid holding each
 ///         tet, in the order TopExp::MapShapes(shape, TopAbs_SOLID) gives (FreeCAD's
 ///         `Shape.Solids`)
+/// @param[in] progress  called at the end of each step of each way of placing the points, phase
+///                      "mesh shape: <step>" (then the way's name in brackets after the first),
+///                      fraction of that way done; returning false cancels (throws Cancelled)
+///                      between steps
 /// @throws InputError for BREP text that cannot be read, a shape without solids, an open shell
 ///         (naming the free edge), a size that is not positive or larger than the shape, a
 ///         surface refinement that does not converge, bad parameters (a local size naming a
 ///         face or edge the shape does not have, or larger than the size), or TetGen missing or
 ///         failing (with its output)
 TetMesh mesh_shape(const std::string& brep, const MeshShapeParameters& parameters,
-                   MeshShapeReport& report);
+                   MeshShapeReport& report, const ProgressCallback& progress = {});
 
 /// As mesh_shape(), in second order: a Tet10 mesh (VTK order) with a mid node on every edge,
 /// numbered after the corners by edge (smaller node first, in increasing order). Mid nodes inside
@@ -213,6 +218,6 @@ TetMesh mesh_shape(const std::string& brep, const MeshShapeParameters& parameter
 /// those stay at the midpoint, counted in report.nb_straight_mid_nodes. The corners and tets are
 /// mesh_shape()'s.
 Tet10Mesh mesh_shape_tet10(const std::string& brep, const MeshShapeParameters& parameters,
-                           MeshShapeReport& report);
+                           MeshShapeReport& report, const ProgressCallback& progress = {});
 
 }  // namespace hexmerge
