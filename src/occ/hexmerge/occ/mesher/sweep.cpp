@@ -444,11 +444,20 @@ std::size_t extrude_tets(int axis, double spacing, std::size_t given,
   for (const auto& [a, b] : sides)
     for (int l = lowest; l < highest; ++l)
       add_quad(point_at(a, l), point_at(b, l), point_at(b, l + 1), point_at(a, l + 1));
-  // Caps: the marker of TetGen's triangle on that plane holding the triangle's centroid.
+  // Caps: the marker of TetGen's triangle on the same corners, else (TetGen cut that part of
+  // the plane otherwise) of its triangle on that plane holding the triangle's centroid.
   for (const auto& [l, list] : on_level)
     for (const auto& tri : section) {
       const std::array<index_t, 3> corners{point_at(tri[0], l), point_at(tri[1], l),
                                            point_at(tri[2], l)};
+      std::array<index_t, 3> key = corners;
+      std::sort(key.begin(), key.end());
+      const auto same = marker_of.find(key);
+      if (same != marker_of.end()) {
+        boundary.push_back(corners);
+        markers.push_back(same->second);
+        continue;
+      }
       Vec3 centroid =
           (frame_point(corners[0]) + frame_point(corners[1]) + frame_point(corners[2])) * (1.0 / 3);
       for (std::size_t i : list) {
