@@ -104,10 +104,12 @@ BBOX = {"box": ((0, 0, 0), (100, 40, 30)), "cylinder": ((-20, -20, 0), (20, 20, 
         "torus": ((-52, -52, -12), (52, 52, 12))}
 
 
-def make_tetgen_lattice(shape, h, out, timeout=3600):
+def make_tetgen_lattice(shape, h, out, timeout=3600, jitter=0.0, seed=1):
     """Substitute for Gmsh's lattice-point mesher (which crashes in Debian's build): Gmsh's
     surface mesh (-clmax h), plus the points of an axis-aligned cubic lattice of spacing h
-    (cell centres of the bounding box grid) lying at least 0.6 h inside, tetrahedralised by
+    (cell centres of the bounding box grid) lying at least 0.6 h inside (each moved by up to
+    jitter * h per coordinate, uniform, numpy seed `seed`: hex-friendly points that are no
+    exact lattice, bench/groups.py), tetrahedralised by
     TetGen keeping the surface mesh (tetgen -pY), through the library's TetGen interface
     (hexmerge._core.tetrahedralize: the module must be importable, e.g. PYTHONPATH=src/python).
     Written as msh 4.1 through meshio."""
@@ -132,6 +134,8 @@ def make_tetgen_lattice(shape, h, out, timeout=3600):
         axes = [np.arange(lo[i] + h / 2, hi[i], h) for i in range(3)]
         g = np.stack(np.meshgrid(*axes, indexing="ij"), -1).reshape(-1, 3)
         g = g[signed_distance(shape, g) > 0.6 * h]
+        if jitter > 0:
+            g = g + np.random.default_rng(seed).uniform(-jitter * h, jitter * h, g.shape)
         # A PLC of the surface triangles whose point list also holds the lattice points: TetGen
         # keeps them as isolated interior vertices. (tetgen -i with an .a.node file crashes here.)
         from hexmerge import _core

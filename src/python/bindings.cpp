@@ -179,6 +179,11 @@ py::dict report_to_dict(const RecombineReport& r) {
   d["volume_fraction"] = per_type(r.volume_fraction);
   d["nonconforming_quads"] = r.nonconforming_quads;
   d["block_hexahedra"] = r.block_hexahedra;
+  d["group_seeds"] = r.group_seeds;
+  d["groups"] = r.groups;
+  d["group_hexahedra"] = r.group_hexahedra;
+  d["groups_failed"] = r.groups_failed;
+  d["groups_capped"] = r.groups_capped;
   d["closing_pyramids"] = r.closing_pyramids;
   d["released_elements"] = r.released_elements;
   d["local_moves"] = r.local_moves;

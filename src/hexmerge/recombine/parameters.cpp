@@ -64,6 +64,12 @@ ParameterTable<RecombineParameters> make_table() {
             "and re-selects them exactly; 0: swaps only (cheap). 3 with local_search_seeds = all "
             "comes within about 2 % of the optimum in allow mode, at about 1.5 s per 10k "
             "tetrahedra"),
+      whole(&P::group_size, "group_size", "", 0, 10000, "Group size",
+            "Conforming mode with pyramids: the most hexahedra and prisms taken together in one "
+            "group whose quad faces close each other (each shared with the next member, on the "
+            "boundary, or closed by a pyramid), grown from each hexahedron candidate; a group "
+            "that needs more is given up (the report counts them: groups_capped). 0: one "
+            "hexahedron at a time"),
       whole(&P::local_search_nodes, "local_search_nodes", "", 1, 1000000, "Local search effort",
             "Branch-and-bound nodes the local search may spend on one neighbourhood (bounds its "
             "time; past it the best re-selection found so far is kept)"),

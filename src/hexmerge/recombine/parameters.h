@@ -86,6 +86,9 @@ struct RecombineParameters {
   /// [0, 4]: face hops around a tet within which the elements are released and re-selected;
   /// 0: swaps only
   int local_search_radius = 0;
+  /// [0, 10000]: conforming mode with pyramids: most hexahedra and prisms taken together in one
+  /// conforming group (select/groups.cpp); 0: no groups, one hexahedron at a time
+  int group_size = 64;
   int local_search_nodes = 2000;  ///< [1, 1e6]: branch-and-bound nodes per neighbourhood
   LocalSearchSeeds local_search_seeds = LocalSearchSeeds::Unmatched;
   BoundaryOrder boundary_order = BoundaryOrder::Quality;

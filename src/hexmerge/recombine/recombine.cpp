@@ -141,6 +141,11 @@ std::size_t output_cells(index_t nb_tets, const std::vector<Candidate>& candidat
 void copy_selection_report(const Selection& selection, RecombineReport& report) {
   report.nonconforming_quads = selection.nonconforming_quads;
   report.block_hexahedra = selection.block_hexahedra;
+  report.group_seeds = selection.group_seeds;
+  report.groups = selection.groups;
+  report.group_hexahedra = selection.group_hexahedra;
+  report.groups_failed = selection.groups_failed;
+  report.groups_capped = selection.groups_capped;
   report.closing_pyramids = selection.closing_pyramids;
   report.released_elements = selection.released_elements;
   report.local_moves = selection.local_moves;

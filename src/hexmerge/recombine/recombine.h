@@ -27,6 +27,11 @@ struct RecombineReport {
   std::array<double, NB_CELL_TYPES> volume_fraction{};  ///< share of input volume per type
   std::size_t nonconforming_quads = 0;  ///< quad faces meeting two triangles in the output
   std::size_t block_hexahedra = 0;      ///< hexahedra kept as a block (structured regions)
+  std::size_t group_seeds = 0;          ///< conforming groups: seeds tried (select/groups.cpp)
+  std::size_t groups = 0;               ///< conforming groups accepted
+  std::size_t group_hexahedra = 0;      ///< hexahedra in the accepted groups
+  std::size_t groups_failed = 0;        ///< groups rolled back: a face nothing could close
+  std::size_t groups_capped = 0;        ///< groups given up at group_size members
   std::size_t closing_pyramids = 0;     ///< pyramids made to close a quad face
   std::size_t released_elements = 0;    ///< elements split back to tets to restore conformity
   std::size_t local_moves = 0;          ///< accepted local optimisation moves (section 4.2)

@@ -15,6 +15,7 @@ Selection Selector::run(const ProgressCallback& progress) {
   }
   report_progress(progress, "selection", 0.0);
   if (params_.conformity == Conformity::Conforming) select_block();
+  if (strict_) select_groups();
   for (const Stage& stage : conforming) {
     if (params_.boundary_order == BoundaryOrder::Quality) {
       boundary_stage_by_quality(stage);

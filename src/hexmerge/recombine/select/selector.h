@@ -7,6 +7,7 @@
 ///   ranking at a tet, and the move journal (begin_move, rollback); ownership and choose/release
 ///   are inline here;
 /// - block.cpp: the block of near-perfect and planar-quad hexahedra and prisms (step 0);
+/// - groups.cpp: hexahedra taken in conforming groups (step 0b);
 /// - greedy.cpp: the boundary and interior greedy stages, the closing of quad faces (step 4)
 ///   and, outside conforming mode, the release of cracks;
 /// - local_optimisation.cpp: the paper's local optimisation at unmatched boundary tets (4.2);
@@ -180,6 +181,16 @@ class Selector {
   // ---- select/block.cpp
   bool planar_quads(const Candidate& c) const;
   void select_block();
+
+  // ---- select/groups.cpp
+  // A face of a candidate against what is chosen: on the boundary, shared or closed by a
+  // reserved pyramid (a triangle: meeting no chosen quad); open (a quad over two free tets that
+  // no reserved pyramid closes); or in conflict (nothing can make it conform).
+  enum class FaceState { Closed, Open, Conflict };
+  FaceState face_state(index_t ci, const Sides& s, int f, std::array<index_t, 2>& behind) const;
+  index_t group_partner(index_t n0, index_t n1, const QuadKey& key) const;
+  bool grow_group(index_t seed, std::vector<index_t>& members, bool& capped);
+  void select_groups();
 
   // ---- select/greedy.cpp
   void boundary_stage_by_quality(const Stage& stage);

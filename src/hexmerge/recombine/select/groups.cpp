@@ -1,0 +1,137 @@
+// Selection step 0b (conforming mode with pyramids): hexahedra taken in conforming groups.
+#include "hexmerge/recombine/select/selector.h"
+
+namespace hexmerge::select {
+
+// A face of candidate ci against what is chosen now (ci itself chosen or not). `behind` gets
+// the tets behind a quad face.
+Selector::FaceState Selector::face_state(index_t ci, const Sides& s, int f,
+                                         std::array<index_t, 2>& behind) const {
+  const Candidate& c = cands_[ci];
+  if (!is_quad(c, f)) {
+    // Our triangle must not meet half of a chosen element's quad.
+    for (int i = 0; i < s.count; ++i) {
+      if (s.side[i].cell_face != f) continue;
+      const index_t n = s.side[i].neighbor;
+      if (n == NO_CELL || is_free(n) || owner_[n] == ci) return FaceState::Closed;
+      const int ef = cell_face_at(owner_[n], n, s.side[i].neighbor_face);
+      return is_quad(cands_[owner_[n]], ef) ? FaceState::Conflict : FaceState::Closed;
+    }
+    return FaceState::Closed;
+  }
+  behind = tets_behind(s, f);
+  const index_t n0 = behind[0], n1 = behind[1];
+  if (n0 == NO_CELL && n1 == NO_CELL) return FaceState::Closed;
+  if (n0 == NO_CELL || n1 == NO_CELL) return FaceState::Conflict;
+  const QuadKey key = face_key(c, f);
+  if (!is_free(n0) || !is_free(n1)) {
+    return owner_[n0] == owner_[n1] && has_quad(cands_[owner_[n0]], key) ? FaceState::Closed
+                                                                         : FaceState::Conflict;
+  }
+  return closing_pyramid(n0, n1, &key) != NO_INDEX ? FaceState::Closed : FaceState::Open;
+}
+
+// The best available hexahedron or prism that takes free tets n0 and n1 with quad face `key`
+// and meets nothing chosen badly: hexahedra first, then the fewest open quad faces, then the
+// best scaled Jacobian. NO_INDEX when there is none.
+index_t Selector::group_partner(index_t n0, index_t n1, const QuadKey& key) const {
+  index_t best = NO_INDEX;
+  int best_open = 0;
+  for (index_t k = offsets_[n0]; k < offsets_[n0 + 1]; ++k) {
+    const index_t xi = ids_[k];
+    const Candidate& x = cands_[xi];
+    if (x.type == CellType::Pyramid || !contains(x, n1) || !available(xi) || !has_quad(x, key)) {
+      continue;
+    }
+    const Sides s = sides(xi);
+    int open = 0;
+    bool conflict = false;
+    std::array<index_t, 2> behind{};
+    for (int f = 0; f < descriptor(x.type).nb_faces && !conflict; ++f) {
+      const FaceState state = face_state(xi, s, f, behind);
+      conflict = state == FaceState::Conflict;
+      open += state == FaceState::Open;
+    }
+    if (conflict) continue;
+    const bool wins = best == NO_INDEX || (x.type != cands_[best].type ? x.type == CellType::Hex
+                                           : open != best_open         ? open < best_open
+                                                               : x.quality > cands_[best].quality);
+    if (wins) {
+      best = xi;
+      best_open = open;
+    }
+  }
+  return best;
+}
+
+// Grows the group of `seed` (chosen here, in the journal begun by the caller): every quad face
+// of a member must lie on the domain boundary, on the identical quad face of a chosen element
+// (a member, or one chosen before), or over a pyramid that no other quad needs (reserved,
+// closing_pyramid); an open one gets the best partner (group_partner), which joins the group.
+// Members are scanned again until a scan adds none, since a later member's quad can take the
+// pyramid an earlier face counted on. Fails on a face that nothing can close, or when a
+// partner would make the group larger than group_size (`capped`).
+bool Selector::grow_group(index_t seed, std::vector<index_t>& members, bool& capped) {
+  members.assign(1, seed);
+  choose(seed);
+  capped = false;
+  for (bool added = true; added;) {
+    added = false;
+    for (std::size_t i = 0; i < members.size(); ++i) {
+      const index_t m = members[i];
+      const Sides s = sides(m);
+      std::array<index_t, 2> behind{};
+      for (int f = 0; f < descriptor(cands_[m].type).nb_faces; ++f) {
+        const FaceState state = face_state(m, s, f, behind);
+        if (state == FaceState::Closed) continue;
+        if (state == FaceState::Conflict) return false;
+        if (members.size() >= static_cast<std::size_t>(params_.group_size)) {
+          capped = true;
+          return false;
+        }
+        const index_t x = group_partner(behind[0], behind[1], face_key(cands_[m], f));
+        if (x == NO_INDEX) return false;
+        choose(x);
+        members.push_back(x);
+        added = true;
+      }
+    }
+  }
+  return true;
+}
+
+// Step 0b: from each hexahedron candidate, best scaled Jacobian first, a group is grown
+// (grow_group) and kept with the pyramids reserved for its open quads, or rolled back. Each
+// candidate seeds at most once, and the members of a failed group seed no other (the memo: a
+// group grown from one of them would meet the same face), so the work is bounded by the
+// candidates times group_size partner searches.
+void Selector::select_groups() {
+  if (params_.group_size <= 0) return;
+  std::vector<index_t> seeds;
+  for (index_t ci = 0; ci < cands_.size(); ++ci) {
+    if (cands_[ci].type == CellType::Hex) seeds.push_back(ci);
+  }
+  std::stable_sort(seeds.begin(), seeds.end(),
+                   [&](index_t a, index_t b) { return cands_[a].quality > cands_[b].quality; });
+  std::vector<char> failed(cands_.size(), 0);
+  std::vector<index_t> members;
+  for (index_t seed : seeds) {
+    if (failed[seed] || !available(seed)) continue;
+    ++result_.group_seeds;
+    begin_move();
+    bool capped = false;
+    if (grow_group(seed, members, capped)) {
+      commit();
+      ++result_.groups;
+      for (index_t m : members) {
+        if (cands_[m].type == CellType::Hex) ++result_.group_hexahedra;
+      }
+      continue;
+    }
+    rollback();
+    ++(capped ? result_.groups_capped : result_.groups_failed);
+    for (index_t m : members) failed[m] = 1;
+  }
+}
+
+}  // namespace hexmerge::select

@@ -1,0 +1,138 @@
+// Conforming groups (select/groups.cpp): hexahedra whose quad faces close each other, taken
+// together or not at all.
+#include <gtest/gtest.h>
+
+#include <set>
+#include <string>
+#include <vector>
+
+#include "fixtures.h"
+#include "hexmerge/core/error.h"
+#include "hexmerge/mesh/tet_topology.h"
+#include "hexmerge/recombine/find_candidates.h"
+#include "hexmerge/recombine/parameters.h"
+#include "hexmerge/recombine/prune_candidates.h"
+#include "hexmerge/recombine/select/select_candidates.h"
+#include "recombine/recombine_checks.h"
+
+namespace hexmerge::test {
+namespace {
+
+// Two by two by two cubes of five tets each (five_tet_grid): the two tets behind a face of a
+// cube are corner tets with different fourth vertices, so no pyramid closes any quad face; the
+// inner node moved off the lattice, so that no cube is near-perfect or has planar quads (the
+// block takes none). Every cube's three inner faces can only be shared with its neighbours.
+TetMesh skewed_five_tet_grid() {
+  TetMesh mesh = five_tet_grid(2);
+  double* inner = &mesh.points[3 * std::size_t(grid_node(2, 1, 1, 1))];
+  inner[0] += 0.2;
+  inner[1] += 0.15;
+  inner[2] += 0.1;
+  return mesh;
+}
+
+std::size_t count(const Outcome& run, CellType type) {
+  return run.check.counts[static_cast<int>(type)];
+}
+
+TEST(select_groups, hexahedra_sharing_faces_no_pyramid_closes_are_taken_together) {
+  const TetMesh mesh = skewed_five_tet_grid();
+  RecombineParameters one_at_a_time;
+  one_at_a_time.group_size = 0;
+  const Outcome before = recombine_and_check(mesh, one_at_a_time, false);
+  EXPECT_EQ(hexes(before), 0u) << "no hexahedron alone has every face closed";
+  EXPECT_EQ(before.report.group_seeds, 0u);
+
+  const Outcome run = recombine_and_check(mesh, {}, false);
+  EXPECT_EQ(hexes(run), 8u);
+  EXPECT_EQ(run.mesh.nb_cells(), 8u);
+  EXPECT_EQ(count(run, CellType::Pyramid), 0u);
+  EXPECT_EQ(run.report.block_hexahedra, 0u);
+  EXPECT_EQ(run.report.groups, 1u);
+  EXPECT_EQ(run.report.group_hexahedra, 8u);
+  EXPECT_EQ(run.report.groups_failed + run.report.groups_capped, 0u);
+  EXPECT_EQ(run.check.nonconforming_quads, 0u);
+  EXPECT_EQ(run.check.cracks, 0u);
+  EXPECT_NEAR(run.report.volume_fraction[static_cast<int>(CellType::Hex)], 1.0, 1e-12);
+  EXPECT_LT(run.mesh.nb_cells(), before.mesh.nb_cells());
+}
+
+// A group that needs more members than group_size is rolled back: the selection is exactly the
+// one made without groups, and the report counts the groups given up.
+TEST(select_groups, a_group_given_up_leaves_the_selection_unchanged) {
+  const TetMesh mesh = skewed_five_tet_grid();
+  const TetTopology topology(mesh);
+  std::vector<Candidate> all = find_candidates(mesh, topology, AcceptanceCriteria{}, 1);
+  std::size_t removed = 0;
+  all = prune_unclosable(mesh, topology, all, removed);
+  RecombineParameters off;
+  off.group_size = 0;
+  RecombineParameters small;
+  small.group_size = 7;
+  RecombineParameters enough;
+  enough.group_size = 8;
+  const Selection without = select_candidates(mesh, topology, all, off);
+  const Selection capped = select_candidates(mesh, topology, all, small);
+  const Selection whole = select_candidates(mesh, topology, all, enough);
+  EXPECT_EQ(capped.elements, without.elements);
+  EXPECT_EQ(capped.groups, 0u);
+  EXPECT_GT(capped.groups_capped, 0u);
+  EXPECT_EQ(capped.group_seeds, capped.groups_capped + capped.groups_failed);
+  EXPECT_EQ(whole.groups, 1u);
+  EXPECT_EQ(whole.group_hexahedra, 8u);
+  EXPECT_EQ(whole.elements.size(), 8u);
+  for (index_t ci : whole.elements) EXPECT_EQ(all[ci].type, CellType::Hex);
+  EXPECT_EQ(whole.nonconforming_quads, 0u);
+}
+
+// Where no partner exists (one cube made a poor hexahedron by moving its outer corner), every
+// group reaching that cube is rolled back and the output is still conforming.
+TEST(select_groups, a_group_with_a_face_nothing_closes_is_rolled_back) {
+  TetMesh mesh = skewed_five_tet_grid();
+  double* corner = &mesh.points[3 * std::size_t(grid_node(2, 0, 0, 0))];
+  corner[0] += 0.55;
+  corner[1] += 0.55;
+  corner[2] += 0.55;
+  RecombineParameters off;
+  off.group_size = 0;
+  const Outcome before = recombine_and_check(mesh, off, false);
+  const Outcome run = recombine_and_check(mesh, {}, false);
+  EXPECT_GT(run.report.groups_failed, 0u);
+  EXPECT_EQ(run.report.groups, 0u);
+  EXPECT_EQ(run.mesh.cell_vertices, before.mesh.cell_vertices);
+  EXPECT_EQ(run.check.nonconforming_quads, 0u);
+  EXPECT_EQ(run.check.cracks, 0u);
+}
+
+// A TetGen lattice with jitter: groups give at least the hexahedra of one at a time, valid and
+// conforming.
+TEST(select_groups, a_jittered_tetgen_lattice_gets_more_hexahedra_conformingly) {
+  if (std::system("command -v tetgen > /dev/null 2>&1") != 0) GTEST_SKIP() << "no tetgen";
+  const TetMesh mesh = tetgen_lattice(6, 0.15, 3);
+  RecombineParameters off;
+  off.group_size = 0;
+  const Outcome before = recombine_and_check(mesh, off, false);
+  const Outcome run = recombine_and_check(mesh, {}, false);
+  EXPECT_GE(hexes(run), hexes(before));
+  EXPECT_GT(run.report.groups, 0u);
+  EXPECT_EQ(run.check.nonconforming_quads, 0u);
+  EXPECT_EQ(run.check.cracks, 0u);
+}
+
+TEST(select_groups, group_size_is_in_the_table_with_its_range) {
+  RecombineParameters p;
+  EXPECT_EQ(p.group_size, 64);
+  set_parameter(p, "group_size", "0");
+  EXPECT_EQ(p.group_size, 0);
+  set_parameter(p, "group_size", "500");
+  EXPECT_EQ(p.group_size, 500);
+  EXPECT_THROW(set_parameter(p, "group_size", "-1"), InputError);
+  EXPECT_THROW(set_parameter(p, "group_size", "10001"), InputError);
+  EXPECT_THROW(set_parameter(p, "group_size", "2.5"), InputError);
+  std::set<std::string> names;
+  for (const ParameterInfo& row : parameter_table()) names.insert(row.name);
+  EXPECT_TRUE(names.count("group_size"));
+}
+
+}  // namespace
+}  // namespace hexmerge::test
