@@ -15,6 +15,7 @@ the groups (seeds tried / accepted / failed / given up at group_size, hexahedra 
 the checker (valid, non-conforming quads, cracks, relative volume difference). Writes JSON.
 
   PYTHONPATH=src/python /usr/bin/python3.11 bench/groups.py bench/meshes/*-delaunay-100k.msh
+  PYTHONPATH=src/python /usr/bin/python3.11 bench/groups.py --option same_nodes=false bench/meshes/box-delaunay-100k.msh
   PYTHONPATH=src/python /usr/bin/python3.11 bench/groups.py --jittered box:100k:0.15 --part flanged_tee:7.911
 """
 import argparse
@@ -32,7 +33,7 @@ import make_meshes  # noqa: E402
 import run_bench  # noqa: E402
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-CAD_DIR = os.path.join(HERE, "..", "..", "shared", "cad")
+CAD_DIR = os.path.join(HERE, "..", "..", "..", "shared", "cad")
 TYPES = ("hex", "prism", "pyramid", "tet")
 
 
@@ -61,7 +62,7 @@ def part_tets(hexmerge, spec):
         tets, _ = hexmerge.mesh_shape(path, float(h), recombine=False)
     import numpy as np
     points = np.asarray(tets.points, dtype=np.float64).reshape(-1, 3)
-    cells = np.asarray(tets.cells, dtype=np.int64).reshape(-1, 4)
+    cells = np.asarray(tets.cell_vertices, dtype=np.int64).reshape(-1, 4)
     regions = getattr(tets, "regions", None)
     return points, cells, (np.asarray(regions) if regions is not None and len(regions) else None)
 
@@ -103,10 +104,14 @@ def main():
     ap.add_argument("--jittered", action="append", default=[], metavar="SHAPE:SIZE:JITTER")
     ap.add_argument("--part", action="append", default=[], metavar="NAME:H")
     ap.add_argument("--group-sizes", default="64", help="comma list of group_size values besides 0")
+    ap.add_argument("--option", action="append", default=[], metavar="NAME=VALUE",
+                    help="another engine option for every run (repeatable), e.g. same_nodes=false")
     ap.add_argument("--output", help="JSON (default bench/results/groups-<time>.json)")
     args = ap.parse_args()
     import hexmerge
 
+    options = dict((k.strip(), run_bench.parse_value(v.strip()))
+                   for k, v in (o.split("=", 1) for o in args.option))
     sizes = [0] + [int(s) for s in args.group_sizes.split(",") if s]
     inputs = [(os.path.basename(f).rsplit(".", 1)[0], lambda f=f: run_bench.load_tet_mesh(f, "int64") + (None,))
               for f in args.files]
@@ -125,7 +130,7 @@ def main():
         points, cells, regions = load()
         base = None
         for size in sizes:
-            r = run(hexmerge, points, cells, regions, {"group_size": size})
+            r = run(hexmerge, points, cells, regions, {**options, "group_size": size})
             r.update({"mesh": name, "tets": int(cells.shape[0])})
             base = base or r["report"]["output_cells"]
             results.append(r)
