@@ -67,9 +67,9 @@ ParameterTable<RecombineParameters> make_table() {
       whole(&P::group_size, "group_size", "", 0, 10000, "Group size",
             "Conforming mode with pyramids: the most hexahedra and prisms taken together in one "
             "group whose quad faces close each other (each shared with the next member, on the "
-            "boundary, or closed by a pyramid), grown from each hexahedron candidate; a group "
-            "that needs more is given up (the report counts them: groups_capped). 0: one "
-            "hexahedron at a time"),
+            "boundary, or closed by a pyramid), grown from each hexahedron and prism candidate; a "
+            "group that needs more is given up (the report counts them: groups_capped). 0: one "
+            "element at a time, as the greedy takes them"),
       whole(&P::local_search_nodes, "local_search_nodes", "", 1, 1000000, "Local search effort",
             "Branch-and-bound nodes the local search may spend on one neighbourhood (bounds its "
             "time; past it the best re-selection found so far is kept)"),

@@ -87,7 +87,7 @@ struct RecombineParameters {
   /// 0: swaps only
   int local_search_radius = 0;
   /// [0, 10000]: conforming mode with pyramids: most hexahedra and prisms taken together in one
-  /// conforming group (select/groups.cpp); 0: no groups, one hexahedron at a time
+  /// conforming group (select/groups.cpp); 0: no groups, one element at a time
   int group_size = 64;
   int local_search_nodes = 2000;  ///< [1, 1e6]: branch-and-bound nodes per neighbourhood
   LocalSearchSeeds local_search_seeds = LocalSearchSeeds::Unmatched;

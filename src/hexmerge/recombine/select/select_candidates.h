@@ -42,6 +42,17 @@ struct Selection {
 /// 0. The block (conforming mode only): the near-perfect hexahedra (scaled Jacobian >= 0.9) and
 ///    the hexahedra and prisms with planar quad faces that can all be kept together, every open
 ///    quad face of them closable by a pyramid no other quad needs, chosen at once.
+/// 0b. Conforming groups (conforming mode with pyramids, group_size > 0): from each hexahedron
+///    candidate, then each prism candidate, best scaled Jacobian first, a group is grown: each
+///    quad face of a member lies on the domain boundary, on the identical quad face of a chosen
+///    element or member, or over the two tets of a pyramid no other quad needs (reserved, as in
+///    the greedy); any other quad face gets a partner, the best available hexahedron (else
+///    prism) with that quad that meets nothing chosen badly (fewest open quads, then quality),
+///    which joins the group. The group is kept whole when every face is closed, else rolled
+///    back (the move journal): a hexahedron whose faces only other hexahedra can close is taken
+///    with them, where one at a time it never is. Each candidate seeds once; a group that would
+///    need more than group_size members is given up (report: group_seeds, groups,
+///    groups_failed, groups_capped, group_hexahedra).
 /// 1. Exhaustive-greedy over boundary tets (tets with a face on the domain boundary or, when
 ///    regions are respected, on a region boundary): hexes, then prisms, then pyramids. With
 ///    boundary_order = quality (the default) every candidate holding a boundary tet, best scaled
