@@ -251,3 +251,26 @@ def test_bound_on_a_gmsh_mesh_is_below_our_count(gmsh_tet4) -> None:
     assert report["gap_percent"] == pytest.approx(expected)
     # Allowed to leave quads open, the selection's hexahedra are one set the volume bound covers.
     assert report["volume_fraction"]["hex"] <= report["hex_volume_bound"] + 1e-9 <= 1.0 + 1e-9
+
+
+def test_conforming_groups_take_hexahedra_no_pyramid_can_close() -> None:
+    """Eight cubes of five tets, the inner node moved (no block): no quad face can be closed by
+    a pyramid, so one at a time (group_size=0) no hexahedron conforms; as one group all eight
+    do, and the report counts it."""
+    points, tets, _ = grid(2, "five")
+    points[13] += [0.1, 0.075, 0.05]  # the inner node, at (0.5, 0.5, 0.5)
+    tets = orient(points, tets)
+    alone, before = hexmerge.recombine(points, tets, group_size=0)
+    assert alone.counts()["hexahedron"] == 0
+    assert before["groups"] == before["group_seeds"] == 0
+    mesh, report = hexmerge.recombine(points, tets)
+    assert mesh.counts()["hexahedron"] == 8 == mesh.nb_cells
+    assert (report["groups"], report["group_hexahedra"]) == (1, 8)
+    assert report["groups_failed"] == report["groups_capped"] == 0
+    check = hexmerge.check(mesh, points, tets)
+    assert check["valid"] and check["nonconforming_quads"] == 0 and check["cracks"] == 0
+    capped, given_up = hexmerge.recombine(points, tets, group_size=7)
+    assert given_up["groups_capped"] > 0 and given_up["groups"] == 0
+    assert np.array_equal(capped.cell_vertices, alone.cell_vertices)
+    with pytest.raises(ValueError, match="group_size"):
+        hexmerge.recombine(points, tets, group_size=-1)
