@@ -21,11 +21,11 @@ struct Selection {
   std::vector<index_t> elements;        ///< chosen candidates; their tet sets are disjoint
   std::size_t nonconforming_quads = 0;  ///< quad faces left meeting two triangles
   std::size_t block_hexahedra = 0;      ///< hexahedra chosen in the block, before the greedy
-  std::size_t group_seeds = 0;           ///< conforming groups: seeds tried
-  std::size_t groups = 0;                ///< conforming groups: accepted
-  std::size_t group_hexahedra = 0;       ///< hexahedra in the accepted groups
-  std::size_t groups_failed = 0;         ///< groups rolled back: a face nothing could close
-  std::size_t groups_capped = 0;         ///< groups given up at group_size members
+  std::size_t group_seeds = 0;          ///< conforming groups: seeds tried
+  std::size_t groups = 0;               ///< conforming groups: accepted
+  std::size_t group_hexahedra = 0;      ///< hexahedra in the accepted groups
+  std::size_t groups_failed = 0;        ///< groups rolled back: a face nothing could close
+  std::size_t groups_capped = 0;        ///< groups given up at group_size members
   std::size_t closing_pyramids = 0;     ///< pyramids chosen to close a quad face
   std::size_t released_elements = 0;    ///< elements given up to restore conformity
   std::size_t local_moves = 0;          ///< accepted local optimisation moves (section 4.2)
