@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <limits>
 #include <unordered_map>
@@ -240,6 +241,10 @@ void best_edge_removal(const FlipMesh& m, index_t a, index_t b, const std::vecto
   }
 }
 
+// A boundary swap may make a triangle with a smaller angle than this (radians, 5 degrees) only
+// where the triangles it replaces had one as small.
+constexpr double kSmallBoundaryAngle = 5.0 * M_PI / 180;
+
 // Whether boundary edge (a, b) may be swapped to (c, d), its boundary faces being (a, b, c) and
 // (a, b, d): both on one patch, in one plane (max_shift 0) or with the lines ab and cd at most
 // max_shift apart, so that the boundary stays where it is or within max_shift of it.
@@ -256,8 +261,22 @@ bool swappable(const FlipMesh& m, index_t a, index_t b, index_t c, index_t d, do
     return false;
   }
   // The quad a, c, b, d convex: its diagonals ab and cd cross (seen along n).
-  return ab.cross(ac).dot(n) * ab.cross(ad).dot(n) < 0 &&
-         cd.cross(ac * -1.0).dot(n) * cd.cross(ab - ac).dot(n) < 0;
+  if (!(ab.cross(ac).dot(n) * ab.cross(ad).dot(n) < 0 &&
+        cd.cross(ac * -1.0).dot(n) * cd.cross(ab - ac).dot(n) < 0))
+    return false;
+  // No boundary triangle under kSmallBoundaryAngle made worse: a swap whose quad has a corner
+  // of nearly 180 degrees would make a flat boundary triangle, and the tet on it a sliver.
+  const Vec3 pb = pa + ab, pc = pa + ac, pd = pa + ad;
+  const auto smallest_angle = [](const Vec3& p, const Vec3& q, const Vec3& r) {
+    const auto at = [](const Vec3& v, const Vec3& x, const Vec3& y) {
+      const Vec3 u = x - v, w = y - v;
+      return std::atan2(u.cross(w).norm(), u.dot(w));
+    };
+    return std::min({at(p, q, r), at(q, r, p), at(r, p, q)});
+  };
+  const double after = std::min(smallest_angle(pc, pd, pa), smallest_angle(pc, pd, pb));
+  return after >= kSmallBoundaryAngle ||
+         after >= std::min(smallest_angle(pa, pb, pc), smallest_angle(pa, pb, pd));
 }
 
 // Face removal across face `opposite` of t: t = (f, p) and its neighbour (f, q) become three

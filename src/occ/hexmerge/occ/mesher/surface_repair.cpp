@@ -533,6 +533,99 @@ void collapse_sides(Surface& surface, double target, double max_side,
     around[r].clear();
     removed[r] = 1;
   };
+  // Node r removed and its ring of neighbours triangulated anew, the triangulation with the
+  // largest smallest angle (dynamic programming over the ring polygon): where no collapse of a
+  // side may go (a node inside a face beside three or more nodes of one CAD edge: a collapse onto
+  // any of them leaves a triangle of three nodes on the edge). Under the same conditions as a
+  // collapse (one face, no triangle turned over, no side longer than `limit`, no side that
+  // already exists, the smallest angle better).
+  auto remove_node = [&](int r, double limit) {
+    if (on_edge[r] || around[r].size() < 3) return false;
+    const int face = tris[around[r].front()].face;
+    if (lattice_face[face]) return false;
+    // The ring in the triangles' order: the triangle (r, v[i], v[i + 1]) is outward.
+    std::unordered_map<int, int> next;
+    std::unordered_map<int, UV> uv;
+    Vec3 reference{0, 0, 0};
+    double before = M_PI;
+    for (int ti : around[r]) {
+      const SurfaceTriangle& t = tris[ti];
+      if (t.face != face) return false;
+      int c = 0;
+      while (t.node[c] != r) ++c;
+      if (!next.emplace(t.node[(c + 1) % 3], t.node[(c + 2) % 3]).second) return false;
+      for (int k = 0; k < 3; ++k) uv[t.node[k]] = t.uv[k];
+      reference = reference + normal_of(t.node);
+      before = std::min(before, smallest_angle(t.node));
+    }
+    std::vector<int> v{next.begin()->first};
+    while (v.size() <= next.size()) {
+      const auto it = next.find(v.back());
+      if (it == next.end()) return false;
+      if (it->second == v.front()) break;
+      v.push_back(it->second);
+    }
+    const int m = static_cast<int>(v.size());
+    if (m != static_cast<int>(next.size())) return false;
+    // Sides between ring nodes that exist outside the ring may not be made again.
+    auto connected = [&](int a, int b) {
+      for (int ti : around[a])
+        if (!has(tris[ti], r) && has(tris[ti], b)) return true;
+      return false;
+    };
+    // best[i][j]: the largest smallest angle of a triangulation of v[i..j] (-1: none).
+    std::vector<double> best(static_cast<std::size_t>(m * m), -1.0);
+    std::vector<int> split(static_cast<std::size_t>(m * m), -1);
+    auto at = [&](int i, int j) -> double& { return best[static_cast<std::size_t>(i * m + j)]; };
+    for (int i = 0; i + 1 < m; ++i) at(i, i + 1) = M_PI;
+    for (int span = 2; span < m; ++span)
+      for (int i = 0; i + span < m; ++i) {
+        const int j = i + span;
+        if (!(i == 0 && j == m - 1) &&
+            ((nodes[v[i]] - nodes[v[j]]).norm() > limit || connected(v[i], v[j])))
+          continue;
+        for (int k = i + 1; k < j; ++k) {
+          if (at(i, k) < 0 || at(k, j) < 0) continue;
+          const std::array<int, 3> t{v[i], v[k], v[j]};
+          if (turned_over(normal_of(t), reference)) continue;
+          const double q = std::min({at(i, k), at(k, j), smallest_angle(t)});
+          if (q > at(i, j)) at(i, j) = q, split[static_cast<std::size_t>(i * m + j)] = k;
+        }
+      }
+    if (!(at(0, m - 1) > before)) return false;
+    std::vector<std::array<int, 3>> made;
+    std::vector<std::pair<int, int>> stack{{0, m - 1}};
+    while (!stack.empty()) {
+      const auto [i, j] = stack.back();
+      stack.pop_back();
+      if (j - i < 2) continue;
+      const int k = split[static_cast<std::size_t>(i * m + j)];
+      made.push_back({v[i], v[k], v[j]});
+      stack.push_back({i, k});
+      stack.push_back({k, j});
+    }
+    ++nb_collapses;
+    for (int ti : around[r])
+      for (int n : tris[ti].node) changed_at[n] = nb_collapses;
+    const std::vector<int> slots = around[r];
+    for (int ti : slots)
+      for (int n : tris[ti].node)
+        around[n].erase(std::remove(around[n].begin(), around[n].end(), ti), around[n].end());
+    for (std::size_t k = 0; k < slots.size(); ++k) {
+      const int ti = slots[k];
+      if (k >= made.size()) {
+        dead[ti] = 1;
+        continue;
+      }
+      for (int c = 0; c < 3; ++c) {
+        tris[ti].node[c] = made[k][c];
+        tris[ti].uv[c] = uv[made[k][c]];
+        around[made[k][c]].push_back(ti);
+      }
+    }
+    removed[r] = 1;
+    return true;
+  };
   for (bool changed = true; changed;) {
     changed = false;
     // Needles' and caps' sides first (priority below 0: their smallest angle minus pi), then the
@@ -566,6 +659,10 @@ void collapse_sides(Surface& surface, double target, double max_side,
         continue;  // as it was when it failed
       const double ab = try_collapse(a, b, limit), ba = try_collapse(b, a, limit);
       if (ab < 0 && ba < 0) {
+        if (priority < 0 && (remove_node(a, limit) || remove_node(b, limit))) {
+          changed = true;
+          continue;
+        }
         failed_kind[key] = nb_collapses;
         continue;
       }
