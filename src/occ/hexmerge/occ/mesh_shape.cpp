@@ -222,7 +222,8 @@ TetMesh mesh_shape_impl(const std::string& brep, const MeshShapeParameters& para
   const std::string regions_brep = glue.glued ? write_brep(shape.shape) : brep;
 
   // 2. A size whose mesh would not fit in memory is refused before any work.
-  SizeEstimate estimate = estimate_size(shape.shape, parameters.size);
+  SizeEstimate estimate =
+      estimate_size(shape.shape, parameters.size, parameters.surface_deflection * parameters.size);
   if (!local_sizes.empty()) {
     const double extra = estimate_local_tets(shape.faces, shape.edges, local_items.face_size,
                                              local_items.edge_size, parameters.size, kLocalGrading);
