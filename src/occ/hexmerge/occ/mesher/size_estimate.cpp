@@ -56,6 +56,27 @@ SizeEstimate estimate_size(const TopoDS_Shape& shape, double size, double deflec
   return e;
 }
 
+double size_that_fits(const TopoDS_Shape& shape, double size, double deflection_ratio,
+                      double bytes) {
+  auto fits = [&](double h) {
+    return estimate_size(shape, h, deflection_ratio * h).bytes <= bytes;
+  };
+  double lo = size, hi = size;
+  // Grown by the cube root of the excess (exact for the volume's term; the surface's grow
+  // slower), then bisected to 1 %.
+  for (int i = 0; i < 60 && !fits(hi); ++i) {
+    lo = hi;
+    hi *= std::max(1.01, std::cbrt(estimate_size(shape, hi, deflection_ratio * hi).bytes / bytes));
+  }
+  while (hi > 1.01 * lo) {
+    const double mid = std::sqrt(lo * hi);
+    (fits(mid) ? hi : lo) = mid;
+  }
+  // Rounded up to three significant digits, as messages print it.
+  const double unit = std::pow(10.0, std::floor(std::log10(hi)) - 2);
+  return std::ceil(hi / unit) * unit;
+}
+
 double estimate_local_tets(const TopTools_IndexedMapOfShape& faces,
                            const TopTools_IndexedMapOfShape& edges,
                            const std::vector<double>& face_size,
