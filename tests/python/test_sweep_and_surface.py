@@ -179,3 +179,25 @@ def test_the_size_suggested_under_a_memory_limit_fits(tmp_path) -> None:
     assert report["meshing"]["estimated_tets"] * 3000 <= limit * 1e9
     with pytest.raises(ValueError, match="give a size of at least"):
         hexmerge.mesh_shape(block, suggested / 1.02, recombine=False, memory_limit=limit)
+
+
+def test_tetgen_failing_on_the_slab_leaves_the_whole_volume_to_it(tmp_path) -> None:
+    """A TetGen that fails on the first slab (here a stand-in crashing on its first input, then
+    the real program) leaves the swept volume to TetGen whole, in the same way of placing the
+    points, and its tets are rebuilt as the same columns: the same tets as from the slab."""
+    plate = gmsh_brep(tmp_path, "tall_holed_plate", TALL_HOLED_PLATE_GEO)
+    real = shutil.which("tetgen")
+    fake = tmp_path / "tetgen"
+    fake.write_text(f"#!/bin/sh\nif [ ! -e {tmp_path / 'crashed'} ]; then touch {tmp_path / 'crashed'}; "
+                    f"kill -SEGV $$; fi\nexec {real} \"$@\"\n")
+    fake.chmod(0o755)
+    h = 3.0
+    tets, report = hexmerge.mesh_shape(plate, h, recombine=False, tetgen=str(fake),
+                                       work_directory=str(tmp_path / "work"))
+    meshing = report["meshing"]
+    assert meshing["strategy"] == "lattice" and meshing["nb_extruded_triangles"] > 0
+    assert len(np.unique(np.round(poly_points(tmp_path / "work")[:, meshing["sweep_axis"]], 6))) == 11
+    slab, _ = hexmerge.mesh_shape(plate, h, recombine=False)
+    assert np.array_equal(tets.points, slab.points)
+    same = [np.unique(np.sort(m.cell_vertices.reshape(-1, 4), axis=1), axis=0) for m in (tets, slab)]
+    assert np.array_equal(same[0], same[1])

@@ -629,7 +629,13 @@ std::optional<tetgen::TetrahedralizeOutput> tetrahedralize_swept(
   slab.facets = std::move(facets);
   slab.first_isolated = first_isolated;
   slab.to_world = input.to_world;
-  tetgen::TetrahedralizeOutput made = tetgen.run(std::move(slab));
+  // TetGen failing on the slab leaves the whole volume to it, as before slabs.
+  tetgen::TetrahedralizeOutput made;
+  try {
+    made = tetgen.run(std::move(slab));
+  } catch (const tetgen::TetrahedralizeFailure&) {
+    return std::nullopt;
+  }
   // TetGen added or moved points: not a stack of planes any more.
   if (made.points.size() != 3 * slab_points.size() || made.nb_nudged > 0) return std::nullopt;
   // The section: the slab's boundary triangles on the first plane, as places.

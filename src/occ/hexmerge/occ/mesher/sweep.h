@@ -95,8 +95,8 @@ std::size_t extrude_tets(int axis, double spacing, std::size_t given,
 /// their centroids. On holed_plate at h 1.04 TetGen on the whole plate ran past 117 s.
 /// Nothing is returned (and nothing run) when a point lies off the lattice planes or has no
 /// repeat on some plane, or a wall side of the first plane is on no facet; nothing either when
-/// TetGen added or moved points on the slab, or the prisms' volume differs from its tets'
-/// (1e-9): the caller then tetrahedralises the whole volume.
+/// TetGen failed on the slab, added or moved points on it, or the prisms' volume differs from
+/// its tets' (1e-9): the caller then tetrahedralises the whole volume.
 /// @param[in] input             the whole volume's input, in frame coordinates
 /// @param[in] nb_surface_nodes  the surface's nodes (the first points; the rest were added)
 /// @param[in] axis              the sweep's frame axis
