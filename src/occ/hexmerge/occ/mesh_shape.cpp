@@ -222,7 +222,8 @@ TetMesh mesh_shape_impl(const std::string& brep, const MeshShapeParameters& para
   const std::string regions_brep = glue.glued ? write_brep(shape.shape) : brep;
 
   // 2. A size whose mesh would not fit in memory is refused before any work.
-  SizeEstimate estimate = estimate_size(shape.shape, parameters.size);
+  SizeEstimate estimate =
+      estimate_size(shape.shape, parameters.size, parameters.surface_deflection * parameters.size);
   if (!local_sizes.empty()) {
     const double extra = estimate_local_tets(shape.faces, shape.edges, local_items.face_size,
                                              local_items.edge_size, parameters.size, kLocalGrading);
@@ -240,7 +241,10 @@ TetMesh mesh_shape_impl(const std::string& brep, const MeshShapeParameters& para
          << " GB to mesh and recombine; "
          << (parameters.memory_limit > 0 ? "memory_limit is " : "the system has ") << limit / 1e9
          << " GB" << (parameters.memory_limit > 0 ? "" : " available")
-         << ": give a size of at least " << parameters.size * std::cbrt(estimate.bytes / limit)
+         << ": give a size of at least "
+         << std::max(parameters.size * std::cbrt(estimate.bytes / limit),
+                     size_that_fits(shape.shape, parameters.size, parameters.surface_deflection,
+                                    limit))
          << " (or raise memory_limit)";
     throw InputError(text.str(), Entity::Parameter);
   }
@@ -418,7 +422,14 @@ TetMesh mesh_attempt(const Shape& shape, const Frame& frame, const std::string& 
   input.first_isolated = nodes.size() + nb_on_faces;
   const std::size_t given = input.points.size();
   input.to_world = [&](const Vec3& p) { return lattice.frame.to_world(p); };
-  TetrahedralizeOutput tets = tetgen.run(std::move(input));
+  // Swept: TetGen on the first slab only, its first plane's triangles extruded (else on the
+  // whole volume, the tets rebuilt as columns below).
+  std::size_t extruded = 0;
+  std::optional<TetrahedralizeOutput> swept_tets;
+  if (sweep_axis >= 0)
+    swept_tets = tetrahedralize_swept(tetgen, input, swept, nodes.size(), sweep_axis,
+                                      lattice.spacing[sweep_axis], extruded);
+  TetrahedralizeOutput tets = swept_tets ? std::move(*swept_tets) : tetgen.run(std::move(input));
   report.tetgen_command = tets.command;
   report.nb_tetgen_restarts = tets.nb_restarts;
   report.nb_nudged_points = tets.nb_nudged;
@@ -427,9 +438,9 @@ TetMesh mesh_attempt(const Shape& shape, const Frame& frame, const std::string& 
   step("tetgen", 0.6);
 
   // 10b. Swept: the tets rebuilt as columns over the first plane's triangles.
-  if (sweep_axis >= 0)
-    report.nb_extruded_triangles =
-        extrude_tets(sweep_axis, lattice.spacing[sweep_axis], given, tets);
+  if (sweep_axis >= 0 && !swept_tets)
+    extruded = extrude_tets(sweep_axis, lattice.spacing[sweep_axis], given, tets);
+  report.nb_extruded_triangles = extruded;
 
   // 11. The tets in the world, regions by solid.
   TetMesh mesh = world_mesh(regions_brep, shape, surface, lattice.frame, tets);

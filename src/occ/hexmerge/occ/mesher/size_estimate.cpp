@@ -1,22 +1,80 @@
 #include "hexmerge/occ/mesher/size_estimate.h"
 
+#include <sys/resource.h>
+
+#include <BRepAdaptor_Surface.hxx>
 #include <BRepGProp.hxx>
 #include <GProp_GProps.hxx>
+#include <TopExp_Explorer.hxx>
+#include <TopoDS.hxx>
+#include <TopoDS_Face.hxx>
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <sstream>
 #include <string>
 
+#include "hexmerge/occ/mesher/surface.h"
+
 namespace hexmerge::mesher {
 
-SizeEstimate estimate_size(const TopoDS_Shape& shape, double size) {
+SizeEstimate estimate_size(const TopoDS_Shape& shape, double size, double deflection) {
   GProp_GProps volume, area;
   BRepGProp::VolumeProperties(shape, volume);
   BRepGProp::SurfaceProperties(shape, area);
   SizeEstimate e;
   e.tets = 11 * std::abs(volume.Mass()) / (size * size * size) + 10 * area.Mass() / (size * size);
+  // Curved faces of small radius r: BRepMesh cuts them into strips (one per kSurfaceAngle or per
+  // chord of sagitta `deflection`, the shorter), which refine() splits to h along: 2 A / (r a h)
+  // triangles (a the strip's angle) where A / (0.433 h²) are at size h, that many times more.
+  for (TopExp_Explorer ex(shape, TopAbs_FACE); ex.More(); ex.Next()) {
+    const TopoDS_Face& face = TopoDS::Face(ex.Current());
+    const BRepAdaptor_Surface surface(face, false);
+    double radius = 0;
+    switch (surface.GetType()) {
+      case GeomAbs_Cylinder:
+        radius = surface.Cylinder().Radius();
+        break;
+      case GeomAbs_Sphere:
+        radius = surface.Sphere().Radius();
+        break;
+      case GeomAbs_Torus:
+        radius = surface.Torus().MinorRadius();
+        break;
+      default:
+        continue;
+    }
+    const double strip =
+        std::min(kSurfaceAngle, 2 * std::acos(std::max(-1.0, 1 - deflection / radius)));
+    const double finer = 0.866 * size / (radius * strip);
+    if (finer <= 1) continue;
+    GProp_GProps face_area;
+    BRepGProp::SurfaceProperties(face, face_area);
+    e.tets += 10 * face_area.Mass() / (size * size) * (finer - 1);
+  }
   e.bytes = e.tets * kBytesPerTet;
   return e;
+}
+
+double size_that_fits(const TopoDS_Shape& shape, double size, double deflection_ratio,
+                      double bytes) {
+  auto fits = [&](double h) {
+    return estimate_size(shape, h, deflection_ratio * h).bytes <= bytes;
+  };
+  double lo = size, hi = size;
+  // Grown by the cube root of the excess (exact for the volume's term; the surface's grow
+  // slower), then bisected to 1 %.
+  for (int i = 0; i < 60 && !fits(hi); ++i) {
+    lo = hi;
+    hi *= std::max(1.01, std::cbrt(estimate_size(shape, hi, deflection_ratio * hi).bytes / bytes));
+  }
+  while (hi > 1.01 * lo) {
+    const double mid = std::sqrt(lo * hi);
+    (fits(mid) ? hi : lo) = mid;
+  }
+  // Rounded up to three significant digits, as messages print it.
+  const double unit = std::pow(10.0, std::floor(std::log10(hi)) - 2);
+  return std::ceil(hi / unit) * unit;
 }
 
 double estimate_local_tets(const TopTools_IndexedMapOfShape& faces,
@@ -42,16 +100,34 @@ double estimate_local_tets(const TopTools_IndexedMapOfShape& faces,
   return tets;
 }
 
-std::uint64_t available_memory() {
-  std::ifstream in("/proc/meminfo");
+namespace {
+
+// The value in kiB of the line of a /proc file that starts with `key`, in bytes; 0 when absent.
+std::uint64_t proc_bytes(const char* file, const std::string& key) {
+  std::ifstream in(file);
   std::string line;
   while (std::getline(in, line))
-    if (line.rfind("MemAvailable:", 0) == 0) {
-      std::istringstream fields(line.substr(13));
+    if (line.rfind(key, 0) == 0) {
+      std::istringstream fields(line.substr(key.size()));
       std::uint64_t kib = 0;
       if (fields >> kib) return kib * 1024;
     }
   return 0;
+}
+
+}  // namespace
+
+std::uint64_t available_memory() {
+  std::uint64_t available = proc_bytes("/proc/meminfo", "MemAvailable:");
+  // A limit on the process's address space (ulimit -v; the benchmark's runs have 8 GB) leaves
+  // it what the limit has above the space it holds now.
+  rlimit limit{};
+  if (getrlimit(RLIMIT_AS, &limit) == 0 && limit.rlim_cur != RLIM_INFINITY) {
+    const std::uint64_t held = proc_bytes("/proc/self/status", "VmSize:");
+    const std::uint64_t left = limit.rlim_cur > held ? limit.rlim_cur - held : 1;
+    available = available > 0 ? std::min(available, left) : left;
+  }
+  return available;
 }
 
 }  // namespace hexmerge::mesher

@@ -219,7 +219,7 @@ Surface triangulate(const Shape& s, double deflection, double tolerance) {
     // A triangulation left in the shape by an earlier call (another attempt, another size) would
     // be kept where it meets the deflection: each call starts from none.
     BRepTools::Clean(s.shape);
-    BRepMesh_IncrementalMesh mesher(s.shape, deflection, false, 0.35, true);
+    BRepMesh_IncrementalMesh mesher(s.shape, deflection, false, kSurfaceAngle, true);
     if (!mesher.IsDone()) throw InputError("OpenCASCADE could not triangulate the shape's faces");
   } catch (const Standard_Failure& e) {
     throw InputError(std::string("OpenCASCADE could not triangulate the shape's faces: ") +

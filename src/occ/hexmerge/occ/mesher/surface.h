@@ -60,8 +60,12 @@ struct Surface {
   std::vector<int> unrefined_faces;
 };
 
-/// The shape's faces triangulated by OpenCASCADE (BRepMesh, chord deflection `deflection`),
-/// nodes closer than `tolerance` merged into one.
+/// BRepMesh's angular deflection in triangulate() (radians): the widest angle a triangle spans
+/// on a curved face (20 degrees: 18 strips around a cylinder whatever its radius).
+constexpr double kSurfaceAngle = 0.35;
+
+/// The shape's faces triangulated by OpenCASCADE (BRepMesh, chord deflection `deflection`,
+/// angular deflection kSurfaceAngle), nodes closer than `tolerance` merged into one.
 /// @throws InputError when a face cannot be triangulated
 Surface triangulate(const Shape& s, double deflection, double tolerance);
 

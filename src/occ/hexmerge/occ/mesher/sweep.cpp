@@ -303,6 +303,7 @@ std::optional<SweptSurface> sweep_surface(const Shape& s, const Sweep& sweep, co
     result.sides.push_back({a, b});
     result.shared.push_back(s.face_solid_count[side.wall[0]] > 1);
     result.on_lattice_face.push_back(lattice_face[side.wall[0]]);
+    result.wall.push_back(side.wall);
     for (int k = 0; k < levels; ++k) {
       swept.triangles.push_back({{copy[k][b], copy[k][a], copy[k + 1][a]}, {}, side.wall[k]});
       swept.triangles.push_back({{copy[k][b], copy[k + 1][a], copy[k + 1][b]}, {}, side.wall[k]});
@@ -323,70 +324,79 @@ namespace {
 constexpr index_t kNoIndex = std::numeric_limits<index_t>::max();
 constexpr int kNoLevel = std::numeric_limits<int>::min();
 
-}  // namespace
+// Points (#points by 3, frame coordinates) as a stack of lattice planes: per point its plane
+// (level) and its place across the axis (the bits of its two other coordinates: the sweep
+// repeats them exactly), and the point at each place on each level.
+struct Stack {
+  std::vector<int> level, place;
+  int lowest = 0, highest = 0, nb_levels = 0;
+  std::vector<index_t> at;
+  index_t point_at(int where, int l) const {
+    return at[static_cast<std::size_t>(where) * nb_levels + (l - lowest)];
+  }
+  int level_of_triangle(const std::array<index_t, 3>& t) const {
+    return level[t[0]] == level[t[1]] && level[t[1]] == level[t[2]] ? level[t[0]] : kNoLevel;
+  }
+};
 
-std::size_t extrude_tets(int axis, double spacing, std::size_t given,
-                         tetgen::TetrahedralizeOutput& tets) {
-  const std::vector<double>& points = tets.points;
+// The stack, or nothing when a point lies off the planes, two share a place and a level, a
+// place lacks a point on some level, or there are fewer than two levels.
+std::optional<Stack> stack_points(const std::vector<double>& points, int axis, double spacing) {
   const std::size_t nb_points = points.size() / 3;
-  if (nb_points != given || nb_points == 0) return 0;
-  // Per point: its plane (level) and its place across the axis (the bits of its two other
-  // coordinates: the sweep repeats them exactly).
+  if (nb_points == 0) return std::nullopt;
   const int u = (axis + 1) % 3, v = (axis + 2) % 3;
-  std::vector<int> level(nb_points);
+  Stack stack;
+  stack.level.resize(nb_points);
+  stack.place.resize(nb_points);
   std::map<std::pair<double, double>, int> place_of;
-  std::vector<int> place(nb_points);
   int lowest = std::numeric_limits<int>::max(), highest = std::numeric_limits<int>::min();
   for (std::size_t i = 0; i < nb_points; ++i) {
     const double* p = &points[3 * i];
     const double k = std::round(p[axis] / spacing);
-    if (std::abs(p[axis] - k * spacing) > 1e-7 * spacing) return 0;
-    level[i] = static_cast<int>(k);
-    lowest = std::min(lowest, level[i]), highest = std::max(highest, level[i]);
-    place[i] = place_of.emplace(std::make_pair(p[u], p[v]), static_cast<int>(place_of.size()))
-                   .first->second;
+    if (std::abs(p[axis] - k * spacing) > 1e-7 * spacing) return std::nullopt;
+    stack.level[i] = static_cast<int>(k);
+    lowest = std::min(lowest, stack.level[i]), highest = std::max(highest, stack.level[i]);
+    stack.place[i] = place_of.emplace(std::make_pair(p[u], p[v]), static_cast<int>(place_of.size()))
+                         .first->second;
   }
-  const int nb_levels = highest - lowest + 1;
-  if (nb_levels < 2) return 0;
-  std::vector<index_t> at(place_of.size() * static_cast<std::size_t>(nb_levels), kNoIndex);
+  stack.lowest = lowest, stack.highest = highest, stack.nb_levels = highest - lowest + 1;
+  if (stack.nb_levels < 2) return std::nullopt;
+  stack.at.assign(place_of.size() * static_cast<std::size_t>(stack.nb_levels), kNoIndex);
   for (std::size_t i = 0; i < nb_points; ++i) {
-    index_t& slot = at[static_cast<std::size_t>(place[i]) * nb_levels + (level[i] - lowest)];
-    if (slot != kNoIndex) return 0;  // two points at one place
+    index_t& slot = stack.at[static_cast<std::size_t>(stack.place[i]) * stack.nb_levels +
+                             (stack.level[i] - lowest)];
+    if (slot != kNoIndex) return std::nullopt;  // two points at one place
     slot = static_cast<index_t>(i);
   }
-  if (std::find(at.begin(), at.end(), kNoIndex) != at.end()) return 0;
-  auto point_at = [&](int where, int l) {
-    return at[static_cast<std::size_t>(where) * nb_levels + (l - lowest)];
-  };
-  auto frame_point = [&](index_t i) { return Vec3::of(&points[3 * i]); };
-  auto volume = [&](index_t a, index_t b, index_t c, index_t d) {
-    const Vec3 p = frame_point(a);
-    return det3(frame_point(b) - p, frame_point(c) - p, frame_point(d) - p) / 6;
-  };
-  auto level_of_triangle = [&](const std::array<index_t, 3>& t) {
-    return level[t[0]] == level[t[1]] && level[t[1]] == level[t[2]] ? level[t[0]] : kNoLevel;
-  };
-  // The cross-section: TetGen's boundary triangles on the first plane, as places.
-  std::vector<std::array<int, 3>> section;
-  for (const auto& t : tets.boundary)
-    if (level_of_triangle(t) == lowest) section.push_back({place[t[0]], place[t[1]], place[t[2]]});
-  // Prisms split by the smallest index (Dompierre et al. 1999): rotated so that the smallest is
-  // vertex 0; the quad 1-2-5-4 is cut through its own smallest.
+  if (std::find(stack.at.begin(), stack.at.end(), kNoIndex) != stack.at.end()) return std::nullopt;
+  return stack;
+}
+
+double tet_volume(const std::vector<double>& points, index_t a, index_t b, index_t c, index_t d) {
+  const Vec3 p = Vec3::of(&points[3 * a]);
+  return det3(Vec3::of(&points[3 * b]) - p, Vec3::of(&points[3 * c]) - p,
+              Vec3::of(&points[3 * d]) - p) /
+         6;
+}
+
+// The prisms over the section's triangles (places) through every slab, each split into three
+// tets by the smallest point index (Dompierre et al. 1999), so that neighbours agree on every
+// quad's diagonal. False when a tet is flat; `volume` per slab.
+bool extrude_section(const Stack& stack, const std::vector<std::array<int, 3>>& section,
+                     const std::vector<double>& points, std::vector<index_t>& made,
+                     std::vector<double>& volume) {
+  // Rotated so that the smallest is vertex 0; the quad 1-2-5-4 is cut through its own smallest.
   static constexpr int kRotation[6][6] = {{0, 1, 2, 3, 4, 5}, {1, 2, 0, 4, 5, 3},
                                           {2, 0, 1, 5, 3, 4}, {3, 5, 4, 0, 2, 1},
                                           {4, 3, 5, 1, 0, 2}, {5, 4, 3, 2, 1, 0}};
-  std::vector<index_t> made;
-  made.reserve(section.size() * 3 * 4 * static_cast<std::size_t>(nb_levels - 1));
-  double before = 0, after = 0;
-  for (std::size_t t = 0; t < tets.tets.size() / 4; ++t) {
-    const index_t* w = &tets.tets[4 * t];
-    before += std::abs(volume(w[0], w[1], w[2], w[3]));
-  }
+  made.clear();
+  made.reserve(section.size() * 3 * 4 * static_cast<std::size_t>(stack.nb_levels - 1));
+  volume.assign(static_cast<std::size_t>(stack.nb_levels - 1), 0.0);
   for (const auto& tri : section)
-    for (int l = lowest; l < highest; ++l) {
-      const index_t prism[6] = {point_at(tri[0], l),     point_at(tri[1], l),
-                                point_at(tri[2], l),     point_at(tri[0], l + 1),
-                                point_at(tri[1], l + 1), point_at(tri[2], l + 1)};
+    for (int l = stack.lowest; l < stack.highest; ++l) {
+      const index_t prism[6] = {stack.point_at(tri[0], l),     stack.point_at(tri[1], l),
+                                stack.point_at(tri[2], l),     stack.point_at(tri[0], l + 1),
+                                stack.point_at(tri[1], l + 1), stack.point_at(tri[2], l + 1)};
       const int first = static_cast<int>(std::min_element(prism, prism + 6) - prism);
       index_t r[6];
       for (int k = 0; k < 6; ++k) r[k] = prism[kRotation[first][k]];
@@ -397,13 +407,74 @@ std::size_t extrude_tets(int axis, double spacing, std::size_t given,
       const auto& split = std::min(r[1], r[5]) < std::min(r[2], r[4]) ? cut : other;
       for (const auto& tet : split) {
         index_t q[4] = {tet[0], tet[1], tet[2], tet[3]};
-        double vol = volume(q[0], q[1], q[2], q[3]);
+        double vol = tet_volume(points, q[0], q[1], q[2], q[3]);
         if (vol < 0) std::swap(q[1], q[2]), vol = -vol;
-        if (!(vol > 0)) return 0;
-        after += vol;
+        if (!(vol > 0)) return false;
+        volume[l - stack.lowest] += vol;
         made.insert(made.end(), q, q + 4);
       }
     }
+  return true;
+}
+
+// The extruded boundary triangles: over each side of the section (once, in the order of their
+// places) in each slab the quad cut through its smallest corner, where `quad_marker` gives it a
+// marker (>= 0); then on each of `cap_levels` every section triangle `cap_marker` gives one.
+template <class QuadMarker, class CapMarker>
+void extruded_boundary(const Stack& stack, const std::vector<std::array<int, 3>>& section,
+                       const std::vector<int>& cap_levels, QuadMarker quad_marker,
+                       CapMarker cap_marker, std::vector<std::array<index_t, 3>>& boundary,
+                       std::vector<int>& markers) {
+  boundary.clear(), markers.clear();
+  std::set<std::pair<int, int>> sides;
+  for (const auto& tri : section)
+    for (int c = 0; c < 3; ++c) sides.insert(std::minmax(tri[c], tri[(c + 1) % 3]));
+  for (const auto& [a, b] : sides)
+    for (int l = stack.lowest; l < stack.highest; ++l) {
+      const index_t q[4] = {stack.point_at(a, l), stack.point_at(b, l), stack.point_at(b, l + 1),
+                            stack.point_at(a, l + 1)};
+      const int marker = quad_marker(a, b, l, q);
+      if (marker < 0) continue;
+      const int s = static_cast<int>(std::min_element(q, q + 4) - q);
+      const index_t p0 = q[s], p1 = q[(s + 1) % 4], p2 = q[(s + 2) % 4], p3 = q[(s + 3) % 4];
+      boundary.push_back({p0, p1, p2});
+      boundary.push_back({p0, p2, p3});
+      markers.push_back(marker);
+      markers.push_back(marker);
+    }
+  for (const int l : cap_levels)
+    for (const auto& tri : section) {
+      const std::array<index_t, 3> corners{stack.point_at(tri[0], l), stack.point_at(tri[1], l),
+                                           stack.point_at(tri[2], l)};
+      const int marker = cap_marker(l, corners);
+      if (marker < 0) continue;
+      boundary.push_back(corners);
+      markers.push_back(marker);
+    }
+}
+
+}  // namespace
+
+std::size_t extrude_tets(int axis, double spacing, std::size_t given,
+                         tetgen::TetrahedralizeOutput& tets) {
+  const std::size_t nb_points = tets.points.size() / 3;
+  if (nb_points != given) return 0;
+  const std::optional<Stack> stack = stack_points(tets.points, axis, spacing);
+  if (!stack) return 0;
+  // The cross-section: TetGen's boundary triangles on the first plane, as places.
+  std::vector<std::array<int, 3>> section;
+  for (const auto& t : tets.boundary)
+    if (stack->level_of_triangle(t) == stack->lowest)
+      section.push_back({stack->place[t[0]], stack->place[t[1]], stack->place[t[2]]});
+  std::vector<index_t> made;
+  std::vector<double> volume;
+  if (!extrude_section(*stack, section, tets.points, made, volume)) return 0;
+  double before = 0, after = 0;
+  for (std::size_t t = 0; t < tets.tets.size() / 4; ++t) {
+    const index_t* w = &tets.tets[4 * t];
+    before += std::abs(tet_volume(tets.points, w[0], w[1], w[2], w[3]));
+  }
+  for (const double v : volume) after += v;
   if (std::abs(after - before) > 1e-9 * before) return 0;
   // The boundary triangles: where TetGen had boundary triangles over the same quad (walls,
   // faces between solids) or over the same part of a plane (caps), with their markers.
@@ -413,70 +484,218 @@ std::size_t extrude_tets(int axis, double spacing, std::size_t given,
     std::array<index_t, 3> key = tets.boundary[i];
     std::sort(key.begin(), key.end());
     marker_of[key] = tets.boundary_marker[i];
-    const int l = level_of_triangle(tets.boundary[i]);
+    const int l = stack->level_of_triangle(tets.boundary[i]);
     if (l != kNoLevel) on_level[l].push_back(i);
   }
-  std::vector<std::array<index_t, 3>> boundary;
-  std::vector<int> markers;
-  // The quad's triangles cut through its smallest corner, when TetGen had one of its triangles.
-  auto add_quad = [&](index_t a, index_t b, index_t c, index_t d) {  // a b c d around
-    const index_t q[4] = {a, b, c, d};
-    int marker = -1;
-    for (int skip = 0; skip < 4 && marker < 0; ++skip) {
+  // A quad's marker: TetGen's on one of its triangles.
+  auto quad_marker = [&](int, int, int, const index_t(&q)[4]) {
+    for (int skip = 0; skip < 4; ++skip) {
       std::array<index_t, 3> key{};
       for (int k = 0, n = 0; k < 4; ++k)
         if (k != skip) key[n++] = q[k];
       std::sort(key.begin(), key.end());
       const auto it = marker_of.find(key);
-      if (it != marker_of.end()) marker = it->second;
+      if (it != marker_of.end()) return it->second;
     }
-    if (marker < 0) return;
-    const int s = static_cast<int>(std::min_element(q, q + 4) - q);
-    const index_t p0 = q[s], p1 = q[(s + 1) % 4], p2 = q[(s + 2) % 4], p3 = q[(s + 3) % 4];
-    boundary.push_back({p0, p1, p2});
-    boundary.push_back({p0, p2, p3});
-    markers.push_back(marker);
-    markers.push_back(marker);
+    return -1;
   };
-  std::set<std::pair<int, int>> sides;
-  for (const auto& tri : section)
-    for (int c = 0; c < 3; ++c) sides.insert(std::minmax(tri[c], tri[(c + 1) % 3]));
-  for (const auto& [a, b] : sides)
-    for (int l = lowest; l < highest; ++l)
-      add_quad(point_at(a, l), point_at(b, l), point_at(b, l + 1), point_at(a, l + 1));
   // Caps: the marker of TetGen's triangle on the same corners, else (TetGen cut that part of
   // the plane otherwise) of its triangle on that plane holding the triangle's centroid.
-  for (const auto& [l, list] : on_level)
-    for (const auto& tri : section) {
-      const std::array<index_t, 3> corners{point_at(tri[0], l), point_at(tri[1], l),
-                                           point_at(tri[2], l)};
-      std::array<index_t, 3> key = corners;
-      std::sort(key.begin(), key.end());
-      const auto same = marker_of.find(key);
-      if (same != marker_of.end()) {
-        boundary.push_back(corners);
-        markers.push_back(same->second);
+  auto cap_marker = [&](int l, const std::array<index_t, 3>& corners) {
+    std::array<index_t, 3> key = corners;
+    std::sort(key.begin(), key.end());
+    const auto same = marker_of.find(key);
+    if (same != marker_of.end()) return same->second;
+    auto frame_point = [&](index_t i) { return Vec3::of(&tets.points[3 * i]); };
+    const Vec3 centroid =
+        (frame_point(corners[0]) + frame_point(corners[1]) + frame_point(corners[2])) * (1.0 / 3);
+    for (std::size_t i : on_level[l]) {
+      const auto& t = tets.boundary[i];
+      double s, r;
+      if (!coordinates_across(centroid, frame_point(t[0]), frame_point(t[1]), frame_point(t[2]),
+                              axis, s, r))
         continue;
-      }
-      Vec3 centroid =
-          (frame_point(corners[0]) + frame_point(corners[1]) + frame_point(corners[2])) * (1.0 / 3);
-      for (std::size_t i : list) {
-        const auto& t = tets.boundary[i];
-        double s, r;
-        if (!coordinates_across(centroid, frame_point(t[0]), frame_point(t[1]), frame_point(t[2]),
-                                axis, s, r))
-          continue;
-        if (s < -1e-9 || r < -1e-9 || s + r > 1 + 1e-9) continue;
-        boundary.push_back(corners);
-        markers.push_back(tets.boundary_marker[i]);
-        break;
-      }
+      if (s < -1e-9 || r < -1e-9 || s + r > 1 + 1e-9) continue;
+      return tets.boundary_marker[i];
     }
-  const std::size_t extruded = section.size();
+    return -1;
+  };
+  std::vector<int> cap_levels;
+  for (const auto& entry : on_level) cap_levels.push_back(entry.first);
+  std::vector<std::array<index_t, 3>> boundary;
+  std::vector<int> markers;
+  extruded_boundary(*stack, section, cap_levels, quad_marker, cap_marker, boundary, markers);
   tets.tets = std::move(made);
   tets.boundary = std::move(boundary);
   tets.boundary_marker = std::move(markers);
-  return extruded;
+  return section.size();
+}
+
+std::optional<tetgen::TetrahedralizeOutput> tetrahedralize_swept(
+    const tetgen::Tetrahedralizer& tetgen, const tetgen::TetrahedralizeInput& input,
+    const SweptSurface& swept, std::size_t nb_surface_nodes, int axis, double spacing,
+    std::size_t& extruded) {
+  extruded = 0;
+  std::vector<double> points;
+  points.reserve(3 * input.points.size());
+  for (const Vec3& p : input.points) points.insert(points.end(), {p.x, p.y, p.z});
+  const std::optional<Stack> found = stack_points(points, axis, spacing);
+  if (!found) return std::nullopt;
+  const Stack& stack = *found;
+  const int bottom = stack.lowest;
+  // The facets on each plane (all their points on it), by index.
+  std::map<int, std::vector<std::size_t>> facets_on;
+  for (std::size_t f = 0; f < input.facets.size(); ++f) {
+    int l = kNoLevel;
+    bool flat = true;
+    for (const auto& polygon : input.facets[f].polygons)
+      for (const int n : polygon) {
+        if (l == kNoLevel) l = stack.level[n];
+        flat = flat && stack.level[n] == l;
+      }
+    if (flat && l != kNoLevel) facets_on[l].push_back(f);
+  }
+  if (!facets_on.count(bottom)) return std::nullopt;
+  // Each wall side of the first plane with the points added on it (lattice walls: their
+  // lattice points), from the loops of the first plane's facets.
+  std::unordered_map<int, std::vector<std::pair<std::size_t, std::size_t>>> in_loop;
+  for (const std::size_t f : facets_on[bottom])
+    for (std::size_t p = 0; p < input.facets[f].polygons.size(); ++p)
+      for (std::size_t k = 0; k < input.facets[f].polygons[p].size(); ++k)
+        in_loop[input.facets[f].polygons[p][k]].emplace_back(f, p * (std::size_t{1} << 32) + k);
+  auto chain_of = [&](int a, int b) {
+    std::vector<int> chain;
+    for (const auto& [f, where] : in_loop[a]) {
+      const auto& loop = input.facets[f].polygons[where >> 32];
+      const std::size_t n = loop.size(), k = where & 0xffffffffu;
+      if (n < 3) continue;
+      for (const int direction : {1, -1}) {
+        chain = {a};
+        for (std::size_t j = 1; j < n; ++j) {
+          const long m = static_cast<long>(n);
+          const int next =
+              loop[((static_cast<long>(k) + direction * static_cast<long>(j)) % m + m) % m];
+          chain.push_back(next);
+          if (next == b) return chain;
+          if (static_cast<std::size_t>(next) < nb_surface_nodes) break;
+        }
+      }
+    }
+    chain.clear();
+    return chain;
+  };
+  // The slab between the first two planes: its points (the facets' first), the first plane's
+  // facets, their copies on the second plane, and the walls between.
+  const double step = spacing;
+  std::vector<int> slab_index(input.points.size(), -1);
+  std::vector<int> slab_points;  // global index per slab point
+  auto up = [&](int n) { return static_cast<int>(stack.point_at(stack.place[n], bottom + 1)); };
+  std::vector<tetgen::Facet> facets;
+  for (const std::size_t f : facets_on[bottom]) {
+    tetgen::Facet lower = input.facets[f], upper = input.facets[f];
+    for (auto& polygon : upper.polygons) {
+      for (int& n : polygon) n = up(n);
+      std::reverse(polygon.begin(), polygon.end());
+    }
+    for (Vec3& hole : upper.holes) set_coord(hole, axis, coord(hole, axis) + step);
+    facets.push_back(std::move(lower));
+    facets.push_back(std::move(upper));
+  }
+  for (std::size_t i = 0; i < swept.sides.size(); ++i) {
+    const int a = swept.sides[i][0], b = swept.sides[i][1];
+    if (stack.level[a] != bottom || stack.level[b] != bottom) return std::nullopt;
+    std::vector<int> chain = chain_of(a, b);
+    if (chain.empty()) return std::nullopt;  // a wall side on no facet
+    std::vector<int> polygon = chain;
+    for (auto n = chain.rbegin(); n != chain.rend(); ++n) polygon.push_back(up(*n));
+    facets.push_back(tetgen::Facet{{polygon}, {}, swept.wall[i][0] + 1});
+  }
+  for (const auto& facet : facets)
+    for (const auto& polygon : facet.polygons)
+      for (const int n : polygon) slab_index[n] = 0;
+  for (std::size_t n = 0; n < input.points.size(); ++n)
+    if (slab_index[n] == 0) slab_index[n] = 1, slab_points.push_back(static_cast<int>(n));
+  const std::size_t first_isolated = slab_points.size();
+  for (std::size_t n = 0; n < input.points.size(); ++n)
+    if (slab_index[n] < 0 && stack.level[n] <= bottom + 1)
+      slab_points.push_back(static_cast<int>(n));
+  for (std::size_t i = 0; i < slab_points.size(); ++i)
+    slab_index[slab_points[i]] = static_cast<int>(i);
+  tetgen::TetrahedralizeInput slab;
+  for (const int n : slab_points) slab.points.push_back(input.points[n]);
+  for (auto& facet : facets)
+    for (auto& polygon : facet.polygons)
+      for (int& n : polygon) n = slab_index[n];
+  slab.facets = std::move(facets);
+  slab.first_isolated = first_isolated;
+  slab.to_world = input.to_world;
+  // TetGen failing on the slab leaves the whole volume to it, as before slabs.
+  tetgen::TetrahedralizeOutput made;
+  try {
+    made = tetgen.run(std::move(slab));
+  } catch (const tetgen::TetrahedralizeFailure&) {
+    return std::nullopt;
+  }
+  // TetGen added or moved points: not a stack of planes any more.
+  if (made.points.size() != 3 * slab_points.size() || made.nb_nudged > 0) return std::nullopt;
+  // The section: the slab's boundary triangles on the first plane, as places.
+  std::vector<std::array<int, 3>> section;
+  for (const auto& t : made.boundary) {
+    const std::array<index_t, 3> global{static_cast<index_t>(slab_points[t[0]]),
+                                        static_cast<index_t>(slab_points[t[1]]),
+                                        static_cast<index_t>(slab_points[t[2]])};
+    if (stack.level_of_triangle(global) == bottom)
+      section.push_back({stack.place[global[0]], stack.place[global[1]], stack.place[global[2]]});
+  }
+  tetgen::TetrahedralizeOutput tets;
+  std::vector<double> volume;
+  if (!extrude_section(stack, section, points, tets.tets, volume)) return std::nullopt;
+  double slab_volume = 0;
+  for (std::size_t t = 0; t < made.tets.size() / 4; ++t) {
+    const index_t* w = &made.tets[4 * t];
+    slab_volume += std::abs(tet_volume(made.points, w[0], w[1], w[2], w[3]));
+  }
+  if (std::abs(volume[0] - slab_volume) > 1e-9 * slab_volume) return std::nullopt;
+  // Markers: a quad over a wall side takes the side's wall face in its slab; a cap triangle the
+  // marker of the facet on its plane that holds its centroid.
+  std::map<std::pair<int, int>, std::size_t> wall_side;  // places, sorted -> side
+  for (std::size_t i = 0; i < swept.sides.size(); ++i) {
+    const std::vector<int> chain = chain_of(swept.sides[i][0], swept.sides[i][1]);
+    for (std::size_t k = 0; k + 1 < chain.size(); ++k)
+      wall_side[std::minmax(stack.place[chain[k]], stack.place[chain[k + 1]])] = i;
+  }
+  auto quad_marker = [&](int a, int b, int l, const index_t(&)[4]) {
+    const auto it = wall_side.find(std::minmax(a, b));
+    return it == wall_side.end() ? -1 : swept.wall[it->second][l - bottom] + 1;
+  };
+  const int u = (axis + 1) % 3, v = (axis + 2) % 3;
+  auto cap_marker = [&](int l, const std::array<index_t, 3>& corners) {
+    Vec3 centroid{0, 0, 0};
+    for (const index_t n : corners) centroid = centroid + input.points[n] * (1.0 / 3);
+    const double cu = coord(centroid, u), cv = coord(centroid, v);
+    for (const std::size_t f : facets_on[l]) {
+      bool inside = false;  // even-odd rule along +u over the facet's loops
+      for (const auto& loop : input.facets[f].polygons)
+        for (std::size_t k = 0; k < loop.size() && loop.size() >= 3; ++k) {
+          const Vec3 &p = input.points[loop[k]], &q = input.points[loop[(k + 1) % loop.size()]];
+          const double pv = coord(p, v), qv = coord(q, v);
+          if ((pv > cv) != (qv > cv) &&
+              cu < coord(p, u) + (cv - pv) * (coord(q, u) - coord(p, u)) / (qv - pv))
+            inside = !inside;
+        }
+      if (inside) return input.facets[f].marker;
+    }
+    return -1;
+  };
+  std::vector<int> cap_levels;
+  for (const auto& entry : facets_on) cap_levels.push_back(entry.first);
+  extruded_boundary(stack, section, cap_levels, quad_marker, cap_marker, tets.boundary,
+                    tets.boundary_marker);
+  tets.points = std::move(points);
+  tets.nb_restarts = made.nb_restarts;
+  tets.command = made.command;
+  extruded = section.size();
+  return tets;
 }
 
 }  // namespace hexmerge::mesher
