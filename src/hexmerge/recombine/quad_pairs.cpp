@@ -39,10 +39,17 @@ namespace {
 const CellDescriptor& kTet = descriptor(CellType::Tet);
 constexpr double kDegToRad = 0.017453292519943295;
 
+// A face pair that passed the normal filter, as the walk from the face's tet meets it. Each pair
+// is tested once, from the face with the smaller code: its entry holds both answers, and the
+// other face's entry (kPending) takes its answer from there (QuadPairs' constructor).
 struct Entry {
-  index_t face;  // 4 * t + f
-  QuadPartner partner;
+  index_t face;     // 4 * t + f
+  index_t partner;  // 4 * s + g
+  std::uint8_t state;
 };
+constexpr std::uint8_t kForward = 1;  // face -> partner accepted
+constexpr std::uint8_t kReverse = 2;  // partner -> face accepted (the test made from face)
+constexpr std::uint8_t kPending = 4;  // tested from the partner's entry
 
 class Builder {
  public:
@@ -92,8 +99,9 @@ class Builder {
           const auto [s, g] = r.faces[a];
           const float* ns = &normals_[12 * std::size_t(s) + 3 * g];
           if (nt[0] * ns[0] + nt[1] * ns[1] + nt[2] * ns[2] < min_cos_) continue;
-          QuadPartner p;
-          if (accept(t, f, s, g, p)) out.push_back({4 * t + f, p});
+          // (The filter is symmetric: the partner's walk meets this pair too.)
+          const index_t face = 4 * t + f, partner = 4 * s + g;
+          out.push_back({face, partner, face < partner ? accept_both(t, f, s, g) : kPending});
         }
       }
     }
@@ -127,23 +135,33 @@ class Builder {
     return n;
   }
 
-  bool accept(index_t t, int f, index_t s, int g, QuadPartner& p) const {
+ public:
+  /// accept(t, f, s, g) alone: face f of tet t takes face g of tet s as partner.
+  bool accept(index_t t, int f, index_t s, int g) const {
+    return (accept_both(t, f, s, g) & kForward) != 0;
+  }
+
+  /// kForward when face f of tet t takes face g of tet s as partner, kReverse when s's face takes
+  /// t's: the quad is the same, seen from either side (x, w, y, z) or (y, z, x, w), and so are
+  /// its corner angles (the same edge vectors at each corner), which are tested once; the
+  /// dihedral angle is measured across the diagonal from the first vertex of each, as each side
+  /// alone would (its rounding differs).
+  std::uint8_t accept_both(index_t t, int f, index_t s, int g) const {
     std::array<index_t, 4> q;
-    if (!quad_from_triangles(tet_face(mesh_, t, f), tet_face(mesh_, s, g), q)) return false;
+    if (!quad_from_triangles(tet_face(mesh_, t, f), tet_face(mesh_, s, g), q)) return 0;
     const double* a = mesh_.point(q[0]);
     const double* b = mesh_.point(q[1]);
     const double* c = mesh_.point(q[2]);
     const double* d = mesh_.point(q[3]);
     const bool on_boundary = is_boundary(t, f) && is_boundary(s, g);
-    if (quad_dihedral_angle_below(a, b, c, d,
-                                  on_boundary ? min_boundary_dihedral_ : min_dihedral_)) {
-      return false;
-    }
-    if (quad_max_corner_angle_above(a, b, c, d, max_corner_)) return false;
-    p = {4 * s + g};
-    return true;
+    const AngleBound& dihedral = on_boundary ? min_boundary_dihedral_ : min_dihedral_;
+    const std::uint8_t sides = (quad_dihedral_angle_below(a, b, c, d, dihedral) ? 0 : kForward) |
+                               (quad_dihedral_angle_below(c, d, a, b, dihedral) ? 0 : kReverse);
+    if (sides == 0 || quad_max_corner_angle_above(a, b, c, d, max_corner_)) return 0;
+    return sides;
   }
 
+ private:
   // Face f of tet t on the domain's boundary, or on a region interface when those count.
   bool is_boundary(index_t t, int f) const {
     if (topo_.on_boundary(t, f)) return true;
@@ -193,22 +211,50 @@ QuadPairs::QuadPairs(const TetMesh& mesh, const TetTopology& topology, double mi
   parallel_chunks(nt, kChunk, threads, [&](index_t chunk, index_t begin, index_t end) {
     for (index_t t = begin; t < end; ++t) builder.faces_of_tet(t, per_chunk[chunk]);
   });
+  // Entries come out grouped by tet face, in increasing order: one array with a running count.
+  std::size_t total = 0;
+  for (const auto& c : per_chunk) total += c.size();
+  std::vector<Entry> entries;
+  entries.reserve(total);
+  for (auto& chunk : per_chunk) {
+    entries.insert(entries.end(), chunk.begin(), chunk.end());
+    std::vector<Entry>().swap(chunk);
+  }
+  std::vector<std::size_t> start(4 * static_cast<std::size_t>(nt) + 1, 0);
+  for (const Entry& e : entries) ++start[e.face + 1];
+  for (std::size_t i = 0; i + 1 < start.size(); ++i) start[i + 1] += start[i];
+  // A pending entry (face > partner) takes kReverse of the partner's entry for this face. The
+  // partner's walk meets the pair unless its ring was cut at its 32 tets: then the pair is
+  // tested here, from this side, as it always was.
+  parallel_chunks(nt, kChunk, threads, [&](index_t, index_t begin, index_t end) {
+    for (std::size_t i = start[4 * std::size_t(begin)]; i < start[4 * std::size_t(end)]; ++i) {
+      Entry& e = entries[i];
+      if (e.state != kPending) continue;
+      const Entry* first = entries.data() + start[e.partner];
+      const Entry* last = entries.data() + start[e.partner + 1];
+      const Entry* r =
+          std::find_if(first, last, [&](const Entry& o) { return o.partner == e.face; });
+      e.state = r != last ? (r->state & kReverse ? kForward : 0)
+                          : (builder.accept(e.face / 4, static_cast<int>(e.face % 4), e.partner / 4,
+                                            static_cast<int>(e.partner % 4))
+                                 ? kForward
+                                 : 0);
+    }
+  });
+  std::vector<std::size_t>().swap(start);
 
   offsets_.assign(4 * static_cast<std::size_t>(nt) + 1, 0);
   masks_.assign(nt, 0);
   partner_bits_.assign(nt, 0);
-  std::size_t total = 0;
-  for (const auto& c : per_chunk) total += c.size();
-  partners_.reserve(total);
-  // Entries come out grouped by tet face, in increasing order: the CSR is a running count.
-  for (auto& chunk : per_chunk) {
-    for (const Entry& e : chunk) {
-      ++offsets_[e.face + 1];
-      masks_[e.face / 4] |= static_cast<unsigned char>(1u << (e.face % 4));
-      partner_bits_[e.face / 4] |= std::uint64_t{1} << (e.partner.face / 4 & 63u);
-      partners_.push_back(e.partner);
-    }
-    std::vector<Entry>().swap(chunk);
+  std::size_t accepted = 0;
+  for (const Entry& e : entries) accepted += (e.state & kForward) != 0;
+  partners_.reserve(accepted);
+  for (const Entry& e : entries) {
+    if (!(e.state & kForward)) continue;
+    ++offsets_[e.face + 1];
+    masks_[e.face / 4] |= static_cast<unsigned char>(1u << (e.face % 4));
+    partner_bits_[e.face / 4] |= std::uint64_t{1} << (e.partner / 4 & 63u);
+    partners_.push_back({e.partner});
   }
   for (std::size_t i = 0; i + 1 < offsets_.size(); ++i) offsets_[i + 1] += offsets_[i];
 }
