@@ -42,6 +42,12 @@ constexpr double kDegToRad = 0.017453292519943295;
 // A face pair that passed the normal filter, as the walk from the face's tet meets it. Each pair
 // is tested once, from the face with the smaller code: its entry holds both answers, and the
 // other face's entry (kPending) takes its answer from there (QuadPairs' constructor).
+// A face around an edge: (tet, local face). (std::pair would zero the walk's arrays, 3 KB per tet.)
+struct RingFace {
+  index_t tet;
+  int face;
+};
+
 struct Entry {
   index_t face;     // 4 * t + f
   index_t partner;  // 4 * s + g
@@ -76,7 +82,7 @@ class Builder {
     struct Ring {
       int others[2];
       int n;
-      std::array<std::pair<index_t, int>, 64> faces;
+      std::array<RingFace, 64> faces;  // not initialised: the first n are written
     };
     std::array<Ring, 6> rings;
     const index_t* q = mesh_.tet(t);
@@ -111,7 +117,7 @@ class Builder {
   // Faces (tet, local face) holding edge x-y of the tets around it other than t: walk from t
   // across each of its two faces on the edge until the walk returns or leaves the domain.
   int tets_around_edge(index_t t, index_t x, index_t y, const int others[2],
-                       std::array<std::pair<index_t, int>, 64>& out) const {
+                       std::array<RingFace, 64>& out) const {
     int n = 0;
     for (int dir = 0; dir < 2; ++dir) {
       index_t prev = t, cur = topo_.neighbor(t, others[dir]);
