@@ -158,8 +158,16 @@ std::vector<Candidate> prune_unclosable(const TetMesh& mesh, const TetTopology& 
     struct Entry {
       std::array<index_t, 3> rest;
       index_t quad;
+      // Lexicographic on (rest, quad), element by element (std::array's comparisons call
+      // memcmp).
       bool operator<(const Entry& o) const {
-        return rest != o.rest ? rest < o.rest : quad < o.quad;
+        if (rest[0] != o.rest[0]) return rest[0] < o.rest[0];
+        if (rest[1] != o.rest[1]) return rest[1] < o.rest[1];
+        if (rest[2] != o.rest[2]) return rest[2] < o.rest[2];
+        return quad < o.quad;
+      }
+      bool same_key(const Entry& o) const {
+        return ((rest[0] ^ o.rest[0]) | (rest[1] ^ o.rest[1]) | (rest[2] ^ o.rest[2])) == 0;
       }
     };
     std::vector<index_t> bucket(static_cast<std::size_t>(nv) + 1, 0);
@@ -189,7 +197,7 @@ std::vector<Candidate> prune_unclosable(const TetMesh& mesh, const TetTopology& 
           for (index_t v = begin; v < end; ++v) {
             std::sort(entries.begin() + bucket[v], entries.begin() + bucket[v + 1]);
             for (index_t j = bucket[v]; j < bucket[v + 1]; ++j) {
-              starts[j] = j == bucket[v] || entries[j].rest != entries[j - 1].rest;
+              starts[j] = j == bucket[v] || !entries[j].same_key(entries[j - 1]);
               at[entries[j].quad] = j;
             }
           }
