@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <utility>
 
 #include "hexmerge/core/parallel.h"
 #include "hexmerge/geometry/quality.h"
@@ -217,27 +218,28 @@ QuadPairs::QuadPairs(const TetMesh& mesh, const TetTopology& topology, double mi
   parallel_chunks(nt, kChunk, threads, [&](index_t chunk, index_t begin, index_t end) {
     for (index_t t = begin; t < end; ++t) builder.faces_of_tet(t, per_chunk[chunk]);
   });
-  // Entries come out grouped by tet face, in increasing order: one array with a running count.
-  std::size_t total = 0;
-  for (const auto& c : per_chunk) total += c.size();
-  std::vector<Entry> entries;
-  entries.reserve(total);
-  for (auto& chunk : per_chunk) {
-    entries.insert(entries.end(), chunk.begin(), chunk.end());
-    std::vector<Entry>().swap(chunk);
-  }
+  // Entries come out grouped by tet face, in increasing order: start[c] is the place of face c's
+  // first entry in the chunks taken one after the other (chunk k's begin at base[k]). The
+  // chunks' lists are not concatenated: each is freed once its partners are placed.
+  std::vector<std::size_t> base(per_chunk.size() + 1, 0);
+  for (std::size_t k = 0; k < per_chunk.size(); ++k) base[k + 1] = base[k] + per_chunk[k].size();
   std::vector<std::size_t> start(4 * static_cast<std::size_t>(nt) + 1, 0);
-  for (const Entry& e : entries) ++start[e.face + 1];
+  for (const auto& chunk : per_chunk)
+    for (const Entry& e : chunk) ++start[e.face + 1];
   for (std::size_t i = 0; i + 1 < start.size(); ++i) start[i + 1] += start[i];
+  // The entries of face c: [first, last) in its chunk's list.
+  auto entries_of = [&](index_t c) {
+    const std::size_t k = c / 4 / kChunk;
+    const Entry* data = per_chunk[k].data();
+    return std::make_pair(data + (start[c] - base[k]), data + (start[c + 1] - base[k]));
+  };
   // A pending entry (face > partner) takes kReverse of the partner's entry for this face. The
   // partner's walk meets the pair unless its ring was cut at its 32 tets: then the pair is
   // tested here, from this side, as it always was.
-  parallel_chunks(nt, kChunk, threads, [&](index_t, index_t begin, index_t end) {
-    for (std::size_t i = start[4 * std::size_t(begin)]; i < start[4 * std::size_t(end)]; ++i) {
-      Entry& e = entries[i];
+  parallel_chunks(nt, kChunk, threads, [&](index_t chunk, index_t, index_t) {
+    for (Entry& e : per_chunk[chunk]) {
       if (e.state != kPending) continue;
-      const Entry* first = entries.data() + start[e.partner];
-      const Entry* last = entries.data() + start[e.partner + 1];
+      const auto [first, last] = entries_of(e.partner);
       const Entry* r =
           std::find_if(first, last, [&](const Entry& o) { return o.partner == e.face; });
       e.state = r != last ? (r->state & kReverse ? kForward : 0)
@@ -253,14 +255,18 @@ QuadPairs::QuadPairs(const TetMesh& mesh, const TetTopology& topology, double mi
   masks_.assign(nt, 0);
   partner_bits_.assign(nt, 0);
   std::size_t accepted = 0;
-  for (const Entry& e : entries) accepted += (e.state & kForward) != 0;
+  for (const auto& chunk : per_chunk)
+    for (const Entry& e : chunk) accepted += (e.state & kForward) != 0;
   partners_.reserve(accepted);
-  for (const Entry& e : entries) {
-    if (!(e.state & kForward)) continue;
-    ++offsets_[e.face + 1];
-    masks_[e.face / 4] |= static_cast<unsigned char>(1u << (e.face % 4));
-    partner_bits_[e.face / 4] |= std::uint64_t{1} << (e.partner / 4 & 63u);
-    partners_.push_back({e.partner});
+  for (auto& chunk : per_chunk) {
+    for (const Entry& e : chunk) {
+      if (!(e.state & kForward)) continue;
+      ++offsets_[e.face + 1];
+      masks_[e.face / 4] |= static_cast<unsigned char>(1u << (e.face % 4));
+      partner_bits_[e.face / 4] |= std::uint64_t{1} << (e.partner / 4 & 63u);
+      partners_.push_back({e.partner});
+    }
+    std::vector<Entry>().swap(chunk);
   }
   for (std::size_t i = 0; i + 1 < offsets_.size(); ++i) offsets_[i + 1] += offsets_[i];
 }
