@@ -40,17 +40,17 @@ namespace {
 const CellDescriptor& kTet = descriptor(CellType::Tet);
 constexpr double kDegToRad = 0.017453292519943295;
 
-// A face pair that passed the normal filter, as the walk from the face's tet meets it. Each pair
-// is tested once, from the face with the smaller code: its entry holds both answers, and the
-// other face's entry (kPending) takes its answer from there (QuadPairs' constructor).
 // A face around an edge: (tet, local face). (std::pair would zero the walk's arrays, 3 KB per tet.)
 struct RingFace {
   index_t tet;
   int face;
 };
 
+// A face pair that passed the normal filter, as the walk from the face's tet meets it, in its
+// face's run of entries (QuadPairs' constructor). Each pair is tested once, from the face with
+// the smaller code: its entry holds both answers (kept only when one of them is yes), and the
+// other face's entry (kPending) takes its answer from there.
 struct Entry {
-  index_t face;     // 4 * t + f
   index_t partner;  // 4 * s + g
   std::uint8_t state;
 };
@@ -77,7 +77,10 @@ class Builder {
         min_cos_(std::cos((180.0 - std::min(min_dihedral, min_boundary_dihedral)) * kDegToRad) -
                  1e-5) {}
 
-  void faces_of_tet(index_t t, std::vector<Entry>& out) const {
+  /// Appends the entries of t's faces, face by face, to `out`; counts[f]: face f's number of
+  /// entries. True when a walk around one of t's edges stopped at its 32 tets (its ring was cut).
+  bool faces_of_tet(index_t t, std::vector<Entry>& out, index_t* counts) const {
+    bool cut = false;
     // The faces around each of t's edges q[i]-q[j] (i < j), walked once per edge. t's two faces
     // holding the edge are those opposite its other two vertices.
     struct Ring {
@@ -94,11 +97,12 @@ class Builder {
         for (int l = 0; l < 4; ++l) {
           if (l != i && l != j) r.others[k++] = l;
         }
-        r.n = tets_around_edge(t, q[i], q[j], r.others, r.faces);
+        r.n = tets_around_edge(t, q[i], q[j], r.others, r.faces, cut);
       }
     }
     // Grouped by face for the CSR; per face, in edge order then walk order.
     for (int f = 0; f < 4; ++f) {
+      const std::size_t size_before = out.size();
       const float* nt = &normals_[12 * std::size_t(t) + 3 * f];
       for (const Ring& r : rings) {
         if (r.others[0] != f && r.others[1] != f) continue;
@@ -108,17 +112,20 @@ class Builder {
           if (nt[0] * ns[0] + nt[1] * ns[1] + nt[2] * ns[2] < min_cos_) continue;
           // (The filter is symmetric: the partner's walk meets this pair too.)
           const index_t face = 4 * t + f, partner = 4 * s + g;
-          out.push_back({face, partner, face < partner ? accept_both(t, f, s, g) : kPending});
+          const std::uint8_t state = face < partner ? accept_both(t, f, s, g) : kPending;
+          if (state != 0) out.push_back({partner, state});
         }
       }
+      counts[f] = static_cast<index_t>(out.size() - size_before);
     }
+    return cut;
   }
 
  private:
   // Faces (tet, local face) holding edge x-y of the tets around it other than t: walk from t
   // across each of its two faces on the edge until the walk returns or leaves the domain.
   int tets_around_edge(index_t t, index_t x, index_t y, const int others[2],
-                       std::array<RingFace, 64>& out) const {
+                       std::array<RingFace, 64>& out, bool& cut) const {
     int n = 0;
     for (int dir = 0; dir < 2; ++dir) {
       index_t prev = t, cur = topo_.neighbor(t, others[dir]);
@@ -137,7 +144,8 @@ class Builder {
         prev = cur;
         cur = next;
       }
-      if (cur == t) break;  // closed ring: every tet seen from one side
+      if (cur != NO_CELL && cur != t) cut = true;  // stopped at the array's end
+      if (cur == t) break;                         // closed ring: every tet seen from one side
     }
     return n;
   }
@@ -214,61 +222,76 @@ QuadPairs::QuadPairs(const TetMesh& mesh, const TetTopology& topology, double mi
   const Builder builder(mesh, topology, normals, min_dihedral_angle, min_boundary_dihedral_angle,
                         max_face_angle, region_interfaces_are_boundary);
   constexpr index_t kChunk = 4096;  // small enough for the threads to finish together
+  // Each chunk's entries, face by face; first offsets_[c + 1] = the number of face c's entries,
+  // then offsets_[c] = the place of its first in its chunk's list.
   std::vector<std::vector<Entry>> per_chunk((nt + kChunk - 1) / kChunk);
+  offsets_.assign(4 * static_cast<std::size_t>(nt) + 1, 0);
+  std::vector<char> cut(nt, 0);  // some ring of the tet cut at its 32 tets
   parallel_chunks(nt, kChunk, threads, [&](index_t chunk, index_t begin, index_t end) {
-    for (index_t t = begin; t < end; ++t) builder.faces_of_tet(t, per_chunk[chunk]);
+    for (index_t t = begin; t < end; ++t)
+      cut[t] = builder.faces_of_tet(t, per_chunk[chunk], &offsets_[4 * std::size_t(t) + 1]);
   });
-  // Entries come out grouped by tet face, in increasing order: start[c] is the place of face c's
-  // first entry in the chunks taken one after the other (chunk k's begin at base[k]). The
-  // chunks' lists are not concatenated: each is freed once its partners are placed.
-  std::vector<std::size_t> base(per_chunk.size() + 1, 0);
-  for (std::size_t k = 0; k < per_chunk.size(); ++k) base[k + 1] = base[k] + per_chunk[k].size();
-  std::vector<std::size_t> start(4 * static_cast<std::size_t>(nt) + 1, 0);
-  for (const auto& chunk : per_chunk)
-    for (const Entry& e : chunk) ++start[e.face + 1];
-  for (std::size_t i = 0; i + 1 < start.size(); ++i) start[i + 1] += start[i];
+  for (std::size_t c = 0, n = 0; c < 4 * static_cast<std::size_t>(nt); ++c) {
+    if (c % (4 * std::size_t(kChunk)) == 0) n = 0;  // a chunk's first face
+    const index_t count = offsets_[c + 1];
+    offsets_[c] = static_cast<index_t>(n);
+    n += count;
+  }
   // The entries of face c: [first, last) in its chunk's list.
-  auto entries_of = [&](index_t c) {
-    const std::size_t k = c / 4 / kChunk;
-    const Entry* data = per_chunk[k].data();
-    return std::make_pair(data + (start[c] - base[k]), data + (start[c + 1] - base[k]));
+  auto entries_of = [&](std::size_t c) {
+    std::vector<Entry>& list = per_chunk[c / 4 / kChunk];
+    const std::size_t end = (c + 1) % (4 * std::size_t(kChunk)) == 0 || c + 1 == 4 * std::size_t(nt)
+                                ? list.size()
+                                : offsets_[c + 1];
+    return std::make_pair(list.data() + offsets_[c], list.data() + end);
   };
-  // A pending entry (face > partner) takes kReverse of the partner's entry for this face. The
-  // partner's walk meets the pair unless its ring was cut at its 32 tets: then the pair is
-  // tested here, from this side, as it always was.
-  parallel_chunks(nt, kChunk, threads, [&](index_t chunk, index_t, index_t) {
-    for (Entry& e : per_chunk[chunk]) {
-      if (e.state != kPending) continue;
-      const auto [first, last] = entries_of(e.partner);
-      const Entry* r =
-          std::find_if(first, last, [&](const Entry& o) { return o.partner == e.face; });
-      e.state = r != last ? (r->state & kReverse ? kForward : 0)
-                          : (builder.accept(e.face / 4, static_cast<int>(e.face % 4), e.partner / 4,
-                                            static_cast<int>(e.partner % 4))
-                                 ? kForward
-                                 : 0);
+  // A pending entry (face > partner) takes kReverse of the partner's entry for this face; no
+  // entry there: the pair was refused both ways. (The partner's walk meets the pair unless one
+  // of its rings was cut at its 32 tets: then the pair is tested here, from this side, as it
+  // always was.)
+  parallel_chunks(nt, kChunk, threads, [&](index_t, index_t begin, index_t end) {
+    for (std::size_t c = 4 * std::size_t(begin); c < 4 * std::size_t(end); ++c) {
+      const auto [first, last] = entries_of(c);
+      for (Entry* e = first; e != last; ++e) {
+        if (e->state != kPending) continue;
+        const auto [pf, pl] = entries_of(e->partner);
+        const Entry* r = std::find_if(pf, pl, [&](const Entry& o) { return o.partner == c; });
+        if (r != pl)
+          e->state = r->state & kReverse ? kForward : 0;
+        else if (cut[e->partner / 4])
+          e->state = builder.accept(static_cast<index_t>(c / 4), static_cast<int>(c % 4),
+                                    e->partner / 4, static_cast<int>(e->partner % 4))
+                         ? kForward
+                         : 0;
+        else
+          e->state = 0;
+      }
     }
   });
-  std::vector<std::size_t>().swap(start);
+  std::vector<char>().swap(cut);
 
-  offsets_.assign(4 * static_cast<std::size_t>(nt) + 1, 0);
   masks_.assign(nt, 0);
   partner_bits_.assign(nt, 0);
   std::size_t accepted = 0;
   for (const auto& chunk : per_chunk)
     for (const Entry& e : chunk) accepted += (e.state & kForward) != 0;
   partners_.reserve(accepted);
-  for (auto& chunk : per_chunk) {
-    for (const Entry& e : chunk) {
-      if (!(e.state & kForward)) continue;
-      ++offsets_[e.face + 1];
-      masks_[e.face / 4] |= static_cast<unsigned char>(1u << (e.face % 4));
-      partner_bits_[e.face / 4] |= std::uint64_t{1} << (e.partner / 4 & 63u);
-      partners_.push_back({e.partner});
+  // offsets_ becomes the CSR: face c's place is read before it is overwritten, face c + 1's
+  // after.
+  for (std::size_t c = 0; c < 4 * static_cast<std::size_t>(nt); ++c) {
+    const auto [first, last] = entries_of(c);
+    offsets_[c] = static_cast<index_t>(partners_.size());
+    const index_t t = static_cast<index_t>(c / 4);
+    for (const Entry* e = first; e != last; ++e) {
+      if (!(e->state & kForward)) continue;
+      masks_[t] |= static_cast<unsigned char>(1u << (c % 4));
+      partner_bits_[t] |= std::uint64_t{1} << (e->partner / 4 & 63u);
+      partners_.push_back({e->partner});
     }
-    std::vector<Entry>().swap(chunk);
+    if ((c + 1) % (4 * std::size_t(kChunk)) == 0)
+      std::vector<Entry>().swap(per_chunk[c / 4 / kChunk]);
   }
-  for (std::size_t i = 0; i + 1 < offsets_.size(); ++i) offsets_[i + 1] += offsets_[i];
+  offsets_[4 * static_cast<std::size_t>(nt)] = static_cast<index_t>(partners_.size());
 }
 
 }  // namespace hexmerge
