@@ -206,8 +206,8 @@ std::vector<Candidate> prune_unclosable(const TetMesh& mesh, const TetTopology& 
   }
 
   // Every quad face of every candidate, at its place: the candidate's tets on its triangles and
-  // flags. The tets across the triangles (Quad::behind) are not held: the i-th is the neighbour
-  // of front[i] across its face on the quad (quads_of counts both in step), behind() below.
+  // flags. The tets across the triangles are not held: the i-th is the neighbour of front[i]
+  // across its face on the quad (quads_of counts both in step), as `across` reads it.
   struct QuadFace {
     std::array<index_t, 2> front;  // the candidate's tets on its triangles (Side)
     index_t candidate;             // local id
