@@ -32,8 +32,14 @@ double angle_deg(const Vec3& u, const Vec3& v) {
 
 // angle_deg(u, v) > bound.degrees, the same answer.
 bool angle_above(const Vec3& u, const Vec3& v, const AngleBound& bound) {
-  double c;
-  if (!cosine(u, v, c)) return 180.0 > bound.degrees;
+  // cosine(u, v, c), its products computed once (sqrt(u.u) is 0 exactly when u.u is).
+  const double uu = u.dot(u), vv = v.dot(v), uv = u.dot(v);
+  if (uu == 0.0 || vv == 0.0) return 180.0 > bound.degrees;
+  // An angle of at most 90 degrees (u.v >= 0, so c >= 0, or NaN when |u| |v| is 0 or infinite
+  // after rounding, which fails every comparison below) is not above a bound whose cosine is
+  // below -kCosineMargin: the answer without the square roots and the division.
+  if (uv >= 0.0 && bound.cosine < -kCosineMargin) return false;
+  const double c = std::clamp(uv / (std::sqrt(uu) * std::sqrt(vv)), -1.0, 1.0);
   if (c < bound.cosine - kCosineMargin) return true;
   if (c > bound.cosine + kCosineMargin) return false;
   return std::acos(c) * kRadToDeg > bound.degrees;

@@ -3,7 +3,7 @@
 #include <cmath>
 
 namespace hexmerge {
-namespace {
+namespace detail {
 
 const CellDescriptor kDescriptors[NB_CELL_TYPES] = {
     {"tet",
@@ -74,8 +74,6 @@ const CellDescriptor kDescriptors[NB_CELL_TYPES] = {
      6},
 };
 
-}  // namespace
-
-const CellDescriptor& descriptor(CellType type) { return kDescriptors[static_cast<int>(type)]; }
+}  // namespace detail
 
 }  // namespace hexmerge

@@ -49,8 +49,15 @@ struct CellDescriptor {
   int nb_quad_faces;      ///< 0, 1, 3, 6
 };
 
-/// The descriptor of a cell type (a table lookup).
-const CellDescriptor& descriptor(CellType type);
+namespace detail {
+extern const CellDescriptor kDescriptors[NB_CELL_TYPES];  ///< by CellType (cell_type.cpp)
+}  // namespace detail
+
+/// The descriptor of a cell type (a table lookup, inline: the engine asks it about a million
+/// times per 10k tets).
+inline const CellDescriptor& descriptor(CellType type) {
+  return detail::kDescriptors[static_cast<int>(type)];
+}
 
 /// Number of vertices of a linear cell of this type.
 inline int nb_vertices(CellType type) { return descriptor(type).nb_vertices; }

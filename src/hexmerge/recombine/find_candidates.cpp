@@ -37,6 +37,19 @@ std::array<index_t, 4> sorted(const std::array<index_t, 4>& a) {
   return sorted_by(a, kNetwork);
 }
 
+// Whether v is among the n ids at `ids`. (A plain loop: std::find is a call on these short
+// lists, 3k instructions per tet on lattice meshes.)
+bool contains(const index_t* ids, int n, index_t v) {
+  bool found = false;
+  for (int i = 0; i < n; ++i) found |= ids[i] == v;
+  return found;
+}
+
+// a == b for face keys, element by element (std::array's == calls memcmp).
+bool same_key(const std::array<index_t, 4>& a, const std::array<index_t, 4>& b) {
+  return ((a[0] ^ b[0]) | (a[1] ^ b[1]) | (a[2] ^ b[2]) | (a[3] ^ b[3])) == 0;
+}
+
 std::array<index_t, 8> sorted(const std::array<index_t, 8>& a) {
   static constexpr std::array<std::pair<int, int>, 19> kNetwork{{{0, 2},
                                                                  {1, 3},
@@ -70,7 +83,7 @@ index_t unique_other_neighbor(index_t v, const std::array<index_t, 4>* faces, co
     for (int i = 0; i < n; ++i) {
       if (faces[f][i] != v) continue;
       for (const index_t u : {faces[f][(i + 1) % n], faces[f][(i + n - 1) % n]}) {
-        if (std::find(exclude, exclude + nex, u) != exclude + nex) continue;
+        if (contains(exclude, nex, u)) continue;
         if (found != NO_VERTEX && found != u) return NO_VERTEX;
         found = u;
       }
@@ -116,7 +129,7 @@ bool assemble_cell(const TetMesh& mesh, const TetTopology& topology, CellType ty
     return assemble_pyramid(mesh, topology, tets, nb, quad_pairs, nb_quad_pairs, vertices);
   }
   const CellDescriptor& d = descriptor(type);
-  auto in_group = [&](index_t t) { return std::find(tets, tets + nb, t) != tets + nb; };
+  auto in_group = [&](index_t t) { return contains(tets, nb, t); };
   // The group's boundary triangles (4 * tet + face), each marked when a quad uses it.
   std::array<index_t, 24> boundary;
   std::array<bool, 24> used{};
@@ -199,7 +212,8 @@ bool assemble_cell(const TetMesh& mesh, const TetTopology& topology, CellType ty
     cf = sorted(cf);
     bool found = false;
     for (int g = 0; g < nb_faces && !found; ++g) {
-      if (!matched[g] && sizes[g] == d.face_size[f] && keys[g] == cf) matched[g] = found = true;
+      if (!matched[g] && sizes[g] == d.face_size[f] && same_key(keys[g], cf))
+        matched[g] = found = true;
     }
     if (!found) return false;
   }

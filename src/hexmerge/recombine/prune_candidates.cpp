@@ -18,9 +18,9 @@ bool holds(const Candidate& c, index_t t) {
   return std::binary_search(c.tets.begin(), c.tets.begin() + c.nb_tets, t);
 }
 
-// A quad face of a candidate: the tets across its triangles.
+// A quad face of a candidate: what is across its triangles (the tets there are the neighbours of
+// the Side's front tets across their faces on the quad).
 struct Quad {
-  std::array<index_t, 2> behind{NO_CELL, NO_CELL};
   std::uint8_t nb_behind = 0;  // triangles found (2 for a proper quad)
   bool open = false;           // some triangle on the boundary
   bool inner = false;          // some triangle with a tet behind
@@ -33,6 +33,7 @@ struct Quad {
 struct Side {
   index_t candidate;  // local id (prune_unclosable)
   std::array<index_t, 2> front{NO_CELL, NO_CELL};
+  std::array<std::uint8_t, 2> front_face{0, 0};  // the local face of each on the quad
   bool exact = true;
 };
 
@@ -80,14 +81,13 @@ CandidateQuads quads_of(const TetMesh& mesh, const TetTopology& topology, const 
         Quad& q = out.quad[k];
         if (n == NO_CELL)
           q.open = true;
-        else {
-          q.inner = true;
-          if (q.nb_behind < 2) q.behind[q.nb_behind] = n;
-        }
-        ++q.nb_behind;
-        if (nb_front[k] < 2)
-          s.front[nb_front[k]] = t;
         else
+          q.inner = true;
+        ++q.nb_behind;
+        if (nb_front[k] < 2) {
+          s.front[nb_front[k]] = t;
+          s.front_face[nb_front[k]] = static_cast<std::uint8_t>(lf);
+        } else
           s.exact = false;
         ++nb_front[k];
       }
@@ -158,8 +158,16 @@ std::vector<Candidate> prune_unclosable(const TetMesh& mesh, const TetTopology& 
     struct Entry {
       std::array<index_t, 3> rest;
       index_t quad;
+      // Lexicographic on (rest, quad), element by element (std::array's comparisons call
+      // memcmp).
       bool operator<(const Entry& o) const {
-        return rest != o.rest ? rest < o.rest : quad < o.quad;
+        if (rest[0] != o.rest[0]) return rest[0] < o.rest[0];
+        if (rest[1] != o.rest[1]) return rest[1] < o.rest[1];
+        if (rest[2] != o.rest[2]) return rest[2] < o.rest[2];
+        return quad < o.quad;
+      }
+      bool same_key(const Entry& o) const {
+        return ((rest[0] ^ o.rest[0]) | (rest[1] ^ o.rest[1]) | (rest[2] ^ o.rest[2])) == 0;
       }
     };
     std::vector<index_t> bucket(static_cast<std::size_t>(nv) + 1, 0);
@@ -189,7 +197,7 @@ std::vector<Candidate> prune_unclosable(const TetMesh& mesh, const TetTopology& 
           for (index_t v = begin; v < end; ++v) {
             std::sort(entries.begin() + bucket[v], entries.begin() + bucket[v + 1]);
             for (index_t j = bucket[v]; j < bucket[v + 1]; ++j) {
-              starts[j] = j == bucket[v] || entries[j].rest != entries[j - 1].rest;
+              starts[j] = j == bucket[v] || !entries[j].same_key(entries[j - 1]);
               at[entries[j].quad] = j;
             }
           }
@@ -197,17 +205,19 @@ std::vector<Candidate> prune_unclosable(const TetMesh& mesh, const TetTopology& 
         go_on);
   }
 
-  // Every quad face of every candidate, at its place: its tets and the candidate's, and flags.
+  // Every quad face of every candidate, at its place: the candidate's tets on its triangles and
+  // flags. The tets across the triangles are not held: the i-th is the neighbour of front[i]
+  // across its face on the quad (quads_of counts both in step), as `across` reads it.
   struct QuadFace {
-    std::array<index_t, 2> behind;  // the tets across its triangles (Quad)
-    std::array<index_t, 2> front;   // the candidate's tets on them (Side)
-    index_t candidate;              // local id
-    std::uint8_t nb_behind;         // triangles found, at most 2 counted
-    bool open;
-    bool inner;
-    bool exact;
+    std::array<index_t, 2> front;  // the candidate's tets on its triangles (Side)
+    index_t candidate;             // local id
+    std::uint8_t faces;            // bits 2i, 2i+1: front[i]'s local face on the quad
+    std::uint8_t nb_behind : 2;    // triangles found, at most 2 counted
+    bool open : 1;
+    bool inner : 1;
+    bool exact : 1;
   };
-  static_assert(sizeof(QuadFace) == 24, "the record's size is this step's peak of memory");
+  static_assert(sizeof(QuadFace) == 16, "the record's size is this step's peak of memory");
   std::vector<QuadFace> faces(nb_quads);
   parallel_chunks(
       n, kChunk, threads,
@@ -224,10 +234,10 @@ std::vector<Candidate> prune_unclosable(const TetMesh& mesh, const TetTopology& 
             const Quad& q = cq.quad[i];
             const Side& s = cq.side[i];
             QuadFace& face = faces[j];
-            face.behind = q.behind;
             face.front = s.front;
             face.candidate = s.candidate;
-            face.nb_behind = std::min<std::uint8_t>(q.nb_behind, 2);
+            face.faces = static_cast<std::uint8_t>(s.front_face[0] | s.front_face[1] << 2);
+            face.nb_behind = std::min<std::uint8_t>(q.nb_behind, 2) & 3u;
             face.open = q.open;
             face.inner = q.inner;
             face.exact = s.exact;
@@ -247,7 +257,7 @@ std::vector<Candidate> prune_unclosable(const TetMesh& mesh, const TetTopology& 
   // Whether the candidate of `s` holds the tets behind q: it is on the quad's other side.
   auto across = [&](const QuadFace& q, const QuadFace& s) {
     for (int i = 0; i < q.nb_behind; ++i) {
-      const index_t b = q.behind[i];
+      const index_t b = topology.neighbor(q.front[i], (q.faces >> (2 * i)) & 3);
       if (s.exact ? b != s.front[0] && b != s.front[1]
                   : !holds(candidates[by_local[s.candidate]], b))
         return false;

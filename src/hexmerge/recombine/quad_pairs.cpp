@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <utility>
 
 #include "hexmerge/core/parallel.h"
 #include "hexmerge/geometry/quality.h"
@@ -39,10 +40,23 @@ namespace {
 const CellDescriptor& kTet = descriptor(CellType::Tet);
 constexpr double kDegToRad = 0.017453292519943295;
 
-struct Entry {
-  index_t face;  // 4 * t + f
-  QuadPartner partner;
+// A face around an edge: (tet, local face). (std::pair would zero the walk's arrays, 3 KB per tet.)
+struct RingFace {
+  index_t tet;
+  int face;
 };
+
+// A face pair that passed the normal filter, as the walk from the face's tet meets it, in its
+// face's run of entries (QuadPairs' constructor). Each pair is tested once, from the face with
+// the smaller code: its entry holds both answers (kept only when one of them is yes), and the
+// other face's entry (kPending) takes its answer from there.
+struct Entry {
+  index_t partner;  // 4 * s + g
+  std::uint8_t state;
+};
+constexpr std::uint8_t kForward = 1;  // face -> partner accepted
+constexpr std::uint8_t kReverse = 2;  // partner -> face accepted (the test made from face)
+constexpr std::uint8_t kPending = 4;  // tested from the partner's entry
 
 class Builder {
  public:
@@ -63,13 +77,16 @@ class Builder {
         min_cos_(std::cos((180.0 - std::min(min_dihedral, min_boundary_dihedral)) * kDegToRad) -
                  1e-5) {}
 
-  void faces_of_tet(index_t t, std::vector<Entry>& out) const {
+  /// Appends the entries of t's faces, face by face, to `out`; counts[f]: face f's number of
+  /// entries. True when a walk around one of t's edges stopped at its 32 tets (its ring was cut).
+  bool faces_of_tet(index_t t, std::vector<Entry>& out, index_t* counts) const {
+    bool cut = false;
     // The faces around each of t's edges q[i]-q[j] (i < j), walked once per edge. t's two faces
     // holding the edge are those opposite its other two vertices.
     struct Ring {
       int others[2];
       int n;
-      std::array<std::pair<index_t, int>, 64> faces;
+      std::array<RingFace, 64> faces;  // not initialised: the first n are written
     };
     std::array<Ring, 6> rings;
     const index_t* q = mesh_.tet(t);
@@ -80,11 +97,12 @@ class Builder {
         for (int l = 0; l < 4; ++l) {
           if (l != i && l != j) r.others[k++] = l;
         }
-        r.n = tets_around_edge(t, q[i], q[j], r.others, r.faces);
+        r.n = tets_around_edge(t, q[i], q[j], r.others, r.faces, cut);
       }
     }
     // Grouped by face for the CSR; per face, in edge order then walk order.
     for (int f = 0; f < 4; ++f) {
+      const std::size_t size_before = out.size();
       const float* nt = &normals_[12 * std::size_t(t) + 3 * f];
       for (const Ring& r : rings) {
         if (r.others[0] != f && r.others[1] != f) continue;
@@ -92,18 +110,22 @@ class Builder {
           const auto [s, g] = r.faces[a];
           const float* ns = &normals_[12 * std::size_t(s) + 3 * g];
           if (nt[0] * ns[0] + nt[1] * ns[1] + nt[2] * ns[2] < min_cos_) continue;
-          QuadPartner p;
-          if (accept(t, f, s, g, p)) out.push_back({4 * t + f, p});
+          // (The filter is symmetric: the partner's walk meets this pair too.)
+          const index_t face = 4 * t + f, partner = 4 * s + g;
+          const std::uint8_t state = face < partner ? accept_both(t, f, s, g) : kPending;
+          if (state != 0) out.push_back({partner, state});
         }
       }
+      counts[f] = static_cast<index_t>(out.size() - size_before);
     }
+    return cut;
   }
 
  private:
   // Faces (tet, local face) holding edge x-y of the tets around it other than t: walk from t
   // across each of its two faces on the edge until the walk returns or leaves the domain.
   int tets_around_edge(index_t t, index_t x, index_t y, const int others[2],
-                       std::array<std::pair<index_t, int>, 64>& out) const {
+                       std::array<RingFace, 64>& out, bool& cut) const {
     int n = 0;
     for (int dir = 0; dir < 2; ++dir) {
       index_t prev = t, cur = topo_.neighbor(t, others[dir]);
@@ -122,28 +144,39 @@ class Builder {
         prev = cur;
         cur = next;
       }
-      if (cur == t) break;  // closed ring: every tet seen from one side
+      if (cur != NO_CELL && cur != t) cut = true;  // stopped at the array's end
+      if (cur == t) break;                         // closed ring: every tet seen from one side
     }
     return n;
   }
 
-  bool accept(index_t t, int f, index_t s, int g, QuadPartner& p) const {
+ public:
+  /// accept(t, f, s, g) alone: face f of tet t takes face g of tet s as partner.
+  bool accept(index_t t, int f, index_t s, int g) const {
+    return (accept_both(t, f, s, g) & kForward) != 0;
+  }
+
+  /// kForward when face f of tet t takes face g of tet s as partner, kReverse when s's face takes
+  /// t's: the quad is the same, seen from either side (x, w, y, z) or (y, z, x, w), and so are
+  /// its corner angles (the same edge vectors at each corner), which are tested once; the
+  /// dihedral angle is measured across the diagonal from the first vertex of each, as each side
+  /// alone would (its rounding differs).
+  std::uint8_t accept_both(index_t t, int f, index_t s, int g) const {
     std::array<index_t, 4> q;
-    if (!quad_from_triangles(tet_face(mesh_, t, f), tet_face(mesh_, s, g), q)) return false;
+    if (!quad_from_triangles(tet_face(mesh_, t, f), tet_face(mesh_, s, g), q)) return 0;
     const double* a = mesh_.point(q[0]);
     const double* b = mesh_.point(q[1]);
     const double* c = mesh_.point(q[2]);
     const double* d = mesh_.point(q[3]);
     const bool on_boundary = is_boundary(t, f) && is_boundary(s, g);
-    if (quad_dihedral_angle_below(a, b, c, d,
-                                  on_boundary ? min_boundary_dihedral_ : min_dihedral_)) {
-      return false;
-    }
-    if (quad_max_corner_angle_above(a, b, c, d, max_corner_)) return false;
-    p = {4 * s + g};
-    return true;
+    const AngleBound& dihedral = on_boundary ? min_boundary_dihedral_ : min_dihedral_;
+    const std::uint8_t sides = (quad_dihedral_angle_below(a, b, c, d, dihedral) ? 0 : kForward) |
+                               (quad_dihedral_angle_below(c, d, a, b, dihedral) ? 0 : kReverse);
+    if (sides == 0 || quad_max_corner_angle_above(a, b, c, d, max_corner_)) return 0;
+    return sides;
   }
 
+ private:
   // Face f of tet t on the domain's boundary, or on a region interface when those count.
   bool is_boundary(index_t t, int f) const {
     if (topo_.on_boundary(t, f)) return true;
@@ -189,28 +222,76 @@ QuadPairs::QuadPairs(const TetMesh& mesh, const TetTopology& topology, double mi
   const Builder builder(mesh, topology, normals, min_dihedral_angle, min_boundary_dihedral_angle,
                         max_face_angle, region_interfaces_are_boundary);
   constexpr index_t kChunk = 4096;  // small enough for the threads to finish together
+  // Each chunk's entries, face by face; first offsets_[c + 1] = the number of face c's entries,
+  // then offsets_[c] = the place of its first in its chunk's list.
   std::vector<std::vector<Entry>> per_chunk((nt + kChunk - 1) / kChunk);
-  parallel_chunks(nt, kChunk, threads, [&](index_t chunk, index_t begin, index_t end) {
-    for (index_t t = begin; t < end; ++t) builder.faces_of_tet(t, per_chunk[chunk]);
-  });
-
   offsets_.assign(4 * static_cast<std::size_t>(nt) + 1, 0);
+  std::vector<char> cut(nt, 0);  // some ring of the tet cut at its 32 tets
+  parallel_chunks(nt, kChunk, threads, [&](index_t chunk, index_t begin, index_t end) {
+    for (index_t t = begin; t < end; ++t)
+      cut[t] = builder.faces_of_tet(t, per_chunk[chunk], &offsets_[4 * std::size_t(t) + 1]);
+  });
+  for (std::size_t c = 0, n = 0; c < 4 * static_cast<std::size_t>(nt); ++c) {
+    if (c % (4 * std::size_t(kChunk)) == 0) n = 0;  // a chunk's first face
+    const index_t count = offsets_[c + 1];
+    offsets_[c] = static_cast<index_t>(n);
+    n += count;
+  }
+  // The entries of face c: [first, last) in its chunk's list.
+  auto entries_of = [&](std::size_t c) {
+    std::vector<Entry>& list = per_chunk[c / 4 / kChunk];
+    const std::size_t end = (c + 1) % (4 * std::size_t(kChunk)) == 0 || c + 1 == 4 * std::size_t(nt)
+                                ? list.size()
+                                : offsets_[c + 1];
+    return std::make_pair(list.data() + offsets_[c], list.data() + end);
+  };
+  // A pending entry (face > partner) takes kReverse of the partner's entry for this face; no
+  // entry there: the pair was refused both ways. (The partner's walk meets the pair unless one
+  // of its rings was cut at its 32 tets: then the pair is tested here, from this side, as it
+  // always was.)
+  parallel_chunks(nt, kChunk, threads, [&](index_t, index_t begin, index_t end) {
+    for (std::size_t c = 4 * std::size_t(begin); c < 4 * std::size_t(end); ++c) {
+      const auto [first, last] = entries_of(c);
+      for (Entry* e = first; e != last; ++e) {
+        if (e->state != kPending) continue;
+        const auto [pf, pl] = entries_of(e->partner);
+        const Entry* r = std::find_if(pf, pl, [&](const Entry& o) { return o.partner == c; });
+        if (r != pl)
+          e->state = r->state & kReverse ? kForward : 0;
+        else if (cut[e->partner / 4])
+          e->state = builder.accept(static_cast<index_t>(c / 4), static_cast<int>(c % 4),
+                                    e->partner / 4, static_cast<int>(e->partner % 4))
+                         ? kForward
+                         : 0;
+        else
+          e->state = 0;
+      }
+    }
+  });
+  std::vector<char>().swap(cut);
+
   masks_.assign(nt, 0);
   partner_bits_.assign(nt, 0);
-  std::size_t total = 0;
-  for (const auto& c : per_chunk) total += c.size();
-  partners_.reserve(total);
-  // Entries come out grouped by tet face, in increasing order: the CSR is a running count.
-  for (auto& chunk : per_chunk) {
-    for (const Entry& e : chunk) {
-      ++offsets_[e.face + 1];
-      masks_[e.face / 4] |= static_cast<unsigned char>(1u << (e.face % 4));
-      partner_bits_[e.face / 4] |= std::uint64_t{1} << (e.partner.face / 4 & 63u);
-      partners_.push_back(e.partner);
+  std::size_t accepted = 0;
+  for (const auto& chunk : per_chunk)
+    for (const Entry& e : chunk) accepted += (e.state & kForward) != 0;
+  partners_.reserve(accepted);
+  // offsets_ becomes the CSR: face c's place is read before it is overwritten, face c + 1's
+  // after.
+  for (std::size_t c = 0; c < 4 * static_cast<std::size_t>(nt); ++c) {
+    const auto [first, last] = entries_of(c);
+    offsets_[c] = static_cast<index_t>(partners_.size());
+    const index_t t = static_cast<index_t>(c / 4);
+    for (const Entry* e = first; e != last; ++e) {
+      if (!(e->state & kForward)) continue;
+      masks_[t] |= static_cast<unsigned char>(1u << (c % 4));
+      partner_bits_[t] |= std::uint64_t{1} << (e->partner / 4 & 63u);
+      partners_.push_back({e->partner});
     }
-    std::vector<Entry>().swap(chunk);
+    if ((c + 1) % (4 * std::size_t(kChunk)) == 0)
+      std::vector<Entry>().swap(per_chunk[c / 4 / kChunk]);
   }
-  for (std::size_t i = 0; i + 1 < offsets_.size(); ++i) offsets_[i + 1] += offsets_[i];
+  offsets_[4 * static_cast<std::size_t>(nt)] = static_cast<index_t>(partners_.size());
 }
 
 }  // namespace hexmerge
