@@ -103,6 +103,8 @@ CASES = [
     ("box_5_cylinder-4-unswept", "box_5_cylinder", 4.0, {"sweep": False}),
     ("tube-2.5", "tube", 2.5, {}),
     ("plate_four_holes-3", "plate_four_holes", 3.0, {}),
+    ("plate-6-local", "plate", 6.0, {"local_sizes": "Face1:3; Edge2,Edge3:2"}),
+    ("bracket-3-local", "bracket", 3.0, {"local_sizes": "Face2:1.5; Edge5:1"}),
     ("gmsh_part", "cad:gmsh_part.step", 4.8, {}),
     ("pyocc_face_recognition", "cad:pyocc_face_recognition_sample_part.stp", 11.0, {}),
     ("gmsh_t20_data", "cad:gmsh_t20_data.step", 2.8, {}),

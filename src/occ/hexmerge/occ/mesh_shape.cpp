@@ -43,68 +43,6 @@ constexpr double kLocalGrading = 0.5;
 // The finer lattices' points around a local size stay this fraction of the size wanted there
 // from the faces and the other points.
 constexpr double kGradedClearance = 0.5;
-// The smallest local size, as a fraction of h (finer lattices down to h / 1024).
-constexpr double kSmallestLocalSize = 1e-3;
-
-// The local sizes per face and edge (0-based; h where none), checked against the shape.
-LocalSizeItems local_size_items(const Shape& shape, const std::vector<LocalSize>& sizes, double h) {
-  LocalSizeItems items;
-  items.face_size.assign(static_cast<std::size_t>(shape.faces.Extent()), h);
-  items.edge_size.assign(static_cast<std::size_t>(shape.edges.Extent()), h);
-  auto fail = [&](const std::string& why) {
-    throw InputError("parameter 'local_sizes': " + why, Entity::Parameter);
-  };
-  for (const LocalSize& local : sizes) {
-    const std::string what = "local size " + parameter_number_text(local.size);
-    if (local.size > h)
-      fail(what + " is larger than the size " + parameter_number_text(h) +
-           ": local sizes refine, give one of at most the size");
-    if (local.size < kSmallestLocalSize * h)
-      fail(what + " is smaller than the size / 1000 (" +
-           parameter_number_text(kSmallestLocalSize * h) + ")");
-    for (const int f : local.faces) {
-      if (f > shape.faces.Extent())
-        fail(what + ": Face" + std::to_string(f) + " does not exist (the shape has " +
-             std::to_string(shape.faces.Extent()) + " faces, Face1 to Face" +
-             std::to_string(shape.faces.Extent()) + ")");
-      items.face_size[f - 1] = std::min(items.face_size[f - 1], local.size);
-    }
-    for (const int e : local.edges) {
-      if (e > shape.edges.Extent())
-        fail(what + ": Edge" + std::to_string(e) + " does not exist (the shape has " +
-             std::to_string(shape.edges.Extent()) + " edges, Edge1 to Edge" +
-             std::to_string(shape.edges.Extent()) + ")");
-      items.edge_size[e - 1] = std::min(items.edge_size[e - 1], local.size);
-    }
-  }
-  return items;
-}
-
-// What the local sizes gave: per entry, the surface's triangles on its faces and segments on
-// its edges, and their longest side.
-std::vector<LocalSizeApplied> local_sizes_applied(const std::vector<LocalSize>& sizes,
-                                                  const Surface& surface) {
-  std::vector<LocalSizeApplied> out;
-  for (const LocalSize& local : sizes) {
-    LocalSizeApplied applied{local.faces, local.edges, local.size, 0, 0, 0.0};
-    auto side = [&](int a, int b) {
-      applied.max_side = std::max(applied.max_side, (surface.nodes[a] - surface.nodes[b]).norm());
-    };
-    for (const SurfaceTriangle& t : surface.triangles)
-      if (std::find(local.faces.begin(), local.faces.end(), t.face + 1) != local.faces.end()) {
-        ++applied.nb_triangles;
-        for (int c = 0; c < 3; ++c) side(t.node[c], t.node[(c + 1) % 3]);
-      }
-    for (const auto& [key, segment] : surface.segments)
-      if (std::find(local.edges.begin(), local.edges.end(), segment.edge + 1) !=
-          local.edges.end()) {
-        ++applied.nb_segments;
-        side(static_cast<int>(key >> 32), static_cast<int>(key & 0xffffffffu));
-      }
-    out.push_back(applied);
-  }
-  return out;
-}
 
 // The tet mesh from the tetrahedraliser's output (frame coordinates): tets oriented positive,
 // points in the world, the surface's nodes at their exact CAD positions, regions by solid.
@@ -163,11 +101,17 @@ constexpr Strategy kStrategies[] = {
     {"surface only", 1.0, false, false, false},
 };
 
+// The faces and edges as the user numbers them (the shape as given), and the shape's they name.
+struct GivenItems {
+  ItemNumbering faces, edges;
+};
+
 // One attempt: steps 3 to 14 of mesh_shape() with one strategy; the Tet10 mesh too when
 // `tet10` is given.
-TetMesh mesh_attempt(const Shape& shape, const Frame& frame, const std::string& regions_brep,
-                     const MeshShapeParameters& parameters, const Strategy& strategy,
-                     MeshShapeReport& report, Tet10Mesh* tet10, const ProgressCallback& progress);
+TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Frame& frame,
+                     const std::string& regions_brep, const MeshShapeParameters& parameters,
+                     const Strategy& strategy, MeshShapeReport& report, Tet10Mesh* tet10,
+                     const ProgressCallback& progress);
 
 // mesh_shape() and, with `tet10`, mesh_shape_tet10().
 TetMesh mesh_shape_impl(const std::string& brep, const MeshShapeParameters& parameters,
@@ -212,7 +156,12 @@ TetMesh mesh_shape_impl(const std::string& brep, const MeshShapeParameters& para
   const Frame frame = choose_frame(shape, parameters.frame);
   // Local sizes naming faces or edges the shape does not have, or coarser than h, fail now.
   const std::vector<LocalSize> local_sizes = parse_local_sizes(parameters.local_sizes);
-  const LocalSizeItems local_items = local_size_items(shape, local_sizes, parameters.size);
+  // The faces and edges as numbered in the shape given (FreeCAD's FaceN, EdgeN).
+  const GivenItems given_items{
+      ItemNumbering::identity("Face", static_cast<std::size_t>(shape.faces.Extent())),
+      ItemNumbering::identity("Edge", static_cast<std::size_t>(shape.edges.Extent()))};
+  const LocalSizeItems local_items =
+      local_size_items(local_sizes, given_items.faces, given_items.edges, parameters.size);
   // Gluing touching solids makes new faces and edges: the numbers given would name others.
   if (glue.glued && !local_sizes.empty())
     throw InputError(
@@ -253,8 +202,8 @@ TetMesh mesh_shape_impl(const std::string& brep, const MeshShapeParameters& para
     MeshShapeReport attempt = report;
     const auto attempt_start = PhaseTimer::Clock::now();
     try {
-      TetMesh mesh =
-          mesh_attempt(shape, frame, regions_brep, parameters, strategy, attempt, tet10, progress);
+      TetMesh mesh = mesh_attempt(shape, given_items, frame, regions_brep, parameters, strategy,
+                                  attempt, tet10, progress);
       attempt.strategy = strategy.name;
       add_phase_seconds(attempt.phase_seconds, "shape", shape_seconds);
       if (failed_seconds > 0)
@@ -273,9 +222,10 @@ TetMesh mesh_shape_impl(const std::string& brep, const MeshShapeParameters& para
                    failures + ")");
 }
 
-TetMesh mesh_attempt(const Shape& shape, const Frame& frame, const std::string& regions_brep,
-                     const MeshShapeParameters& parameters, const Strategy& strategy,
-                     MeshShapeReport& report, Tet10Mesh* tet10, const ProgressCallback& progress) {
+TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Frame& frame,
+                     const std::string& regions_brep, const MeshShapeParameters& parameters,
+                     const Strategy& strategy, MeshShapeReport& report, Tet10Mesh* tet10,
+                     const ProgressCallback& progress) {
   PhaseTimer clock(report.phase_seconds);
   // Each step's end: its time, and the progress of this way of placing the points ("mesh shape:
   // <step>", the way's name after the first); a callback asking to stop cancels here.
@@ -308,8 +258,9 @@ TetMesh mesh_attempt(const Shape& shape, const Frame& frame, const std::string& 
   // lattice faces (refined like curved ones), their edges and those faces' edges no lattice
   // edges; the size field from the surface as BRepMesh made it.
   const std::vector<LocalSize> local_sizes = parse_local_sizes(parameters.local_sizes);
-  const LocalSizeItems local_items = local_size_items(
-      shape, local_sizes, std::max(h, parameters.size));  // checked at the size asked for
+  const LocalSizeItems local_items =
+      local_size_items(local_sizes, given_items.faces, given_items.edges,
+                       std::max(h, parameters.size));  // checked at the size asked for
   LocalSizeItems items_at_h = local_items;
   for (double& size : items_at_h.face_size) size = std::min(size, h);
   for (double& size : items_at_h.edge_size) size = std::min(size, h);
@@ -468,7 +419,8 @@ TetMesh mesh_attempt(const Shape& shape, const Frame& frame, const std::string& 
   std::vector<int> vertex_face = surface.node_face;
   vertex_face.insert(vertex_face.end(), inserted.face.begin(), inserted.face.end());
   report.max_boundary_distance = max_boundary_distance(shape, mesh, vertex_face, 1e-6 * h);
-  report.local_sizes = local_sizes_applied(local_sizes, surface);
+  report.local_sizes =
+      local_sizes_applied(local_sizes, given_items.faces, given_items.edges, surface);
   step("check", 0.95);
 
   // 14. Second order: the boundary mid-edge nodes on the CAD.

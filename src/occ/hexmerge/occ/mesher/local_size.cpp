@@ -1,9 +1,13 @@
 #include "hexmerge/occ/mesher/local_size.h"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <limits>
+#include <string>
 
+#include "hexmerge/core/error.h"
+#include "hexmerge/core/parameter_table.h"
 #include "hexmerge/occ/mesher/common.h"
 
 namespace hexmerge::mesher {
@@ -21,8 +25,104 @@ double squared_distance_to_segment(const Vec3& p, const Vec3& a, const Vec3& b) 
 // Levels of finer lattices at most (spacing h / 2^10): a local size below h / 1024 is refused
 // before (mesh_shape's validation), so this is never reached for a valid one.
 constexpr int kMaxLevels = 10;
+// The smallest local size, as a fraction of h (finer lattices down to h / 1024).
+constexpr double kSmallestLocalSize = 1e-3;
+
+// Per shape item, whether one of the given numbers names it.
+std::vector<char> named(const std::vector<int>& numbers, const ItemNumbering& numbering) {
+  std::vector<char> out(numbering.nb_items, 0);
+  for (const int n : numbers)
+    for (const int i : numbering.to_shape[static_cast<std::size_t>(n - 1)])
+      out[static_cast<std::size_t>(i)] = 1;
+  return out;
+}
+
+// Counts one triangle or segment (`nb` ends, closed when 3) on a local size's items, with its
+// longest side.
+void tally(LocalSizeApplied& applied, std::size_t& count, const std::vector<Vec3>& nodes,
+           const int* ends, int nb) {
+  ++count;
+  for (int c = 0; c < (nb == 3 ? 3 : 1); ++c)
+    applied.max_side =
+        std::max(applied.max_side, (nodes[ends[c]] - nodes[ends[(c + 1) % nb]]).norm());
+}
 
 }  // namespace
+
+ItemNumbering ItemNumbering::identity(const char* kind, std::size_t count) {
+  ItemNumbering out;
+  out.kind = kind;
+  out.nb_items = count;
+  out.to_shape.resize(count);
+  for (std::size_t i = 0; i < count; ++i) out.to_shape[i] = {static_cast<int>(i)};
+  return out;
+}
+
+const std::vector<int>& ItemNumbering::items(int number, const std::string& parameter,
+                                             const std::string& what) const {
+  if (number < 1 || static_cast<std::size_t>(number) > to_shape.size()) {
+    std::string lower = kind;
+    lower[0] = static_cast<char>(std::tolower(static_cast<unsigned char>(lower[0])));
+    const std::string count = std::to_string(to_shape.size());
+    throw InputError("parameter '" + parameter + "': " + what + ": " + kind +
+                         std::to_string(number) + " does not exist (the shape has " + count + " " +
+                         lower + "s, " + kind + "1 to " + kind + count + ")",
+                     Entity::Parameter);
+  }
+  return to_shape[static_cast<std::size_t>(number - 1)];
+}
+
+LocalSizeItems local_size_items(const std::vector<LocalSize>& sizes, const ItemNumbering& faces,
+                                const ItemNumbering& edges, double h) {
+  LocalSizeItems items;
+  items.face_size.assign(faces.nb_items, h);
+  items.edge_size.assign(edges.nb_items, h);
+  const auto fail = [&](const std::string& why) {
+    throw InputError("parameter 'local_sizes': " + why, Entity::Parameter);
+  };
+  // One kind of item: every number checked, its items given the size.
+  const auto apply = [](const std::vector<int>& numbers, const ItemNumbering& numbering,
+                        const std::string& what, double size, std::vector<double>& item_size) {
+    for (const int n : numbers)
+      for (const int i : numbering.items(n, "local_sizes", what))
+        item_size[static_cast<std::size_t>(i)] =
+            std::min(item_size[static_cast<std::size_t>(i)], size);
+  };
+  for (const LocalSize& local : sizes) {
+    const std::string what = "local size " + parameter_number_text(local.size);
+    if (local.size > h)
+      fail(what + " is larger than the size " + parameter_number_text(h) +
+           ": local sizes refine, give one of at most the size");
+    if (local.size < kSmallestLocalSize * h)
+      fail(what + " is smaller than the size / 1000 (" +
+           parameter_number_text(kSmallestLocalSize * h) + ")");
+    apply(local.faces, faces, what, local.size, items.face_size);
+    apply(local.edges, edges, what, local.size, items.edge_size);
+  }
+  return items;
+}
+
+std::vector<LocalSizeApplied> local_sizes_applied(const std::vector<LocalSize>& sizes,
+                                                  const ItemNumbering& faces,
+                                                  const ItemNumbering& edges,
+                                                  const Surface& surface) {
+  std::vector<LocalSizeApplied> out;
+  for (const LocalSize& local : sizes) {
+    LocalSizeApplied applied{local.faces, local.edges, local.size, 0, 0, 0.0};
+    const std::vector<char> on_face = named(local.faces, faces);
+    const std::vector<char> on_edge = named(local.edges, edges);
+    for (const SurfaceTriangle& t : surface.triangles)
+      if (on_face[static_cast<std::size_t>(t.face)])
+        tally(applied, applied.nb_triangles, surface.nodes, t.node.data(), 3);
+    for (const auto& [key, segment] : surface.segments)
+      if (on_edge[static_cast<std::size_t>(segment.edge)]) {
+        const int ends[2] = {static_cast<int>(key >> 32), static_cast<int>(key & 0xffffffffu)};
+        tally(applied, applied.nb_segments, surface.nodes, ends, 2);
+      }
+    out.push_back(applied);
+  }
+  return out;
+}
 
 SizeField::SizeField(double h, double grading, double slack, const Vec3& lo, const Vec3& hi)
     : h_(h),

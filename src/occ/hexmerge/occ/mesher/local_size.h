@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "hexmerge/geometry/vec3.h"
+#include "hexmerge/occ/mesh_shape.h"
 #include "hexmerge/occ/mesher/lattice.h"
 #include "hexmerge/occ/mesher/spatial.h"
 #include "hexmerge/occ/mesher/surface.h"
@@ -55,6 +56,38 @@ struct LocalSizeItems {
   std::vector<double> face_size;  ///< per face, its local size (h: none)
   std::vector<double> edge_size;  ///< per edge, its local size (h: none)
 };
+
+/// How the face or edge numbers a user gives (1-based, FreeCAD's FaceN and EdgeN of the shape as
+/// given) name the shape's items (0-based): each given item may have become several (gluing
+/// touching solids splits faces) or one shared with another.
+struct ItemNumbering {
+  const char* kind = "Face";  ///< "Face" or "Edge", for messages
+  std::size_t nb_items = 0;   ///< the shape's items of this kind
+  /// per given item (0-based), the shape's items it names
+  std::vector<std::vector<int>> to_shape;
+  /// The numbering of a shape of `count` items, each given item being itself.
+  static ItemNumbering identity(const char* kind, std::size_t count);
+  /// The shape's items that given number `number` (1-based) names.
+  /// @throws InputError (Entity::Parameter) for a number the shape as given has not, the message
+  ///         starting with `parameter` and `what` ("parameter 'local_sizes': local size 0.5:
+  ///         Face9 does not exist (the shape has 6 faces, Face1 to Face6)")
+  const std::vector<int>& items(int number, const std::string& parameter,
+                                const std::string& what) const;
+};
+
+/// The faces and edges given local sizes (0-based, sizes above h lowered to h: none), checked.
+/// @param[in] sizes  the local sizes (numbers as given)
+/// @throws InputError (Entity::Parameter) naming the face or edge that does not exist, or a size
+///         larger than h or smaller than h / 1000
+LocalSizeItems local_size_items(const std::vector<LocalSize>& sizes, const ItemNumbering& faces,
+                                const ItemNumbering& edges, double h);
+
+/// What the local sizes gave: per entry, the surface's triangles on its faces and segments on its
+/// edges, and their longest side (the entries' numbers as given).
+std::vector<LocalSizeApplied> local_sizes_applied(const std::vector<LocalSize>& sizes,
+                                                  const ItemNumbering& faces,
+                                                  const ItemNumbering& edges,
+                                                  const Surface& surface);
 
 /// The size field of the triangles (world coordinates) of the faces, and the segments of the
 /// edges, with a local size below h.
