@@ -122,6 +122,40 @@ def local_sizes_text(value: Any) -> str:
     return "; ".join(entries)
 
 
+def face_layers_text(value: Any) -> str:
+    """The mesher's ``face_layers`` text from what Python users give: the text itself
+    ("3:4:0.5:1.2; Face5:2:0.25"), or a list of entries, each such a text or a dict
+    ``{"faces": [3, 5], "layers": 4, "thickness": 0.5, "growth": 1.2}`` (growth optional,
+    default 1). Faces are numbered from 1; the thickness is the first layer's, a length."""
+    if isinstance(value, str):
+        return value
+    if isinstance(value, dict) or not isinstance(value, (list, tuple)):
+        value = [value]
+    entries = []
+    for entry in value:
+        if isinstance(entry, str):
+            entries.append(entry)
+            continue
+        if not isinstance(entry, dict) or set(entry) - {"faces", "layers", "thickness", "growth"} \
+                or not {"faces", "layers", "thickness"} <= set(entry):
+            raise _core.InputError(
+                f"face_layers: entry {entry!r} is not FACES:LAYERS:THICKNESS[:GROWTH] text or a dict "
+                "with faces, layers, thickness and optionally growth"
+            )
+        faces = entry["faces"] if isinstance(entry["faces"], (list, tuple)) else [entry["faces"]]
+        fields = [",".join(str(f) for f in faces)]
+        for key in ("layers", "thickness", "growth"):
+            if key not in entry:
+                continue
+            number = entry[key]
+            if isinstance(number, bool) or not isinstance(number, (int, float, np.floating, np.integer)):
+                raise _core.InputError(f"face_layers: entry {entry!r} has {key} {number!r}: it must be a number")
+            fields.append(str(int(number)) if key == "layers" and float(number).is_integer()
+                          else repr(float(number)))
+        entries.append(":".join(fields))
+    return "; ".join(entries)
+
+
 def _options(size: Any, given: dict[str, Any]) -> dict[str, str]:
     """The mesher's options (size included) as the text the compiled table parses, type-checked
     here; the table checks the ranges and choices."""
@@ -132,6 +166,8 @@ def _options(size: Any, given: dict[str, Any]) -> dict[str, str]:
     out = {}
     if "local_sizes" in given:
         given["local_sizes"] = local_sizes_text(given["local_sizes"])
+    if "face_layers" in given:
+        given["face_layers"] = face_layers_text(given["face_layers"])
     for name, value in given.items():
         if table[name]["type"] == "text" and isinstance(value, os.PathLike):
             value = os.fspath(value)
@@ -184,7 +220,11 @@ def mesh_shape(
         tetgen (the TetGen program, a name on PATH or a path), work_directory (keep TetGen's
         files there; default: a temporary folder, removed), local_sizes (finer sizes on faces
         and edges numbered from 1: "5,6:1.5; Edge3:0.5", or a list, see local_sizes_text();
-        reported in the report's ``local_sizes``); fractions of h where they are lengths) and the engine's (parameters(); the engine's defaults (conforming)
+        reported in the report's ``local_sizes``), face_layers (boundary layers of their own on
+        faces numbered from 1: "3:4:0.5:1.2" is 4 layers on Face3, the first 0.5 deep, each
+        next 1.2 times thicker; or a list, see face_layers_text(); reported in the report's
+        ``face_layers``, per entry the nodes that got each layer); fractions of h where they
+        are lengths) and the engine's (parameters(); the engine's defaults (conforming)
         otherwise), by name.
 
     Returns
@@ -193,7 +233,8 @@ def mesh_shape(
         The mesh (regions: the index of the solid holding each cell) and the report: with
         recombine, recombine()'s report; in both cases the mesher's report under ``"meshing"``
         (counts, ``frame``, ``spacing``, ``sweep_axis`` (the frame axis the tets are swept
-        along, -1: not swept), ``max_boundary_distance`` of the corner nodes to the CAD, ``phase_seconds``, ``seconds``, ``tets``, ``points``, ``parameters``).
+        along, -1: not swept), ``sweep_skipped`` (why an extrusion was not swept, "" when it
+        was or is none), ``max_boundary_distance`` of the corner nodes to the CAD, ``phase_seconds``, ``seconds``, ``tets``, ``points``, ``parameters``).
 
     Raises
     ------

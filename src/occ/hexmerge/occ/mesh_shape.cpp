@@ -106,6 +106,53 @@ struct GivenItems {
   ItemNumbering faces, edges;
 };
 
+// The face layers on the shape's faces, checked: faces that exist, a first layer not thicker
+// than h.
+std::vector<FaceLayerSpec> face_layer_specs(const std::vector<FaceLayers>& entries,
+                                            const ItemNumbering& faces, double h) {
+  std::vector<FaceLayerSpec> out;
+  for (const FaceLayers& entry : entries) {
+    std::string items;
+    for (const int f : entry.faces) items += (items.empty() ? "Face" : ",Face") + std::to_string(f);
+    const std::string what = "boundary layers on " + items;
+    if (entry.thickness > h)
+      throw InputError("parameter 'face_layers': " + what + ": the first layer's thickness " +
+                           parameter_number_text(entry.thickness) + " is larger than the size " +
+                           parameter_number_text(h) +
+                           ": boundary layers are finer than the mesh, give a thickness of at "
+                           "most the size",
+                       Entity::Parameter);
+    FaceLayerSpec spec{{}, entry.layers, entry.thickness, entry.growth};
+    for (const int f : entry.faces)
+      for (const int i : faces.items(f, "face_layers", what)) spec.faces.push_back(i);
+    out.push_back(spec);
+  }
+  return out;
+}
+
+// Fails naming the first face-layer entry whose faces got no point in the first layer: no node
+// of theirs off their edges, or no room anywhere.
+void check_face_layers_placed(const std::vector<FaceLayers>& entries,
+                              const std::vector<FaceLayersApplied>& applied, double h) {
+  for (std::size_t e = 0; e < entries.size() && e < applied.size(); ++e) {
+    if (applied[e].nb_per_layer.empty() || applied[e].nb_per_layer[0] > 0) continue;
+    std::string items;
+    for (const int f : entries[e].faces)
+      items += (items.empty() ? "Face" : ",Face") + std::to_string(f);
+    throw InputError(
+        "parameter 'face_layers': boundary layers on " + items +
+            (applied[e].nb_nodes == 0
+                 ? ": at size " + parameter_number_text(h) +
+                       " the face has no surface node off its edges to grow layers from (give "
+                       "a smaller size, or a local size on the face)"
+                 : ": no room for a first layer " + parameter_number_text(entries[e].thickness) +
+                       " deep at any of its " + std::to_string(applied[e].nb_nodes) +
+                       " nodes (the shape is thinner there, or the face is shared by two "
+                       "solids)"),
+        Entity::Parameter);
+  }
+}
+
 // One attempt: steps 3 to 14 of mesh_shape() with one strategy; the Tet10 mesh too when
 // `tet10` is given.
 TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Frame& frame,
@@ -156,18 +203,19 @@ TetMesh mesh_shape_impl(const std::string& brep, const MeshShapeParameters& para
   const Frame frame = choose_frame(shape, parameters.frame);
   // Local sizes naming faces or edges the shape does not have, or coarser than h, fail now.
   const std::vector<LocalSize> local_sizes = parse_local_sizes(parameters.local_sizes);
-  // The faces and edges as numbered in the shape given (FreeCAD's FaceN, EdgeN).
-  const GivenItems given_items{
+  // The faces and edges as numbered in the shape given (FreeCAD's FaceN, EdgeN), through the
+  // gluing of touching solids, which splits and merges faces and edges.
+  GivenItems given_items{
       ItemNumbering::identity("Face", static_cast<std::size_t>(shape.faces.Extent())),
       ItemNumbering::identity("Edge", static_cast<std::size_t>(shape.edges.Extent()))};
+  if (glue.glued) {
+    given_items.faces.to_shape = glue.face_images;
+    given_items.edges.to_shape = glue.edge_images;
+  }
   const LocalSizeItems local_items =
       local_size_items(local_sizes, given_items.faces, given_items.edges, parameters.size);
-  // Gluing touching solids makes new faces and edges: the numbers given would name others.
-  if (glue.glued && !local_sizes.empty())
-    throw InputError(
-        "parameter 'local_sizes': the shape's solids touch and were glued into shared faces, "
-        "which renumbers its faces and edges; local sizes are not supported on such shapes yet",
-        Entity::Parameter);
+  // Face layers on faces the shape has not, or thicker than h, fail now too.
+  face_layer_specs(parse_face_layers(parameters.face_layers), given_items.faces, parameters.size);
   const std::string regions_brep = glue.glued ? write_brep(shape.shape) : brep;
 
   // 2. A size whose mesh would not fit in memory is refused before any work.
@@ -264,8 +312,18 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
   LocalSizeItems items_at_h = local_items;
   for (double& size : items_at_h.face_size) size = std::min(size, h);
   for (double& size : items_at_h.edge_size) size = std::min(size, h);
+  // Face layers (none when this way places no layers): their faces are no lattice faces either.
+  const std::vector<FaceLayers> layer_entries = parse_face_layers(parameters.face_layers);
+  const std::vector<FaceLayerSpec> layer_specs =
+      strategy.layers
+          ? face_layer_specs(layer_entries, given_items.faces, std::max(h, parameters.size))
+          : std::vector<FaceLayerSpec>{};
+  std::vector<char> layered(items_at_h.face_size.size(), 0);
+  for (const FaceLayerSpec& spec : layer_specs)
+    for (const int f : spec.faces) layered[static_cast<std::size_t>(f)] = 1;
+  const std::vector<bool> lattice_faces_as_found = lattice.lattice_face;
   for (std::size_t f = 0; f < items_at_h.face_size.size(); ++f)
-    if (items_at_h.face_size[f] < h && lattice.lattice_face[f]) {
+    if ((items_at_h.face_size[f] < h || layered[f]) && lattice.lattice_face[f]) {
       lattice.lattice_face[f] = false;
       --lattice.nb_lattice_faces;
     }
@@ -284,9 +342,27 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
   // 5. The surface at size h: swept when the shape is an extrusion along a lattice axis, else
   // refined and cleaned.
   std::optional<Sweep> sweep;
-  if (parameters.sweep && strategy.lattice_faces && !local)
+  if (parameters.sweep && strategy.lattice_faces && !local && layer_specs.empty())
     sweep = find_sweep(shape, lattice.frame, lattice.face_plane, lattice.lattice_face,
                        lattice.cells, lattice.spacing, h);
+  // The sweep carries one size along its axis (slabs h thick) and the global layers: a shape that
+  // would be swept without its local sizes or face layers is meshed unswept, and says why.
+  if (parameters.sweep && strategy.lattice_faces && (local || !layer_specs.empty())) {
+    const std::optional<Sweep> would =
+        find_sweep(shape, lattice.frame, lattice.face_plane, lattice_faces_as_found, lattice.cells,
+                   lattice.spacing, h);
+    Surface probe = surface;  // sweep_surface() rebuilds the surface it is given
+    if (would &&
+        sweep_surface(shape, *would, lattice.frame,
+                      lattice.frame.axis[would->axis] * lattice.spacing[would->axis],
+                      lattice.cells[would->axis], h, deflection, lattice_faces_as_found, probe))
+      report.sweep_skipped =
+          std::string("not swept, though an extrusion: ") +
+          (local ? "the sweep's slabs are h thick along its axis, finer than h nowhere, so a "
+                   "local size is meshed unswept"
+                 : "face layers are placed on their faces' own nodes, which the sweep's "
+                   "repeated cross-section does not have");
+  }
   SweptSurface swept;
   if (sweep) {
     const int a = sweep->axis;
@@ -324,10 +400,12 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
   const Parity parity(nodes, surface, shape.face_solid_count, around, h);
   InsertedPoints inserted;
   const int nb_layers = strategy.layers ? parameters.boundary_layers : 0;
-  const KeptPoints kept =
+  KeptPoints kept =
       keep_lattice_points(lattice, around, parity,
                           (nb_layers * parameters.layer_thickness + parameters.lattice_margin) * h,
                           parameters.lattice_margin * h);
+  clear_face_layers(layer_specs, nodes, surface, lattice, around, parameters.lattice_margin * h,
+                    kept);
   step("lattice", 0.2);
 
   // 8. The hexahedral core and its closing pyramids' apexes.
@@ -344,14 +422,37 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
   std::vector<char> no_layers;
   if (local)
     for (const Vec3& p : surface.nodes) no_layers.push_back(field.at(p) < h ? 1 : 0);
+  const std::size_t before_layers = inserted.points.size();
   report.nb_layer_points =
       place_layers(nodes, surface, shape.face_solid_count, lattice, sweep_axis, swept, nb_layers,
                    parameters.layer_thickness * h, parameters.lattice_margin * h, parity, around,
-                   inserted, local ? &no_layers : nullptr);
+                   inserted, local ? &no_layers : nullptr, layer_specs, &report.face_layers);
+  for (std::size_t e = 0; e < report.face_layers.size(); ++e) {
+    FaceLayersApplied& applied = report.face_layers[e];
+    applied.faces = layer_entries[e].faces;
+    applied.layers = layer_entries[e].layers;
+    applied.thickness = layer_entries[e].thickness;
+    applied.growth = layer_entries[e].growth;
+  }
+  check_face_layers_placed(layer_entries, report.face_layers, h);
   if (local)
     report.nb_graded_points =
         place_graded_points(field, lattice, parity, around, kGradedClearance, inserted);
+  // The face layers' points (the last place_layers() added) stay at their depths: they go first
+  // among the isolated points, and improve_tets() leaves every point before them in place (the
+  // points on lattice faces too: finer lattices' points there keep their place then).
+  std::size_t nb_face_layer_points = 0;
+  for (const FaceLayersApplied& applied : report.face_layers)
+    nb_face_layer_points += applied.nb_points;
+  std::size_t isolated_before = 0;  // isolated points before the face layers' in `inserted`
+  for (std::size_t i = 0; i < before_layers + report.nb_layer_points - nb_face_layer_points; ++i)
+    isolated_before += inserted.face[i] < 0;
   const std::size_t nb_on_faces = face_points_first(inserted);
+  if (nb_face_layer_points > 0) {  // every point in the range is isolated (face -1)
+    const auto first = inserted.points.begin() + static_cast<std::ptrdiff_t>(nb_on_faces);
+    std::rotate(first, first + static_cast<std::ptrdiff_t>(isolated_before),
+                first + static_cast<std::ptrdiff_t>(isolated_before + nb_face_layer_points));
+  }
   step("layers", 0.3);
 
   // 10. TetGen: the surface kept as it is, the lattice faces with their lattice points, the other
@@ -390,7 +491,8 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
   ImproveParameters improve;
   improve.spacing = lattice.spacing;
   improve.sweep_axis = sweep_axis;
-  improve.nb_surface_nodes = nodes.size();
+  improve.nb_surface_nodes =
+      nodes.size() + (nb_face_layer_points > 0 ? nb_on_faces + nb_face_layer_points : 0);
   improve.max_boundary_shift = deflection;
   std::vector<std::int32_t> boundary_face(tets.boundary_marker.size());
   for (std::size_t i = 0; i < boundary_face.size(); ++i)

@@ -69,7 +69,14 @@ const std::vector<int>& ItemNumbering::items(int number, const std::string& para
                          lower + "s, " + kind + "1 to " + kind + count + ")",
                      Entity::Parameter);
   }
-  return to_shape[static_cast<std::size_t>(number - 1)];
+  const std::vector<int>& out = to_shape[static_cast<std::size_t>(number - 1)];
+  if (out.empty())
+    throw InputError("parameter '" + parameter + "': " + what + ": " + kind +
+                         std::to_string(number) +
+                         " of the shape as given is gone from the shape whose touching solids "
+                         "were glued (it lay inside another solid?)",
+                     Entity::Parameter);
+  return out;
 }
 
 LocalSizeItems local_size_items(const std::vector<LocalSize>& sizes, const ItemNumbering& faces,
