@@ -85,20 +85,29 @@ def _shape_text_and_unit(shape: str | bytes | os.PathLike[str]) -> tuple[str, st
     )
 
 
+def _entries_text(value: Any, entry_text: Callable[[Any], str]) -> str:
+    """A ';'-separated option text from the text itself, one entry or a list of entries: text
+    entries as they are, the others through entry_text."""
+    if isinstance(value, str):
+        return value
+    if isinstance(value, dict) or not isinstance(value, (list, tuple)):
+        value = [value]
+    return "; ".join(entry if isinstance(entry, str) else entry_text(entry) for entry in value)
+
+
+def _entry_number(option: str, entry: Any, what: str, number: Any) -> float:
+    if isinstance(number, bool) or not isinstance(number, (int, float, np.floating, np.integer)):
+        raise _core.InputError(f"{option}: entry {entry!r} has {what} {number!r}: it must be a number")
+    return float(number)
+
+
 def local_sizes_text(value: Any) -> str:
     """The mesher's ``local_sizes`` text from what Python users give: the text itself
     ("5,6:1.5; Edge3:0.5"), or a list of entries, each such a text, a dict
     ``{"faces": [5, 6], "edges": [3], "size": 1.5}`` or a pair ``(items, size)`` with items a
     face number, "FaceN"/"EdgeN", or a list of those. Faces and edges are numbered from 1."""
-    if isinstance(value, str):
-        return value
-    if isinstance(value, dict) or not isinstance(value, (list, tuple)):
-        value = [value]
-    entries = []
-    for entry in value:
-        if isinstance(entry, str):
-            entries.append(entry)
-            continue
+
+    def entry_text(entry: Any) -> str:
         if isinstance(entry, dict):
             unknown = set(entry) - {"faces", "edges", "size"}
             if unknown or "size" not in entry:
@@ -116,10 +125,9 @@ def local_sizes_text(value: Any) -> str:
                 f"local_sizes: entry {entry!r} is not ITEMS:SIZE text, a dict with faces/edges and "
                 "size, or a pair (items, size)"
             )
-        if isinstance(size, bool) or not isinstance(size, (int, float, np.floating, np.integer)):
-            raise _core.InputError(f"local_sizes: entry {entry!r} has size {size!r}: it must be a number")
-        entries.append(f"{','.join(items)}:{float(size)!r}")
-    return "; ".join(entries)
+        return f"{','.join(items)}:{_entry_number('local_sizes', entry, 'size', size)!r}"
+
+    return _entries_text(value, entry_text)
 
 
 def face_layers_text(value: Any) -> str:
@@ -127,15 +135,8 @@ def face_layers_text(value: Any) -> str:
     ("3:4:0.5:1.2; Face5:2:0.25"), or a list of entries, each such a text or a dict
     ``{"faces": [3, 5], "layers": 4, "thickness": 0.5, "growth": 1.2}`` (growth optional,
     default 1). Faces are numbered from 1; the thickness is the first layer's, a length."""
-    if isinstance(value, str):
-        return value
-    if isinstance(value, dict) or not isinstance(value, (list, tuple)):
-        value = [value]
-    entries = []
-    for entry in value:
-        if isinstance(entry, str):
-            entries.append(entry)
-            continue
+
+    def entry_text(entry: Any) -> str:
         if not isinstance(entry, dict) or set(entry) - {"faces", "layers", "thickness", "growth"} \
                 or not {"faces", "layers", "thickness"} <= set(entry):
             raise _core.InputError(
@@ -145,15 +146,12 @@ def face_layers_text(value: Any) -> str:
         faces = entry["faces"] if isinstance(entry["faces"], (list, tuple)) else [entry["faces"]]
         fields = [",".join(str(f) for f in faces)]
         for key in ("layers", "thickness", "growth"):
-            if key not in entry:
-                continue
-            number = entry[key]
-            if isinstance(number, bool) or not isinstance(number, (int, float, np.floating, np.integer)):
-                raise _core.InputError(f"face_layers: entry {entry!r} has {key} {number!r}: it must be a number")
-            fields.append(str(int(number)) if key == "layers" and float(number).is_integer()
-                          else repr(float(number)))
-        entries.append(":".join(fields))
-    return "; ".join(entries)
+            if key in entry:
+                number = _entry_number("face_layers", entry, key, entry[key])
+                fields.append(str(int(number)) if key == "layers" and number.is_integer() else repr(number))
+        return ":".join(fields)
+
+    return _entries_text(value, entry_text)
 
 
 def _options(size: Any, given: dict[str, Any]) -> dict[str, str]:
