@@ -234,7 +234,8 @@ def test_an_extrusion_with_a_local_size_says_why_it_is_not_swept(plate_meshes, t
     plain, fine = plate_meshes["plain"][1]["meshing"], plate_meshes["fine hole"][1]["meshing"]
     assert plain["sweep_axis"] >= 0 and plain["sweep_skipped"] == ""
     assert fine["sweep_axis"] == -1
-    assert fine["sweep_skipped"].startswith("not swept, though an extrusion: the sweep's slabs are h thick")
+    assert fine["sweep_skipped"].startswith("not swept, though an extrusion: the local size 2.5 on Face5 (a face) "
+                                             "needs a graded surface")
     # A shape that is no extrusion has nothing to say.
     from test_mesh_shape import GEOMETRY, gmsh_brep
     bracket = gmsh_brep(tmp_path, "bracket", GEOMETRY / "bracket.geo")
@@ -244,3 +245,24 @@ def test_an_extrusion_with_a_local_size_says_why_it_is_not_swept(plate_meshes, t
     code = cli.main(["mesh", str(PLATE), "-h", "10", "--local-size", "Face5:5", "-o", str(tmp_path / "p.vtu")])
     assert code == 0
     assert "note: not swept, though an extrusion" in capsys.readouterr().err
+
+
+def test_local_sizes_on_the_caps_edges_are_swept() -> None:
+    """The hole's top circle (Edge15) at 2.5: the sweep splits the hole wall's sides on the first
+    plane to the size and repeats them on every plane, so both circles get nodes at most 2.5
+    apart, and the plate stays swept: hexahedra and prisms only."""
+    tets, report = hexmerge.mesh_shape(PLATE, H, recombine=False, local_sizes="Edge15:2.5")
+    meshing = report["meshing"]
+    assert meshing["sweep_axis"] >= 0 and meshing["sweep_skipped"] == ""
+    (applied,) = meshing["local_sizes"]
+    assert applied["nb_segments"] >= 2 * np.pi * 50 / 2.5 and applied["max_side"] <= 2.5 * (1 + 1e-9)
+    p = tets.points
+    for z in (0.0, 10.0):
+        ring = p[on_hole(p) & (np.abs(p[:, 2] - z) < 1e-9)]
+        angles = np.sort(np.arctan2(ring[:, 1], ring[:, 0]))
+        gaps = np.diff(np.concatenate([angles, angles[:1] + 2 * np.pi]))
+        assert 2 * 50 * np.sin(gaps.max() / 2) <= 2.5 * (1 + 1e-9), z  # the longest chord
+    mesh, rep = hexmerge.mesh_shape(PLATE, H, local_sizes="Edge15:2.5")
+    assert_checked(mesh, tets, rep, H)
+    assert rep["output_counts"]["tet"] == 0 and rep["output_counts"]["pyramid"] == 0
+    assert rep["volume_fraction"]["hex"] >= 0.95

@@ -342,37 +342,49 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
   // 5. The surface at size h: swept when the shape is an extrusion along a lattice axis, else
   // refined and cleaned.
   std::optional<Sweep> sweep;
+  std::vector<double> wall_size;  // swept with local sizes on its caps' edges: per wall
   if (parameters.sweep && strategy.lattice_faces && !local && layer_specs.empty())
     sweep = find_sweep(shape, lattice.frame, lattice.face_plane, lattice.lattice_face,
                        lattice.cells, lattice.spacing, h);
-  // The sweep carries one size along its axis (slabs h thick) and the global layers: a shape that
-  // would be swept without its local sizes or face layers is meshed unswept, and says why.
+  // The sweep carries local sizes on its caps' edges only (the walls' sides split to them), and
+  // the global layers only: a shape that would be swept without its other local sizes or its
+  // face layers is meshed unswept, and says why.
   if (parameters.sweep && strategy.lattice_faces && (local || !layer_specs.empty())) {
-    const std::optional<Sweep> would =
+    std::optional<Sweep> would =
         find_sweep(shape, lattice.frame, lattice.face_plane, lattice_faces_as_found, lattice.cells,
                    lattice.spacing, h);
-    Surface probe = surface;  // sweep_surface() rebuilds the surface it is given
-    if (would &&
-        sweep_surface(shape, *would, lattice.frame,
-                      lattice.frame.axis[would->axis] * lattice.spacing[would->axis],
-                      lattice.cells[would->axis], h, deflection, lattice_faces_as_found, probe))
-      report.sweep_skipped =
-          std::string("not swept, though an extrusion: ") +
-          (local ? "the sweep's slabs are h thick along its axis, finer than h nowhere, so a "
-                   "local size is meshed unswept"
-                 : "face layers are placed on their faces' own nodes, which the sweep's "
-                   "repeated cross-section does not have");
+    std::string why;
+    if (would && !layer_specs.empty())
+      why =
+          "face layers are placed on their faces' own nodes, which the sweep's repeated "
+          "cross-section does not have";
+    else if (would)
+      why = sweep_carries(local_sizes, given_items.edges, *would, shape.edge_faces,
+                          lattice_faces_as_found, h, wall_size);
+    if (would && why.empty()) {
+      sweep = would;
+    } else {
+      wall_size.clear();
+      Surface probe = surface;  // sweep_surface() rebuilds the surface it is given
+      if (would &&
+          sweep_surface(shape, *would, lattice.frame,
+                        lattice.frame.axis[would->axis] * lattice.spacing[would->axis],
+                        lattice.cells[would->axis], h, deflection, lattice_faces_as_found, probe))
+        report.sweep_skipped = "not swept, though an extrusion: " + why;
+    }
   }
   SweptSurface swept;
   if (sweep) {
     const int a = sweep->axis;
-    const std::optional<SweptSurface> made =
-        sweep_surface(shape, *sweep, lattice.frame, lattice.frame.axis[a] * lattice.spacing[a],
-                      lattice.cells[a], h, deflection, lattice.lattice_face, surface);
-    if (made)
+    const std::optional<SweptSurface> made = sweep_surface(
+        shape, *sweep, lattice.frame, lattice.frame.axis[a] * lattice.spacing[a], lattice.cells[a],
+        h, deflection, lattice.lattice_face, surface, wall_size.empty() ? nullptr : &wall_size);
+    if (made) {
       swept = *made;
-    else
+      local = nullptr;  // carried by the split walls: no graded points off the planes
+    } else {
       sweep.reset();  // the cross-section changes along the axis
+    }
   }
   if (sweep) {
     report.sweep_axis = sweep->axis;
@@ -523,6 +535,9 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
   report.max_boundary_distance = max_boundary_distance(shape, mesh, vertex_face, 1e-6 * h);
   report.local_sizes =
       local_sizes_applied(local_sizes, given_items.faces, given_items.edges, surface);
+  if (sweep)
+    add_swept_segments(report.local_sizes, local_sizes, given_items.edges, *sweep, shape.edge_faces,
+                       surface);
   step("check", 0.95);
 
   // 14. Second order: the boundary mid-edge nodes on the CAD.

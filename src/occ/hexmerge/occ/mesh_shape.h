@@ -100,8 +100,10 @@ struct MeshShapeParameters {
   /// and the report number them): entries "ITEMS:SIZE" separated by ';', ITEMS a comma-separated
   /// list of "N" or "FaceN" (a face), "EdgeN" (an edge); e.g. "5:1.5; Edge3,Edge4:0.5". The
   /// surface there is refined to the size (its neighbours grading out by half the distance),
-  /// the lattice and layers keep clear, finer lattices fill the graded zone inside, and the shape
-  /// is not swept. Sizes in (0, h], at least h / 1000. See parse_local_sizes().
+  /// the lattice and layers keep clear, finer lattices fill the graded zone inside. A swept shape
+  /// stays swept for local sizes on its caps' edges only (the walls' sides split to them);
+  /// otherwise it is not swept, and MeshShapeReport::sweep_skipped says why. Sizes in (0, h],
+  /// at least h / 1000. See parse_local_sizes().
   std::string local_sizes;
   /// Boundary layers on some faces (1-based, as FreeCAD's FaceN): entries
   /// "FACES:LAYERS:THICKNESS[:GROWTH]" separated by ';', FACES a comma-separated list of "N" or

@@ -59,8 +59,8 @@ ParameterTable<MeshShapeParameters> make_table() {
       text(&P::local_sizes, "local_sizes", "Local sizes",
            "Finer sizes on some faces and edges (1-based, as FreeCAD's FaceN, EdgeN): entries "
            "ITEMS:SIZE separated by ';', ITEMS a comma-separated list of N or FaceN (faces), "
-           "EdgeN (edges); e.g. '5:1.5; Edge3:0.5'. Sizes in (0, size]; the shape is then not "
-           "swept",
+           "EdgeN (edges); e.g. '5:1.5; Edge3:0.5'. Sizes in (0, size]; an extrusion stays "
+           "swept only for local sizes on its caps' edges",
            {"--local-size", ""}),
       // The add-on fills it from the analysis' boundary layer objects: no property of its own.
       text(&P::face_layers, "face_layers", "Face layers",

@@ -172,6 +172,64 @@ void SizeField::graded_box(Vec3& lo, Vec3& hi) const {
   hi = items_hi_ + Vec3{reach, reach, reach};
 }
 
+std::string sweep_carries(const std::vector<LocalSize>& sizes, const ItemNumbering& edges,
+                          const Sweep& sweep, const std::vector<std::vector<int>>& edge_faces,
+                          const std::vector<bool>& lattice_face, double h,
+                          std::vector<double>& wall_size) {
+  wall_size.assign(lattice_face.size(), h);
+  for (const LocalSize& local : sizes) {
+    if (local.size >= h) continue;
+    const std::string what = "the local size " + parameter_number_text(local.size) + " on ";
+    if (!local.faces.empty())
+      return what + "Face" + std::to_string(local.faces[0]) +
+             " (a face) needs a graded surface, which the sweep's slabs (h thick along its axis) "
+             "and repeated cross-section cannot carry (local sizes on its caps' edges are swept)";
+    for (const int number : local.edges)
+      for (const int e : edges.items(number, "local_sizes", what)) {
+        bool on_cap = false;
+        for (const int f : edge_faces[static_cast<std::size_t>(e)])
+          on_cap = on_cap || sweep.cap[static_cast<std::size_t>(f)] >= 0;
+        const std::string edge = what + "Edge" + std::to_string(number);
+        if (!on_cap) return edge + " (an edge along the sweep's axis) needs slabs thinner than h";
+        for (const int f : edge_faces[static_cast<std::size_t>(e)]) {
+          if (sweep.cap[static_cast<std::size_t>(f)] >= 0) continue;
+          if (lattice_face[static_cast<std::size_t>(f)])
+            return edge +
+                   " lies on a wall on a lattice plane, whose lattice points the sweep keeps";
+          wall_size[static_cast<std::size_t>(f)] =
+              std::min(wall_size[static_cast<std::size_t>(f)], local.size);
+        }
+      }
+  }
+  return "";
+}
+
+void add_swept_segments(std::vector<LocalSizeApplied>& applied, const std::vector<LocalSize>& sizes,
+                        const ItemNumbering& edges, const Sweep& sweep,
+                        const std::vector<std::vector<int>>& edge_faces, const Surface& surface) {
+  std::vector<char> has_segments(edges.nb_items, 0);
+  for (const auto& [key, segment] : surface.segments)
+    has_segments[static_cast<std::size_t>(segment.edge)] = 1;
+  const auto is_wall_of = [&](int e, int wall) {
+    const std::vector<int>& faces = edge_faces[static_cast<std::size_t>(e)];
+    return std::find(faces.begin(), faces.end(), wall) != faces.end();
+  };
+  for (std::size_t k = 0; k < sizes.size() && k < applied.size(); ++k)
+    for (const int number : sizes[k].edges)
+      for (const int e : edges.to_shape[static_cast<std::size_t>(number - 1)]) {
+        if (has_segments[static_cast<std::size_t>(e)]) continue;
+        for (const int wall : edge_faces[static_cast<std::size_t>(e)]) {
+          if (sweep.cap[static_cast<std::size_t>(wall)] >= 0) continue;
+          for (const auto& [key, segment] : surface.segments)
+            if (is_wall_of(segment.edge, wall)) {
+              const int ends[2] = {static_cast<int>(key >> 32),
+                                   static_cast<int>(key & 0xffffffffu)};
+              tally(applied[k], applied[k].nb_segments, surface.nodes, ends, 2);
+            }
+        }
+      }
+}
+
 SizeField make_size_field(const Surface& surface, const LocalSizeItems& items, double h,
                           double grading, double deflection, double diagonal) {
   Vec3 lo{std::numeric_limits<double>::max(), std::numeric_limits<double>::max(),

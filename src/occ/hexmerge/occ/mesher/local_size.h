@@ -6,6 +6,7 @@
 
 #include <array>
 #include <cstddef>
+#include <string>
 #include <vector>
 
 #include "hexmerge/geometry/vec3.h"
@@ -13,6 +14,7 @@
 #include "hexmerge/occ/mesher/lattice.h"
 #include "hexmerge/occ/mesher/spatial.h"
 #include "hexmerge/occ/mesher/surface.h"
+#include "hexmerge/occ/mesher/sweep.h"
 
 namespace hexmerge::mesher {
 
@@ -88,6 +90,27 @@ std::vector<LocalSizeApplied> local_sizes_applied(const std::vector<LocalSize>& 
                                                   const ItemNumbering& faces,
                                                   const ItemNumbering& edges,
                                                   const Surface& surface);
+
+/// Whether a sweep carries the local sizes: only those on edges of its caps whose walls are no
+/// lattice faces (the first plane's sides on those walls are split to the size and repeated on
+/// every plane); a face, an edge along the axis or on a lattice wall would need slabs thinner
+/// than h or a graded cross-section.
+/// @param[in]  edge_faces    per edge of the shape, the faces it bounds
+/// @param[in]  lattice_face  per face, whether it is a lattice face (as found, before the local
+///                           sizes)
+/// @param[out] wall_size     carried: per face, the size its sides are split to (h: none)
+/// @return "" when carried, else why not, in one line naming the first item that cannot be
+std::string sweep_carries(const std::vector<LocalSize>& sizes, const ItemNumbering& edges,
+                          const Sweep& sweep, const std::vector<std::vector<int>>& edge_faces,
+                          const std::vector<bool>& lattice_face, double h,
+                          std::vector<double>& wall_size);
+
+/// Swept: the first plane's segments are the only ones the surface keeps; an edge of a cap on
+/// another plane has copies of those of the first plane's edges on the same walls. Adds them to
+/// the entries (of local_sizes_applied()) whose edges have no segment of their own.
+void add_swept_segments(std::vector<LocalSizeApplied>& applied, const std::vector<LocalSize>& sizes,
+                        const ItemNumbering& edges, const Sweep& sweep,
+                        const std::vector<std::vector<int>>& edge_faces, const Surface& surface);
 
 /// The size field of the triangles (world coordinates) of the faces, and the segments of the
 /// edges, with a local size below h.
