@@ -99,19 +99,40 @@ def test_the_layered_box_recombines_and_checks(box, layered_box) -> None:
           f"{report['volume_fraction']['hex']:.3f}, prisms {report['output_counts'].get('wedge', 0)}")
 
 
-def test_layers_on_the_hole_of_a_plate() -> None:
-    """A curved face: the hole's wall (radius 50) at h 5 gets 2 layers, 0.5 then 1 deep, radially
-    into the plate; the plate's volume is kept."""
+def test_layers_on_the_hole_of_a_plate_are_swept() -> None:
+    """A curved wall of an extrusion: the hole's wall (radius 50) at h 5 gets 2 layers, 0.5 then
+    1 deep, radially into the plate, on the sweep's first plane and repeated on every plane: the
+    plate stays swept, its volume kept, and recombines into hexahedra and prisms only."""
     tets, report = hexmerge.mesh_shape(PLATE, 5.0, recombine=False, face_layers="Face5:2:0.5:2")
     hexmerge.validate(tets.points, tets.cell_vertices.reshape(-1, 4), tets.regions)
-    (applied,) = report["meshing"]["face_layers"]
+    meshing = report["meshing"]
+    assert meshing["sweep_axis"] >= 0 and meshing["sweep_skipped"] == ""
+    (applied,) = meshing["face_layers"]
+    assert applied["nb_per_layer"] == [applied["nb_nodes"]] * 2 and applied["nb_nodes"] > 0
     p = tets.points
     r = np.hypot(p[:, 0], p[:, 1])
-    inner = (p[:, 2] > 1e-6) & (p[:, 2] < 10 - 1e-6)
-    for k, depth in enumerate([0.5, 1.5]):
-        at = inner & (np.abs(r - 50 - depth) <= JITTER * depth + 1e-3)
-        assert int(at.sum()) >= applied["nb_per_layer"][k] > 0.8 * applied["nb_nodes"] > 0
+    planes = np.unique(np.round(p[np.abs(r - 50) < 1e-6, 2], 9))  # the hole's nodes' heights
+    assert len(planes) >= 3
+    for depth in (0.5, 1.5):
+        at = np.abs(r - 50 - depth) <= JITTER * depth + 1e-9
+        # The same points on every plane (the first plane's repeated).
+        assert int(at.sum()) == applied["nb_nodes"] * len(planes), depth
+    # Nothing between the wall and the first layer.
+    assert (r[(r > 50 + 1e-6)] >= 50 + 0.5 * (1 - JITTER) - 1e-9).all()
     assert tet_volume(tets) == pytest.approx(400 * 200 * 10 - np.pi * 50 ** 2 * 10, rel=2e-3)
+    mesh, rep = hexmerge.mesh_shape(PLATE, 5.0, face_layers="Face5:2:0.5:2")
+    assert_checked(mesh, tets, rep, 5.0)
+    assert rep["output_counts"]["tet"] == 0 and rep["output_counts"]["pyramid"] == 0
+    assert rep["volume_fraction"]["hex"] >= 0.95
+
+
+def test_layers_on_a_cap_are_not_swept_and_say_why() -> None:
+    tets, report = hexmerge.mesh_shape(PLATE, 10.0, recombine=False, face_layers="Face6:1:2")
+    meshing = report["meshing"]
+    assert meshing["sweep_axis"] == -1
+    assert meshing["sweep_skipped"].startswith("not swept, though an extrusion: the face layers on Face6 lie on "
+                                               "a cap")
+    hexmerge.validate(tets.points, tets.cell_vertices.reshape(-1, 4), tets.regions)
 
 
 @pytest.mark.parametrize(

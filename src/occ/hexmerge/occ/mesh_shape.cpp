@@ -106,15 +106,20 @@ struct GivenItems {
   ItemNumbering faces, edges;
 };
 
+// "Face3,Face5": faces numbered from 1.
+std::string faces_text(const std::vector<int>& faces) {
+  std::string out;
+  for (const int f : faces) out += (out.empty() ? "Face" : ",Face") + std::to_string(f);
+  return out;
+}
+
 // The face layers on the shape's faces, checked: faces that exist, a first layer not thicker
 // than h.
 std::vector<FaceLayerSpec> face_layer_specs(const std::vector<FaceLayers>& entries,
                                             const ItemNumbering& faces, double h) {
   std::vector<FaceLayerSpec> out;
   for (const FaceLayers& entry : entries) {
-    std::string items;
-    for (const int f : entry.faces) items += (items.empty() ? "Face" : ",Face") + std::to_string(f);
-    const std::string what = "boundary layers on " + items;
+    const std::string what = "boundary layers on " + faces_text(entry.faces);
     if (entry.thickness > h)
       throw InputError("parameter 'face_layers': " + what + ": the first layer's thickness " +
                            parameter_number_text(entry.thickness) + " is larger than the size " +
@@ -136,11 +141,8 @@ void check_face_layers_placed(const std::vector<FaceLayers>& entries,
                               const std::vector<FaceLayersApplied>& applied, double h) {
   for (std::size_t e = 0; e < entries.size() && e < applied.size(); ++e) {
     if (applied[e].nb_per_layer.empty() || applied[e].nb_per_layer[0] > 0) continue;
-    std::string items;
-    for (const int f : entries[e].faces)
-      items += (items.empty() ? "Face" : ",Face") + std::to_string(f);
     throw InputError(
-        "parameter 'face_layers': boundary layers on " + items +
+        "parameter 'face_layers': boundary layers on " + faces_text(entries[e].faces) +
             (applied[e].nb_nodes == 0
                  ? ": at size " + parameter_number_text(h) +
                        " the face has no surface node off its edges to grow layers from (give "
@@ -354,15 +356,20 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
         find_sweep(shape, lattice.frame, lattice.face_plane, lattice_faces_as_found, lattice.cells,
                    lattice.spacing, h);
     std::string why;
-    if (would && !layer_specs.empty())
-      why =
-          "face layers are placed on their faces' own nodes, which the sweep's repeated "
-          "cross-section does not have";
-    else if (would)
+    if (would)
       why = sweep_carries(local_sizes, given_items.edges, *would, shape.edge_faces,
                           lattice_faces_as_found, h, wall_size);
+    // Face layers on walls are placed on the first plane and repeated; on caps they are not.
+    for (std::size_t e = 0; would && why.empty() && e < layer_specs.size(); ++e)
+      for (const int f : layer_specs[e].faces)
+        if (would->cap[static_cast<std::size_t>(f)] >= 0 && why.empty())
+          why = "the face layers on " + faces_text(layer_entries[e].faces) +
+                " lie on a cap, whose nodes the sweep repeats from its first plane (face layers "
+                "on its walls are swept)";
     if (would && why.empty()) {
-      sweep = would;
+      // Walls with face layers are no lattice faces now: the sweep over the faces as they are.
+      sweep = find_sweep(shape, lattice.frame, lattice.face_plane, lattice.lattice_face,
+                         lattice.cells, lattice.spacing, h);
     } else {
       wall_size.clear();
       Surface probe = surface;  // sweep_surface() rebuilds the surface it is given
@@ -460,7 +467,8 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
   for (std::size_t i = 0; i < before_layers + report.nb_layer_points - nb_face_layer_points; ++i)
     isolated_before += inserted.face[i] < 0;
   const std::size_t nb_on_faces = face_points_first(inserted);
-  if (nb_face_layer_points > 0) {  // every point in the range is isolated (face -1)
+  // (Swept: nothing moves, and the face layers' points on caps are face points.)
+  if (nb_face_layer_points > 0 && sweep_axis < 0) {  // every point in the range is isolated
     const auto first = inserted.points.begin() + static_cast<std::ptrdiff_t>(nb_on_faces);
     std::rotate(first, first + static_cast<std::ptrdiff_t>(isolated_before),
                 first + static_cast<std::ptrdiff_t>(isolated_before + nb_face_layer_points));
@@ -504,7 +512,8 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
   improve.spacing = lattice.spacing;
   improve.sweep_axis = sweep_axis;
   improve.nb_surface_nodes =
-      nodes.size() + (nb_face_layer_points > 0 ? nb_on_faces + nb_face_layer_points : 0);
+      nodes.size() +
+      (nb_face_layer_points > 0 && sweep_axis < 0 ? nb_on_faces + nb_face_layer_points : 0);
   improve.max_boundary_shift = deflection;
   std::vector<std::int32_t> boundary_face(tets.boundary_marker.size());
   for (std::size_t i = 0; i < boundary_face.size(); ++i)

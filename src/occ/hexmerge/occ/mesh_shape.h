@@ -110,8 +110,10 @@ struct MeshShapeParameters {
   /// "FaceN"; e.g. "3,Face4:3:0.5:1.5". The surface nodes of those faces get LAYERS points along
   /// the inward normal, the first THICKNESS (a length) deep, each next layer GROWTH times thicker
   /// than the one before (default 1), where there is room (the clearance rules of the global
-  /// layers; depths vary by up to 10 % per node); the faces are no lattice faces, the lattice keeps
-  /// clear of the layers, and the shape is not swept. Their other nodes keep `boundary_layers`.
+  /// layers; depths vary by up to 10 % per node); the faces are no lattice faces and the lattice
+  /// keeps clear of the layers. A swept shape stays swept for layers on its walls (placed on the
+  /// first plane and repeated), not on its caps (MeshShapeReport::sweep_skipped says why). The
+  /// other faces' nodes keep `boundary_layers`.
   /// LAYERS in [1, 10], THICKNESS in (0, h], GROWTH in [1, 3]. See parse_face_layers().
   std::string face_layers;
 };

@@ -68,7 +68,7 @@ ParameterTable<MeshShapeParameters> make_table() {
            "FACES:LAYERS:THICKNESS[:GROWTH] separated by ';', FACES a comma-separated list of N "
            "or FaceN; e.g. '3:4:0.5:1.2' (4 layers on Face3, the first 0.5 deep, each next 1.2 "
            "times thicker). LAYERS 1 to 10, THICKNESS in (0, size], GROWTH 1 to 3 (default 1); "
-           "the shape is then not swept",
+           "an extrusion stays swept for layers on its walls, not on its caps",
            {"--face-layer", ""}),
   });
 }

@@ -164,10 +164,19 @@ std::size_t place_layers(const std::vector<Vec3>& nodes, const Surface& surface,
     for (std::size_t e = 0; e < face_layers.size(); ++e)
       (*applied)[e].nb_per_layer.assign(static_cast<std::size_t>(face_layers[e].layers), 0);
     for (std::size_t i = 0; i < nodes.size(); ++i)
-      if (spec_of[i] >= 0 && smooth[i] && normal[i].norm() > 0)
+      if (spec_of[i] >= 0 && smooth[i] && normal[i].norm() > 0 &&
+          (sweep_axis < 0 || swept.base[i] == static_cast<int>(i)))  // swept: the first plane's
         ++(*applied)[static_cast<std::size_t>(spec_of[i])].nb_nodes;
   }
   std::vector<int> reached(nodes.size(), 0);  // face-layer nodes: the layers placed so far
+  // A face-layer node got layer k, `points` points (swept: one per plane).
+  const auto reach = [&](std::size_t i, int k, std::size_t points) {
+    reached[i] = k;
+    if (!applied) return;
+    FaceLayersApplied& counts = (*applied)[static_cast<std::size_t>(spec_of[i])];
+    counts.nb_points += points;
+    ++counts.nb_per_layer[static_cast<std::size_t>(k - 1)];
+  };
   // The global layers first, then the face layers: these come last in `inserted`, together.
   for (const bool face_pass : {false, true})
     for (int k = 1; k <= (face_pass ? deepest : layers); ++k)
@@ -221,6 +230,7 @@ std::size_t place_layers(const std::vector<Vec3>& nodes, const Surface& surface,
               inserted.face.push_back(face);
               ++placed;
             }
+            if (spec) reach(i, k, repeats.size());
             continue;
           }
           // Inside the shape and clear of every face, lattice faces too: points offset from a
@@ -232,14 +242,7 @@ std::size_t place_layers(const std::vector<Vec3>& nodes, const Surface& surface,
           inserted.points.push_back(q);
           inserted.face.push_back(-1);
           ++placed;
-          if (spec) {
-            reached[i] = k;
-            if (applied) {
-              FaceLayersApplied& counts = (*applied)[static_cast<std::size_t>(spec_of[i])];
-              ++counts.nb_points;
-              ++counts.nb_per_layer[static_cast<std::size_t>(k - 1)];
-            }
-          }
+          if (spec) reach(i, k, 1);
         }
   return placed;
 }

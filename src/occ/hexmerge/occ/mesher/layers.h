@@ -54,8 +54,9 @@ std::size_t clear_face_layers(const std::vector<FaceLayerSpec>& specs,
 /// @param[in] face_layers       the faces with layers of their own: their nodes (those of the first
 ///                              spec holding one of its faces) take that spec's layers, depths
 ///                              and growth instead, no_layers or not, a layer only where the node
-///                              got the one before; not with a sweep. Their points are placed
-///                              after the global layers' and come last in `inserted`
+///                              got the one before; swept, on walls only, placed on the first
+///                              plane and repeated. Their points are placed after the global
+///                              layers' and come last in `inserted`
 /// @param[out] applied          per spec, its counts (nodes, faces, layers, thickness and growth
 ///                              left to the caller); resized to face_layers' size
 /// @return the number of points placed
