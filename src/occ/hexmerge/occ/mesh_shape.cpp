@@ -345,6 +345,7 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
   // refined and cleaned.
   std::optional<Sweep> sweep;
   std::vector<double> wall_size;  // swept with local sizes on its caps' edges: per wall
+  bool carried = false;           // an extrusion whose local sizes and face layers the sweep takes
   if (parameters.sweep && strategy.lattice_faces && !local && layer_specs.empty())
     sweep = find_sweep(shape, lattice.frame, lattice.face_plane, lattice.lattice_face,
                        lattice.cells, lattice.spacing, h);
@@ -366,7 +367,8 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
           why = "the face layers on " + faces_text(layer_entries[e].faces) +
                 " lie on a cap, whose nodes the sweep repeats from its first plane (face layers "
                 "on its walls are swept)";
-    if (would && why.empty()) {
+    carried = would && why.empty();
+    if (carried) {
       // Walls with face layers are no lattice faces now: the sweep over the faces as they are.
       sweep = find_sweep(shape, lattice.frame, lattice.face_plane, lattice.lattice_face,
                          lattice.cells, lattice.spacing, h);
@@ -393,6 +395,10 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
       sweep.reset();  // the cross-section changes along the axis
     }
   }
+  if (carried && !sweep)
+    report.sweep_skipped =
+        "not swept, though an extrusion: its sweep failed with the local sizes and face layers "
+        "applied (walls split to a local size, or made no lattice faces for layers)";
   if (sweep) {
     report.sweep_axis = sweep->axis;
   } else {
