@@ -15,6 +15,7 @@ Usage (after building the module, see bench/README.md):
   PYTHONPATH=src/python /usr/bin/python3.11 bench/mesher_hashes.py --output /tmp/before.json
   ... mesher_hashes.py --compare /tmp/before.json
   ... mesher_hashes.py --cases cylinder-2.57,plate-6 --compare /tmp/before.json
+  ... mesher_hashes.py --compare /tmp/before.json --ignore-new-keys   (a change adding report keys)
 """
 import argparse
 import hashlib
@@ -103,6 +104,8 @@ CASES = [
     ("box_5_cylinder-4-unswept", "box_5_cylinder", 4.0, {"sweep": False}),
     ("tube-2.5", "tube", 2.5, {}),
     ("plate_four_holes-3", "plate_four_holes", 3.0, {}),
+    ("plate-6-local", "plate", 6.0, {"local_sizes": "Face1:3; Edge2,Edge3:2"}),
+    ("bracket-3-local", "bracket", 3.0, {"local_sizes": "Face2:1.5; Edge5:1"}),
     ("gmsh_part", "cad:gmsh_part.step", 4.8, {}),
     ("pyocc_face_recognition", "cad:pyocc_face_recognition_sample_part.stp", 11.0, {}),
     ("gmsh_t20_data", "cad:gmsh_t20_data.step", 2.8, {}),
@@ -127,14 +130,15 @@ def shape_text(shape: str, work: str, cad: str) -> str | None:
     return _core.read_shape_file(brep)
 
 
-def fingerprint(points, tets, regions, report: dict, work: str) -> tuple[str, dict]:
+def fingerprint(points, tets, regions, report: dict, work: str, drop=()) -> tuple[str, dict]:
     import numpy as np
     h = hashlib.sha1()
     for name, a in (("points", points), ("tets", tets), ("regions", regions)):
         a = np.ascontiguousarray(a)
         h.update(name.encode() + str(a.dtype).encode() + str(a.shape).encode())
         h.update(a.tobytes())
-    rep = {k: v for k, v in benchlib.jsonable(dict(report)).items() if k != "phase_seconds"}
+    rep = {k: v for k, v in benchlib.jsonable(dict(report)).items()
+           if k != "phase_seconds" and k not in drop}
     if "tetgen_command" in rep:
         rep["tetgen_command"] = rep["tetgen_command"].replace(work, "<work>")
     h.update(json.dumps(rep, sort_keys=True).encode())
@@ -155,7 +159,14 @@ def main() -> int:
     ap.add_argument("--tetgen", default="tetgen")
     ap.add_argument("--output", help="JSON file to write")
     ap.add_argument("--compare", metavar="JSON", help="an earlier output to compare with")
+    ap.add_argument("--ignore-new-keys", action="store_true",
+                    help="with --compare: leave the report keys the earlier output lacks out of "
+                    "the fingerprints (a change that adds report fields, nothing else)")
     args = ap.parse_args()
+    old = {}
+    if args.compare and args.ignore_new_keys:
+        with open(args.compare) as f:
+            old = json.load(f)
 
     from hexmerge import _core
 
@@ -183,7 +194,10 @@ def main() -> int:
                 print(f"{name:32s} {sha}  error: {str(e).splitlines()[0]}", flush=True)
                 continue
             seconds = time.perf_counter() - start
-            sha, rep = fingerprint(points, tets, regions, report, run_dir)
+            drop = ()
+            if name in old and "report" in old[name]:
+                drop = set(dict(report)) - set(old[name]["report"]) - {"phase_seconds"}
+            sha, rep = fingerprint(points, tets, regions, report, run_dir, drop)
             results[name] = {"sha1": sha, "tets": int(len(tets)), "points": int(len(points)),
                              "report": rep, "seconds": seconds}
             print(f"{name:32s} {sha}  {len(tets):7d} tets {seconds:6.2f} s", flush=True)

@@ -129,14 +129,16 @@ def link_part(obj):
 
 
 def found_mesh_regions(obj):
-    """(lines, warnings) of the mesh regions a shape-mode object honours (for the task panel)."""
+    """(lines, warnings) of the mesh regions and boundary layers a shape-mode object honours (for
+    the task panel)."""
     source = obj.SourceMesh
     if not is_shape_source(source):
         return [], []
     analysis = containing_analysis(obj) or containing_analysis(source)
-    _, found, warnings = mesh_regions.local_sizes(
-        obj, source, analysis, float(properties.mesher_values(obj).get("size") or 0.0))
-    return found, warnings
+    size = float(properties.mesher_values(obj).get("size") or 0.0)
+    _, found, warnings = mesh_regions.local_sizes(obj, source, analysis, size)
+    _, layers_found, layers_warnings = mesh_regions.face_layers(obj, source, analysis, size)
+    return found + layers_found, warnings + layers_warnings
 
 
 def containing_analysis(obj):
@@ -153,10 +155,14 @@ def prepare(obj):
     analysis = containing_analysis(obj) or containing_analysis(source)
     if is_shape_source(source):
         mesher = properties.mesher_values(obj)
-        entries, _, warnings = mesh_regions.local_sizes(
-            obj, source, analysis, float(mesher.get("size") or 0.0))
+        size = float(mesher.get("size") or 0.0)
+        entries, _, warnings = mesh_regions.local_sizes(obj, source, analysis, size)
         if entries:
             mesher["local_sizes"] = "; ".join(entries)
+        layer_entries, _, layer_warnings = mesh_regions.face_layers(obj, source, analysis, size)
+        if layer_entries:
+            mesher["face_layers"] = "; ".join(layer_entries)
+        warnings = warnings + layer_warnings
         job = jobs.ShapeJob.prepare(
             source.Shape, mesher, properties.engine_values(obj),
             material_names=regions_mod.material_solids(analysis, source),

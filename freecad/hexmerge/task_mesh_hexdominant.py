@@ -228,7 +228,7 @@ class TaskPanelHexDominant(base_taskpanel.TransactionTaskPanel):
                     else "One region (a single solid).")
             found, not_honoured = mesh_hexdominant.found_mesh_regions(self.obj)
             if found:
-                text += "\nMesh regions (local sizes): " + "; ".join(found)
+                text += "\nMesh regions and boundary layers: " + "; ".join(found)
             if not_honoured:
                 text += "\nNot honoured: " + "; ".join(not_honoured)
             self.form.l_regions.setText(text)

@@ -500,6 +500,16 @@ py::tuple run_mesh_shape(const std::string& brep, const std::map<std::string, st
     local_sizes.append(e);
   }
   d["local_sizes"] = local_sizes;
+  py::list face_layers;
+  for (const FaceLayersApplied& l : report.face_layers) {
+    py::dict e;
+    e["faces"] = l.faces, e["layers"] = l.layers, e["thickness"] = l.thickness;
+    e["growth"] = l.growth, e["nb_nodes"] = l.nb_nodes, e["nb_points"] = l.nb_points;
+    e["nb_per_layer"] = l.nb_per_layer;
+    face_layers.append(e);
+  }
+  d["face_layers"] = face_layers;
+  d["sweep_skipped"] = report.sweep_skipped;
   d["nb_graded_points"] = report.nb_graded_points;
   if (second_order) {
     d["nb_projected_mid_nodes"] = report.nb_projected_mid_nodes;

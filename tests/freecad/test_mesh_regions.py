@@ -1,6 +1,7 @@
 # SPDX-License-Identifier: LGPL-2.1-or-later
 """FEM mesh regions in shape mode (freecadcmd -t test_mesh_regions): a Fem::MeshRegion on a face
-of the shape makes the hex-dominant mesh finer there; what cannot be honoured is warned about.
+of the shape makes the hex-dominant mesh finer there, a Fem::MeshBoundaryLayer makes layers of
+nodes at the thicknesses it asks; what cannot be honoured is warned about.
 
 The shape is FreeCAD's plate with a hole (resources/examples, 400 x 200 x 10 mm, hole radius 50):
 Face5 is the hole's wall, Vertex1 a corner."""
@@ -105,7 +106,49 @@ class MeshRegions(unittest.TestCase):
         warnings = report["freecad"]["warnings"]
         self.assertEqual(len(warnings), 2, warnings)
         self.assertIn("Vertex1 of Plate is not supported in shape mode", warnings[0])
-        self.assertIn("boundary layer Layers is not honoured in shape mode", warnings[1])
+        # Its MinimumThickness is FreeCAD's default, 0: left out, said so.
+        self.assertIn("boundary layer Layers: no MinimumThickness set: left out", warnings[1])
+        self.assertEqual(report["meshing"]["face_layers"], [])
+
+    def test_a_boundary_layer_object_makes_layers_on_its_face(self):
+        """A Fem::MeshBoundaryLayer on a face of a box (Face1, x = 0; 100 x 40 x 30 mm, h 10):
+        3 layers from 1 mm, growth 1.5: nodes at 1, 2.5 and 4.75 mm from the face (within the
+        mesher's 10 % variation), straight over the face's nodes (tests/python/test_face_layers.py
+        checks the same mesh's volume and recombination)."""
+        from femobjects import mesh_boundarylayer
+        box = self.doc.addObject("Part::Box", "Box")
+        box.Length, box.Width, box.Height = 100, 40, 30
+        self.doc.recompute()
+        obj = hm.make_hexdominant_mesh(self.doc, box, target_size=H, second_order=False,
+                                       analysis=self.analysis)
+        self.assertNotIn("Invalid", obj.State)
+        layer = self.doc.addObject("Fem::FeaturePython", "WallLayers")
+        mesh_boundarylayer.MeshBoundaryLayer(layer)
+        layer.NumberOfLayers = 3
+        layer.MinimumThickness = 1.0
+        layer.GrowthRate = 1.5
+        layer.References = [(box, "Face1")]
+        obj.MeshBoundaryLayerList = [layer]
+        obj.touch()
+        self.doc.recompute()
+        self.assertNotIn("Invalid", obj.State)
+        report = mesh_hexdominant.report_dict(obj)
+        self.assertEqual(report["freecad"]["warnings"], [])
+        self.assertEqual(report["meshing"]["parameters"]["face_layers"], "Face1:3:1.0:1.5")
+        (applied,) = report["meshing"]["face_layers"]
+        self.assertEqual(applied["faces"], [1])
+        self.assertEqual(mesh_hexdominant.found_mesh_regions(obj)[0],
+                         ["WallLayers: Face1 3 layers from 1 mm, growth 1.5"])
+        points = [obj.FemMesh.getNodeById(n) for n in obj.FemMesh.Nodes]
+        face = {(round(p.y, 6), round(p.z, 6)) for p in points if abs(p.x) < 1e-9}
+        over = [p for p in points if 0 < p.x < 6 and (round(p.y, 6), round(p.z, 6)) in face]
+        for k, depth in enumerate([1.0, 2.5, 4.75]):
+            at = [p for p in over if abs(p.x - depth) <= 0.1 * depth + 1e-9]
+            self.assertEqual(len(at), applied["nb_per_layer"][k], (depth, applied))
+            self.assertGreater(len(at), 0.5 * applied["nb_nodes"])
+        # Nothing between the face and its first layer over the face's nodes.
+        self.assertGreaterEqual(min(p.x for p in over), 0.9 - 1e-9)
+        self.assertEqual(obj.FemMesh.VolumeCount, sum(report["output_counts"].values()))
 
 
 if __name__ == "__main__":

@@ -171,3 +171,98 @@ def test_cli_local_size(tmp_path, capsys) -> None:
     err = capsys.readouterr().err
     assert "Face8 does not exist" in err and "Traceback" not in err
     assert not (tmp_path / "x.vtu").exists()
+
+
+# Two boxes touching as separate closed shells (a compound, as FreeCAD compounds and STEP
+# assemblies arrive): gluing splits box 1's x = 30 face (Face2) into the patch it shares with box
+# 2's x = 30 face (Face7) and the rest, which renumbers the faces; the numbers given are those of
+# the compound as given (FreeCAD's FaceN of it).
+TOUCHING_BOXES_GEO = """SetFactory("OpenCASCADE");
+Box(1) = {0, 0, 0, 30, 20, 10};
+Box(2) = {30, 5, 2, 15, 8, 6};
+"""
+
+
+def test_local_sizes_and_face_layers_on_touching_solids(tmp_path) -> None:
+    from test_mesh_shape import gmsh_brep
+    shape = gmsh_brep(tmp_path, "touching_boxes", TOUCHING_BOXES_GEO)
+    h, fine = 2.0, 0.5
+    tets, report = hexmerge.mesh_shape(shape, h, recombine=False, local_sizes=f"Face2:{fine}",
+                                       face_layers="Face1:2:0.25:2")
+    meshing = report["meshing"]
+    assert meshing["nb_solids"] == 2 and meshing["nb_shared_faces"] == 1
+    hexmerge.validate(tets.points, tets.cell_vertices.reshape(-1, 4), tets.regions)
+    p = tets.points
+    # Face2, both its pieces: the boundary triangles on x = 30 (outside the patch) and the tet
+    # sides inside the patch, at most the local size.
+    (applied,) = meshing["local_sizes"]
+    assert applied["faces"] == [2] and applied["max_side"] <= fine * (1 + 1e-9)
+    tris = boundary_triangles(tets)
+    on_plane = (np.abs(p[:, 0] - 30) < 1e-9)
+    outside = on_plane[tris].all(axis=1)
+    assert outside.sum() > 0 and longest_sides(p, tris[outside]).max() <= fine * (1 + 1e-9)
+    cells = tets.cell_vertices.reshape(-1, 4)
+    edges = np.unique(np.sort(np.concatenate([cells[:, [a, b]] for a in range(4) for b in range(a + 1, 4)]),
+                             axis=1), axis=0)
+    patch = on_plane & (p[:, 1] > 5 - 1e-9) & (p[:, 1] < 13 + 1e-9) & (p[:, 2] > 2 - 1e-9) & (p[:, 2] < 8 + 1e-9)
+    in_patch = patch[edges].all(axis=1)
+    assert in_patch.sum() > 100
+    assert np.linalg.norm(p[edges[in_patch, 0]] - p[edges[in_patch, 1]], axis=1).max() <= fine * (1 + 1e-9)
+    # Face1 (box 1's x = 0 face): its layers at 0.25 and 0.75 over its nodes.
+    (layers,) = meshing["face_layers"]
+    assert layers["faces"] == [1] and min(layers["nb_per_layer"]) > 0.5 * layers["nb_nodes"] > 0
+    face_yz = {(round(y, 9), round(z, 9)) for y, z in p[np.abs(p[:, 0]) < 1e-9][:, 1:]}
+    over = np.array([(round(y, 9), round(z, 9)) in face_yz for y, z in p[:, 1:]])
+    for k, depth in enumerate([0.25, 0.75]):
+        at = over & (np.abs(p[:, 0] - depth) <= 0.1 * depth * (1 + 1e-9))
+        assert at.sum() == layers["nb_per_layer"][k]
+    # Each region keeps its solid's volume.
+    q = p[cells]
+    volumes = np.einsum("ij,ij->i", np.cross(q[:, 1] - q[:, 0], q[:, 2] - q[:, 0]), q[:, 3] - q[:, 0]) / 6
+    for region, volume in enumerate([30 * 20 * 10, 15 * 8 * 6]):
+        assert volumes[tets.regions == region].sum() == pytest.approx(volume, rel=1e-9)
+
+
+def test_a_face_number_of_the_compound_as_given(tmp_path) -> None:
+    from test_mesh_shape import gmsh_brep
+    shape = gmsh_brep(tmp_path, "touching_boxes", TOUCHING_BOXES_GEO)
+    with pytest.raises(hexmerge.InputError, match=r"Face13 does not exist \(the shape has 12 faces"):
+        hexmerge.mesh_shape(shape, 2.0, recombine=False, local_sizes="Face13:0.5")
+
+
+def test_an_extrusion_with_a_local_size_says_why_it_is_not_swept(plate_meshes, tmp_path, capsys) -> None:
+    plain, fine = plate_meshes["plain"][1]["meshing"], plate_meshes["fine hole"][1]["meshing"]
+    assert plain["sweep_axis"] >= 0 and plain["sweep_skipped"] == ""
+    assert fine["sweep_axis"] == -1
+    assert fine["sweep_skipped"].startswith("not swept, though an extrusion: the local size 2.5 on Face5 (a face) "
+                                             "needs a graded surface")
+    # A shape that is no extrusion has nothing to say.
+    from test_mesh_shape import GEOMETRY, gmsh_brep
+    bracket = gmsh_brep(tmp_path, "bracket", GEOMETRY / "bracket.geo")
+    _, report = hexmerge.mesh_shape(bracket, 3.0, recombine=False, local_sizes="Face2:1.5")
+    assert report["meshing"]["sweep_axis"] == -1 and report["meshing"]["sweep_skipped"] == ""
+    # The CLI says it as a note (on stderr).
+    code = cli.main(["mesh", str(PLATE), "-h", "10", "--local-size", "Face5:5", "-o", str(tmp_path / "p.vtu")])
+    assert code == 0
+    assert "note: not swept, though an extrusion" in capsys.readouterr().err
+
+
+def test_local_sizes_on_the_caps_edges_are_swept() -> None:
+    """The hole's top circle (Edge15) at 2.5: the sweep splits the hole wall's sides on the first
+    plane to the size and repeats them on every plane, so both circles get nodes at most 2.5
+    apart, and the plate stays swept: hexahedra and prisms only."""
+    tets, report = hexmerge.mesh_shape(PLATE, H, recombine=False, local_sizes="Edge15:2.5")
+    meshing = report["meshing"]
+    assert meshing["sweep_axis"] >= 0 and meshing["sweep_skipped"] == ""
+    (applied,) = meshing["local_sizes"]
+    assert applied["nb_segments"] >= 2 * np.pi * 50 / 2.5 and applied["max_side"] <= 2.5 * (1 + 1e-9)
+    p = tets.points
+    for z in (0.0, 10.0):
+        ring = p[on_hole(p) & (np.abs(p[:, 2] - z) < 1e-9)]
+        angles = np.sort(np.arctan2(ring[:, 1], ring[:, 0]))
+        gaps = np.diff(np.concatenate([angles, angles[:1] + 2 * np.pi]))
+        assert 2 * 50 * np.sin(gaps.max() / 2) <= 2.5 * (1 + 1e-9), z  # the longest chord
+    mesh, rep = hexmerge.mesh_shape(PLATE, H, local_sizes="Edge15:2.5")
+    assert_checked(mesh, tets, rep, H)
+    assert rep["output_counts"]["tet"] == 0 and rep["output_counts"]["pyramid"] == 0
+    assert rep["volume_fraction"]["hex"] >= 0.95

@@ -142,6 +142,8 @@ def test_python_keywords_are_the_tables() -> None:
         ("tetgen", "", r"parameter 'tetgen' must name the TetGen program"),
         ("local_sizes", "5-2", r"parameter 'local_sizes': entry '5-2' is not ITEMS:SIZE"),
         ("local_sizes", "Face5:x", r"parameter 'local_sizes': entry 'Face5:x' has size 'x'"),
+        ("face_layers", "5:2", r"parameter 'face_layers': entry '5:2' is not FACES:LAYERS:THICKNESS"),
+        ("face_layers", "5:2:x", r"parameter 'face_layers': entry '5:2:x' has thickness 'x'"),
         ("no_such_option", "1", r"unknown parameter 'no_such_option' \(the parameters are: size, "),
     ],
 )
@@ -189,6 +191,7 @@ def test_freecad_properties_are_the_tables() -> None:
         if spec.kind != "App::PropertyEnumeration" and row["name"] not in ("pyramid_placement",):
             assert spec.default == row["default"] or math.isclose(spec.default, row["default"]), name
     # Rows the add-on does not show are the TetGen program and its work folder, and the local
-    # sizes (from the analysis' mesh regions, freecad/hexmerge/mesh_regions.py) only.
+    # sizes and face layers (from the analysis' mesh regions and boundary layer objects,
+    # freecad/hexmerge/mesh_regions.py) only.
     hidden = {r["name"] for _, rows in tables() for r in rows if not r["freecad_property"]}
-    assert hidden <= {"tetgen", "work_directory", "local_sizes"}
+    assert hidden <= {"tetgen", "work_directory", "local_sizes", "face_layers"}

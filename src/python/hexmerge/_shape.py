@@ -85,20 +85,29 @@ def _shape_text_and_unit(shape: str | bytes | os.PathLike[str]) -> tuple[str, st
     )
 
 
+def _entries_text(value: Any, entry_text: Callable[[Any], str]) -> str:
+    """A ';'-separated option text from the text itself, one entry or a list of entries: text
+    entries as they are, the others through entry_text."""
+    if isinstance(value, str):
+        return value
+    if isinstance(value, dict) or not isinstance(value, (list, tuple)):
+        value = [value]
+    return "; ".join(entry if isinstance(entry, str) else entry_text(entry) for entry in value)
+
+
+def _entry_number(option: str, entry: Any, what: str, number: Any) -> float:
+    if isinstance(number, bool) or not isinstance(number, (int, float, np.floating, np.integer)):
+        raise _core.InputError(f"{option}: entry {entry!r} has {what} {number!r}: it must be a number")
+    return float(number)
+
+
 def local_sizes_text(value: Any) -> str:
     """The mesher's ``local_sizes`` text from what Python users give: the text itself
     ("5,6:1.5; Edge3:0.5"), or a list of entries, each such a text, a dict
     ``{"faces": [5, 6], "edges": [3], "size": 1.5}`` or a pair ``(items, size)`` with items a
     face number, "FaceN"/"EdgeN", or a list of those. Faces and edges are numbered from 1."""
-    if isinstance(value, str):
-        return value
-    if isinstance(value, dict) or not isinstance(value, (list, tuple)):
-        value = [value]
-    entries = []
-    for entry in value:
-        if isinstance(entry, str):
-            entries.append(entry)
-            continue
+
+    def entry_text(entry: Any) -> str:
         if isinstance(entry, dict):
             unknown = set(entry) - {"faces", "edges", "size"}
             if unknown or "size" not in entry:
@@ -116,10 +125,33 @@ def local_sizes_text(value: Any) -> str:
                 f"local_sizes: entry {entry!r} is not ITEMS:SIZE text, a dict with faces/edges and "
                 "size, or a pair (items, size)"
             )
-        if isinstance(size, bool) or not isinstance(size, (int, float, np.floating, np.integer)):
-            raise _core.InputError(f"local_sizes: entry {entry!r} has size {size!r}: it must be a number")
-        entries.append(f"{','.join(items)}:{float(size)!r}")
-    return "; ".join(entries)
+        return f"{','.join(items)}:{_entry_number('local_sizes', entry, 'size', size)!r}"
+
+    return _entries_text(value, entry_text)
+
+
+def face_layers_text(value: Any) -> str:
+    """The mesher's ``face_layers`` text from what Python users give: the text itself
+    ("3:4:0.5:1.2; Face5:2:0.25"), or a list of entries, each such a text or a dict
+    ``{"faces": [3, 5], "layers": 4, "thickness": 0.5, "growth": 1.2}`` (growth optional,
+    default 1). Faces are numbered from 1; the thickness is the first layer's, a length."""
+
+    def entry_text(entry: Any) -> str:
+        if not isinstance(entry, dict) or set(entry) - {"faces", "layers", "thickness", "growth"} \
+                or not {"faces", "layers", "thickness"} <= set(entry):
+            raise _core.InputError(
+                f"face_layers: entry {entry!r} is not FACES:LAYERS:THICKNESS[:GROWTH] text or a dict "
+                "with faces, layers, thickness and optionally growth"
+            )
+        faces = entry["faces"] if isinstance(entry["faces"], (list, tuple)) else [entry["faces"]]
+        fields = [",".join(str(f) for f in faces)]
+        for key in ("layers", "thickness", "growth"):
+            if key in entry:
+                number = _entry_number("face_layers", entry, key, entry[key])
+                fields.append(str(int(number)) if key == "layers" and number.is_integer() else repr(number))
+        return ":".join(fields)
+
+    return _entries_text(value, entry_text)
 
 
 def _options(size: Any, given: dict[str, Any]) -> dict[str, str]:
@@ -132,6 +164,8 @@ def _options(size: Any, given: dict[str, Any]) -> dict[str, str]:
     out = {}
     if "local_sizes" in given:
         given["local_sizes"] = local_sizes_text(given["local_sizes"])
+    if "face_layers" in given:
+        given["face_layers"] = face_layers_text(given["face_layers"])
     for name, value in given.items():
         if table[name]["type"] == "text" and isinstance(value, os.PathLike):
             value = os.fspath(value)
@@ -184,7 +218,11 @@ def mesh_shape(
         tetgen (the TetGen program, a name on PATH or a path), work_directory (keep TetGen's
         files there; default: a temporary folder, removed), local_sizes (finer sizes on faces
         and edges numbered from 1: "5,6:1.5; Edge3:0.5", or a list, see local_sizes_text();
-        reported in the report's ``local_sizes``); fractions of h where they are lengths) and the engine's (parameters(); the engine's defaults (conforming)
+        reported in the report's ``local_sizes``), face_layers (boundary layers of their own on
+        faces numbered from 1: "3:4:0.5:1.2" is 4 layers on Face3, the first 0.5 deep, each
+        next 1.2 times thicker; or a list, see face_layers_text(); reported in the report's
+        ``face_layers``, per entry the nodes that got each layer); fractions of h where they
+        are lengths) and the engine's (parameters(); the engine's defaults (conforming)
         otherwise), by name.
 
     Returns
@@ -193,7 +231,8 @@ def mesh_shape(
         The mesh (regions: the index of the solid holding each cell) and the report: with
         recombine, recombine()'s report; in both cases the mesher's report under ``"meshing"``
         (counts, ``frame``, ``spacing``, ``sweep_axis`` (the frame axis the tets are swept
-        along, -1: not swept), ``max_boundary_distance`` of the corner nodes to the CAD, ``phase_seconds``, ``seconds``, ``tets``, ``points``, ``parameters``).
+        along, -1: not swept), ``sweep_skipped`` (why an extrusion was not swept, "" when it
+        was or is none), ``max_boundary_distance`` of the corner nodes to the CAD, ``phase_seconds``, ``seconds``, ``tets``, ``points``, ``parameters``).
 
     Raises
     ------

@@ -131,7 +131,9 @@ def build_parser() -> argparse.ArgumentParser:
         # The size is also -h (as Gmsh's -clmax), required, checked before any work.
         {"size": dict(flags=["-h"], required=True, type=_positive_length, metavar="H"),
          # Repeatable: one ITEMS:SIZE per option (or several, separated by ';').
-         "local_sizes": dict(action="append", metavar="ITEMS:SIZE")},
+         "local_sizes": dict(action="append", metavar="ITEMS:SIZE"),
+         # Repeatable likewise: one FACES:LAYERS:THICKNESS[:GROWTH] per option.
+         "face_layers": dict(action="append", metavar="FACES:N:THICKNESS[:GROWTH]")},
     )
     add_parameter_options(msh)
 
@@ -387,6 +389,27 @@ def _mesh_notes(meshing: dict[str, Any]) -> list[str]:
             items = [f"Face{f}" for f in applied["faces"]] + [f"Edge{e}" for e in applied["edges"]]
             notes.append(f"local size {applied['size']:g} on {','.join(items)}: sides up to "
                          f"{applied['max_side']:.3g} remain there (a face that did not refine)")
+    notes += face_layer_notes(meshing)
+    if meshing.get("sweep_skipped"):
+        notes.append(meshing["sweep_skipped"])
+    return notes
+
+
+def face_layer_notes(meshing: dict[str, Any]) -> list[str]:
+    """One line per face-layer entry that did not get all its layers at all its nodes."""
+    notes = []
+    for applied in meshing.get("face_layers", []):
+        items = ",".join(f"Face{f}" for f in applied["faces"])
+        per_layer = applied["nb_per_layer"]
+        if applied["nb_nodes"] and all(n == applied["nb_nodes"] for n in per_layer):
+            continue
+        if not any(per_layer):
+            notes.append(f"boundary layers on {items}: none placed (the points were placed by "
+                         f"{meshing['strategy']}, which places no layers)")
+            continue
+        counts = ", ".join(f"{n}" for n in per_layer)
+        notes.append(f"boundary layers on {items}: nodes per layer {counts} of the face's "
+                     f"{applied['nb_nodes']} (no room deeper, or a point too near another)")
     return notes
 
 

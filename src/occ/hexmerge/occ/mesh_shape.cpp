@@ -43,68 +43,6 @@ constexpr double kLocalGrading = 0.5;
 // The finer lattices' points around a local size stay this fraction of the size wanted there
 // from the faces and the other points.
 constexpr double kGradedClearance = 0.5;
-// The smallest local size, as a fraction of h (finer lattices down to h / 1024).
-constexpr double kSmallestLocalSize = 1e-3;
-
-// The local sizes per face and edge (0-based; h where none), checked against the shape.
-LocalSizeItems local_size_items(const Shape& shape, const std::vector<LocalSize>& sizes, double h) {
-  LocalSizeItems items;
-  items.face_size.assign(static_cast<std::size_t>(shape.faces.Extent()), h);
-  items.edge_size.assign(static_cast<std::size_t>(shape.edges.Extent()), h);
-  auto fail = [&](const std::string& why) {
-    throw InputError("parameter 'local_sizes': " + why, Entity::Parameter);
-  };
-  for (const LocalSize& local : sizes) {
-    const std::string what = "local size " + parameter_number_text(local.size);
-    if (local.size > h)
-      fail(what + " is larger than the size " + parameter_number_text(h) +
-           ": local sizes refine, give one of at most the size");
-    if (local.size < kSmallestLocalSize * h)
-      fail(what + " is smaller than the size / 1000 (" +
-           parameter_number_text(kSmallestLocalSize * h) + ")");
-    for (const int f : local.faces) {
-      if (f > shape.faces.Extent())
-        fail(what + ": Face" + std::to_string(f) + " does not exist (the shape has " +
-             std::to_string(shape.faces.Extent()) + " faces, Face1 to Face" +
-             std::to_string(shape.faces.Extent()) + ")");
-      items.face_size[f - 1] = std::min(items.face_size[f - 1], local.size);
-    }
-    for (const int e : local.edges) {
-      if (e > shape.edges.Extent())
-        fail(what + ": Edge" + std::to_string(e) + " does not exist (the shape has " +
-             std::to_string(shape.edges.Extent()) + " edges, Edge1 to Edge" +
-             std::to_string(shape.edges.Extent()) + ")");
-      items.edge_size[e - 1] = std::min(items.edge_size[e - 1], local.size);
-    }
-  }
-  return items;
-}
-
-// What the local sizes gave: per entry, the surface's triangles on its faces and segments on
-// its edges, and their longest side.
-std::vector<LocalSizeApplied> local_sizes_applied(const std::vector<LocalSize>& sizes,
-                                                  const Surface& surface) {
-  std::vector<LocalSizeApplied> out;
-  for (const LocalSize& local : sizes) {
-    LocalSizeApplied applied{local.faces, local.edges, local.size, 0, 0, 0.0};
-    auto side = [&](int a, int b) {
-      applied.max_side = std::max(applied.max_side, (surface.nodes[a] - surface.nodes[b]).norm());
-    };
-    for (const SurfaceTriangle& t : surface.triangles)
-      if (std::find(local.faces.begin(), local.faces.end(), t.face + 1) != local.faces.end()) {
-        ++applied.nb_triangles;
-        for (int c = 0; c < 3; ++c) side(t.node[c], t.node[(c + 1) % 3]);
-      }
-    for (const auto& [key, segment] : surface.segments)
-      if (std::find(local.edges.begin(), local.edges.end(), segment.edge + 1) !=
-          local.edges.end()) {
-        ++applied.nb_segments;
-        side(static_cast<int>(key >> 32), static_cast<int>(key & 0xffffffffu));
-      }
-    out.push_back(applied);
-  }
-  return out;
-}
 
 // The tet mesh from the tetrahedraliser's output (frame coordinates): tets oriented positive,
 // points in the world, the surface's nodes at their exact CAD positions, regions by solid.
@@ -163,11 +101,66 @@ constexpr Strategy kStrategies[] = {
     {"surface only", 1.0, false, false, false},
 };
 
+// The faces and edges as the user numbers them (the shape as given), and the shape's they name.
+struct GivenItems {
+  ItemNumbering faces, edges;
+};
+
+// "Face3,Face5": faces numbered from 1.
+std::string faces_text(const std::vector<int>& faces) {
+  std::string out;
+  for (const int f : faces) out += (out.empty() ? "Face" : ",Face") + std::to_string(f);
+  return out;
+}
+
+// The face layers on the shape's faces, checked: faces that exist, a first layer not thicker
+// than h.
+std::vector<FaceLayerSpec> face_layer_specs(const std::vector<FaceLayers>& entries,
+                                            const ItemNumbering& faces, double h) {
+  std::vector<FaceLayerSpec> out;
+  for (const FaceLayers& entry : entries) {
+    const std::string what = "boundary layers on " + faces_text(entry.faces);
+    if (entry.thickness > h)
+      throw InputError("parameter 'face_layers': " + what + ": the first layer's thickness " +
+                           parameter_number_text(entry.thickness) + " is larger than the size " +
+                           parameter_number_text(h) +
+                           ": boundary layers are finer than the mesh, give a thickness of at "
+                           "most the size",
+                       Entity::Parameter);
+    FaceLayerSpec spec{{}, entry.layers, entry.thickness, entry.growth};
+    for (const int f : entry.faces)
+      for (const int i : faces.items(f, "face_layers", what)) spec.faces.push_back(i);
+    out.push_back(spec);
+  }
+  return out;
+}
+
+// Fails naming the first face-layer entry whose faces got no point in the first layer: no node
+// of theirs off their edges, or no room anywhere.
+void check_face_layers_placed(const std::vector<FaceLayers>& entries,
+                              const std::vector<FaceLayersApplied>& applied, double h) {
+  for (std::size_t e = 0; e < entries.size() && e < applied.size(); ++e) {
+    if (applied[e].nb_per_layer.empty() || applied[e].nb_per_layer[0] > 0) continue;
+    throw InputError(
+        "parameter 'face_layers': boundary layers on " + faces_text(entries[e].faces) +
+            (applied[e].nb_nodes == 0
+                 ? ": at size " + parameter_number_text(h) +
+                       " the face has no surface node off its edges to grow layers from (give "
+                       "a smaller size, or a local size on the face)"
+                 : ": no room for a first layer " + parameter_number_text(entries[e].thickness) +
+                       " deep at any of its " + std::to_string(applied[e].nb_nodes) +
+                       " nodes (the shape is thinner there, or the face is shared by two "
+                       "solids)"),
+        Entity::Parameter);
+  }
+}
+
 // One attempt: steps 3 to 14 of mesh_shape() with one strategy; the Tet10 mesh too when
 // `tet10` is given.
-TetMesh mesh_attempt(const Shape& shape, const Frame& frame, const std::string& regions_brep,
-                     const MeshShapeParameters& parameters, const Strategy& strategy,
-                     MeshShapeReport& report, Tet10Mesh* tet10, const ProgressCallback& progress);
+TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Frame& frame,
+                     const std::string& regions_brep, const MeshShapeParameters& parameters,
+                     const Strategy& strategy, MeshShapeReport& report, Tet10Mesh* tet10,
+                     const ProgressCallback& progress);
 
 // mesh_shape() and, with `tet10`, mesh_shape_tet10().
 TetMesh mesh_shape_impl(const std::string& brep, const MeshShapeParameters& parameters,
@@ -212,13 +205,19 @@ TetMesh mesh_shape_impl(const std::string& brep, const MeshShapeParameters& para
   const Frame frame = choose_frame(shape, parameters.frame);
   // Local sizes naming faces or edges the shape does not have, or coarser than h, fail now.
   const std::vector<LocalSize> local_sizes = parse_local_sizes(parameters.local_sizes);
-  const LocalSizeItems local_items = local_size_items(shape, local_sizes, parameters.size);
-  // Gluing touching solids makes new faces and edges: the numbers given would name others.
-  if (glue.glued && !local_sizes.empty())
-    throw InputError(
-        "parameter 'local_sizes': the shape's solids touch and were glued into shared faces, "
-        "which renumbers its faces and edges; local sizes are not supported on such shapes yet",
-        Entity::Parameter);
+  // The faces and edges as numbered in the shape given (FreeCAD's FaceN, EdgeN), through the
+  // gluing of touching solids, which splits and merges faces and edges.
+  GivenItems given_items{
+      ItemNumbering::identity("Face", static_cast<std::size_t>(shape.faces.Extent())),
+      ItemNumbering::identity("Edge", static_cast<std::size_t>(shape.edges.Extent()))};
+  if (glue.glued) {
+    given_items.faces.to_shape = glue.face_images;
+    given_items.edges.to_shape = glue.edge_images;
+  }
+  const LocalSizeItems local_items =
+      local_size_items(local_sizes, given_items.faces, given_items.edges, parameters.size);
+  // Face layers on faces the shape has not, or thicker than h, fail now too.
+  face_layer_specs(parse_face_layers(parameters.face_layers), given_items.faces, parameters.size);
   const std::string regions_brep = glue.glued ? write_brep(shape.shape) : brep;
 
   // 2. A size whose mesh would not fit in memory is refused before any work.
@@ -257,8 +256,8 @@ TetMesh mesh_shape_impl(const std::string& brep, const MeshShapeParameters& para
     MeshShapeReport attempt = report;
     const auto attempt_start = PhaseTimer::Clock::now();
     try {
-      TetMesh mesh =
-          mesh_attempt(shape, frame, regions_brep, parameters, strategy, attempt, tet10, progress);
+      TetMesh mesh = mesh_attempt(shape, given_items, frame, regions_brep, parameters, strategy,
+                                  attempt, tet10, progress);
       attempt.strategy = strategy.name;
       add_phase_seconds(attempt.phase_seconds, "shape", shape_seconds);
       if (failed_seconds > 0)
@@ -277,9 +276,10 @@ TetMesh mesh_shape_impl(const std::string& brep, const MeshShapeParameters& para
                    failures + ")");
 }
 
-TetMesh mesh_attempt(const Shape& shape, const Frame& frame, const std::string& regions_brep,
-                     const MeshShapeParameters& parameters, const Strategy& strategy,
-                     MeshShapeReport& report, Tet10Mesh* tet10, const ProgressCallback& progress) {
+TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Frame& frame,
+                     const std::string& regions_brep, const MeshShapeParameters& parameters,
+                     const Strategy& strategy, MeshShapeReport& report, Tet10Mesh* tet10,
+                     const ProgressCallback& progress) {
   PhaseTimer clock(report.phase_seconds);
   // Each step's end: its time, and the progress of this way of placing the points ("mesh shape:
   // <step>", the way's name after the first); a callback asking to stop cancels here.
@@ -312,13 +312,24 @@ TetMesh mesh_attempt(const Shape& shape, const Frame& frame, const std::string& 
   // lattice faces (refined like curved ones), their edges and those faces' edges no lattice
   // edges; the size field from the surface as BRepMesh made it.
   const std::vector<LocalSize> local_sizes = parse_local_sizes(parameters.local_sizes);
-  const LocalSizeItems local_items = local_size_items(
-      shape, local_sizes, std::max(h, parameters.size));  // checked at the size asked for
+  const LocalSizeItems local_items =
+      local_size_items(local_sizes, given_items.faces, given_items.edges,
+                       std::max(h, parameters.size));  // checked at the size asked for
   LocalSizeItems items_at_h = local_items;
   for (double& size : items_at_h.face_size) size = std::min(size, h);
   for (double& size : items_at_h.edge_size) size = std::min(size, h);
+  // Face layers (none when this way places no layers): their faces are no lattice faces either.
+  const std::vector<FaceLayers> layer_entries = parse_face_layers(parameters.face_layers);
+  const std::vector<FaceLayerSpec> layer_specs =
+      strategy.layers
+          ? face_layer_specs(layer_entries, given_items.faces, std::max(h, parameters.size))
+          : std::vector<FaceLayerSpec>{};
+  std::vector<char> layered(items_at_h.face_size.size(), 0);
+  for (const FaceLayerSpec& spec : layer_specs)
+    for (const int f : spec.faces) layered[static_cast<std::size_t>(f)] = 1;
+  const std::vector<bool> lattice_faces_as_found = lattice.lattice_face;
   for (std::size_t f = 0; f < items_at_h.face_size.size(); ++f)
-    if (items_at_h.face_size[f] < h && lattice.lattice_face[f]) {
+    if ((items_at_h.face_size[f] < h || layered[f]) && lattice.lattice_face[f]) {
       lattice.lattice_face[f] = false;
       --lattice.nb_lattice_faces;
     }
@@ -337,20 +348,61 @@ TetMesh mesh_attempt(const Shape& shape, const Frame& frame, const std::string& 
   // 5. The surface at size h: swept when the shape is an extrusion along a lattice axis, else
   // refined and cleaned.
   std::optional<Sweep> sweep;
-  if (parameters.sweep && strategy.lattice_faces && !local)
+  std::vector<double> wall_size;  // swept with local sizes on its caps' edges: per wall
+  bool carried = false;           // an extrusion whose local sizes and face layers the sweep takes
+  if (parameters.sweep && strategy.lattice_faces && !local && layer_specs.empty())
     sweep = find_sweep(shape, lattice.frame, lattice.face_plane, lattice.lattice_face,
                        lattice.cells, lattice.spacing, h);
+  // The sweep carries local sizes on its caps' edges only (the walls' sides split to them), and
+  // the global layers only: a shape that would be swept without its other local sizes or its
+  // face layers is meshed unswept, and says why.
+  if (parameters.sweep && strategy.lattice_faces && (local || !layer_specs.empty())) {
+    std::optional<Sweep> would =
+        find_sweep(shape, lattice.frame, lattice.face_plane, lattice_faces_as_found, lattice.cells,
+                   lattice.spacing, h);
+    std::string why;
+    if (would)
+      why = sweep_carries(local_sizes, given_items.edges, *would, shape.edge_faces,
+                          lattice_faces_as_found, h, wall_size);
+    // Face layers on walls are placed on the first plane and repeated; on caps they are not.
+    for (std::size_t e = 0; would && why.empty() && e < layer_specs.size(); ++e)
+      for (const int f : layer_specs[e].faces)
+        if (would->cap[static_cast<std::size_t>(f)] >= 0 && why.empty())
+          why = "the face layers on " + faces_text(layer_entries[e].faces) +
+                " lie on a cap, whose nodes the sweep repeats from its first plane (face layers "
+                "on its walls are swept)";
+    carried = would && why.empty();
+    if (carried) {
+      // Walls with face layers are no lattice faces now: the sweep over the faces as they are.
+      sweep = find_sweep(shape, lattice.frame, lattice.face_plane, lattice.lattice_face,
+                         lattice.cells, lattice.spacing, h);
+    } else {
+      wall_size.clear();
+      Surface probe = surface;  // sweep_surface() rebuilds the surface it is given
+      if (would &&
+          sweep_surface(shape, *would, lattice.frame,
+                        lattice.frame.axis[would->axis] * lattice.spacing[would->axis],
+                        lattice.cells[would->axis], h, deflection, lattice_faces_as_found, probe))
+        report.sweep_skipped = "not swept, though an extrusion: " + why;
+    }
+  }
   SweptSurface swept;
   if (sweep) {
     const int a = sweep->axis;
-    const std::optional<SweptSurface> made =
-        sweep_surface(shape, *sweep, lattice.frame, lattice.frame.axis[a] * lattice.spacing[a],
-                      lattice.cells[a], h, deflection, lattice.lattice_face, surface);
-    if (made)
+    const std::optional<SweptSurface> made = sweep_surface(
+        shape, *sweep, lattice.frame, lattice.frame.axis[a] * lattice.spacing[a], lattice.cells[a],
+        h, deflection, lattice.lattice_face, surface, wall_size.empty() ? nullptr : &wall_size);
+    if (made) {
       swept = *made;
-    else
+      local = nullptr;  // carried by the split walls: no graded points off the planes
+    } else {
       sweep.reset();  // the cross-section changes along the axis
+    }
   }
+  if (carried && !sweep)
+    report.sweep_skipped =
+        "not swept, though an extrusion: its sweep failed with the local sizes and face layers "
+        "applied (walls split to a local size, or made no lattice faces for layers)";
   if (sweep) {
     report.sweep_axis = sweep->axis;
   } else {
@@ -377,10 +429,12 @@ TetMesh mesh_attempt(const Shape& shape, const Frame& frame, const std::string& 
   const Parity parity(nodes, surface, shape.face_solid_count, around, h);
   InsertedPoints inserted;
   const int nb_layers = strategy.layers ? parameters.boundary_layers : 0;
-  const KeptPoints kept =
+  KeptPoints kept =
       keep_lattice_points(lattice, around, parity,
                           (nb_layers * parameters.layer_thickness + parameters.lattice_margin) * h,
                           parameters.lattice_margin * h);
+  clear_face_layers(layer_specs, nodes, surface, lattice, around, parameters.lattice_margin * h,
+                    kept);
   step("lattice", 0.2);
 
   // 8. The hexahedral core and its closing pyramids' apexes.
@@ -397,14 +451,38 @@ TetMesh mesh_attempt(const Shape& shape, const Frame& frame, const std::string& 
   std::vector<char> no_layers;
   if (local)
     for (const Vec3& p : surface.nodes) no_layers.push_back(field.at(p) < h ? 1 : 0);
+  const std::size_t before_layers = inserted.points.size();
   report.nb_layer_points =
       place_layers(nodes, surface, shape.face_solid_count, lattice, sweep_axis, swept, nb_layers,
                    parameters.layer_thickness * h, parameters.lattice_margin * h, parity, around,
-                   inserted, local ? &no_layers : nullptr);
+                   inserted, local ? &no_layers : nullptr, layer_specs, &report.face_layers);
+  for (std::size_t e = 0; e < report.face_layers.size(); ++e) {
+    FaceLayersApplied& applied = report.face_layers[e];
+    applied.faces = layer_entries[e].faces;
+    applied.layers = layer_entries[e].layers;
+    applied.thickness = layer_entries[e].thickness;
+    applied.growth = layer_entries[e].growth;
+  }
+  check_face_layers_placed(layer_entries, report.face_layers, h);
   if (local)
     report.nb_graded_points =
         place_graded_points(field, lattice, parity, around, kGradedClearance, inserted);
+  // The face layers' points (the last place_layers() added) stay at their depths: they go first
+  // among the isolated points, and improve_tets() leaves every point before them in place (the
+  // points on lattice faces too: finer lattices' points there keep their place then).
+  std::size_t nb_face_layer_points = 0;
+  for (const FaceLayersApplied& applied : report.face_layers)
+    nb_face_layer_points += applied.nb_points;
+  std::size_t isolated_before = 0;  // isolated points before the face layers' in `inserted`
+  for (std::size_t i = 0; i < before_layers + report.nb_layer_points - nb_face_layer_points; ++i)
+    isolated_before += inserted.face[i] < 0;
   const std::size_t nb_on_faces = face_points_first(inserted);
+  // (Swept: nothing moves, and the face layers' points on caps are face points.)
+  if (nb_face_layer_points > 0 && sweep_axis < 0) {  // every point in the range is isolated
+    const auto first = inserted.points.begin() + static_cast<std::ptrdiff_t>(nb_on_faces);
+    std::rotate(first, first + static_cast<std::ptrdiff_t>(isolated_before),
+                first + static_cast<std::ptrdiff_t>(isolated_before + nb_face_layer_points));
+  }
   step("layers", 0.3);
 
   // 10. TetGen: the surface kept as it is, the lattice faces with their lattice points, the other
@@ -450,7 +528,9 @@ TetMesh mesh_attempt(const Shape& shape, const Frame& frame, const std::string& 
   ImproveParameters improve;
   improve.spacing = lattice.spacing;
   improve.sweep_axis = sweep_axis;
-  improve.nb_surface_nodes = nodes.size();
+  improve.nb_surface_nodes =
+      nodes.size() +
+      (nb_face_layer_points > 0 && sweep_axis < 0 ? nb_on_faces + nb_face_layer_points : 0);
   improve.max_boundary_shift = deflection;
   std::vector<std::int32_t> boundary_face(tets.boundary_marker.size());
   for (std::size_t i = 0; i < boundary_face.size(); ++i)
@@ -479,7 +559,11 @@ TetMesh mesh_attempt(const Shape& shape, const Frame& frame, const std::string& 
   std::vector<int> vertex_face = surface.node_face;
   vertex_face.insert(vertex_face.end(), inserted.face.begin(), inserted.face.end());
   report.max_boundary_distance = max_boundary_distance(shape, mesh, vertex_face, 1e-6 * h);
-  report.local_sizes = local_sizes_applied(local_sizes, surface);
+  report.local_sizes =
+      local_sizes_applied(local_sizes, given_items.faces, given_items.edges, surface);
+  if (sweep)
+    add_swept_segments(report.local_sizes, local_sizes, given_items.edges, *sweep, shape.edge_faces,
+                       surface);
   step("check", 0.95);
 
   // 14. Second order: the boundary mid-edge nodes on the CAD.

@@ -100,9 +100,22 @@ struct MeshShapeParameters {
   /// and the report number them): entries "ITEMS:SIZE" separated by ';', ITEMS a comma-separated
   /// list of "N" or "FaceN" (a face), "EdgeN" (an edge); e.g. "5:1.5; Edge3,Edge4:0.5". The
   /// surface there is refined to the size (its neighbours grading out by half the distance),
-  /// the lattice and layers keep clear, finer lattices fill the graded zone inside, and the shape
-  /// is not swept. Sizes in (0, h], at least h / 1000. See parse_local_sizes().
+  /// the lattice and layers keep clear, finer lattices fill the graded zone inside. A swept shape
+  /// stays swept for local sizes on its caps' edges only (the walls' sides split to them);
+  /// otherwise it is not swept, and MeshShapeReport::sweep_skipped says why. Sizes in (0, h],
+  /// at least h / 1000. See parse_local_sizes().
   std::string local_sizes;
+  /// Boundary layers on some faces (1-based, as FreeCAD's FaceN): entries
+  /// "FACES:LAYERS:THICKNESS[:GROWTH]" separated by ';', FACES a comma-separated list of "N" or
+  /// "FaceN"; e.g. "3,Face4:3:0.5:1.5". The surface nodes of those faces get LAYERS points along
+  /// the inward normal, the first THICKNESS (a length) deep, each next layer GROWTH times thicker
+  /// than the one before (default 1), where there is room (the clearance rules of the global
+  /// layers; depths vary by up to 10 % per node); the faces are no lattice faces and the lattice
+  /// keeps clear of the layers. A swept shape stays swept for layers on its walls (placed on the
+  /// first plane and repeated), not on its caps (MeshShapeReport::sweep_skipped says why). The
+  /// other faces' nodes keep `boundary_layers`.
+  /// LAYERS in [1, 10], THICKNESS in (0, h], GROWTH in [1, 3]. See parse_face_layers().
+  std::string face_layers;
 };
 
 /// One entry of MeshShapeParameters::local_sizes.
@@ -116,6 +129,34 @@ struct LocalSize {
 /// @throws InputError (Entity::Parameter) naming the entry that is not "ITEMS:SIZE", an item
 ///         that is not N, FaceN or EdgeN (N >= 1), or a size that is not a number > 0
 std::vector<LocalSize> parse_local_sizes(const std::string& text);
+
+/// One entry of MeshShapeParameters::face_layers.
+struct FaceLayers {
+  std::vector<int> faces;  ///< 1-based face numbers
+  int layers = 0;          ///< layers of points, 1 to 10
+  double thickness = 0.0;  ///< the first layer's depth (a length)
+  double growth = 1.0;     ///< each layer's depth over the one before, 1 to 3
+};
+
+/// The entries of a face_layers text ("": none).
+/// @throws InputError (Entity::Parameter) naming the entry that is not
+///         FACES:LAYERS:THICKNESS[:GROWTH], a face that is not N or FaceN (N >= 1), a number of
+///         layers outside [1, 10], a thickness not > 0, or a growth outside [1, 3]
+std::vector<FaceLayers> parse_face_layers(const std::string& text);
+
+/// What mesh_shape() did with one entry of face_layers.
+struct FaceLayersApplied {
+  std::vector<int> faces;  ///< 1-based, as given
+  int layers = 0;
+  double thickness = 0.0;
+  double growth = 1.0;
+  /// the surface nodes of its faces where the surface is smooth (the others, on sharp edges
+  /// and corners, take no layers)
+  std::size_t nb_nodes = 0;
+  std::size_t nb_points = 0;  ///< layer points placed from those nodes
+  /// per layer (first = nearest the face), the nodes that got a point in it
+  std::vector<std::size_t> nb_per_layer;
+};
 
 /// What mesh_shape() did with one local size.
 struct LocalSizeApplied {
@@ -170,6 +211,10 @@ struct MeshShapeReport {
   /// The local sizes (MeshShapeParameters::local_sizes) as applied, in their order
   std::vector<LocalSizeApplied> local_sizes;
   std::size_t nb_graded_points = 0;  ///< points of the finer lattices around local sizes
+  /// The face layers (MeshShapeParameters::face_layers) as applied, in their order
+  std::vector<FaceLayersApplied> face_layers;
+  /// Why the shape was not swept where sweep is on (empty: swept, or not an extrusion)
+  std::string sweep_skipped;
   /// mesh_shape_tet10(): boundary mid-edge nodes projected onto their CAD face or edge (on a
   /// plane: the midpoint itself)
   std::size_t nb_projected_mid_nodes = 0;

@@ -59,9 +59,17 @@ ParameterTable<MeshShapeParameters> make_table() {
       text(&P::local_sizes, "local_sizes", "Local sizes",
            "Finer sizes on some faces and edges (1-based, as FreeCAD's FaceN, EdgeN): entries "
            "ITEMS:SIZE separated by ';', ITEMS a comma-separated list of N or FaceN (faces), "
-           "EdgeN (edges); e.g. '5:1.5; Edge3:0.5'. Sizes in (0, size]; the shape is then not "
-           "swept",
+           "EdgeN (edges); e.g. '5:1.5; Edge3:0.5'. Sizes in (0, size]; an extrusion stays "
+           "swept only for local sizes on its caps' edges",
            {"--local-size", ""}),
+      // The add-on fills it from the analysis' boundary layer objects: no property of its own.
+      text(&P::face_layers, "face_layers", "Face layers",
+           "Boundary layers on some faces (1-based, as FreeCAD's FaceN): entries "
+           "FACES:LAYERS:THICKNESS[:GROWTH] separated by ';', FACES a comma-separated list of N "
+           "or FaceN; e.g. '3:4:0.5:1.2' (4 layers on Face3, the first 0.5 deep, each next 1.2 "
+           "times thicker). LAYERS 1 to 10, THICKNESS in (0, size], GROWTH 1 to 3 (default 1); "
+           "an extrusion stays swept for layers on its walls, not on its caps",
+           {"--face-layer", ""}),
   });
 }
 
@@ -76,6 +84,52 @@ InputError bad_local_size(const std::string& entry, const std::string& why) {
   return InputError("parameter 'local_sizes': entry '" + entry + "' " + why, Entity::Parameter);
 }
 
+InputError bad_face_layers(const std::string& entry, const std::string& why) {
+  return InputError("parameter 'face_layers': entry '" + entry + "' " + why, Entity::Parameter);
+}
+
+// The fields of a text separated by `separator`, trimmed (empty ones too).
+std::vector<std::string> fields_of(const std::string& text, char separator) {
+  std::vector<std::string> out;
+  std::size_t start = 0;
+  while (start <= text.size()) {
+    std::size_t end = text.find(separator, start);
+    if (end == std::string::npos) end = text.size();
+    out.push_back(trimmed(text.substr(start, end - start)));
+    start = end + 1;
+  }
+  return out;
+}
+
+// The number of an item "N", "FaceN" or "EdgeN" (-1: not one), and whether it is an edge.
+int item_number(const std::string& item, bool& edge) {
+  std::string lower;
+  for (const char c : item) lower += static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  std::size_t digits = 0;
+  edge = false;
+  if (lower.rfind("face", 0) == 0) {
+    digits = 4;
+  } else if (lower.rfind("edge", 0) == 0) {
+    edge = true, digits = 4;
+  }
+  const std::string number = item.substr(digits);
+  const bool whole = !number.empty() && number.size() < 10 &&
+                     std::all_of(number.begin(), number.end(), [](char c) {
+                       return std::isdigit(static_cast<unsigned char>(c));
+                     });
+  if (!whole || std::stoi(number) < 1) return -1;
+  return std::stoi(number);
+}
+
+// A number field of a face_layers entry, or -1 when it is not a finite number.
+double number_of(const std::string& field) {
+  const std::string text = trimmed(field);
+  char* end = nullptr;
+  const double value = std::strtod(text.c_str(), &end);
+  if (text.empty() || *end != '\0' || !std::isfinite(value)) return -1;
+  return value;
+}
+
 }  // namespace
 
 const ParameterTable<MeshShapeParameters>& mesh_shape_parameter_table() {
@@ -85,12 +139,7 @@ const ParameterTable<MeshShapeParameters>& mesh_shape_parameter_table() {
 
 std::vector<LocalSize> parse_local_sizes(const std::string& text) {
   std::vector<LocalSize> out;
-  std::size_t start = 0;
-  while (start <= text.size()) {
-    std::size_t end = text.find(';', start);
-    if (end == std::string::npos) end = text.size();
-    const std::string entry = trimmed(text.substr(start, end - start));
-    start = end + 1;
+  for (const std::string& entry : fields_of(text, ';')) {
     if (entry.empty()) continue;
     const std::size_t colon = entry.rfind(':');
     if (colon == std::string::npos)
@@ -101,35 +150,54 @@ std::vector<LocalSize> parse_local_sizes(const std::string& text) {
     local.size = std::strtod(size_text.c_str(), &size_end);
     if (size_text.empty() || *size_end != '\0' || !std::isfinite(local.size) || local.size <= 0)
       throw bad_local_size(entry, "has size '" + size_text + "': it must be a number > 0");
-    const std::string items = entry.substr(0, colon);
-    std::size_t at = 0;
-    while (at <= items.size()) {
-      std::size_t comma = items.find(',', at);
-      if (comma == std::string::npos) comma = items.size();
-      const std::string item = trimmed(items.substr(at, comma - at));
-      at = comma + 1;
-      std::string lower;
-      for (const char c : item)
-        lower += static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-      std::vector<int>* into = &local.faces;
-      std::size_t digits = 0;
-      if (lower.rfind("face", 0) == 0) {
-        digits = 4;
-      } else if (lower.rfind("edge", 0) == 0) {
-        into = &local.edges, digits = 4;
-      }
-      const std::string number = item.substr(digits);
-      const bool whole = !number.empty() && number.size() < 10 &&
-                         std::all_of(number.begin(), number.end(), [](char c) {
-                           return std::isdigit(static_cast<unsigned char>(c));
-                         });
-      if (!whole || std::stoi(number) < 1)
+    for (const std::string& item : fields_of(entry.substr(0, colon), ',')) {
+      bool edge = false;
+      const int number = item_number(item, edge);
+      if (number < 0)
         throw bad_local_size(entry, "names '" + item +
                                         "': items are N or FaceN (a face), EdgeN (an edge), "
                                         "numbered from 1");
-      into->push_back(std::stoi(number));
+      (edge ? local.edges : local.faces).push_back(number);
     }
     out.push_back(local);
+  }
+  return out;
+}
+
+std::vector<FaceLayers> parse_face_layers(const std::string& text) {
+  std::vector<FaceLayers> out;
+  for (const std::string& entry : fields_of(text, ';')) {
+    if (entry.empty()) continue;
+    const std::vector<std::string> fields = fields_of(entry, ':');
+    if (fields.size() < 3 || fields.size() > 4)
+      throw bad_face_layers(entry,
+                            "is not FACES:LAYERS:THICKNESS[:GROWTH] (e.g. '3:4:0.5:1.2' or "
+                            "'Face3,Face5:2:0.25')");
+    FaceLayers layers;
+    for (const std::string& item : fields_of(fields[0], ',')) {
+      bool edge = false;
+      const int number = item_number(item, edge);
+      if (number < 0 || edge)
+        throw bad_face_layers(entry, "names '" + item +
+                                         "': boundary layers go on faces, N or FaceN, numbered "
+                                         "from 1");
+      layers.faces.push_back(number);
+    }
+    const double count = number_of(fields[1]);
+    if (count < 1 || count > 10 || count != std::floor(count))
+      throw bad_face_layers(entry,
+                            "has " + fields[1] + " layers: give a whole number from 1 to 10");
+    layers.layers = static_cast<int>(count);
+    layers.thickness = number_of(fields[2]);
+    if (layers.thickness <= 0)
+      throw bad_face_layers(entry, "has thickness '" + fields[2] + "': it must be a length > 0");
+    if (fields.size() == 4) {
+      layers.growth = number_of(fields[3]);
+      if (layers.growth < 1 || layers.growth > 3)
+        throw bad_face_layers(entry,
+                              "has growth rate '" + fields[3] + "': give a number from 1 to 3");
+    }
+    out.push_back(layers);
   }
   return out;
 }
@@ -137,6 +205,7 @@ std::vector<LocalSize> parse_local_sizes(const std::string& text) {
 void validate_mesh_shape_parameters(const MeshShapeParameters& parameters) {
   mesh_shape_parameter_table().validate(parameters);
   parse_local_sizes(parameters.local_sizes);
+  parse_face_layers(parameters.face_layers);
   if (parameters.tetgen.empty()) {
     throw InputError("parameter 'tetgen' must name the TetGen program (got '')", Entity::Parameter);
   }

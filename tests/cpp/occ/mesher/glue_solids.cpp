@@ -10,6 +10,8 @@
 #include <TopTools_IndexedDataMapOfShapeListOfShape.hxx>
 #include <TopTools_IndexedMapOfShape.hxx>
 #include <TopoDS_Compound.hxx>
+#include <algorithm>
+#include <cmath>
 #include <string>
 #include <vector>
 
@@ -90,6 +92,58 @@ TEST(glue_solids, overlapping_solids_are_refused_by_name) {
     EXPECT_NE(what.find("overlap"), std::string::npos) << what;
     EXPECT_NE(what.find("125"), std::string::npos) << what;
   }
+}
+
+// The faces and edges as given (FreeCAD's FaceN, EdgeN of the compound) through the gluing: the
+// box's +x face becomes the shared patch and the rest (same area in all), the bar's -x face the
+// shared patch; the other faces one each, of their own area; every glued face is some given
+// face's image.
+TEST(glue_solids, reports_what_each_face_and_edge_given_became) {
+  const TopoDS_Shape box = occ_box(0, 0, 0, 10, 10, 10);
+  const TopoDS_Shape bar = occ_box(10, 3, 3, 30, 7, 7);
+  const TopoDS_Shape given = compound({box, bar});
+  mesher::GlueSolidsReport report;
+  const TopoDS_Shape glued = mesher::glue_solids(given, 1e-7, report);
+  TopTools_IndexedMapOfShape before, after, edges_before;
+  TopExp::MapShapes(given, TopAbs_FACE, before);
+  TopExp::MapShapes(glued, TopAbs_FACE, after);
+  TopExp::MapShapes(given, TopAbs_EDGE, edges_before);
+  ASSERT_EQ(report.face_images.size(), static_cast<std::size_t>(before.Extent()));
+  ASSERT_EQ(report.edge_images.size(), static_cast<std::size_t>(edges_before.Extent()));
+  const auto area = [](const TopoDS_Shape& face) {
+    GProp_GProps props;
+    BRepGProp::SurfaceProperties(face, props);
+    return props.Mass();
+  };
+  std::vector<char> imaged(static_cast<std::size_t>(after.Extent()), 0);
+  std::vector<int> named_by(static_cast<std::size_t>(after.Extent()), 0);
+  int split = 0;
+  for (int f = 1; f <= before.Extent(); ++f) {
+    const std::vector<int>& images = report.face_images[static_cast<std::size_t>(f - 1)];
+    ASSERT_FALSE(images.empty()) << "Face" << f;
+    double total = 0;
+    for (const int i : images) {
+      total += area(after(i + 1));
+      imaged[static_cast<std::size_t>(i)] = 1;
+      ++named_by[static_cast<std::size_t>(i)];
+    }
+    EXPECT_NEAR(total, area(before(f)), 1e-6) << "Face" << f;
+    if (images.size() == 2) ++split;
+  }
+  EXPECT_EQ(split, 1);  // the box's +x face: the patch and the rest
+  // One glued face is named by two given faces (the box's +x face, the bar's -x face): the patch.
+  int shared = 0;
+  for (std::size_t i = 0; i < named_by.size(); ++i)
+    if (named_by[i] == 2) {
+      ++shared;
+      EXPECT_NEAR(area(after(static_cast<int>(i) + 1)), 16, 1e-6);
+    } else {
+      EXPECT_EQ(named_by[i], 1) << "glued face " << i;
+    }
+  EXPECT_EQ(shared, 1);
+  for (std::size_t i = 0; i < imaged.size(); ++i) EXPECT_TRUE(imaged[i]) << "glued face " << i;
+  for (std::size_t e = 0; e < report.edge_images.size(); ++e)
+    EXPECT_FALSE(report.edge_images[e].empty()) << "Edge" << e + 1;
 }
 
 }  // namespace

@@ -11,6 +11,7 @@
 #include <TopTools_ListOfShape.hxx>
 #include <TopoDS.hxx>
 #include <TopoDS_Compound.hxx>
+#include <algorithm>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -19,6 +20,26 @@
 
 namespace hexmerge::mesher {
 namespace {
+
+// Per item of `kind` of the shape as given, the items of the glued shape it became.
+std::vector<std::vector<int>> images_of(BRepAlgoAPI_BuilderAlgo& fuse, const TopoDS_Shape& given,
+                                        const TopoDS_Shape& glued, TopAbs_ShapeEnum kind) {
+  TopTools_IndexedMapOfShape before, after;
+  TopExp::MapShapes(given, kind, before);
+  TopExp::MapShapes(glued, kind, after);
+  std::vector<std::vector<int>> out(static_cast<std::size_t>(before.Extent()));
+  for (int i = 1; i <= before.Extent(); ++i) {
+    std::vector<int>& images = out[static_cast<std::size_t>(i - 1)];
+    const auto add = [&](const TopoDS_Shape& s) {
+      const int index = after.FindIndex(s);
+      if (index > 0 && std::find(images.begin(), images.end(), index - 1) == images.end())
+        images.push_back(index - 1);
+    };
+    for (const TopoDS_Shape& s : fuse.Modified(before(i))) add(s);
+    if (images.empty() && !fuse.IsDeleted(before(i))) add(before(i));
+  }
+  return out;
+}
 
 double volume_of(const TopoDS_Shape& solid) {
   GProp_GProps props;
@@ -116,6 +137,8 @@ TopoDS_Shape glue_solids(const TopoDS_Shape& shape, double tolerance, GlueSolids
     for (const TopoDS_Shape& s : face_solids(f)) around.Add(s);
     report.nb_shared_faces += around.Extent() > 1;
   }
+  report.face_images = images_of(fuse, shape, glued, TopAbs_FACE);
+  report.edge_images = images_of(fuse, shape, glued, TopAbs_EDGE);
   return glued;
 }
 

@@ -10,6 +10,7 @@
 
 #include <TopoDS_Shape.hxx>
 #include <cstddef>
+#include <vector>
 
 namespace hexmerge::mesher {
 
@@ -18,6 +19,13 @@ struct GlueSolidsReport {
   std::size_t nb_solids = 0;        ///< solids of the shape
   std::size_t nb_shared_faces = 0;  ///< faces bounding two solids after gluing
   bool glued = false;               ///< General Fuse ran (more than one solid)
+  /// Glued: per face of the shape as given (0-based, in TopExp::MapShapes(shape, TopAbs_FACE)
+  /// order: FreeCAD's FaceN is face N - 1), the faces of the glued shape it became (0-based, in
+  /// the same order over the glued shape): itself, its pieces, or the one face it shares with
+  /// another solid's face. Empty when not glued.
+  std::vector<std::vector<int>> face_images;
+  /// Likewise per edge (FreeCAD's EdgeN).
+  std::vector<std::vector<int>> edge_images;
 };
 
 /// The shape's solids, in the order TopExp::MapShapes(shape, TopAbs_SOLID) gives them, glued:

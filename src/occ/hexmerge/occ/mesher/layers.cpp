@@ -1,5 +1,6 @@
 #include "hexmerge/occ/mesher/layers.h"
 
+#include <algorithm>
 #include <cmath>
 #include <utility>
 
@@ -18,11 +19,52 @@ constexpr double kCoreSlack = 0.05;
 
 }  // namespace
 
+double FaceLayerSpec::depth(int k) const {
+  double sum = 0, step = thickness;
+  for (int j = 0; j < k; ++j) sum += step, step *= growth;
+  return sum;
+}
+
+std::size_t clear_face_layers(const std::vector<FaceLayerSpec>& specs,
+                              const std::vector<Vec3>& nodes, const Surface& surface,
+                              const Lattice& lattice, const Surroundings& around, double margin,
+                              KeptPoints& kept) {
+  if (specs.empty()) return 0;
+  std::vector<double> reach(lattice.lattice_face.size(), 0.0);
+  double deepest = 0;
+  for (const FaceLayerSpec& spec : specs)
+    for (const int f : spec.faces) {
+      // The closing pyramids' apexes (and circumspheres) reach half a cell beyond the core.
+      const double r = spec.depth(spec.layers) * (1 + kLayerJitter) + margin +
+                       0.5 * std::max({lattice.spacing[0], lattice.spacing[1], lattice.spacing[2]});
+      reach[static_cast<std::size_t>(f)] = std::max(reach[static_cast<std::size_t>(f)], r);
+      deepest = std::max(deepest, r);
+    }
+  // One set per distinct reach would be exact; one set of every layered face at the deepest
+  // reach over-clears only where entries of different depths meet.
+  TriangleSet layered(nodes, around.box_lo, around.box_hi, std::max(deepest, 1e-12));
+  for (const SurfaceTriangle& t : surface.triangles)
+    if (reach[static_cast<std::size_t>(t.face)] > 0) layered.add(t.node);
+  const int n0 = lattice.cells[0] + 1, n1 = lattice.cells[1] + 1, n2 = lattice.cells[2] + 1;
+  std::size_t dropped = 0;
+  for (int k = 0; k < n2; ++k)
+    for (int j = 0; j < n1; ++j)
+      for (int i = 0; i < n0; ++i) {
+        const std::size_t index = (static_cast<std::size_t>(k) * n1 + j) * n0 + i;
+        if (!kept.kept[index] || !layered.any_within(lattice.point(i, j, k), deepest)) continue;
+        kept.kept[index] = 0;
+        ++dropped;
+      }
+  return dropped;
+}
+
 std::size_t place_layers(const std::vector<Vec3>& nodes, const Surface& surface,
                          const std::vector<int>& face_solid_count, const Lattice& lattice,
                          int sweep_axis, const SweptSurface& swept, int layers, double thickness,
                          double core_margin, const Parity& parity, Surroundings& around,
-                         InsertedPoints& inserted, const std::vector<char>* no_layers) {
+                         InsertedPoints& inserted, const std::vector<char>* no_layers,
+                         const std::vector<FaceLayerSpec>& face_layers,
+                         std::vector<FaceLayersApplied>* applied) {
   // Boundary layers: surface nodes of the other faces where the surface is smooth, moved along
   // the inward normal, where there is room.
   std::vector<Vec3> normal(nodes.size(), Vec3{0, 0, 0});
@@ -37,9 +79,23 @@ std::size_t place_layers(const std::vector<Vec3>& nodes, const Surface& surface,
       if (lattice.lattice_face[t.face] || face_solid_count[t.face] > 1) smooth[c] = false;
     }
   }
+  // Per node, the face-layer spec it takes (-1: the global layers).
+  std::vector<int> spec_of(nodes.size(), -1);
+  if (!face_layers.empty()) {
+    std::vector<int> face_spec(lattice.lattice_face.size(), -1);
+    for (std::size_t e = face_layers.size(); e-- > 0;)
+      for (const int f : face_layers[e].faces)
+        face_spec[static_cast<std::size_t>(f)] = static_cast<int>(e);
+    for (const SurfaceTriangle& t : surface.triangles) {
+      const int e = face_spec[static_cast<std::size_t>(t.face)];
+      if (e < 0) continue;
+      for (const int c : t.node)
+        if (spec_of[c] < 0 || e < spec_of[c]) spec_of[c] = e;
+    }
+  }
   if (no_layers)
     for (std::size_t i = 0; i < nodes.size(); ++i)
-      if ((*no_layers)[i]) smooth[i] = false;
+      if ((*no_layers)[i] && spec_of[i] < 0) smooth[i] = false;
   for (auto& n : normal)
     if (n.norm() > 0) n = unit(n);
   for (const SurfaceTriangle& t : surface.triangles) {
@@ -101,60 +157,93 @@ std::size_t place_layers(const std::vector<Vec3>& nodes, const Surface& surface,
            !around.core_points.any_within(q, core_margin);
   };
   std::size_t placed = 0;
-  for (int k = 1; k <= layers; ++k)
+  int deepest = 0;
+  for (const FaceLayerSpec& spec : face_layers) deepest = std::max(deepest, spec.layers);
+  if (applied) {
+    applied->assign(face_layers.size(), FaceLayersApplied{});
+    for (std::size_t e = 0; e < face_layers.size(); ++e)
+      (*applied)[e].nb_per_layer.assign(static_cast<std::size_t>(face_layers[e].layers), 0);
     for (std::size_t i = 0; i < nodes.size(); ++i)
-      for (const double sign : {1.0, -1.0}) {
-        if (sign < 0 && !two_sided[i]) continue;
-        if (!smooth[i] || normal[i].norm() == 0) continue;
-        if (sweep_axis >= 0 && swept.base[i] != static_cast<int>(i))
-          continue;  // placed with its base
-        // Depths vary by up to kLayerJitter (a fixed pseudo-random fraction per node): the sides
-        // of equally deep layers are cocircular quads (rectangles, isosceles trapezoids), which
-        // TetGen cuts with flat tets where the prisms on either side disagree on the diagonal.
-        const double spread =
-            static_cast<double>((static_cast<std::size_t>(surface.seed[i]) * 2654435761u) % 1000) /
-                500.0 -
-            1;
-        const double depth = k * layer * (1 + kLayerJitter * spread);
-        const Vec3 q = nodes[i] - normal[i] * (sign * depth);
-        // Room: no other part of the surface nearer than the depth, no other point too near.
-        if (around.curved.any_within(q, 0.9 * depth)) continue;
-        if (around.layer_points.any_within(q, 0.3 * layer) ||
-            around.surface_points.any_within(q, 0.5 * depth))
-          continue;
-        if (sweep_axis >= 0) {
-          const int a = sweep_axis;
-          std::vector<std::pair<Vec3, int>> repeats;  // the point on every plane, and its cap face
-          for (int j : column[i]) {
-            Vec3 r = q;
-            set_coord(r, a, coord(nodes[j], a));
-            const int level = static_cast<int>(std::lround(coord(r, a) / lattice.spacing[a]));
-            int index[3] = {-1, -1, -1};
-            index[a] = level;
-            const int face = around.on_lattice_face(r, index);  // a cap it lies in, on any plane
-            if (face < 0 && (level == 0 || level == lattice.cells[a]))
-              break;  // outside: none anywhere
-            if (!clear_of_core(r)) break;
-            repeats.emplace_back(r, face);
+      if (spec_of[i] >= 0 && smooth[i] && normal[i].norm() > 0 &&
+          (sweep_axis < 0 || swept.base[i] == static_cast<int>(i)))  // swept: the first plane's
+        ++(*applied)[static_cast<std::size_t>(spec_of[i])].nb_nodes;
+  }
+  std::vector<int> reached(nodes.size(), 0);  // face-layer nodes: the layers placed so far
+  // A face-layer node got layer k, `points` points (swept: one per plane).
+  const auto reach = [&](std::size_t i, int k, std::size_t points) {
+    reached[i] = k;
+    if (!applied) return;
+    FaceLayersApplied& counts = (*applied)[static_cast<std::size_t>(spec_of[i])];
+    counts.nb_points += points;
+    ++counts.nb_per_layer[static_cast<std::size_t>(k - 1)];
+  };
+  // The global layers first, then the face layers: these come last in `inserted`, together.
+  for (const bool face_pass : {false, true})
+    for (int k = 1; k <= (face_pass ? deepest : layers); ++k)
+      for (std::size_t i = 0; i < nodes.size(); ++i)
+        for (const double sign : {1.0, -1.0}) {
+          if (sign < 0 && !two_sided[i]) continue;
+          if (!smooth[i] || normal[i].norm() == 0 || (spec_of[i] >= 0) != face_pass) continue;
+          const FaceLayerSpec* spec =
+              spec_of[i] >= 0 ? &face_layers[static_cast<std::size_t>(spec_of[i])] : nullptr;
+          if (spec && (k > spec->layers || reached[i] < k - 1)) continue;
+          if (sweep_axis >= 0 && swept.base[i] != static_cast<int>(i))
+            continue;  // placed with its base
+          // Depths vary by up to kLayerJitter (a fixed pseudo-random fraction per node): the sides
+          // of equally deep layers are cocircular quads (rectangles, isosceles trapezoids), which
+          // TetGen cuts with flat tets where the prisms on either side disagree on the diagonal.
+          const double spread =
+              static_cast<double>((static_cast<std::size_t>(surface.seed[i]) * 2654435761u) %
+                                  1000) /
+                  500.0 -
+              1;
+          const double depth = spec ? spec->depth(k) * (1 + kLayerJitter * spread)
+                                    : k * layer * (1 + kLayerJitter * spread);
+          // This layer's own thickness: points of other layers keep 0.3 of it away.
+          const double own = spec ? spec->depth(k) - spec->depth(k - 1) : layer;
+          const Vec3 q = nodes[i] - normal[i] * (sign * depth);
+          // Room: no other part of the surface nearer than the depth, no other point too near.
+          if (around.curved.any_within(q, 0.9 * depth)) continue;
+          if (around.layer_points.any_within(q, 0.3 * own) ||
+              around.surface_points.any_within(q, 0.5 * depth))
+            continue;
+          if (sweep_axis >= 0) {
+            const int a = sweep_axis;
+            std::vector<std::pair<Vec3, int>>
+                repeats;  // the point on every plane, and its cap face
+            for (int j : column[i]) {
+              Vec3 r = q;
+              set_coord(r, a, coord(nodes[j], a));
+              const int level = static_cast<int>(std::lround(coord(r, a) / lattice.spacing[a]));
+              int index[3] = {-1, -1, -1};
+              index[a] = level;
+              const int face = around.on_lattice_face(r, index);  // a cap it lies in, on any plane
+              if (face < 0 && (level == 0 || level == lattice.cells[a]))
+                break;  // outside: none anywhere
+              if (!clear_of_core(r)) break;
+              repeats.emplace_back(r, face);
+            }
+            if (repeats.size() != column[i].size()) continue;
+            for (const auto& [r, face] : repeats) {
+              around.layer_points.add(r);
+              inserted.points.push_back(r);
+              inserted.face.push_back(face);
+              ++placed;
+            }
+            if (spec) reach(i, k, repeats.size());
+            continue;
           }
-          if (repeats.size() != column[i].size()) continue;
-          for (const auto& [r, face] : repeats) {
-            around.layer_points.add(r);
-            inserted.points.push_back(r);
-            inserted.face.push_back(face);
-            ++placed;
-          }
-          continue;
+          // Inside the shape and clear of every face, lattice faces too: points offset from a
+          // curved face next to a planar one went through the planar one, and TetGen left them out.
+          if (!parity.inside(q) || around.every_face.any_within(q, kLayerClearance * depth))
+            continue;
+          if (!clear_of_core(q)) continue;
+          around.layer_points.add(q);
+          inserted.points.push_back(q);
+          inserted.face.push_back(-1);
+          ++placed;
+          if (spec) reach(i, k, 1);
         }
-        // Inside the shape and clear of every face, lattice faces too: points offset from a
-        // curved face next to a planar one went through the planar one, and TetGen left them out.
-        if (!parity.inside(q) || around.every_face.any_within(q, kLayerClearance * depth)) continue;
-        if (!clear_of_core(q)) continue;
-        around.layer_points.add(q);
-        inserted.points.push_back(q);
-        inserted.face.push_back(-1);
-        ++placed;
-      }
   return placed;
 }
 

@@ -8,11 +8,33 @@
 #include <vector>
 
 #include "hexmerge/geometry/vec3.h"
+#include "hexmerge/occ/mesh_shape.h"
 #include "hexmerge/occ/mesher/lattice.h"
 #include "hexmerge/occ/mesher/surface.h"
 #include "hexmerge/occ/mesher/sweep.h"
 
 namespace hexmerge::mesher {
+
+/// Boundary layers asked on some faces (MeshShapeParameters::face_layers), on the shape's faces.
+struct FaceLayerSpec {
+  std::vector<int> faces;  ///< the shape's faces (0-based)
+  int layers = 0;          ///< layers of points
+  double thickness = 0.0;  ///< the first layer's depth (a length)
+  double growth = 1.0;     ///< each layer's depth over the one before
+
+  /// The depth of layer k (1-based) from the face: thickness (1 + growth + ... + growth^(k-1)).
+  double depth(int k) const;
+};
+
+/// Drops the kept lattice points nearer to a face of `specs` than its layers' depth (grown by
+/// the depths' variation) plus `margin` plus half a lattice cell, so that the core, its closing
+/// pyramids' apexes and their circumspheres keep out of the face layers.
+/// @param[in] nodes  the surface's nodes in frame coordinates
+/// @return the number of points dropped
+std::size_t clear_face_layers(const std::vector<FaceLayerSpec>& specs,
+                              const std::vector<Vec3>& nodes, const Surface& surface,
+                              const Lattice& lattice, const Surroundings& around, double margin,
+                              KeptPoints& kept);
 
 /// Places the boundary-layer points, appending them to `inserted` and to around.layer_points.
 /// Nodes of lattice faces and of faces between two solids get none (swept: the walls between
@@ -29,11 +51,21 @@ namespace hexmerge::mesher {
 /// @param[in] core_margin       the least distance from a core point (a length)
 /// @param[in] no_layers         per node, 1 where it gets no layers (null: none such; local sizes:
 ///                              the nodes where the size wanted is below h)
+/// @param[in] face_layers       the faces with layers of their own: their nodes (those of the first
+///                              spec holding one of its faces) take that spec's layers, depths
+///                              and growth instead, no_layers or not, a layer only where the node
+///                              got the one before; swept, on walls only, placed on the first
+///                              plane and repeated. Their points are placed after the global
+///                              layers' and come last in `inserted`
+/// @param[out] applied          per spec, its counts (nodes, faces, layers, thickness and growth
+///                              left to the caller); resized to face_layers' size
 /// @return the number of points placed
 std::size_t place_layers(const std::vector<Vec3>& nodes, const Surface& surface,
                          const std::vector<int>& face_solid_count, const Lattice& lattice,
                          int sweep_axis, const SweptSurface& swept, int layers, double thickness,
                          double core_margin, const Parity& parity, Surroundings& around,
-                         InsertedPoints& inserted, const std::vector<char>* no_layers = nullptr);
+                         InsertedPoints& inserted, const std::vector<char>* no_layers = nullptr,
+                         const std::vector<FaceLayerSpec>& face_layers = {},
+                         std::vector<FaceLayersApplied>* applied = nullptr);
 
 }  // namespace hexmerge::mesher

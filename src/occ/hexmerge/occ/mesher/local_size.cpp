@@ -1,9 +1,13 @@
 #include "hexmerge/occ/mesher/local_size.h"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <limits>
+#include <string>
 
+#include "hexmerge/core/error.h"
+#include "hexmerge/core/parameter_table.h"
 #include "hexmerge/occ/mesher/common.h"
 
 namespace hexmerge::mesher {
@@ -21,8 +25,111 @@ double squared_distance_to_segment(const Vec3& p, const Vec3& a, const Vec3& b) 
 // Levels of finer lattices at most (spacing h / 2^10): a local size below h / 1024 is refused
 // before (mesh_shape's validation), so this is never reached for a valid one.
 constexpr int kMaxLevels = 10;
+// The smallest local size, as a fraction of h (finer lattices down to h / 1024).
+constexpr double kSmallestLocalSize = 1e-3;
+
+// Per shape item, whether one of the given numbers names it.
+std::vector<char> named(const std::vector<int>& numbers, const ItemNumbering& numbering) {
+  std::vector<char> out(numbering.nb_items, 0);
+  for (const int n : numbers)
+    for (const int i : numbering.to_shape[static_cast<std::size_t>(n - 1)])
+      out[static_cast<std::size_t>(i)] = 1;
+  return out;
+}
+
+// Counts one triangle or segment (`nb` ends, closed when 3) on a local size's items, with its
+// longest side.
+void tally(LocalSizeApplied& applied, std::size_t& count, const std::vector<Vec3>& nodes,
+           const int* ends, int nb) {
+  ++count;
+  for (int c = 0; c < (nb == 3 ? 3 : 1); ++c)
+    applied.max_side =
+        std::max(applied.max_side, (nodes[ends[c]] - nodes[ends[(c + 1) % nb]]).norm());
+}
 
 }  // namespace
+
+ItemNumbering ItemNumbering::identity(const char* kind, std::size_t count) {
+  ItemNumbering out;
+  out.kind = kind;
+  out.nb_items = count;
+  out.to_shape.resize(count);
+  for (std::size_t i = 0; i < count; ++i) out.to_shape[i] = {static_cast<int>(i)};
+  return out;
+}
+
+const std::vector<int>& ItemNumbering::items(int number, const std::string& parameter,
+                                             const std::string& what) const {
+  if (number < 1 || static_cast<std::size_t>(number) > to_shape.size()) {
+    std::string lower = kind;
+    lower[0] = static_cast<char>(std::tolower(static_cast<unsigned char>(lower[0])));
+    const std::string count = std::to_string(to_shape.size());
+    throw InputError("parameter '" + parameter + "': " + what + ": " + kind +
+                         std::to_string(number) + " does not exist (the shape has " + count + " " +
+                         lower + "s, " + kind + "1 to " + kind + count + ")",
+                     Entity::Parameter);
+  }
+  const std::vector<int>& out = to_shape[static_cast<std::size_t>(number - 1)];
+  if (out.empty())
+    throw InputError("parameter '" + parameter + "': " + what + ": " + kind +
+                         std::to_string(number) +
+                         " of the shape as given is gone from the shape whose touching solids "
+                         "were glued (it lay inside another solid?)",
+                     Entity::Parameter);
+  return out;
+}
+
+LocalSizeItems local_size_items(const std::vector<LocalSize>& sizes, const ItemNumbering& faces,
+                                const ItemNumbering& edges, double h) {
+  LocalSizeItems items;
+  items.face_size.assign(faces.nb_items, h);
+  items.edge_size.assign(edges.nb_items, h);
+  const auto fail = [&](const std::string& why) {
+    throw InputError("parameter 'local_sizes': " + why, Entity::Parameter);
+  };
+  // One kind of item: every number checked, its items given the size.
+  const auto apply = [](const std::vector<int>& numbers, const ItemNumbering& numbering,
+                        const std::string& what, double size, std::vector<double>& item_size) {
+    for (const int n : numbers)
+      for (const int i : numbering.items(n, "local_sizes", what))
+        item_size[static_cast<std::size_t>(i)] =
+            std::min(item_size[static_cast<std::size_t>(i)], size);
+  };
+  for (const LocalSize& local : sizes) {
+    const std::string what = "local size " + parameter_number_text(local.size);
+    if (local.size > h)
+      fail(what + " is larger than the size " + parameter_number_text(h) +
+           ": local sizes refine, give one of at most the size");
+    if (local.size < kSmallestLocalSize * h)
+      fail(what + " is smaller than the size / 1000 (" +
+           parameter_number_text(kSmallestLocalSize * h) + ")");
+    apply(local.faces, faces, what, local.size, items.face_size);
+    apply(local.edges, edges, what, local.size, items.edge_size);
+  }
+  return items;
+}
+
+std::vector<LocalSizeApplied> local_sizes_applied(const std::vector<LocalSize>& sizes,
+                                                  const ItemNumbering& faces,
+                                                  const ItemNumbering& edges,
+                                                  const Surface& surface) {
+  std::vector<LocalSizeApplied> out;
+  for (const LocalSize& local : sizes) {
+    LocalSizeApplied applied{local.faces, local.edges, local.size, 0, 0, 0.0};
+    const std::vector<char> on_face = named(local.faces, faces);
+    const std::vector<char> on_edge = named(local.edges, edges);
+    for (const SurfaceTriangle& t : surface.triangles)
+      if (on_face[static_cast<std::size_t>(t.face)])
+        tally(applied, applied.nb_triangles, surface.nodes, t.node.data(), 3);
+    for (const auto& [key, segment] : surface.segments)
+      if (on_edge[static_cast<std::size_t>(segment.edge)]) {
+        const int ends[2] = {static_cast<int>(key >> 32), static_cast<int>(key & 0xffffffffu)};
+        tally(applied, applied.nb_segments, surface.nodes, ends, 2);
+      }
+    out.push_back(applied);
+  }
+  return out;
+}
 
 SizeField::SizeField(double h, double grading, double slack, const Vec3& lo, const Vec3& hi)
     : h_(h),
@@ -63,6 +170,64 @@ void SizeField::graded_box(Vec3& lo, Vec3& hi) const {
   const double reach = (h_ - smallest_) / grading_ + slack_;
   lo = items_lo_ - Vec3{reach, reach, reach};
   hi = items_hi_ + Vec3{reach, reach, reach};
+}
+
+std::string sweep_carries(const std::vector<LocalSize>& sizes, const ItemNumbering& edges,
+                          const Sweep& sweep, const std::vector<std::vector<int>>& edge_faces,
+                          const std::vector<bool>& lattice_face, double h,
+                          std::vector<double>& wall_size) {
+  wall_size.assign(lattice_face.size(), h);
+  for (const LocalSize& local : sizes) {
+    if (local.size >= h) continue;
+    const std::string what = "the local size " + parameter_number_text(local.size) + " on ";
+    if (!local.faces.empty())
+      return what + "Face" + std::to_string(local.faces[0]) +
+             " (a face) needs a graded surface, which the sweep's slabs (h thick along its axis) "
+             "and repeated cross-section cannot carry (local sizes on its caps' edges are swept)";
+    for (const int number : local.edges)
+      for (const int e : edges.items(number, "local_sizes", what)) {
+        bool on_cap = false;
+        for (const int f : edge_faces[static_cast<std::size_t>(e)])
+          on_cap = on_cap || sweep.cap[static_cast<std::size_t>(f)] >= 0;
+        const std::string edge = what + "Edge" + std::to_string(number);
+        if (!on_cap) return edge + " (an edge along the sweep's axis) needs slabs thinner than h";
+        for (const int f : edge_faces[static_cast<std::size_t>(e)]) {
+          if (sweep.cap[static_cast<std::size_t>(f)] >= 0) continue;
+          if (lattice_face[static_cast<std::size_t>(f)])
+            return edge +
+                   " lies on a wall on a lattice plane, whose lattice points the sweep keeps";
+          wall_size[static_cast<std::size_t>(f)] =
+              std::min(wall_size[static_cast<std::size_t>(f)], local.size);
+        }
+      }
+  }
+  return "";
+}
+
+void add_swept_segments(std::vector<LocalSizeApplied>& applied, const std::vector<LocalSize>& sizes,
+                        const ItemNumbering& edges, const Sweep& sweep,
+                        const std::vector<std::vector<int>>& edge_faces, const Surface& surface) {
+  std::vector<char> has_segments(edges.nb_items, 0);
+  for (const auto& [key, segment] : surface.segments)
+    has_segments[static_cast<std::size_t>(segment.edge)] = 1;
+  const auto is_wall_of = [&](int e, int wall) {
+    const std::vector<int>& faces = edge_faces[static_cast<std::size_t>(e)];
+    return std::find(faces.begin(), faces.end(), wall) != faces.end();
+  };
+  for (std::size_t k = 0; k < sizes.size() && k < applied.size(); ++k)
+    for (const int number : sizes[k].edges)
+      for (const int e : edges.to_shape[static_cast<std::size_t>(number - 1)]) {
+        if (has_segments[static_cast<std::size_t>(e)]) continue;
+        for (const int wall : edge_faces[static_cast<std::size_t>(e)]) {
+          if (sweep.cap[static_cast<std::size_t>(wall)] >= 0) continue;
+          for (const auto& [key, segment] : surface.segments)
+            if (is_wall_of(segment.edge, wall)) {
+              const int ends[2] = {static_cast<int>(key >> 32),
+                                   static_cast<int>(key & 0xffffffffu)};
+              tally(applied[k], applied[k].nb_segments, surface.nodes, ends, 2);
+            }
+        }
+      }
 }
 
 SizeField make_size_field(const Surface& surface, const LocalSizeItems& items, double h,

@@ -6,12 +6,15 @@
 
 #include <array>
 #include <cstddef>
+#include <string>
 #include <vector>
 
 #include "hexmerge/geometry/vec3.h"
+#include "hexmerge/occ/mesh_shape.h"
 #include "hexmerge/occ/mesher/lattice.h"
 #include "hexmerge/occ/mesher/spatial.h"
 #include "hexmerge/occ/mesher/surface.h"
+#include "hexmerge/occ/mesher/sweep.h"
 
 namespace hexmerge::mesher {
 
@@ -55,6 +58,59 @@ struct LocalSizeItems {
   std::vector<double> face_size;  ///< per face, its local size (h: none)
   std::vector<double> edge_size;  ///< per edge, its local size (h: none)
 };
+
+/// How the face or edge numbers a user gives (1-based, FreeCAD's FaceN and EdgeN of the shape as
+/// given) name the shape's items (0-based): each given item may have become several (gluing
+/// touching solids splits faces) or one shared with another.
+struct ItemNumbering {
+  const char* kind = "Face";  ///< "Face" or "Edge", for messages
+  std::size_t nb_items = 0;   ///< the shape's items of this kind
+  /// per given item (0-based), the shape's items it names
+  std::vector<std::vector<int>> to_shape;
+  /// The numbering of a shape of `count` items, each given item being itself.
+  static ItemNumbering identity(const char* kind, std::size_t count);
+  /// The shape's items that given number `number` (1-based) names.
+  /// @throws InputError (Entity::Parameter) for a number the shape as given has not, the message
+  ///         starting with `parameter` and `what` ("parameter 'local_sizes': local size 0.5:
+  ///         Face9 does not exist (the shape has 6 faces, Face1 to Face6)")
+  const std::vector<int>& items(int number, const std::string& parameter,
+                                const std::string& what) const;
+};
+
+/// The faces and edges given local sizes (0-based, sizes above h lowered to h: none), checked.
+/// @param[in] sizes  the local sizes (numbers as given)
+/// @throws InputError (Entity::Parameter) naming the face or edge that does not exist, or a size
+///         larger than h or smaller than h / 1000
+LocalSizeItems local_size_items(const std::vector<LocalSize>& sizes, const ItemNumbering& faces,
+                                const ItemNumbering& edges, double h);
+
+/// What the local sizes gave: per entry, the surface's triangles on its faces and segments on its
+/// edges, and their longest side (the entries' numbers as given).
+std::vector<LocalSizeApplied> local_sizes_applied(const std::vector<LocalSize>& sizes,
+                                                  const ItemNumbering& faces,
+                                                  const ItemNumbering& edges,
+                                                  const Surface& surface);
+
+/// Whether a sweep carries the local sizes: only those on edges of its caps whose walls are no
+/// lattice faces (the first plane's sides on those walls are split to the size and repeated on
+/// every plane); a face, an edge along the axis or on a lattice wall would need slabs thinner
+/// than h or a graded cross-section.
+/// @param[in]  edge_faces    per edge of the shape, the faces it bounds
+/// @param[in]  lattice_face  per face, whether it is a lattice face (as found, before the local
+///                           sizes)
+/// @param[out] wall_size     carried: per face, the size its sides are split to (h: none)
+/// @return "" when carried, else why not, in one line naming the first item that cannot be
+std::string sweep_carries(const std::vector<LocalSize>& sizes, const ItemNumbering& edges,
+                          const Sweep& sweep, const std::vector<std::vector<int>>& edge_faces,
+                          const std::vector<bool>& lattice_face, double h,
+                          std::vector<double>& wall_size);
+
+/// Swept: the first plane's segments are the only ones the surface keeps; an edge of a cap on
+/// another plane has copies of those of the first plane's edges on the same walls. Adds them to
+/// the entries (of local_sizes_applied()) whose edges have no segment of their own.
+void add_swept_segments(std::vector<LocalSizeApplied>& applied, const std::vector<LocalSize>& sizes,
+                        const ItemNumbering& edges, const Sweep& sweep,
+                        const std::vector<std::vector<int>>& edge_faces, const Surface& surface);
 
 /// The size field of the triangles (world coordinates) of the faces, and the segments of the
 /// edges, with a local size below h.

@@ -99,7 +99,8 @@ std::optional<Sweep> find_sweep(const Shape& s, const Frame& frame,
 std::optional<SweptSurface> sweep_surface(const Shape& s, const Sweep& sweep, const Frame& frame,
                                           const Vec3& step, int levels, double target,
                                           double deflection, const std::vector<bool>& lattice_face,
-                                          Surface& surface) {
+                                          Surface& surface,
+                                          const std::vector<double>* wall_target) {
   const int axis = sweep.axis;
   auto directed = [](int a, int b) {
     return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(a)) << 32) |
@@ -193,7 +194,10 @@ std::optional<SweptSurface> sweep_surface(const Shape& s, const Sweep& sweep, co
   for (const Side& side : boundary) {
     const auto segment = surface.segments.find(pair_key(side.from, side.to));
     const double length = (surface.nodes[side.to] - surface.nodes[side.from]).norm();
-    int pieces = static_cast<int>(std::ceil(length / target - 1e-9));
+    double side_target = target;
+    if (wall_target)
+      for (const int w : side.wall) side_target = std::min(side_target, (*wall_target)[w]);
+    int pieces = static_cast<int>(std::ceil(length / side_target - 1e-9));
     if (lattice_face[side.wall[0]] || segment == surface.segments.end() || pieces <= 1) {
       if (segment != surface.segments.end()) segments.insert(*segment);
       sides.push_back(side);

@@ -63,11 +63,13 @@ struct SweptSurface {
 /// repeated on the `levels` planes above (`step` apart), the walls as two triangles per side and
 /// slab (of the wall face there), and the caps on the planes above as copies of the first
 /// plane's triangles, each in the cap face that holds its centroid there. The nodes come plane
-/// by plane, in the same order on every plane.
+/// by plane, in the same order on every plane. `wall_target` (null: none), per face, a smaller
+/// target for the sides on that wall (local sizes on the caps' edges).
 std::optional<SweptSurface> sweep_surface(const Shape& s, const Sweep& sweep, const Frame& frame,
                                           const Vec3& step, int levels, double target,
                                           double deflection, const std::vector<bool>& lattice_face,
-                                          Surface& surface);
+                                          Surface& surface,
+                                          const std::vector<double>* wall_target = nullptr);
 
 /// Rebuilds a swept shape's tets as columns over one cross-section: the triangles TetGen made on
 /// the first plane, each extruded through every slab as a prism of three tets (split by the
