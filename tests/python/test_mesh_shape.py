@@ -653,6 +653,36 @@ exec {real} "$@"
     assert "terminate called" not in err and "Aborted" not in err, err
 
 
+@needs_tetgen
+def test_a_tetgen_failure_in_its_surface_meshing_is_restarted_with_the_loops_started_elsewhere(
+        shapes, tmp_path) -> None:
+    """TetGen 1.5.0 stopping in its surface meshing on a valid lattice face (thin bracket at h
+    0.6: "Two segments ... intersect" on the base face with the slot, or a failed assertion,
+    depending on the vertex each loop starts at) is run again with the loops started elsewhere,
+    in the same way of placing the points, not the next way."""
+    real = shutil.which("tetgen")
+    fake = tmp_path / "tetgen"
+    fake.write_text(f"""#!/bin/sh
+if [ ! -e {tmp_path / 'failed'} ]; then
+  touch {tmp_path / 'failed'}
+  echo "Opening $2."
+  echo "Delaunizing vertices..."
+  echo "Creating surface mesh ..."
+  echo "Error:  Invalid PLC."
+  echo "  Two segments (1, 2) and (3, 4) intersect."
+  kill -ABRT $$
+fi
+exec {real} "$@"
+""")
+    fake.chmod(0o755)
+    tets, report = hexmerge.mesh_shape(shapes["bracket"], 3.0, recombine=False, tetgen=str(fake))
+    meshing = report["meshing"]
+    assert meshing["strategy"] == "lattice" and meshing["failed_strategies"] == []
+    assert meshing["nb_tetgen_restarts"] == 1
+    mesh, rep = hexmerge.recombine(tets.points, tets.cell_vertices.reshape(-1, 4), tets.regions)
+    assert_checked(mesh, tets, rep, 3.0)
+
+
 def test_sizes_that_do_not_fit_in_memory_are_refused_before_any_work(shapes) -> None:
     """The tets are estimated from the shape's volume and area; a size needing more memory than
     the limit (or the system has) is refused at once, with the estimate and a size that fits."""

@@ -119,6 +119,19 @@ std::string failure_text(int status, const fs::path& log, const std::vector<Face
               : std::string(faces.size() > 1 ? "; faces " : "; face ") + where + " of the shape");
 }
 
+// Whether TetGen's log ends in its surface meshing stage (the last progress line is "Creating
+// surface mesh ..."): where TetGen 1.5.0 triangulates the lattice faces from their loops.
+bool failed_in_surface_mesh(const fs::path& log) {
+  std::ifstream in(log);
+  std::string line, stage;
+  while (std::getline(in, line)) {
+    const auto first = line.find_first_not_of(' ');
+    if (first == std::string::npos || first > 0) continue;  // stages start in column 0
+    if (line.size() >= 3 && line.compare(line.size() - 3, 3, "...") == 0) stage = line;
+  }
+  return stage.rfind("Creating surface mesh", 0) == 0;
+}
+
 // Reads a TetGen output table (.node, .ele or .face, 0-based with -z): a header "count header
 // ...", then per line an id and `columns` values; '#' starts a comment. The header's second
 // number is `header`: the values per row of .node (3) and .ele (4), the marker flag of .face
@@ -241,10 +254,13 @@ TetrahedralizeOutput Tetrahedralizer::run(TetrahedralizeInput input) const {
   const std::size_t given = points.size();
   std::vector<double> frame_points;
   // TetGen 1.5 can fail to triangulate a lattice face from its loops: it never ends, or leaves
-  // the face with a gap and every tet counted as outside. Nearly collinear loop nodes did it
-  // (align_straight_edges() now prevents that), and whether it happened depended on the vertex
-  // the loop started at. So TetGen runs under a time limit, far above its own time (about 1 s
-  // per 20k points), and after a failure the loops start elsewhere.
+  // the face with a gap and every tet counted as outside, or stops in its surface meshing
+  // ("Invalid PLC. Two segments ... intersect" or a failed assertion on a valid face: thin
+  // bracket at h 0.6, a base face with a slot, fails or not with the loop's first vertex). Nearly
+  // collinear loop nodes did it (align_straight_edges() now prevents that), and whether it
+  // happened depended on the vertex the loop started at. So TetGen runs under a time limit, far
+  // above its own time (about 1 s per 20k points), and after such a failure the loops start
+  // elsewhere.
   const double time_limit = parameters_.time_limit > 0
                                 ? parameters_.time_limit
                                 : 30 + 1e-3 * static_cast<double>(points.size());
@@ -252,7 +268,23 @@ TetrahedralizeOutput Tetrahedralizer::run(TetrahedralizeInput input) const {
   limit_text << time_limit;
   // TetGen's output line-buffered, so that its reason survives an abort.
   const std::string limited = "timeout -k 5 " + limit_text.str() + " stdbuf -oL ";
+  const bool has_loops = std::any_of(facets.begin(), facets.end(), [](const Facet& f) {
+    return std::any_of(f.polygons.begin(), f.polygons.end(),
+                       [](const auto& polygon) { return polygon.size() > 3; });
+  });
   int restarts = 0;
+  const auto start_loops_elsewhere = [&] {
+    for (Facet& facet : facets)
+      for (auto& polygon : facet.polygons)
+        if (polygon.size() > 3)
+          std::rotate(
+              polygon.begin(),
+              polygon.begin() + static_cast<std::ptrdiff_t>(
+                                    (7919u * static_cast<unsigned>(restarts)) % polygon.size()),
+              polygon.end());
+    ++output.nb_restarts;
+    write_poly();
+  };
   for (bool nudged = false;;) {
     const int status = std::system(
         (limited + output.command + " > " + shell_quote(log.string()) + " 2>&1").c_str());
@@ -265,16 +297,13 @@ TetrahedralizeOutput Tetrahedralizer::run(TetrahedralizeInput input) const {
                        : "lost the shape's surface (no tets inside)") +
             ", " + std::to_string(restarts) +
             " times with the lattice faces' loops started at other vertices");
-      for (Facet& facet : facets)
-        for (auto& polygon : facet.polygons)
-          if (polygon.size() > 3)
-            std::rotate(
-                polygon.begin(),
-                polygon.begin() + static_cast<std::ptrdiff_t>(
-                                      (7919u * static_cast<unsigned>(restarts)) % polygon.size()),
-                polygon.end());
-      ++output.nb_restarts;
-      write_poly();
+      start_loops_elsewhere();
+      continue;
+    }
+    if (status != 0 && has_loops && restarts < parameters_.restarts &&
+        failed_in_surface_mesh(log)) {
+      ++restarts;
+      start_loops_elsewhere();
       continue;
     }
     if (status != 0 || !fs::exists(work.path() / "shape.1.ele"))
