@@ -241,9 +241,9 @@ TetMesh mesh_shape_impl(const std::string& brep, const MeshShapeParameters& para
          << (parameters.memory_limit > 0 ? "memory_limit is " : "the system has ") << limit / 1e9
          << " GB" << (parameters.memory_limit > 0 ? "" : " available")
          << ": give a size of at least "
-         << std::max(parameters.size * std::cbrt(estimate.bytes / limit),
-                     size_that_fits(shape.shape, parameters.size, parameters.surface_deflection,
-                                    limit))
+         << std::max(
+                parameters.size * std::cbrt(estimate.bytes / limit),
+                size_that_fits(shape.shape, parameters.size, parameters.surface_deflection, limit))
          << " (or raise memory_limit)";
     throw InputError(text.str(), Entity::Parameter);
   }
