@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <array>
-#include <cmath>
 #include <cstdint>
 #include <limits>
 #include <unordered_map>
@@ -10,6 +9,7 @@
 #include "hexmerge/core/error.h"
 #include "hexmerge/geometry/quality.h"
 #include "hexmerge/geometry/vec3.h"
+#include "hexmerge/occ/mesher/surface.h"
 
 namespace hexmerge {
 namespace {
@@ -267,13 +267,7 @@ bool swappable(const FlipMesh& m, index_t a, index_t b, index_t c, index_t d, do
   // No boundary triangle under kSmallBoundaryAngle made worse: a swap whose quad has a corner
   // of nearly 180 degrees would make a flat boundary triangle, and the tet on it a sliver.
   const Vec3 pb = pa + ab, pc = pa + ac, pd = pa + ad;
-  const auto smallest_angle = [](const Vec3& p, const Vec3& q, const Vec3& r) {
-    const auto at = [](const Vec3& v, const Vec3& x, const Vec3& y) {
-      const Vec3 u = x - v, w = y - v;
-      return std::atan2(u.cross(w).norm(), u.dot(w));
-    };
-    return std::min({at(p, q, r), at(q, r, p), at(r, p, q)});
-  };
+  using mesher::smallest_angle;
   const double after = std::min(smallest_angle(pc, pd, pa), smallest_angle(pc, pd, pb));
   return after >= kSmallBoundaryAngle ||
          after >= std::min(smallest_angle(pa, pb, pc), smallest_angle(pa, pb, pd));

@@ -65,18 +65,25 @@ class NodeMerger {
 
 }  // namespace
 
-double angle_at(const std::vector<Vec3>& nodes, int v, int a, int b) {
-  const Vec3 x = nodes[a] - nodes[v], y = nodes[b] - nodes[v];
+namespace {
+// The angle at v between the sides to a and b.
+double angle_at(const Vec3& v, const Vec3& a, const Vec3& b) {
+  const Vec3 x = a - v, y = b - v;
   return std::atan2(x.cross(y).norm(), x.dot(y));
+}
+}  // namespace
+
+double angle_at(const std::vector<Vec3>& nodes, int v, int a, int b) {
+  return angle_at(nodes[v], nodes[a], nodes[b]);
 }
 Vec3 normal_of(const std::vector<Vec3>& nodes, int a, int b, int c) {
   return (nodes[b] - nodes[a]).cross(nodes[c] - nodes[a]);
 }
+double smallest_angle(const Vec3& a, const Vec3& b, const Vec3& c) {
+  return std::min({angle_at(a, b, c), angle_at(b, c, a), angle_at(c, a, b)});
+}
 double smallest_angle(const std::vector<Vec3>& nodes, const std::array<int, 3>& v) {
-  double worst = M_PI;
-  for (int c = 0; c < 3; ++c)
-    worst = std::min(worst, angle_at(nodes, v[c], v[(c + 1) % 3], v[(c + 2) % 3]));
-  return worst;
+  return smallest_angle(nodes[v[0]], nodes[v[1]], nodes[v[2]]);
 }
 
 // Surface smoothing and collapses keep every triangle within this angle (20 degrees) of the

@@ -75,6 +75,8 @@ double angle_at(const std::vector<Vec3>& nodes, int v, int a, int b);
 Vec3 normal_of(const std::vector<Vec3>& nodes, int a, int b, int c);
 /// The smallest angle of triangle v.
 double smallest_angle(const std::vector<Vec3>& nodes, const std::array<int, 3>& v);
+/// The smallest angle of triangle abc.
+double smallest_angle(const Vec3& a, const Vec3& b, const Vec3& c);
 
 /// Surface smoothing and collapses keep every triangle within 20 degrees of the surface's normal
 /// at the node they move or remove: true when `now` turned further from `reference`.
