@@ -377,16 +377,18 @@ def test_extrusions_are_swept(shapes, name: str, h: float) -> None:
     assert unswept["meshing"]["sweep_axis"] == -1
 
 
-# A plate with a grid of holes about as wide as h (bench/geometry/holed_plate.geo, smaller).
-HOLED_PLATE_GEO = """SetFactory("OpenCASCADE");
-Box(1) = {0, 0, 0, 48, 36, 6};
+def holed_plate_geo(thickness: float) -> str:
+    """A 48 x 36 plate with a grid of 12 holes of radius 2, about as wide as h
+    (bench/geometry/holed_plate.geo, smaller)."""
+    return f"""SetFactory("OpenCASCADE");
+Box(1) = {{0, 0, 0, 48, 36, {thickness:g}}};
 k = 2;
-For i In {0:3}
-  For j In {0:2}
-    Cylinder(k) = {12 + 12 * i, 6 + 12 * j, -1, 0, 0, 8, 2}; k += 1;
+For i In {{0:3}}
+  For j In {{0:2}}
+    Cylinder(k) = {{12 + 12 * i, 6 + 12 * j, -1, 0, 0, {thickness + 2:g}, 2}}; k += 1;
   EndFor
 EndFor
-BooleanDifference(100) = { Volume{1}; Delete; }{ Volume{2:k - 1}; Delete; };
+BooleanDifference(100) = {{ Volume{{1}}; Delete; }}{{ Volume{{2:k - 1}}; Delete; }};
 """
 
 
@@ -397,7 +399,7 @@ def test_a_plate_with_holes_is_swept_into_columns_of_hexahedra_and_prisms(tmp_pa
     but better than the tets they replace are taken: the holes' fine triangles left as tets
     turned their neighbours into pyramids, plane after plane (the benchmark's plate at h 3.4:
     40 % hex volume and 35 % pyramids; now 87 % hex, the rest prisms)."""
-    plate = gmsh_brep(tmp_path, "holed_plate", HOLED_PLATE_GEO)
+    plate = gmsh_brep(tmp_path, "holed_plate", holed_plate_geo(6))
     h = 3.4
     tets, report = hexmerge.mesh_shape(plate, h, recombine=False)
     meshing = report["meshing"]
@@ -609,6 +611,21 @@ def test_tetgen_failures_are_restarted_then_reported(shapes, tmp_path, script, l
     assert (tmp_path / "runs").read_text().count("started") == 36
 
 
+def tetgen_failing_once(flag: Path, failure: str) -> Path:
+    """A `tetgen` beside `flag` that runs the shell lines `failure` the first time (while `flag`
+    does not exist, which it then creates) and the real TetGen after."""
+    fake = flag.parent / "tetgen"
+    fake.write_text(f"""#!/bin/sh
+if [ ! -e {flag} ]; then
+  touch {flag}
+  {failure}
+fi
+exec {shutil.which("tetgen")} "$@"
+""")
+    fake.chmod(0o755)
+    return fake
+
+
 @pytest.mark.parametrize(("crash", "how"), [
     ("kill -ABRT $$", "TetGen stopped on an internal error"),
     ("kill -SEGV $$", "TetGen crashed \\(segmentation fault\\)"),
@@ -618,20 +635,11 @@ def test_a_tetgen_crash_falls_back_to_the_next_strategy(shapes, tmp_path, capsys
     h 2.5): the next way of placing the points (the lattice at 0.95 of the size) is tried, the
     report names the failure in our words with TetGen's reason, and the mesh is valid. TetGen's
     crash text is never shown."""
-    real = shutil.which("tetgen")
-    fake = tmp_path / "tetgen"
-    fake.write_text(f"""#!/bin/sh
-if [ ! -e {tmp_path / 'crashed'} ]; then
-  touch {tmp_path / 'crashed'}
-  echo "Opening $2."
+    fake = tetgen_failing_once(tmp_path / "crashed", f"""echo "Opening $2."
   echo "Error:  Invalid PLC."
   echo "  Two segments (1, 2) and (3, 4) intersect."
   echo "terminate called after throwing an instance of 'int'" >&2
-  {crash}
-fi
-exec {real} "$@"
-""")
-    fake.chmod(0o755)
+  {crash}""")
     tets, report = hexmerge.mesh_shape(shapes["bracket"], 3.0, recombine=False, tetgen=str(fake))
     meshing = report["meshing"]
     assert meshing["strategy"] == "lattice at 0.95 of the size"
@@ -660,21 +668,12 @@ def test_a_tetgen_failure_in_its_surface_meshing_is_restarted_with_the_loops_sta
     0.6: "Two segments ... intersect" on the base face with the slot, or a failed assertion,
     depending on the vertex each loop starts at) is run again with the loops started elsewhere,
     in the same way of placing the points, not the next way."""
-    real = shutil.which("tetgen")
-    fake = tmp_path / "tetgen"
-    fake.write_text(f"""#!/bin/sh
-if [ ! -e {tmp_path / 'failed'} ]; then
-  touch {tmp_path / 'failed'}
-  echo "Opening $2."
+    fake = tetgen_failing_once(tmp_path / "failed", """echo "Opening $2."
   echo "Delaunizing vertices..."
   echo "Creating surface mesh ..."
   echo "Error:  Invalid PLC."
   echo "  Two segments (1, 2) and (3, 4) intersect."
-  kill -ABRT $$
-fi
-exec {real} "$@"
-""")
-    fake.chmod(0o755)
+  kill -ABRT $$""")
     tets, report = hexmerge.mesh_shape(shapes["bracket"], 3.0, recombine=False, tetgen=str(fake))
     meshing = report["meshing"]
     assert meshing["strategy"] == "lattice" and meshing["failed_strategies"] == []

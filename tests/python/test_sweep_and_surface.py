@@ -15,7 +15,7 @@ import pytest
 import hexmerge
 from hexmerge import _core
 from conftest import ROOT
-from test_mesh_shape import assert_checked, boundary_nodes, gmsh_brep
+from test_mesh_shape import assert_checked, boundary_nodes, gmsh_brep, holed_plate_geo
 
 pytestmark = [
     pytest.mark.skipif(not hexmerge.WITH_OPENCASCADE or not hasattr(_core, "mesh_shape"),
@@ -50,16 +50,7 @@ def poly_points(work: Path) -> np.ndarray:
 
 
 # A plate 30 thick with a grid of 12 holes of radius 2: ten slabs at h 3.
-TALL_HOLED_PLATE_GEO = """SetFactory("OpenCASCADE");
-Box(1) = {0, 0, 0, 48, 36, 30};
-k = 2;
-For i In {0:3}
-  For j In {0:2}
-    Cylinder(k) = {12 + 12 * i, 6 + 12 * j, -1, 0, 0, 32, 2}; k += 1;
-  EndFor
-EndFor
-BooleanDifference(100) = { Volume{1}; Delete; }{ Volume{2:k - 1}; Delete; };
-"""
+TALL_HOLED_PLATE_GEO = holed_plate_geo(30)
 
 
 def test_a_sweep_is_tetrahedralised_from_one_slab(tmp_path) -> None:
