@@ -74,7 +74,6 @@ class TaskPanelHexDominant(base_taskpanel.TransactionTaskPanel):
 
     def __init__(self, obj):
         super().__init__(obj)
-        TaskPanelHexDominant.current = self
         self.form = FreeCADGui.PySideUic.loadUi(UI_FILE)
         self.form.setWindowTitle("Hex-dominant mesh")
         self.run = None
@@ -83,7 +82,7 @@ class TaskPanelHexDominant(base_taskpanel.TransactionTaskPanel):
         self.wheel_guard = base_taskpanel.WheelGuard(self.form)
         self.loader = FreeCADGui.UiLoader()  # kept: its widgets die with it
         self.widgets = {}  # property name -> (spec, widget)
-        self.quantity_boxes = []  # the Gui::QuantitySpinBox wrappers, see release_quantity_boxes
+        self.quantity_boxes = []  # the Gui::QuantitySpinBox wrappers, see release_wrappers
         self.shape_only = []  # widgets shown only for a shape source
         self.build_parameter_widgets()
         self.set_up_results_table()
@@ -96,6 +95,7 @@ class TaskPanelHexDominant(base_taskpanel.TransactionTaskPanel):
         report = mesh_hexdominant.report_dict(obj)
         if report:
             self.show_results(report)
+        TaskPanelHexDominant.current = self  # only once built: a failed panel is never current
 
     # -- widgets <-> properties ---------------------------------------------------------------
     def build_parameter_widgets(self):
@@ -289,25 +289,35 @@ class TaskPanelHexDominant(base_taskpanel.TransactionTaskPanel):
 
     def form_destroyed(self, *args):
         """However the panel goes (OK, Cancel, the document closed), its run stops and PySide
-        lets go of its quantity boxes."""
+        lets go of the form's widgets."""
         self.shut_down()
-        self.release_quantity_boxes()
+        self.release_wrappers()
 
-    def release_quantity_boxes(self):
-        """Detaches PySide from the Gui::QuantitySpinBox widgets before the form goes; Qt deletes
-        the widgets with the form. They come from FreeCAD's UiLoader, so PySide is not told when
-        Qt deletes them, and a later panel's box at the same address would get the dead one's
-        wrapper ("already deleted"). shiboken2.invalidate marks each wrapper dead and drops it
-        from PySide's address table without touching the widget.
+    def release_wrappers(self):
+        """Detaches PySide from the widgets FreeCAD made (the form from its .ui file, the named
+        children FreeCAD's loader hangs on it as attributes, the Gui::QuantitySpinBox widgets)
+        before the form goes; Qt deletes them with the form. PySide is not told when Qt deletes
+        such widgets, so while this panel object lives (a macro's variable, `current`), a later
+        panel's widget at the same address would get the dead one's wrapper: for the form, with
+        the old children as attributes ("Internal C++ object already deleted"). shiboken2.
+        invalidate marks each wrapper dead and drops it from PySide's address table without
+        touching the widget.
 
         Not shiboken2.delete: PySide2 5.15 leaves the "this is the QApplication" bit of such a
         wrapper uninitialised (heap garbage), and delete() on a wrapper with the bit set deletes
         FreeCAD's QApplication instead of the widget: the intermittent abort "free(): invalid
         size" (docs/freecad.md)."""
         import shiboken2
-        for w in self.quantity_boxes:
-            shiboken2.invalidate(w)
+        if TaskPanelHexDominant.current is self:
+            TaskPanelHexDominant.current = None
+        if self.form is None:
+            return
+        children = [w for w in vars(self.form).values() if isinstance(w, QtCore.QObject)]
+        for w in self.quantity_boxes + children + [self.form]:
+            if shiboken2.isValid(w):
+                shiboken2.invalidate(w)
         self.quantity_boxes = []
+        self.form = None
 
     def on_progress(self, fraction, phase):
         if not phase:
@@ -333,7 +343,7 @@ class TaskPanelHexDominant(base_taskpanel.TransactionTaskPanel):
         self.show_results(report)
         if self.accept_when_done:
             self.accept_when_done = False
-            self.release_quantity_boxes()
+            self.release_wrappers()
             super().accept()
 
     def fail(self, error):
@@ -368,12 +378,12 @@ class TaskPanelHexDominant(base_taskpanel.TransactionTaskPanel):
             self.apply()
             return False
         self.shut_down()
-        self.release_quantity_boxes()
+        self.release_wrappers()
         return super().accept()
 
     def reject(self):
         self.shut_down()
-        self.release_quantity_boxes()
+        self.release_wrappers()
         return super().reject()
 
     # -- results ------------------------------------------------------------------------------

@@ -3,8 +3,8 @@
 panel at the combo view's default width (no value cut off) and its wheel guard; Apply and OK on
 a tet mesh and a shape; colours of first- and second-order meshes checked triangle by triangle;
 Cancel during the engine (three times) leaves no timer and no error, and closing a panel lets go of
-its quantity boxes without deleting through PySide (flag_as_qapp); OK without Apply runs in the background;
-save and reopen print no error. Takes screenshots of the panel and of a coloured Hexa20 mesh."""
+its form and quantity boxes without deleting through PySide (flag_as_qapp); OK without Apply runs
+in the background; save and reopen print no error. Takes screenshots of the panel and of a coloured Hexa20 mesh."""
 
 import os
 import subprocess
@@ -236,8 +236,13 @@ def open_panel(command, obj_to_select):
     FreeCADGui.Selection.clearSelection()
     FreeCADGui.Selection.addSelection(obj_to_select)
     FreeCADGui.runCommand(command)
-    assert wait(lambda: TaskPanelHexDominant.current is not previous, 10), "no panel"
-    return TaskPanelHexDominant.current
+    assert wait(lambda: TaskPanelHexDominant.current not in (None, previous), 10), "no panel"
+    panel = TaskPanelHexDominant.current
+    # a fresh form: not a dead panel's wrapper (at the same address) with its dead children
+    import shiboken2
+    assert all(shiboken2.isValid(w) for w in (panel.form, panel.form.w_advanced,
+                                              panel.form.l_status)), "a dead widget in a new panel"
+    return panel
 
 
 def finished(panel):
@@ -275,6 +280,7 @@ def main():
     import shiboken2
     import helpers
     from freecad.hexmerge import commands, mesh_hexdominant
+    from freecad.hexmerge.task_mesh_hexdominant import TaskPanelHexDominant
 
     doc, mesh = helpers.box_doc("1st", 8.0, name="HexMergeGui")
     fem_actions = check_fem_menu()
@@ -378,7 +384,10 @@ def main():
         errors_before = len(report_view_errors())
         run = panel.run
         boxes = flag_as_qapp(panel)
+        form, advanced = panel.form, panel.form.w_advanced
         panel.reject()
+        assert not shiboken2.isValid(form) and not shiboken2.isValid(advanced) and \
+            TaskPanelHexDominant.current is None, "Cancel left the form's wrappers for a later panel"
         assert not run.timer.isActive(), "the progress timer still runs after Cancel"
         assert not run.running(), "the engine thread still runs after Cancel"
         assert not any(shiboken2.isValid(w) for w in boxes), "Cancel left a box wrapper valid"
