@@ -74,8 +74,40 @@ double cell_volume(CellType type, const double* points, const index_t* vertices)
   return six_volume / 6.0;
 }
 
+namespace {
+
+// scaled_jacobian() of a tet, to the last bit: the same corners and arithmetic as the general
+// loop (cell_type.cpp's tet corners {0,1,2,3}, {1,2,0,3}, {2,0,1,3}, {3,0,2,1}), with each of the
+// six edge lengths computed once (|a - b| and |b - a| are the same double). The mesher's flips
+// and node moves evaluate tets by the million.
+double tet_scaled_jacobian(const double* points, const index_t* vertices, double scale) {
+  const Vec3 p0 = Vec3::of(points + 3 * static_cast<std::size_t>(vertices[0]));
+  const Vec3 p1 = Vec3::of(points + 3 * static_cast<std::size_t>(vertices[1]));
+  const Vec3 p2 = Vec3::of(points + 3 * static_cast<std::size_t>(vertices[2]));
+  const Vec3 p3 = Vec3::of(points + 3 * static_cast<std::size_t>(vertices[3]));
+  const Vec3 e01 = p1 - p0, e02 = p2 - p0, e03 = p3 - p0;
+  const Vec3 e12 = p2 - p1, e10 = p0 - p1, e13 = p3 - p1;
+  const Vec3 e20 = p0 - p2, e21 = p1 - p2, e23 = p3 - p2;
+  const Vec3 e30 = p0 - p3, e32 = p2 - p3, e31 = p1 - p3;
+  const double l01 = e01.norm(), l02 = e02.norm(), l03 = e03.norm();
+  const double l12 = e12.norm(), l13 = e13.norm(), l23 = e23.norm();
+  auto corner = [](const Vec3& a, const Vec3& b, const Vec3& c, double la, double lb, double lc) {
+    const double l = la * lb * lc;
+    return l > 0.0 ? det3(a, b, c) / l : 0.0;
+  };
+  double worst = 1e300;  // as the general loop starts (a NaN corner then leaves it)
+  worst = std::min(worst, corner(e01, e02, e03, l01, l02, l03));
+  worst = std::min(worst, corner(e12, e10, e13, l12, l01, l13));
+  worst = std::min(worst, corner(e20, e21, e23, l02, l12, l23));
+  worst = std::min(worst, corner(e30, e32, e31, l03, l23, l13));
+  return std::min(1.0, worst * scale);
+}
+
+}  // namespace
+
 double scaled_jacobian(CellType type, const double* points, const index_t* vertices) {
   const CellDescriptor& d = descriptor(type);
+  if (type == CellType::Tet) return tet_scaled_jacobian(points, vertices, d.jacobian_scale);
   auto p = [&](int local) {
     return Vec3::of(points + 3 * static_cast<std::size_t>(vertices[local]));
   };

@@ -52,6 +52,7 @@ class FlipMesh {
            const std::vector<std::int32_t>& boundary_patch)
       : points_(mesh.points) {
     at_vertex_.resize(mesh.nb_vertices());
+    changed_.assign(mesh.nb_vertices(), 0);
     for (index_t t = 0; t < mesh.nb_tets(); ++t) {
       const index_t* v = mesh.tet(t);
       add(Tet{v[0], v[1], v[2], v[3]}, mesh.region(t), !fixed.empty() && fixed[t]);
@@ -87,14 +88,31 @@ class FlipMesh {
     fixed_.push_back(fixed);
     alive_.push_back(1);
     quality_.push_back(quality(t));
-    for (index_t v : t) at_vertex_[v].push_back(id);
+    examined_.push_back(0);
+    for (index_t v : t) at_vertex_[v].push_back(id), changed_[v] = clock_;
   }
   void remove(index_t t) {
     alive_[t] = 0;
     for (index_t v : tets_[t]) {
       auto& list = at_vertex_[v];
       list.erase(std::find(list.begin(), list.end(), t));
+      changed_[v] = clock_;
     }
+  }
+
+  // Whether t's flips may differ from when it was last examined: everything they read (the
+  // tets across its faces and around its edges, their qualities, the boundary patches of faces
+  // at its edges) lies in tets holding one of its vertices, and every tet added or removed
+  // stamps its vertices. A tet never examined has stamp 0, below every clock.
+  bool changed_since_examined(index_t t) const {
+    const std::uint64_t seen = examined_[t];
+    return seen == 0 || std::any_of(tets_[t].begin(), tets_[t].end(),
+                                    [&](index_t v) { return changed_[v] >= seen; });
+  }
+  // Marks t examined now; the next change stamps with a later clock.
+  void examine(index_t t) {
+    examined_[t] = ++clock_;
+    ++clock_;
   }
 
   // The tets around edge (a, b), in `around`, and their other vertices in `ring`, so that tet i
@@ -189,6 +207,10 @@ class FlipMesh {
   std::vector<char> fixed_, alive_;
   std::vector<double> quality_;
   std::vector<std::vector<index_t>> at_vertex_;
+  // Change stamps: per tet the clock when it was last examined, per vertex when a tet at it was
+  // last added or removed (see changed_since_examined).
+  std::vector<std::uint64_t> examined_, changed_;
+  std::uint64_t clock_ = 1;
   std::unordered_map<FaceKey, std::int32_t, FaceKeyHash> patch_;
 };
 
@@ -325,11 +347,16 @@ void remove_slivers(TetMesh& mesh, const std::vector<char>& fixed,
     work.clear();
     for (index_t t = 0; t < m.nb_slots(); ++t)
       if (m.alive(t) && !m.fixed(t) && m.quality(t) < parameters.target) work.push_back(t);
-    std::sort(work.begin(), work.end(),
-              [&](index_t a, index_t b) { return m.quality(a) < m.quality(b); });
+    // Worst first; ties by slot, so that the order depends on nothing but the tets in the list.
+    std::sort(work.begin(), work.end(), [&](index_t a, index_t b) {
+      return m.quality(a) < m.quality(b) || (m.quality(a) == m.quality(b) && a < b);
+    });
     std::size_t flips = 0;
     for (index_t t : work) {
-      if (!m.alive(t)) continue;
+      // A tet whose surroundings did not change since it was last examined has no flip now
+      // either (it may change before its turn: hence the test here, not in the list).
+      if (!m.alive(t) || !m.changed_since_examined(t)) continue;
+      m.examine(t);
       // The best flip that replaces t, better than the tets it replaces.
       Flip best;
       for (int i = 0; i < 4; ++i) best_face_removal(m, t, i, best);
