@@ -40,6 +40,25 @@ void smooth_nodes(TetMesh& mesh, const std::vector<char>& movable,
     for (std::size_t i = start[v]; i < start[v + 1]; ++i) q = std::min(q, quality(at[i]));
     return q;
   };
+  // The same, but only when it is above `bound`: else some value <= bound, found as soon as one
+  // tet is no better (the tet that was the worst last goes first: most tries fail on it).
+  std::size_t last_worst = 0;
+  auto worst_above = [&](index_t v, double bound) {
+    double q = std::numeric_limits<double>::infinity();
+    std::size_t worst = last_worst;
+    for (std::size_t k = start[v]; k <= start[v + 1]; ++k) {
+      const std::size_t i = k == start[v] ? last_worst : k - 1;
+      if (k > start[v] && i == last_worst) continue;
+      const double qi = quality(at[i]);
+      if (qi <= bound) {
+        last_worst = i;
+        return qi;
+      }
+      if (qi < q) q = qi, worst = i;  // as std::min: a NaN is passed over
+    }
+    last_worst = worst;
+    return q;
+  };
   auto place = [&](index_t v, const Vec3& p) {
     double* x = &mesh.points[3 * static_cast<std::size_t>(v)];
     x[0] = p.x, x[1] = p.y, x[2] = p.z;
@@ -78,10 +97,11 @@ void smooth_nodes(TetMesh& mesh, const std::vector<char>& movable,
           shortest = std::min(shortest, (p - origin).norm());
         }
       centroid = centroid * (1.0 / count);
+      last_worst = start[v];
       // Tries position p: kept (and the node left there) when strictly better.
       auto try_at = [&](const Vec3& p) {
         place(v, p);
-        const double q = worst_at(v);
+        const double q = worst_above(v, best + 1e-12);
         if (q > best + 1e-12) {
           best = q, here = p;
           return true;
