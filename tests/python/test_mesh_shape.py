@@ -732,6 +732,9 @@ def test_touching_solids_are_meshed_conformally_one_region_each(tmp_path) -> Non
     for region, volume in enumerate(expected):
         got = volumes[tets.regions == region].sum()
         assert abs(got - volume) < 0.01 * volume, (region, got, volume)
+    # The regions come from the triangles on the faces; classifying every tet by geometry agrees.
+    by_geometry, _ = hexmerge.regions_by_solid(shape.read_text(), tets.points, cells, classify_every_tet=True)
+    assert np.array_equal(by_geometry, tets.regions)
     # No face between two regions is a boundary face: every interface triangle has a tet on
     # each side (the mesh is one conforming piece).
     faces = np.sort(np.concatenate([cells[:, [1, 2, 3]], cells[:, [0, 2, 3]], cells[:, [0, 1, 3]],

@@ -24,6 +24,7 @@
 #include "hexmerge/occ/mesher/second_order.h"
 #include "hexmerge/occ/mesher/shape.h"
 #include "hexmerge/occ/mesher/size_estimate.h"
+#include "hexmerge/occ/mesher/solid_regions.h"
 #include "hexmerge/occ/mesher/surface.h"
 #include "hexmerge/occ/mesher/surface_repair.h"
 #include "hexmerge/occ/mesher/sweep.h"
@@ -71,9 +72,13 @@ TetMesh world_mesh(const std::string& brep, const Shape& shape, const Surface& s
     mesh.points[3 * i] = surface.nodes[i].x, mesh.points[3 * i + 1] = surface.nodes[i].y,
                     mesh.points[3 * i + 2] = surface.nodes[i].z;
   }
-  if (shape.solids.Extent() > 1)
-    mesh.regions = regions_by_solid(brep, mesh);
-  else
+  if (shape.solids.Extent() > 1) {
+    // From the triangles TetGen kept on the faces; by geometry where they do not separate the
+    // solids (they always do when TetGen recovered every face).
+    std::optional<std::vector<std::int32_t>> regions =
+        solid_regions(shape, mesh.tets, tets.boundary, tets.boundary_marker);
+    mesh.regions = regions ? std::move(*regions) : regions_by_solid(brep, mesh);
+  } else
     mesh.regions.assign(mesh.tets.size() / 4, 0);
   return mesh;
 }

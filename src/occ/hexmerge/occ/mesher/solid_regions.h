@@ -1,0 +1,29 @@
+#pragma once
+/// @file
+/// The solid of each tet of a mesh made from a shape's faces (internal header: includes
+/// OpenCASCADE through shape.h).
+
+#include <array>
+#include <cstdint>
+#include <optional>
+#include <vector>
+
+#include "hexmerge/core/index.h"
+#include "hexmerge/occ/mesher/shape.h"
+
+namespace hexmerge::mesher {
+
+/// Per tet, the index of its solid in shape.solids, from the triangles the tetrahedraliser kept
+/// on the shape's faces: the tets connected through faces that are no such triangle are one
+/// solid's, and that solid is the one every face they touch bounds (a shared face bounds two).
+/// No geometry is evaluated. Nothing when the triangles do not separate the solids (a component
+/// touching faces of no single common solid): the caller then classifies by geometry.
+/// @param[in] shape      the shape meshed (its solids and faces, glued where they touch)
+/// @param[in] tets       #tets by 4, vertex indices
+/// @param[in] triangles  the triangles on the shape's faces (interior ones, between two solids,
+///                       included), each with its face's index into shape.faces + 1
+std::optional<std::vector<std::int32_t>> solid_regions(
+    const Shape& shape, const std::vector<index_t>& tets,
+    const std::vector<std::array<index_t, 3>>& triangles, const std::vector<int>& markers);
+
+}  // namespace hexmerge::mesher
