@@ -19,7 +19,7 @@ constexpr double kCoreSlack = 0.05;
 // A wall meets a lattice-face wall "at about a right angle" when their normals are further
 // apart than this angle (and nearer than its supplement): its layer is then carried onto the
 // lattice face.
-constexpr double kOntoPlaneAngle = 60.0;
+constexpr double kOntoPlaneAngle = 70.0;
 
 }  // namespace
 
