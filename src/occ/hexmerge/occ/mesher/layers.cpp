@@ -108,6 +108,55 @@ std::size_t place_layers(const std::vector<Vec3>& nodes, const Surface& surface,
     for (int c : t.node)
       if (unit(n).dot(normal[c]) < std::cos(25.0 * M_PI / 180)) smooth[c] = false;
   }
+  // Not swept: where a face of one solid meets a lattice face at about a right angle (a bore
+  // and the plane it goes through), the layer goes on in that plane: the node's layer points
+  // lie on the lattice face, along its other faces' normal made parallel to the plane, and are
+  // points of that face for TetGen. A layer ending before the plane left a wedge there and a
+  // tet or prism of the full depth on the plane (docs/fem-accuracy.md).
+  std::vector<int> onto_axis(nodes.size(), -1);  // per node: the lattice plane's axis, -1: none
+  if (sweep_axis < 0) {
+    std::vector<Vec3> own(nodes.size(), Vec3{0, 0, 0});  // its faces' normal, lattice faces out
+    std::vector<int> axis_of(nodes.size(), -1);          // the lattice plane; -2: two or more
+    std::vector<double> offset_of(nodes.size(), 0.0);
+    for (const SurfaceTriangle& t : surface.triangles) {
+      const std::size_t face = static_cast<std::size_t>(t.face);
+      for (const int c : t.node) {
+        if (face_solid_count[face] > 1) {
+          axis_of[c] = -2;
+        } else if (lattice.lattice_face[face]) {
+          const int a = lattice.face_plane[face]->axis;
+          const double at = coord(nodes[t.node[0]], a);
+          if (axis_of[c] == -1)
+            axis_of[c] = a, offset_of[c] = at;
+          else if (axis_of[c] != a || offset_of[c] != at)
+            axis_of[c] = -2;
+        } else {
+          own[c] = own[c] + triangle_normal(t);
+        }
+      }
+    }
+    for (std::size_t c = 0; c < nodes.size(); ++c)
+      if (axis_of[c] >= 0 && own[c].norm() > 0 && (!no_layers || !(*no_layers)[c] || spec_of[c] >= 0))
+        own[c] = unit(own[c]);
+      else
+        axis_of[c] = -1;
+    for (const SurfaceTriangle& t : surface.triangles) {
+      if (lattice.lattice_face[static_cast<std::size_t>(t.face)]) continue;
+      const Vec3 n = triangle_normal(t);
+      for (const int c : t.node)
+        if (axis_of[c] >= 0 && (n.norm() == 0 || unit(n).dot(own[c]) < std::cos(25.0 * M_PI / 180)))
+          axis_of[c] = -1;
+    }
+    for (std::size_t c = 0; c < nodes.size(); ++c) {
+      if (axis_of[c] < 0 || std::abs(coord(own[c], axis_of[c])) > std::cos(kOntoPlaneAngle * M_PI / 180))
+        continue;
+      Vec3 in_plane = own[c];
+      set_coord(in_plane, axis_of[c], 0.0);
+      onto_axis[c] = axis_of[c];
+      normal[c] = unit(in_plane);
+      smooth[c] = true;
+    }
+  }
   // Swept: the nodes repeating a node of the bottom caps' boundary take its normal across the
   // walls (its sides' normals weighted by length), on the caps' planes too, and are smooth where
   // the walls are; the depths, the room and the caps' faces are found on the bottom plane, so
@@ -244,8 +293,9 @@ std::size_t place_layers(const std::vector<Vec3>& nodes, const Surface& surface,
           // This layer's own thickness: points of other layers keep 0.3 of it away.
           const double own = spec ? spec->depth(k) - spec->depth(k - 1) : layer;
           Vec3 q = nodes[i] - normal[i] * (sign * depth);
-          // Carried onto a lattice-face wall: exactly on its plane, within its side.
-          int plane_axis = -1;
+          // Carried onto a lattice face: exactly on its plane; swept, within the wall's side.
+          int plane_axis = onto_axis[i];
+          if (plane_axis >= 0) set_coord(q, plane_axis, coord(nodes[i], plane_axis));
           if (onto_side[i] >= 0) {
             const auto& side = swept.sides[static_cast<std::size_t>(onto_side[i])];
             const AxisPlane& plane =
@@ -296,12 +346,25 @@ std::size_t place_layers(const std::vector<Vec3>& nodes, const Surface& surface,
           }
           // Inside the shape and clear of every face, lattice faces too: points offset from a
           // curved face next to a planar one went through the planar one, and TetGen left them out.
-          if (!parity.inside(q) || around.every_face.any_within(q, kLayerClearance * depth))
+          // Carried onto a lattice face: inside that face, clear of every other.
+          int face = -1;
+          if (plane_axis >= 0) {
+            int index[3] = {-1, -1, -1};
+            index[plane_axis] =
+                static_cast<int>(std::lround(coord(q, plane_axis) / lattice.spacing[plane_axis]));
+            face = around.on_lattice_face(q, index);
+            if (face < 0 || around.every_face.any_within_off_plane(q, kLayerClearance * depth,
+                                                                    plane_axis,
+                                                                    coord(q, plane_axis)))
+              continue;
+          } else if (!parity.inside(q) ||
+                     around.every_face.any_within(q, kLayerClearance * depth)) {
             continue;
+          }
           if (!clear_of_core(q)) continue;
           around.layer_points.add(q);
           inserted.points.push_back(q);
-          inserted.face.push_back(-1);
+          inserted.face.push_back(face);
           ++placed;
           if (spec) reach(i, k, 1);
         }
