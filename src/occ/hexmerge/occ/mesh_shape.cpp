@@ -470,22 +470,18 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
   // The face layers' points (the last place_layers() added) stay at their depths: they go first
   // among the isolated points, and improve_tets() leaves every point before them in place (the
   // points on lattice faces too: finer lattices' points there keep their place then).
-  // (Those carried onto a lattice face are points of that face, which stay too.)
   std::size_t nb_face_layer_points = 0;
   for (const FaceLayersApplied& applied : report.face_layers)
     nb_face_layer_points += applied.nb_points;
-  const std::size_t face_layers_from = before_layers + report.nb_layer_points - nb_face_layer_points;
   std::size_t isolated_before = 0;  // isolated points before the face layers' in `inserted`
-  for (std::size_t i = 0; i < face_layers_from; ++i) isolated_before += inserted.face[i] < 0;
-  std::size_t nb_isolated_face_layer = 0;  // the face layers' points that are isolated
-  for (std::size_t i = face_layers_from; i < face_layers_from + nb_face_layer_points; ++i)
-    nb_isolated_face_layer += inserted.face[i] < 0;
+  for (std::size_t i = 0; i < before_layers + report.nb_layer_points - nb_face_layer_points; ++i)
+    isolated_before += inserted.face[i] < 0;
   const std::size_t nb_on_faces = face_points_first(inserted);
   // (Swept: nothing moves, and the face layers' points on caps are face points.)
-  if (nb_isolated_face_layer > 0 && sweep_axis < 0) {  // the isolated ones, in order
+  if (nb_face_layer_points > 0 && sweep_axis < 0) {  // every point in the range is isolated
     const auto first = inserted.points.begin() + static_cast<std::ptrdiff_t>(nb_on_faces);
     std::rotate(first, first + static_cast<std::ptrdiff_t>(isolated_before),
-                first + static_cast<std::ptrdiff_t>(isolated_before + nb_isolated_face_layer));
+                first + static_cast<std::ptrdiff_t>(isolated_before + nb_face_layer_points));
   }
   step("layers", 0.3);
 
@@ -534,7 +530,7 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
   improve.sweep_axis = sweep_axis;
   improve.nb_surface_nodes =
       nodes.size() +
-      (nb_isolated_face_layer > 0 && sweep_axis < 0 ? nb_on_faces + nb_isolated_face_layer : 0);
+      (nb_face_layer_points > 0 && sweep_axis < 0 ? nb_on_faces + nb_face_layer_points : 0);
   improve.max_boundary_shift = deflection;
   std::vector<std::int32_t> boundary_face(tets.boundary_marker.size());
   for (std::size_t i = 0; i < boundary_face.size(); ++i)

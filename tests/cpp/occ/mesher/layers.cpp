@@ -5,7 +5,6 @@
 #include <cmath>
 #include <utility>
 
-#include "hexmerge/occ/mesher/common.h"
 #include "hexmerge/occ/mesher/surface_repair.h"
 #include "mesher_fixtures.h"
 
@@ -13,9 +12,7 @@ namespace hexmerge::test {
 namespace {
 
 // The plate with a hole, refined and not swept: the layers go around the hole only (the other
-// faces are lattice faces), at k layer depths (10 % jitter) into the solid; where the hole meets
-// the plate's top and bottom (lattice faces, at a right angle), on those faces: points of that
-// face, on its plane.
+// faces are lattice faces), at k layer depths (10 % jitter) into the solid.
 TEST(place_layers, around_the_curved_faces_at_their_depths) {
   const double h = 2.0, thickness = 0.3 * h;
   for (int layers : {1, 2}) {
@@ -34,23 +31,12 @@ TEST(place_layers, around_the_curved_faces_at_their_depths) {
     ASSERT_EQ(inserted.points.size(), placed);
     ASSERT_EQ(inserted.face.size(), placed);
     EXPECT_GT(placed, 50u * layers);
-    std::size_t deepest = 0, on_faces = 0;
+    std::size_t deepest = 0;
     for (std::size_t i = 0; i < placed; ++i) {
       const Vec3 q = inserted.points[i];
+      EXPECT_EQ(inserted.face[i], -1);
       bool on = false;
-      const bool inside = occ_inside(p.shape, p.lattice.frame.to_world(q), on);
-      const int face = inserted.face[i];
-      if (face >= 0) {
-        ++on_faces;
-        ASSERT_TRUE(p.lattice.lattice_face[static_cast<std::size_t>(face)]) << i;
-        const mesher::AxisPlane& plane = *p.lattice.face_plane[static_cast<std::size_t>(face)];
-        const double level = mesher::coord(q, plane.axis) / p.lattice.spacing[plane.axis];
-        EXPECT_EQ(level, std::round(level)) << i;  // exactly on a lattice plane
-        EXPECT_TRUE(on) << i;
-      } else {
-        EXPECT_EQ(face, -1);
-        EXPECT_TRUE(inside) << i;
-      }
+      EXPECT_TRUE(occ_inside(p.shape, p.lattice.frame.to_world(q), on)) << i;
       // Depth from the hole's wall (r = 8, axis at (30, 20)): within a layer's 10 % jitter of
       // a whole number of layers, up to `layers`.
       const double depth = std::hypot(q.x - 30, q.y - 20) - 8;
@@ -62,8 +48,6 @@ TEST(place_layers, around_the_curved_faces_at_their_depths) {
       EXPECT_TRUE(around.layer_points.any_within(q, 1e-9));
     }
     EXPECT_EQ(deepest, static_cast<std::size_t>(layers));
-    // Both of the hole's rims (about 25 nodes each at h 2), every layer.
-    EXPECT_GT(on_faces, 2u * 20u * layers);
   }
 }
 

@@ -108,55 +108,6 @@ std::size_t place_layers(const std::vector<Vec3>& nodes, const Surface& surface,
     for (int c : t.node)
       if (unit(n).dot(normal[c]) < std::cos(25.0 * M_PI / 180)) smooth[c] = false;
   }
-  // Not swept: where a face of one solid meets a lattice face at about a right angle (a bore
-  // and the plane it goes through), the layer goes on in that plane: the node's layer points
-  // lie on the lattice face, along its other faces' normal made parallel to the plane, and are
-  // points of that face for TetGen. A layer ending before the plane left a wedge there and a
-  // tet or prism of the full depth on the plane (docs/fem-accuracy.md).
-  std::vector<int> onto_axis(nodes.size(), -1);  // per node: the lattice plane's axis, -1: none
-  if (sweep_axis < 0) {
-    std::vector<Vec3> own(nodes.size(), Vec3{0, 0, 0});  // its faces' normal, lattice faces out
-    std::vector<int> axis_of(nodes.size(), -1);          // the lattice plane; -2: two or more
-    std::vector<double> offset_of(nodes.size(), 0.0);
-    for (const SurfaceTriangle& t : surface.triangles) {
-      const std::size_t face = static_cast<std::size_t>(t.face);
-      for (const int c : t.node) {
-        if (face_solid_count[face] > 1) {
-          axis_of[c] = -2;
-        } else if (lattice.lattice_face[face]) {
-          const int a = lattice.face_plane[face]->axis;
-          const double at = coord(nodes[t.node[0]], a);
-          if (axis_of[c] == -1)
-            axis_of[c] = a, offset_of[c] = at;
-          else if (axis_of[c] != a || offset_of[c] != at)
-            axis_of[c] = -2;
-        } else {
-          own[c] = own[c] + triangle_normal(t);
-        }
-      }
-    }
-    for (std::size_t c = 0; c < nodes.size(); ++c)
-      if (axis_of[c] >= 0 && own[c].norm() > 0 && (!no_layers || !(*no_layers)[c] || spec_of[c] >= 0))
-        own[c] = unit(own[c]);
-      else
-        axis_of[c] = -1;
-    for (const SurfaceTriangle& t : surface.triangles) {
-      if (lattice.lattice_face[static_cast<std::size_t>(t.face)]) continue;
-      const Vec3 n = triangle_normal(t);
-      for (const int c : t.node)
-        if (axis_of[c] >= 0 && (n.norm() == 0 || unit(n).dot(own[c]) < std::cos(25.0 * M_PI / 180)))
-          axis_of[c] = -1;
-    }
-    for (std::size_t c = 0; c < nodes.size(); ++c) {
-      if (axis_of[c] < 0 || std::abs(coord(own[c], axis_of[c])) > std::cos(kOntoPlaneAngle * M_PI / 180))
-        continue;
-      Vec3 in_plane = own[c];
-      set_coord(in_plane, axis_of[c], 0.0);
-      onto_axis[c] = axis_of[c];
-      normal[c] = unit(in_plane);
-      smooth[c] = true;
-    }
-  }
   // Swept: the nodes repeating a node of the bottom caps' boundary take its normal across the
   // walls (its sides' normals weighted by length), on the caps' planes too, and are smooth where
   // the walls are; the depths, the room and the caps' faces are found on the bottom plane, so
@@ -201,24 +152,25 @@ std::size_t place_layers(const std::vector<Vec3>& nodes, const Surface& surface,
     // lattice face, along the wall's normal made parallel to the plane. A layer ending before the
     // plane left a wedge there and a hexahedron of the full depth on the plane, and the first-order
     // stress at the bore peaked two nodes from it (docs/fem-accuracy.md). Where the wall meets the
-    // lattice face at a shallow angle (a fillet), the station stays without layers.
+    // lattice face at a shallow angle (a fillet), the station stays without layers; face layers
+    // end at their walls' edges. (Not swept, the same carried onto lattice faces lowered the
+    // tets' smallest scaled Jacobian: cylinder h 2.7 0.227 to 0.181, bracket-4 with two layers
+    // recombined 0.112 to 0.062; not done.)
+    // Per station, its side on a lattice-face wall (-2: two), and its other sides.
     std::vector<int> lattice_side(nodes.size(), -1), other_sides(nodes.size(), 0);
-    std::vector<Vec3> other_sum(nodes.size(), Vec3{0, 0, 0});
     for (std::size_t k = 0; k < swept.sides.size(); ++k)
       for (int end : swept.sides[k]) {
-        if (swept.on_lattice_face[k]) {
+        if (swept.on_lattice_face[k])
           lattice_side[end] = lattice_side[end] == -1 ? static_cast<int>(k) : -2;
-        } else {
+        else
           ++other_sides[end];
-          other_sum[end] = other_sum[end] + side_normal[k];
-        }
       }
     for (std::size_t k = 0; k < swept.sides.size(); ++k) {
       if (swept.on_lattice_face[k] || swept.shared[k]) continue;
       const Vec3 n = unit(side_normal[k]);
       for (int end : swept.sides[k]) {
         const int l = lattice_side[end];
-        if (l < 0 || other_sides[end] != 1 || two_sided[end]) continue;
+        if (l < 0 || other_sides[end] != 1 || two_sided[end] || spec_of[end] >= 0) continue;
         const Vec3 plane = unit(side_normal[static_cast<std::size_t>(l)]);
         if (std::abs(n.dot(plane)) > std::cos(kOntoPlaneAngle * M_PI / 180)) continue;
         const Vec3 in_plane = n - plane * n.dot(plane);
@@ -293,14 +245,12 @@ std::size_t place_layers(const std::vector<Vec3>& nodes, const Surface& surface,
           // This layer's own thickness: points of other layers keep 0.3 of it away.
           const double own = spec ? spec->depth(k) - spec->depth(k - 1) : layer;
           Vec3 q = nodes[i] - normal[i] * (sign * depth);
-          // Carried onto a lattice face: exactly on its plane; swept, within the wall's side.
-          int plane_axis = onto_axis[i];
-          if (plane_axis >= 0) set_coord(q, plane_axis, coord(nodes[i], plane_axis));
+          // Carried onto a lattice-face wall: exactly on its plane, within its side.
+          int plane_axis = -1;
           if (onto_side[i] >= 0) {
             const auto& side = swept.sides[static_cast<std::size_t>(onto_side[i])];
-            const AxisPlane& plane =
-                *lattice.face_plane[static_cast<std::size_t>(
-                    swept.wall[static_cast<std::size_t>(onto_side[i])][0])];
+            const AxisPlane& plane = *lattice.face_plane[static_cast<std::size_t>(
+                swept.wall[static_cast<std::size_t>(onto_side[i])][0])];
             plane_axis = plane.axis;
             set_coord(q, plane_axis, coord(nodes[i], plane_axis));
             const Vec3 along = nodes[side[0] == static_cast<int>(i) ? side[1] : side[0]] - nodes[i];
@@ -324,7 +274,8 @@ std::size_t place_layers(const std::vector<Vec3>& nodes, const Surface& surface,
               int face = around.on_lattice_face(r, index);  // a cap it lies in, on any plane
               if (face < 0 && (level == 0 || level == lattice.cells[a]))
                 break;  // outside: none anywhere
-              if (plane_axis >= 0 && face < 0) {  // on the lattice-face wall
+              // Carried onto a lattice-face wall: on that face (between the caps too).
+              if (plane_axis >= 0 && face < 0) {
                 int on_wall[3] = {-1, -1, -1};
                 on_wall[plane_axis] = static_cast<int>(
                     std::lround(coord(r, plane_axis) / lattice.spacing[plane_axis]));
@@ -346,25 +297,12 @@ std::size_t place_layers(const std::vector<Vec3>& nodes, const Surface& surface,
           }
           // Inside the shape and clear of every face, lattice faces too: points offset from a
           // curved face next to a planar one went through the planar one, and TetGen left them out.
-          // Carried onto a lattice face: inside that face, clear of every other.
-          int face = -1;
-          if (plane_axis >= 0) {
-            int index[3] = {-1, -1, -1};
-            index[plane_axis] =
-                static_cast<int>(std::lround(coord(q, plane_axis) / lattice.spacing[plane_axis]));
-            face = around.on_lattice_face(q, index);
-            if (face < 0 || around.every_face.any_within_off_plane(q, kLayerClearance * depth,
-                                                                    plane_axis,
-                                                                    coord(q, plane_axis)))
-              continue;
-          } else if (!parity.inside(q) ||
-                     around.every_face.any_within(q, kLayerClearance * depth)) {
+          if (!parity.inside(q) || around.every_face.any_within(q, kLayerClearance * depth))
             continue;
-          }
           if (!clear_of_core(q)) continue;
           around.layer_points.add(q);
           inserted.points.push_back(q);
-          inserted.face.push_back(face);
+          inserted.face.push_back(-1);
           ++placed;
           if (spec) reach(i, k, 1);
         }

@@ -100,18 +100,6 @@ class TriangleSet {
       return squared_distance_to_triangle(q, nodes_[t[0]], nodes_[t[1]], nodes_[t[2]]) < r * r;
     });
   }
-  /// As any_within(), leaving out the triangles lying in the plane where coordinate `axis` is
-  /// `offset` (all three corners exactly on it).
-  bool any_within_off_plane(const Vec3& q, double r, int axis, double offset) const {
-    const Vec3 d{r, r, r};
-    return grid_.any_in(q - d, q + d, [&](int i) {
-      const auto& t = tris_[i];
-      if (coord(nodes_[t[0]], axis) == offset && coord(nodes_[t[1]], axis) == offset &&
-          coord(nodes_[t[2]], axis) == offset)
-        return false;
-      return squared_distance_to_triangle(q, nodes_[t[0]], nodes_[t[1]], nodes_[t[2]]) < r * r;
-    });
-  }
 
  private:
   const std::vector<Vec3>& nodes_;
