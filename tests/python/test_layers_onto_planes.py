@@ -17,7 +17,7 @@ import pytest
 
 import hexmerge
 from meshes import cell_volumes
-from test_mesh_shape import assert_checked, gmsh_brep, needs_tetgen, pytestmark  # noqa: F401
+from test_mesh_shape import assert_checked, boundary_nodes, gmsh_brep, needs_tetgen, pytestmark  # noqa: F401
 
 A, B, LENGTH = 50.0, 100.0, 20.0
 QUARTER_TUBE_GEO = f"""SetFactory("OpenCASCADE");
@@ -81,6 +81,15 @@ def test_the_bore_layer_goes_on_onto_the_symmetry_planes(quarter_tube, h: float,
     assert len(off_plane) > len(on_plane)
     for depths in (off_plane, on_plane):
         assert 0.89 * thickness * h <= min(depths) and max(depths) <= 1.11 * thickness * h, depths
+    # The layer nodes on the planes are nodes of the planes' triangles (TetGen got them as points
+    # of those facets, not as points inside).
+    p = tets.points
+    depth = np.hypot(p[:, 0], p[:, 1]) - A
+    layer_on_plane = ((np.abs(p[:, 0]) < 1e-9 * A) | (np.abs(p[:, 1]) < 1e-9 * A)) & \
+        (depth > 1e-6 * A) & (depth < 1.11 * thickness * h)
+    on_boundary = {tuple(q) for q in np.round(boundary_nodes(tets), 9)}
+    assert layer_on_plane.sum() == len(on_plane)
+    assert all(tuple(q) in on_boundary for q in np.round(p[layer_on_plane], 9))
 
     mesh, report = hexmerge.mesh_shape(quarter_tube, h, layer_thickness=thickness)
     result = assert_checked(mesh, tets, report, h)
