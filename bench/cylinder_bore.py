@@ -250,10 +250,29 @@ def shape_worker(job):
                               for e, d in zip(around[peak], depth)],
             "peak distortion": distortion[peak],
             "bore distortion": [min(d_values), max(d_values)],
-            "corr error distortion": float(np.corrcoef([error[n] for n in with_d], d_values)[0, 1])}
+            "corr error distortion": float(np.corrcoef([error[n] for n in with_d], d_values)[0, 1]),
+            "section": sorted((math.degrees(math.atan2(nodes[n].y, nodes[n].x)), error[n])
+                              for n in bore if abs(nodes[n].z) < 1e-6),
+            "plane layer nodes": plane_layer_nodes(nodes, bore, job["size"])}
 
 
-def shape_table(sizes, layer_thickness, boundary_layers, timeout):
+def plane_layer_nodes(nodes, bore, h):
+    """The bore nodes on the planes x = 0 and y = 0, and the radial depth of the nearest node
+    on the same plane and at the same z (within 0.7 h of the bore; None: none)."""
+    out = []
+    for n in bore:
+        p = nodes[n]
+        if abs(p.x) > 1e-6 and abs(p.y) > 1e-6:
+            continue
+        on_x = abs(p.x) <= 1e-6
+        depths = [math.hypot(q.x, q.y) - A for q in nodes.values()
+                  if abs(q.z - p.z) < 1e-6 and abs(q.x if on_x else q.y) <= 1e-6
+                  and 1e-6 < math.hypot(q.x, q.y) - A < 0.7 * h]
+        out.append(min(depths) if depths else None)
+    return out
+
+
+def shape_table(sizes, layer_thickness, boundary_layers, timeout, nodes=False):
     home = os.path.join(tempfile.gettempdir(), "hexmerge-fem-home")
     os.makedirs(home, exist_ok=True)
     for size in sizes:
@@ -278,6 +297,14 @@ def shape_table(sizes, layer_thickness, boundary_layers, timeout):
               "{peak theta:.1f} deg in {peak elements}, distortion {peak distortion:.3f} "
               "(bore hexahedra {bore distortion}); corr(node error, distortion) "
               "{corr error distortion:+.2f}".format(**r), flush=True)
+        layer = r["plane layer nodes"]
+        print("  bore nodes on the planes x = 0 and y = 0: {}, with a layer node on the plane: {} "
+              "(depth {})".format(len(layer), sum(d is not None for d in layer),
+                                  ", ".join("{:.2f}".format(d) for d in sorted(
+                                      {round(d, 2) for d in layer if d is not None})) or "-"))
+        if nodes:
+            print("  bore nodes at z = 0 (theta: error %): " + ", ".join(
+                "{:.1f}: {:+.2f}".format(t, e) for t, e in r["section"]), flush=True)
 
 
 def main():
@@ -287,12 +314,14 @@ def main():
     parser.add_argument("--layer-thickness", type=float)
     parser.add_argument("--boundary-layers", type=int)
     parser.add_argument("--timeout", type=float, default=900.0, help="seconds per size")
+    parser.add_argument("--nodes", action="store_true",
+                        help="shape: print every bore node's error at z = 0")
     args = parser.parse_args()
     if args.part == "polar":
         polar_table()
     else:
         shape_table([float(s) for s in args.sizes.split(",")], args.layer_thickness,
-                    args.boundary_layers, args.timeout)
+                    args.boundary_layers, args.timeout, args.nodes)
 
 
 if os.environ.get("HEXMERGE_BORE_JOB"):

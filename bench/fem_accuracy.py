@@ -435,11 +435,14 @@ def worker(job):
     else:
         shape = doc.getObject(mesh.Part.Name).Shape if mesh.Part else None
         second = job["order"] == "2nd"
-        sj = jobs.ShapeJob.prepare(shape, {"size": job["size"], "second_order": second})
+        extra = job.get("shape_options") or {}
+        sj = jobs.ShapeJob.prepare(shape, dict(extra, size=job["size"], second_order=second))
         sj.run()
         femmesh, report = sj.finish()
         mesh.FemMesh = femmesh
         label = "from shape {:g} mm, {} order".format(job["size"], "second" if second else "first")
+        if extra:
+            label += " ({})".format(", ".join("{}={}".format(k, v) for k, v in sorted(extra.items())))
         # As FreeCAD's writer writes it (C3D8 / C3D20), then each other hexahedron type the
         # add-on offers, retyped as the add-on's writer hook does (freecad/hexmerge/calculix.py).
         written = "C3D20" if second else "C3D8"
@@ -645,6 +648,9 @@ def main():
     parser.add_argument("--timeout", type=float, default=900.0, help="seconds per job")
     parser.add_argument("--no-doc", action="store_true", help="do not write docs/fem-accuracy.md")
     parser.add_argument("--table", help="print the table of an earlier JSON run")
+    parser.add_argument("--shape-options", default="{}",
+                        help='JSON: more mesher parameters for the meshes from the shape, e.g. '
+                        '\'{"layer_thickness": 0.15}\'')
     args = parser.parse_args()
     if args.table:
         with open(args.table) as f:
@@ -660,6 +666,8 @@ def main():
     t = time.perf_counter()
     os.makedirs(os.path.join(ROOT, "bench", "results"), exist_ok=True)
     for job in jobs_for(cases, args.kinds.split(","), args.orders.split(",")):
+        if job.get("kind", "shape") == "shape":
+            job["shape_options"] = json.loads(args.shape_options)
         try:
             rows += run_job(job, args.timeout)
         except (RuntimeError, subprocess.TimeoutExpired) as e:
