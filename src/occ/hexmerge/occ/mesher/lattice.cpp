@@ -15,6 +15,11 @@
 
 namespace hexmerge::mesher {
 
+namespace {
+// Closing pyramids' apexes keep at least this fraction of h from every face.
+constexpr double kApexClearance = 0.1;
+}  // namespace
+
 Lattice lay_lattice(const Shape& shape, const Frame& frame, const std::vector<Vec3>& surface_nodes,
                     double h, bool lattice_faces) {
   Lattice lattice;
@@ -299,8 +304,13 @@ CoreCounts add_core(const Lattice& lattice, Surroundings& around, const Parity& 
       return state = 1;
     }
     const auto [centre, r] = pyramid_sphere(i, j, k, dir);
+    // The apex off every face: on a face its sphere can touch the face's plane at the apex
+    // only (a face across the pyramid's axis), and the apex makes flat tets with the face's
+    // triangles (gmsh_SampleCrankshaft4A at h 4.61: apexes on a planar end face half a cell
+    // off the lattice planes).
     const bool ok = around.ball_is_empty(centre, r) &&
                     !around.surface_points.any_within(apex, 0.25 * h) &&
+                    !around.every_face.any_within(apex, kApexClearance * h) &&
                     !around.layer_points.any_within(apex, 0.25 * h);
     return state = ok ? 2 : 3;
   };
