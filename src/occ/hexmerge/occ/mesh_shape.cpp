@@ -417,6 +417,7 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
     refine(shape, surface, h, lattice.lattice_face, lattice.lattice_edge, local);
     report.nb_unrefined_faces = surface.unrefined_faces.size();
     collapse_sides(surface, h, h, lattice.lattice_face, local);
+    remove_folds(surface, 1e-8 * shape.diagonal);  // TetGen's own coincidence tolerance
   }
   const int sweep_axis = report.sweep_axis;
   step("surface", 0.15);

@@ -112,3 +112,42 @@ TEST(face_holding, first_triangle_holding_the_point) {
 
 }  // namespace
 }  // namespace hexmerge::test
+
+namespace hexmerge::test {
+namespace {
+
+TEST(remove_folds, coincident_nodes_merged_and_folds_taken_out) {
+  // A closed tetrahedron's surface (nodes 0-3), plus node 4 at node 3's place used by a fold on
+  // nodes 0, 1, 4 (one triangle each way), plus node 5 at node 2's place standing in for it in
+  // one of the tetrahedron's triangles.
+  mesher::Surface s;
+  s.nodes = {Vec3{0, 0, 0}, Vec3{1, 0, 0}, Vec3{0, 1, 0},
+             Vec3{0, 0, 1}, Vec3{0, 0, 1}, Vec3{0, 1, 1e-12}};
+  s.node_face = {0, 0, 0, 1, 1, 2};
+  s.seed = {10, 11, 12, 13, 14, 15};
+  auto triangle = [](int a, int b, int c, int face) {
+    mesher::SurfaceTriangle t;
+    t.node = {a, b, c};
+    t.face = face;
+    return t;
+  };
+  s.triangles = {triangle(0, 2, 1, 0), triangle(0, 1, 3, 1), triangle(1, 5, 3, 2),
+                 triangle(0, 3, 2, 3), triangle(0, 1, 4, 1), triangle(1, 0, 4, 1)};
+  s.segments[mesher::pair_key(1, 5)] = mesher::EdgeSegment{7, 0.0, 1.0};
+  mesher::remove_folds(s, 1e-9);
+  ASSERT_EQ(s.nodes.size(), 4u);  // 4 merged into 3, 5 into 2
+  ASSERT_EQ(s.triangles.size(), 4u);
+  std::string problem;
+  EXPECT_TRUE(closed_and_oriented(s.triangles, problem)) << problem;
+  EXPECT_EQ(s.seed, (std::vector<int>{10, 11, 12, 13}));
+  ASSERT_EQ(s.segments.size(), 1u);
+  EXPECT_EQ(s.segments.begin()->first, mesher::pair_key(1, 2));
+  // Nothing to do: nothing changes.
+  const auto before = s.triangles;
+  mesher::remove_folds(s, 1e-9);
+  ASSERT_EQ(s.triangles.size(), before.size());
+  for (std::size_t i = 0; i < before.size(); ++i) EXPECT_EQ(s.triangles[i].node, before[i].node);
+}
+
+}  // namespace
+}  // namespace hexmerge::test

@@ -69,6 +69,14 @@ constexpr double kSurfaceAngle = 0.35;
 /// @throws InputError when a face cannot be triangulated
 Surface triangulate(const Shape& s, double deflection, double tolerance);
 
+/// Merges nodes within `tolerance` of an earlier node into it (the triangles that lose a side go),
+/// takes out pairs of triangles on the same three nodes facing opposite ways (a fold: it bounds
+/// no volume; of triangles facing the same way one stays), then the nodes no triangle uses (the
+/// rest renumbered, with their segments and seeds). The repairs can leave nodes at one point
+/// where a side was split again and again there (gmsh_Kurbelwelle at h 0.57: ten nodes at one
+/// point of face 5, in folds), and TetGen stops on coincident nodes.
+void remove_folds(Surface& surface, double tolerance);
+
 /// The angle at node v between the sides to a and b.
 double angle_at(const std::vector<Vec3>& nodes, int v, int a, int b);
 /// The (area-weighted: twice the area long) normal of triangle abc.
