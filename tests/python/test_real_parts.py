@@ -164,3 +164,15 @@ def test_no_coincident_surface_nodes_reach_tetgen() -> None:
 
     rounded = np.round(tets.points / (1e-7 * 0.5699)).astype(np.int64)
     assert len(np.unique(rounded, axis=0)) == len(tets.points)  # no two nodes at one point
+
+
+def test_nodes_of_an_axis_parallel_edge_share_their_other_coordinates() -> None:
+    """gmsh_part at h 4.196 (its 50k size): the nodes of a straight edge along z on a lattice
+    face differed in the last bits of y, three of them collinear to 3e-15 only, and TetGen never
+    finished that face's surface mesh: the first run hit the time limit (42 s) and the part
+    meshed at the restart. The nodes of such an edge now share their other coordinates exactly."""
+    tets, report = hexmerge.mesh_shape(CAD / "gmsh_part.step", 4.196, recombine=False)
+    meshing = report["meshing"]
+    assert meshing["nb_tetgen_restarts"] == 0
+    assert meshing["failed_strategies"] == []
+    assert meshing["strategy"] == "lattice"

@@ -721,10 +721,18 @@ void align_straight_edges(const Shape& s, const Surface& surface,
     const double t0 = list.front().first, t1 = list.back().first;
     Vec3& a = nodes[list.front().second];
     Vec3& b = nodes[list.back().second];
-    std::vector<int> across;  // the axes the edge runs across
+    // The axes the edge runs across; along the others its ends differ by round-off at most
+    // (1e-9 of its length), and every node of the edge takes the first end's value there:
+    // gmsh_part at h 4.196 had an edge along z whose nodes' y differed in the last bits, and
+    // TetGen never ended meshing that lattice face (a run of three nodes collinear to 3e-15).
+    const double length = (b - a).norm();
+    std::vector<int> across, along;
     for (int c = 0; c < 3; ++c)
-      if (coord(a, c) != coord(b, c)) across.push_back(c);
-    if (across.size() < 2 || t1 <= t0) continue;
+      (std::abs(coord(a, c) - coord(b, c)) > 1e-9 * length ? across : along).push_back(c);
+    if (across.empty() || t1 <= t0) continue;
+    for (int c : along)
+      for (const auto& [t, node] : list) set_coord(nodes[node], c, coord(a, c));
+    if (across.size() < 2) continue;
     for (int c : across)
       set_coord(a, c, round_to(coord(a, c), exponent)),
           set_coord(b, c, round_to(coord(b, c), exponent));
