@@ -222,9 +222,8 @@ bool assemble_cell(const TetMesh& mesh, const TetTopology& topology, CellType ty
 
 namespace {
 
-// A match as the search keeps it until the end: a Candidate with room for the search's groups
-// only (kMaxNodes tets, not MAX_CANDIDATE_TETS): 64 bytes instead of 104, for the per-chunk
-// lists that are held together with the result while it is made.
+// A match as the search keeps it until the end: a Candidate with its tets in place (the search's
+// groups have at most kMaxNodes), for the per-chunk lists.
 struct Match {
   std::array<index_t, 8> vertices;
   std::array<index_t, kMaxNodes> tets;  // sorted; first nb_tets used
@@ -237,18 +236,33 @@ struct Match {
 // The matches of every chunk as candidates, in the order of their roots' input ids (a stable
 // counting sort on the root, each group's smallest tet), each root's own in the order they were
 // found. Each chunk's list is freed once its matches are placed.
-std::vector<Candidate> in_root_order(std::vector<std::vector<Match>>& per_chunk, index_t nt) {
+Candidates in_root_order(std::vector<std::vector<Match>>& per_chunk, index_t nt) {
+  // Per root: where its first candidate and its first candidate's first tet go.
   std::vector<std::size_t> start(static_cast<std::size_t>(nt) + 1, 0);
-  for (const auto& chunk : per_chunk)
-    for (const Match& m : chunk) ++start[m.tets[0] + 1];
-  for (index_t t = 0; t < nt; ++t) start[t + 1] += start[t];
+  std::vector<std::size_t> tet_start(static_cast<std::size_t>(nt) + 1, 0);
+  for (const auto& chunk : per_chunk) {
+    for (const Match& m : chunk) {
+      ++start[m.tets[0] + 1];
+      tet_start[m.tets[0] + 1] += m.nb_tets;
+    }
+  }
+  for (index_t t = 0; t < nt; ++t) {
+    start[t + 1] += start[t];
+    tet_start[t + 1] += tet_start[t];
+  }
+  if (tet_start[nt] >= NO_INDEX) {
+    throw ResourceError("the candidates hold more than 2^32 - 2 tets in all");
+  }
   std::vector<Candidate> all(start[nt]);
+  std::vector<index_t> tets(tet_start[nt]);
   for (auto& chunk : per_chunk) {
     for (const Match& m : chunk) {
       Candidate& c = all[start[m.tets[0]]++];
+      std::size_t& first = tet_start[m.tets[0]];
       c.vertices = m.vertices;
-      c.tets.fill(NO_CELL);
-      std::copy_n(m.tets.begin(), m.nb_tets, c.tets.begin());
+      c.first_tet = static_cast<index_t>(first);
+      std::copy_n(m.tets.begin(), m.nb_tets, tets.begin() + first);
+      first += m.nb_tets;
       c.type = m.type;
       c.graph = m.graph;
       c.nb_tets = m.nb_tets;
@@ -256,7 +270,7 @@ std::vector<Candidate> in_root_order(std::vector<std::vector<Match>>& per_chunk,
     }
     std::vector<Match>().swap(chunk);
   }
-  return all;
+  return Candidates(std::move(all), std::move(tets));
 }
 
 // The enabled search programs merged into one tree: programs that begin with the same steps
@@ -571,9 +585,9 @@ class Matcher {
 
 }  // namespace
 
-std::vector<Candidate> find_candidates(const TetMesh& mesh, const TetTopology& topology,
-                                       const AcceptanceCriteria& criteria, int threads,
-                                       const ProgressCallback& progress) {
+Candidates find_candidates(const TetMesh& mesh, const TetTopology& topology,
+                           const AcceptanceCriteria& criteria, int threads,
+                           const ProgressCallback& progress) {
   const index_t nt = mesh.nb_tets();
   // The search runs on a copy in space-filling-curve order (spatial_order.h), where the tets it
   // walks are mostly in cache; root i there is the input's tet input_id[i].

@@ -14,9 +14,7 @@ namespace {
 
 using QuadKey = FaceKey;
 
-bool holds(const Candidate& c, index_t t) {
-  return std::binary_search(c.tets.begin(), c.tets.begin() + c.nb_tets, t);
-}
+bool holds(TetSpan tets, index_t t) { return std::binary_search(tets.begin(), tets.end(), t); }
 
 // A quad face of a candidate: what is across its triangles (the tets there are the neighbours of
 // the Side's front tets across their faces on the quad).
@@ -45,7 +43,7 @@ struct CandidateQuads {
 };
 
 CandidateQuads quads_of(const TetMesh& mesh, const TetTopology& topology, const Candidate& c,
-                        index_t ci) {
+                        TetSpan tets, index_t ci) {
   const CellDescriptor& d = descriptor(c.type);
   CandidateQuads out;
   std::array<std::uint8_t, 8> quads_at{};  // per local vertex: bit k for the k-th quad face
@@ -56,8 +54,7 @@ CandidateQuads quads_of(const TetMesh& mesh, const TetTopology& topology, const 
     ++out.count;
   }
   std::array<int, 6> nb_front{};
-  for (int i = 0; i < c.nb_tets; ++i) {
-    const index_t t = c.tets[i];
+  for (const index_t t : tets) {
     const index_t* v = mesh.tet(t);
     std::array<std::uint8_t, 4> at{};
     for (int k = 0; k < 4; ++k)
@@ -70,7 +67,7 @@ CandidateQuads quads_of(const TetMesh& mesh, const TetTopology& topology, const 
         if (k != lf) in &= at[k];
       if (in == 0) continue;
       const index_t n = topology.neighbor(t, lf);
-      const bool inside = n != NO_CELL && holds(c, n);  // a face inside the cell (flat tets)
+      const bool inside = n != NO_CELL && holds(tets, n);  // a face inside the cell (flat tets)
       for (int k = 0; k < out.count; ++k) {
         if (!(in & (1u << k))) continue;
         Side& s = out.side[k];
@@ -98,9 +95,8 @@ CandidateQuads quads_of(const TetMesh& mesh, const TetTopology& topology, const 
 
 }  // namespace
 
-std::vector<Candidate> prune_unclosable(const TetMesh& mesh, const TetTopology& topology,
-                                        std::vector<Candidate> candidates, std::size_t& removed,
-                                        int threads) {
+Candidates prune_unclosable(const TetMesh& mesh, const TetTopology& topology, Candidates candidates,
+                            std::size_t& removed, int threads) {
   const index_t n = static_cast<index_t>(candidates.size());
   constexpr index_t kChunk = 4096;
   auto go_on = [](double) { return true; };
@@ -124,9 +120,9 @@ std::vector<Candidate> prune_unclosable(const TetMesh& mesh, const TetTopology& 
       }
     }
     std::vector<index_t> start(order.size() + 1, 0);  // first local id per rank of first tet
-    for (const Candidate& c : candidates) ++start[rank[c.tets[0]] + 1];
+    for (const Candidate& c : candidates) ++start[rank[candidates.tets(c)[0]] + 1];
     for (std::size_t i = 0; i < order.size(); ++i) start[i + 1] += start[i];
-    for (index_t ci = 0; ci < n; ++ci) by_local[start[rank[candidates[ci].tets[0]]]++] = ci;
+    for (index_t ci = 0; ci < n; ++ci) by_local[start[rank[candidates.tets(ci)[0]]]++] = ci;
   }
   // Quad face k of the candidate of local id l: first[l] <= k < first[l + 1].
   std::vector<index_t> first(static_cast<std::size_t>(n) + 1, 0);
@@ -226,9 +222,11 @@ std::vector<Candidate> prune_unclosable(const TetMesh& mesh, const TetTopology& 
           if (l + 8 < end) {  // local order jumps between the candidates' runs: fetch ahead
             const char* ahead = reinterpret_cast<const char*>(&candidates[by_local[l + 8]]);
             __builtin_prefetch(ahead);
-            __builtin_prefetch(ahead + 64);
+            __builtin_prefetch(ahead + sizeof(Candidate) - 1);
+            __builtin_prefetch(candidates.tets(by_local[l + 4]).data());
           }
-          const CandidateQuads cq = quads_of(mesh, topology, candidates[by_local[l]], l);
+          const Candidate& c = candidates[by_local[l]];
+          const CandidateQuads cq = quads_of(mesh, topology, c, candidates.tets(c), l);
           for (int i = 0; i < cq.count; ++i) {
             const index_t j = at[first[l] + i];
             const Quad& q = cq.quad[i];
@@ -259,7 +257,7 @@ std::vector<Candidate> prune_unclosable(const TetMesh& mesh, const TetTopology& 
     for (int i = 0; i < q.nb_behind; ++i) {
       const index_t b = topology.neighbor(q.front[i], (q.faces >> (2 * i)) & 3);
       if (s.exact ? b != s.front[0] && b != s.front[1]
-                  : !holds(candidates[by_local[s.candidate]], b))
+                  : !holds(candidates.tets(by_local[s.candidate]), b))
         return false;
     }
     return true;
@@ -318,11 +316,8 @@ std::vector<Candidate> prune_unclosable(const TetMesh& mesh, const TetTopology& 
   std::vector<char> keep(n, 0);
   for (index_t l = 0; l < n; ++l) keep[by_local[l]] = viable[l];
   // The kept ones moved up in place: no second array of candidates.
-  std::size_t kept = 0;
-  for (index_t ci = 0; ci < n; ++ci)
-    if (keep[ci]) candidates[kept++] = candidates[ci];
-  removed = n - kept;
-  candidates.resize(kept);
+  candidates.keep_if([&](index_t ci) { return keep[ci] != 0; });
+  removed = n - candidates.size();
   return candidates;
 }
 
