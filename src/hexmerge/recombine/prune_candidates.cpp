@@ -25,12 +25,12 @@ struct Quad {
 };
 
 // A candidate with a given quad face, as the candidates across it see it: whether it holds a
-// tet that touches the quad. Its tets on the quad's triangles (front) answer that without
-// reading the candidate, unless it has more than two such triangles or a triangle of the quad
-// inside it (flat tets): then `exact` is false and only its tets tell.
+// tet that touches the quad. Its tets on the quad's triangles (front, by their places among the
+// candidate's tets) answer that, unless it has more than two such triangles or a triangle of
+// the quad inside it (flat tets): then `exact` is false and all its tets tell.
 struct Side {
   index_t candidate;  // local id (prune_unclosable)
-  std::array<index_t, 2> front{NO_CELL, NO_CELL};
+  std::array<std::uint8_t, 2> front{0, 0};       // places among the candidate's tets
   std::array<std::uint8_t, 2> front_face{0, 0};  // the local face of each on the quad
   bool exact = true;
 };
@@ -54,7 +54,8 @@ CandidateQuads quads_of(const TetMesh& mesh, const TetTopology& topology, const 
     ++out.count;
   }
   std::array<int, 6> nb_front{};
-  for (const index_t t : tets) {
+  for (int place = 0; place < tets.size(); ++place) {
+    const index_t t = tets[place];
     const index_t* v = mesh.tet(t);
     std::array<std::uint8_t, 4> at{};
     for (int k = 0; k < 4; ++k)
@@ -82,7 +83,7 @@ CandidateQuads quads_of(const TetMesh& mesh, const TetTopology& topology, const 
           q.inner = true;
         ++q.nb_behind;
         if (nb_front[k] < 2) {
-          s.front[nb_front[k]] = t;
+          s.front[nb_front[k]] = static_cast<std::uint8_t>(place);
           s.front_face[nb_front[k]] = static_cast<std::uint8_t>(lf);
         } else
           s.exact = false;
@@ -135,36 +136,38 @@ Candidates prune_unclosable(const TetMesh& mesh, const TetTopology& topology, Ca
     first[l + 1] = static_cast<index_t>(total);
   }
   const index_t nb_quads = first[n];
-  auto for_each_key = [&](index_t l, auto&& fn) {
+  // The key of the i-th quad face of the candidate of local id l.
+  auto key_of = [&](index_t l, int i) {
     const Candidate& c = candidates[by_local[l]];
     const CellDescriptor& d = descriptor(c.type);
-    index_t k = first[l];
     for (int f = 0; f < d.nb_faces; ++f)
-      if (d.face_size[f] == 4) fn(k++, face_key(c, f));
+      if (d.face_size[f] == 4 && i-- == 0) return face_key(c, f);
+    return QuadKey{};
   };
 
-  // The quads in the order of their keys (a counting sort on the rank of the smallest vertex,
-  // then each bucket sorted by the other three and the quad), the quads of one key making a
-  // group: at[k] is quad k's place in that order, starts[j] whether place j begins a group.
-  // The keys are not held (this step's tables are the engine's peak of memory on lattice
-  // meshes): counted by their smallest vertex, then made where they are placed.
+  // The quads in the order of their keys, the quads of one key making a group: at[k] is quad
+  // k's place in that order, starts[j] whether place j begins a group. The keys are not held
+  // (this step's tables are the engine's peak of memory on lattice meshes): a counting sort on
+  // the rank of the smallest vertex, then each bucket sorted by a hash of the other three and
+  // the quad, in 8-byte entries; a run of one hash is one key but for collisions: its keys are
+  // made again and it is sorted by key, then quad. The groups are in no useful order, each in
+  // the order of its quads, which is all the steps below read.
   std::vector<index_t> at(nb_quads);
   std::vector<char> starts(nb_quads);
   {
     struct Entry {
-      std::array<index_t, 3> rest;
+      std::uint32_t hash;  // of the key's three largest vertices
       index_t quad;
-      // Lexicographic on (rest, quad), element by element (std::array's comparisons call
-      // memcmp).
       bool operator<(const Entry& o) const {
-        if (rest[0] != o.rest[0]) return rest[0] < o.rest[0];
-        if (rest[1] != o.rest[1]) return rest[1] < o.rest[1];
-        if (rest[2] != o.rest[2]) return rest[2] < o.rest[2];
-        return quad < o.quad;
+        return hash != o.hash ? hash < o.hash : quad < o.quad;
       }
-      bool same_key(const Entry& o) const {
-        return ((rest[0] ^ o.rest[0]) | (rest[1] ^ o.rest[1]) | (rest[2] ^ o.rest[2])) == 0;
-      }
+    };
+    static_assert(sizeof(Entry) == 8, "the entries are this step's peak of memory");
+    auto hash_of = [](const QuadKey& key) {
+      std::uint32_t h = key[1] * 0x9E3779B1u;
+      h = (h ^ (h >> 15) ^ key[2]) * 0x85EBCA77u;
+      h = (h ^ (h >> 13) ^ key[3]) * 0xC2B2AE3Du;
+      return h ^ (h >> 16);
     };
     std::vector<index_t> bucket(static_cast<std::size_t>(nv) + 1, 0);
     for (index_t l = 0; l < n; ++l) {  // counted by the smallest vertex, the key's first
@@ -182,38 +185,67 @@ Candidates prune_unclosable(const TetMesh& mesh, const TetTopology& topology, Ca
     {
       std::vector<index_t> fill(bucket.begin(), bucket.end() - 1);
       for (index_t l = 0; l < n; ++l) {
-        for_each_key(l, [&](index_t k, const QuadKey& key) {
-          entries[fill[vertex_rank[key[0]]]++] = {{key[1], key[2], key[3]}, k};
-        });
+        const Candidate& c = candidates[by_local[l]];
+        const CellDescriptor& d = descriptor(c.type);
+        index_t k = first[l];
+        for (int f = 0; f < d.nb_faces; ++f) {
+          if (d.face_size[f] != 4) continue;
+          const QuadKey key = face_key(c, f);
+          entries[fill[vertex_rank[key[0]]]++] = {hash_of(key), k++};
+        }
       }
     }
+    // The key of quad k (its candidate found in `first`).
+    auto key_of_quad = [&](index_t k) {
+      const index_t l =
+          static_cast<index_t>(std::upper_bound(first.begin(), first.end(), k) - first.begin()) - 1;
+      return key_of(l, static_cast<int>(k - first[l]));
+    };
     parallel_chunks(
         nv, kChunk, threads,
         [&](index_t, index_t begin, index_t end) {
+          std::vector<std::pair<QuadKey, index_t>> run;
           for (index_t v = begin; v < end; ++v) {
-            std::sort(entries.begin() + bucket[v], entries.begin() + bucket[v + 1]);
-            for (index_t j = bucket[v]; j < bucket[v + 1]; ++j) {
-              starts[j] = j == bucket[v] || !entries[j].same_key(entries[j - 1]);
-              at[entries[j].quad] = j;
+            const index_t last = bucket[v + 1];
+            std::sort(entries.begin() + bucket[v], entries.begin() + last);
+            for (index_t j = bucket[v], e; j < last; j = e) {
+              e = j + 1;
+              while (e < last && entries[e].hash == entries[j].hash) ++e;
+              if (e == j + 1) {
+                starts[j] = 1;
+                at[entries[j].quad] = j;
+                continue;
+              }
+              run.clear();
+              for (index_t i = j; i < e; ++i)
+                run.emplace_back(key_of_quad(entries[i].quad), entries[i].quad);
+              // By key, then quad: one key (the quads' order, as sorted) but for collisions.
+              std::sort(run.begin(), run.end());
+              for (index_t i = j; i < e; ++i) {
+                starts[i] = i == j || run[i - j].first != run[i - j - 1].first;
+                at[run[i - j].second] = i;
+              }
             }
           }
         },
         go_on);
   }
 
-  // Every quad face of every candidate, at its place: the candidate's tets on its triangles and
-  // flags. The tets across the triangles are not held: the i-th is the neighbour of front[i]
-  // across its face on the quad (quads_of counts both in step), as `across` reads it.
+  // Every quad face of every candidate, at its place: its candidate's tets on its triangles (by
+  // their places among the candidate's tets) and flags, 8 bytes. The tets across the triangles
+  // are not held: the i-th is the neighbour of front i across its face on the quad (quads_of
+  // counts both in step), as `behind` reads it.
   struct QuadFace {
-    std::array<index_t, 2> front;  // the candidate's tets on its triangles (Side)
-    index_t candidate;             // local id
-    std::uint8_t faces;            // bits 2i, 2i+1: front[i]'s local face on the quad
-    std::uint8_t nb_behind : 2;    // triangles found, at most 2 counted
+    index_t candidate;           // local id
+    std::uint8_t front;          // bits 4i to 4i + 3: the place of front i among its tets
+    std::uint8_t faces;          // bits 2i, 2i+1: front i's local face on the quad
+    std::uint8_t nb_behind : 2;  // triangles found, at most 2 counted
     bool open : 1;
     bool inner : 1;
     bool exact : 1;
   };
-  static_assert(sizeof(QuadFace) == 16, "the record's size is this step's peak of memory");
+  static_assert(sizeof(QuadFace) == 8, "the record's size is this step's peak of memory");
+  static_assert(MAX_CANDIDATE_TETS <= 16, "a front's place is 4 bits");
   std::vector<QuadFace> faces(nb_quads);
   parallel_chunks(
       n, kChunk, threads,
@@ -232,8 +264,8 @@ Candidates prune_unclosable(const TetMesh& mesh, const TetTopology& topology, Ca
             const Quad& q = cq.quad[i];
             const Side& s = cq.side[i];
             QuadFace& face = faces[j];
-            face.front = s.front;
             face.candidate = s.candidate;
+            face.front = static_cast<std::uint8_t>(s.front[0] | s.front[1] << 4);
             face.faces = static_cast<std::uint8_t>(s.front_face[0] | s.front_face[1] << 2);
             face.nb_behind = std::min<std::uint8_t>(q.nb_behind, 2) & 3u;
             face.open = q.open;
@@ -252,13 +284,27 @@ Candidates prune_unclosable(const TetMesh& mesh, const TetTopology& topology, Ca
   };
 
   std::vector<char> viable(n, 1);  // by local id
-  // Whether the candidate of `s` holds the tets behind q: it is on the quad's other side.
-  auto across = [&](const QuadFace& q, const QuadFace& s) {
-    for (int i = 0; i < q.nb_behind; ++i) {
-      const index_t b = topology.neighbor(q.front[i], (q.faces >> (2 * i)) & 3);
-      if (s.exact ? b != s.front[0] && b != s.front[1]
-                  : !holds(candidates.tets(by_local[s.candidate]), b))
-        return false;
+  auto tets_of = [&](index_t l) { return candidates.tets(by_local[l]); };
+  // The tets behind quad face q (q.nb_behind of them; q not open).
+  auto behind = [&](const QuadFace& q) {
+    std::array<index_t, 2> b{NO_CELL, NO_CELL};
+    const TetSpan tets = tets_of(q.candidate);
+    for (int i = 0; i < q.nb_behind; ++i)
+      b[i] = topology.neighbor(tets[(q.front >> (4 * i)) & 15], (q.faces >> (2 * i)) & 3);
+    return b;
+  };
+  // Whether the candidate of `s` holds the tets b behind a quad face (nb of them): it is on the
+  // quad's other side.
+  auto across = [&](const std::array<index_t, 2>& b, int nb, const QuadFace& s) {
+    const TetSpan tets = tets_of(s.candidate);
+    for (int i = 0; i < nb; ++i) {
+      bool in = false;
+      if (s.exact) {
+        for (int k = 0; k < s.nb_behind; ++k) in = in || tets[(s.front >> (4 * k)) & 15] == b[i];
+      } else {
+        in = holds(tets, b[i]);
+      }
+      if (!in) return false;
     }
     return true;
   };
@@ -266,10 +312,11 @@ Candidates prune_unclosable(const TetMesh& mesh, const TetTopology& topology, Ca
   auto closed = [&](index_t l, index_t j) {
     const QuadFace& q = faces[j];
     if (q.open) return !q.inner;  // on the boundary, unless half of it is inside
+    const std::array<index_t, 2> b = behind(q);
     const auto [begin, end] = group_of(j);
     for (index_t i = begin; i < end; ++i) {
       const QuadFace& s = faces[i];
-      if (s.candidate != l && viable[s.candidate] && across(q, s)) return true;
+      if (s.candidate != l && viable[s.candidate] && across(b, q.nb_behind, s)) return true;
     }
     return false;
   };
@@ -304,7 +351,9 @@ Candidates prune_unclosable(const TetMesh& mesh, const TetTopology& topology, Ca
       for (index_t j = begin; j < end; ++j) {
         const index_t p = faces[j].candidate;
         const QuadFace& q = faces[j];
-        if (!viable[p] || q.open || !across(q, mine) || closed(p, j)) continue;
+        if (!viable[p] || q.open || !across(behind(q), q.nb_behind, mine) || closed(p, j)) {
+          continue;
+        }
         viable[p] = 0;
         to_follow.push_back(p);
       }
