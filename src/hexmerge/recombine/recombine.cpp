@@ -19,8 +19,23 @@
 #include "hexmerge/recombine/rf_graph.h"
 #include "hexmerge/recombine/select/select_candidates.h"
 
+#if defined(__GLIBC__)
+#include <malloc.h>
+#endif
+
 namespace hexmerge {
 namespace {
+
+// Gives the memory freed so far back to the system. The search's per-chunk lists and the quad
+// pairs' tables are allocated by the worker threads, in their own malloc arenas, and freed
+// once the candidates are made; glibc keeps those pages (the arenas are trimmed only from their
+// top), so that on two threads the resident set at the pruning, the engine's peak, held them
+// on top of what is live: 933 against 788 bytes per tet on box TetGen lattice 100k.
+void release_freed_memory() {
+#if defined(__GLIBC__)
+  malloc_trim(0);
+#endif
+}
 
 int thread_count(int requested) {
   if (requested > 0) return requested;
@@ -198,6 +213,7 @@ MixedMesh recombine(const TetMesh& input, const RecombineParameters& parameters,
                            ? find_candidates_exhaustive(tets, faces, criteria, threads, progress)
                            : find_candidates(tets, faces, criteria, threads, progress);
     drop_boundary_pyramids(tets, faces, parameters.pyramid_placement, found);
+    release_freed_memory();
     return found;
   };
   Candidates candidates = find(mesh, topology);
