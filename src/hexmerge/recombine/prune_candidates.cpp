@@ -16,6 +16,22 @@ using QuadKey = FaceKey;
 
 bool holds(TetSpan tets, index_t t) { return std::binary_search(tets.begin(), tets.end(), t); }
 
+// face_key of a quad face, inline (a sorting network): the keys are made twice per quad face.
+QuadKey quad_key(const Candidate& c, int f) {
+  const std::array<int, 4>& face = descriptor(c.type).face[f];
+  std::array<index_t, 4> k{c.vertices[face[0]], c.vertices[face[1]], c.vertices[face[2]],
+                           c.vertices[face[3]]};
+  auto order = [&](int i, int j) {
+    if (k[j] < k[i]) std::swap(k[i], k[j]);
+  };
+  order(0, 1);
+  order(2, 3);
+  order(0, 2);
+  order(1, 3);
+  order(1, 2);
+  return k;
+}
+
 // A quad face of a candidate: what is across its triangles (the tets there are the neighbours of
 // the Side's front tets across their faces on the quad).
 struct Quad {
@@ -141,7 +157,7 @@ Candidates prune_unclosable(const TetMesh& mesh, const TetTopology& topology, Ca
     const Candidate& c = candidates[by_local[l]];
     const CellDescriptor& d = descriptor(c.type);
     for (int f = 0; f < d.nb_faces; ++f)
-      if (d.face_size[f] == 4 && i-- == 0) return face_key(c, f);
+      if (d.face_size[f] == 4 && i-- == 0) return quad_key(c, f);
     return QuadKey{};
   };
 
@@ -155,12 +171,18 @@ Candidates prune_unclosable(const TetMesh& mesh, const TetTopology& topology, Ca
   std::vector<index_t> at(nb_quads);
   std::vector<char> starts(nb_quads);
   {
+    // The hash's top 29 bits, and the quad as its candidate (local id) and its place among the
+    // candidate's quad faces (the low 3 bits): ordered as (hash, quad), quad = first[l] + place.
     struct Entry {
-      std::uint32_t hash;  // of the key's three largest vertices
-      index_t quad;
+      std::uint32_t hash_place;
+      index_t candidate;
       bool operator<(const Entry& o) const {
-        return hash != o.hash ? hash < o.hash : quad < o.quad;
+        if ((hash_place ^ o.hash_place) >> 3) return hash_place < o.hash_place;
+        if (candidate != o.candidate) return candidate < o.candidate;
+        return hash_place < o.hash_place;
       }
+      bool same_hash(const Entry& o) const { return ((hash_place ^ o.hash_place) >> 3) == 0; }
+      int place() const { return static_cast<int>(hash_place & 7u); }
     };
     static_assert(sizeof(Entry) == 8, "the entries are this step's peak of memory");
     auto hash_of = [](const QuadKey& key) {
@@ -187,43 +209,57 @@ Candidates prune_unclosable(const TetMesh& mesh, const TetTopology& topology, Ca
       for (index_t l = 0; l < n; ++l) {
         const Candidate& c = candidates[by_local[l]];
         const CellDescriptor& d = descriptor(c.type);
-        index_t k = first[l];
+        std::uint32_t place = 0;
         for (int f = 0; f < d.nb_faces; ++f) {
           if (d.face_size[f] != 4) continue;
-          const QuadKey key = face_key(c, f);
-          entries[fill[vertex_rank[key[0]]]++] = {hash_of(key), k++};
+          const QuadKey key = quad_key(c, f);
+          entries[fill[vertex_rank[key[0]]]++] = {(hash_of(key) & ~7u) | place++, l};
         }
       }
     }
-    // The key of quad k (its candidate found in `first`).
-    auto key_of_quad = [&](index_t k) {
-      const index_t l =
-          static_cast<index_t>(std::upper_bound(first.begin(), first.end(), k) - first.begin()) - 1;
-      return key_of(l, static_cast<int>(k - first[l]));
-    };
     parallel_chunks(
         nv, kChunk, threads,
         [&](index_t, index_t begin, index_t end) {
-          std::vector<std::pair<QuadKey, index_t>> run;
+          struct Keyed {
+            QuadKey key;
+            index_t quad;
+            // (key, quad), element by element (std::array's comparisons call memcmp).
+            bool operator<(const Keyed& o) const {
+              for (int i = 0; i < 4; ++i)
+                if (key[i] != o.key[i]) return key[i] < o.key[i];
+              return quad < o.quad;
+            }
+            bool same_key(const Keyed& o) const {
+              return ((key[0] ^ o.key[0]) | (key[1] ^ o.key[1]) | (key[2] ^ o.key[2]) |
+                      (key[3] ^ o.key[3])) == 0;
+            }
+          };
+          std::vector<Keyed> run;
           for (index_t v = begin; v < end; ++v) {
             const index_t last = bucket[v + 1];
             std::sort(entries.begin() + bucket[v], entries.begin() + last);
             for (index_t j = bucket[v], e; j < last; j = e) {
               e = j + 1;
-              while (e < last && entries[e].hash == entries[j].hash) ++e;
+              while (e < last && entries[e].same_hash(entries[j])) ++e;
               if (e == j + 1) {
                 starts[j] = 1;
-                at[entries[j].quad] = j;
+                at[first[entries[j].candidate] + entries[j].place()] = j;
                 continue;
               }
-              run.clear();
-              for (index_t i = j; i < e; ++i)
-                run.emplace_back(key_of_quad(entries[i].quad), entries[i].quad);
               // By key, then quad: one key (the quads' order, as sorted) but for collisions.
-              std::sort(run.begin(), run.end());
+              // (Insertion sort: a run is a few quads.)
+              run.clear();
               for (index_t i = j; i < e; ++i) {
-                starts[i] = i == j || run[i - j].first != run[i - j - 1].first;
-                at[run[i - j].second] = i;
+                const Entry& x = entries[i];
+                const Keyed k{key_of(x.candidate, x.place()), first[x.candidate] + x.place()};
+                std::size_t m = run.size();
+                run.push_back(k);
+                for (; m > 0 && k < run[m - 1]; --m) run[m] = run[m - 1];
+                run[m] = k;
+              }
+              for (index_t i = j; i < e; ++i) {
+                starts[i] = i == j || !run[i - j].same_key(run[i - j - 1]);
+                at[run[i - j].quad] = i;
               }
             }
           }
