@@ -141,13 +141,15 @@ Candidates prune_unclosable(const TetMesh& mesh, const TetTopology& topology, Ca
     for (std::size_t i = 0; i < order.size(); ++i) start[i + 1] += start[i];
     for (index_t ci = 0; ci < n; ++ci) by_local[start[rank[candidates.tets(ci)[0]]]++] = ci;
   }
-  // Quad face k of the candidate of local id l: first[l] <= k < first[l + 1].
+  // Quad face k of the candidate of local id l: first[l] <= k < first[l + 1]. Places of quad
+  // faces are below 2^31: the sort below marks a group's first place in at[]'s top bit.
+  constexpr index_t kGroupStart = index_t(1) << 31;
   std::vector<index_t> first(static_cast<std::size_t>(n) + 1, 0);
   std::size_t total = 0;
   for (index_t l = 0; l < n; ++l) {
     total += descriptor(candidates[by_local[l]].type).nb_quad_faces;
-    if (total >= NO_INDEX) {
-      throw ResourceError("prune_unclosable: more than 2^32 - 2 quad faces of candidates");
+    if (total >= kGroupStart) {
+      throw ResourceError("prune_unclosable: more than 2^31 - 1 quad faces of candidates");
     }
     first[l + 1] = static_cast<index_t>(total);
   }
@@ -162,14 +164,14 @@ Candidates prune_unclosable(const TetMesh& mesh, const TetTopology& topology, Ca
   };
 
   // The quads in the order of their keys, the quads of one key making a group: at[k] is quad
-  // k's place in that order, starts[j] whether place j begins a group. The keys are not held
+  // k's place in that order, with kGroupStart when the place begins a group (until the
+  // records below take that flag over). The keys are not held
   // (this step's tables are the engine's peak of memory on lattice meshes): a counting sort on
   // the rank of the smallest vertex, then each bucket sorted by a hash of the other three and
   // the quad, in 8-byte entries; a run of one hash is one key but for collisions: its keys are
   // made again and it is sorted by key, then quad. The groups are in no useful order, each in
   // the order of its quads, which is all the steps below read.
   std::vector<index_t> at(nb_quads);
-  std::vector<char> starts(nb_quads);
   {
     // The hash's top 29 bits, and the quad as its candidate (local id) and its place among the
     // candidate's quad faces (the low 3 bits): ordered as (hash, quad), quad = first[l] + place.
@@ -242,8 +244,7 @@ Candidates prune_unclosable(const TetMesh& mesh, const TetTopology& topology, Ca
               e = j + 1;
               while (e < last && entries[e].same_hash(entries[j])) ++e;
               if (e == j + 1) {
-                starts[j] = 1;
-                at[first[entries[j].candidate] + entries[j].place()] = j;
+                at[first[entries[j].candidate] + entries[j].place()] = j | kGroupStart;
                 continue;
               }
               // By key, then quad: one key (the quads' order, as sorted) but for collisions.
@@ -258,8 +259,8 @@ Candidates prune_unclosable(const TetMesh& mesh, const TetTopology& topology, Ca
                 run[m] = k;
               }
               for (index_t i = j; i < e; ++i) {
-                starts[i] = i == j || !run[i - j].same_key(run[i - j - 1]);
-                at[run[i - j].quad] = i;
+                const bool start = i == j || !run[i - j].same_key(run[i - j - 1]);
+                at[run[i - j].quad] = i | (start ? kGroupStart : 0);
               }
             }
           }
@@ -279,6 +280,7 @@ Candidates prune_unclosable(const TetMesh& mesh, const TetTopology& topology, Ca
     bool open : 1;
     bool inner : 1;
     bool exact : 1;
+    bool start : 1;  // the first of its group
   };
   static_assert(sizeof(QuadFace) == 8, "the record's size is this step's peak of memory");
   static_assert(MAX_CANDIDATE_TETS <= 16, "a front's place is 4 bits");
@@ -296,7 +298,9 @@ Candidates prune_unclosable(const TetMesh& mesh, const TetTopology& topology, Ca
           const Candidate& c = candidates[by_local[l]];
           const CandidateQuads cq = quads_of(mesh, topology, c, candidates.tets(c), l);
           for (int i = 0; i < cq.count; ++i) {
-            const index_t j = at[first[l] + i];
+            const index_t at_flag = at[first[l] + i];
+            const index_t j = at_flag & ~kGroupStart;
+            at[first[l] + i] = j;
             const Quad& q = cq.quad[i];
             const Side& s = cq.side[i];
             QuadFace& face = faces[j];
@@ -307,6 +311,7 @@ Candidates prune_unclosable(const TetMesh& mesh, const TetTopology& topology, Ca
             face.open = q.open;
             face.inner = q.inner;
             face.exact = s.exact;
+            face.start = (at_flag & kGroupStart) != 0;
           }
         }
       },
@@ -314,8 +319,8 @@ Candidates prune_unclosable(const TetMesh& mesh, const TetTopology& topology, Ca
   // The places [begin, end) of the group of the quad at place j.
   auto group_of = [&](index_t j) {
     index_t begin = j, end = j + 1;
-    while (!starts[begin]) --begin;
-    while (end < nb_quads && !starts[end]) ++end;
+    while (!faces[begin].start) --begin;
+    while (end < nb_quads && !faces[end].start) ++end;
     return std::make_pair(begin, end);
   };
 
@@ -397,7 +402,6 @@ Candidates prune_unclosable(const TetMesh& mesh, const TetTopology& topology, Ca
   }
   std::vector<QuadFace>().swap(faces);
   std::vector<index_t>().swap(at);
-  std::vector<char>().swap(starts);
   std::vector<char> keep(n, 0);
   for (index_t l = 0; l < n; ++l) keep[by_local[l]] = viable[l];
   // The kept ones moved up in place: no second array of candidates.
