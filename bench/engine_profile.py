@@ -15,6 +15,10 @@ tet, wall time per phase and thread scaling, printed as the table the issue asks
 - Peak memory and wall time: run_bench.py's worker (a fresh process per run; peak = high-water
   mark of the resident set during the call minus the resident set before it), once per thread
   count. The wall times depend on the load of the machine: run on a quiet machine to compare.
+- Heap peak (--heap): heaptrack on the same one-thread run as callgrind's (the .npz), the
+  process's peak of heap memory as heaptrack_print reports it: the interpreter, numpy and the
+  input arrays included (a few MB), only the heap (no stacks, no freed pages an allocator
+  keeps), and the same on any load. Needs `heaptrack`; a 100k mesh takes about half a minute.
 - The command line's files (--cli): the steps of `hexmerge recombine IN -o OUT.vtu` timed one
   by one in one process (hexmerge._io.read_tets, hexmerge.recombine, _io.to_meshio,
   _io.write_atomic), to see what reading and writing cost against the engine.
@@ -24,6 +28,7 @@ Usage (after building the module, see bench/README.md; meshes from make_meshes.p
   ... engine_profile.py --callgrind box-delaunay-100k,box-tetgen-lattice-100k \\
         --timing box-delaunay-1m,box-tetgen-lattice-1m --threads 1,2 --output /tmp/p.json
   ... engine_profile.py --callgrind '' --timing '' --cli box-delaunay-1m --cli-threads 2
+  ... engine_profile.py --callgrind '' --timing '' --heap box-tetgen-lattice-100k
   ... engine_profile.py --table /tmp/p.json
 """
 import argparse
@@ -126,6 +131,36 @@ def profile_instructions(path, tmp):
             "strategy": report.get("selection_strategy")}
 
 
+def heap_peak(path, tmp):
+    """The heap peak (bytes, and per tet) of a one-thread recombine of the mesh, by heaptrack."""
+    import numpy as np
+    points, cells = run_bench.load_tet_mesh(path)
+    npz = os.path.join(tmp, "mesh.npz")
+    np.savez(npz, points=points, cells=cells)
+    out = os.path.join(tmp, "heaptrack")
+    rep = os.path.join(tmp, "report.json")
+    env = dict(os.environ)
+    env["OPENBLAS_NUM_THREADS"] = "1"
+    env["PYTHONPATH"] = os.pathsep.join(
+        [p for p in env.get("PYTHONPATH", "").split(os.pathsep) if p] +
+        [os.path.join(benchlib.ROOT, "src", "python")])
+    subprocess.run(["heaptrack", "-o", out, sys.executable, os.path.abspath(__file__),
+                    "--callgrind-worker", npz, rep],
+                   check=True, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    data = [f for f in os.listdir(tmp) if f.startswith("heaptrack")][0]
+    text = subprocess.run(["heaptrack_print", "-f", os.path.join(tmp, data), "--print-peaks", "0",
+                           "--print-allocators", "0", "--print-temporary", "0",
+                           "--print-leaks", "0"], capture_output=True, text=True,
+                          check=True).stdout
+    m = re.search(r"peak heap memory consumption: ([\d.]+)([KMGT]?)", text)
+    if not m:
+        raise RuntimeError(f"no heap peak in heaptrack_print's output for {path}")
+    scale = {"": 1, "K": 1e3, "M": 1e6, "G": 1e9, "T": 1e12}[m.group(2)]
+    peak = float(m.group(1)) * scale
+    tets = int(cells.shape[0])
+    return {"tets": tets, "heap_peak_bytes": peak, "heap_bytes_per_tet": peak / tets}
+
+
 def timing(path, threads, timeout):
     args = argparse.Namespace(options=[("threads", threads)], no_check=True, int64=False,
                               timeout=timeout)
@@ -205,6 +240,13 @@ def table(data):
             ps = rs[0].get("phase_seconds") or {}
             row += [fmt(ps.get(p), ".3f") for p in phases]
             lines.append("| " + " | ".join(row) + " |")
+    heap = data.get("heap", {})
+    if heap:
+        lines += ["", "| mesh | tets | heap peak MB (heaptrack, 1 thread) | B/tet |",
+                  "|---|---|---|---|"]
+        for name, r in heap.items():
+            lines.append(f"| {name} | {fmt(r['tets'])} | {r['heap_peak_bytes'] / 1e6:.1f} | "
+                         f"{fmt(r['heap_bytes_per_tet'])} |")
     cli = data.get("cli", {})
     if cli:
         lines += ["", "| mesh | tets | threads | read s | engine s | write .vtu s | .vtu MB | "
@@ -225,6 +267,8 @@ def main():
     ap.add_argument("--timing", default="box-delaunay-100k,box-tetgen-lattice-100k,"
                                         "box-delaunay-1m,box-tetgen-lattice-1m",
                     help="meshes timed and measured for peak memory; '' for none")
+    ap.add_argument("--heap", default="", help="meshes whose heap peak heaptrack measures (one "
+                                               "thread); '' for none")
     ap.add_argument("--threads", default="1,2")
     ap.add_argument("--cli", default="", help="meshes whose `hexmerge recombine -o .vtu` steps are "
                                               "timed (read, engine, write); '' for none")
@@ -247,7 +291,7 @@ def main():
     import datetime
     data = {"git": args.commit or benchlib.git_commit(), "machine": benchlib.machine(),
             "date": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC"),
-            "instructions": {}, "timing": {}, "cli": {}}
+            "instructions": {}, "timing": {}, "heap": {}, "cli": {}}
 
     def mesh_path(name):
         p = os.path.join(args.mesh_dir, name + ".msh")
@@ -267,6 +311,13 @@ def main():
             with tempfile.TemporaryDirectory() as tmp:
                 print(f"{name}: callgrind ...", file=sys.stderr, flush=True)
                 data["instructions"][name] = profile_instructions(path, tmp)
+            save()
+    for name in [n for n in args.heap.split(",") if n]:
+        path = mesh_path(name)
+        if path:
+            with tempfile.TemporaryDirectory() as tmp:
+                print(f"{name}: heaptrack ...", file=sys.stderr, flush=True)
+                data["heap"][name] = heap_peak(path, tmp)
             save()
     for name in [n for n in args.timing.split(",") if n]:
         path = mesh_path(name)

@@ -29,19 +29,18 @@ int saving(const Candidate& c) { return static_cast<int>(c.nb_tets) - 1; }
 // A bound that needs no solver: every tet gives at most the best share (n - 1) / n of a
 // candidate covering it, so the savings are at most the sum of those shares (a feasible point
 // of the LP's dual). Used only when the LP relaxation does not finish in time.
-double share_bound(index_t nb_tets, const std::vector<Candidate>& candidates) {
+double share_bound(index_t nb_tets, const Candidates& candidates) {
   std::vector<double> share(nb_tets, 0.0);
   for (const Candidate& c : candidates) {
     const double s = static_cast<double>(saving(c)) / c.nb_tets;
-    for (int i = 0; i < c.nb_tets; ++i) share[c.tets[i]] = std::max(share[c.tets[i]], s);
+    for (const index_t t : candidates.tets(c)) share[t] = std::max(share[t], s);
   }
   double sum = 0.0;
   for (double s : share) sum += s;
   return sum;
 }
 
-std::size_t elements_saved(const std::vector<Candidate>& candidates,
-                           const std::vector<index_t>& chosen) {
+std::size_t elements_saved(const Candidates& candidates, const std::vector<index_t>& chosen) {
   std::size_t saved = 0;
   for (index_t c : chosen) saved += saving(candidates[c]);
   return saved;
@@ -118,12 +117,13 @@ glp_iocp search_parameters(int time_limit_ms, SearchState& state) {
 }
 
 // The set-packing program, to be maximised: one binary column per candidate with its weight, one
-// row per tet that two or more of them share (a tet of one candidate constrains nothing).
-void load_packing(glp_prob* lp, index_t nb_tets, const std::vector<const Candidate*>& columns,
+// row per tet that two or more of them share (a tet of one candidate constrains nothing). A
+// column is given by its candidate's tets.
+void load_packing(glp_prob* lp, index_t nb_tets, const std::vector<TetSpan>& columns,
                   const std::vector<double>& weights) {
   std::vector<int> covering(nb_tets, 0);
-  for (const Candidate* c : columns) {
-    for (int i = 0; i < c->nb_tets; ++i) ++covering[c->tets[i]];
+  for (const TetSpan& c : columns) {
+    for (const index_t t : c) ++covering[t];
   }
   std::vector<int> row_of(nb_tets, 0);
   int nb_rows = 0;
@@ -141,9 +141,9 @@ void load_packing(glp_prob* lp, index_t nb_tets, const std::vector<const Candida
     const int j = static_cast<int>(k) + 1;
     glp_set_col_kind(lp, j, GLP_BV);
     glp_set_obj_coef(lp, j, weights[k]);
-    for (int i = 0; i < columns[k]->nb_tets; ++i) {
-      if (row_of[columns[k]->tets[i]] == 0) continue;
-      ia.push_back(row_of[columns[k]->tets[i]]);
+    for (const index_t t : columns[k]) {
+      if (row_of[t] == 0) continue;
+      ia.push_back(row_of[t]);
       ja.push_back(j);
       ar.push_back(1.0);
     }
@@ -155,7 +155,7 @@ void load_packing(glp_prob* lp, index_t nb_tets, const std::vector<const Candida
 #endif
 
 std::vector<ConformityRow> conformity_rows(const TetMesh& mesh, const TetTopology& topology,
-                                           const std::vector<Candidate>& candidates) {
+                                           const Candidates& candidates) {
   // Every quad face of every candidate, keyed by its sorted vertices.
   struct Quad {
     std::array<index_t, 4> key;
@@ -173,8 +173,8 @@ std::vector<ConformityRow> conformity_rows(const TetMesh& mesh, const TetTopolog
       std::sort(q.key.begin(), q.key.end());
       // The candidate's tet faces lying on the quad, and whether each has a tet beyond it.
       int on_quad = 0, beyond = 0;
-      for (int k = 0; k < c.nb_tets; ++k) {
-        const index_t* v = mesh.tet(c.tets[k]);
+      for (const index_t t : candidates.tets(c)) {
+        const index_t* v = mesh.tet(t);
         for (int tf = 0; tf < 4; ++tf) {
           bool inside = true;
           for (int i = 0; i < 4 && inside; ++i) {
@@ -182,7 +182,7 @@ std::vector<ConformityRow> conformity_rows(const TetMesh& mesh, const TetTopolog
           }
           if (!inside) continue;
           ++on_quad;
-          if (topology.neighbor(c.tets[k], tf) != NO_CELL) ++beyond;
+          if (topology.neighbor(t, tf) != NO_CELL) ++beyond;
         }
       }
       q.constrained = on_quad == 2 && beyond == 2;
@@ -225,16 +225,15 @@ void require_selection_bound() {
       Entity::Parameter);
 }
 
-SelectionBound bound_selection(index_t nb_tets, const std::vector<Candidate>& candidates,
+SelectionBound bound_selection(index_t nb_tets, const Candidates& candidates,
                                const std::vector<index_t>& initial, double time_limit,
                                const std::vector<ConformityRow>& conformity) {
   HEXMERGE_ASSERT(time_limit > 0.0, "bound_selection: the time limit must be positive");
   std::vector<char> used(nb_tets, 0);
   for (index_t ci : initial) {
-    const Candidate& c = candidates[ci];
-    for (int i = 0; i < c.nb_tets; ++i) {
-      HEXMERGE_ASSERT(!used[c.tets[i]], "bound_selection: the initial selection overlaps");
-      used[c.tets[i]] = 1;
+    for (const index_t t : candidates.tets(ci)) {
+      HEXMERGE_ASSERT(!used[t], "bound_selection: the initial selection overlaps");
+      used[t] = 1;
     }
   }
 #ifndef HEXMERGE_WITH_GLPK
@@ -266,10 +265,10 @@ SelectionBound bound_selection(index_t nb_tets, const std::vector<Candidate>& ca
 
   std::unique_ptr<glp_prob, ProblemDeleter> problem(glp_create_prob());
   glp_prob* lp = problem.get();
-  std::vector<const Candidate*> columns;
+  std::vector<TetSpan> columns;
   std::vector<double> weights;
   for (const Candidate& c : candidates) {
-    columns.push_back(&c);
+    columns.push_back(candidates.tets(c));
     weights.push_back(saving(c));
   }
   load_packing(lp, nb_tets, columns, weights);
@@ -349,8 +348,7 @@ SelectionBound bound_selection(index_t nb_tets, const std::vector<Candidate>& ca
 #endif
 }
 
-VolumeBound bound_hex_volume(const TetMesh& mesh, const std::vector<Candidate>& candidates,
-                             double time_limit) {
+VolumeBound bound_hex_volume(const TetMesh& mesh, const Candidates& candidates, double time_limit) {
   HEXMERGE_ASSERT(time_limit > 0.0, "bound_hex_volume: the time limit must be positive");
 #ifndef HEXMERGE_WITH_GLPK
   static_cast<void>(mesh);
@@ -368,13 +366,13 @@ VolumeBound bound_hex_volume(const TetMesh& mesh, const std::vector<Candidate>& 
         tet_volume(mesh.point(v[0]), mesh.point(v[1]), mesh.point(v[2]), mesh.point(v[3]));
     mesh_volume += volume_of[t];
   }
-  std::vector<const Candidate*> columns;
+  std::vector<TetSpan> columns;
   std::vector<double> weights;
   for (const Candidate& c : candidates) {
     if (c.type != CellType::Hex) continue;
     double volume = 0.0;
-    for (int i = 0; i < c.nb_tets; ++i) volume += volume_of[c.tets[i]];
-    columns.push_back(&c);
+    for (const index_t t : candidates.tets(c)) volume += volume_of[t];
+    columns.push_back(candidates.tets(c));
     weights.push_back(volume / mesh_volume);
   }
   VolumeBound result;

@@ -48,7 +48,7 @@ struct ConformityRow {
 /// domain boundary, or one the rule cannot read plainly (not exactly two of the candidate's tet
 /// faces on it), gets no row: leaving a row out only loosens the bound, never breaks it.
 std::vector<ConformityRow> conformity_rows(const TetMesh& mesh, const TetTopology& topology,
-                                           const std::vector<Candidate>& candidates);
+                                           const Candidates& candidates);
 
 /// True when HexMerge was built with GLPK (CMake option HEXMERGE_WITH_GLPK and libglpk-dev).
 bool selection_bound_available();
@@ -68,7 +68,7 @@ void require_selection_bound();
 /// @param[in] conformity    rows added to the packing (conformity_rows()); empty: none. Rows that
 ///                          `initial` breaks are left out, so that it stays a solution.
 /// Throws InputError (Entity::Parameter, naming optimality_bound) when GLPK is not compiled in.
-SelectionBound bound_selection(index_t nb_tets, const std::vector<Candidate>& candidates,
+SelectionBound bound_selection(index_t nb_tets, const Candidates& candidates,
                                const std::vector<index_t>& initial, double time_limit,
                                const std::vector<ConformityRow>& conformity = {});
 
@@ -90,7 +90,6 @@ struct VolumeBound {
 /// hexahedron volume of every selection. Given the candidates left by prune_unclosable, it bounds
 /// the conforming selections, whatever the selection strategy. Throws InputError
 /// (Entity::Parameter, naming optimality_bound) when GLPK is not compiled in.
-VolumeBound bound_hex_volume(const TetMesh& mesh, const std::vector<Candidate>& candidates,
-                             double time_limit);
+VolumeBound bound_hex_volume(const TetMesh& mesh, const Candidates& candidates, double time_limit);
 
 }  // namespace hexmerge

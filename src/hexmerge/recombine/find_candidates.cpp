@@ -222,9 +222,7 @@ bool assemble_cell(const TetMesh& mesh, const TetTopology& topology, CellType ty
 
 namespace {
 
-// A match as the search keeps it until the end: a Candidate with room for the search's groups
-// only (kMaxNodes tets, not MAX_CANDIDATE_TETS): 64 bytes instead of 104, for the per-chunk
-// lists that are held together with the result while it is made.
+// A match as the search makes it (the matches of one root, until they are kept).
 struct Match {
   std::array<index_t, 8> vertices;
   std::array<index_t, kMaxNodes> tets;  // sorted; first nb_tets used
@@ -234,29 +232,95 @@ struct Match {
   std::uint8_t nb_tets;
 };
 
+// The kept matches of one chunk of roots, held until every chunk is searched and then put in
+// root order (the search's peak of memory): per match 16 bytes, its corners as places among
+// its tets' vertices, and its tets in one list.
+struct ChunkMatches {
+  struct Packed {
+    std::uint64_t corners;  // corner j: bits 5j to 5j + 4, 4 * (place of a tet) + its vertex
+    float quality;
+    CellType type;
+    std::uint8_t graph;
+    std::uint8_t nb_tets;
+  };
+  static_assert(sizeof(Packed) == 16, "the per-chunk lists are the search's peak of memory");
+  static_assert(4 * kMaxNodes <= 32, "a corner's place is 5 bits");
+  std::vector<Packed> matches;
+  std::vector<index_t> tets;  // the matches' tets (input ids), one after the other
+
+  // m's corners are vertices of its tets, which are the input's tets of those ids.
+  void push_back(const TetMesh& input, const Match& m) {
+    std::uint64_t corners = 0;
+    const int nv = descriptor(m.type).nb_vertices;
+    for (int j = 0; j < nv; ++j) {
+      int place = -1;
+      for (int i = 0; i < m.nb_tets && place < 0; ++i) {
+        const index_t* q = input.tet(m.tets[i]);
+        for (int k = 0; k < 4; ++k)
+          if (q[k] == m.vertices[j]) place = 4 * i + k;
+      }
+      HEXMERGE_ASSERT(place >= 0, "find_candidates: a corner of a match is not on its tets");
+      corners |= static_cast<std::uint64_t>(place) << (5 * j);
+    }
+    matches.push_back({corners, m.quality, m.type, m.graph, m.nb_tets});
+    tets.insert(tets.end(), m.tets.begin(), m.tets.begin() + m.nb_tets);
+  }
+
+  void shrink_to_fit() {
+    matches.shrink_to_fit();
+    tets.shrink_to_fit();
+  }
+};
+
 // The matches of every chunk as candidates, in the order of their roots' input ids (a stable
 // counting sort on the root, each group's smallest tet), each root's own in the order they were
-// found. Each chunk's list is freed once its matches are placed.
-std::vector<Candidate> in_root_order(std::vector<std::vector<Match>>& per_chunk, index_t nt) {
+// found. Each chunk's lists are freed once its matches are placed.
+Candidates in_root_order(const TetMesh& input, std::vector<ChunkMatches>& per_chunk) {
+  const index_t nt = input.nb_tets();
+  // Per root: where its first candidate and its first candidate's first tet go.
   std::vector<std::size_t> start(static_cast<std::size_t>(nt) + 1, 0);
-  for (const auto& chunk : per_chunk)
-    for (const Match& m : chunk) ++start[m.tets[0] + 1];
-  for (index_t t = 0; t < nt; ++t) start[t + 1] += start[t];
+  std::vector<std::size_t> tet_start(static_cast<std::size_t>(nt) + 1, 0);
+  for (const ChunkMatches& chunk : per_chunk) {
+    std::size_t at = 0;
+    for (const ChunkMatches::Packed& m : chunk.matches) {
+      const index_t root = chunk.tets[at];
+      ++start[root + 1];
+      tet_start[root + 1] += m.nb_tets;
+      at += m.nb_tets;
+    }
+  }
+  for (index_t t = 0; t < nt; ++t) {
+    start[t + 1] += start[t];
+    tet_start[t + 1] += tet_start[t];
+  }
+  if (tet_start[nt] >= NO_INDEX) {
+    throw ResourceError("the candidates hold more than 2^32 - 2 tets in all");
+  }
   std::vector<Candidate> all(start[nt]);
-  for (auto& chunk : per_chunk) {
-    for (const Match& m : chunk) {
-      Candidate& c = all[start[m.tets[0]]++];
-      c.vertices = m.vertices;
-      c.tets.fill(NO_CELL);
-      std::copy_n(m.tets.begin(), m.nb_tets, c.tets.begin());
+  std::vector<index_t> tets(tet_start[nt]);
+  for (ChunkMatches& chunk : per_chunk) {
+    std::size_t at = 0;
+    for (const ChunkMatches::Packed& m : chunk.matches) {
+      const index_t* group = chunk.tets.data() + at;
+      Candidate& c = all[start[group[0]]++];
+      std::size_t& first = tet_start[group[0]];
+      c.vertices.fill(NO_VERTEX);
+      for (int j = 0; j < descriptor(m.type).nb_vertices; ++j) {
+        const unsigned place = (m.corners >> (5 * j)) & 31u;
+        c.vertices[j] = input.tet(group[place / 4])[place % 4];
+      }
+      c.first_tet = static_cast<index_t>(first);
+      std::copy_n(group, m.nb_tets, tets.begin() + first);
+      first += m.nb_tets;
+      at += m.nb_tets;
       c.type = m.type;
       c.graph = m.graph;
       c.nb_tets = m.nb_tets;
       c.quality = m.quality;
     }
-    std::vector<Match>().swap(chunk);
+    chunk = ChunkMatches();
   }
-  return all;
+  return Candidates(std::move(all), std::move(tets));
 }
 
 // The enabled search programs merged into one tree: programs that begin with the same steps
@@ -320,10 +384,12 @@ class SearchTree {
 class Matcher {
  public:
   /// @param[in] input_id  the input's id of each tet of `mesh`
-  Matcher(const TetMesh& mesh, const TetTopology& topology, const QuadPairs& quad_pairs,
-          const std::vector<index_t>& input_id, const AcceptanceCriteria& criteria,
-          const SearchTree& tree, std::vector<Match>& out)
-      : mesh_(mesh),
+  /// @param[in] input     the mesh `mesh` renumbers (the same vertices)
+  Matcher(const TetMesh& input, const TetMesh& mesh, const TetTopology& topology,
+          const QuadPairs& quad_pairs, const std::vector<index_t>& input_id,
+          const AcceptanceCriteria& criteria, const SearchTree& tree, ChunkMatches& out)
+      : input_(input),
+        mesh_(mesh),
         topology_(topology),
         pairs_(quad_pairs),
         input_id_(input_id),
@@ -352,13 +418,14 @@ class Matcher {
     }
     // Program by program, as if each ran alone in turn: the same group may be matched again
     // through an automorphism that fixes the root, and the first match is kept.
-    const std::size_t first_of_root = out_.size();
+    kept_.clear();
     for (std::vector<Match>& found : found_) {
       for (const Match& c : found) {
-        if (!seen(c, first_of_root)) out_.push_back(c);
+        if (!seen(c)) kept_.push_back(c);
       }
       found.clear();
     }
+    for (const Match& c : kept_) out_.push_back(input_, c);
     for (std::vector<QuadSet>& quads : found_quads_) quads.clear();
   }
 
@@ -520,11 +587,11 @@ class Matcher {
     found_quads.push_back(quads);
   }
 
-  // True when a candidate kept from this root (from out_[first_of_root]) is the same cell.
-  bool seen(const Match& c, std::size_t first_of_root) const {
-    for (std::size_t i = first_of_root; i < out_.size(); ++i) {
-      if (out_[i].type == c.type && out_[i].tets == c.tets &&
-          sorted(out_[i].vertices) == sorted(c.vertices) && same_cell(out_[i], c)) {
+  // True when a candidate kept from this root is the same cell.
+  bool seen(const Match& c) const {
+    for (const Match& k : kept_) {
+      if (k.type == c.type && k.tets == c.tets && sorted(k.vertices) == sorted(c.vertices) &&
+          same_cell(k, c)) {
         return true;
       }
     }
@@ -549,6 +616,7 @@ class Matcher {
     return true;
   }
 
+  const TetMesh& input_;
   const TetMesh& mesh_;
   const TetTopology& topology_;
   const QuadPairs& pairs_;
@@ -557,7 +625,8 @@ class Matcher {
   const SearchTree& tree_;
   std::vector<std::vector<Match>> found_;          // this root's matches, per program
   std::vector<std::vector<QuadSet>> found_quads_;  // and their quad_set()s
-  std::vector<Match>& out_;
+  std::vector<Match> kept_;                        // this root's matches kept
+  ChunkMatches& out_;
   index_t root_ = 0;
   index_t root_input_id_ = 0;
   int nb_assigned_ = 0;
@@ -571,9 +640,9 @@ class Matcher {
 
 }  // namespace
 
-std::vector<Candidate> find_candidates(const TetMesh& mesh, const TetTopology& topology,
-                                       const AcceptanceCriteria& criteria, int threads,
-                                       const ProgressCallback& progress) {
+Candidates find_candidates(const TetMesh& mesh, const TetTopology& topology,
+                           const AcceptanceCriteria& criteria, int threads,
+                           const ProgressCallback& progress) {
   const index_t nt = mesh.nb_tets();
   // The search runs on a copy in space-filling-curve order (spatial_order.h), where the tets it
   // walks are mostly in cache; root i there is the input's tet input_id[i].
@@ -586,18 +655,18 @@ std::vector<Candidate> find_candidates(const TetMesh& mesh, const TetTopology& t
   // Small chunks: the threads finish together (the search time per root varies a lot).
   constexpr index_t kChunk = 2048;
   const SearchTree tree(criteria.types);
-  std::vector<std::vector<Match>> per_chunk((nt + kChunk - 1) / kChunk);
+  std::vector<ChunkMatches> per_chunk((nt + kChunk - 1) / kChunk);
   parallel_chunks(
       nt, kChunk, std::max(1, threads),
       [&](index_t chunk, index_t begin, index_t end) {
-        Matcher matcher(local, local_topology, quad_pairs, input_id, criteria, tree,
+        Matcher matcher(mesh, local, local_topology, quad_pairs, input_id, criteria, tree,
                         per_chunk[chunk]);
         for (index_t t = begin; t < end; ++t) matcher.run_from(t);
         // Without the growth slack: the lists are held until the last chunk is searched.
         per_chunk[chunk].shrink_to_fit();
       },
       [&](double fraction) { return !progress || progress("candidates", fraction); });
-  return in_root_order(per_chunk, nt);
+  return in_root_order(mesh, per_chunk);
 }
 
 bool good_enough(const AcceptanceCriteria& criteria, const TetMesh& mesh, CellType type, double sj,

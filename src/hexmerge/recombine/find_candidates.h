@@ -12,23 +12,9 @@
 #include "hexmerge/mesh/cell_type.h"
 #include "hexmerge/mesh/tet_mesh.h"
 #include "hexmerge/mesh/tet_topology.h"
+#include "hexmerge/recombine/candidates.h"
 
 namespace hexmerge {
-
-/// Most tets in one candidate: a hexahedron's subdivisions have 5 to 15 tets (Pellerin,
-/// Verhetsel & Remacle 2018); the exhaustive finder's groups may add flat tets on its faces.
-constexpr int MAX_CANDIDATE_TETS = 16;
-
-/// A possible element: a group of tets and the cell they form.
-struct Candidate {
-  std::array<index_t, 8> vertices;  ///< local order of cell_type.h; unused slots NO_VERTEX
-  std::array<index_t, MAX_CANDIDATE_TETS> tets;  ///< sorted; first nb_tets used, then NO_CELL
-  CellType type;
-  std::uint8_t graph;  ///< index into rf_graphs() of the template that found it, or
-                       ///< EXHAUSTIVE_GRAPH (find_candidates_exhaustive.h)
-  std::uint8_t nb_tets;
-  float quality;  ///< scaled Jacobian
-};
 
 /// The sorted vertices of a face of a candidate's cell (NO_VERTEX past a triangle's three): equal
 /// for two cells exactly when they share that face.
@@ -62,9 +48,9 @@ bool good_enough(const AcceptanceCriteria& criteria, const TetMesh& mesh, CellTy
 /// of the mesh renumbered along a space-filling curve, spatial_order.h, for the cache; the
 /// result names the input's tets, in the order a search on the input itself gives.)
 /// @param[in] threads  worker threads (>= 1)
-std::vector<Candidate> find_candidates(const TetMesh& mesh, const TetTopology& topology,
-                                       const AcceptanceCriteria& criteria, int threads,
-                                       const ProgressCallback& progress = {});
+Candidates find_candidates(const TetMesh& mesh, const TetTopology& topology,
+                           const AcceptanceCriteria& criteria, int threads,
+                           const ProgressCallback& progress = {});
 
 /// Builds the cell formed by a group of tets, given which of the group's boundary triangles pair
 /// into quads, and checks it: the group's boundary must be exactly the cell's faces (triangles

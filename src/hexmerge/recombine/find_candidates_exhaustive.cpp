@@ -133,7 +133,7 @@ constexpr int kMaxCapSubsets = 3;
 class CellBuilder {
  public:
   CellBuilder(const TetMesh& mesh, const TetTopology& topology, const QuadPairs& pairs,
-              const AcceptanceCriteria& criteria, std::vector<Candidate>& out)
+              const AcceptanceCriteria& criteria, Candidates& out)
       : mesh_(mesh), topo_(topology), pairs_(pairs), criteria_(criteria), out_(out) {}
 
   // The cell of `type` on `vertices` (local order), grown from tet face `seed` (4 * tet + face,
@@ -316,18 +316,17 @@ class CellBuilder {
     c.graph = EXHAUSTIVE_GRAPH;
     c.quality = static_cast<float>(sj);
     const unsigned all = (1u << nb_caps) - 1;
+    index_t tets[kMaxGroup];
     for (unsigned subset = 0; subset <= all; ++subset) {
       if (nb_caps > kMaxCapSubsets && subset != 0 && subset != all) continue;
-      c.tets.fill(NO_CELL);
-      std::copy(group_, group_ + nb_, c.tets.begin());
+      std::copy(group_, group_ + nb_, tets);
       int n = nb_;
       for (int q = 0; q < nb_quads; ++q) {
         const int cap = cap_of_quad[q];
-        if (cap >= 0 && (subset & (1u << cap))) c.tets[n++] = caps[cap];
+        if (cap >= 0 && (subset & (1u << cap))) tets[n++] = caps[cap];
       }
-      c.nb_tets = static_cast<std::uint8_t>(n);
-      std::sort(c.tets.begin(), c.tets.begin() + n);
-      out_.push_back(c);
+      std::sort(tets, tets + n);
+      out_.push_back(c, tets, n);
     }
   }
 
@@ -357,7 +356,7 @@ class CellBuilder {
   const TetTopology& topo_;
   const QuadPairs& pairs_;
   const AcceptanceCriteria& criteria_;
-  std::vector<Candidate>& out_;
+  Candidates& out_;
   CellType type_ = CellType::Hex;
   const CellDescriptor* d_ = nullptr;
   std::array<index_t, 8> v_{};
@@ -464,9 +463,9 @@ class Searcher {
 
 }  // namespace
 
-std::vector<Candidate> find_candidates_exhaustive(const TetMesh& mesh, const TetTopology& topology,
-                                                  const AcceptanceCriteria& criteria, int threads,
-                                                  const ProgressCallback& progress) {
+Candidates find_candidates_exhaustive(const TetMesh& mesh, const TetTopology& topology,
+                                      const AcceptanceCriteria& criteria, int threads,
+                                      const ProgressCallback& progress) {
   threads = std::max(1, threads);
   const QuadPairs pairs(mesh, topology, criteria.min_dihedral_angle,
                         criteria.min_boundary_dihedral_angle, criteria.max_face_angle, threads,
@@ -475,7 +474,7 @@ std::vector<Candidate> find_candidates_exhaustive(const TetMesh& mesh, const Tet
 
   const index_t nq = static_cast<index_t>(index.size());
   constexpr index_t kChunk = 8192;
-  std::vector<std::vector<Candidate>> per_chunk((nq + kChunk - 1) / kChunk);
+  std::vector<Candidates> per_chunk((nq + kChunk - 1) / kChunk);
   parallel_chunks(
       nq, kChunk, threads,
       [&](index_t chunk, index_t begin, index_t end) {
@@ -484,7 +483,18 @@ std::vector<Candidate> find_candidates_exhaustive(const TetMesh& mesh, const Tet
         for (index_t k = begin; k < end; ++k) searcher.run(index.quad(k));
       },
       [&](double fraction) { return !progress || progress("candidates", fraction); });
-  return concatenate(per_chunk);
+  Candidates all;
+  std::size_t nb = 0, nb_tets = 0;
+  for (const Candidates& chunk : per_chunk) {
+    nb += chunk.size();
+    nb_tets += chunk.all_tets().size();
+  }
+  all.reserve(nb, nb_tets);
+  for (Candidates& chunk : per_chunk) {
+    all.append(chunk);
+    chunk = Candidates();
+  }
+  return all;
 }
 
 }  // namespace hexmerge

@@ -41,8 +41,8 @@ constexpr std::uint8_t EXHAUSTIVE_GRAPH = 255;
 /// Candidates come with tets sorted, vertices in the local order of cell_type.h, graph
 /// EXHAUSTIVE_GRAPH. The order of the result does not depend on the number of threads.
 /// @param[in] threads  worker threads (>= 1)
-std::vector<Candidate> find_candidates_exhaustive(const TetMesh& mesh, const TetTopology& topology,
-                                                  const AcceptanceCriteria& criteria, int threads,
-                                                  const ProgressCallback& progress = {});
+Candidates find_candidates_exhaustive(const TetMesh& mesh, const TetTopology& topology,
+                                      const AcceptanceCriteria& criteria, int threads,
+                                      const ProgressCallback& progress = {});
 
 }  // namespace hexmerge

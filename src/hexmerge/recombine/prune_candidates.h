@@ -26,8 +26,7 @@ namespace hexmerge {
 /// The candidates are taken by value and the kept ones returned in their storage (pass them with
 /// std::move when the caller no longer needs them: no second array is made).
 /// @param[in] threads  worker threads (>= 1); the result does not depend on them
-std::vector<Candidate> prune_unclosable(const TetMesh& mesh, const TetTopology& topology,
-                                        std::vector<Candidate> candidates, std::size_t& removed,
-                                        int threads = 1);
+Candidates prune_unclosable(const TetMesh& mesh, const TetTopology& topology, Candidates candidates,
+                            std::size_t& removed, int threads = 1);
 
 }  // namespace hexmerge

@@ -17,17 +17,23 @@
 namespace hexmerge::test {
 namespace {
 
-/// A candidate made of the given tets only (the program looks at nothing else).
-Candidate group(std::vector<index_t> tets, CellType type = CellType::Hex) {
-  Candidate c{};
-  c.vertices.fill(NO_VERTEX);
-  c.tets.fill(NO_CELL);
-  std::sort(tets.begin(), tets.end());
-  std::copy(tets.begin(), tets.end(), c.tets.begin());
-  c.nb_tets = static_cast<std::uint8_t>(tets.size());
-  c.type = type;
-  c.quality = 1.0f;
-  return c;
+struct Group {
+  std::vector<index_t> tets;
+  CellType type = CellType::Hex;
+};
+
+/// Candidates made of the given tets only (the program looks at nothing else).
+Candidates groups(std::vector<Group> list) {
+  Candidates out;
+  for (Group& g : list) {
+    Candidate c{};
+    c.vertices.fill(NO_VERTEX);
+    c.type = g.type;
+    c.quality = 1.0f;
+    std::sort(g.tets.begin(), g.tets.end());
+    out.push_back(c, g.tets.data(), static_cast<int>(g.tets.size()));
+  }
+  return out;
 }
 
 #define SKIP_WITHOUT_GLPK() \
@@ -36,8 +42,8 @@ Candidate group(std::vector<index_t> tets, CellType type = CellType::Hex) {
 TEST(bound_selection, two_disjoint_hexes_beat_the_one_that_overlaps_both) {
   SKIP_WITHOUT_GLPK();
   // A takes tets 0-5; B and C each share three of them with A and are disjoint from each other.
-  const std::vector<Candidate> candidates = {
-      group({0, 1, 2, 3, 4, 5}), group({0, 1, 2, 10, 11, 12}), group({3, 4, 5, 13, 14, 15})};
+  const Candidates candidates =
+      groups({{{0, 1, 2, 3, 4, 5}}, {{0, 1, 2, 10, 11, 12}}, {{3, 4, 5, 13, 14, 15}}});
   // Started from the greedy-looking choice {A}: the solver must still find {B, C}.
   for (const std::vector<index_t>& initial : {std::vector<index_t>{}, std::vector<index_t>{0}}) {
     const SelectionBound bound = bound_selection(16, candidates, initial, 10.0);
@@ -51,9 +57,8 @@ TEST(bound_selection, two_disjoint_hexes_beat_the_one_that_overlaps_both) {
 TEST(bound_selection, an_odd_cycle_of_conflicts_is_solved_past_its_fractional_relaxation) {
   SKIP_WITHOUT_GLPK();
   // Three pyramids pairwise sharing one tet: the LP relaxation saves 1.5, any selection 1.
-  const std::vector<Candidate> candidates = {group({0, 1}, CellType::Pyramid),
-                                             group({1, 2}, CellType::Pyramid),
-                                             group({0, 2}, CellType::Pyramid)};
+  const Candidates candidates = groups(
+      {{{0, 1}, CellType::Pyramid}, {{1, 2}, CellType::Pyramid}, {{0, 2}, CellType::Pyramid}});
   const SelectionBound bound = bound_selection(3, candidates, {}, 10.0);
   EXPECT_TRUE(bound.proved);
   EXPECT_EQ(bound.bound_elements, 2u);
@@ -64,8 +69,8 @@ TEST(bound_selection, an_odd_cycle_of_conflicts_is_solved_past_its_fractional_re
 TEST(bound_selection, a_conformity_row_forbids_a_quad_face_left_open) {
   SKIP_WITHOUT_GLPK();
   // Hexes A and C, and pyramid B that closes A's quad face but overlaps C.
-  const std::vector<Candidate> candidates = {
-      group({0, 1, 2, 3, 4, 5}), group({6, 7}, CellType::Pyramid), group({7, 8, 9, 10, 11, 12})};
+  const Candidates candidates =
+      groups({{{0, 1, 2, 3, 4, 5}}, {{6, 7}, CellType::Pyramid}, {{7, 8, 9, 10, 11, 12}}});
   const SelectionBound packing = bound_selection(13, candidates, {}, 10.0);
   EXPECT_EQ(packing.bound_elements, 3u);  // A and C
   const std::vector<ConformityRow> rows = {{0, {1}}};
@@ -91,7 +96,7 @@ TEST(bound_selection, conforming_selections_keep_every_conformity_row) {
     const TetTopology topology(mesh);
     const RecombineParameters p;  // conforming
     AcceptanceCriteria criteria;
-    const std::vector<Candidate> candidates = find_candidates(mesh, topology, criteria, 1);
+    const Candidates candidates = find_candidates(mesh, topology, criteria, 1);
     const Selection selection = select_candidates(mesh, topology, candidates, p);
     const std::vector<ConformityRow> rows = conformity_rows(mesh, topology, candidates);
     EXPECT_FALSE(rows.empty());

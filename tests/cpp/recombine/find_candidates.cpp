@@ -21,17 +21,16 @@
 namespace hexmerge::test {
 namespace {
 
-std::vector<Candidate> find(const TetMesh& mesh, const AcceptanceCriteria& criteria,
-                            int threads = 1) {
+Candidates find(const TetMesh& mesh, const AcceptanceCriteria& criteria, int threads = 1) {
   const TetTopology topology(mesh);
   return find_candidates(mesh, topology, criteria, threads);
 }
 
 using Key = std::tuple<int, std::vector<index_t>, std::vector<index_t>>;
 
-Key key_of(const Candidate& c) {
-  return {static_cast<int>(c.type),
-          std::vector<index_t>(c.tets.begin(), c.tets.begin() + c.nb_tets),
+Key key_of(const Candidates& cs, const Candidate& c) {
+  const TetSpan tets = cs.tets(c);
+  return {static_cast<int>(c.type), std::vector<index_t>(tets.begin(), tets.end()),
           std::vector<index_t>(c.vertices.begin(), c.vertices.begin() + nb_vertices(c.type))};
 }
 
@@ -47,11 +46,11 @@ double det(const double* o, const double* a, const double* b, const double* c) {
 // cell's faces, each triangle face once and each quad face as two triangles on one diagonal, and
 // returns the volume the cell's faces enclose, each quad split on the group's own diagonal (so
 // that it must equal the tets' volume exactly, planar or not). NaN when the boundary is wrong.
-double enclosed_volume(const TetMesh& mesh, const Candidate& c) {
+double enclosed_volume(const TetMesh& mesh, const Candidate& c, TetSpan tets) {
   const CellDescriptor& d = descriptor(c.type);
   std::vector<std::set<index_t>> boundary;
   for (int i = 0; i < c.nb_tets; ++i) {
-    const index_t* q = mesh.tet(c.tets[i]);
+    const index_t* q = mesh.tet(tets[i]);
     for (int f = 0; f < 4; ++f) {
       std::set<index_t> face;
       for (int k = 0; k < 4; ++k) {
@@ -59,7 +58,7 @@ double enclosed_volume(const TetMesh& mesh, const Candidate& c) {
       }
       int shared = 0;
       for (int j = 0; j < c.nb_tets; ++j) {
-        const index_t* r = mesh.tet(c.tets[j]);
+        const index_t* r = mesh.tet(tets[j]);
         const std::set<index_t> other(r, r + 4);
         shared += j != i && std::includes(other.begin(), other.end(), face.begin(), face.end());
       }
@@ -129,28 +128,29 @@ TEST(find_candidates, every_candidate_is_a_valid_cell_its_tets_tile) {
       ASSERT_LT(c.graph, rf_graphs().size());
       EXPECT_EQ(rf_graphs()[c.graph].type, c.type);
       EXPECT_EQ(c.nb_tets, rf_graphs()[c.graph].nb_nodes);
-      // Tets sorted, distinct, then NO_CELL; vertices distinct, then NO_VERTEX.
-      EXPECT_TRUE(std::is_sorted(c.tets.begin(), c.tets.begin() + c.nb_tets));
-      EXPECT_EQ(std::adjacent_find(c.tets.begin(), c.tets.begin() + c.nb_tets),
-                c.tets.begin() + c.nb_tets);
-      for (int i = c.nb_tets; i < MAX_CANDIDATE_TETS; ++i) EXPECT_EQ(c.tets[i], NO_CELL);
+      // Tets sorted, distinct, ids of the mesh; vertices distinct, then NO_VERTEX.
+      const TetSpan tets = candidates.tets(c);
+      EXPECT_EQ(tets.size(), c.nb_tets);
+      EXPECT_TRUE(std::is_sorted(tets.begin(), tets.end()));
+      EXPECT_EQ(std::adjacent_find(tets.begin(), tets.end()), tets.end());
+      for (index_t t : tets) EXPECT_LT(t, mesh.nb_tets());
       const std::set<index_t> corners(c.vertices.begin(), c.vertices.begin() + nv);
       EXPECT_EQ(static_cast<int>(corners.size()), nv);
       for (int i = nv; i < 8; ++i) EXPECT_EQ(c.vertices[i], NO_VERTEX);
       // The tets use exactly the cell's corners and tile its volume.
       std::set<index_t> used;
       double tets_volume = 0.0;
-      for (int i = 0; i < c.nb_tets; ++i) {
-        const index_t* q = mesh.tet(c.tets[i]);
+      for (index_t t : tets) {
+        const index_t* q = mesh.tet(t);
         used.insert(q, q + 4);
         tets_volume += cell_volume(CellType::Tet, mesh.points.data(), q);
         if (criteria.respect_regions && !mesh.regions.empty()) {
-          EXPECT_EQ(mesh.regions[c.tets[i]], mesh.regions[c.tets[0]]) << "across regions";
+          EXPECT_EQ(mesh.regions[t], mesh.regions[tets[0]]) << "across regions";
         }
       }
       EXPECT_EQ(used, corners);
       EXPECT_GT(cell_volume(c.type, mesh.points.data(), c.vertices.data()), 0.0) << "inverted";
-      const double enclosed = enclosed_volume(mesh, c);
+      const double enclosed = enclosed_volume(mesh, c, tets);
       ASSERT_FALSE(std::isnan(enclosed)) << "the tets' boundary is not the cell's faces";
       EXPECT_NEAR(enclosed, tets_volume, 1e-9 * tets_volume) << "the tets do not tile the cell";
       // Quality is the cell's scaled Jacobian, and passes the criteria.
@@ -158,12 +158,11 @@ TEST(find_candidates, every_candidate_is_a_valid_cell_its_tets_tile) {
       EXPECT_NEAR(c.quality, sj, 1e-6);
       if (c.quality < criteria.min_scaled_jacobian - 1e-6) {  // no worse than its tets
         EXPECT_TRUE(c.type == CellType::Hex || c.type == CellType::Prism);
-        for (index_t t : c.tets)
-          if (t != NO_CELL)
-            EXPECT_GE(c.quality,
-                      scaled_jacobian(CellType::Tet, mesh.points.data(), mesh.tet(t)) - 1e-6);
+        for (index_t t : tets)
+          EXPECT_GE(c.quality,
+                    scaled_jacobian(CellType::Tet, mesh.points.data(), mesh.tet(t)) - 1e-6);
       }
-      EXPECT_TRUE(seen.insert(key_of(c)).second) << "reported twice";
+      EXPECT_TRUE(seen.insert(key_of(candidates, c)).second) << "reported twice";
     }
   }
 }
@@ -177,8 +176,8 @@ TEST(find_candidates, does_not_depend_on_the_threads) {
     ASSERT_EQ(one.size(), two.size());
     ASSERT_EQ(one.size(), three.size());
     for (std::size_t i = 0; i < one.size(); ++i) {
-      EXPECT_EQ(key_of(one[i]), key_of(two[i])) << i;
-      EXPECT_EQ(key_of(one[i]), key_of(three[i])) << i;
+      EXPECT_EQ(key_of(one, one[i]), key_of(two, two[i])) << i;
+      EXPECT_EQ(key_of(one, one[i]), key_of(three, three[i])) << i;
       EXPECT_EQ(one[i].quality, two[i].quality) << i;
     }
   }
@@ -189,7 +188,7 @@ TEST(find_candidates, stricter_acceptance_keeps_a_subset) {
     SCOPED_TRACE(name);
     const auto loose = find(mesh, permissive_criteria());
     std::set<Key> loose_keys;
-    for (const Candidate& c : loose) loose_keys.insert(key_of(c));
+    for (const Candidate& c : loose) loose_keys.insert(key_of(loose, c));
     AcceptanceCriteria strict = permissive_criteria();
     strict.min_scaled_jacobian = 0.6;
     strict.lowest_scaled_jacobian = 0.6;
@@ -198,7 +197,8 @@ TEST(find_candidates, stricter_acceptance_keeps_a_subset) {
     const auto kept = find(mesh, strict);
     EXPECT_LE(kept.size(), loose.size());
     for (const Candidate& c : kept) {
-      EXPECT_TRUE(loose_keys.count(key_of(c))) << "a candidate only the stricter criteria find";
+      EXPECT_TRUE(loose_keys.count(key_of(kept, c)))
+          << "a candidate only the stricter criteria find";
       EXPECT_GE(c.quality, 0.6 - 1e-6);
     }
   }
@@ -213,13 +213,13 @@ TEST(find_candidates, below_the_minimum_only_hexes_and_prisms_better_than_their_
     AcceptanceCriteria criteria = permissive_criteria();
     criteria.min_scaled_jacobian = 0.6;
     criteria.lowest_scaled_jacobian = 0.1;
-    for (const Candidate& c : find(mesh, criteria)) {
+    const Candidates found = find(mesh, criteria);
+    for (const Candidate& c : found) {
       if (c.quality >= 0.6 - 1e-6) continue;
       ++relaxed;
       EXPECT_TRUE(c.type == CellType::Hex || c.type == CellType::Prism);
       EXPECT_GE(c.quality, 0.1 - 1e-6);
-      for (index_t t : c.tets) {
-        if (t == NO_CELL) break;
+      for (index_t t : found.tets(c)) {
         EXPECT_GE(c.quality,
                   scaled_jacobian(CellType::Tet, mesh.points.data(), mesh.tet(t)) - 1e-6);
       }
@@ -261,7 +261,8 @@ TEST(find_candidates, respect_regions_splits_the_candidates_at_the_interface) {
   const auto together = find(mesh, criteria);
   EXPECT_LT(apart.size(), together.size()) << "nothing crossed the interface";
   for (const Candidate& c : apart) {
-    for (int i = 1; i < c.nb_tets; ++i) EXPECT_EQ(mesh.regions[c.tets[i]], mesh.regions[c.tets[0]]);
+    const TetSpan tets = apart.tets(c);
+    for (index_t t : tets) EXPECT_EQ(mesh.regions[t], mesh.regions[tets[0]]);
   }
 }
 

@@ -38,7 +38,7 @@ AcceptanceCriteria anything() {
 /// A cell as the tests compare them: type, tets, and its faces as sorted vertex sets.
 using CellKey = std::tuple<int, std::vector<index_t>, std::set<std::vector<index_t>>>;
 
-CellKey key_of(const Candidate& c) {
+std::set<std::vector<index_t>> faces_of(const Candidate& c) {
   const CellDescriptor& d = descriptor(c.type);
   std::set<std::vector<index_t>> faces;
   for (int f = 0; f < d.nb_faces; ++f) {
@@ -47,8 +47,15 @@ CellKey key_of(const Candidate& c) {
     std::sort(face.begin(), face.end());
     faces.insert(face);
   }
-  return {static_cast<int>(c.type),
-          std::vector<index_t>(c.tets.begin(), c.tets.begin() + c.nb_tets), faces};
+  return faces;
+}
+
+std::vector<index_t> tets_of(const Candidates& cs, const Candidate& c) {
+  return std::vector<index_t>(cs.tets(c).begin(), cs.tets(c).end());
+}
+
+CellKey key_of(const Candidates& cs, const Candidate& c) {
+  return {static_cast<int>(c.type), tets_of(cs, c), faces_of(c)};
 }
 
 /// Independent check that `tets` fill the cell of `type` on `v` (local order): every face of a
@@ -123,22 +130,23 @@ bool fills(const TetMesh& mesh, const std::vector<index_t>& tets, CellType type,
 /// Runs both finders; expects every program candidate among the exhaustive ones, no exhaustive
 /// candidate twice, and every exhaustive candidate filled (independent check). Returns the
 /// exhaustive candidates.
-std::vector<Candidate> compare(const TetMesh& mesh, const AcceptanceCriteria& criteria) {
+Candidates compare(const TetMesh& mesh, const AcceptanceCriteria& criteria) {
   const TetTopology topology(mesh);
   const auto programs = find_candidates(mesh, topology, criteria, 1);
   const auto exhaustive = find_candidates_exhaustive(mesh, topology, criteria, 2);
   std::set<CellKey> found;
   for (const Candidate& c : exhaustive) {
     EXPECT_EQ(c.graph, EXHAUSTIVE_GRAPH);
-    EXPECT_TRUE(std::is_sorted(c.tets.begin(), c.tets.begin() + c.nb_tets));
-    EXPECT_TRUE(found.insert(key_of(c)).second) << "found twice";
-    EXPECT_TRUE(fills(mesh, std::vector<index_t>(c.tets.begin(), c.tets.begin() + c.nb_tets),
-                      c.type, c.vertices.data()));
+    const std::vector<index_t> tets = tets_of(exhaustive, c);
+    EXPECT_EQ(tets.size(), c.nb_tets);
+    EXPECT_TRUE(std::is_sorted(tets.begin(), tets.end()));
+    EXPECT_TRUE(found.insert(key_of(exhaustive, c)).second) << "found twice";
+    EXPECT_TRUE(fills(mesh, tets, c.type, c.vertices.data()));
     EXPECT_GE(c.quality, criteria.min_scaled_jacobian);
     EXPECT_NEAR(c.quality, scaled_jacobian(c.type, mesh.points.data(), c.vertices.data()), 1e-6);
   }
   for (const Candidate& c : programs) {
-    EXPECT_EQ(found.count(key_of(c)), 1u)
+    EXPECT_EQ(found.count(key_of(programs, c)), 1u)
         << descriptor(c.type).name << " of " << int(c.nb_tets) << " tets from template "
         << int(c.graph) << " not found exhaustively";
   }
@@ -146,12 +154,12 @@ std::vector<Candidate> compare(const TetMesh& mesh, const AcceptanceCriteria& cr
   const auto again = find_candidates_exhaustive(mesh, topology, criteria, 1);
   EXPECT_EQ(again.size(), exhaustive.size());
   for (std::size_t i = 0; i < std::min(again.size(), exhaustive.size()); ++i) {
-    EXPECT_EQ(key_of(again[i]), key_of(exhaustive[i]));
+    EXPECT_EQ(key_of(again, again[i]), key_of(exhaustive, exhaustive[i]));
   }
   return exhaustive;
 }
 
-std::size_t count_type(const std::vector<Candidate>& cs, CellType type) {
+std::size_t count_type(const Candidates& cs, CellType type) {
   return std::count_if(cs.begin(), cs.end(), [&](const Candidate& c) { return c.type == type; });
 }
 
@@ -213,8 +221,10 @@ TEST(find_candidates_exhaustive, respects_regions) {
   mesh.regions.assign(mesh.nb_tets(), 0);
   for (index_t t = 0; t < mesh.nb_tets(); t += 7) mesh.regions[t] = 1;
   const TetTopology topology(mesh);
-  for (const Candidate& c : find_candidates_exhaustive(mesh, topology, AcceptanceCriteria{}, 1)) {
-    for (int i = 1; i < c.nb_tets; ++i) EXPECT_EQ(mesh.region(c.tets[i]), mesh.region(c.tets[0]));
+  const Candidates found = find_candidates_exhaustive(mesh, topology, AcceptanceCriteria{}, 1);
+  for (const Candidate& c : found) {
+    const TetSpan tets = found.tets(c);
+    for (index_t t : tets) EXPECT_EQ(mesh.region(t), mesh.region(tets[0]));
   }
   compare(mesh, AcceptanceCriteria{});
 }
@@ -314,8 +324,7 @@ TEST(find_candidates_exhaustive, agrees_cell_by_cell_with_a_brute_force_oracle_o
       std::map<std::set<std::vector<index_t>>, std::set<std::vector<index_t>>> hex_groups;
       for (const Candidate& c : found) {
         if (c.type != CellType::Hex) continue;
-        hex_groups[std::get<2>(key_of(c))].insert(
-            std::vector<index_t>(c.tets.begin(), c.tets.begin() + c.nb_tets));
+        hex_groups[faces_of(c)].insert(tets_of(found, c));
       }
       std::size_t lattice_hexes = 0;
       auto id = [&](int i, int j, int k) { return index_t((k * (n + 1) + j) * (n + 1) + i); };
@@ -348,11 +357,10 @@ TEST(find_candidates_exhaustive, agrees_cell_by_cell_with_a_brute_force_oracle_o
             }
             if (fills(mesh, inside, CellType::Hex, v.data())) ++strict_filled;
             if (!groups.empty()) ++cells_filled;
-            Candidate cell;
+            Candidate cell{};
             cell.type = CellType::Hex;
             std::copy(v.begin(), v.end(), cell.vertices.begin());
-            cell.nb_tets = 0;
-            const auto it = hex_groups.find(std::get<2>(key_of(cell)));
+            const auto it = hex_groups.find(faces_of(cell));
             const std::set<std::vector<index_t>> by_finder =
                 it == hex_groups.end() ? std::set<std::vector<index_t>>{} : it->second;
             // Flat tets on the cell's faces ("caps", in the fullest group only) may be left out:

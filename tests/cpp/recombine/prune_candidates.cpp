@@ -20,7 +20,7 @@ using test::five_tet_grid;
 using test::kuhn_grid;
 using test::orient_positively;
 
-std::size_t count_type(const std::vector<Candidate>& candidates, CellType type) {
+std::size_t count_type(const Candidates& candidates, CellType type) {
   std::size_t n = 0;
   for (const Candidate& c : candidates) n += c.type == type;
   return n;
@@ -58,7 +58,7 @@ TetMesh cube_with_cap(const std::array<double, 3>& apex0, const std::array<doubl
   return mesh;
 }
 
-std::vector<Candidate> candidates_of(const TetMesh& mesh) {
+Candidates candidates_of(const TetMesh& mesh) {
   const TetTopology topology(mesh);
   AcceptanceCriteria criteria;
   criteria.min_scaled_jacobian = 0.05;
@@ -69,10 +69,8 @@ std::vector<Candidate> candidates_of(const TetMesh& mesh) {
 // that is neither on the boundary nor the face of a candidate still kept on its other side (one
 // that holds the tets behind the face's triangles), until a sweep drops nothing.
 std::vector<char> unclosable_by_sweeps(const TetMesh& mesh, const TetTopology& topology,
-                                       const std::vector<Candidate>& all) {
-  auto holds = [&](const Candidate& c, index_t t) {
-    return std::find(c.tets.begin(), c.tets.begin() + c.nb_tets, t) != c.tets.begin() + c.nb_tets;
-  };
+                                       const Candidates& all) {
+  auto holds = [&](const Candidate& c, index_t t) { return all.tets(c).contains(t); };
   std::vector<std::vector<FaceKey>> faces(all.size());
   for (std::size_t ci = 0; ci < all.size(); ++ci)
     for (int f = 0; f < descriptor(all[ci].type).nb_faces; ++f)
@@ -90,13 +88,13 @@ std::vector<char> unclosable_by_sweeps(const TetMesh& mesh, const TetTopology& t
         // The triangles of the candidate's boundary on this face, and the tets behind them.
         std::vector<index_t> behind;
         bool open = false;
-        for (int i = 0; i < c.nb_tets; ++i) {
-          const index_t* v = mesh.tet(c.tets[i]);
+        for (const index_t t : all.tets(c)) {
+          const index_t* v = mesh.tet(t);
           for (int lf = 0; lf < 4; ++lf) {
             bool on_face = true;
             for (int k = 0; k < 4; ++k)
               if (k != lf) on_face = on_face && std::count(key.begin(), key.end(), v[k]) > 0;
-            const index_t n = topology.neighbor(c.tets[i], lf);
+            const index_t n = topology.neighbor(t, lf);
             if (!on_face || (n != NO_CELL && holds(c, n))) continue;
             if (n == NO_CELL)
               open = true;
@@ -129,19 +127,20 @@ std::vector<char> unclosable_by_sweeps(const TetMesh& mesh, const TetTopology& t
 
 // prune_unclosable keeps exactly the candidates the sweeps keep, in their order, on any number of
 // threads.
-void expect_same_as_sweeps(const TetMesh& mesh, const std::vector<Candidate>& all) {
+void expect_same_as_sweeps(const TetMesh& mesh, const Candidates& all) {
   const TetTopology topology(mesh);
   const std::vector<char> dropped = unclosable_by_sweeps(mesh, topology, all);
-  std::vector<Candidate> expected;
+  Candidates expected;
   for (std::size_t ci = 0; ci < all.size(); ++ci)
-    if (!dropped[ci]) expected.push_back(all[ci]);
+    if (!dropped[ci]) expected.push_back(all[ci], all.tets(ci).data(), all[ci].nb_tets);
   for (int threads : {1, 2}) {
     std::size_t removed = 0;
-    const std::vector<Candidate> kept = prune_unclosable(mesh, topology, all, removed, threads);
+    const Candidates kept = prune_unclosable(mesh, topology, all, removed, threads);
     EXPECT_EQ(removed, all.size() - expected.size());
     ASSERT_EQ(kept.size(), expected.size());
     for (std::size_t i = 0; i < kept.size(); ++i) {
-      EXPECT_EQ(kept[i].tets, expected[i].tets);
+      EXPECT_TRUE(std::equal(kept.tets(i).begin(), kept.tets(i).end(), expected.tets(i).begin(),
+                             expected.tets(i).end()));
       EXPECT_EQ(kept[i].type, expected[i].type);
       EXPECT_EQ(kept[i].vertices, expected[i].vertices);
     }
@@ -152,9 +151,9 @@ TEST(PruneUnclosable, KeepsEveryCellOfAGrid) {
   // Every quad face of a grid cell is on the boundary or shared with the next cell.
   const TetMesh mesh = kuhn_grid(3);
   const TetTopology topology(mesh);
-  const std::vector<Candidate> all = candidates_of(mesh);
+  const Candidates all = candidates_of(mesh);
   std::size_t removed = 0;
-  const std::vector<Candidate> kept = prune_unclosable(mesh, topology, all, removed);
+  const Candidates kept = prune_unclosable(mesh, topology, all, removed);
   EXPECT_EQ(kept.size() + removed, all.size());
   std::size_t cubes = 0;
   for (const Candidate& c : kept) cubes += c.type == CellType::Hex && c.quality > 0.999f;
@@ -164,11 +163,11 @@ TEST(PruneUnclosable, KeepsEveryCellOfAGrid) {
 TEST(PruneUnclosable, KeepsAHexWhoseQuadAPyramidCloses) {
   const TetMesh mesh = cube_with_cap({0.5, 0.5, 1.5}, {0.5, 0.5, 1.5});
   const TetTopology topology(mesh);
-  const std::vector<Candidate> all = candidates_of(mesh);
+  const Candidates all = candidates_of(mesh);
   ASSERT_EQ(count_type(all, CellType::Hex), 1u);
   ASSERT_GE(count_type(all, CellType::Pyramid), 1u);
   std::size_t removed = 0;
-  const std::vector<Candidate> kept = prune_unclosable(mesh, topology, all, removed);
+  const Candidates kept = prune_unclosable(mesh, topology, all, removed);
   EXPECT_EQ(count_type(kept, CellType::Hex), 1u);
   // And the selection makes the pair: one hex, one pyramid, conforming.
   RecombineReport report;
@@ -184,10 +183,10 @@ TEST(PruneUnclosable, RemovesAHexWhoseQuadNothingCloses) {
   // Two tets with different apexes on the top quad: no pyramid, no hex across.
   const TetMesh mesh = cube_with_cap({0.3, 0.6, 1.4}, {0.7, 0.4, 1.4});
   const TetTopology topology(mesh);
-  const std::vector<Candidate> all = candidates_of(mesh);
+  const Candidates all = candidates_of(mesh);
   ASSERT_EQ(count_type(all, CellType::Hex), 1u);
   std::size_t removed = 0;
-  const std::vector<Candidate> kept = prune_unclosable(mesh, topology, all, removed);
+  const Candidates kept = prune_unclosable(mesh, topology, all, removed);
   EXPECT_EQ(count_type(kept, CellType::Hex), 0u);
   // So do the pyramids and prisms of the cube that have the top quad as a face.
   EXPECT_GT(removed, 1u);
@@ -214,7 +213,7 @@ TEST(PruneUnclosable, KeepsWhatTheDefinitionKeepsOnPerturbedGrids) {
       for (bool exhaustive : {false, true}) {
         SCOPED_TRACE(testing::Message() << "kind " << kind << " trial " << trial
                                         << (exhaustive ? " exhaustive" : " programs"));
-        const std::vector<Candidate> all =
+        const Candidates all =
             exhaustive ? find_candidates_exhaustive(mesh, topology, test::permissive_criteria(), 1)
                        : find_candidates(mesh, topology, test::permissive_criteria(), 1);
         expect_same_as_sweeps(mesh, all);
@@ -247,7 +246,7 @@ TEST(PruneUnclosable, KeepsWhatTheDefinitionKeepsWithAFlatTetOnAQuad) {
     TetMesh mesh = test::make_tet_mesh(p, with_cap);
     orient_positively(mesh);
     const TetTopology topology(mesh);
-    const std::vector<Candidate> all =
+    const Candidates all =
         find_candidates_exhaustive(mesh, topology, test::permissive_criteria(), 1);
     ASSERT_GE(count_type(all, CellType::Hex), 2u);  // with and without the flat tet
     expect_same_as_sweeps(mesh, all);

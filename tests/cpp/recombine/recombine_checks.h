@@ -86,12 +86,12 @@ inline Outcome recombine_and_check(const TetMesh& input, const RecombineParamete
 
 // The cells a selection makes (its elements and the tets it leaves); owners gets, per tet, how
 // many chosen elements hold it.
-inline std::size_t selection_cells(const TetMesh& mesh, const std::vector<Candidate>& candidates,
+inline std::size_t selection_cells(const TetMesh& mesh, const Candidates& candidates,
                                    const Selection& s, std::vector<int>& owners) {
   owners.assign(mesh.nb_tets(), 0);
   std::size_t taken = 0;
   for (index_t ci : s.elements) {
-    for (int i = 0; i < candidates[ci].nb_tets; ++i) ++owners[candidates[ci].tets[i]];
+    for (const index_t t : candidates.tets(ci)) ++owners[t];
     taken += static_cast<std::size_t>(candidates[ci].nb_tets);
   }
   return s.elements.size() + (mesh.nb_tets() - taken);

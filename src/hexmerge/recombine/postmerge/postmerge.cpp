@@ -25,7 +25,9 @@ struct QuadFace {
 
 class Stage {
  public:
-  Stage(FlipMesh& mesh, const PostMergeOptions& options) : m_(mesh), options_(options) {
+  /// candidates: those whose Candidate records the member functions are given
+  Stage(FlipMesh& mesh, const Candidates& candidates, const PostMergeOptions& options)
+      : m_(mesh), cands_(candidates), options_(options) {
     if (options.placement == PyramidPlacement::NoBoundaryNode) {
       boundary_vertex_.assign(mesh.nb_slots() == 0 ? 0 : max_vertex() + 1, 0);
       for (index_t t = 0; t < m_.nb_slots(); ++t) {
@@ -213,15 +215,14 @@ class Stage {
   }
 
   index_t inner_tet(const Candidate& cand, index_t a, index_t b, index_t c) const {
-    for (int i = 0; i < cand.nb_tets; ++i) {
-      if (m_.alive(cand.tets[i]) && holds3(m_.tet(cand.tets[i]), a, b, c)) return cand.tets[i];
+    for (const index_t t : cands_.tets(cand)) {
+      if (m_.alive(t) && holds3(m_.tet(t), a, b, c)) return t;
     }
     return NO_CELL;
   }
 
-  static bool in_candidate(const Candidate& cand, index_t t) {
-    return std::find(cand.tets.begin(), cand.tets.begin() + cand.nb_tets, t) !=
-           cand.tets.begin() + cand.nb_tets;
+  bool in_candidate(const Candidate& cand, index_t t) const {
+    return cands_.tets(cand).contains(t);
   }
 
   bool face_on_boundary(index_t t, int f) const {
@@ -242,23 +243,24 @@ class Stage {
   }
 
   FlipMesh& m_;
+  const Candidates& cands_;
   const PostMergeOptions& options_;
   std::vector<char> boundary_vertex_;
 };
 
-bool all_alive(const FlipMesh& m, const Candidate& cand) {
-  for (int i = 0; i < cand.nb_tets; ++i) {
-    if (!m.alive(cand.tets[i]) || m.locked(cand.tets[i])) return false;
+bool all_alive(const FlipMesh& m, TetSpan tets) {
+  for (const index_t t : tets) {
+    if (!m.alive(t) || m.locked(t)) return false;
   }
   return true;
 }
 
 }  // namespace
 
-QuadCensus quad_census(const TetMesh& mesh, const std::vector<Candidate>& candidates,
+QuadCensus quad_census(const TetMesh& mesh, const Candidates& candidates,
                        const PostMergeOptions& options) {
   FlipMesh m(mesh);
-  Stage stage(m, options);
+  Stage stage(m, candidates, options);
   QuadCensus census;
   std::vector<QuadFace> faces;
   std::array<index_t, 2> pyramid{};
@@ -274,11 +276,11 @@ QuadCensus quad_census(const TetMesh& mesh, const std::vector<Candidate>& candid
   return census;
 }
 
-PostMergeResult close_open_quads(const TetMesh& mesh, const std::vector<Candidate>& candidates,
-                                 const std::vector<Candidate>& selected_from,
-                                 const Selection& selection, const PostMergeOptions& options) {
+PostMergeResult close_open_quads(const TetMesh& mesh, const Candidates& candidates,
+                                 const Candidates& selected_from, const Selection& selection,
+                                 const PostMergeOptions& options) {
   FlipMesh m(mesh);
-  Stage stage(m, options);
+  Stage stage(m, candidates, options);
   PostMergeResult result;
   // The selection's hexahedra and the elements on their quad faces stay as they are.
   std::set<FaceKey> hex_quads;
@@ -294,7 +296,7 @@ PostMergeResult close_open_quads(const TetMesh& mesh, const std::vector<Candidat
       keep = descriptor(c.type).face_size[f] == 4 && hex_quads.count(face_key(c, f)) != 0;
     }
     if (!keep) continue;
-    for (int i = 0; i < c.nb_tets; ++i) m.set_locked(c.tets[i], true);
+    for (const index_t t : selected_from.tets(c)) m.set_locked(t, true);
   }
   // Hexahedron candidates: first those whose faces are closed as the tets are, then the others,
   // best scaled Jacobian first (ties by index: deterministic).
@@ -324,13 +326,13 @@ PostMergeResult close_open_quads(const TetMesh& mesh, const std::vector<Candidat
   for (int pass = 0; pass < 2; ++pass) {
     for (index_t i : order) {
       const Candidate& cand = candidates[i];
-      if (!all_alive(m, cand) || !stage.quad_faces(cand, faces)) continue;
+      if (!all_alive(m, candidates.tets(cand)) || !stage.quad_faces(cand, faces)) continue;
       if (pass == 1) ++result.attempted;
       const std::size_t start = m.mark();
       locked_here.clear();
-      for (int k = 0; k < cand.nb_tets; ++k) {
-        m.set_locked(cand.tets[k], true);
-        locked_here.push_back(cand.tets[k]);
+      for (const index_t t : candidates.tets(cand)) {
+        m.set_locked(t, true);
+        locked_here.push_back(t);
       }
       bool ok = true;
       for (const QuadFace& q : faces) {

@@ -47,7 +47,7 @@ struct QuadCensus {
 };
 
 /// The census on `mesh` (candidates found on it; their tet ids are the mesh's).
-QuadCensus quad_census(const TetMesh& mesh, const std::vector<Candidate>& candidates,
+QuadCensus quad_census(const TetMesh& mesh, const Candidates& candidates,
                        const PostMergeOptions& options);
 
 struct PostMergeResult {
@@ -65,8 +65,8 @@ struct PostMergeResult {
 /// flips of tets that no kept candidate or closing pyramid holds. When every face closes, its
 /// tets and pyramids are kept; otherwise every flip made for it is undone and it is not tried
 /// again. Work: at most (max_fan - 1)^2 flips tried per face.
-PostMergeResult close_open_quads(const TetMesh& mesh, const std::vector<Candidate>& candidates,
-                                 const std::vector<Candidate>& selected_from,
-                                 const Selection& selection, const PostMergeOptions& options);
+PostMergeResult close_open_quads(const TetMesh& mesh, const Candidates& candidates,
+                                 const Candidates& selected_from, const Selection& selection,
+                                 const PostMergeOptions& options);
 
 }  // namespace hexmerge

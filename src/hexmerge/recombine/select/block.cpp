@@ -66,7 +66,7 @@ void Selector::select_block() {
   std::vector<char> in_block(cands_.size(), 0);
   auto unclaimed = [&](const Candidate& c) {
     for (int i = 0; i < c.nb_tets; ++i) {
-      if (block_of[c.tets[i]] != NO_INDEX) return false;
+      if (block_of[cands_.tets(c)[i]] != NO_INDEX) return false;
     }
     return true;
   };
@@ -74,7 +74,7 @@ void Selector::select_block() {
     for (index_t ci : list) {
       const Candidate& c = cands_[ci];
       if (!unclaimed(c)) continue;
-      for (int i = 0; i < c.nb_tets; ++i) block_of[c.tets[i]] = ci;
+      for (int i = 0; i < c.nb_tets; ++i) block_of[cands_.tets(c)[i]] = ci;
       in_block[ci] = 1;
     }
   };
@@ -163,12 +163,12 @@ void Selector::select_block() {
     if (gone == NO_INDEX) continue;
     in_block[gone] = 0;
     const Candidate& c = cands_[gone];
-    for (int i = 0; i < c.nb_tets; ++i) block_of[c.tets[i]] = NO_INDEX;
+    for (int i = 0; i < c.nb_tets; ++i) block_of[cands_.tets(c)[i]] = NO_INDEX;
     // Who may have counted on it: block hexahedra next to its tets, and those whose quads
     // meet the tets next to them (a conflict may be gone).
     for (int i = 0; i < c.nb_tets; ++i) {
       for (int f = 0; f < 4; ++f) {
-        const index_t n = topo_.neighbor(c.tets[i], f);
+        const index_t n = topo_.neighbor(cands_.tets(c)[i], f);
         if (n == NO_CELL) continue;
         enqueue(block_of[n]);
         if (block_of[n] == NO_INDEX) enqueue(other_quad_at(n, NO_INDEX));

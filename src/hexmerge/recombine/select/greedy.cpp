@@ -12,7 +12,8 @@ void Selector::boundary_stage_by_quality(const Stage& stage) {
     const Candidate& c = cands_[ci];
     if (c.type != stage.type) continue;
     bool on_boundary = false;
-    for (int i = 0; i < c.nb_tets; ++i) on_boundary = on_boundary || is_boundary_[c.tets[i]];
+    for (int i = 0; i < c.nb_tets; ++i)
+      on_boundary = on_boundary || is_boundary_[cands_.tets(c)[i]];
     if (on_boundary) order.push_back(ci);
   }
   std::stable_sort(order.begin(), order.end(),
@@ -56,14 +57,14 @@ void Selector::boundary_stage(const Stage& stage) {
     // Candidates that lost a tet are no longer available: their boundary tets move down.
     const Candidate& c = cands_[ci];
     for (int i = 0; i < c.nb_tets; ++i) {
-      const index_t s = c.tets[i];
+      const index_t s = cands_.tets(c)[i];
       for (index_t k = offsets_[s]; k < offsets_[s + 1]; ++k) {
         const index_t xi = ids_[k];
         const Candidate& x = cands_[xi];
         if (xi == ci || x.type != stage.type || counted[xi]) continue;
         counted[xi] = 1;
         for (int j = 0; j < x.nb_tets; ++j) {
-          const index_t u = x.tets[j];
+          const index_t u = cands_.tets(x)[j];
           if (!is_boundary_[u] || !is_free(u) || count[u] == 0) continue;
           --count[u];
           if (count[u] > 0) {
@@ -203,7 +204,7 @@ void Selector::close_quads() {
     const Candidate& c = cands_[ci];
     for (int i = 0; i < c.nb_tets; ++i) {
       for (int f = 0; f < 4; ++f) {
-        const index_t n = topo_.neighbor(c.tets[i], f);
+        const index_t n = topo_.neighbor(cands_.tets(c)[i], f);
         if (n != NO_CELL && !is_free(n)) enqueue(owner_[n]);
       }
     }

@@ -24,13 +24,13 @@ int cell_face_of(const Candidate& c, const std::array<index_t, 3>& tri) {
 }  // namespace
 
 CandidateIndex::CandidateIndex(const TetMesh& mesh, const TetTopology& topo,
-                               const std::vector<Candidate>& cands, bool respect_regions) {
+                               const Candidates& cands, bool respect_regions) {
   const index_t nt = mesh.nb_tets();
   offsets.assign(static_cast<std::size_t>(nt) + 1, 0);
   first_face.assign(cands.size() + 1, 0);
   for (index_t ci = 0; ci < cands.size(); ++ci) {
     const Candidate& c = cands[ci];
-    for (int i = 0; i < c.nb_tets; ++i) ++offsets[c.tets[i] + 1];
+    for (const index_t t : cands.tets(c)) ++offsets[t + 1];
     first_face[ci + 1] = first_face[ci] + 4 * static_cast<std::size_t>(c.nb_tets);
   }
   for (index_t t = 0; t < nt; ++t) offsets[t + 1] += offsets[t];
@@ -39,14 +39,14 @@ CandidateIndex::CandidateIndex(const TetMesh& mesh, const TetTopology& topo,
   cell_face.assign(first_face.back(), -1);
   for (index_t ci = 0; ci < cands.size(); ++ci) {
     const Candidate& c = cands[ci];
+    const TetSpan ct = cands.tets(c);
     for (int i = 0; i < c.nb_tets; ++i) {
-      const index_t t = c.tets[i];
+      const index_t t = ct[i];
       ids[fill[t]++] = ci;
       const index_t* q = mesh.tet(t);
       for (int f = 0; f < 4; ++f) {
         const index_t n = topo.neighbor(t, f);
-        if (n != NO_CELL && std::find(c.tets.begin(), c.tets.begin() + c.nb_tets, n) !=
-                                c.tets.begin() + c.nb_tets) {
+        if (n != NO_CELL && ct.contains(n)) {
           continue;  // internal face of the candidate
         }
         const std::array<index_t, 3> tri{q[kTet.face[f][0]], q[kTet.face[f][1]],
@@ -69,14 +69,14 @@ CandidateIndex::CandidateIndex(const TetMesh& mesh, const TetTopology& topo,
 }
 
 Sides Selector::sides(index_t ci) const {
-  const Candidate& c = cands_[ci];
+  const TetSpan ct = cands_.tets(ci);
   Sides s;
-  for (int i = 0; i < c.nb_tets; ++i) {
+  for (int i = 0; i < ct.size(); ++i) {
     for (int f = 0; f < 4; ++f) {
       const int cf = index_.cell_face[index_.first_face[ci] + 4 * i + f];
       if (cf < 0) continue;
-      const index_t n = topo_.neighbor(c.tets[i], f);
-      s.side[s.count++] = {n, n == NO_CELL ? -1 : topo_.neighbor_face(c.tets[i], f), cf};
+      const index_t n = topo_.neighbor(ct[i], f);
+      s.side[s.count++] = {n, n == NO_CELL ? -1 : topo_.neighbor_face(ct[i], f), cf};
     }
   }
   return s;
@@ -119,7 +119,7 @@ index_t Selector::closer(index_t n1, index_t n2, const QuadKey* extra,
     if (!contains(x, n2) || !available(xi)) continue;
     if (exclude) {
       bool overlap = false;
-      for (int i = 0; i < x.nb_tets && !overlap; ++i) overlap = contains(*exclude, x.tets[i]);
+      for (const index_t t : cands_.tets(x)) overlap = overlap || contains(*exclude, t);
       if (overlap) continue;
     }
     bool all = true;

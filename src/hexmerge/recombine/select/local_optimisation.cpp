@@ -21,7 +21,7 @@ void Selector::try_move(index_t ci) {
   const Candidate& c = cands_[ci];
   std::vector<index_t> in_way;
   for (int i = 0; i < c.nb_tets; ++i) {
-    const index_t o = owner_[c.tets[i]];
+    const index_t o = owner_[cands_.tets(c)[i]];
     if (o != NO_INDEX && std::find(in_way.begin(), in_way.end(), o) == in_way.end()) {
       in_way.push_back(o);
     }
@@ -42,7 +42,7 @@ void Selector::try_move(index_t ci) {
   for (index_t o : in_way) {
     const Candidate& e = cands_[o];
     for (int i = 0; i < e.nb_tets; ++i) {
-      if (is_free(e.tets[i])) freed.push_back(e.tets[i]);
+      if (is_free(cands_.tets(e)[i])) freed.push_back(cands_.tets(e)[i]);
     }
   }
   for (CellType type : {CellType::Hex, CellType::Prism, CellType::Pyramid}) {

@@ -30,11 +30,11 @@ bool Selector::fits_outside(index_t ci) const {
     for (int f = 0; f < 4; ++f) {
       const int cf = index_.cell_face[index_.first_face[ci] + 4 * i + f];
       if (cf < 0) continue;
-      const index_t n = topo_.neighbor(c.tets[i], f);
+      const index_t n = topo_.neighbor(cands_.tets(c)[i], f);
       if (n == NO_CELL || local_[n] >= 0) continue;
       if (is_free(n)) {
         if (is_quad(c, cf)) return false;
-      } else if (!faces_match(ci, cf, owner_[n], n, topo_.neighbor_face(c.tets[i], f))) {
+      } else if (!faces_match(ci, cf, owner_[n], n, topo_.neighbor_face(cands_.tets(c)[i], f))) {
         return false;
       }
     }
@@ -49,13 +49,13 @@ bool Selector::fits_inside(const Hood& h, index_t ci) const {
     for (int f = 0; f < 4; ++f) {
       const int cf = index_.cell_face[index_.first_face[ci] + 4 * i + f];
       if (cf < 0) continue;
-      const index_t n = topo_.neighbor(c.tets[i], f);
+      const index_t n = topo_.neighbor(cands_.tets(c)[i], f);
       if (n == NO_CELL || local_[n] < 0) continue;
       const int st = h.state[local_[n]];
       if (st == UNDECIDED) continue;
       if (st == LEFT_FREE) {
         if (is_quad(c, cf)) return false;
-      } else if (!faces_match(ci, cf, owner_[n], n, topo_.neighbor_face(c.tets[i], f))) {
+      } else if (!faces_match(ci, cf, owner_[n], n, topo_.neighbor_face(cands_.tets(c)[i], f))) {
         return false;
       }
     }
@@ -95,7 +95,7 @@ bool Selector::reselect(Hood& h) {
       stamp_of_[ci] = stamp_;
       const Candidate& c = cands_[ci];
       bool inside = true;
-      for (int i = 0; i < c.nb_tets && inside; ++i) inside = local_[c.tets[i]] >= 0;
+      for (int i = 0; i < c.nb_tets && inside; ++i) inside = local_[cands_.tets(c)[i]] >= 0;
       if (inside && (!check || fits_outside(ci))) h.pool.push_back(ci);
     }
   }
@@ -113,7 +113,7 @@ bool Selector::reselect(Hood& h) {
   for (index_t ci : h.pool) {
     const Candidate& c = cands_[ci];
     for (int i = 0; i < c.nb_tets; ++i) {
-      const int l = local_[c.tets[i]];
+      const int l = local_[cands_.tets(c)[i]];
       ++h.at_offsets[l + 1];
       ++h.open_sizes[l * (MAX_CANDIDATE_TETS + 1) + c.nb_tets];
       h.sizes[l] |= 1u << c.nb_tets;
@@ -126,7 +126,8 @@ bool Selector::reselect(Hood& h) {
     std::vector<int> fill(h.at_offsets.begin(), h.at_offsets.end() - 1);
     for (std::size_t p = 0; p < h.pool.size(); ++p) {
       const Candidate& c = cands_[h.pool[p]];
-      for (int i = 0; i < c.nb_tets; ++i) h.at[fill[local_[c.tets[i]]]++] = static_cast<int>(p);
+      for (int i = 0; i < c.nb_tets; ++i)
+        h.at[fill[local_[cands_.tets(c)[i]]]++] = static_cast<int>(p);
     }
   }
   // Tets an outside element's quad face ends on cannot stay tets.
@@ -186,7 +187,7 @@ long long Selector::close_entries(Hood& h, const int* ls, int k, long long befor
       if (h.closed[p]++ != 0) continue;
       const Candidate& c = cands_[h.pool[p]];
       for (int i = 0; i < c.nb_tets; ++i) {
-        const int u = local_[c.tets[i]];
+        const int u = local_[cands_.tets(c)[i]];
         const bool undecided = h.state[u] == UNDECIDED;
         const long long old = undecided ? share_of(h, u) : 0;
         if (--h.open_sizes[u * (MAX_CANDIDATE_TETS + 1) + c.nb_tets] == 0) {
@@ -206,7 +207,7 @@ void Selector::reopen_entries(Hood& h, const int* ls, int k) {
       if (--h.closed[p] != 0) continue;
       const Candidate& c = cands_[h.pool[p]];
       for (int i = 0; i < c.nb_tets; ++i) {
-        const int u = local_[c.tets[i]];
+        const int u = local_[cands_.tets(c)[i]];
         if (h.open_sizes[u * (MAX_CANDIDATE_TETS + 1) + c.nb_tets]++ == 0) {
           h.sizes[u] |= 1u << c.nb_tets;
         }
@@ -245,12 +246,12 @@ void Selector::branch(Hood& h, std::size_t pos, int saved, long long rest) {
     if (check && !fits_inside(h, ci)) continue;
     long long before = 0;
     for (int i = 0; i < c.nb_tets; ++i) {
-      ls[i] = local_[c.tets[i]];
+      ls[i] = local_[cands_.tets(c)[i]];
       before += share_of(h, ls[i]);
     }
     for (int i = 0; i < c.nb_tets; ++i) {
       h.state[ls[i]] = p;
-      owner_[c.tets[i]] = ci;
+      owner_[cands_.tets(c)[i]] = ci;
     }
     const long long drop = close_entries(h, ls, c.nb_tets, before);
     h.current.push_back(p);
@@ -259,7 +260,7 @@ void Selector::branch(Hood& h, std::size_t pos, int saved, long long rest) {
     reopen_entries(h, ls, c.nb_tets);
     for (int i = 0; i < c.nb_tets; ++i) {
       h.state[ls[i]] = UNDECIDED;
-      owner_[c.tets[i]] = NO_INDEX;
+      owner_[cands_.tets(c)[i]] = NO_INDEX;
     }
     if (h.stopped) return;
   }
@@ -284,7 +285,7 @@ void Selector::hood_add_element(Hood& h, index_t e) {
   if (std::find(h.released.begin(), h.released.end(), e) != h.released.end()) return;
   h.released.push_back(e);
   const Candidate& c = cands_[e];
-  for (int i = 0; i < c.nb_tets; ++i) hood_add(h, c.tets[i]);
+  for (int i = 0; i < c.nb_tets; ++i) hood_add(h, cands_.tets(c)[i]);
 }
 
 void Selector::hood_clear_marks(Hood& h) {
@@ -300,7 +301,7 @@ bool Selector::try_swap(Hood& h, index_t e) {
   bool any_free = false;
   for (int i = 0; i < c.nb_tets; ++i) {
     for (int f = 0; f < 4; ++f) {
-      const index_t n = topo_.neighbor(c.tets[i], f);
+      const index_t n = topo_.neighbor(cands_.tets(c)[i], f);
       if (n != NO_CELL && is_free(n)) {
         hood_add(h, n);
         any_free = true;
@@ -317,7 +318,7 @@ bool Selector::try_swap(Hood& h, index_t e) {
       for (index_t j = offsets_[t]; j < offsets_[t + 1] && !useful; ++j) {
         const Candidate& x = cands_[ids_[j]];
         bool inside = true;
-        for (int i = 0; i < x.nb_tets && inside; ++i) inside = local_[x.tets[i]] >= 0;
+        for (int i = 0; i < x.nb_tets && inside; ++i) inside = local_[cands_.tets(x)[i]] >= 0;
         useful = inside;
       }
     }

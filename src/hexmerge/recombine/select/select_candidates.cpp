@@ -47,8 +47,7 @@ Selection Selector::run(const ProgressCallback& progress) {
 }  // namespace select
 
 Selection select_candidates(const TetMesh& mesh, const TetTopology& topology,
-                            const std::vector<Candidate>& candidates,
-                            const RecombineParameters& parameters,
+                            const Candidates& candidates, const RecombineParameters& parameters,
                             const ProgressCallback& progress) {
   // Conforming mode with pyramids: "safe pyramids" (a pending quad face only where a closing
   // pyramid is reserved for it; never releases). Without pyramids, and in the other modes:

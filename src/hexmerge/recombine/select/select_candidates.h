@@ -95,8 +95,7 @@ struct Selection {
 /// another element. The Conformity parameter decides whether a candidate that would break that
 /// may be chosen (parameters.h).
 Selection select_candidates(const TetMesh& mesh, const TetTopology& topology,
-                            const std::vector<Candidate>& candidates,
-                            const RecombineParameters& parameters,
+                            const Candidates& candidates, const RecombineParameters& parameters,
                             const ProgressCallback& progress = {});
 
 }  // namespace hexmerge

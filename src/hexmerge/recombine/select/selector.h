@@ -74,7 +74,7 @@ struct Stage {
 // What every selection reads and none changes, built once: tet -> candidates, the cell face
 // each tet face of a candidate lies in, the boundary tets.
 struct CandidateIndex {
-  CandidateIndex(const TetMesh& mesh, const TetTopology& topo, const std::vector<Candidate>& cands,
+  CandidateIndex(const TetMesh& mesh, const TetTopology& topo, const Candidates& cands,
                  bool respect_regions);
 
   std::vector<index_t> offsets, ids;    // tet -> candidates (CSR)
@@ -85,9 +85,8 @@ struct CandidateIndex {
 
 class Selector {
  public:
-  Selector(const TetMesh& mesh, const TetTopology& topology,
-           const std::vector<Candidate>& candidates, const CandidateIndex& index,
-           const RecombineParameters& parameters, bool strict)
+  Selector(const TetMesh& mesh, const TetTopology& topology, const Candidates& candidates,
+           const CandidateIndex& index, const RecombineParameters& parameters, bool strict)
       : mesh_(mesh),
         topo_(topology),
         cands_(candidates),
@@ -107,16 +106,13 @@ class Selector {
   bool is_free(index_t t) const { return owner_[t] == NO_INDEX; }
 
   bool available(index_t ci) const {
-    const Candidate& c = cands_[ci];
-    for (int i = 0; i < c.nb_tets; ++i) {
-      if (!is_free(c.tets[i])) return false;
+    for (const index_t t : cands_.tets(ci)) {
+      if (!is_free(t)) return false;
     }
     return true;
   }
 
-  bool contains(const Candidate& c, index_t t) const {
-    return std::find(c.tets.begin(), c.tets.begin() + c.nb_tets, t) != c.tets.begin() + c.nb_tets;
-  }
+  bool contains(const Candidate& c, index_t t) const { return cands_.tets(c).contains(t); }
 
   // ---- select/kernel.cpp
   Sides sides(index_t ci) const;
@@ -143,9 +139,8 @@ class Selector {
 
   // The cell face of candidate ei that face f of its tet t lies in (-1: inside the cell).
   int cell_face_at(index_t ei, index_t t, int f) const {
-    const Candidate& e = cands_[ei];
-    const int i =
-        static_cast<int>(std::find(e.tets.begin(), e.tets.begin() + e.nb_tets, t) - e.tets.begin());
+    const TetSpan e = cands_.tets(ei);
+    const int i = static_cast<int>(std::find(e.begin(), e.end(), t) - e.begin());
     return index_.cell_face[index_.first_face[ei] + 4 * i + f];
   }
 
@@ -163,15 +158,13 @@ class Selector {
   }
 
   void choose(index_t ci) {
-    const Candidate& c = cands_[ci];
-    for (int i = 0; i < c.nb_tets; ++i) set_owner(c.tets[i], ci);
+    for (const index_t t : cands_.tets(ci)) set_owner(t, ci);
     if (journaling_) chosen_journal_.push_back({ci, chosen_[ci]});
     chosen_[ci] = 1;
   }
 
   void release(index_t ci) {
-    const Candidate& c = cands_[ci];
-    for (int i = 0; i < c.nb_tets; ++i) set_owner(c.tets[i], NO_INDEX);
+    for (const index_t t : cands_.tets(ci)) set_owner(t, NO_INDEX);
     if (journaling_) chosen_journal_.push_back({ci, chosen_[ci]});
     chosen_[ci] = 0;
   }
@@ -260,7 +253,7 @@ class Selector {
 
   const TetMesh& mesh_;
   const TetTopology& topo_;
-  const std::vector<Candidate>& cands_;
+  const Candidates& cands_;
   const RecombineParameters& params_;
   const bool strict_;  // pending quads only where a safe closing pyramid waits (closing_pyramid)
   std::vector<index_t> owner_;           // per tet: the chosen candidate that holds it, or NO_INDEX

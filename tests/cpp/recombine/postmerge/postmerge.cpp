@@ -61,7 +61,7 @@ TetMesh capped_cube(const std::vector<Point>& apexes) {
   return mesh;
 }
 
-std::vector<Candidate> candidates_of(const TetMesh& mesh, double min_sj) {
+Candidates candidates_of(const TetMesh& mesh, double min_sj) {
   const TetTopology topology(mesh);
   AcceptanceCriteria criteria;
   criteria.min_scaled_jacobian = min_sj;
@@ -140,7 +140,7 @@ TEST(post_merge, the_census_counts_the_cube_closed_by_one_apex_and_not_by_two) {
 TEST(post_merge, a_flip_takes_one_apex_out_of_the_fan_and_the_cube_closes) {
   const TopFace face = top_face();
   const TetMesh mesh = capped_cube({over(face.corner0, 0.4, 1.6), over(face.corner1, 0.4, 1.6)});
-  const std::vector<Candidate> candidates = candidates_of(mesh, 0.05);
+  const Candidates candidates = candidates_of(mesh, 0.05);
   const PostMergeResult result =
       close_open_quads(mesh, candidates, {}, Selection{}, loose_options());
   EXPECT_EQ(result.closed, 1u);

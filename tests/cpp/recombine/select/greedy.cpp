@@ -24,7 +24,7 @@ TEST(select_greedy, in_allow_mode_every_cube_of_a_kuhn_grid_is_one_hexahedron) {
   const int n = 3;
   const TetMesh mesh = kuhn_grid(n);
   const TetTopology topology(mesh);
-  const std::vector<Candidate> all = find_candidates(mesh, topology, AcceptanceCriteria{}, 1);
+  const Candidates all = find_candidates(mesh, topology, AcceptanceCriteria{}, 1);
   RecombineParameters p;
   p.conformity = Conformity::Allow;
   const Selection s = select_candidates(mesh, topology, all, p);
@@ -41,7 +41,7 @@ TEST(select_greedy, both_boundary_orders_give_a_disjoint_conforming_selection) {
   if (std::system("command -v tetgen > /dev/null 2>&1") != 0) GTEST_SKIP() << "no tetgen";
   const TetMesh mesh = tetgen_lattice(5, 0.15, 7);
   const TetTopology topology(mesh);
-  std::vector<Candidate> all = find_candidates(mesh, topology, AcceptanceCriteria{}, 1);
+  Candidates all = find_candidates(mesh, topology, AcceptanceCriteria{}, 1);
   std::size_t removed = 0;
   all = prune_unclosable(mesh, topology, all, removed);
   for (BoundaryOrder order : {BoundaryOrder::Quality, BoundaryOrder::FewestMatches}) {

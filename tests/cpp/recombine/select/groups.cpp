@@ -62,7 +62,7 @@ TEST(select_groups, hexahedra_sharing_faces_no_pyramid_closes_are_taken_together
 TEST(select_groups, a_group_given_up_leaves_the_selection_unchanged) {
   const TetMesh mesh = skewed_five_tet_grid();
   const TetTopology topology(mesh);
-  std::vector<Candidate> all = find_candidates(mesh, topology, AcceptanceCriteria{}, 1);
+  Candidates all = find_candidates(mesh, topology, AcceptanceCriteria{}, 1);
   std::size_t removed = 0;
   all = prune_unclosable(mesh, topology, all, removed);
   RecombineParameters off;
@@ -96,7 +96,7 @@ TEST(select_groups, a_group_with_a_face_nothing_closes_is_rolled_back) {
   corner[1] += 0.55;
   corner[2] += 0.55;
   const TetTopology topology(mesh);
-  const std::vector<Candidate> all = find_candidates(mesh, topology, AcceptanceCriteria{}, 1);
+  const Candidates all = find_candidates(mesh, topology, AcceptanceCriteria{}, 1);
   std::size_t hex_candidates = 0;
   for (const Candidate& c : all) hex_candidates += c.type == CellType::Hex;
   ASSERT_EQ(hex_candidates, 7u) << "the moved corner's cube is no hexahedron candidate";

@@ -31,7 +31,7 @@ TEST(select_local_optimisation, moves_never_add_cells_and_keep_the_selection_dis
     for (int i = 0; i < 600; ++i) points.push_back({u(rng), u(rng), u(rng)});
     const TetMesh mesh = tetgen_mesh(points);
     const TetTopology topology(mesh);
-    const std::vector<Candidate> all = find_candidates(mesh, topology, permissive_criteria(), 1);
+    const Candidates all = find_candidates(mesh, topology, permissive_criteria(), 1);
     std::size_t cells[2] = {0, 0};
     for (bool on : {false, true}) {
       RecombineParameters p;

@@ -21,7 +21,7 @@ namespace hexmerge::test {
 namespace {
 
 /// The cells of a selection: tets minus the tets merged away.
-std::size_t cells_of(const TetMesh& mesh, const std::vector<Candidate>& candidates,
+std::size_t cells_of(const TetMesh& mesh, const Candidates& candidates,
                      const Selection& selection) {
   std::size_t cells = mesh.nb_tets();
   for (index_t c : selection.elements) cells -= candidates[c].nb_tets - 1u;
@@ -30,18 +30,20 @@ std::size_t cells_of(const TetMesh& mesh, const std::vector<Candidate>& candidat
 
 /// The candidates of one Kuhn cube with exactly the given tet sets, in that order; the first gets
 /// the best quality, so that the greedy takes it first.
-std::vector<Candidate> kuhn_cube_candidates(const TetMesh& cube,
-                                            const std::vector<std::set<index_t>>& wanted) {
+Candidates kuhn_cube_candidates(const TetMesh& cube, const std::vector<std::set<index_t>>& wanted) {
   const TetTopology topology(cube);
-  const std::vector<Candidate> all = find_candidates(cube, topology, AcceptanceCriteria{}, 1);
-  std::vector<Candidate> out;
+  const Candidates all = find_candidates(cube, topology, AcceptanceCriteria{}, 1);
+  Candidates out;
   for (const std::set<index_t>& tets : wanted) {
     for (const Candidate& c : all) {
-      if (std::set<index_t>(c.tets.begin(), c.tets.begin() + c.nb_tets) == tets) out.push_back(c);
+      const TetSpan ct = all.tets(c);
+      if (std::set<index_t>(ct.begin(), ct.end()) != tets) continue;
+      Candidate copy = c;
+      if (out.empty()) copy.quality = 0.99f;
+      out.push_back(copy, ct.data(), ct.size());
     }
   }
   EXPECT_EQ(out.size(), wanted.size());
-  if (!out.empty()) out[0].quality = 0.99f;
   return out;
 }
 
@@ -53,8 +55,7 @@ std::vector<Candidate> kuhn_cube_candidates(const TetMesh& cube,
 TEST(local_search, a_swap_undoes_the_greedys_trap_one_element_for_two) {
   const TetMesh cube = kuhn_grid(1);
   const TetTopology topology(cube);
-  const std::vector<Candidate> candidates =
-      kuhn_cube_candidates(cube, {{0, 1, 2}, {0, 2, 3}, {1, 4}});
+  const Candidates candidates = kuhn_cube_candidates(cube, {{0, 1, 2}, {0, 2, 3}, {1, 4}});
   ASSERT_EQ(candidates.size(), 3u);
   RecombineParameters p;
   p.conformity = Conformity::Allow;
@@ -83,8 +84,7 @@ TEST(local_search, a_swap_undoes_the_greedys_trap_one_element_for_two) {
 TEST(local_search, a_reselection_reaches_what_a_swap_cannot) {
   const TetMesh cube = kuhn_grid(1);
   const TetTopology topology(cube);
-  const std::vector<Candidate> candidates =
-      kuhn_cube_candidates(cube, {{0, 1, 2}, {2, 3, 5}, {0, 1}});
+  const Candidates candidates = kuhn_cube_candidates(cube, {{0, 1, 2}, {2, 3, 5}, {0, 1}});
   ASSERT_EQ(candidates.size(), 3u);
   RecombineParameters p;
   p.conformity = Conformity::Allow;

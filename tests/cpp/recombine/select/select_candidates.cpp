@@ -16,7 +16,7 @@
 namespace hexmerge::test {
 namespace {
 
-void remove_unclosable_candidates(const TetMesh& mesh, std::vector<Candidate>& candidates) {
+void remove_unclosable_candidates(const TetMesh& mesh, Candidates& candidates) {
   std::size_t removed = 0;
   candidates = prune_unclosable(mesh, TetTopology(mesh), candidates, removed);
 }
@@ -34,7 +34,7 @@ struct StrategyCase {
 TEST(select_candidates, names_the_strategy_it_ran_and_keeps_the_selection_disjoint) {
   const TetMesh mesh = kuhn_grid(4);
   const TetTopology topology(mesh);
-  const std::vector<Candidate> all = find_candidates(mesh, topology, AcceptanceCriteria{}, 1);
+  const Candidates all = find_candidates(mesh, topology, AcceptanceCriteria{}, 1);
   ASSERT_FALSE(all.empty());
   for (const StrategyCase& c : {StrategyCase{Conformity::Conforming, true, "safe_pyramids"},
                                 StrategyCase{Conformity::Conforming, false, "closable"},
@@ -46,9 +46,11 @@ TEST(select_candidates, names_the_strategy_it_ran_and_keeps_the_selection_disjoi
     p.make_pyramids = c.make_pyramids;
     // As recombine offers them: without pyramids when none may be made, and in conforming
     // mode without the candidates no conforming selection can hold.
-    std::vector<Candidate> offered;
+    Candidates offered;
     for (const Candidate& x : all) {
-      if (c.make_pyramids || x.type != CellType::Pyramid) offered.push_back(x);
+      if (c.make_pyramids || x.type != CellType::Pyramid) {
+        offered.push_back(x, all.tets(x).data(), x.nb_tets);
+      }
     }
     if (c.conformity == Conformity::Conforming) remove_unclosable_candidates(mesh, offered);
     const Selection s = select_candidates(mesh, topology, offered, p);
@@ -57,7 +59,7 @@ TEST(select_candidates, names_the_strategy_it_ran_and_keeps_the_selection_disjoi
     std::vector<int> owners(mesh.nb_tets(), 0);
     for (index_t ci : s.elements) {
       ASSERT_LT(ci, offered.size());
-      for (int i = 0; i < offered[ci].nb_tets; ++i) ++owners[offered[ci].tets[i]];
+      for (const index_t t : offered.tets(ci)) ++owners[t];
     }
     for (index_t t = 0; t < mesh.nb_tets(); ++t) EXPECT_LE(owners[t], 1) << "tet " << t;
     if (c.conformity == Conformity::Conforming) {
