@@ -45,7 +45,7 @@ struct Quad {
 // candidate's tets) answer that, unless it has more than two such triangles or a triangle of
 // the quad inside it (flat tets): then `exact` is false and all its tets tell.
 struct Side {
-  index_t candidate;  // local id (prune_unclosable)
+  index_t candidate;                             // local id (prune_unclosable)
   std::array<std::uint8_t, 2> front{0, 0};       // places among the candidate's tets
   std::array<std::uint8_t, 2> front_face{0, 0};  // the local face of each on the quad
   bool exact = true;
