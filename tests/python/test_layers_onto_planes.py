@@ -17,7 +17,10 @@ import pytest
 
 import hexmerge
 from meshes import cell_volumes
-from test_mesh_shape import assert_checked, boundary_nodes, gmsh_brep, needs_tetgen, pytestmark  # noqa: F401
+from test_mesh_shape import assert_checked, boundary_nodes, gmsh_brep, needs_tetgen
+from test_mesh_shape import pytestmark as mesh_shape_marks
+
+pytestmark = mesh_shape_marks  # the same skips (built without OpenCASCADE)
 
 A, B, LENGTH = 50.0, 100.0, 20.0
 QUARTER_TUBE_GEO = f"""SetFactory("OpenCASCADE");
