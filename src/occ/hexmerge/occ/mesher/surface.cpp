@@ -227,41 +227,20 @@ void drop_unused_nodes(Surface& surface) {
 }  // namespace
 
 void remove_folds(Surface& surface, double tolerance) {
-  // Nodes within the tolerance of an earlier one become that one (a grid of cells the
-  // tolerance wide: the earlier node is in one of the 27 cells around).
-  const std::size_t n = surface.nodes.size();
-  std::vector<int> to(n);
-  std::unordered_map<std::uint64_t, std::vector<int>> grid;
-  const auto cell = [&](double x) { return static_cast<std::int64_t>(std::floor(x / tolerance)); };
-  const auto key = [](std::int64_t i, std::int64_t j, std::int64_t k) {
-    return (static_cast<std::uint64_t>(i) * 73856093u) ^
-           (static_cast<std::uint64_t>(j) * 19349663u) ^
-           (static_cast<std::uint64_t>(k) * 83492791u);
-  };
-  bool merged = false;
-  for (std::size_t v = 0; v < n; ++v) {
-    const Vec3& p = surface.nodes[v];
-    const std::int64_t i = cell(p.x), j = cell(p.y), k = cell(p.z);
-    int found = -1;
-    for (std::int64_t di = -1; di <= 1 && found < 0; ++di)
-      for (std::int64_t dj = -1; dj <= 1 && found < 0; ++dj)
-        for (std::int64_t dk = -1; dk <= 1 && found < 0; ++dk) {
-          const auto it = grid.find(key(i + di, j + dj, k + dk));
-          if (it == grid.end()) continue;
-          for (int w : it->second)
-            if ((surface.nodes[static_cast<std::size_t>(w)] - p).norm() <= tolerance) {
-              found = w;
-              break;
-            }
-        }
-    to[v] = found >= 0 ? found : static_cast<int>(v);
-    if (found >= 0) {
-      merged = true;
-    } else {
-      grid[key(i, j, k)].push_back(static_cast<int>(v));
+  // Nodes within the tolerance of another become one (NodeMerger, as in triangulate()); a
+  // merged node keeps the seed of the first of its nodes.
+  Surface merged;
+  NodeMerger merger(merged, tolerance);
+  std::vector<int> to(surface.nodes.size());
+  for (std::size_t v = 0; v < surface.nodes.size(); ++v)
+    to[v] = merger.id(surface.nodes[v], surface.node_face[v]);
+  if (merged.nodes.size() < surface.nodes.size()) {
+    if (!surface.seed.empty()) {
+      merged.seed.assign(merged.nodes.size(), -1);
+      for (std::size_t v = 0; v < surface.nodes.size(); ++v)
+        if (merged.seed[static_cast<std::size_t>(to[v])] < 0)
+          merged.seed[static_cast<std::size_t>(to[v])] = surface.seed[v];
     }
-  }
-  if (merged) {
     std::vector<SurfaceTriangle> kept;
     kept.reserve(surface.triangles.size());
     for (SurfaceTriangle t : surface.triangles) {
@@ -271,11 +250,14 @@ void remove_folds(Surface& surface, double tolerance) {
     }
     surface.triangles.swap(kept);
     std::unordered_map<std::uint64_t, EdgeSegment> segments;
-    for (const auto& [k, segment] : surface.segments) {
-      const int a = to[k >> 32], b = to[k & 0xffffffffu];
+    for (const auto& [key, segment] : surface.segments) {
+      const int a = to[key >> 32], b = to[key & 0xffffffffu];
       if (a != b) segments[pair_key(a, b)] = segment;
     }
     surface.segments = std::move(segments);
+    surface.nodes = std::move(merged.nodes);
+    surface.node_face = std::move(merged.node_face);
+    surface.seed = std::move(merged.seed);
   }
   remove_coincident_triangles(surface);
   drop_unused_nodes(surface);
