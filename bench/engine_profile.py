@@ -96,18 +96,24 @@ def cost_of(costs, prefix):
     return max(hits) if hits else 0
 
 
-def profile_instructions(path, tmp):
+def worker_input(path, tmp):
+    """The mesh saved for a worker run (--callgrind-worker) under a tool: (cells, the .npz, the
+    report file it writes, its environment: this checkout's module, one BLAS thread)."""
     import numpy as np
     points, cells = run_bench.load_tet_mesh(path)
     npz = os.path.join(tmp, "mesh.npz")
     np.savez(npz, points=points, cells=cells)
-    out = os.path.join(tmp, "callgrind.out")
-    rep = os.path.join(tmp, "report.json")
     env = dict(os.environ)
     env["OPENBLAS_NUM_THREADS"] = "1"
     env["PYTHONPATH"] = os.pathsep.join(
         [p for p in env.get("PYTHONPATH", "").split(os.pathsep) if p] +
         [os.path.join(benchlib.ROOT, "src", "python")])
+    return cells, npz, os.path.join(tmp, "report.json"), env
+
+
+def profile_instructions(path, tmp):
+    cells, npz, rep, env = worker_input(path, tmp)
+    out = os.path.join(tmp, "callgrind.out")
     subprocess.run(["valgrind", "--tool=callgrind", f"--callgrind-out-file={out}",
                     "--separate-threads=yes",
                     sys.executable, os.path.abspath(__file__), "--callgrind-worker", npz, rep],
@@ -133,17 +139,8 @@ def profile_instructions(path, tmp):
 
 def heap_peak(path, tmp):
     """The heap peak (bytes, and per tet) of a one-thread recombine of the mesh, by heaptrack."""
-    import numpy as np
-    points, cells = run_bench.load_tet_mesh(path)
-    npz = os.path.join(tmp, "mesh.npz")
-    np.savez(npz, points=points, cells=cells)
+    cells, npz, rep, env = worker_input(path, tmp)
     out = os.path.join(tmp, "heaptrack")
-    rep = os.path.join(tmp, "report.json")
-    env = dict(os.environ)
-    env["OPENBLAS_NUM_THREADS"] = "1"
-    env["PYTHONPATH"] = os.pathsep.join(
-        [p for p in env.get("PYTHONPATH", "").split(os.pathsep) if p] +
-        [os.path.join(benchlib.ROOT, "src", "python")])
     subprocess.run(["heaptrack", "-o", out, sys.executable, os.path.abspath(__file__),
                     "--callgrind-worker", npz, rep],
                    check=True, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
