@@ -76,7 +76,7 @@ TetMesh world_mesh(const std::string& brep, const Shape& shape, const Surface& s
     // From the triangles TetGen kept on the faces; by geometry where they do not separate the
     // solids (they always do when TetGen recovered every face).
     std::optional<std::vector<std::int32_t>> regions =
-        solid_regions(shape, mesh.tets, tets.boundary, tets.boundary_marker);
+        solid_regions(shape, mesh, tets.boundary, tets.boundary_marker);
     mesh.regions = regions ? std::move(*regions) : regions_by_solid(brep, mesh);
   } else
     mesh.regions.assign(mesh.tets.size() / 4, 0);

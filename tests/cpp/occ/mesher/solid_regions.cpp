@@ -31,8 +31,14 @@ struct CubeMesh {
   std::vector<Vec3> points;  // the 3 x 2 x 2 grid, x fastest
   std::vector<index_t> tets;
   std::vector<std::array<index_t, 3>> triangles;  // the tets' faces on a plane of a cube
-  std::vector<int> markers;                       // their faces in shape.faces, + 1
-  std::vector<bool> shared;                       // on the plane x = 1
+  TetMesh mesh() const {
+    TetMesh m;
+    for (const Vec3& p : points) m.points.insert(m.points.end(), {p.x, p.y, p.z});
+    m.tets = tets;
+    return m;
+  }
+  std::vector<int> markers;  // their faces in shape.faces, + 1
+  std::vector<bool> shared;  // on the plane x = 1
 };
 
 // Each cube in 6 tets around its diagonal (Kuhn), the faces on the cubes' planes marked with
@@ -92,7 +98,7 @@ TEST(solid_regions, two_touching_cubes_one_region_each) {
   const CubeMesh m = cube_mesh(shape);
   // 6 faces of 2 triangles per cube, the shared square once: 22.
   ASSERT_EQ(m.triangles.size(), 22u);
-  const auto regions = mesher::solid_regions(shape, m.tets, m.triangles, m.markers);
+  const auto regions = mesher::solid_regions(shape, m.mesh(), m.triangles, m.markers);
   ASSERT_TRUE(regions.has_value());
   ASSERT_EQ(regions->size(), 12u);
   for (std::size_t t = 0; t < 12; ++t) {
@@ -112,10 +118,10 @@ TEST(solid_regions, nothing_when_the_triangles_do_not_separate_the_solids) {
   for (std::size_t i = 0; i < m.triangles.size(); ++i)
     if (!m.shared[i]) triangles.push_back(m.triangles[i]), markers.push_back(m.markers[i]);
   ASSERT_EQ(triangles.size(), 20u);
-  EXPECT_FALSE(mesher::solid_regions(shape, m.tets, triangles, markers).has_value());
+  EXPECT_FALSE(mesher::solid_regions(shape, m.mesh(), triangles, markers).has_value());
   // A marker naming no face of the shape.
   m.markers[0] = shape.faces.Extent() + 5;
-  EXPECT_FALSE(mesher::solid_regions(shape, m.tets, m.triangles, m.markers).has_value());
+  EXPECT_FALSE(mesher::solid_regions(shape, m.mesh(), m.triangles, m.markers).has_value());
 }
 
 }  // namespace

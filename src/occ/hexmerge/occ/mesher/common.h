@@ -1,12 +1,16 @@
 #pragma once
 /// @file
 /// Small helpers the mesher's stages share (internal header of mesh_shape(); no OpenCASCADE):
-/// component-wise minimum and maximum, a coordinate by axis, the key of an unordered node pair.
+/// component-wise minimum and maximum, a coordinate by axis, the keys of an unordered node pair
+/// and of a triangle.
 
 #include <algorithm>
+#include <array>
+#include <cstddef>
 #include <cstdint>
 #include <utility>
 
+#include "hexmerge/core/index.h"
 #include "hexmerge/geometry/vec3.h"
 
 namespace hexmerge::mesher {
@@ -17,6 +21,21 @@ inline std::uint64_t pair_key(int a, int b) {
   return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(a)) << 32) |
          static_cast<std::uint32_t>(b);
 }
+
+/// A triangle (a tet's face) by its sorted vertices, and its hash.
+using FaceKey = std::array<index_t, 3>;
+inline FaceKey face_key(index_t a, index_t b, index_t c) {
+  FaceKey k{a, b, c};
+  std::sort(k.begin(), k.end());
+  return k;
+}
+struct FaceKeyHash {
+  std::size_t operator()(const FaceKey& k) const {
+    return (static_cast<std::size_t>(k[0]) * 73856093u) ^
+           (static_cast<std::size_t>(k[1]) * 19349663u) ^
+           (static_cast<std::size_t>(k[2]) * 83492791u);
+  }
+};
 
 /// Component-wise minimum and maximum.
 inline Vec3 vmin(const Vec3& a, const Vec3& b) {

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "hexmerge/core/index.h"
+#include "hexmerge/mesh/tet_mesh.h"
 #include "hexmerge/occ/mesher/shape.h"
 
 namespace hexmerge::mesher {
@@ -19,11 +20,11 @@ namespace hexmerge::mesher {
 /// No geometry is evaluated. Nothing when the triangles do not separate the solids (a component
 /// touching faces of no single common solid): the caller then classifies by geometry.
 /// @param[in] shape      the shape meshed (its solids and faces, glued where they touch)
-/// @param[in] tets       #tets by 4, vertex indices
+/// @param[in] mesh       the tets, positively oriented
 /// @param[in] triangles  the triangles on the shape's faces (interior ones, between two solids,
 ///                       included), each with its face's index into shape.faces + 1
 std::optional<std::vector<std::int32_t>> solid_regions(
-    const Shape& shape, const std::vector<index_t>& tets,
-    const std::vector<std::array<index_t, 3>>& triangles, const std::vector<int>& markers);
+    const Shape& shape, const TetMesh& mesh, const std::vector<std::array<index_t, 3>>& triangles,
+    const std::vector<int>& markers);
 
 }  // namespace hexmerge::mesher
