@@ -9,6 +9,7 @@
 #include "hexmerge/core/error.h"
 #include "hexmerge/geometry/quality.h"
 #include "hexmerge/geometry/vec3.h"
+#include "hexmerge/occ/mesher/common.h"
 #include "hexmerge/occ/mesher/surface.h"
 
 namespace hexmerge {
@@ -17,20 +18,9 @@ namespace {
 using Tet = std::array<index_t, 4>;
 constexpr double kInfinity = std::numeric_limits<double>::infinity();
 
-// A face by its sorted vertices.
-using FaceKey = std::array<index_t, 3>;
-FaceKey face_key(index_t a, index_t b, index_t c) {
-  FaceKey k{a, b, c};
-  std::sort(k.begin(), k.end());
-  return k;
-}
-struct FaceKeyHash {
-  std::size_t operator()(const FaceKey& k) const {
-    return (static_cast<std::size_t>(k[0]) * 73856093u) ^
-           (static_cast<std::size_t>(k[1]) * 19349663u) ^
-           (static_cast<std::size_t>(k[2]) * 83492791u);
-  }
-};
+using mesher::face_key;
+using mesher::FaceKey;
+using mesher::FaceKeyHash;
 
 // Whether (w, x, y, z), four distinct vertices of t, run in t's own (positive) order up to an
 // even permutation.
@@ -109,11 +99,8 @@ class FlipMesh {
     return seen == 0 || std::any_of(tets_[t].begin(), tets_[t].end(),
                                     [&](index_t v) { return changed_[v] >= seen; });
   }
-  // Marks t examined now; the next change stamps with a later clock.
-  void examine(index_t t) {
-    examined_[t] = ++clock_;
-    ++clock_;
-  }
+  // Marks t examined now: the changes from now on stamp at least this clock.
+  void examine(index_t t) { examined_[t] = ++clock_; }
 
   // The tets around edge (a, b), in `around`, and their other vertices in `ring`, so that tet i
   // is (a, b, ring[i], ring[i + 1]) in positive order (ring[n] = ring[0] for a closed ring, an

@@ -46,16 +46,15 @@ void smooth_nodes(TetMesh& mesh, const std::vector<char>& movable,
   auto worst_above = [&](index_t v, double bound) {
     double q = std::numeric_limits<double>::infinity();
     std::size_t worst = last_worst;
-    for (std::size_t k = start[v]; k <= start[v + 1]; ++k) {
-      const std::size_t i = k == start[v] ? last_worst : k - 1;
-      if (k > start[v] && i == last_worst) continue;
+    // Whether tet i is no better than `bound`; q the least seen (as std::min: a NaN passed over).
+    const auto no_better = [&](std::size_t i) {
       const double qi = quality(at[i]);
-      if (qi <= bound) {
-        last_worst = i;
-        return qi;
-      }
-      if (qi < q) q = qi, worst = i;  // as std::min: a NaN is passed over
-    }
+      if (qi < q) q = qi, worst = i;
+      return qi <= bound;
+    };
+    bool failed = no_better(last_worst);
+    for (std::size_t i = start[v]; i < start[v + 1] && !failed; ++i)
+      if (i != last_worst) failed = no_better(i);
     last_worst = worst;
     return q;
   };
