@@ -302,20 +302,15 @@ def main():
             with open(args.output, "w") as f:
                 json.dump(data, f, indent=1)
 
-    for name in [n for n in args.callgrind.split(",") if n]:
-        path = mesh_path(name)
-        if path:
-            with tempfile.TemporaryDirectory() as tmp:
-                print(f"{name}: callgrind ...", file=sys.stderr, flush=True)
-                data["instructions"][name] = profile_instructions(path, tmp)
-            save()
-    for name in [n for n in args.heap.split(",") if n]:
-        path = mesh_path(name)
-        if path:
-            with tempfile.TemporaryDirectory() as tmp:
-                print(f"{name}: heaptrack ...", file=sys.stderr, flush=True)
-                data["heap"][name] = heap_peak(path, tmp)
-            save()
+    for names, key, tool, profile in ((args.callgrind, "instructions", "callgrind", profile_instructions),
+                                      (args.heap, "heap", "heaptrack", heap_peak)):
+        for name in [n for n in names.split(",") if n]:
+            path = mesh_path(name)
+            if path:
+                with tempfile.TemporaryDirectory() as tmp:
+                    print(f"{name}: {tool} ...", file=sys.stderr, flush=True)
+                    data[key][name] = profile(path, tmp)
+                save()
     for name in [n for n in args.timing.split(",") if n]:
         path = mesh_path(name)
         if not path:
