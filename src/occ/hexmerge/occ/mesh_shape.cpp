@@ -428,17 +428,19 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
   report.nb_surface_triangles = surface.triangles.size();
   Surroundings around(nodes, surface, lattice, h);
 
-  // 7. The lattice points kept: inside, far enough from the faces that are not lattice faces.
-  // (Kept down to lattice_margin alone, 0.3 h, with the layers keeping out of the core, the core
-  // had 30-60 % more hex volume on real parts, but boundary tets of scaled Jacobian 0.15: three
-  // surface nodes and a layer point, where the layer points by the core are left out.)
+  // 7. The lattice points kept: inside, lattice_margin from the faces that are not lattice faces
+  // (the layers keep out of the core after it, and improve_tets() nudges the closing pyramids'
+  // apexes off the faces where that leaves a tet under 0.2). Swept, lattice_margin beyond the
+  // layers: the columns recombine into hexahedra up to the layers anyway, and the layers stay
+  // whole at their depth (the walls' stress in first order follows that depth, issue 15).
   const Parity parity(nodes, surface, shape.face_solid_count, around, h);
   InsertedPoints inserted;
   const int nb_layers = strategy.layers ? parameters.boundary_layers : 0;
+  const double keep_distance =
+      (parameters.lattice_margin + (sweep_axis >= 0 ? nb_layers * parameters.layer_thickness : 0)) *
+      h;
   KeptPoints kept =
-      keep_lattice_points(lattice, around, parity,
-                          (nb_layers * parameters.layer_thickness + parameters.lattice_margin) * h,
-                          parameters.lattice_margin * h);
+      keep_lattice_points(lattice, around, parity, keep_distance, parameters.lattice_margin * h);
   clear_face_layers(layer_specs, nodes, surface, lattice, around, parameters.lattice_margin * h,
                     kept);
   step("lattice", 0.2);

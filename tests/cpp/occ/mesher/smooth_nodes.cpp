@@ -8,6 +8,7 @@
 #include "fixtures.h"
 #include "hexmerge/core/error.h"
 #include "hexmerge/geometry/quality.h"
+#include "hexmerge/geometry/vec3.h"
 
 namespace hexmerge {
 namespace {
@@ -46,6 +47,33 @@ TEST(smooth_nodes, moving_the_centre_raises_the_minimum_and_nothing_else_moves) 
   validate_tet_mesh(m);
 }
 
+TEST(smooth_nodes, a_nudged_node_moves_only_until_its_tets_reach_the_nudge_target) {
+  TetMesh free_run = star_with_an_offset_centre(), nudged_run = free_run;
+  const Vec3 start{0.9, 0.05, 0.02};
+  std::vector<char> movable(free_run.nb_vertices(), kFixed);
+  movable[6] = kFree;
+  SmoothNodesReport report;
+  smooth_nodes(free_run, movable, SmoothNodesParameters{}, report);
+  movable[6] = kNudged;
+  SmoothNodesParameters parameters;
+  parameters.nudge_target = 0.2;
+  smooth_nodes(nudged_run, movable, parameters, report);
+  EXPECT_GE(report.min_after, 0.2);
+  EXPECT_LT(report.min_after, 0.5);  // not as far as the free node goes (0.707 at the centre)
+  EXPECT_DOUBLE_EQ(report.min_after, min_quality(nudged_run));
+  EXPECT_GE(report.moves, 1u);
+  const double free_move = (Vec3::of(free_run.point(6)) - start).norm();
+  const double nudge = (Vec3::of(nudged_run.point(6)) - start).norm();
+  EXPECT_GT(nudge, 0);
+  EXPECT_LT(nudge, 0.5 * free_move);
+  validate_tet_mesh(nudged_run);
+  // At the nudge target already: it stays, though below the free nodes' target.
+  const std::vector<double> before = nudged_run.points;
+  smooth_nodes(nudged_run, movable, parameters, report);
+  EXPECT_EQ(nudged_run.points, before);
+  EXPECT_EQ(report.moves, 0u);
+}
+
 TEST(smooth_nodes, fixed_nodes_and_good_tets_stay) {
   TetMesh m = star_with_an_offset_centre();
   const std::vector<double> before = m.points;
@@ -68,6 +96,9 @@ TEST(smooth_nodes, bad_arguments_name_what_is_wrong) {
                InputError);
   SmoothNodesParameters bad;
   bad.target = 0;
+  EXPECT_THROW(smooth_nodes(m, std::vector<char>(m.nb_vertices(), 1), bad, report), InputError);
+  bad.target = 0.3;
+  bad.nudge_target = 1.5;
   EXPECT_THROW(smooth_nodes(m, std::vector<char>(m.nb_vertices(), 1), bad, report), InputError);
 }
 

@@ -12,8 +12,10 @@ namespace hexmerge {
 
 void smooth_nodes(TetMesh& mesh, const std::vector<char>& movable,
                   const SmoothNodesParameters& parameters, SmoothNodesReport& report) {
-  if (!(parameters.target > 0 && parameters.target <= 1) || parameters.max_passes < 1)
-    throw InputError("smooth_nodes: target must be in (0, 1], max_passes >= 1", Entity::Parameter);
+  if (!(parameters.target > 0 && parameters.target <= 1) ||
+      !(parameters.nudge_target > 0 && parameters.nudge_target <= 1) || parameters.max_passes < 1)
+    throw InputError("smooth_nodes: target and nudge_target must be in (0, 1], max_passes >= 1",
+                     Entity::Parameter);
   if (movable.size() != mesh.nb_vertices())
     throw InputError("smooth_nodes: one movable flag per node (" +
                          std::to_string(mesh.nb_vertices()) + "), not " +
@@ -80,9 +82,11 @@ void smooth_nodes(TetMesh& mesh, const std::vector<char>& movable,
   for (int pass = 0; pass < parameters.max_passes; ++pass) {
     std::size_t moved = 0;
     for (index_t v = 0; v < nv; ++v) {
-      if (!movable[v] || start[v] == start[v + 1]) continue;
+      if (movable[v] == kFixed || start[v] == start[v + 1]) continue;
+      const bool nudged = movable[v] == kNudged;
+      const double target = nudged ? parameters.nudge_target : parameters.target;
       double best = worst_at(v);
-      if (best >= parameters.target) continue;
+      if (best >= target) continue;
       const Vec3 origin = Vec3::of(mesh.point(v));
       Vec3 here = origin, centroid{0, 0, 0};
       double shortest = std::numeric_limits<double>::infinity();
@@ -108,10 +112,14 @@ void smooth_nodes(TetMesh& mesh, const std::vector<char>& movable,
         place(v, here);
         return false;
       };
-      try_at(centroid) || try_at((here + centroid) * 0.5);
-      for (double step = 0.25 * shortest; step > 1e-3 * shortest;) {
+      if (!nudged) try_at(centroid) || try_at((here + centroid) * 0.5);
+      for (double step = (nudged ? 0.05 : 0.25) * shortest;
+           step > 1e-3 * shortest && !(nudged && best >= target);) {
         bool better = false;
-        for (const Vec3& d : directions) better |= try_at(here + d * step);
+        for (const Vec3& d : directions) {
+          better |= try_at(here + d * step);
+          if (nudged && best >= target) break;
+        }
         if (!better) step *= 0.5;
       }
       if ((here - origin).norm() > 0) ++moved, ++report.moves;
