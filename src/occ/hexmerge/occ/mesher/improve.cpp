@@ -2,8 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
-#include <map>
+#include <unordered_map>
 
+#include "hexmerge/occ/mesher/common.h"
 #include "hexmerge/occ/mesher/remove_slivers.h"
 #include "hexmerge/occ/mesher/smooth_nodes.h"
 
@@ -62,7 +63,8 @@ void improve_tets(TetMesh& mesh, const std::vector<double>& frame_points,
   };
   // The CAD face of each boundary face, from TetGen's markers (face index + 1), so that
   // triangles of one planar face may swap their shared sides.
-  std::map<std::array<index_t, 3>, std::int32_t> face_marker;
+  std::unordered_map<FaceKey, std::int32_t, FaceKeyHash> face_marker;
+  std::vector<char> on_boundary(made, 0);  // per vertex: a corner of a boundary triangle
   // Free: the layer and Steiner points. Nudged: the cell centres, the apexes of the closing
   // pyramids, which lie as near the faces as the core does (a tet of three surface nodes and an
   // apex reached 0.155 on the suite's cylinder): moved only as far as lifts their tets to 0.2,
@@ -72,10 +74,9 @@ void improve_tets(TetMesh& mesh, const std::vector<double>& frame_points,
     if (parameters.sweep_axis < 0)
       movable[v] = !half_lattice[v] ? kFree : centre[v] ? kNudged : kFixed;
   for (std::size_t i = 0; i < boundary.size(); ++i) {
-    std::array<index_t, 3> key = boundary[i];
-    for (index_t v : key) movable[v] = 0;
-    std::sort(key.begin(), key.end());
-    face_marker[key] = boundary_face[i];
+    const std::array<index_t, 3>& corners = boundary[i];
+    for (index_t v : corners) movable[v] = kFixed, on_boundary[v] = 1;
+    face_marker[face_key(corners[0], corners[1], corners[2])] = boundary_face[i];
   }
   for (int round = 0; round < kQualityRounds; ++round) {
     std::vector<char> fixed(mesh.nb_tets(), 0);
@@ -85,9 +86,9 @@ void improve_tets(TetMesh& mesh, const std::vector<double>& frame_points,
     for (index_t t = 0; t < mesh.nb_tets(); ++t)
       for (int f = 0; f < 4; ++f) {
         const index_t* v = mesh.tet(t);
-        std::array<index_t, 3> key{v[(f + 1) % 4], v[(f + 2) % 4], v[(f + 3) % 4]};
-        std::sort(key.begin(), key.end());
-        const auto it = face_marker.find(key);
+        const index_t a = v[(f + 1) % 4], b = v[(f + 2) % 4], c = v[(f + 3) % 4];
+        if (!on_boundary[a] || !on_boundary[b] || !on_boundary[c]) continue;
+        const auto it = face_marker.find(face_key(a, b, c));
         if (it != face_marker.end())
           boundary_patch[4 * static_cast<std::size_t>(t) + f] = it->second;
       }
