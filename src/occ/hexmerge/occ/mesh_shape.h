@@ -69,8 +69,8 @@ struct MeshShapeParameters {
   int boundary_layers = 1;
   /// Thickness of one boundary layer, as a fraction of h, in [0.1, 1].
   double layer_thickness = 0.3;
-  /// Lattice points nearer than this fraction of h to a face that is not a lattice face (or to
-  /// the outermost boundary layer) are dropped. In [0.1, 2].
+  /// Lattice points nearer than this fraction of h to a face that is not a lattice face (swept
+  /// shapes: this beyond their boundary layers) are dropped. In [0.1, 2].
   double lattice_margin = 0.3;
   /// Chord deflection of the surface triangulation on curved faces, as a fraction of h.
   /// In [0.001, 0.5].

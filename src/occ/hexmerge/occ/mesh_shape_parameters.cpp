@@ -29,8 +29,8 @@ ParameterTable<MeshShapeParameters> make_table() {
       number(&P::layer_thickness, "layer_thickness", "h", 0.1, 1, "Layer thickness",
              "Thickness of one boundary layer, as a fraction of the target size h"),
       number(&P::lattice_margin, "lattice_margin", "h", 0.1, 2, "Lattice margin",
-             "Lattice points nearer than this to a face off the lattice planes (or to the "
-             "outermost boundary layer) are dropped; a fraction of h"),
+             "Lattice points nearer than this to a face off the lattice planes (swept shapes: "
+             "this beyond their boundary layers) are dropped; a fraction of h"),
       number(&P::surface_deflection, "surface_deflection", "h", 0.001, 0.5, "Surface deflection",
              "Chord deflection of the surface triangulation on curved faces, as a fraction of h"),
       choice(&P::frame, "frame", {"auto", "principal", "global"}, "Lattice frame",
