@@ -258,6 +258,9 @@ MixedMesh recombine(const TetMesh& input, const RecombineParameters& parameters,
     options.min_tet_quality = criteria.min_scaled_jacobian;
     options.placement = parameters.pyramid_placement;
     options.contract_edges = parameters.post_merge_contractions;
+    options.move_nodes = parameters.post_merge_moves;
+    options.min_dihedral_angle = criteria.min_dihedral_angle;
+    options.max_face_angle = criteria.max_face_angle;
     const QuadCensus before = quad_census(mesh, found, options);
     report.census_hex_candidates = report.census_hex_candidates_after = before.hex_candidates;
     report.census_closable = report.census_closable_after = before.closable;
@@ -288,6 +291,7 @@ MixedMesh recombine(const TetMesh& input, const RecombineParameters& parameters,
       report.flips_32 += stage.flips.flips_32;
       report.flips_44 += stage.flips.flips_44;
       report.contractions += stage.flips.contractions;
+      report.node_moves += stage.flips.moves;
       report.candidates_unclosable = unclosable;
       flipped = std::move(stage.tets);
       found = std::move(new_found);
@@ -310,14 +314,25 @@ MixedMesh recombine(const TetMesh& input, const RecombineParameters& parameters,
   MixedMesh out = build_output(tets, candidates, selection);
   fill_report(tets, out, report);
   report.input_volume = std::ldexp(report.input_volume, -3 * exponent);
-  if (exponent != 0) out.points = input.points;
+  // Scaled back by the same power of two (exact): a node the stage did not move is the input's
+  // bit for bit.
+  if (exponent != 0 && !kept) out.points = input.points;
+  if (exponent != 0 && kept) {
+    for (double& c : out.points) c = std::ldexp(c, -exponent);
+  }
   if (kept) {
     // The cells are unions of the stage's tets, not of the input's: no source tets. The nodes
-    // contractions took out are used by no cell: declared changed (none moves).
+    // contractions took out are used by no cell, and the nodes moves took elsewhere: both are
+    // declared changed.
     out.source_offsets.clear();
     out.source_tets.clear();
     std::vector<char> used(input.nb_vertices(), 0);
     for (index_t v : tets.tets) used[v] = 1;
+    for (index_t v = 0; v < input.nb_vertices(); ++v) {
+      if (used[v] && !std::equal(input.point(v), input.point(v) + 3, &out.points[3 * v])) {
+        out.changed_nodes.push_back(v);
+      }
+    }
     for (index_t v : input.tets) {
       if (!used[v]) {
         used[v] = 1;

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "hexmerge/core/error.h"
 #include "hexmerge/geometry/quality.h"
@@ -116,7 +117,7 @@ bool FlipMesh::flip_23(index_t t0, index_t t1, double min_quality) {
   const index_t a = face[0];
   index_t b = face[1], c = face[2];
   if (tet_volume(point(a), point(b), point(c), point(p)) < 0.0) std::swap(b, c);
-  return replace({t0, t1}, {{{a, b, q, p}}, {{b, c, q, p}}, {{c, a, q, p}}}, min_quality, 23);
+  return change({t0, t1}, {{{a, b, q, p}}, {{b, c, q, p}}, {{c, a, q, p}}}, min_quality, 23);
 }
 
 bool FlipMesh::remove_edge(index_t u, index_t v, int diagonal, double min_quality) {
@@ -169,7 +170,7 @@ bool FlipMesh::remove_edge(index_t u, index_t v, int diagonal, double min_qualit
     const index_t r0 = ring[s], r1 = ring[s + 1], r2 = ring[s + 2], r3 = ring[(s + 3) % 4];
     made = {{{r0, r1, r2, v}}, {{r0, r2, r3, v}}, {{r0, r2, r1, u}}, {{r0, r3, r2, u}}};
   }
-  return replace(around, made, min_quality, ring.size() == 3 ? 32 : 44);
+  return change(around, made, min_quality, ring.size() == 3 ? 32 : 44);
 }
 
 bool FlipMesh::contract(index_t from, index_t onto, double min_quality) {
@@ -206,7 +207,7 @@ bool FlipMesh::contract(index_t from, index_t onto, double min_quality) {
     std::replace(cone.begin(), cone.end(), from, onto);
     made.push_back(cone);
   }
-  return replace(star, made, min_quality, kContraction);
+  return change(star, made, min_quality, kContraction);
 }
 
 bool FlipMesh::flat_boundary(const std::vector<std::array<index_t, 3>>& faces, index_t onto) const {
@@ -249,6 +250,14 @@ void FlipMesh::undo(std::size_t mark) {
   while (journal_.size() > mark) {
     const Entry e = journal_.back();
     journal_.pop_back();
+    if (e.kind == kMove) {
+      HEXMERGE_ASSERT(e.tet + 1 == moves_.size(), "journal out of order");
+      const Move& move = moves_.back();
+      std::copy(move.from.begin(), move.from.end(), &points_[3 * std::size_t{move.node}]);
+      moves_.pop_back();
+      --counts_.moves;
+      continue;
+    }
     if (e.kind == 23) --counts_.flips_23;
     if (e.kind == 32) --counts_.flips_32;
     if (e.kind == 44) --counts_.flips_44;
@@ -264,6 +273,173 @@ void FlipMesh::undo(std::size_t mark) {
       alive_[e.tet] = 1;
     }
   }
+}
+
+bool FlipMesh::change(const std::vector<index_t>& old_tets,
+                      const std::vector<std::array<index_t, 4>>& new_tets, double min_quality,
+                      std::uint8_t kind) {
+  if (replace(old_tets, new_tets, min_quality, kind)) return true;
+  if (!smoothing_) return false;
+  for (index_t t : old_tets) {
+    if (!alive_[t] || locked_[t] || regions_[t] != regions_[old_tets[0]]) return false;
+  }
+  const auto quality = [this](const std::array<index_t, 4>& q) {
+    return scaled_jacobian(CellType::Tet, points_.data(), q.data());
+  };
+  // The refused tets: a node they all hold is moved (no other node changes them).
+  std::vector<const std::array<index_t, 4>*> refused;
+  for (const auto& q : new_tets) {
+    if (!(quality(q) >= min_quality)) refused.push_back(&q);
+  }
+  if (refused.empty()) return false;  // refused for the volume guard
+  for (index_t v : *refused[0]) {
+    const bool in_all = std::all_of(refused.begin(), refused.end(), [v](const auto* q) {
+      return std::find(q->begin(), q->end(), v) != q->end();
+    });
+    if (!in_all) continue;
+    std::vector<Goal> goals;
+    for (const auto& q : new_tets) {
+      if (std::find(q.begin(), q.end(), v) != q.end()) {
+        goals.push_back({[&quality, &q]() { return quality(q); }, min_quality});
+      }
+    }
+    const std::size_t start = mark();
+    if (smooth(v, goals, old_tets, min_quality) &&
+        replace(old_tets, new_tets, min_quality, kind)) {
+      return true;
+    }
+    undo(start);
+  }
+  return false;
+}
+
+void FlipMesh::star(index_t v, std::vector<index_t>& out) const { tets_with_edge(v, v, out); }
+
+bool FlipMesh::boundary_face(index_t t, int f) const {
+  std::array<index_t, 3> face{};
+  int n = 0;
+  for (int i = 0; i < 4; ++i) {
+    if (i != f) face[n++] = tet(t)[i];
+  }
+  return tet_with_face(face[0], face[1], face[2], t) == NO_CELL;
+}
+
+bool FlipMesh::movable(index_t v) const {
+  std::vector<index_t> around;
+  star(v, around);
+  if (around.empty()) return false;
+  for (index_t t : around) {
+    if (locked_[t] || regions_[t] != regions_[around[0]]) return false;
+    for (int f = 0; f < 4; ++f) {
+      if (tet(t)[f] != v && boundary_face(t, f)) return false;
+    }
+  }
+  return true;
+}
+
+bool FlipMesh::smooth(index_t v, const std::vector<Goal>& goals,
+                      const std::vector<index_t>& leaving, double min_quality) {
+  if (!movable(v)) return false;
+  std::vector<index_t> around;
+  star(v, around);
+  // The tets that stay, each with the scaled Jacobian it must keep.
+  std::vector<std::pair<index_t, double>> staying;
+  double length = 0.0;
+  std::array<double, 3> centroid{};
+  int edges = 0;
+  double* p = &points_[3 * std::size_t{v}];
+  for (index_t t : around) {
+    if (std::find(leaving.begin(), leaving.end(), t) == leaving.end()) {
+      staying.emplace_back(t, std::min(min_quality,
+                                       scaled_jacobian(CellType::Tet, points_.data(), tet(t))));
+    }
+    for (int i = 0; i < 4; ++i) {
+      const index_t w = tet(t)[i];
+      if (w == v) continue;
+      const double* q = point(w);
+      length += std::sqrt((q[0] - p[0]) * (q[0] - p[0]) + (q[1] - p[1]) * (q[1] - p[1]) +
+                          (q[2] - p[2]) * (q[2] - p[2]));
+      for (int k = 0; k < 3; ++k) centroid[k] += q[k];
+      ++edges;
+    }
+  }
+  length /= edges;
+  for (double& x : centroid) x /= edges;
+  // The least margin over the goals and the staying tets (a staying tet that falls below its
+  // bound rules the position out).
+  const auto margin = [&]() {
+    double least = std::numeric_limits<double>::infinity();
+    for (const auto& [t, need] : staying) {
+      const double m = scaled_jacobian(CellType::Tet, points_.data(), tet(t)) - need;
+      if (!(m >= 0.0)) return -std::numeric_limits<double>::infinity();
+      least = std::min(least, m);
+    }
+    for (const Goal& goal : goals) least = std::min(least, goal.quality() - goal.need);
+    if (least >= 0.0 && guard_ && !guard_(v, leaving)) {
+      return -std::numeric_limits<double>::infinity();
+    }
+    return least;
+  };
+  const std::array<double, 3> start{{p[0], p[1], p[2]}};
+  const auto at = [&](const std::array<double, 3>& x) {
+    std::copy(x.begin(), x.end(), p);
+    return margin();
+  };
+  std::array<double, 3> best = start;
+  double best_margin = at(start);
+  const double from_centroid = at(centroid);
+  if (from_centroid > best_margin) {
+    best = centroid;
+    best_margin = from_centroid;
+  }
+  // Pattern search: the 6 axis and 8 diagonal directions, the best step kept, the step halved
+  // when none improves; stops once every bound is met with kEnough to spare.
+  static constexpr double kEnough = 0.02;
+  static const double kDiagonal = 1.0 / std::sqrt(3.0);
+  std::vector<std::array<double, 3>> directions;
+  for (int k = 0; k < 3; ++k) {
+    for (double s : {-1.0, 1.0}) {
+      std::array<double, 3> d{};
+      d[k] = s;
+      directions.push_back(d);
+    }
+  }
+  for (double x : {-kDiagonal, kDiagonal}) {
+    for (double y : {-kDiagonal, kDiagonal}) {
+      for (double z : {-kDiagonal, kDiagonal}) directions.push_back({{x, y, z}});
+    }
+  }
+  int trials = 2;
+  for (double step = length / 3.0; step > length * 1e-3 && trials < kMaxTrials;) {
+    if (best_margin >= kEnough) break;
+    std::array<double, 3> next = best;
+    double next_margin = best_margin;
+    for (const auto& d : directions) {
+      const std::array<double, 3> x{
+          {best[0] + step * d[0], best[1] + step * d[1], best[2] + step * d[2]}};
+      const double m = at(x);
+      ++trials;
+      if (m > next_margin) {
+        next = x;
+        next_margin = m;
+      }
+    }
+    if (next_margin > best_margin) {
+      best = next;
+      best_margin = next_margin;
+    } else {
+      step /= 2.0;
+    }
+  }
+  if (!(best_margin >= 0.0) || best == start) {
+    std::copy(start.begin(), start.end(), p);
+    return best_margin >= 0.0;  // met where it is: nothing to move
+  }
+  std::copy(best.begin(), best.end(), p);
+  journal_.push_back({static_cast<index_t>(moves_.size()), false, kMove});
+  moves_.push_back({v, start});
+  ++counts_.moves;
+  return true;
 }
 
 TetMesh FlipMesh::compact() const {

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <set>
+#include <cstdlib>
 
 #include "hexmerge/geometry/quality.h"
 #include "hexmerge/mesh/cell_type.h"
@@ -23,11 +24,36 @@ struct QuadFace {
   index_t inner_abc, inner_acd;
 };
 
+/// A candidate's scaled Jacobian is stored as a float: a moved candidate is compared with it
+/// less this.
+constexpr double kQualityRounding = 1e-6;
+
+/// With move_nodes, apexes whose pyramid reaches this share of the acceptance are tried.
+constexpr double kMovableApexShare = 0.5;
+
 class Stage {
  public:
   /// candidates: those whose Candidate records the member functions are given
   Stage(FlipMesh& mesh, const Candidates& candidates, const PostMergeOptions& options)
-      : m_(mesh), cands_(candidates), options_(options) {
+      : m_(mesh),
+        cands_(candidates),
+        options_(options),
+        min_dihedral_(options.min_dihedral_angle),
+        max_corner_(options.max_face_angle) {
+    if (options.move_nodes) {
+      // The candidates at each node, for the move guard.
+      for (index_t i = 0; i < static_cast<index_t>(candidates.size()); ++i) {
+        const Candidate& c = candidates[i];
+        for (int k = 0; k < descriptor(c.type).nb_vertices; ++k) {
+          const index_t v = c.vertices[k];
+          if (v >= at_node_.size()) at_node_.resize(v + 1);
+          at_node_[v].push_back(i);
+        }
+      }
+      m_.set_move_guard([this](index_t v, const std::vector<index_t>& leaving) {
+        return still_accepted(v, leaving);
+      });
+    }
     if (options.placement == PyramidPlacement::NoBoundaryNode) {
       boundary_vertex_.assign(mesh.nb_slots() == 0 ? 0 : max_vertex() + 1, 0);
       for (index_t t = 0; t < m_.nb_slots(); ++t) {
@@ -64,6 +90,37 @@ class Stage {
     return true;
   }
 
+  /// Every candidate at node v whose tets are alive and not in `leaving` still passes the
+  /// acceptance with the node where it is (PostMergeOptions::min_dihedral_angle).
+  bool still_accepted(index_t v, const std::vector<index_t>& leaving) const {
+    if (v >= at_node_.size()) return true;
+    std::vector<QuadFace> faces;
+    for (const index_t i : at_node_[v]) {
+      const Candidate& c = cands_[i];
+      const TetSpan tets = cands_.tets(c);
+      const bool gone = std::any_of(tets.begin(), tets.end(), [&](index_t t) {
+        return !m_.alive(t) || std::find(leaving.begin(), leaving.end(), t) != leaving.end();
+      });
+      if (gone) continue;
+      const double sj = scaled_jacobian(c.type, m_.point(0), c.vertices.data());
+      if (!(sj >= std::min(options_.min_pyramid_quality, double{c.quality} - kQualityRounding))) {
+        return false;
+      }
+      if (!quad_faces(c, faces)) return false;
+      for (const QuadFace& q : faces) {
+        if (q.a != v && q.b != v && q.c != v && q.d != v) continue;
+        const double *a = m_.point(q.a), *b = m_.point(q.b), *cc = m_.point(q.c),
+                     *d = m_.point(q.d);
+        if (quad_dihedral_angle_below(a, b, cc, d, min_dihedral_) &&
+            quad_dihedral_angle_below(cc, d, a, b, min_dihedral_)) {
+          return false;
+        }
+        if (quad_max_corner_angle_above(a, b, cc, d, max_corner_)) return false;
+      }
+    }
+    return true;
+  }
+
   /// Both triangles on the domain boundary.
   bool on_boundary(const QuadFace& q) const {
     return m_.tet_with_face(q.a, q.b, q.c, q.inner_abc) == NO_CELL &&
@@ -95,8 +152,24 @@ class Stage {
   /// The pyramid on the face with apex `apex` made of tets t0 (holding b) and t1 (holding d)
   /// passes the acceptance.
   bool pyramid_ok(const QuadFace& q, index_t apex, index_t t0, index_t t1) const {
+    return pyramid_quality(q, apex) >= options_.min_pyramid_quality &&
+           pyramid_allowed(q, apex, t0, t1);
+  }
+
+  /// pyramid_ok(), or (move_nodes) made so by moving the apex (its tets all kept positive and
+  /// at the floor, or not worse where they were below it).
+  bool pyramid_ok_or_moved(const QuadFace& q, index_t apex, index_t t0, index_t t1) {
+    if (pyramid_ok(q, apex, t0, t1)) return true;
+    if (!options_.move_nodes || !pyramid_allowed(q, apex, t0, t1)) return false;
+    if (std::getenv("NO_APEX")) return false;  // EXPERIMENT
+    const std::vector<FlipMesh::Goal> goals = {
+        {[this, &q, apex]() { return pyramid_quality(q, apex); }, options_.min_pyramid_quality}};
+    return m_.smooth(apex, goals, {}, options_.min_tet_quality);
+  }
+
+  /// The pyramid's region and placement pass the acceptance (its shape aside).
+  bool pyramid_allowed(const QuadFace& q, index_t apex, index_t t0, index_t t1) const {
     if (m_.region(t0) != m_.region(t1)) return false;
-    if (pyramid_quality(q, apex) < options_.min_pyramid_quality) return false;
     if (options_.placement == PyramidPlacement::NoBoundaryFace) {
       for (index_t t : {t0, t1}) {
         for (int f = 0; f < 4; ++f) {
@@ -133,19 +206,23 @@ class Stage {
     if (!fan(q, cand, vertices, tets)) return false;
     if (tets.size() == 2) {
       pyramid = {tets[0], tets[1]};
-      return pyramid_ok(q, vertices[1], tets[0], tets[1]);
+      return pyramid_ok_or_moved(q, vertices[1], tets[0], tets[1]);
     }
-    // Apexes by the quality of their pyramid, best first.
+    // Apexes by the quality of their pyramid, best first (with move_nodes also those at half
+    // the acceptance or more, which a move of the apex may lift).
+    const double least =
+        options_.min_pyramid_quality * (options_.move_nodes ? kMovableApexShare : 1.0);
     std::vector<std::pair<double, index_t>> apexes;
     for (std::size_t i = 1; i + 1 < vertices.size(); ++i) {
       const double quality = pyramid_quality(q, vertices[i]);
-      if (quality >= options_.min_pyramid_quality) apexes.emplace_back(-quality, vertices[i]);
+      if (quality >= least) apexes.emplace_back(-quality, vertices[i]);
     }
     std::sort(apexes.begin(), apexes.end());
     for (const auto& [unused, apex] : apexes) {
       const std::size_t start = m_.mark();
       if (reduce_fan(q, cand, apex, vertices.size()) && fan(q, cand, vertices, tets) &&
-          tets.size() == 2 && vertices[1] == apex && pyramid_ok(q, apex, tets[0], tets[1])) {
+          tets.size() == 2 && vertices[1] == apex &&
+          pyramid_ok_or_moved(q, apex, tets[0], tets[1])) {
         pyramid = {tets[0], tets[1]};
         return true;
       }
@@ -246,6 +323,9 @@ class Stage {
   const Candidates& cands_;
   const PostMergeOptions& options_;
   std::vector<char> boundary_vertex_;
+  AngleBound min_dihedral_, max_corner_;
+  /// The candidates at each node (move_nodes only).
+  std::vector<std::vector<index_t>> at_node_;
 };
 
 bool all_alive(const FlipMesh& m, TetSpan tets) {
@@ -280,6 +360,7 @@ PostMergeResult close_open_quads(const TetMesh& mesh, const Candidates& candidat
                                  const Candidates& selected_from, const Selection& selection,
                                  const PostMergeOptions& options) {
   FlipMesh m(mesh);
+  m.set_smoothing(options.move_nodes && !std::getenv("NO_CHANGE"));  // EXPERIMENT
   Stage stage(m, candidates, options);
   PostMergeResult result;
   // The selection's hexahedra and the elements on their quad faces stay as they are.
