@@ -267,7 +267,24 @@ MixedMesh recombine(const TetMesh& input, const RecombineParameters& parameters,
     timer.lap("census_before");
     for (int round = 0; round < parameters.post_merge_rounds; ++round) {
       const TetMesh& current = report.post_merge == "kept" ? flipped : mesh;
-      PostMergeResult stage = close_open_quads(current, found, candidates, selection, options);
+      // Node moves: hexahedron candidates under looser bounds, which a move may lift.
+      Candidates liftable;
+      if (options.move_nodes) {
+        AcceptanceCriteria loose = criteria;
+        loose.min_dihedral_angle -= kLiftAngle;
+        loose.max_face_angle += kLiftAngle;
+        loose.min_scaled_jacobian = std::min(loose.min_scaled_jacobian, kLiftScaledJacobian);
+        loose.lowest_scaled_jacobian = loose.min_scaled_jacobian;
+        loose.types = {};
+        loose.types[static_cast<int>(CellType::Hex)] = true;
+        std::unique_ptr<TetTopology> current_topology;
+        if (&current != &mesh) current_topology = std::make_unique<TetTopology>(current);
+        liftable = find_candidates(current, current_topology ? *current_topology : topology,
+                                   loose, threads);
+        timer.lap("post_merge_liftable" + std::string("_") + std::to_string(round + 1));
+      }
+      PostMergeResult stage =
+          close_open_quads(current, found, candidates, selection, options, liftable);
       report.post_merge_attempted += stage.attempted;
       const std::string suffix = "_" + std::to_string(round + 1);
       timer.lap("post_merge_flips" + suffix);
@@ -292,6 +309,7 @@ MixedMesh recombine(const TetMesh& input, const RecombineParameters& parameters,
       report.flips_44 += stage.flips.flips_44;
       report.contractions += stage.flips.contractions;
       report.node_moves += stage.flips.moves;
+      report.post_merge_lifted += stage.lifted;
       report.candidates_unclosable = unclosable;
       flipped = std::move(stage.tets);
       found = std::move(new_found);

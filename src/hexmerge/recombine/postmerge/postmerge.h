@@ -31,6 +31,12 @@
 
 namespace hexmerge {
 
+/// recombine() looks for liftable hexahedron candidates with the minimum dihedral angle lowered
+/// by this many degrees, the maximum face angle raised by as many, and this minimum scaled
+/// Jacobian.
+constexpr double kLiftAngle = 15.0;
+constexpr double kLiftScaledJacobian = 0.15;
+
 struct PostMergeOptions {
   double min_pyramid_quality = 0.3;  ///< scaled Jacobian of a closing pyramid
   double min_tet_quality = 0.3;      ///< scaled Jacobian of every tet a flip makes
@@ -46,8 +52,8 @@ struct PostMergeOptions {
   /// again with one of its nodes moved, and a pyramid apex whose pyramid fails
   /// min_pyramid_quality is moved to lift it.
   bool move_nodes = false;
-  /// A move may not make a candidate at the node that passed the acceptance fail it (its tets
-  /// alive and not about to be replaced): its scaled Jacobian stays at least min_pyramid_quality
+  /// A move may not make a protected candidate at the node (close_open_quads) that passed the
+  /// acceptance fail it (its tets alive and not about to be replaced): its scaled Jacobian stays at least min_pyramid_quality
   /// (or its own, when lower), and each of its quad faces at the node at least this dihedral
   /// angle across its diagonal and at most max_face_angle at its corners (degrees; the moved
   /// node is inside the domain, so its quads are inner ones).
@@ -71,6 +77,8 @@ struct PostMergeResult {
   std::size_t attempted = 0;       ///< hexahedron candidates worked on (each once)
   std::size_t closed = 0;          ///< of them: every quad face closed, by at least one flip
   std::size_t already_closed = 0;  ///< of them: every quad face closed as the tets were
+  /// Of the closed: liftable candidates that a node move made pass the acceptance.
+  std::size_t lifted = 0;
 };
 
 /// Works on the hexahedron candidates of `candidates` (found on `mesh`, any pruning), best
@@ -80,8 +88,14 @@ struct PostMergeResult {
 /// flips of tets that no kept candidate or closing pyramid holds. When every face closes, its
 /// tets and pyramids are kept; otherwise every flip made for it is undone and it is not tried
 /// again. Work: at most (max_fan - 1)^2 flips tried per face.
+/// With move_nodes, `liftable` (hexahedron candidates found with looser bounds: recombine()
+/// uses kLiftAngle and kLiftScaledJacobian) are worked on too, in the same order: one that fails the acceptance is
+/// first made to pass it by moving one of its nodes (Stage::lift), then closed as the others.
+/// Every node move keeps the hexahedron candidates of `candidates` and the selection's elements
+/// that pass the acceptance passing it (PostMergeOptions::min_dihedral_angle).
 PostMergeResult close_open_quads(const TetMesh& mesh, const Candidates& candidates,
                                  const Candidates& selected_from, const Selection& selection,
-                                 const PostMergeOptions& options);
+                                 const PostMergeOptions& options,
+                                 const Candidates& liftable = Candidates{});
 
 }  // namespace hexmerge
