@@ -279,8 +279,8 @@ MixedMesh recombine(const TetMesh& input, const RecombineParameters& parameters,
         loose.types[static_cast<int>(CellType::Hex)] = true;
         std::unique_ptr<TetTopology> current_topology;
         if (&current != &mesh) current_topology = std::make_unique<TetTopology>(current);
-        liftable = find_candidates(current, current_topology ? *current_topology : topology,
-                                   loose, threads);
+        liftable = find_candidates(current, current_topology ? *current_topology : topology, loose,
+                                   threads);
         timer.lap("post_merge_liftable" + std::string("_") + std::to_string(round + 1));
       }
       PostMergeResult stage =

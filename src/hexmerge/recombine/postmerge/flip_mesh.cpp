@@ -304,8 +304,7 @@ bool FlipMesh::change(const std::vector<index_t>& old_tets,
       }
     }
     const std::size_t start = mark();
-    if (smooth(v, goals, old_tets, min_quality) &&
-        replace(old_tets, new_tets, min_quality, kind)) {
+    if (smooth(v, goals, old_tets, min_quality) && replace(old_tets, new_tets, min_quality, kind)) {
       return true;
     }
     undo(start);
@@ -350,8 +349,8 @@ bool FlipMesh::smooth(index_t v, const std::vector<Goal>& goals,
   double* p = &points_[3 * std::size_t{v}];
   for (index_t t : around) {
     if (std::find(leaving.begin(), leaving.end(), t) == leaving.end()) {
-      staying.emplace_back(t, std::min(min_quality,
-                                       scaled_jacobian(CellType::Tet, points_.data(), tet(t))));
+      staying.emplace_back(
+          t, std::min(min_quality, scaled_jacobian(CellType::Tet, points_.data(), tet(t))));
     }
     for (int i = 0; i < 4; ++i) {
       const index_t w = tet(t)[i];

@@ -100,8 +100,8 @@ class FlipMesh {
   /// every region's volume is kept. The position is found by a pattern search from the
   /// node's place and from its neighbours' centroid (steps of a third of the mean edge length at
   /// v, halved down to 1/1000 of it), maximising the least margin over the goals and tets. False
-  /// (nothing changed) when no position meets them all (and the move guard). Work: the tets at v, times the
-  /// positions tried (at most kMaxTrials).
+  /// (nothing changed) when no position meets them all (and the move guard). Work: the tets at v,
+  /// times the positions tried (at most kMaxTrials).
   bool smooth(index_t v, const std::vector<Goal>& goals, const std::vector<index_t>& leaving,
               double min_quality);
   /// v is an inner node whose tets are all of one region and unlocked (smooth() may move it).
@@ -158,7 +158,7 @@ class FlipMesh {
   std::vector<std::vector<index_t>> incidence_;
   struct Entry {
     index_t tet;
-    bool created;       ///< created (undo kills it) or killed (undo revives it)
+    bool created;  ///< created (undo kills it) or killed (undo revives it)
     /// 0: none, else the change counted (23, 32, 44, kContraction) on its last entry; kMove: a
     /// node move (`tet` is its index in moves_)
     std::uint8_t kind;

@@ -41,8 +41,7 @@ class Stage {
         cands_(candidates),
         options_(options),
         min_dihedral_(options.min_dihedral_angle),
-        max_corner_(options.max_face_angle) {
-  }
+        max_corner_(options.max_face_angle) {}
 
   /// A move may not make candidate `i` of `list` fail the acceptance while its tets are alive
   /// (still_accepted()); the first call turns the move guard on.
@@ -148,16 +147,18 @@ class Stage {
         return q.a == v || q.b == v || q.c == v || q.d == v || quad_accepted(q);
       });
       if (!holds_failing || !m_.movable(v)) continue;
-      std::vector<FlipMesh::Goal> goals = {
-          {[this, &cand]() { return scaled_jacobian(CellType::Hex, m_.point(0), cand.vertices.data()); },
-           need}};
+      std::vector<FlipMesh::Goal> goals = {{[this, &cand]() {
+                                              return scaled_jacobian(CellType::Hex, m_.point(0),
+                                                                     cand.vertices.data());
+                                            },
+                                            need}};
       for (const QuadFace& q : faces) {
         if (q.a != v && q.b != v && q.c != v && q.d != v) continue;
         // Angles in right angles, so that a degree weighs about as much as 0.01 of scaled
         // Jacobian.
         goals.push_back({[this, q]() {
-                           return quad_dihedral_angle(m_.point(q.a), m_.point(q.b),
-                                                      m_.point(q.c), m_.point(q.d)) /
+                           return quad_dihedral_angle(m_.point(q.a), m_.point(q.b), m_.point(q.c),
+                                                      m_.point(q.d)) /
                                   90.0;
                          },
                          (options_.min_dihedral_angle + kAngleSpare) / 90.0});

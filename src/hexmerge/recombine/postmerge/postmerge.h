@@ -53,10 +53,10 @@ struct PostMergeOptions {
   /// min_pyramid_quality is moved to lift it.
   bool move_nodes = false;
   /// A move may not make a protected candidate at the node (close_open_quads) that passed the
-  /// acceptance fail it (its tets alive and not about to be replaced): its scaled Jacobian stays at least min_pyramid_quality
-  /// (or its own, when lower), and each of its quad faces at the node at least this dihedral
-  /// angle across its diagonal and at most max_face_angle at its corners (degrees; the moved
-  /// node is inside the domain, so its quads are inner ones).
+  /// acceptance fail it (its tets alive and not about to be replaced): its scaled Jacobian stays at
+  /// least min_pyramid_quality (or its own, when lower), and each of its quad faces at the node at
+  /// least this dihedral angle across its diagonal and at most max_face_angle at its corners
+  /// (degrees; the moved node is inside the domain, so its quads are inner ones).
   double min_dihedral_angle = 150.0;
   double max_face_angle = 150.0;
 };
@@ -89,10 +89,10 @@ struct PostMergeResult {
 /// tets and pyramids are kept; otherwise every flip made for it is undone and it is not tried
 /// again. Work: at most (max_fan - 1)^2 flips tried per face.
 /// With move_nodes, `liftable` (hexahedron candidates found with looser bounds: recombine()
-/// uses kLiftAngle and kLiftScaledJacobian) are worked on too, in the same order: one that fails the acceptance is
-/// first made to pass it by moving one of its nodes (Stage::lift), then closed as the others.
-/// Every node move keeps the hexahedron candidates of `candidates` and the selection's elements
-/// that pass the acceptance passing it (PostMergeOptions::min_dihedral_angle).
+/// uses kLiftAngle and kLiftScaledJacobian) are worked on too, in the same order: one that fails
+/// the acceptance is first made to pass it by moving one of its nodes (Stage::lift), then closed as
+/// the others. Every node move keeps the hexahedron candidates of `candidates` and the selection's
+/// elements that pass the acceptance passing it (PostMergeOptions::min_dihedral_angle).
 PostMergeResult close_open_quads(const TetMesh& mesh, const Candidates& candidates,
                                  const Candidates& selected_from, const Selection& selection,
                                  const PostMergeOptions& options,
