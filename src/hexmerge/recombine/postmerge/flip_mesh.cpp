@@ -20,7 +20,8 @@ FlipMesh::FlipMesh(const TetMesh& mesh)
       tets_(mesh.tets),
       alive_(mesh.nb_tets(), 1),
       locked_(mesh.nb_tets(), 0),
-      incidence_(mesh.nb_vertices()) {
+      incidence_(mesh.nb_vertices()),
+      inner_(mesh.nb_vertices(), 0) {
   regions_.resize(mesh.nb_tets());
   for (index_t t = 0; t < mesh.nb_tets(); ++t) {
     regions_[t] = mesh.region(t);
@@ -328,12 +329,21 @@ bool FlipMesh::movable(index_t v) const {
   star(v, around);
   if (around.empty()) return false;
   for (index_t t : around) {
-    if (locked_[t] || regions_[t] != regions_[around[0]]) return false;
-    for (int f = 0; f < 4; ++f) {
-      if (tet(t)[f] != v && boundary_face(t, f)) return false;
-    }
+    if (locked_[t]) return false;
   }
-  return true;
+  // Inside one region: no change alters it (flips and contractions keep the boundary and the
+  // regions, and a contracted node is used no more), so it is found once per node.
+  if (inner_[v] == 0) {
+    bool inner = true;
+    for (index_t t : around) {
+      inner = inner && regions_[t] == regions_[around[0]];
+      for (int f = 0; f < 4 && inner; ++f) {
+        if (tet(t)[f] != v && boundary_face(t, f)) inner = false;
+      }
+    }
+    inner_[v] = inner ? 1 : 2;
+  }
+  return inner_[v] == 1;
 }
 
 bool FlipMesh::smooth(index_t v, const std::vector<Goal>& goals,

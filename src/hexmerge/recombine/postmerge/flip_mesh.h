@@ -164,6 +164,8 @@ class FlipMesh {
     std::uint8_t kind;
   };
   std::vector<Entry> journal_;
+  /// Per node, found on first use by movable(): 0 not yet, 1 inside one region, 2 not.
+  mutable std::vector<std::uint8_t> inner_;
   FlipCounts counts_;
 };
 
