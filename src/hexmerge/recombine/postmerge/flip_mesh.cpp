@@ -419,7 +419,7 @@ bool FlipMesh::smooth(index_t v, const std::vector<Goal>& goals,
     }
   }
   int trials = 2;
-  for (double step = length / 3.0; step > length * 1e-3 && trials < kMaxTrials;) {
+  for (double step = length / 3.0; step > length * kSmallestStep && trials < kMaxTrials;) {
     if (best_margin >= kEnough) break;
     std::array<double, 3> next = best;
     double next_margin = best_margin;

@@ -493,7 +493,12 @@ PostMergeResult close_open_quads(const TetMesh& mesh, const Candidates& found,
       if (pass == 1) ++result.attempted;
       const std::size_t start = m.mark();
       if (lifting) {
-        if (!stage.lift(cand)) continue;
+        // A move changes no tet's vertices: a face whose fan cannot be followed now (it leaves
+        // the mesh, runs into the candidate or is longer than max_fan) will not close.
+        const bool followed = std::all_of(faces.begin(), faces.end(), [&](const QuadFace& q) {
+          return stage.on_boundary(q) || stage.fan(q, cand, fan_vertices, fan_tets);
+        });
+        if (!followed || !stage.lift(cand)) continue;
         if (!stage.quad_faces(cand, faces)) {
           m.undo(start);
           continue;
