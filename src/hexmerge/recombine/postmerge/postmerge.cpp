@@ -41,7 +41,19 @@ class Stage {
         cands_(candidates),
         options_(options),
         min_dihedral_(options.min_dihedral_angle),
-        max_corner_(options.max_face_angle) {}
+        max_corner_(options.max_face_angle) {
+    if (options.placement == PyramidPlacement::NoBoundaryNode) {
+      boundary_vertex_.assign(mesh.nb_slots() == 0 ? 0 : max_vertex() + 1, 0);
+      for (index_t t = 0; t < m_.nb_slots(); ++t) {
+        for (int f = 0; f < 4; ++f) {
+          if (!face_on_boundary(t, f)) continue;
+          for (int i = 0; i < 4; ++i) {
+            if (i != f) boundary_vertex_[m_.tet(t)[i]] = 1;
+          }
+        }
+      }
+    }
+  }
 
   /// A move may not make candidate `i` of `list` fail the acceptance while its tets are alive
   /// (still_accepted()); the first call turns the move guard on.

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <array>
 #include <cstdlib>
+#include <map>
 #include <random>
 #include <vector>
 
@@ -344,6 +345,45 @@ TEST(post_merge, with_node_moves_a_delaunay_mesh_stays_valid_and_the_moves_are_d
     EXPECT_GE(report.min_scaled_jacobian[static_cast<int>(type)], 0.3);
   }
   EXPECT_GE(check.min_scaled_jacobian, test::min_quality(mesh) - 1e-12);
+}
+
+// Pyramids kept off boundary nodes (the FreeCAD add-on's placement): the stage with moves
+// closes no quad with a pyramid that has a node on the boundary, and the output is valid.
+TEST(post_merge, with_pyramids_off_boundary_nodes_the_stage_keeps_the_placement) {
+  const TetMesh mesh = test::tetgen_mesh(spaced_points(11, 12.0, 2500));
+  if (mesh.nb_tets() == 0) GTEST_SKIP() << "no tetgen";
+  RecombineParameters parameters;
+  parameters.same_nodes = false;
+  parameters.pyramid_placement = PyramidPlacement::NoBoundaryNode;
+  RecombineReport report;
+  const MixedMesh out = recombine(mesh, parameters, report);
+  const CheckReport check = check_mesh(out, mesh);
+  EXPECT_TRUE(check.valid()) << (check.problems.empty() ? "" : check.problems[0]);
+  EXPECT_EQ(check.nonconforming_quads, 0u);
+  // The input's boundary nodes: corners of faces held by one tet.
+  std::map<std::array<index_t, 3>, int> faces;
+  for (index_t t = 0; t < mesh.nb_tets(); ++t) {
+    for (int f = 0; f < 4; ++f) {
+      std::array<index_t, 3> tri{};
+      int n = 0;
+      for (int i = 0; i < 4; ++i) {
+        if (i != f) tri[n++] = mesh.tet(t)[i];
+      }
+      std::sort(tri.begin(), tri.end());
+      ++faces[tri];
+    }
+  }
+  std::vector<char> on_boundary(mesh.nb_vertices(), 0);
+  for (const auto& [tri, n] : faces) {
+    if (n == 1) {
+      for (index_t v : tri) on_boundary[v] = 1;
+    }
+  }
+  for (index_t c = 0; c < out.nb_cells(); ++c) {
+    if (out.types[c] != CellType::Pyramid) continue;
+    const index_t* v = out.cell(c);
+    for (int i = 0; i < 5; ++i) EXPECT_FALSE(on_boundary[v[i]]) << "pyramid " << c;
+  }
 }
 
 }  // namespace
