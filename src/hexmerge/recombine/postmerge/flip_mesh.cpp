@@ -21,7 +21,7 @@ FlipMesh::FlipMesh(const TetMesh& mesh)
       alive_(mesh.nb_tets(), 1),
       locked_(mesh.nb_tets(), 0),
       incidence_(mesh.nb_vertices()),
-      inner_(mesh.nb_vertices(), 0) {
+      kind_(mesh.nb_vertices(), kUnknown) {
   regions_.resize(mesh.nb_tets());
   for (index_t t = 0; t < mesh.nb_tets(); ++t) {
     regions_[t] = mesh.region(t);
@@ -212,10 +212,17 @@ bool FlipMesh::contract(index_t from, index_t onto, double min_quality) {
 }
 
 bool FlipMesh::flat_boundary(const std::vector<std::array<index_t, 3>>& faces, index_t onto) const {
-  bool holds_onto = false;
+  const bool holds_onto = std::any_of(faces.begin(), faces.end(), [onto](const auto& f) {
+    return f[0] == onto || f[1] == onto || f[2] == onto;
+  });
+  std::array<double, 3> normal{};
+  return holds_onto && plane_of(faces, normal);
+}
+
+bool FlipMesh::plane_of(const std::vector<std::array<index_t, 3>>& faces,
+                        std::array<double, 3>& n) const {
   double longest = 0.0;
   for (const auto& f : faces) {
-    holds_onto = holds_onto || f[0] == onto || f[1] == onto || f[2] == onto;
     for (int i = 0; i < 3; ++i) {
       const double* p = point(f[i]);
       const double* q = point(f[(i + 1) % 3]);
@@ -224,15 +231,14 @@ bool FlipMesh::flat_boundary(const std::vector<std::array<index_t, 3>>& faces, i
                                    (p[2] - q[2]) * (p[2] - q[2])));
     }
   }
-  if (!holds_onto) return false;
   // Every corner of every face within a tiny distance of the first face's plane (so the node is
-  // on no edge or corner of the geometry, and `onto` is on its face).
+  // on no edge or corner of the geometry).
   const double* a = point(faces[0][0]);
   const double* b = point(faces[0][1]);
   const double* c = point(faces[0][2]);
   const double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
   const double v[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
-  double n[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
+  n = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
   const double norm = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
   if (!(norm > 0.0)) return false;
   for (double& x : n) x /= norm;
@@ -331,19 +337,37 @@ bool FlipMesh::movable(index_t v) const {
   for (index_t t : around) {
     if (locked_[t]) return false;
   }
-  // Inside one region: no change alters it (flips and contractions keep the boundary and the
-  // regions, and a contracted node is used no more), so it is found once per node.
-  if (inner_[v] == 0) {
-    bool inner = true;
+  // Inside one region, or inside a flat face of the domain: no change alters it (flips and
+  // contractions keep the boundary and the regions, and a contracted node is used no more), so
+  // it is found once per node.
+  if (kind_[v] == kUnknown) {
+    bool one_region = true;
+    std::vector<std::array<index_t, 3>> boundary;
     for (index_t t : around) {
-      inner = inner && regions_[t] == regions_[around[0]];
-      for (int f = 0; f < 4 && inner; ++f) {
-        if (tet(t)[f] != v && boundary_face(t, f)) inner = false;
+      one_region = one_region && regions_[t] == regions_[around[0]];
+      for (int f = 0; f < 4; ++f) {
+        if (tet(t)[f] == v || !boundary_face(t, f)) continue;
+        std::array<index_t, 3> face{};
+        int n = 0;
+        for (int i = 0; i < 4; ++i) {
+          if (i != f) face[n++] = tet(t)[i];
+        }
+        boundary.push_back(face);
       }
     }
-    inner_[v] = inner ? 1 : 2;
+    std::array<double, 3> normal{};
+    if (!one_region) {
+      kind_[v] = kFixed;
+    } else if (boundary.empty()) {
+      kind_[v] = kInner;
+    } else if (plane_of(boundary, normal)) {
+      kind_[v] = kOnFlatFace;
+      face_normal_[v] = normal;
+    } else {
+      kind_[v] = kFixed;
+    }
   }
-  return inner_[v] == 1;
+  return kind_[v] == kInner || (kind_[v] == kOnFlatFace && slide_on_faces_);
 }
 
 bool FlipMesh::smooth(index_t v, const std::vector<Goal>& goals,
@@ -374,6 +398,14 @@ bool FlipMesh::smooth(index_t v, const std::vector<Goal>& goals,
   }
   length /= edges;
   for (double& x : centroid) x /= edges;
+  // A node inside a flat face moves in its plane: the centroid projected, the directions in it.
+  const bool on_face = kind_[v] == kOnFlatFace;
+  const std::array<double, 3> n = on_face ? face_normal_.at(v) : std::array<double, 3>{};
+  if (on_face) {
+    const double off =
+        (centroid[0] - p[0]) * n[0] + (centroid[1] - p[1]) * n[1] + (centroid[2] - p[2]) * n[2];
+    for (int k = 0; k < 3; ++k) centroid[k] -= off * n[k];
+  }
   // The least margin over the goals and the staying tets (a staying tet that falls below its
   // bound rules the position out).
   const auto margin = [&]() {
@@ -406,16 +438,37 @@ bool FlipMesh::smooth(index_t v, const std::vector<Goal>& goals,
   static constexpr double kEnough = 0.02;
   static const double kDiagonal = 1.0 / std::sqrt(3.0);
   std::vector<std::array<double, 3>> directions;
-  for (int k = 0; k < 3; ++k) {
+  if (on_face) {
+    // Two unit vectors spanning the plane, their sums and differences (8 directions).
+    const int k = std::fabs(n[0]) < 0.6 ? 0 : (std::fabs(n[1]) < 0.6 ? 1 : 2);
+    std::array<double, 3> e{};
+    e[k] = 1.0;
+    std::array<double, 3> a{{e[0] - n[k] * n[0], e[1] - n[k] * n[1], e[2] - n[k] * n[2]}};
+    const double norm = std::sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
+    for (double& x : a) x /= norm;
+    const std::array<double, 3> b{
+        {n[1] * a[2] - n[2] * a[1], n[2] * a[0] - n[0] * a[2], n[0] * a[1] - n[1] * a[0]}};
+    const double h = std::sqrt(0.5);
     for (double s : {-1.0, 1.0}) {
-      std::array<double, 3> d{};
-      d[k] = s;
-      directions.push_back(d);
+      directions.push_back({{s * a[0], s * a[1], s * a[2]}});
+      directions.push_back({{s * b[0], s * b[1], s * b[2]}});
+      for (double t : {-1.0, 1.0}) {
+        directions.push_back(
+            {{h * (s * a[0] + t * b[0]), h * (s * a[1] + t * b[1]), h * (s * a[2] + t * b[2])}});
+      }
     }
-  }
-  for (double x : {-kDiagonal, kDiagonal}) {
-    for (double y : {-kDiagonal, kDiagonal}) {
-      for (double z : {-kDiagonal, kDiagonal}) directions.push_back({{x, y, z}});
+  } else {
+    for (int k = 0; k < 3; ++k) {
+      for (double s : {-1.0, 1.0}) {
+        std::array<double, 3> d{};
+        d[k] = s;
+        directions.push_back(d);
+      }
+    }
+    for (double x : {-kDiagonal, kDiagonal}) {
+      for (double y : {-kDiagonal, kDiagonal}) {
+        for (double z : {-kDiagonal, kDiagonal}) directions.push_back({{x, y, z}});
+      }
     }
   }
   int trials = 2;

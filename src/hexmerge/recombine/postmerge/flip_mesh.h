@@ -9,14 +9,16 @@
 /// new tet positively oriented with a scaled Jacobian of at least the given floor; a change that
 /// cannot satisfy that changes nothing. Flips keep every node; a contraction leaves one inner
 /// node unused. Node moves (smooth(), and flips and contractions made valid by one with
-/// set_smoothing) move inner nodes only: a node whose tets are all of one region, unlocked and
-/// have no face on the domain boundary at it, every one of them positive afterwards, so the
-/// star's union (and every region's volume) is kept.
+/// set_smoothing) move a node whose tets are all of one region and unlocked and have no face on
+/// the domain boundary at it, or (set_slide_on_faces) whose boundary faces lie in one plane,
+/// within that plane; every tet at it stays positive, so the star's union (its boundary
+/// triangles re-tiling the same flat polygon) and every region's volume are kept.
 
 #include <array>
 #include <cstddef>
 #include <cstdint>
 #include <functional>
+#include <unordered_map>
 #include <utility>
 #include <vector>
 
@@ -47,6 +49,9 @@ class FlipMesh {
   /// floor is tried again after moving one vertex of every such tet (smooth()): the move and the
   /// change are made together or not at all.
   void set_smoothing(bool on) { smoothing_ = on; }
+  /// When on, a node inside a flat face of the domain (its boundary triangles in one plane, its
+  /// tets of one region) may move too, in that plane (movable(), smooth()).
+  void set_slide_on_faces(bool on) { slide_on_faces_ = on; }
   /// A further condition on every position smooth() takes node v to (called with the node
   /// there and the tets the caller replaces next): e.g. that the elements the stage may still
   /// take at v stay acceptable.
@@ -93,18 +98,19 @@ class FlipMesh {
     std::function<double()> quality;
     double need;
   };
-  /// Moves inner node v (movable()) so that every goal is met and each of its tets other than
-  /// `leaving` (tets the caller replaces next, in the same undo step) stays positive with a
-  /// scaled Jacobian of at least min(min_quality, its scaled Jacobian before). With `leaving`
-  /// empty the star keeps its union (its surface is fixed and every tet stays positive), so
-  /// every region's volume is kept. The position is found by a pattern search from the
-  /// node's place and from its neighbours' centroid (steps of a third of the mean edge length at
-  /// v, halved down to kSmallestStep of it), maximising the least margin over the goals and tets.
-  /// False (nothing changed) when no position meets them all (and the move guard). Work: the tets
-  /// at v, times the positions tried (at most kMaxTrials).
+  /// Moves node v (movable(); in its face's plane when it is on the boundary) so that every goal is
+  /// met and each of its tets other than `leaving` (tets the caller replaces next, in the same undo
+  /// step) stays positive with a scaled Jacobian of at least min(min_quality, its scaled Jacobian
+  /// before). With `leaving` empty the star keeps its union (its surface is fixed and every tet
+  /// stays positive), so every region's volume is kept. The position is found by a pattern search
+  /// from the node's place and from its neighbours' centroid (steps of a third of the mean edge
+  /// length at v, halved down to kSmallestStep of it), maximising the least margin over the goals
+  /// and tets. False (nothing changed) when no position meets them all (and the move guard). Work:
+  /// the tets at v, times the positions tried (at most kMaxTrials).
   bool smooth(index_t v, const std::vector<Goal>& goals, const std::vector<index_t>& leaving,
               double min_quality);
-  /// v is an inner node whose tets are all of one region and unlocked (smooth() may move it).
+  /// v is an inner node (or, with set_slide_on_faces, a node inside a flat face of the domain)
+  /// whose tets are all of one region and unlocked (smooth() may move it).
   bool movable(index_t v) const;
 
   /// The undo journal: undo(mark()) restores the mesh as it was at the mark, counts included.
@@ -130,6 +136,8 @@ class FlipMesh {
   static constexpr double kFlatTolerance = 1e-12;
   /// The boundary faces at a node lie in one plane, and `onto` is a corner of one of them.
   bool flat_boundary(const std::vector<std::array<index_t, 3>>& faces, index_t onto) const;
+  /// The faces lie in one plane (within kFlatTolerance of their longest edge); its unit normal.
+  bool plane_of(const std::vector<std::array<index_t, 3>>& faces, std::array<double, 3>& n) const;
   bool replace(const std::vector<index_t>& old_tets,
                const std::vector<std::array<index_t, 4>>& new_tets, double min_quality,
                std::uint8_t kind);
@@ -167,8 +175,12 @@ class FlipMesh {
     std::uint8_t kind;
   };
   std::vector<Entry> journal_;
-  /// Per node, found on first use by movable(): 0 not yet, 1 inside one region, 2 not.
-  mutable std::vector<std::uint8_t> inner_;
+  /// Per node, found on first use by movable().
+  static constexpr std::uint8_t kUnknown = 0, kInner = 1, kOnFlatFace = 2, kFixed = 3;
+  mutable std::vector<std::uint8_t> kind_;
+  /// The unit normal of the flat face a kOnFlatFace node lies in.
+  mutable std::unordered_map<index_t, std::array<double, 3>> face_normal_;
+  bool slide_on_faces_ = false;
   FlipCounts counts_;
 };
 

@@ -432,6 +432,7 @@ PostMergeResult close_open_quads(const TetMesh& mesh, const Candidates& found,
                                  const PostMergeOptions& options, const Candidates& liftable) {
   FlipMesh m(mesh);
   m.set_smoothing(options.move_nodes);
+  m.set_slide_on_faces(options.move_nodes);
   // The candidates worked on: those found, then (move_nodes) the liftable hexahedra.
   Candidates candidates;
   const Candidates* all = &found;

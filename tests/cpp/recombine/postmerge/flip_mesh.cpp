@@ -410,5 +410,32 @@ TEST(flip_mesh, the_move_guard_rules_positions_out) {
   EXPECT_EQ(m.compact().points, mesh.points);
 }
 
+// With sliding on, a node inside a flat face of the grid moves in the face's plane: the
+// boundary triangles and the volume are kept; a node on an edge of the grid never moves.
+TEST(flip_mesh, a_node_inside_a_flat_face_slides_in_its_plane_and_an_edge_node_stays) {
+  TetMesh mesh = test::kuhn_grid(2);
+  const index_t face_node = test::grid_node(2, 0, 1, 1);  // on the face x = 0
+  mesh.points[3 * face_node + 1] += 0.3;
+  mesh.points[3 * face_node + 2] -= 0.25;
+  FlipMesh m(mesh);
+  const auto boundary = boundary_triangles(m);
+  bool positive = false;
+  const double vol = volume(m, positive);
+  ASSERT_TRUE(positive);
+  EXPECT_FALSE(m.movable(face_node));  // sliding off
+  m.set_slide_on_faces(true);
+  ASSERT_TRUE(m.movable(face_node));
+  EXPECT_FALSE(m.movable(test::grid_node(2, 0, 0, 1)));  // on an edge of the grid
+  EXPECT_FALSE(m.movable(test::grid_node(2, 0, 0, 0)));  // a corner
+  const double before = worst_at(m, face_node);
+  const std::vector<FlipMesh::Goal> goals = {
+      {[&]() { return worst_at(m, face_node); }, before + 0.1}};
+  ASSERT_TRUE(m.smooth(face_node, goals, {}, 0.3));
+  EXPECT_GE(worst_at(m, face_node), before + 0.1);
+  EXPECT_EQ(m.point(face_node)[0], 0.0);  // still on the face x = 0, exactly
+  EXPECT_NE(m.compact().points, mesh.points);
+  expect_same_union(m, boundary, vol);
+}
+
 }  // namespace
 }  // namespace hexmerge
