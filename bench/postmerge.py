@@ -1,13 +1,14 @@
 #!/usr/bin/env python3
 """The post-merge stage (issue 19) against today's output: each mesh recombined with
-same_nodes=true (the input's tets) and same_nodes=false (flips and edge contractions close open
-quads, the selection runs again; with --flips-only also post_merge_contractions=false), each
+same_nodes=true (the input's tets) and same_nodes=false (flips, edge contractions and node moves
+close open quads, the selection runs again; with --flips-only also post_merge_contractions=false
+and post_merge_moves=false, with --without-moves also post_merge_moves=false), each
 checked by the independent checker (with the nodes the output declares changed: the boundary
 and every region's volume verified).
 
 Prints one Markdown row per mesh and run: cells, reduction, hexahedron volume, the census (hex
 candidates whose every quad face is closed by the tets: on the input, after the stage), the
-flips and contractions kept, the stage's time against the engine's, the checker's verdict, its volume differences
+flips, contractions and node moves kept, the stage's time against the engine's, the checker's verdict, its volume differences
 and the smallest scaled Jacobians (new elements; every element against the input's tets).
 Writes the results as JSON.
 
@@ -76,10 +77,17 @@ def row(name, r, base_cells):
     fewer = 100.0 * (1.0 - rep["output_cells"] / base_cells)
     census = f"{rep['census_closable']} / {rep['census_hex_candidates']}"
     after = f"{rep['census_closable_after']} / {rep['census_hex_candidates_after']}"
-    flips = f"{rep['flips_23']} / {rep['flips_32']} / {rep['flips_44']} / {rep['contractions']}"
+    flips = (f"{rep['flips_23']} / {rep['flips_32']} / {rep['flips_44']} / {rep['contractions']}"
+             f" / {rep['node_moves']}")
     same = r["options"].get("same_nodes", True)
-    run = "true" if same else ("false" if r["options"].get("post_merge_contractions", True)
-                               else "false, flips only")
+    if same:
+        run = "true"
+    elif not r["options"].get("post_merge_contractions", True):
+        run = "false, flips only"
+    elif not r["options"].get("post_merge_moves", True):
+        run = "false, no moves"
+    else:
+        run = "false"
     return (f"| {name} | {run} | {rep['output_cells']:,} | {fewer:.1f} | "
             f"{rep['element_reduction_percent']:.1f} | {hexv:.1f} | "
             f"{'' if same else census} | {'' if same else after} | {'' if same else flips} | "
@@ -100,7 +108,10 @@ def main():
     ap.add_argument("--option", action="append", default=[], metavar="NAME=VALUE",
                     help="extra option for both runs")
     ap.add_argument("--flips-only", action="store_true",
-                    help="also run the stage without contractions (post_merge_contractions=false)")
+                    help="also run the stage with flips only (post_merge_contractions=false, "
+                    "post_merge_moves=false)")
+    ap.add_argument("--without-moves", action="store_true",
+                    help="also run the stage without node moves (post_merge_moves=false)")
     ap.add_argument("--output", default=os.path.join(run_bench.RESULTS_DIR, "postmerge.json"))
     args = ap.parse_args()
 
@@ -114,7 +125,7 @@ def main():
     meshes = args.files or run_bench.find_meshes(args.shapes.split(","), args.kinds.split(","),
                                                  args.sizes.split(","), args.mesh_dir)
     print("| mesh | same_nodes | cells | fewer % | reduction % | hex vol. % | census before "
-          "| census after | flips 2-3 / 3-2 / 4-4 / contractions | stage | engine s | stage s (flips) | valid "
+          "| census after | flips 2-3 / 3-2 / 4-4 / contractions / moves | stage | engine s | stage s (flips) | valid "
           "| non-conf. | cracks | max region dV | min SJ new | min SJ all |")
     print("|" + "---|" * 18)
     results = {"commit": benchlib.git_commit(), "machine": benchlib.machine(), "meshes": {}}
@@ -127,11 +138,14 @@ def main():
         cells = base["report"]["output_cells"]
         print(row(name, base, cells), flush=True)
         entry = {"input_min_tet_sj": min_tet_scaled_jacobian(points, tets), "same_nodes": base}
-        for key, contract in (("flips_only", False), ("post_merge", True)):
-            if not args.flips_only and not contract:
+        for key, contract, moves, wanted in (("flips_only", False, False, args.flips_only),
+                                             ("no_moves", True, False, args.without_moves),
+                                             ("post_merge", True, True, True)):
+            if not wanted:
                 continue
             r = run(hexmerge, points, tets,
-                    dict(extra, same_nodes=False, post_merge_contractions=contract))
+                    dict(extra, same_nodes=False, post_merge_contractions=contract,
+                         post_merge_moves=moves))
             print(row(name, r, cells), flush=True)
             entry[key] = r
         results["meshes"][name] = entry

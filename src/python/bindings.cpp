@@ -207,6 +207,8 @@ py::dict report_to_dict(const RecombineReport& r) {
   d["post_merge_rounds"] = r.post_merge_rounds;
   d["post_merge_closed"] = r.post_merge_closed;
   d["contractions"] = r.contractions;
+  d["node_moves"] = r.node_moves;
+  d["post_merge_lifted"] = r.post_merge_lifted;
   d["flips_23"] = r.flips_23;
   d["flips_32"] = r.flips_32;
   d["flips_44"] = r.flips_44;

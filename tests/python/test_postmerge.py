@@ -1,5 +1,5 @@
-"""The post-merge stage's options (same_nodes, post_merge_contractions) through the Python API and
-the CLI, and the checker's view of the nodes the stage declares changed."""
+"""The post-merge stage's options (same_nodes, post_merge_contractions, post_merge_moves) through
+the Python API and the CLI, and the checker's view of the nodes the stage declares changed."""
 
 from __future__ import annotations
 
@@ -45,9 +45,9 @@ def delaunay_box(tmp_path_factory: pytest.TempPathFactory) -> tuple[np.ndarray, 
 
 def test_contractions_are_declared_and_the_checker_verifies_them(delaunay_box) -> None:
     points, tets, _ = delaunay_box
-    mesh, report = hexmerge.recombine(points, tets, same_nodes=False)
+    mesh, report = hexmerge.recombine(points, tets, same_nodes=False, post_merge_moves=False)
     assert report["post_merge"] == "kept"
-    assert report["contractions"] > 0
+    assert report["contractions"] > 0 and report["node_moves"] == 0
     # The declared nodes are exactly the input's nodes no cell uses any more (none moved).
     unused = np.setdiff1d(np.unique(tets), np.unique(mesh.cell_vertices))
     assert np.array_equal(np.sort(mesh.changed_nodes), unused)
@@ -70,13 +70,44 @@ def test_flips_only_and_same_nodes_declare_nothing(delaunay_box) -> None:
     points, tets, _ = delaunay_box
     same, r0 = hexmerge.recombine(points, tets)
     assert r0["post_merge"] == "off" and same.changed_nodes is None
-    flips, r1 = hexmerge.recombine(points, tets, same_nodes=False, post_merge_contractions=False)
-    assert r1["contractions"] == 0 and flips.changed_nodes is None
+    flips, r1 = hexmerge.recombine(points, tets, same_nodes=False, post_merge_contractions=False,
+                                   post_merge_moves=False)
+    assert r1["contractions"] == 0 and r1["node_moves"] == 0 and flips.changed_nodes is None
     assert hexmerge.check(flips, points, tets)["valid"]
     both, r2 = hexmerge.recombine(points, tets, same_nodes=False)
     # Contractions close quads no flip closes: never fewer hexahedra closed than flips alone.
     assert r2["post_merge_closed"] >= r1["post_merge_closed"]
     assert r2["output_cells"] < r0["output_cells"]
+
+
+def test_moved_nodes_are_declared_inside_the_domain_and_the_checker_verifies_them(
+        delaunay_box) -> None:
+    points, tets, _ = delaunay_box
+    mesh, report = hexmerge.recombine(points, tets, same_nodes=False)
+    assert report["post_merge"] == "kept"
+    assert report["node_moves"] > 0
+    moved = np.flatnonzero(np.any(mesh.points != points, axis=1))
+    unused = np.setdiff1d(np.unique(tets), np.unique(mesh.cell_vertices))
+    assert len(moved) > 0
+    # Declared: exactly the moved nodes and the unused ones.
+    assert np.array_equal(np.sort(mesh.changed_nodes), np.union1d(moved, unused))
+    # A moved node on the boundary stays in its face of the box (0..4, 0..4, 0..2), exactly,
+    # and none is on an edge of it (two such coordinates).
+    on_face = ((points[moved][:, :2] == 0) | (points[moved][:, :2] == 4)).sum(axis=1) + \
+        ((points[moved][:, 2] == 0) | (points[moved][:, 2] == 2))
+    assert (on_face <= 1).all()
+    for axis, values in ((0, (0, 4)), (1, (0, 4)), (2, (0, 2))):
+        sliding = np.isin(points[moved][:, axis], values)
+        assert np.array_equal(mesh.points[moved][sliding, axis], points[moved][sliding, axis])
+    check = hexmerge.check(mesh, points, tets)
+    assert check["valid"], check["problems"]
+    assert check["inverted_cells"] == 0
+    assert check["off_boundary_nodes"] == 0 and check["volume_not_kept"] == 0
+    assert check["nonconforming_quads"] == 0 and check["cracks"] == 0
+    assert abs(check["relative_volume_difference"]) < 1e-9
+    # Undeclared, the moved nodes fail the check.
+    mesh.changed_nodes = None
+    assert not hexmerge.check(mesh, points, tets)["valid"]
 
 
 def test_a_moved_boundary_node_fails_the_check_even_when_declared(delaunay_box) -> None:
@@ -105,3 +136,8 @@ def test_cli_takes_the_contraction_option(delaunay_box, tmp_path: Path) -> None:
         report = json.loads(stats.read_text())["report"]
         assert report["post_merge"] == "kept"
         assert (report["contractions"] > 0) == expect_contractions
+    for flag, expect_moves in (("--no-post-merge-moves", False), ("--post-merge-moves", True)):
+        subprocess.run(cmd + [flag], check=True, capture_output=True,
+                       env={"PYTHONPATH": env_path, "PATH": "/usr/bin:/bin"})
+        report = json.loads(stats.read_text())["report"]
+        assert (report["node_moves"] > 0) == expect_moves

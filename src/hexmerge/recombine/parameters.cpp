@@ -107,6 +107,12 @@ ParameterTable<RecombineParameters> make_table() {
            "contract a node behind it (inside the domain or inside a flat face of it) into its "
            "neighbour (the paper's edge contraction): the node leaves the mesh, no node moves, "
            "the boundary and every region's volume are kept"),
+      flag(&P::post_merge_moves, "post_merge_moves", "Node moves",
+           "In the post-merge stage (same_nodes off), move an inner node (the paper's smoothing) "
+           "where that makes a refused flip or contraction valid or lifts a closing pyramid "
+           "above the acceptance; every tet at the node stays positive and at the quality floor "
+           "(or not worse where it was below), boundary nodes never move, every region's volume "
+           "is kept"),
   });
 }
 

@@ -105,6 +105,8 @@ struct RecombineParameters {
   int post_merge_rounds = 1;
   /// The post-merge stage may also contract nodes away (same_nodes off; FlipMesh::contract)
   bool post_merge_contractions = true;
+  /// The post-merge stage may also move inner nodes (same_nodes off; FlipMesh::smooth)
+  bool post_merge_moves = true;
 };
 
 /// The floor under min_scaled_jacobian: an element at or below 0 would be flat or inverted (the

@@ -258,13 +258,33 @@ MixedMesh recombine(const TetMesh& input, const RecombineParameters& parameters,
     options.min_tet_quality = criteria.min_scaled_jacobian;
     options.placement = parameters.pyramid_placement;
     options.contract_edges = parameters.post_merge_contractions;
+    options.move_nodes = parameters.post_merge_moves;
+    options.min_dihedral_angle = criteria.min_dihedral_angle;
+    options.max_face_angle = criteria.max_face_angle;
     const QuadCensus before = quad_census(mesh, found, options);
     report.census_hex_candidates = report.census_hex_candidates_after = before.hex_candidates;
     report.census_closable = report.census_closable_after = before.closable;
     timer.lap("census_before");
     for (int round = 0; round < parameters.post_merge_rounds; ++round) {
       const TetMesh& current = report.post_merge == "kept" ? flipped : mesh;
-      PostMergeResult stage = close_open_quads(current, found, candidates, selection, options);
+      // Node moves: hexahedron candidates under looser bounds, which a move may lift.
+      Candidates liftable;
+      if (options.move_nodes) {
+        AcceptanceCriteria loose = criteria;
+        loose.min_dihedral_angle -= kLiftAngle;
+        loose.max_face_angle += kLiftAngle;
+        loose.min_scaled_jacobian = std::min(loose.min_scaled_jacobian, kLiftScaledJacobian);
+        loose.lowest_scaled_jacobian = loose.min_scaled_jacobian;
+        loose.types = {};
+        loose.types[static_cast<int>(CellType::Hex)] = true;
+        std::unique_ptr<TetTopology> current_topology;
+        if (&current != &mesh) current_topology = std::make_unique<TetTopology>(current);
+        liftable = find_candidates(current, current_topology ? *current_topology : topology, loose,
+                                   threads);
+        timer.lap("post_merge_liftable" + std::string("_") + std::to_string(round + 1));
+      }
+      PostMergeResult stage =
+          close_open_quads(current, found, candidates, selection, options, liftable);
       report.post_merge_attempted += stage.attempted;
       const std::string suffix = "_" + std::to_string(round + 1);
       timer.lap("post_merge_flips" + suffix);
@@ -288,6 +308,8 @@ MixedMesh recombine(const TetMesh& input, const RecombineParameters& parameters,
       report.flips_32 += stage.flips.flips_32;
       report.flips_44 += stage.flips.flips_44;
       report.contractions += stage.flips.contractions;
+      report.node_moves += stage.flips.moves;
+      report.post_merge_lifted += stage.lifted;
       report.candidates_unclosable = unclosable;
       flipped = std::move(stage.tets);
       found = std::move(new_found);
@@ -310,14 +332,25 @@ MixedMesh recombine(const TetMesh& input, const RecombineParameters& parameters,
   MixedMesh out = build_output(tets, candidates, selection);
   fill_report(tets, out, report);
   report.input_volume = std::ldexp(report.input_volume, -3 * exponent);
-  if (exponent != 0) out.points = input.points;
+  // Scaled back by the same power of two (exact): a node the stage did not move is the input's
+  // bit for bit.
+  if (exponent != 0 && !kept) out.points = input.points;
+  if (exponent != 0 && kept) {
+    for (double& c : out.points) c = std::ldexp(c, -exponent);
+  }
   if (kept) {
     // The cells are unions of the stage's tets, not of the input's: no source tets. The nodes
-    // contractions took out are used by no cell: declared changed (none moves).
+    // contractions took out are used by no cell, and the nodes moves took elsewhere: both are
+    // declared changed.
     out.source_offsets.clear();
     out.source_tets.clear();
     std::vector<char> used(input.nb_vertices(), 0);
     for (index_t v : tets.tets) used[v] = 1;
+    for (index_t v = 0; v < input.nb_vertices(); ++v) {
+      if (used[v] && !std::equal(input.point(v), input.point(v) + 3, &out.points[3 * v])) {
+        out.changed_nodes.push_back(v);
+      }
+    }
     for (index_t v : input.tets) {
       if (!used[v]) {
         used[v] = 1;

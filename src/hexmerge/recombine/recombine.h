@@ -65,7 +65,10 @@ struct RecombineReport {
   std::size_t flips_32 = 0;
   std::size_t flips_44 = 0;
   std::size_t contractions = 0;  ///< edge contractions the stage kept (one inner node each)
-  PhaseSeconds phase_seconds;    ///< wall time per phase, in order
+  std::size_t node_moves = 0;    ///< inner-node moves the stage kept (post_merge_moves)
+  /// Hexahedron candidates closed by the stage that a node move made pass the acceptance
+  std::size_t post_merge_lifted = 0;
+  PhaseSeconds phase_seconds;  ///< wall time per phase, in order
   /// The optimality bound (parameter optimality_bound, bound_selection.h); the fields below are
   /// set only when it ran. In conforming mode the program has the conformity rows and bounds the
   /// conforming selections; in the other modes it is plain set packing and bounds every selection.

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "hexmerge/core/error.h"
 #include "hexmerge/geometry/quality.h"
@@ -19,7 +20,8 @@ FlipMesh::FlipMesh(const TetMesh& mesh)
       tets_(mesh.tets),
       alive_(mesh.nb_tets(), 1),
       locked_(mesh.nb_tets(), 0),
-      incidence_(mesh.nb_vertices()) {
+      incidence_(mesh.nb_vertices()),
+      kind_(mesh.nb_vertices(), kUnknown) {
   regions_.resize(mesh.nb_tets());
   for (index_t t = 0; t < mesh.nb_tets(); ++t) {
     regions_[t] = mesh.region(t);
@@ -116,7 +118,7 @@ bool FlipMesh::flip_23(index_t t0, index_t t1, double min_quality) {
   const index_t a = face[0];
   index_t b = face[1], c = face[2];
   if (tet_volume(point(a), point(b), point(c), point(p)) < 0.0) std::swap(b, c);
-  return replace({t0, t1}, {{{a, b, q, p}}, {{b, c, q, p}}, {{c, a, q, p}}}, min_quality, 23);
+  return change({t0, t1}, {{{a, b, q, p}}, {{b, c, q, p}}, {{c, a, q, p}}}, min_quality, 23);
 }
 
 bool FlipMesh::remove_edge(index_t u, index_t v, int diagonal, double min_quality) {
@@ -169,7 +171,7 @@ bool FlipMesh::remove_edge(index_t u, index_t v, int diagonal, double min_qualit
     const index_t r0 = ring[s], r1 = ring[s + 1], r2 = ring[s + 2], r3 = ring[(s + 3) % 4];
     made = {{{r0, r1, r2, v}}, {{r0, r2, r3, v}}, {{r0, r2, r1, u}}, {{r0, r3, r2, u}}};
   }
-  return replace(around, made, min_quality, ring.size() == 3 ? 32 : 44);
+  return change(around, made, min_quality, ring.size() == 3 ? 32 : 44);
 }
 
 bool FlipMesh::contract(index_t from, index_t onto, double min_quality) {
@@ -206,14 +208,21 @@ bool FlipMesh::contract(index_t from, index_t onto, double min_quality) {
     std::replace(cone.begin(), cone.end(), from, onto);
     made.push_back(cone);
   }
-  return replace(star, made, min_quality, kContraction);
+  return change(star, made, min_quality, kContraction);
 }
 
 bool FlipMesh::flat_boundary(const std::vector<std::array<index_t, 3>>& faces, index_t onto) const {
-  bool holds_onto = false;
+  const bool holds_onto = std::any_of(faces.begin(), faces.end(), [onto](const auto& f) {
+    return f[0] == onto || f[1] == onto || f[2] == onto;
+  });
+  std::array<double, 3> normal{};
+  return holds_onto && plane_of(faces, normal);
+}
+
+bool FlipMesh::plane_of(const std::vector<std::array<index_t, 3>>& faces,
+                        std::array<double, 3>& n) const {
   double longest = 0.0;
   for (const auto& f : faces) {
-    holds_onto = holds_onto || f[0] == onto || f[1] == onto || f[2] == onto;
     for (int i = 0; i < 3; ++i) {
       const double* p = point(f[i]);
       const double* q = point(f[(i + 1) % 3]);
@@ -222,15 +231,14 @@ bool FlipMesh::flat_boundary(const std::vector<std::array<index_t, 3>>& faces, i
                                    (p[2] - q[2]) * (p[2] - q[2])));
     }
   }
-  if (!holds_onto) return false;
   // Every corner of every face within a tiny distance of the first face's plane (so the node is
-  // on no edge or corner of the geometry, and `onto` is on its face).
+  // on no edge or corner of the geometry).
   const double* a = point(faces[0][0]);
   const double* b = point(faces[0][1]);
   const double* c = point(faces[0][2]);
   const double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
   const double v[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
-  double n[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
+  n = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
   const double norm = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
   if (!(norm > 0.0)) return false;
   for (double& x : n) x /= norm;
@@ -249,6 +257,14 @@ void FlipMesh::undo(std::size_t mark) {
   while (journal_.size() > mark) {
     const Entry e = journal_.back();
     journal_.pop_back();
+    if (e.kind == kMove) {
+      HEXMERGE_ASSERT(e.tet + 1 == moves_.size(), "journal out of order");
+      const Move& move = moves_.back();
+      std::copy(move.from.begin(), move.from.end(), &points_[3 * std::size_t{move.node}]);
+      moves_.pop_back();
+      --counts_.moves;
+      continue;
+    }
     if (e.kind == 23) --counts_.flips_23;
     if (e.kind == 32) --counts_.flips_32;
     if (e.kind == 44) --counts_.flips_44;
@@ -264,6 +280,228 @@ void FlipMesh::undo(std::size_t mark) {
       alive_[e.tet] = 1;
     }
   }
+}
+
+bool FlipMesh::change(const std::vector<index_t>& old_tets,
+                      const std::vector<std::array<index_t, 4>>& new_tets, double min_quality,
+                      std::uint8_t kind) {
+  if (replace(old_tets, new_tets, min_quality, kind)) return true;
+  if (!smoothing_) return false;
+  for (index_t t : old_tets) {
+    if (!alive_[t] || locked_[t] || regions_[t] != regions_[old_tets[0]]) return false;
+  }
+  const auto quality = [this](const std::array<index_t, 4>& q) {
+    return scaled_jacobian(CellType::Tet, points_.data(), q.data());
+  };
+  // The refused tets: a node they all hold is moved (no other node changes them).
+  std::vector<const std::array<index_t, 4>*> refused;
+  for (const auto& q : new_tets) {
+    if (!(quality(q) >= min_quality)) refused.push_back(&q);
+  }
+  if (refused.empty()) return false;  // refused for the volume guard
+  for (index_t v : *refused[0]) {
+    const bool in_all = std::all_of(refused.begin(), refused.end(), [v](const auto* q) {
+      return std::find(q->begin(), q->end(), v) != q->end();
+    });
+    if (!in_all) continue;
+    std::vector<Goal> goals;
+    for (const auto& q : new_tets) {
+      if (std::find(q.begin(), q.end(), v) != q.end()) {
+        goals.push_back({[&quality, &q]() { return quality(q); }, min_quality});
+      }
+    }
+    const std::size_t start = mark();
+    if (smooth(v, goals, old_tets, min_quality) && replace(old_tets, new_tets, min_quality, kind)) {
+      return true;
+    }
+    undo(start);
+  }
+  return false;
+}
+
+void FlipMesh::star(index_t v, std::vector<index_t>& out) const { tets_with_edge(v, v, out); }
+
+bool FlipMesh::boundary_face(index_t t, int f) const {
+  std::array<index_t, 3> face{};
+  int n = 0;
+  for (int i = 0; i < 4; ++i) {
+    if (i != f) face[n++] = tet(t)[i];
+  }
+  return tet_with_face(face[0], face[1], face[2], t) == NO_CELL;
+}
+
+bool FlipMesh::movable(index_t v) const {
+  std::vector<index_t> around;
+  star(v, around);
+  if (around.empty()) return false;
+  for (index_t t : around) {
+    if (locked_[t]) return false;
+  }
+  // Inside one region, or inside a flat face of the domain: no change alters it (flips and
+  // contractions keep the boundary and the regions, and a contracted node is used no more), so
+  // it is found once per node.
+  if (kind_[v] == kUnknown) {
+    bool one_region = true;
+    std::vector<std::array<index_t, 3>> boundary;
+    for (index_t t : around) {
+      one_region = one_region && regions_[t] == regions_[around[0]];
+      for (int f = 0; f < 4; ++f) {
+        if (tet(t)[f] == v || !boundary_face(t, f)) continue;
+        std::array<index_t, 3> face{};
+        int n = 0;
+        for (int i = 0; i < 4; ++i) {
+          if (i != f) face[n++] = tet(t)[i];
+        }
+        boundary.push_back(face);
+      }
+    }
+    std::array<double, 3> normal{};
+    if (!one_region) {
+      kind_[v] = kFixed;
+    } else if (boundary.empty()) {
+      kind_[v] = kInner;
+    } else if (plane_of(boundary, normal)) {
+      kind_[v] = kOnFlatFace;
+      face_normal_[v] = normal;
+    } else {
+      kind_[v] = kFixed;
+    }
+  }
+  return kind_[v] == kInner || (kind_[v] == kOnFlatFace && slide_on_faces_);
+}
+
+bool FlipMesh::smooth(index_t v, const std::vector<Goal>& goals,
+                      const std::vector<index_t>& leaving, double min_quality) {
+  if (!movable(v)) return false;
+  std::vector<index_t> around;
+  star(v, around);
+  // The tets that stay, each with the scaled Jacobian it must keep.
+  std::vector<std::pair<index_t, double>> staying;
+  double length = 0.0;
+  std::array<double, 3> centroid{};
+  int edges = 0;
+  double* p = &points_[3 * std::size_t{v}];
+  for (index_t t : around) {
+    if (std::find(leaving.begin(), leaving.end(), t) == leaving.end()) {
+      staying.emplace_back(
+          t, std::min(min_quality, scaled_jacobian(CellType::Tet, points_.data(), tet(t))));
+    }
+    for (int i = 0; i < 4; ++i) {
+      const index_t w = tet(t)[i];
+      if (w == v) continue;
+      const double* q = point(w);
+      length += std::sqrt((q[0] - p[0]) * (q[0] - p[0]) + (q[1] - p[1]) * (q[1] - p[1]) +
+                          (q[2] - p[2]) * (q[2] - p[2]));
+      for (int k = 0; k < 3; ++k) centroid[k] += q[k];
+      ++edges;
+    }
+  }
+  length /= edges;
+  for (double& x : centroid) x /= edges;
+  // A node inside a flat face moves in its plane: the centroid projected, the directions in it.
+  const bool on_face = kind_[v] == kOnFlatFace;
+  const std::array<double, 3> n = on_face ? face_normal_.at(v) : std::array<double, 3>{};
+  if (on_face) {
+    const double off =
+        (centroid[0] - p[0]) * n[0] + (centroid[1] - p[1]) * n[1] + (centroid[2] - p[2]) * n[2];
+    for (int k = 0; k < 3; ++k) centroid[k] -= off * n[k];
+  }
+  // The least margin over the goals and the staying tets (a staying tet that falls below its
+  // bound rules the position out).
+  const auto margin = [&]() {
+    double least = std::numeric_limits<double>::infinity();
+    for (const auto& [t, need] : staying) {
+      const double m = scaled_jacobian(CellType::Tet, points_.data(), tet(t)) - need;
+      if (!(m >= 0.0)) return -std::numeric_limits<double>::infinity();
+      least = std::min(least, m);
+    }
+    for (const Goal& goal : goals) least = std::min(least, goal.quality() - goal.need);
+    if (least >= 0.0 && guard_ && !guard_(v, leaving)) {
+      return -std::numeric_limits<double>::infinity();
+    }
+    return least;
+  };
+  const std::array<double, 3> start{{p[0], p[1], p[2]}};
+  const auto at = [&](const std::array<double, 3>& x) {
+    std::copy(x.begin(), x.end(), p);
+    return margin();
+  };
+  std::array<double, 3> best = start;
+  double best_margin = at(start);
+  const double from_centroid = at(centroid);
+  if (from_centroid > best_margin) {
+    best = centroid;
+    best_margin = from_centroid;
+  }
+  // Pattern search: the 6 axis and 8 diagonal directions, the best step kept, the step halved
+  // when none improves; stops once every bound is met with kEnough to spare.
+  static constexpr double kEnough = 0.02;
+  static const double kDiagonal = 1.0 / std::sqrt(3.0);
+  std::vector<std::array<double, 3>> directions;
+  if (on_face) {
+    // Two unit vectors spanning the plane, their sums and differences (8 directions).
+    const int k = std::fabs(n[0]) < 0.6 ? 0 : (std::fabs(n[1]) < 0.6 ? 1 : 2);
+    std::array<double, 3> e{};
+    e[k] = 1.0;
+    std::array<double, 3> a{{e[0] - n[k] * n[0], e[1] - n[k] * n[1], e[2] - n[k] * n[2]}};
+    const double norm = std::sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
+    for (double& x : a) x /= norm;
+    const std::array<double, 3> b{
+        {n[1] * a[2] - n[2] * a[1], n[2] * a[0] - n[0] * a[2], n[0] * a[1] - n[1] * a[0]}};
+    const double h = std::sqrt(0.5);
+    for (double s : {-1.0, 1.0}) {
+      directions.push_back({{s * a[0], s * a[1], s * a[2]}});
+      directions.push_back({{s * b[0], s * b[1], s * b[2]}});
+      for (double t : {-1.0, 1.0}) {
+        directions.push_back(
+            {{h * (s * a[0] + t * b[0]), h * (s * a[1] + t * b[1]), h * (s * a[2] + t * b[2])}});
+      }
+    }
+  } else {
+    for (int k = 0; k < 3; ++k) {
+      for (double s : {-1.0, 1.0}) {
+        std::array<double, 3> d{};
+        d[k] = s;
+        directions.push_back(d);
+      }
+    }
+    for (double x : {-kDiagonal, kDiagonal}) {
+      for (double y : {-kDiagonal, kDiagonal}) {
+        for (double z : {-kDiagonal, kDiagonal}) directions.push_back({{x, y, z}});
+      }
+    }
+  }
+  int trials = 2;
+  for (double step = length / 3.0; step > length * kSmallestStep && trials < kMaxTrials;) {
+    if (best_margin >= kEnough) break;
+    std::array<double, 3> next = best;
+    double next_margin = best_margin;
+    for (const auto& d : directions) {
+      const std::array<double, 3> x{
+          {best[0] + step * d[0], best[1] + step * d[1], best[2] + step * d[2]}};
+      const double m = at(x);
+      ++trials;
+      if (m > next_margin) {
+        next = x;
+        next_margin = m;
+      }
+    }
+    if (next_margin > best_margin) {
+      best = next;
+      best_margin = next_margin;
+    } else {
+      step /= 2.0;
+    }
+  }
+  if (!(best_margin >= 0.0) || best == start) {
+    std::copy(start.begin(), start.end(), p);
+    return best_margin >= 0.0;  // met where it is: nothing to move
+  }
+  std::copy(best.begin(), best.end(), p);
+  journal_.push_back({static_cast<index_t>(moves_.size()), false, kMove});
+  moves_.push_back({v, start});
+  ++counts_.moves;
+  return true;
 }
 
 TetMesh FlipMesh::compact() const {

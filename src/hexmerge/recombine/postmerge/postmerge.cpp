@@ -23,11 +23,25 @@ struct QuadFace {
   index_t inner_abc, inner_acd;
 };
 
+/// A candidate's scaled Jacobian is stored as a float: a moved candidate is compared with it
+/// less this.
+constexpr double kQualityRounding = 1e-6;
+
+/// Degrees a lifted candidate's quad angles are kept inside the bounds.
+constexpr double kAngleSpare = 1e-6;
+
+/// With move_nodes, apexes whose pyramid reaches this share of the acceptance are tried.
+constexpr double kMovableApexShare = 0.5;
+
 class Stage {
  public:
   /// candidates: those whose Candidate records the member functions are given
   Stage(FlipMesh& mesh, const Candidates& candidates, const PostMergeOptions& options)
-      : m_(mesh), cands_(candidates), options_(options) {
+      : m_(mesh),
+        cands_(candidates),
+        options_(options),
+        min_dihedral_(options.min_dihedral_angle),
+        max_corner_(options.max_face_angle) {
     if (options.placement == PyramidPlacement::NoBoundaryNode) {
       boundary_vertex_.assign(mesh.nb_slots() == 0 ? 0 : max_vertex() + 1, 0);
       for (index_t t = 0; t < m_.nb_slots(); ++t) {
@@ -41,9 +55,30 @@ class Stage {
     }
   }
 
+  /// A move may not make candidate `i` of `list` fail the acceptance while its tets are alive
+  /// (still_accepted()); the first call turns the move guard on.
+  void protect(const Candidates& list, index_t i) {
+    const Candidate& c = list[i];
+    for (int k = 0; k < descriptor(c.type).nb_vertices; ++k) {
+      const index_t v = c.vertices[k];
+      if (v >= at_node_.size()) at_node_.resize(v + 1);
+      at_node_[v].push_back({&list, i});
+    }
+    if (!guarded_) {
+      m_.set_move_guard([this](index_t v, const std::vector<index_t>& leaving) {
+        return still_accepted(v, leaving);
+      });
+      guarded_ = true;
+    }
+  }
+
   /// The candidate's quad faces with their diagonals; false when a face's split is not found
   /// among its tets (cannot happen for a candidate of the finders).
   bool quad_faces(const Candidate& cand, std::vector<QuadFace>& faces) const {
+    return quad_faces(cands_, cand, faces);
+  }
+  bool quad_faces(const Candidates& list, const Candidate& cand,
+                  std::vector<QuadFace>& faces) const {
     faces.clear();
     const CellDescriptor& desc = descriptor(cand.type);
     for (int f = 0; f < desc.nb_faces; ++f) {
@@ -53,7 +88,7 @@ class Stage {
       bool found = false;
       for (int s = 0; s < 2 && !found; ++s) {
         const index_t a = v[s], b = v[s + 1], c = v[s + 2], d = v[(s + 3) % 4];
-        const index_t abc = inner_tet(cand, a, b, c), acd = inner_tet(cand, a, c, d);
+        const index_t abc = inner_tet(list, cand, a, b, c), acd = inner_tet(list, cand, a, c, d);
         if (abc != NO_CELL && acd != NO_CELL) {
           faces.push_back({a, b, c, d, abc, acd});
           found = true;
@@ -62,6 +97,98 @@ class Stage {
       if (!found) return false;
     }
     return true;
+  }
+
+  /// Every candidate at node v whose tets are alive and not in `leaving` still passes the
+  /// acceptance with the node where it is (PostMergeOptions::min_dihedral_angle).
+  bool still_accepted(index_t v, const std::vector<index_t>& leaving) const {
+    if (v >= at_node_.size()) return true;
+    for (const auto& [list, i] : at_node_[v]) {
+      const Candidate& c = (*list)[i];
+      const TetSpan tets = list->tets(c);
+      const bool gone = std::any_of(tets.begin(), tets.end(), [&](index_t t) {
+        return !m_.alive(t) || std::find(leaving.begin(), leaving.end(), t) != leaving.end();
+      });
+      if (gone) continue;
+      const double need =
+          std::min(options_.min_pyramid_quality, double{c.quality} - kQualityRounding);
+      if (!accepted(*list, c, v, need)) return false;
+    }
+    return true;
+  }
+
+  /// Candidate c of `list` has a scaled Jacobian of at least `need` and its quad faces at node
+  /// `at` (every quad face when `at` is NO_VERTEX) pass the angle bounds across their diagonal.
+  bool accepted(const Candidates& list, const Candidate& c, index_t at, double need) const {
+    const double sj = scaled_jacobian(c.type, m_.point(0), c.vertices.data());
+    if (!(sj >= need)) return false;
+    std::vector<QuadFace> faces;
+    if (!quad_faces(list, c, faces)) return false;
+    for (const QuadFace& q : faces) {
+      if (at != NO_VERTEX && q.a != at && q.b != at && q.c != at && q.d != at) continue;
+      if (!quad_accepted(q)) return false;
+    }
+    return true;
+  }
+
+  bool quad_accepted(const QuadFace& q) const {
+    const double *a = m_.point(q.a), *b = m_.point(q.b), *c = m_.point(q.c), *d = m_.point(q.d);
+    if (quad_dihedral_angle_below(a, b, c, d, min_dihedral_) &&
+        quad_dihedral_angle_below(c, d, a, b, min_dihedral_)) {
+      return false;
+    }
+    return !quad_max_corner_angle_above(a, b, c, d, max_corner_);
+  }
+
+  /// The candidate passes the acceptance with the nodes where they are.
+  bool passes(const Candidate& cand) const {
+    return accepted(cands_, cand, NO_VERTEX, options_.min_pyramid_quality);
+  }
+
+  /// A hexahedron candidate that fails the acceptance (a liftable one) made to pass it by
+  /// moving one of its nodes (each quad face that fails holds it): the paper's smoothing. True
+  /// when it passes (moved or not); on false nothing is changed.
+  bool lift(const Candidate& cand) {
+    const double need = options_.min_pyramid_quality;
+    if (accepted(cands_, cand, NO_VERTEX, need)) return true;
+    std::vector<QuadFace> faces;
+    if (!quad_faces(cand, faces)) return false;
+    for (int k = 0; k < 8; ++k) {
+      const index_t v = cand.vertices[k];
+      const bool holds_failing = std::all_of(faces.begin(), faces.end(), [&](const QuadFace& q) {
+        return q.a == v || q.b == v || q.c == v || q.d == v || quad_accepted(q);
+      });
+      if (!holds_failing || !m_.movable(v)) continue;
+      std::vector<FlipMesh::Goal> goals = {{[this, &cand]() {
+                                              return scaled_jacobian(CellType::Hex, m_.point(0),
+                                                                     cand.vertices.data());
+                                            },
+                                            need}};
+      for (const QuadFace& q : faces) {
+        if (q.a != v && q.b != v && q.c != v && q.d != v) continue;
+        // Angles in right angles, so that a degree weighs about as much as 0.01 of scaled
+        // Jacobian.
+        goals.push_back({[this, q]() {
+                           return quad_dihedral_angle(m_.point(q.a), m_.point(q.b), m_.point(q.c),
+                                                      m_.point(q.d)) /
+                                  90.0;
+                         },
+                         (options_.min_dihedral_angle + kAngleSpare) / 90.0});
+        goals.push_back({[this, q]() {
+                           return -quad_max_corner_angle(m_.point(q.a), m_.point(q.b),
+                                                         m_.point(q.c), m_.point(q.d)) /
+                                  90.0;
+                         },
+                         -(options_.max_face_angle - kAngleSpare) / 90.0});
+      }
+      const std::size_t start = m_.mark();
+      if (m_.smooth(v, goals, {}, options_.min_tet_quality) &&
+          accepted(cands_, cand, NO_VERTEX, need)) {
+        return true;
+      }
+      m_.undo(start);
+    }
+    return false;
   }
 
   /// Both triangles on the domain boundary.
@@ -95,8 +222,23 @@ class Stage {
   /// The pyramid on the face with apex `apex` made of tets t0 (holding b) and t1 (holding d)
   /// passes the acceptance.
   bool pyramid_ok(const QuadFace& q, index_t apex, index_t t0, index_t t1) const {
+    return pyramid_quality(q, apex) >= options_.min_pyramid_quality &&
+           pyramid_allowed(q, apex, t0, t1);
+  }
+
+  /// pyramid_ok(), or (move_nodes) made so by moving the apex (its tets all kept positive and
+  /// at the floor, or not worse where they were below it).
+  bool pyramid_ok_or_moved(const QuadFace& q, index_t apex, index_t t0, index_t t1) {
+    if (pyramid_ok(q, apex, t0, t1)) return true;
+    if (!options_.move_nodes || !pyramid_allowed(q, apex, t0, t1)) return false;
+    const std::vector<FlipMesh::Goal> goals = {
+        {[this, &q, apex]() { return pyramid_quality(q, apex); }, options_.min_pyramid_quality}};
+    return m_.smooth(apex, goals, {}, options_.min_tet_quality);
+  }
+
+  /// The pyramid's region and placement pass the acceptance (its shape aside).
+  bool pyramid_allowed(const QuadFace& q, index_t apex, index_t t0, index_t t1) const {
     if (m_.region(t0) != m_.region(t1)) return false;
-    if (pyramid_quality(q, apex) < options_.min_pyramid_quality) return false;
     if (options_.placement == PyramidPlacement::NoBoundaryFace) {
       for (index_t t : {t0, t1}) {
         for (int f = 0; f < 4; ++f) {
@@ -133,19 +275,23 @@ class Stage {
     if (!fan(q, cand, vertices, tets)) return false;
     if (tets.size() == 2) {
       pyramid = {tets[0], tets[1]};
-      return pyramid_ok(q, vertices[1], tets[0], tets[1]);
+      return pyramid_ok_or_moved(q, vertices[1], tets[0], tets[1]);
     }
-    // Apexes by the quality of their pyramid, best first.
+    // Apexes by the quality of their pyramid, best first (with move_nodes also those at half
+    // the acceptance or more, which a move of the apex may lift).
+    const double least =
+        options_.min_pyramid_quality * (options_.move_nodes ? kMovableApexShare : 1.0);
     std::vector<std::pair<double, index_t>> apexes;
     for (std::size_t i = 1; i + 1 < vertices.size(); ++i) {
       const double quality = pyramid_quality(q, vertices[i]);
-      if (quality >= options_.min_pyramid_quality) apexes.emplace_back(-quality, vertices[i]);
+      if (quality >= least) apexes.emplace_back(-quality, vertices[i]);
     }
     std::sort(apexes.begin(), apexes.end());
     for (const auto& [unused, apex] : apexes) {
       const std::size_t start = m_.mark();
       if (reduce_fan(q, cand, apex, vertices.size()) && fan(q, cand, vertices, tets) &&
-          tets.size() == 2 && vertices[1] == apex && pyramid_ok(q, apex, tets[0], tets[1])) {
+          tets.size() == 2 && vertices[1] == apex &&
+          pyramid_ok_or_moved(q, apex, tets[0], tets[1])) {
         pyramid = {tets[0], tets[1]};
         return true;
       }
@@ -214,8 +360,9 @@ class Stage {
     return false;
   }
 
-  index_t inner_tet(const Candidate& cand, index_t a, index_t b, index_t c) const {
-    for (const index_t t : cands_.tets(cand)) {
+  index_t inner_tet(const Candidates& list, const Candidate& cand, index_t a, index_t b,
+                    index_t c) const {
+    for (const index_t t : list.tets(cand)) {
       if (m_.alive(t) && holds3(m_.tet(t), a, b, c)) return t;
     }
     return NO_CELL;
@@ -246,6 +393,10 @@ class Stage {
   const Candidates& cands_;
   const PostMergeOptions& options_;
   std::vector<char> boundary_vertex_;
+  AngleBound min_dihedral_, max_corner_;
+  /// The candidates at each node (move_nodes only).
+  std::vector<std::vector<std::pair<const Candidates*, index_t>>> at_node_;
+  bool guarded_ = false;
 };
 
 bool all_alive(const FlipMesh& m, TetSpan tets) {
@@ -276,11 +427,25 @@ QuadCensus quad_census(const TetMesh& mesh, const Candidates& candidates,
   return census;
 }
 
-PostMergeResult close_open_quads(const TetMesh& mesh, const Candidates& candidates,
+PostMergeResult close_open_quads(const TetMesh& mesh, const Candidates& found,
                                  const Candidates& selected_from, const Selection& selection,
-                                 const PostMergeOptions& options) {
+                                 const PostMergeOptions& options, const Candidates& liftable) {
   FlipMesh m(mesh);
-  Stage stage(m, candidates, options);
+  m.set_smoothing(options.move_nodes);
+  m.set_slide_on_faces(options.move_nodes);
+  // The candidates worked on: those found, then (move_nodes) the liftable hexahedra.
+  Candidates candidates;
+  const Candidates* all = &found;
+  const index_t nb_found = static_cast<index_t>(found.size());
+  if (options.move_nodes && !liftable.empty()) {
+    candidates = found;
+    for (const Candidate& c : liftable) {
+      if (c.type == CellType::Hex) candidates.push_back(c, liftable.tets(c).data(), c.nb_tets);
+    }
+    all = &candidates;
+  }
+  Stage stage(m, *all, options);
+  const Candidates& cands = *all;
   PostMergeResult result;
   // The selection's hexahedra and the elements on their quad faces stay as they are.
   std::set<FaceKey> hex_quads;
@@ -301,36 +466,59 @@ PostMergeResult close_open_quads(const TetMesh& mesh, const Candidates& candidat
   // Hexahedron candidates: first those whose faces are closed as the tets are, then the others,
   // best scaled Jacobian first (ties by index: deterministic).
   std::vector<index_t> order;
-  for (index_t i = 0; i < static_cast<index_t>(candidates.size()); ++i) {
-    if (candidates[i].type == CellType::Hex) order.push_back(i);
+  for (index_t i = 0; i < static_cast<index_t>(cands.size()); ++i) {
+    if (cands[i].type == CellType::Hex) order.push_back(i);
   }
   // Fewest flips first (the fan lengths beyond two tets, summed over the faces; a face whose
   // fan cannot be followed counts max_fan), then best scaled Jacobian.
-  std::vector<int> effort(candidates.size(), 0);
+  std::vector<int> effort(cands.size(), 0);
   std::vector<QuadFace> faces;
   std::vector<index_t> fan_vertices, fan_tets;
   for (index_t i : order) {
-    if (!stage.quad_faces(candidates[i], faces)) continue;
+    if (!stage.quad_faces(cands[i], faces)) continue;
     for (const QuadFace& q : faces) {
       if (stage.on_boundary(q)) continue;
-      effort[i] += stage.fan(q, candidates[i], fan_vertices, fan_tets)
+      effort[i] += stage.fan(q, cands[i], fan_vertices, fan_tets)
                        ? static_cast<int>(fan_tets.size()) - 2
                        : options.max_fan;
     }
   }
   std::stable_sort(order.begin(), order.end(), [&](index_t x, index_t y) {
     if (effort[x] != effort[y]) return effort[x] < effort[y];
-    return candidates[x].quality > candidates[y].quality;
+    return cands[x].quality > cands[y].quality;
   });
+  if (options.move_nodes) {
+    // Moves keep the hexahedron candidates found and the selection's elements passing the
+    // acceptance (every candidate found would leave few moves: docs/recombine.md).
+    for (index_t i : order) {
+      if (i < nb_found) stage.protect(cands, i);
+    }
+    for (index_t e : selection.elements) stage.protect(selected_from, e);
+  }
   std::vector<index_t> locked_here;
   for (int pass = 0; pass < 2; ++pass) {
     for (index_t i : order) {
-      const Candidate& cand = candidates[i];
-      if (!all_alive(m, candidates.tets(cand)) || !stage.quad_faces(cand, faces)) continue;
+      const Candidate& cand = cands[i];
+      if (!all_alive(m, cands.tets(cand)) || !stage.quad_faces(cand, faces)) continue;
+      // A liftable candidate: made acceptable by a node move first (flips' pass only).
+      const bool lifting = i >= nb_found;
+      if (lifting && (pass == 0 || stage.passes(cand))) continue;  // passing: one of `found`
       if (pass == 1) ++result.attempted;
       const std::size_t start = m.mark();
+      if (lifting) {
+        // A move changes no tet's vertices: a face whose fan cannot be followed now (it leaves
+        // the mesh, runs into the candidate or is longer than max_fan) will not close.
+        const bool followed = std::all_of(faces.begin(), faces.end(), [&](const QuadFace& q) {
+          return stage.on_boundary(q) || stage.fan(q, cand, fan_vertices, fan_tets);
+        });
+        if (!followed || !stage.lift(cand)) continue;
+        if (!stage.quad_faces(cand, faces)) {
+          m.undo(start);
+          continue;
+        }
+      }
       locked_here.clear();
-      for (const index_t t : candidates.tets(cand)) {
+      for (const index_t t : cands.tets(cand)) {
         m.set_locked(t, true);
         locked_here.push_back(t);
       }
@@ -346,6 +534,7 @@ PostMergeResult close_open_quads(const TetMesh& mesh, const Candidates& candidat
         }
       }
       if (ok) {
+        if (lifting) ++result.lifted;
         if (pass == 0) {
           ++result.already_closed;
         } else {

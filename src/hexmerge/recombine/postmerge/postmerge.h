@@ -14,7 +14,10 @@
 /// xi, an inner node, merged into its neighbour along the fan. Flips keep every node, a
 /// contraction leaves one inner node unused; both keep every boundary triangle and every region's
 /// volume; every new tet is positively oriented, in the region of the tets it replaces, with a
-/// scaled Jacobian of at least the floor given.
+/// scaled Jacobian of at least the floor given. With move_nodes, a refused flip or contraction is
+/// tried again with one inner node moved (every tet at it stays positive, none falls below the
+/// floor or, if it was below, below itself), and an apex whose pyramid falls short of the
+/// acceptance is moved to lift it: the paper's smoothing.
 
 #include <cstddef>
 #include <vector>
@@ -28,6 +31,12 @@
 
 namespace hexmerge {
 
+/// recombine() looks for liftable hexahedron candidates with the minimum dihedral angle lowered
+/// by this many degrees, the maximum face angle raised by as many, and this minimum scaled
+/// Jacobian.
+constexpr double kLiftAngle = 15.0;
+constexpr double kLiftScaledJacobian = 0.15;
+
 struct PostMergeOptions {
   double min_pyramid_quality = 0.3;  ///< scaled Jacobian of a closing pyramid
   double min_tet_quality = 0.3;      ///< scaled Jacobian of every tet a flip makes
@@ -38,6 +47,18 @@ struct PostMergeOptions {
   /// When no flip takes a vertex out of the fan, contract it into a neighbour along the fan
   /// (FlipMesh::contract: inner nodes only; the node leaves the mesh).
   bool contract_edges = false;
+  /// Node moves (the paper's smoothing; FlipMesh::smooth, inner nodes only): a flip or
+  /// contraction refused because a new tet would invert or fall below min_tet_quality is tried
+  /// again with one of its nodes moved, and a pyramid apex whose pyramid fails
+  /// min_pyramid_quality is moved to lift it.
+  bool move_nodes = false;
+  /// A move may not make a protected candidate at the node (close_open_quads) that passed the
+  /// acceptance fail it (its tets alive and not about to be replaced): its scaled Jacobian stays at
+  /// least min_pyramid_quality (or its own, when lower), and each of its quad faces at the node at
+  /// least this dihedral angle across its diagonal and at most max_face_angle at its corners
+  /// (degrees; the moved node is inside the domain, so its quads are inner ones).
+  double min_dihedral_angle = 150.0;
+  double max_face_angle = 150.0;
 };
 
 /// Hexahedron candidates, and those whose every quad face the tets close as they are.
@@ -51,11 +72,13 @@ QuadCensus quad_census(const TetMesh& mesh, const Candidates& candidates,
                        const PostMergeOptions& options);
 
 struct PostMergeResult {
-  TetMesh tets;                    ///< the tets after the flips (same points, compact)
-  FlipCounts flips;                ///< flips and contractions kept
+  TetMesh tets;                    ///< the tets after the flips (points as moved, compact)
+  FlipCounts flips;                ///< flips, contractions and node moves kept
   std::size_t attempted = 0;       ///< hexahedron candidates worked on (each once)
   std::size_t closed = 0;          ///< of them: every quad face closed, by at least one flip
   std::size_t already_closed = 0;  ///< of them: every quad face closed as the tets were
+  /// Of the closed: liftable candidates that a node move made pass the acceptance.
+  std::size_t lifted = 0;
 };
 
 /// Works on the hexahedron candidates of `candidates` (found on `mesh`, any pruning), best
@@ -65,8 +88,14 @@ struct PostMergeResult {
 /// flips of tets that no kept candidate or closing pyramid holds. When every face closes, its
 /// tets and pyramids are kept; otherwise every flip made for it is undone and it is not tried
 /// again. Work: at most (max_fan - 1)^2 flips tried per face.
+/// With move_nodes, `liftable` (hexahedron candidates found with looser bounds: recombine()
+/// uses kLiftAngle and kLiftScaledJacobian) are worked on too, in the same order: one that fails
+/// the acceptance is first made to pass it by moving one of its nodes (Stage::lift), then closed as
+/// the others. Every node move keeps the hexahedron candidates of `candidates` and the selection's
+/// elements that pass the acceptance passing it (PostMergeOptions::min_dihedral_angle).
 PostMergeResult close_open_quads(const TetMesh& mesh, const Candidates& candidates,
                                  const Candidates& selected_from, const Selection& selection,
-                                 const PostMergeOptions& options);
+                                 const PostMergeOptions& options,
+                                 const Candidates& liftable = Candidates{});
 
 }  // namespace hexmerge

@@ -324,5 +324,118 @@ TEST(flip_mesh, a_contraction_on_a_flat_face_keeps_the_face) {
   EXPECT_NEAR(bottom_area, 1.0, 1e-12);
 }
 
+// A 2 x 2 x 2 Kuhn grid with its one inner node pushed off its place.
+TetMesh displaced_grid(const Point& offset) {
+  TetMesh mesh = test::kuhn_grid(2);
+  const index_t v = test::grid_node(2, 1, 1, 1);
+  for (int k = 0; k < 3; ++k) mesh.points[3 * v + k] += offset[k];
+  return mesh;
+}
+
+double worst_at(const FlipMesh& m, index_t v) {
+  double worst = 1.0;
+  for (index_t t : alive_tets(m)) {
+    const index_t* q = m.tet(t);
+    if (std::count(q, q + 4, v) == 0) continue;
+    const std::array<index_t, 4> tet{{q[0], q[1], q[2], q[3]}};
+    worst = std::min(worst, scaled_jacobian(CellType::Tet, m.point(0), tet.data()));
+  }
+  return worst;
+}
+
+TEST(flip_mesh, a_move_meets_its_goal_keeps_the_union_and_undo_puts_the_node_back) {
+  const TetMesh mesh = displaced_grid({0.3, 0.2, 0.25});
+  const index_t v = test::grid_node(2, 1, 1, 1);
+  FlipMesh m(mesh);
+  const auto boundary = boundary_triangles(m);
+  bool positive = false;
+  const double vol = volume(m, positive);
+  ASSERT_TRUE(positive);
+  const double before = worst_at(m, v);
+  // Goal: the worst tet at the node at least 0.1 better than now.
+  const std::vector<FlipMesh::Goal> goals = {{[&]() { return worst_at(m, v); }, before + 0.1}};
+  const std::size_t start = m.mark();
+  ASSERT_TRUE(m.movable(v));
+  ASSERT_TRUE(m.smooth(v, goals, {}, 0.3));
+  EXPECT_EQ(m.counts().moves, 1u);
+  EXPECT_GE(worst_at(m, v), before + 0.1);
+  EXPECT_NE(m.compact().points, mesh.points);  // the node moved
+  expect_same_union(m, boundary, vol);         // same tets, same surface, same volume
+  m.undo(start);
+  EXPECT_EQ(m.counts().moves, 0u);
+  EXPECT_EQ(m.compact().points, mesh.points);
+}
+
+TEST(flip_mesh, a_move_refuses_boundary_nodes_locked_tets_and_goals_out_of_reach) {
+  const TetMesh mesh = displaced_grid({0.3, 0.2, 0.25});
+  const index_t v = test::grid_node(2, 1, 1, 1);
+  FlipMesh m(mesh);
+  const std::vector<FlipMesh::Goal> unreachable = {{[&]() { return worst_at(m, v); }, 2.0}};
+  EXPECT_FALSE(m.smooth(v, unreachable, {}, 0.3));
+  EXPECT_EQ(m.compact().points, mesh.points);
+  // A node on a face of the grid is not moved, whatever the goal.
+  const index_t face_node = test::grid_node(2, 0, 1, 1);
+  EXPECT_FALSE(m.movable(face_node));
+  const std::vector<FlipMesh::Goal> lift = {
+      {[&]() { return worst_at(m, face_node); }, worst_at(m, face_node) + 0.1}};
+  EXPECT_FALSE(m.smooth(face_node, lift, {}, 0.0));
+  // A locked tet at the node (a kept element's) keeps it where it is.
+  for (index_t t : alive_tets(m)) {
+    if (std::count(m.tet(t), m.tet(t) + 4, v) != 0) {
+      m.set_locked(t, true);
+      break;
+    }
+  }
+  EXPECT_FALSE(m.movable(v));
+  const std::vector<FlipMesh::Goal> better = {{[&]() { return worst_at(m, v); }, 0.5}};
+  EXPECT_FALSE(m.smooth(v, better, {}, 0.3));
+  EXPECT_EQ(m.compact().points, mesh.points);
+  EXPECT_EQ(m.counts().moves, 0u);
+}
+
+// A guard refuses every position: nothing moves.
+TEST(flip_mesh, the_move_guard_rules_positions_out) {
+  const TetMesh mesh = displaced_grid({0.3, 0.2, 0.25});
+  const index_t v = test::grid_node(2, 1, 1, 1);
+  FlipMesh m(mesh);
+  int asked = 0;
+  m.set_move_guard([&](index_t node, const std::vector<index_t>&) {
+    EXPECT_EQ(node, v);
+    ++asked;
+    return false;
+  });
+  const std::vector<FlipMesh::Goal> goals = {{[&]() { return worst_at(m, v); }, 0.5}};
+  EXPECT_FALSE(m.smooth(v, goals, {}, 0.3));
+  EXPECT_GT(asked, 0);
+  EXPECT_EQ(m.compact().points, mesh.points);
+}
+
+// With sliding on, a node inside a flat face of the grid moves in the face's plane: the
+// boundary triangles and the volume are kept; a node on an edge of the grid never moves.
+TEST(flip_mesh, a_node_inside_a_flat_face_slides_in_its_plane_and_an_edge_node_stays) {
+  TetMesh mesh = test::kuhn_grid(2);
+  const index_t face_node = test::grid_node(2, 0, 1, 1);  // on the face x = 0
+  mesh.points[3 * face_node + 1] += 0.3;
+  mesh.points[3 * face_node + 2] -= 0.25;
+  FlipMesh m(mesh);
+  const auto boundary = boundary_triangles(m);
+  bool positive = false;
+  const double vol = volume(m, positive);
+  ASSERT_TRUE(positive);
+  EXPECT_FALSE(m.movable(face_node));  // sliding off
+  m.set_slide_on_faces(true);
+  ASSERT_TRUE(m.movable(face_node));
+  EXPECT_FALSE(m.movable(test::grid_node(2, 0, 0, 1)));  // on an edge of the grid
+  EXPECT_FALSE(m.movable(test::grid_node(2, 0, 0, 0)));  // a corner
+  const double before = worst_at(m, face_node);
+  const std::vector<FlipMesh::Goal> goals = {
+      {[&]() { return worst_at(m, face_node); }, before + 0.1}};
+  ASSERT_TRUE(m.smooth(face_node, goals, {}, 0.3));
+  EXPECT_GE(worst_at(m, face_node), before + 0.1);
+  EXPECT_EQ(m.point(face_node)[0], 0.0);  // still on the face x = 0, exactly
+  EXPECT_NE(m.compact().points, mesh.points);
+  expect_same_union(m, boundary, vol);
+}
+
 }  // namespace
 }  // namespace hexmerge

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <array>
 #include <cstdlib>
+#include <map>
 #include <random>
 #include <vector>
 
@@ -253,6 +254,148 @@ TEST(post_merge, regions_are_kept_region_by_region) {
   EXPECT_EQ(check.nonconforming_quads, 0u);
   EXPECT_EQ(check.region_mismatches, 0u);
   EXPECT_LT(check.max_region_volume_difference, 1e-6);
+}
+
+// A 2 x 2 x 2 grid of Kuhn cubes with its one inner node pushed off its place: quads at it fold
+// below the acceptance's dihedral angle, so cubes around it are no hexahedron candidates. Given
+// them as liftable (found under looser bounds), the stage moves nodes (the paper's
+// smoothing) so that one passes, closes it, and keeps the tets a tiling of the same volume;
+// without moves nothing is lifted and no node moves.
+TEST(post_merge, a_node_move_lifts_a_cube_a_displaced_node_folded) {
+  TetMesh mesh = kuhn_grid(2);
+  const index_t v = test::grid_node(2, 1, 1, 1);
+  const Point offset = {0.4, -0.35, 0.38};
+  for (int k = 0; k < 3; ++k) mesh.points[3 * v + k] += offset[k];
+  ASSERT_GT(test::min_quality(mesh), 0.0);
+  const TetTopology topology(mesh);
+  AcceptanceCriteria strict;
+  AcceptanceCriteria loose = strict;
+  loose.min_dihedral_angle -= kLiftAngle;
+  loose.max_face_angle += kLiftAngle;
+  loose.min_scaled_jacobian = kLiftScaledJacobian;
+  const Candidates strict_found = find_candidates(mesh, topology, strict, 1);
+  const Candidates liftable = find_candidates(mesh, topology, loose, 1);
+  // The strict hexahedra are left out of `found` (they stay among the liftable ones, which pass
+  // as they are and are skipped): one closed first would lock the node.
+  Candidates found = strict_found;
+  found.keep_if([&](index_t i) { return strict_found[i].type != CellType::Hex; });
+  const auto hex_count = [](const Candidates& c) {
+    return std::count_if(c.begin(), c.end(),
+                         [](const Candidate& x) { return x.type == CellType::Hex; });
+  };
+  ASSERT_GT(hex_count(liftable), hex_count(strict_found));  // folded cubes, refused
+  PostMergeOptions options;
+  options.move_nodes = false;
+  const PostMergeResult fixed = close_open_quads(mesh, found, {}, Selection{}, options, liftable);
+  EXPECT_EQ(fixed.lifted, 0u);
+  EXPECT_EQ(fixed.flips.moves, 0u);
+  EXPECT_EQ(fixed.tets.points, mesh.points);
+  options.move_nodes = true;
+  const PostMergeResult moved = close_open_quads(mesh, found, {}, Selection{}, options, liftable);
+  EXPECT_GE(moved.lifted, 1u);
+  EXPECT_GE(moved.closed, moved.lifted);
+  EXPECT_GE(moved.flips.moves, 1u);
+  // Nodes moved: the inner one, or nodes inside a face of the grid, in that face (one
+  // coordinate 0 or 2, kept exactly); none on an edge or corner. The tets tile the same volume,
+  // every one positive, none below the floor or its own scaled Jacobian before.
+  std::size_t nb_moved = 0;
+  for (index_t w = 0; w < mesh.nb_vertices(); ++w) {
+    if (std::equal(mesh.point(w), mesh.point(w) + 3, moved.tets.point(w))) continue;
+    ++nb_moved;
+    if (w == v) continue;
+    int on_faces = 0;
+    for (int k = 0; k < 3; ++k) {
+      const double x = mesh.point(w)[k];
+      if (x != 0.0 && x != 2.0) continue;
+      ++on_faces;
+      EXPECT_EQ(moved.tets.point(w)[k], x) << "node " << w;
+    }
+    EXPECT_EQ(on_faces, 1) << "node " << w;
+  }
+  EXPECT_GE(nb_moved, 1u);
+  EXPECT_NEAR(test::total_volume(moved.tets), test::total_volume(mesh), 1e-12);
+  EXPECT_GE(test::min_quality(moved.tets), std::min(0.3, test::min_quality(mesh)));
+  EXPECT_NO_THROW(validate_tet_mesh(moved.tets));
+  // The lifted cubes pass the acceptance now: more hexahedron candidates on the moved tets.
+  const Candidates after = find_candidates(moved.tets, TetTopology(moved.tets), strict, 1);
+  EXPECT_GT(hex_count(after), hex_count(strict_found));
+  const QuadCensus census = quad_census(moved.tets, after, PostMergeOptions{});
+  EXPECT_GT(census.closable, quad_census(mesh, strict_found, PostMergeOptions{}).closable);
+}
+
+// On a Delaunay mesh of random points the stage with moves keeps every element positive, the
+// boundary, the volume and the floors, with every moved node declared.
+TEST(post_merge, with_node_moves_a_delaunay_mesh_stays_valid_and_the_moves_are_declared) {
+  const TetMesh mesh = test::tetgen_mesh(spaced_points(11, 12.0, 2500));
+  if (mesh.nb_tets() == 0) GTEST_SKIP() << "no tetgen";
+  RecombineParameters parameters;
+  parameters.same_nodes = false;
+  parameters.lowest_scaled_jacobian = 0.3;
+  RecombineReport report;
+  const MixedMesh out = recombine(mesh, parameters, report);
+  ASSERT_EQ(report.post_merge, "kept");
+  EXPECT_GT(report.node_moves, 0u);
+  std::size_t moved = 0;
+  for (index_t w = 0; w < mesh.nb_vertices(); ++w) {
+    if (std::equal(mesh.point(w), mesh.point(w) + 3, &out.points[3 * w])) continue;
+    ++moved;
+    EXPECT_NE(std::find(out.changed_nodes.begin(), out.changed_nodes.end(), w),
+              out.changed_nodes.end());
+  }
+  EXPECT_GT(moved, 0u);
+  const CheckReport check = check_mesh(out, mesh);
+  EXPECT_TRUE(check.valid()) << (check.problems.empty() ? "" : check.problems[0]);
+  EXPECT_EQ(check.inverted_cells, 0u);
+  EXPECT_EQ(check.nonconforming_quads, 0u);
+  EXPECT_EQ(check.cracks, 0u);
+  EXPECT_EQ(check.off_boundary_nodes, 0u);
+  EXPECT_EQ(check.moved_nodes, 0u);
+  EXPECT_EQ(check.region_mismatches, 0u);
+  EXPECT_LT(check.max_region_volume_difference, 1e-9);
+  for (CellType type : {CellType::Hex, CellType::Prism, CellType::Pyramid}) {
+    if (report.output_counts[static_cast<int>(type)] == 0) continue;
+    EXPECT_GE(report.min_scaled_jacobian[static_cast<int>(type)], 0.3);
+  }
+  EXPECT_GE(check.min_scaled_jacobian, test::min_quality(mesh) - 1e-12);
+}
+
+// Pyramids kept off boundary nodes (the FreeCAD add-on's placement): the stage with moves
+// closes no quad with a pyramid that has a node on the boundary, and the output is valid.
+TEST(post_merge, with_pyramids_off_boundary_nodes_the_stage_keeps_the_placement) {
+  const TetMesh mesh = test::tetgen_mesh(spaced_points(11, 12.0, 2500));
+  if (mesh.nb_tets() == 0) GTEST_SKIP() << "no tetgen";
+  RecombineParameters parameters;
+  parameters.same_nodes = false;
+  parameters.pyramid_placement = PyramidPlacement::NoBoundaryNode;
+  RecombineReport report;
+  const MixedMesh out = recombine(mesh, parameters, report);
+  const CheckReport check = check_mesh(out, mesh);
+  EXPECT_TRUE(check.valid()) << (check.problems.empty() ? "" : check.problems[0]);
+  EXPECT_EQ(check.nonconforming_quads, 0u);
+  // The input's boundary nodes: corners of faces held by one tet.
+  std::map<std::array<index_t, 3>, int> faces;
+  for (index_t t = 0; t < mesh.nb_tets(); ++t) {
+    for (int f = 0; f < 4; ++f) {
+      std::array<index_t, 3> tri{};
+      int n = 0;
+      for (int i = 0; i < 4; ++i) {
+        if (i != f) tri[n++] = mesh.tet(t)[i];
+      }
+      std::sort(tri.begin(), tri.end());
+      ++faces[tri];
+    }
+  }
+  std::vector<char> on_boundary(mesh.nb_vertices(), 0);
+  for (const auto& [tri, n] : faces) {
+    if (n == 1) {
+      for (index_t v : tri) on_boundary[v] = 1;
+    }
+  }
+  for (index_t c = 0; c < out.nb_cells(); ++c) {
+    if (out.types[c] != CellType::Pyramid) continue;
+    const index_t* v = out.cell(c);
+    for (int i = 0; i < 5; ++i) EXPECT_FALSE(on_boundary[v[i]]) << "pyramid " << c;
+  }
 }
 
 }  // namespace
