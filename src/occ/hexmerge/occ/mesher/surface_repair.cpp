@@ -35,6 +35,8 @@ constexpr double kDistortedMiddle = 0.25;
 // A side is not split where its middle on the CAD is nearer than this fraction of the side to
 // one of its ends.
 constexpr double kSplitEnd = 0.1;
+// A face whose splits put this many new nodes on nodes already there is given up.
+constexpr int kStackedLimit = 100;
 // No flip makes a triangle with a smaller angle than this (radians, about 0.06 degrees).
 constexpr double kFlatAngle = 1e-3;
 constexpr int kSmoothingRounds = 5;
@@ -171,6 +173,41 @@ void refine(const Shape& s, Surface& surface, double target, const std::vector<b
     surface.node_face.push_back(t.face);
     return static_cast<int>(surface.nodes.size()) - 1;
   };
+  // The nodes by position (cells of the target's size), to find a node already at a point.
+  std::unordered_map<std::uint64_t, std::vector<int>> node_cells;
+  auto cell_key = [&](long i, long j, long k) {
+    return (static_cast<std::uint64_t>(i & 0x1fffff) << 42) |
+           (static_cast<std::uint64_t>(j & 0x1fffff) << 21) |
+           static_cast<std::uint64_t>(k & 0x1fffff);
+  };
+  auto cell_of = [&](const Vec3& p, long(&c)[3]) {
+    c[0] = std::lround(std::floor(p.x / target)), c[1] = std::lround(std::floor(p.y / target));
+    c[2] = std::lround(std::floor(p.z / target));
+  };
+  auto file_node = [&](int n) {
+    long c[3];
+    cell_of(surface.nodes[n], c);
+    node_cells[cell_key(c[0], c[1], c[2])].push_back(n);
+  };
+  for (int n = 0; n < static_cast<int>(surface.nodes.size()); ++n) file_node(n);
+  // A node within `tolerance` (below the target) of p, other than the last one made, or -1.
+  auto node_at = [&](const Vec3& p, double tolerance) {
+    long c[3];
+    cell_of(p, c);
+    const int last = static_cast<int>(surface.nodes.size()) - 1;
+    for (long i = c[0] - 1; i <= c[0] + 1; ++i)
+      for (long j = c[1] - 1; j <= c[1] + 1; ++j)
+        for (long k = c[2] - 1; k <= c[2] + 1; ++k) {
+          const auto it = node_cells.find(cell_key(i, j, k));
+          if (it == node_cells.end()) continue;
+          for (int n : it->second)
+            if (n != last && (surface.nodes[n] - p).norm() < tolerance) return n;
+        }
+    return -1;
+  };
+  // Per face: given up (see below), and the new nodes that landed on a node already there.
+  std::vector<char> given_up(s.faces.Extent(), 0);
+  std::vector<int> stacked(s.faces.Extent(), 0);
   // Sides whose middle on the CAD falls on one of their ends (a face's pole or collapsed side:
   // splitting them again and again stacked 1,054 nodes on one point of gmsh_917_fusee's face 60).
   std::unordered_set<std::uint64_t> unsplittable;
@@ -190,6 +227,13 @@ void refine(const Shape& s, Surface& surface, double target, const std::vector<b
       UV uv;
       m = midpoint(t0, side_with_key(tris[t0], key), -1, uv);
       const double side = length(a, b);
+      // A middle on a node already there: the face's parameters collapse to one point there (a
+      // pole, a B-spline's collapsed side) and the side crosses it. Splitting stacks nodes there
+      // (remove_folds() merges them later) without shortening anything: a face that does it
+      // kStackedLimit times is given up at once (gmsh_t20_data at h 0.66 stacked 42,345 nodes on
+      // one point of face 16, 300 s, until the limit on a face's nodes gave it up).
+      if (node_at(surface.nodes[m], 1e-6 * side) >= 0 && ++stacked[tris[t0].face] >= kStackedLimit)
+        given_up[tris[t0].face] = 1, list_unrefined(tris[t0].face);
       if (length(m, a) < kSplitEnd * side || length(m, b) < kSplitEnd * side) {
         surface.nodes.pop_back();
         surface.node_face.pop_back();
@@ -198,6 +242,7 @@ void refine(const Shape& s, Surface& surface, double target, const std::vector<b
         return std::vector<std::uint64_t>{};
       }
     }
+    if (m >= 0) file_node(m);
     for (int ti : around) {
       const SurfaceTriangle t = tris[ti];
       const int c = side_with_key(t, key);
@@ -322,7 +367,6 @@ void refine(const Shape& s, Surface& surface, double target, const std::vector<b
     for (int n : t.node) face_target[t.face] = std::min(face_target[t.face], size_at(n));
   }
   std::vector<std::size_t> added(s.faces.Extent(), 0);
-  std::vector<char> given_up(s.faces.Extent(), 0);
   // With local sizes, passes until no side is longer than wanted: a flip after a split can
   // make a side of a triangle passed before longer (a few of them, by under 1 %).
   for (int pass = 0, splits = 1; splits > 0 && pass < (field ? 4 : 1); ++pass) {
