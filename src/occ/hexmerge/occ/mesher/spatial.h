@@ -1,12 +1,15 @@
 #pragma once
 /// @file
 /// Spatial queries of the mesher (internal header of mesh_shape(); no OpenCASCADE): points and
-/// triangles in a uniform grid of cubic buckets, "is there one within r of q".
+/// triangles in a uniform grid of cubic buckets, "is there one within r of q"; nodes in a sparse
+/// grid, "which node is within r of q".
 
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstddef>
+#include <cstdint>
+#include <unordered_map>
 #include <vector>
 
 #include "hexmerge/geometry/triangle_distance.h"
@@ -14,6 +17,45 @@
 #include "hexmerge/occ/mesher/common.h"
 
 namespace hexmerge::mesher {
+
+/// Nodes (indices into the caller's vector, which may grow) in a sparse grid of cubic cells of
+/// side `cell`: "a node within `tolerance` of p", for tolerances up to the cell's side.
+class NodeHash {
+ public:
+  NodeHash(const std::vector<Vec3>& nodes, double cell) : nodes_(nodes), cell_(cell) {}
+  void add(int n) {
+    const std::array<long long, 3> c = cell_of(nodes_[n]);
+    cells_[hash(c[0], c[1], c[2])].push_back(n);
+  }
+  /// The first node found within `tolerance` (at most the cell's side) of p, or -1.
+  int find(const Vec3& p, double tolerance) const {
+    const std::array<long long, 3> c = cell_of(p);
+    for (long long i = c[0] - 1; i <= c[0] + 1; ++i)
+      for (long long j = c[1] - 1; j <= c[1] + 1; ++j)
+        for (long long k = c[2] - 1; k <= c[2] + 1; ++k) {
+          const auto it = cells_.find(hash(i, j, k));
+          if (it == cells_.end()) continue;
+          for (int n : it->second)
+            if ((nodes_[n] - p).norm() <= tolerance) return n;
+        }
+    return -1;
+  }
+
+ private:
+  std::array<long long, 3> cell_of(const Vec3& p) const {
+    return {static_cast<long long>(std::floor(p.x / cell_)),
+            static_cast<long long>(std::floor(p.y / cell_)),
+            static_cast<long long>(std::floor(p.z / cell_))};
+  }
+  static std::uint64_t hash(long long i, long long j, long long k) {
+    return static_cast<std::uint64_t>(i) * 73856093ULL ^
+           static_cast<std::uint64_t>(j) * 19349663ULL ^
+           static_cast<std::uint64_t>(k) * 83492791ULL;
+  }
+  const std::vector<Vec3>& nodes_;
+  double cell_;
+  std::unordered_map<std::uint64_t, std::vector<int>> cells_;
+};
 
 /// Items (ints) filed under every bucket their bounding box overlaps, in a grid of cubic
 /// buckets of side `cell` over the box [lo, hi] (points outside go to the nearest bucket).

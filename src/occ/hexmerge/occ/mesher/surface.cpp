@@ -21,6 +21,7 @@
 
 #include "hexmerge/core/error.h"
 #include "hexmerge/occ/mesher/shape.h"
+#include "hexmerge/occ/mesher/spatial.h"
 
 namespace hexmerge::mesher {
 namespace {
@@ -28,39 +29,22 @@ namespace {
 // Merges points closer than a tolerance into one node.
 class NodeMerger {
  public:
-  NodeMerger(Surface& s, double tolerance) : s_(s), tol_(tolerance) {}
+  NodeMerger(Surface& s, double tolerance)
+      : s_(s), tol_(tolerance), nodes_(s.nodes, 4 * tolerance) {}
   int id(const Vec3& p, int face) {
-    const std::array<long long, 3> c = cell(p);
-    for (long long i = c[0] - 1; i <= c[0] + 1; ++i)
-      for (long long j = c[1] - 1; j <= c[1] + 1; ++j)
-        for (long long k = c[2] - 1; k <= c[2] + 1; ++k) {
-          auto it = cells_.find(hash(i, j, k));
-          if (it == cells_.end()) continue;
-          for (int n : it->second)
-            if ((s_.nodes[n] - p).norm() <= tol_) return n;
-        }
+    const int found = nodes_.find(p, tol_);
+    if (found >= 0) return found;
     const int n = static_cast<int>(s_.nodes.size());
     s_.nodes.push_back(p);
     s_.node_face.push_back(face);
-    cells_[hash(c[0], c[1], c[2])].push_back(n);
+    nodes_.add(n);
     return n;
   }
 
  private:
-  std::array<long long, 3> cell(const Vec3& p) const {
-    const double w = 4 * tol_;
-    return {static_cast<long long>(std::floor(p.x / w)),
-            static_cast<long long>(std::floor(p.y / w)),
-            static_cast<long long>(std::floor(p.z / w))};
-  }
-  static std::uint64_t hash(long long i, long long j, long long k) {
-    return static_cast<std::uint64_t>(i) * 73856093ULL ^
-           static_cast<std::uint64_t>(j) * 19349663ULL ^
-           static_cast<std::uint64_t>(k) * 83492791ULL;
-  }
   Surface& s_;
   double tol_;
-  std::unordered_map<std::uint64_t, std::vector<int>> cells_;
+  NodeHash nodes_;
 };
 
 }  // namespace

@@ -24,6 +24,7 @@
 #include "hexmerge/core/error.h"
 #include "hexmerge/occ/mesher/local_size.h"
 #include "hexmerge/occ/mesher/shape.h"
+#include "hexmerge/occ/mesher/spatial.h"
 
 namespace hexmerge::mesher {
 namespace {
@@ -174,37 +175,8 @@ void refine(const Shape& s, Surface& surface, double target, const std::vector<b
     return static_cast<int>(surface.nodes.size()) - 1;
   };
   // The nodes by position (cells of the target's size), to find a node already at a point.
-  std::unordered_map<std::uint64_t, std::vector<int>> node_cells;
-  auto cell_key = [&](long i, long j, long k) {
-    return (static_cast<std::uint64_t>(i & 0x1fffff) << 42) |
-           (static_cast<std::uint64_t>(j & 0x1fffff) << 21) |
-           static_cast<std::uint64_t>(k & 0x1fffff);
-  };
-  auto cell_of = [&](const Vec3& p, long(&c)[3]) {
-    c[0] = std::lround(std::floor(p.x / target)), c[1] = std::lround(std::floor(p.y / target));
-    c[2] = std::lround(std::floor(p.z / target));
-  };
-  auto file_node = [&](int n) {
-    long c[3];
-    cell_of(surface.nodes[n], c);
-    node_cells[cell_key(c[0], c[1], c[2])].push_back(n);
-  };
-  for (int n = 0; n < static_cast<int>(surface.nodes.size()); ++n) file_node(n);
-  // A node within `tolerance` (below the target) of p, other than the last one made, or -1.
-  auto node_at = [&](const Vec3& p, double tolerance) {
-    long c[3];
-    cell_of(p, c);
-    const int last = static_cast<int>(surface.nodes.size()) - 1;
-    for (long i = c[0] - 1; i <= c[0] + 1; ++i)
-      for (long j = c[1] - 1; j <= c[1] + 1; ++j)
-        for (long k = c[2] - 1; k <= c[2] + 1; ++k) {
-          const auto it = node_cells.find(cell_key(i, j, k));
-          if (it == node_cells.end()) continue;
-          for (int n : it->second)
-            if (n != last && (surface.nodes[n] - p).norm() < tolerance) return n;
-        }
-    return -1;
-  };
+  NodeHash node_cells(surface.nodes, target);
+  for (int n = 0; n < static_cast<int>(surface.nodes.size()); ++n) node_cells.add(n);
   // Per face: given up (see below), and the new nodes that landed on a node already there.
   std::vector<char> given_up(s.faces.Extent(), 0);
   std::vector<int> stacked(s.faces.Extent(), 0);
@@ -232,7 +204,9 @@ void refine(const Shape& s, Surface& surface, double target, const std::vector<b
       // (remove_folds() merges them later) without shortening anything: a face that does it
       // kStackedLimit times is given up at once (gmsh_t20_data at h 0.66 stacked 42,345 nodes on
       // one point of face 16, 300 s, until the limit on a face's nodes gave it up).
-      if (node_at(surface.nodes[m], 1e-6 * side) >= 0 && ++stacked[tris[t0].face] >= kStackedLimit)
+      // (m itself is filed below, once kept.)
+      if (node_cells.find(surface.nodes[m], 1e-6 * side) >= 0 &&
+          ++stacked[tris[t0].face] >= kStackedLimit)
         given_up[tris[t0].face] = 1, list_unrefined(tris[t0].face);
       if (length(m, a) < kSplitEnd * side || length(m, b) < kSplitEnd * side) {
         surface.nodes.pop_back();
@@ -242,7 +216,7 @@ void refine(const Shape& s, Surface& surface, double target, const std::vector<b
         return std::vector<std::uint64_t>{};
       }
     }
-    if (m >= 0) file_node(m);
+    if (m >= 0) node_cells.add(m);
     for (int ti : around) {
       const SurfaceTriangle t = tris[ti];
       const int c = side_with_key(t, key);
