@@ -267,6 +267,7 @@ MixedMesh recombine(const TetMesh& input, const RecombineParameters& parameters,
     timer.lap("census_before");
     for (int round = 0; round < parameters.post_merge_rounds; ++round) {
       const TetMesh& current = report.post_merge == "kept" ? flipped : mesh;
+      const std::string suffix = "_" + std::to_string(round + 1);
       // Node moves: hexahedron candidates under looser bounds, which a move may lift.
       Candidates liftable;
       if (options.move_nodes) {
@@ -281,12 +282,11 @@ MixedMesh recombine(const TetMesh& input, const RecombineParameters& parameters,
         if (&current != &mesh) current_topology = std::make_unique<TetTopology>(current);
         liftable = find_candidates(current, current_topology ? *current_topology : topology, loose,
                                    threads);
-        timer.lap("post_merge_liftable" + std::string("_") + std::to_string(round + 1));
+        timer.lap("post_merge_liftable" + suffix);
       }
       PostMergeResult stage =
           close_open_quads(current, found, candidates, selection, options, liftable);
       report.post_merge_attempted += stage.attempted;
-      const std::string suffix = "_" + std::to_string(round + 1);
       timer.lap("post_merge_flips" + suffix);
       if (stage.closed == 0) break;
       const TetTopology new_topology(stage.tets);
