@@ -57,6 +57,7 @@ CAD_SUFFIXES = (".step", ".stp", ".brep", ".brp", ".iges", ".igs")  # hexmerge's
 GENERATED = ["flanged_tee", "hex_bolt", "thin_bracket", "touching_boxes", "holed_plate"]
 RESULTS = os.path.join(benchlib.RESULTS_DIR, "real-parts-latest.json")
 SIZES_FILE = os.path.join(benchlib.RESULTS_DIR, "real-parts-sizes.json")
+GMSH_REFERENCE = os.path.join(benchlib.RESULTS_DIR, "gmsh-reference.json")  # bench/gmsh_reference.py
 DOCS = os.path.join(ROOT, "docs", "benchmarks-real-parts.md")
 TABLE_BEGIN = "<!-- real-parts table: bench/real_parts.py --docs writes from here -->"
 TABLE_END = "<!-- real-parts table end -->"
@@ -81,10 +82,23 @@ NB_VERTICES = [4, 5, 6, 8]
 
 
 # --------------------------------------------------------------------------- measures
+def corner_scaled_jacobians(p, corners, scale):
+    """Verdict's scaled Jacobian of cells of one type (src/hexmerge/geometry/quality.cpp): p holds
+    their vertices' coordinates (cells x vertices x 3); the smallest corner determinant of the
+    unit edge vectors over the type's corner frames {v, a, b, c}, times its scale, capped at 1."""
+    import numpy as np
+
+    worst = np.full(len(p), np.inf)
+    for v, a, b, c in corners:
+        e = [p[:, k] - p[:, v] for k in (a, b, c)]
+        length = np.prod([np.linalg.norm(x, axis=1) for x in e], axis=0)
+        det = np.einsum("ij,ij->i", e[0], np.cross(e[1], e[2]))
+        worst = np.minimum(worst, np.divide(det, length, out=np.zeros_like(det), where=length > 0))
+    return np.minimum(1.0, worst * scale)
+
+
 def scaled_jacobians(mesh):
-    """Verdict's scaled Jacobian of every cell of a MixedMesh (src/hexmerge/geometry/quality.cpp:
-    the smallest corner determinant of the unit edge vectors, times the type's scale, capped
-    at 1)."""
+    """Verdict's scaled Jacobian of every cell of a MixedMesh (corner_scaled_jacobians per type)."""
     import numpy as np
 
     sj = np.empty(mesh.nb_cells)
@@ -93,15 +107,15 @@ def scaled_jacobians(mesh):
         if len(cells) == 0:
             continue
         vertices = mesh.cell_vertices[mesh.offsets[cells][:, None] + np.arange(NB_VERTICES[t])]
-        p = mesh.points[vertices]
-        worst = np.full(len(cells), np.inf)
-        for v, a, b, c in corners:
-            e = [p[:, k] - p[:, v] for k in (a, b, c)]
-            length = np.prod([np.linalg.norm(x, axis=1) for x in e], axis=0)
-            det = np.einsum("ij,ij->i", e[0], np.cross(e[1], e[2]))
-            worst = np.minimum(worst, np.divide(det, length, out=np.zeros_like(det), where=length > 0))
-        sj[cells] = np.minimum(1.0, worst * scale)
+        sj[cells] = corner_scaled_jacobians(mesh.points[vertices], corners, scale)
     return sj
+
+
+def tet_scaled_jacobians(points, tets):
+    """Verdict's scaled Jacobian of every tet of a plain tet mesh (points n x 3, tets m x 4 vertex
+    indices, Gmsh's and hexmerge's orientation): the same measure as scaled_jacobians'."""
+    corners, scale = CORNERS[0]
+    return corner_scaled_jacobians(points[tets], corners, scale)
 
 
 def boundary_triangle_angles(points, tets):
@@ -377,11 +391,35 @@ def cell(row, key, spec):
     return "–" if v is None else format(v, spec)
 
 
-def markdown(data) -> str:
+def gmsh_cells(row, gmsh) -> list:
+    """The "Gmsh min SJ" and "Gmsh min boundary angle" cells of a row: Gmsh's own tet mesh at the
+    same h (bench/gmsh_reference.py's row `gmsh`, or None), its status when it failed, "h differs"
+    when it was made at another h."""
+    if gmsh is None:
+        return ["–", "–"]
+    if row.get("h") is None or gmsh.get("h") is None or abs(gmsh["h"] - row["h"]) > 1e-9 * row["h"]:
+        return ["h differs"] * 2
+    if gmsh["status"] != "ok":
+        return [gmsh["status"]] * 2
+    return [cell(gmsh, "min_sj", ".2g"), cell(gmsh, "min_boundary_angle", ".2g")]
+
+
+def same_h_gmsh(row, gmsh) -> bool:
+    """Whether both meshed at the same h: the rows whose min SJ can be compared."""
+    return (gmsh is not None and row["status"] == "ok" and gmsh["status"] == "ok"
+            and abs(gmsh["h"] - row["h"]) <= 1e-9 * row["h"])
+
+
+def markdown(data, reference=None) -> str:
+    """The tables of a results file; with `reference` (bench/gmsh_reference.py's results), two
+    more columns per row: Gmsh's own tet mesh's min SJ and min boundary angle at the same h."""
     m = data["machine"]
     lines = [f"Commit `{data['commit']}`, {m['nproc']} CPUs ({m['cpu_model']}), {data['date']}; "
              f"timeout {data['options']['timeout']:g} s, memory limit {data['options']['memory']:g} GB, "
-             f"{data['options']['jobs']} run(s) at a time; hexmerge defaults (conforming).", ""]
+             f"{data['options']['jobs']} run(s) at a time; hexmerge defaults (conforming)."
+             + (f" Gmsh columns: Gmsh {reference['gmsh_version']}'s own tet mesh at the same h "
+                f"(`{reference['command']}`, bench/gmsh_reference.py, {reference['date']})." if reference else ""), ""]
+    gmsh = {(r["part"], r["target"]): r for r in reference["rows"]} if reference else {}
     targets = []
     for row in data["rows"]:
         if row["target"] not in targets:
@@ -392,8 +430,8 @@ def markdown(data) -> str:
         lines += [f"### About {target} tets", "",
                   "| part | h | status | s (mesh + recombine) | tets | hex vol % | prism vol % | pyramid vol % "
                   "| tet vol % | min SJ | min boundary angle ° | boundary dist / h | non-conf. quads | cracks "
-                  "| SJ < 0.2 |",
-                  "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+                  "| SJ < 0.2 |" + (" Gmsh min SJ | Gmsh min boundary angle ° |" if reference else ""),
+                  "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|" + ("---|---|" if reference else "")]
         for r in rows:
             status = r["status"] if r["status"] == "ok" else short(f"{r['status']}: {error_summary(r)}")
             if r["status"] == "ok" and not r.get("valid"):
@@ -408,13 +446,17 @@ def markdown(data) -> str:
                 f"| {r['part']}", cell(r, "h", ".4g"), status, seconds, cell(r, "tets", ","),
                 pct(r, "hex"), pct(r, "prism"), pct(r, "pyramid"), pct(r, "tet"), cell(r, "min_sj", ".2g"),
                 cell(r, "min_boundary_angle", ".2g"), bdist, cell(r, "nonconforming_quads", ","),
-                cell(r, "cracks", ","), cell(r, "below_sj_floor", ",")]) + " |")
+                cell(r, "cracks", ","), cell(r, "below_sj_floor", ",")]
+                + (gmsh_cells(r, gmsh.get((r["part"], target))) if reference else [])) + " |")
         ok = [r for r in rows if r["status"] == "ok"]
+        both = [(r, gmsh[r["part"], target]) for r in ok if same_h_gmsh(r, gmsh.get((r["part"], target)))]
         hexes = [100 * r["volume_fraction"]["hex"] for r in ok]
         lines += ["", f"- {target}: {len(ok)} of {len(rows)} parts meshed"
                   + (f" ({sum(1 for r in ok if r.get('valid'))} valid by the checker)" if ok else "")
                   + (f"; median hex volume {statistics.median(hexes):.1f} %" if hexes else "")
-                  + (f"; min SJ >= 0.2 on {sum(1 for r in ok if r['min_sj'] >= SJ_FLOOR)}" if ok else ""), ""]
+                  + (f"; min SJ >= 0.2 on {sum(1 for r in ok if r['min_sj'] >= SJ_FLOOR)}" if ok else "")
+                  + (f"; min SJ below Gmsh's on {sum(1 for r, g in both if r['min_sj'] < g['min_sj'])} of "
+                     f"{len(both)} (both meshed at the same h)" if reference else ""), ""]
         for r in ok:
             if worst is None or r["min_sj"] < worst["min_sj"]:
                 worst = r
@@ -435,6 +477,15 @@ def write_docs(table: str) -> None:
     os.replace(DOCS + ".tmp", DOCS)
 
 
+def gmsh_reference(path) -> dict | None:
+    """bench/gmsh_reference.py's results for the Gmsh columns: `path`, or by default
+    bench/results/gmsh-reference.json when it exists; None for an empty path."""
+    if path == "" or (path is None and not os.path.exists(GMSH_REFERENCE)):
+        return None
+    with open(path or GMSH_REFERENCE) as f:
+        return json.load(f)
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--cad", default=DEFAULT_CAD, help="folder of the shared real parts (default: %(default)s)")
@@ -448,6 +499,9 @@ def main() -> int:
     ap.add_argument("--jobs", type=int, default=1, help="parts run at a time (default: %(default)s)")
     ap.add_argument("--docs", action="store_true", help=f"also write the tables into {os.path.relpath(DOCS, ROOT)}")
     ap.add_argument("--table", metavar="JSON", help="print the tables of an earlier results file and exit")
+    ap.add_argument("--gmsh-reference", metavar="JSON",
+                    help="Gmsh's own tet mesh at the same sizes (bench/gmsh_reference.py) for the tables' Gmsh "
+                    f"columns (default: {os.path.relpath(GMSH_REFERENCE, ROOT)} when it exists; '' for none)")
     ap.add_argument("--worker", help=argparse.SUPPRESS)
     ap.add_argument("--size", type=float, help=argparse.SUPPRESS)
     args = ap.parse_args()
@@ -457,7 +511,7 @@ def main() -> int:
         return 0
     if args.table:
         with open(args.table) as f:
-            table = markdown(json.load(f))
+            table = markdown(json.load(f), gmsh_reference(args.gmsh_reference))
         print(table)
         if args.docs:
             write_docs(table)
@@ -484,7 +538,7 @@ def main() -> int:
                 rows = pool.map(lambda part: runner.measure(*part, facts[part[0]], target, previous.get(part[0])),
                                 parts)
                 previous = {r["part"]: r for r in rows if r["status"] == "ok"}
-    table = markdown(dict(header, rows=runner.rows))
+    table = markdown(dict(header, rows=runner.rows), gmsh_reference(args.gmsh_reference))
     print(table)
     if args.docs:
         write_docs(table)
