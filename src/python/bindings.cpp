@@ -483,6 +483,7 @@ py::tuple run_mesh_shape(const std::string& brep, const std::map<std::string, st
   d["nb_edge_flips"] = report.nb_edge_flips;
   d["nb_boundary_swaps"] = report.nb_boundary_swaps;
   d["nb_node_moves"] = report.nb_node_moves;
+  d["nb_boundary_node_moves"] = report.nb_boundary_node_moves;
   d["sweep_axis"] = report.sweep_axis;
   py::list axes;
   for (const auto& axis : report.frame) axes.append(py::make_tuple(axis[0], axis[1], axis[2]));

@@ -289,6 +289,10 @@ def test_flips_raise_the_smallest_scaled_jacobian(shapes, name: str, h: float, f
     quality = tet_scaled_jacobians(tets.points, tets.cell_vertices.reshape(-1, 4).astype(np.int64))
     assert meshing["nb_face_flips"] + meshing["nb_edge_flips"] > 0
     assert meshing["nb_node_moves"] > 0  # smooth_nodes moved layer or Steiner points
+    # and boundary nodes along their CAD faces and edges, which keeps them on the CAD; only while
+    # a tet at them is below 0.2 (the plate's never are)
+    assert (meshing["nb_boundary_node_moves"] > 0) == (name != "plate")
+    assert meshing["max_boundary_distance"] <= 1e-6 * h
     assert meshing["nb_nudged_points"] == 0  # TetGen kept every lattice point the first time
     assert quality.min() >= meshing["min_tet_quality_before"] - 1e-12  # flips never lower it
     assert quality.min() >= floor

@@ -26,6 +26,7 @@
 #include "hexmerge/occ/mesher/size_estimate.h"
 #include "hexmerge/occ/mesher/solid_regions.h"
 #include "hexmerge/occ/mesher/surface.h"
+#include "hexmerge/occ/mesher/surface_path.h"
 #include "hexmerge/occ/mesher/surface_repair.h"
 #include "hexmerge/occ/mesher/sweep.h"
 #include "hexmerge/occ/regions_by_solid.h"
@@ -547,6 +548,10 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
   std::vector<std::int32_t> swappable = boundary_face;
   for (std::int32_t& face : swappable)
     if (face >= 0 && items_at_h.face_size[static_cast<std::size_t>(face)] < h) face = -1;
+  // The boundary nodes inside a face move along it (not swept: nothing moves there).
+  const std::unique_ptr<SurfacePath> along_faces =
+      sweep_axis < 0 ? boundary_path(shape, surface, lattice.lattice_face, 1e-6 * h) : nullptr;
+  improve.surface = along_faces.get();
   ImproveReport improved;
   improve_tets(mesh, tets.points, tets.boundary, swappable, improve, improved);
   report.min_tet_quality_before = improved.min_quality_before;
@@ -554,6 +559,7 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
   report.nb_edge_flips = improved.edge_flips;
   report.nb_boundary_swaps = improved.boundary_swaps;
   report.nb_node_moves = improved.node_moves;
+  report.nb_boundary_node_moves = improved.boundary_node_moves;
   step("slivers", 0.9);
   // A tet the flips and moves left flat or folded (gmsh_Block at h 1.18: scaled Jacobian
   // 1e-13) fails this way of placing the points, not the whole run: the next way is tried.

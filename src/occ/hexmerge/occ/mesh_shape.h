@@ -196,6 +196,8 @@ struct MeshShapeReport {
   std::size_t nb_edge_flips = 0;        ///< edge removals (3-2, 4-4, ...) taking out slivers
   std::size_t nb_boundary_swaps = 0;    ///< of which on the boundary, inside one planar face
   std::size_t nb_node_moves = 0;  ///< moves of boundary-layer and Steiner points (smooth_nodes)
+  /// of those, moves of boundary nodes along their CAD face or edge
+  std::size_t nb_boundary_node_moves = 0;
   int sweep_axis = -1;  ///< the lattice axis the tets are swept along (0..2), -1: not swept
   /// Swept: the cross-section's triangles whose columns of prisms make the tets (0: TetGen's
   /// tets kept, see mesher::extrude_tets()).

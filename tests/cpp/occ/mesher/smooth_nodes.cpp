@@ -74,6 +74,92 @@ TEST(smooth_nodes, a_nudged_node_moves_only_until_its_tets_reach_the_nudge_targe
   EXPECT_EQ(report.moves, 0u);
 }
 
+// A square pyramid (apex 4 over the ring 0-3 on z = 0) cut at node 5, which lies on the base
+// close to corner 0: the tets at corner 0 are flat, the base's triangles needles.
+TetMesh pyramid_with_an_offset_base_node() {
+  TetMesh m;
+  m.points = {1, 0, 0, 0, 1, 0, -1, 0, 0, 0, -1, 0, 0, 0, 1, 0.9, 0.05, 0};
+  for (index_t i = 0; i < 4; ++i) add_tet(m, 5, i, (i + 1) % 4, 4);
+  return m;
+}
+
+// The plane z = 0 (dimension 2) or the line y = 0.05, z = 0 (dimension 1) through node 5, by
+// lengths along x and y from where the node stands.
+class FlatPath final : public SurfacePath {
+ public:
+  explicit FlatPath(int dimension) : dimension_(dimension) {}
+  int dimension(index_t v) const override { return v == 5 ? dimension_ : 0; }
+  void tangents(index_t, Vec3& along_u, Vec3& along_v) const override {
+    along_u = {1, 0, 0};
+    along_v = dimension_ == 2 ? Vec3{0, 1, 0} : Vec3{0, 0, 0};
+  }
+  bool at(index_t, double a, double b, Vec3& point) const override {
+    if (dimension_ == 1 && b != 0) return false;
+    point = stood_ + Vec3{a, b, 0};
+    return true;
+  }
+  void moved(index_t, double a, double b) override {
+    stood_ = stood_ + Vec3{a, b, 0};
+    ++moves_;
+  }
+  Vec3 stood() const { return stood_; }
+  int moves() const { return moves_; }
+
+ private:
+  int dimension_;
+  Vec3 stood_{0.9, 0.05, 0};
+  int moves_ = 0;
+};
+
+TEST(smooth_nodes, a_node_on_a_surface_moves_along_it_and_stays_on_it) {
+  TetMesh m = pyramid_with_an_offset_base_node();
+  const double q0 = min_quality(m);
+  std::vector<char> movable(m.nb_vertices(), kFixed);
+  movable[5] = kOnSurface;
+  FlatPath plane(2);
+  SmoothNodesReport report;
+  smooth_nodes(m, movable, SmoothNodesParameters{}, report, &plane);
+  EXPECT_LT(q0, 0.1);
+  EXPECT_GE(report.min_after, 0.2);  // the nudge target (the base's centre gives 1)
+  EXPECT_DOUBLE_EQ(report.min_after, min_quality(m));
+  EXPECT_EQ(report.surface_moves, report.moves);
+  EXPECT_GE(report.moves, 1u);
+  EXPECT_EQ(m.point(5)[2], 0.0);  // on the plane
+  const Vec3 stood = plane.stood();
+  EXPECT_EQ(Vec3::of(m.point(5)).x, stood.x);  // where the path was told it went
+  EXPECT_EQ(Vec3::of(m.point(5)).y, stood.y);
+  EXPECT_LT(stood.x, 0.9);
+  validate_tet_mesh(m);
+}
+
+TEST(smooth_nodes, a_node_on_a_curve_moves_along_it_only) {
+  TetMesh m = pyramid_with_an_offset_base_node();
+  std::vector<char> movable(m.nb_vertices(), kFixed);
+  movable[5] = kOnSurface;
+  FlatPath line(1);
+  SmoothNodesReport report;
+  smooth_nodes(m, movable, SmoothNodesParameters{}, report, &line);
+  EXPECT_GT(report.min_after, report.min_before);
+  EXPECT_EQ(m.point(5)[1], 0.05);
+  EXPECT_EQ(m.point(5)[2], 0.0);
+  EXPECT_LT(m.point(5)[0], 0.9);
+  validate_tet_mesh(m);
+}
+
+TEST(smooth_nodes, a_node_on_a_surface_stays_without_its_path) {
+  TetMesh m = pyramid_with_an_offset_base_node();
+  const std::vector<double> before = m.points;
+  std::vector<char> movable(m.nb_vertices(), kFixed);
+  movable[5] = kOnSurface;
+  SmoothNodesReport report;
+  smooth_nodes(m, movable, SmoothNodesParameters{}, report);
+  EXPECT_EQ(m.points, before);
+  FlatPath elsewhere(0);  // holds no node
+  smooth_nodes(m, movable, SmoothNodesParameters{}, report, &elsewhere);
+  EXPECT_EQ(m.points, before);
+  EXPECT_EQ(elsewhere.moves(), 0);
+}
+
 TEST(smooth_nodes, fixed_nodes_and_good_tets_stay) {
   TetMesh m = star_with_an_offset_centre();
   const std::vector<double> before = m.points;
@@ -99,6 +185,9 @@ TEST(smooth_nodes, bad_arguments_name_what_is_wrong) {
   EXPECT_THROW(smooth_nodes(m, std::vector<char>(m.nb_vertices(), 1), bad, report), InputError);
   bad.target = 0.3;
   bad.nudge_target = 1.5;
+  EXPECT_THROW(smooth_nodes(m, std::vector<char>(m.nb_vertices(), 1), bad, report), InputError);
+  bad.nudge_target = 0.2;
+  bad.floor = -1;
   EXPECT_THROW(smooth_nodes(m, std::vector<char>(m.nb_vertices(), 1), bad, report), InputError);
 }
 

@@ -10,38 +10,45 @@
 #include <vector>
 
 #include "hexmerge/mesh/tet_mesh.h"
+#include "hexmerge/occ/mesher/smooth_nodes.h"
 
 namespace hexmerge::mesher {
 
 /// What improve_tets() did.
 struct ImproveReport {
-  double min_quality_before = 0.0;  ///< smallest scaled Jacobian before the first flips
-  std::size_t face_flips = 0;       ///< 2-3 flips
-  std::size_t edge_flips = 0;       ///< edge removals (3-2, 4-4, ...)
-  std::size_t boundary_swaps = 0;   ///< of which on the boundary, inside one CAD face
-  std::size_t node_moves = 0;       ///< moves of free nodes
+  double min_quality_before = 0.0;      ///< smallest scaled Jacobian before the first flips
+  std::size_t face_flips = 0;           ///< 2-3 flips
+  std::size_t edge_flips = 0;           ///< edge removals (3-2, 4-4, ...)
+  std::size_t boundary_swaps = 0;       ///< of which on the boundary, inside one CAD face
+  std::size_t node_moves = 0;           ///< moves of free nodes
+  std::size_t boundary_node_moves = 0;  ///< of those, of boundary nodes along a CAD face or edge
 };
 
 /// How improve_tets() works.
 struct ImproveParameters {
   std::array<double, 3> spacing{};  ///< the lattice's spacing per frame axis
   int sweep_axis = -1;              ///< swept: the tets within one slab stay; -1: not swept
-  /// Vertices below this index (the surface's nodes) never move.
+  /// Vertices below this index (the surface's nodes) move only along `surface`.
   std::size_t nb_surface_nodes = 0;
   /// Boundary triangles of one CAD face may swap their side where the boundary moves by no more
   /// than this (the surface's chord deflection).
   double max_boundary_shift = 0.0;
+  /// The boundary nodes that may move along their CAD face or edge, and where (null: none; swept:
+  /// none move). They move while a tet at them is below 0.2, no more of their tets below it and
+  /// their boundary triangles' smallest angle kept (or above 10 degrees).
+  SurfacePath* surface = nullptr;
 };
 
 /// Flips take out slivers, then the free nodes (not on the surface, not on the half lattice,
-/// not in a swept mesh) move to raise the worst tet around them, then flips again, for 4 rounds
+/// not in a swept mesh; the boundary nodes along their CAD face or edge, `surface`) move to raise
+/// the worst tet around them, then flips again, for 4 rounds
 /// of flips. Tets within one lattice cell or closing pyramid (all corners on the half lattice,
 /// within one cell's width), or swept within one slab, stay as they are.
 /// @param[in,out] mesh           the tets (coordinates in the world)
 /// @param[in]     frame_points   #vertices by 3: the vertices in frame coordinates (lattice at
 ///                               multiples of the spacing)
 /// @param[in]     boundary       the boundary triangles and, per triangle, its CAD face
-///                (boundary_face); their vertices never move
+///                (boundary_face); their vertices move along `surface` only
 void improve_tets(TetMesh& mesh, const std::vector<double>& frame_points,
                   const std::vector<std::array<index_t, 3>>& boundary,
                   const std::vector<std::int32_t>& boundary_face,

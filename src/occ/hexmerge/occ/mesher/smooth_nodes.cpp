@@ -1,6 +1,7 @@
 #include "hexmerge/occ/mesher/smooth_nodes.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 
@@ -9,13 +10,28 @@
 #include "hexmerge/geometry/vec3.h"
 
 namespace hexmerge {
+namespace {
+
+// A node on a surface may make the smallest angle of the boundary triangles at it smaller only
+// while it stays above this (degrees).
+constexpr double kRimAngle = 10.0;
+
+// The angle between u and w, in degrees (atan2: exact down to tiny angles).
+double angle_between(const Vec3& u, const Vec3& w) {
+  return std::atan2(u.cross(w).norm(), u.dot(w)) * 180 / M_PI;
+}
+
+}  // namespace
 
 void smooth_nodes(TetMesh& mesh, const std::vector<char>& movable,
-                  const SmoothNodesParameters& parameters, SmoothNodesReport& report) {
+                  const SmoothNodesParameters& parameters, SmoothNodesReport& report,
+                  SurfacePath* surface) {
   if (!(parameters.target > 0 && parameters.target <= 1) ||
-      !(parameters.nudge_target > 0 && parameters.nudge_target <= 1) || parameters.max_passes < 1)
-    throw InputError("smooth_nodes: target and nudge_target must be in (0, 1], max_passes >= 1",
-                     Entity::Parameter);
+      !(parameters.nudge_target > 0 && parameters.nudge_target <= 1) ||
+      !(parameters.floor > 0 && parameters.floor <= 1) || parameters.max_passes < 1)
+    throw InputError(
+        "smooth_nodes: target, nudge_target and floor must be in (0, 1], max_passes >= 1",
+        Entity::Parameter);
   if (movable.size() != mesh.nb_vertices())
     throw InputError("smooth_nodes: one movable flag per node (" +
                          std::to_string(mesh.nb_vertices()) + "), not " +
@@ -79,12 +95,19 @@ void smooth_nodes(TetMesh& mesh, const std::vector<char>& movable,
   for (int c = 0; c < 8; ++c)
     directions.push_back(Vec3{c & 1 ? r3 : -r3, c & 2 ? r3 : -r3, c & 4 ? r3 : -r3});
 
+  // On a surface: its two parameter directions and their diagonals, in (a, b).
+  const double r2 = 1 / std::sqrt(2.0);
+  const double plane[8][2] = {{1, 0},   {-1, 0},   {0, 1},    {0, -1},
+                              {r2, r2}, {r2, -r2}, {-r2, r2}, {-r2, -r2}};
+
   for (int pass = 0; pass < parameters.max_passes; ++pass) {
     std::size_t moved = 0;
     for (index_t v = 0; v < nv; ++v) {
       if (movable[v] == kFixed || start[v] == start[v + 1]) continue;
+      const bool on_surface = movable[v] == kOnSurface;
+      if (on_surface && (!surface || surface->dimension(v) == 0)) continue;
       const bool nudged = movable[v] == kNudged;
-      const double target = nudged ? parameters.nudge_target : parameters.target;
+      const double target = nudged || on_surface ? parameters.nudge_target : parameters.target;
       double best = worst_at(v);
       if (best >= target) continue;
       const Vec3 origin = Vec3::of(mesh.point(v));
@@ -112,6 +135,83 @@ void smooth_nodes(TetMesh& mesh, const std::vector<char>& movable,
         place(v, here);
         return false;
       };
+      if (on_surface) {
+        // Lengths (a, b) along the surface from where the node stood; the tets below the floor.
+        double a = 0, b = 0;
+        const auto below_floor = [&] {
+          std::size_t below = 0;
+          for (std::size_t i = start[v]; i < start[v + 1]; ++i)
+            below += quality(at[i]) < parameters.floor;
+          return below;
+        };
+        std::size_t below = below_floor();
+        // The boundary triangles at v: the faces at v of one tet around it (a face at v between
+        // two tets is in both, and both are around v).
+        std::vector<std::array<index_t, 2>> rim;
+        {
+          std::vector<std::array<index_t, 2>> sides;
+          for (std::size_t i = start[v]; i < start[v + 1]; ++i) {
+            const index_t* t = mesh.tet(at[i]);
+            index_t others[3], n = 0;
+            for (int k = 0; k < 4; ++k)
+              if (t[k] != v) others[n++] = t[k];
+            for (int k = 0; k < 3; ++k)
+              sides.push_back({std::min(others[k], others[(k + 1) % 3]),
+                               std::max(others[k], others[(k + 1) % 3])});
+          }
+          std::sort(sides.begin(), sides.end());
+          for (std::size_t i = 0; i < sides.size();) {
+            std::size_t j = i;
+            while (j < sides.size() && sides[j] == sides[i]) ++j;
+            if (j - i == 1) rim.push_back(sides[i]);
+            i = j;
+          }
+        }
+        // The smallest angle of those triangles: a move keeps it at least as large, or above
+        // kRimAngle.
+        const auto rim_angle = [&] {
+          double least = 180;
+          const Vec3 p = Vec3::of(mesh.point(v));
+          for (const auto& [x, y] : rim) {
+            const Vec3 q = Vec3::of(mesh.point(x)), r = Vec3::of(mesh.point(y));
+            least = std::min({least, angle_between(q - p, r - p), angle_between(p - q, r - q),
+                              angle_between(p - r, q - r)});
+          }
+          return least;
+        };
+        double angle = rim_angle();
+        auto try_along = [&](double ta, double tb) {
+          Vec3 p;
+          if (!surface->at(v, ta, tb, p)) return false;
+          const double was = best;
+          const Vec3 stood = here;
+          if (!try_at(p)) return false;
+          const std::size_t now = below_floor();
+          const double now_angle = rim_angle();
+          if (now > below || now_angle < std::min(angle, kRimAngle)) {  // back
+            best = was, here = stood;
+            place(v, here);
+            return false;
+          }
+          below = now, angle = now_angle, a = ta, b = tb;
+          return true;
+        };
+        Vec3 along_u, along_v;
+        surface->tangents(v, along_u, along_v);
+        const Vec3 to_centroid = centroid - origin;
+        try_along(to_centroid.dot(along_u), to_centroid.dot(along_v)) ||
+            try_along(0.5 * to_centroid.dot(along_u), 0.5 * to_centroid.dot(along_v));
+        const int directions_on_path = surface->dimension(v) == 1 ? 2 : 8;
+        for (double step = 0.25 * shortest; step > 1e-3 * shortest;) {
+          bool better = false;
+          for (int d = 0; d < directions_on_path; ++d)
+            better |= try_along(a + plane[d][0] * step, b + plane[d][1] * step);
+          if (!better) step *= 0.5;
+        }
+        if ((here - origin).norm() > 0)
+          surface->moved(v, a, b), ++moved, ++report.moves, ++report.surface_moves;
+        continue;
+      }
       if (!nudged) try_at(centroid) || try_at((here + centroid) * 0.5);
       for (double step = (nudged ? 0.05 : 0.25) * shortest;
            step > 1e-3 * shortest && !(nudged && best >= target);) {

@@ -5,6 +5,7 @@
 #include <cstddef>
 #include <vector>
 
+#include "hexmerge/geometry/vec3.h"
 #include "hexmerge/mesh/tet_mesh.h"
 
 namespace hexmerge {
@@ -17,6 +18,26 @@ enum NodeMobility : char {
   /// further once it reaches it (a node that placed elements rely on, as the apex of a closing
   /// pyramid: the least move that makes its tets usable).
   kNudged = 2,
+  /// On a surface: moved as a free node, but along the surface through it (SurfacePath), as a
+  /// boundary node inside a CAD face.
+  kOnSurface = 3,
+};
+
+/// The surface kOnSurface nodes move along (the CAD face through each): positions by lengths
+/// along the surface's two parameter directions from where the node stands.
+class SurfacePath {
+ public:
+  virtual ~SurfacePath() = default;
+  /// The dimension of the path node v may move along: 2 a surface, 1 a curve (its second
+  /// parameter direction unused), 0 none.
+  virtual int dimension(index_t v) const = 0;
+  /// Unit tangents along the surface's two parameters at node v, where it stands.
+  virtual void tangents(index_t v, Vec3& along_u, Vec3& along_v) const = 0;
+  /// The surface's point at lengths (a, b) along those tangents from node v (its parameters
+  /// offset by a / |dS/du| and b / |dS/dv|); false where that leaves the surface's domain.
+  virtual bool at(index_t v, double a, double b, Vec3& point) const = 0;
+  /// Node v was left at (a, b) from where it stood: its parameters follow.
+  virtual void moved(index_t v, double a, double b) = 0;
 };
 
 /// How smooth_nodes() works.
@@ -25,15 +46,20 @@ struct SmoothNodesParameters {
   double target = 0.3;
   /// Nudged nodes with a tet below this scaled Jacobian around them are moved, in (0, 1].
   double nudge_target = 0.2;
+  /// Nodes on a surface take a position only where no more of their tets than before are below
+  /// this (a node of the boundary moves its triangles too: the worst tet alone raised, others
+  /// fell below the floor).
+  double floor = 0.2;
   /// Passes over the nodes, at least 1; a pass that moves nothing ends the run.
   int max_passes = 4;
 };
 
 /// What smooth_nodes() did.
 struct SmoothNodesReport {
-  double min_before = 0.0;  ///< smallest scaled Jacobian of a tet, before
-  double min_after = 0.0;   ///< and after
-  std::size_t moves = 0;    ///< node moves done
+  double min_before = 0.0;        ///< smallest scaled Jacobian of a tet, before
+  double min_after = 0.0;         ///< and after
+  std::size_t moves = 0;          ///< node moves done
+  std::size_t surface_moves = 0;  ///< of those, of nodes on a surface (kOnSurface)
 };
 
 /// Raises the smallest scaled Jacobian (quality.h) of the tets around free nodes by moving those
@@ -41,7 +67,9 @@ struct SmoothNodesReport {
 /// neighbours, steps from a quarter of its shortest edge down to a thousandth) that takes a
 /// position only when the worst tet around the node gets strictly better. Nudged nodes: the
 /// same search without the centroid, from a twentieth of the shortest edge, ended as soon as
-/// the worst tet reaches `nudge_target`. Only the tets around
+/// the worst tet reaches `nudge_target`. Nodes on a surface: the free nodes' search in the
+/// surface's two parameter directions and their diagonals (on a curve: its one direction; the
+/// centroid taken along the tangents), each position tried on the path. Only the tets around
 /// a moved node change, so the mesh's minimum never decreases and no tet turns over. The tets
 /// stay as they are (no flips; see remove_slivers()).
 ///
@@ -51,8 +79,10 @@ struct SmoothNodesReport {
 ///                            nodes out
 /// @param[in]     parameters  see SmoothNodesParameters
 /// @param[out]    report      the minimum before and after, the moves
+/// @param[in,out] surface     where kOnSurface nodes go (null: they stay)
 /// @throws InputError for a `movable` of another size than #V or bad parameters
 void smooth_nodes(TetMesh& mesh, const std::vector<char>& movable,
-                  const SmoothNodesParameters& parameters, SmoothNodesReport& report);
+                  const SmoothNodesParameters& parameters, SmoothNodesReport& report,
+                  SurfacePath* surface = nullptr);
 
 }  // namespace hexmerge
