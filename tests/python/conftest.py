@@ -1,4 +1,5 @@
-"""pytest setup: import hexmerge from the checkout (src/python), shared mesh fixtures."""
+"""pytest setup: import hexmerge from the checkout (src/python) and the benchmarks' measures
+(bench/real_parts.py), shared mesh fixtures."""
 
 from __future__ import annotations
 
@@ -11,8 +12,9 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[2]
 PYTHON_SRC = ROOT / "src" / "python"
-if str(PYTHON_SRC) not in sys.path:
-    sys.path.insert(0, str(PYTHON_SRC))
+for folder in (PYTHON_SRC, ROOT / "bench"):
+    if str(folder) not in sys.path:
+        sys.path.insert(0, str(folder))
 
 BOX_GEO = """
 SetFactory("OpenCASCADE");

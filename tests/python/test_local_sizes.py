@@ -17,7 +17,8 @@ import pytest
 
 import hexmerge
 from hexmerge import _core, cli
-from test_mesh_shape import PLATE, SURFACES, assert_checked, boundary_nodes, tet_scaled_jacobians
+from real_parts import tet_scaled_jacobians
+from test_mesh_shape import PLATE, SURFACES, assert_checked, boundary_nodes
 
 pytestmark = [
     pytest.mark.skipif(not hexmerge.WITH_OPENCASCADE or not hasattr(_core, "mesh_shape"),

@@ -23,6 +23,7 @@ import hexmerge
 from hexmerge import _core, cli
 from conftest import ROOT
 from meshes import EDGES
+from real_parts import tet_scaled_jacobians
 
 pytestmark = pytest.mark.skipif(
     not hexmerge.WITH_OPENCASCADE or not hasattr(_core, "mesh_shape"),
@@ -249,18 +250,6 @@ def test_every_core_face_has_its_closer(shapes) -> None:
     mesh, report = hexmerge.recombine(tets.points, cells, tets.regions)
     assert report["block_hexahedra"] >= nb_core
     assert report["volume_fraction"]["hex"] >= 0.97
-
-
-def tet_scaled_jacobians(points: np.ndarray, tets: np.ndarray) -> np.ndarray:
-    """Verdict's scaled Jacobian of each tet (src/hexmerge/geometry/quality.h): the smallest
-    corner determinant of unit edge vectors, times sqrt(2)."""
-    p = points[tets]
-    worst = np.full(len(tets), np.inf)
-    for o, x, y, z in ((0, 1, 2, 3), (1, 0, 3, 2), (2, 0, 1, 3), (3, 0, 2, 1)):
-        e = [p[:, k] - p[:, o] for k in (x, y, z)]
-        det = np.einsum("ij,ij->i", e[0], np.cross(e[1], e[2]))
-        worst = np.minimum(worst, det / np.prod([np.linalg.norm(v, axis=1) for v in e], axis=0))
-    return worst * np.sqrt(2)
 
 
 # (shape, h, floor of the smallest tet scaled Jacobian after the flips and node moves). Measured

@@ -21,8 +21,8 @@ namespace {
 
 class BoundaryPath final : public SurfacePath {
  public:
-  BoundaryPath(const Shape& shape, const Surface& surface, const std::vector<bool>& lattice_face,
-               double tolerance)
+  BoundaryPath(const Shape& shape, const Surface& surface, const std::vector<bool>& kept_face,
+               const std::vector<bool>& kept_edge, double tolerance)
       : face_(surface.nodes.size(), -1), uv_(surface.nodes.size()) {
     // A node inside one face: on no CAD edge, every triangle at it on one face.
     const std::vector<char> on_edge = nodes_on_edges(surface);
@@ -38,7 +38,7 @@ class BoundaryPath final : public SurfacePath {
     for (std::size_t n = 0; n < face_.size(); ++n) {
       const int f = face_[n];
       if (f < 0) continue;
-      if (on_edge[n] || mixed[n] || lattice_face[static_cast<std::size_t>(f)]) {
+      if (on_edge[n] || mixed[n] || kept_face[static_cast<std::size_t>(f)]) {
         face_[n] = -1;
         continue;
       }
@@ -62,8 +62,8 @@ class BoundaryPath final : public SurfacePath {
         face_[n] = -1;
     }
     // A node inside one CAD edge: on the sides of that edge only, at one parameter, strictly
-    // between the curve's ends (a closed edge's vertex has two), the edge bounding no lattice
-    // face.
+    // between the curve's ends (a closed edge's vertex has two), the edge not kept and bounding
+    // no kept face.
     edge_.assign(surface.nodes.size(), -1);
     t_.assign(surface.nodes.size(), 0.0);
     std::vector<char> edge_mixed(surface.nodes.size(), 0);
@@ -83,13 +83,13 @@ class BoundaryPath final : public SurfacePath {
     for (std::size_t n = 0; n < edge_.size(); ++n) {
       const int e = edge_[n];
       if (e < 0) continue;
-      bool lattice = false;
+      bool kept = kept_edge[static_cast<std::size_t>(e)];
       for (const int f : shape.edge_faces[static_cast<std::size_t>(e)])
-        lattice = lattice || lattice_face[static_cast<std::size_t>(f)];
+        kept = kept || kept_face[static_cast<std::size_t>(f)];
       std::optional<BRepAdaptor_Curve>& c = curves_[static_cast<std::size_t>(e)];
-      if (!edge_mixed[n] && sides[n] == 2 && !lattice && !c)
+      if (!edge_mixed[n] && sides[n] == 2 && !kept && !c)
         c.emplace(TopoDS::Edge(shape.edges(e + 1)));
-      if (edge_mixed[n] || sides[n] != 2 || lattice || !(t_[n] > c->FirstParameter()) ||
+      if (edge_mixed[n] || sides[n] != 2 || kept || !(t_[n] > c->FirstParameter()) ||
           !(t_[n] < c->LastParameter()))
         edge_[n] = -1;
     }
@@ -196,9 +196,9 @@ class BoundaryPath final : public SurfacePath {
 }  // namespace
 
 std::unique_ptr<SurfacePath> boundary_path(const Shape& shape, const Surface& surface,
-                                           const std::vector<bool>& lattice_face,
-                                           double tolerance) {
-  return std::make_unique<BoundaryPath>(shape, surface, lattice_face, tolerance);
+                                           const std::vector<bool>& kept_face,
+                                           const std::vector<bool>& kept_edge, double tolerance) {
+  return std::make_unique<BoundaryPath>(shape, surface, kept_face, kept_edge, tolerance);
 }
 
 }  // namespace hexmerge::mesher

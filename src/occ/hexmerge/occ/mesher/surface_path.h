@@ -14,14 +14,18 @@ struct Shape;
 struct Surface;
 
 /// The path of the surface's nodes that lie inside one face (on no CAD edge, every triangle at
-/// them on that face) that is not a lattice face: its surface, from the node's parameters on it
-/// (nodes numbered as `surface`'s; the mesh's other vertices are held by none).
-/// Nodes inside one CAD edge (on its sides only, between its ends), where the edge bounds no
-/// lattice face: its curve.
-/// @param[in] lattice_face  per face, whether it is a lattice face (its nodes stay on the lattice)
-/// @param[in] tolerance     a face node whose parameters are further than this from it (a repair
-///                          moved it) gets them again by projection, or stays
+/// them on that face) whose nodes are not kept: its surface, from the node's parameters on it
+/// (nodes numbered as `surface`'s; the mesh's other vertices are held by none). Nodes inside one
+/// CAD edge (on its sides only, between its ends) that is not kept and bounds no kept face: its
+/// curve.
+/// @param[in] kept_face  per face, whether its nodes stay (lattice faces: on the lattice; faces
+///                       with a local size: their sides at most the size; face layers: their
+///                       points along the nodes' normals)
+/// @param[in] kept_edge  per edge, whether its nodes stay (a local size on it)
+/// @param[in] tolerance  a face node whose parameters are further than this from it (a repair
+///                       moved it) gets them again by projection, or stays
 std::unique_ptr<SurfacePath> boundary_path(const Shape& shape, const Surface& surface,
-                                           const std::vector<bool>& lattice_face, double tolerance);
+                                           const std::vector<bool>& kept_face,
+                                           const std::vector<bool>& kept_edge, double tolerance);
 
 }  // namespace hexmerge::mesher
