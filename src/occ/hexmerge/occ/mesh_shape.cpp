@@ -84,13 +84,6 @@ TetMesh world_mesh(const std::string& brep, const Shape& shape, const Surface& s
   return mesh;
 }
 
-// TetGen's radius-edge bound with lattice points, unswept (its -q). gmsh_918_pump_carter at
-// h 10.29 (the boundary nodes moved along the CAD in both): min SJ 1.3e-4 without, 0.018 at 4
-// (6 % more tets), 0.032 at 3 (9 %); but the points it adds near the core break closing
-// pyramids: gmsh_part at h 4.196 75.3 % hex volume without, 75.2 at 5, 73.0 at 4, 70.1 at 3;
-// at 1.5 the layers' flat tets are split too (gmsh_t20_data at h 2.05: 32 -> 22 %).
-constexpr double kLatticeRadiusEdge = 4.0;
-
 // How one attempt places its points. mesh_shape() tries them in this order until TetGen
 // tetrahedralises the input; the later ones hand TetGen simpler input (no planar facets holding
 // lattice points, on which TetGen 1.5 fails for some shapes and sizes; no boundary layers; no
@@ -311,15 +304,8 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
   tetgen_parameters.restarts = kTetgenRestarts;
   tetgen_parameters.nudge = 1e-7 * h;
   tetgen_parameters.tolerance = 1e-9 * h;
-  // Without lattice points TetGen fills the volume itself (radius-edge ratio 1.5). With them,
-  // unswept, it adds points only where a tet's ratio exceeds kLatticeRadiusEdge: the needles
-  // between fine surface features and the coarse points inside, which no flip or node move
-  // lifts; the lattice's cells, its pyramids and the layers' prisms stay below it. Swept shapes
-  // get none (the sweep repeats the first slab's points on every plane).
-  tetgen_parameters.radius_edge_ratio = strategy.lattice_points ? 0.0 : 1.5;
+  tetgen_parameters.quality = !strategy.lattice_points;
   const Tetrahedralizer tetgen(tetgen_parameters);
-  tetgen_parameters.radius_edge_ratio = strategy.lattice_points ? kLatticeRadiusEdge : 1.5;
-  const Tetrahedralizer refining(tetgen_parameters);
 
   // 4. The surface triangulation (on the CAD), and the lattice through its bounding box in the
   // frame.
@@ -530,9 +516,7 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
   if (sweep_axis >= 0)
     swept_tets = tetrahedralize_swept(tetgen, input, swept, nodes.size(), sweep_axis,
                                       lattice.spacing[sweep_axis], extruded);
-  TetrahedralizeOutput tets = swept_tets        ? std::move(*swept_tets)
-                              : sweep_axis >= 0 ? tetgen.run(std::move(input))
-                                                : refining.run(std::move(input));
+  TetrahedralizeOutput tets = swept_tets ? std::move(*swept_tets) : tetgen.run(std::move(input));
   report.tetgen_command = tets.command;
   report.nb_tetgen_restarts = tets.nb_restarts;
   report.nb_nudged_points = tets.nb_nudged;

@@ -248,9 +248,8 @@ TetrahedralizeOutput Tetrahedralizer::run(TetrahedralizeInput input) const {
   write_poly();
   const fs::path log = work.path() / "tetgen.log";
   // Not quiet: on failure, its last lines say why (read by failure_text()).
-  std::ostringstream quality;  // TetGen reads the bound as printed: the shortest exact form
-  if (parameters_.radius_edge_ratio > 0) quality << 'q' << parameters_.radius_edge_ratio;
-  const std::string switches = std::string(delaunay ? " -z" : " -pYz") + quality.str() + " ";
+  const std::string switches =
+      std::string(delaunay ? " -z" : " -pYz") + (parameters_.quality ? "q1.5 " : " ");
   output.command = shell_quote(program_) + switches + shell_quote(poly.string());
   const std::size_t given = points.size();
   std::vector<double> frame_points;

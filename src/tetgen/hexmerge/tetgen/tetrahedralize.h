@@ -69,9 +69,9 @@ struct TetrahedralizeParameters {
   double nudge = 0.0;
   /// Distance within which an output point is the input point of the same rank.
   double tolerance = 0.0;
-  /// Let the tetrahedraliser add points inside until no tet's radius-edge ratio exceeds this
-  /// (TetGen's -q; never on the boundary); 0: add none.
-  double radius_edge_ratio = 0.0;
+  /// Let the tetrahedraliser add points inside for quality (radius-edge ratio at most 1.5), for
+  /// an input with no isolated points.
+  bool quality = false;
 };
 
 /// The tets.

@@ -18,8 +18,8 @@ enum NodeMobility : char {
   /// further once it reaches it (a node that placed elements rely on, as the apex of a closing
   /// pyramid: the least move that makes its tets usable).
   kNudged = 2,
-  /// On a surface: moved as a free node, along the surface through it (SurfacePath), while its
-  /// worst tet is below `nudge_target` (a boundary node inside a CAD face or edge).
+  /// On a surface: moved as a free node, but along the surface through it (SurfacePath), as a
+  /// boundary node inside a CAD face.
   kOnSurface = 3,
 };
 
