@@ -20,7 +20,7 @@ struct Surface;
 /// curve.
 /// @param[in] kept_face  per face, whether its nodes stay (lattice faces: on the lattice; faces
 ///                       with a local size: their sides at most the size; face layers: their
-///                       points along the nodes' normals)
+///                       points along the nodes' normals; faces between two solids)
 /// @param[in] kept_edge  per edge, whether its nodes stay (a local size on it)
 /// @param[in] tolerance  a face node whose parameters are further than this from it (a repair
 ///                       moved it) gets them again by projection, or stays
