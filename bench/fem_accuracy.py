@@ -25,7 +25,9 @@ a private HOME) and collects their rows; results also go to bench/results/fem-ac
 (--output another file). --recombine-options adds engine options to every recombination variant,
 e.g. the post-merge stage of issue 19:
     /usr/bin/python3.11 bench/fem_accuracy.py --cases cantilever,plate --kinds gmsh --no-doc \
-        --recombine-options '{"same_nodes": false}' --output bench/results/fem-accuracy-post-merge.json
+        --recombine-options '{"same_nodes": false}' --paired \
+        --output bench/results/fem-accuracy-post-merge.json
+(--paired: each variant without and with those options, on the same Gmsh mesh.)
 """
 
 import argparse
@@ -427,9 +429,16 @@ def worker(job):
         variants = VARIANTS + (LINEAR_ONLY_VARIANTS if job["order"] == "1st" else [])
         defaults = {r["name"]: r["default"] for r in engine.parameter_table()}
         extra = job.get("recombine_options") or {}
-        seen = set()
+        runs = []
         for name, options, post in variants:
-            options = dict(options, **extra)
+            if extra and job.get("paired"):  # both, on the same source mesh
+                runs.append((name, options, post, ""))
+                runs.append((name, dict(options, **extra), post, " + " + ", ".join(
+                    "{}={}".format(k, json.dumps(v)) for k, v in sorted(extra.items()))))
+            else:
+                runs.append((name, dict(options, **extra), post, ""))
+        seen = set()
+        for name, options, post, suffix in runs:
             effective = tuple(sorted(dict(defaults, **{k: str(v).lower() for k, v in
                                                        options.items()}).items())) \
                 + (json.dumps(post, sort_keys=True),)
@@ -438,6 +447,7 @@ def worker(job):
             seen.add(effective)
             if "pyramid_placement" not in options and options.get("make_pyramids", True):
                 name += " (pyramid_placement={})".format(defaults["pyramid_placement"])
+            name += suffix
             femmesh, report = jobs.recombine_femmesh(source, regions="none", **options)
             mesh.FemMesh = femmesh
             result, inp, seconds = solve(doc, post)
@@ -665,6 +675,9 @@ def main():
     parser.add_argument("--recombine-options", default="{}",
                         help='JSON: engine options added to every recombination variant of the '
                         'Gmsh meshes, e.g. \'{"same_nodes": false}\' (the post-merge stage)')
+    parser.add_argument("--paired", action="store_true",
+                        help="with --recombine-options: solve each variant without and with "
+                        "them, on the same Gmsh mesh (Gmsh's meshes differ from run to run)")
     parser.add_argument("--output", default=os.path.join(ROOT, "bench", "results",
                                                          "fem-accuracy.json"),
                         help="the JSON results file (default bench/results/fem-accuracy.json)")
@@ -691,13 +704,15 @@ def main():
             job["shape_options"] = json.loads(args.shape_options)
         else:
             job["recombine_options"] = recombine_options
+            job["paired"] = args.paired
         try:
             rows += run_job(job, args.timeout)
         except (RuntimeError, subprocess.TimeoutExpired) as e:
             print("  FAILED: {}".format(e), flush=True)
         header = header_text() + " Whole run {:.0f} s.".format(time.perf_counter() - t)
         if recombine_options:
-            header += " Recombination options on every variant: {}.".format(
+            header += " Recombination options {}: {}.".format(
+                "beside every variant (rows ' + ...')" if args.paired else "on every variant",
                 json.dumps(recombine_options, sort_keys=True))
         with open(args.output, "w") as f:
             json.dump({"header": header, "rows": rows}, f, indent=1)  # after every job
