@@ -21,7 +21,13 @@ Run (5 to 10 min on 2 shared cores, depending on their other load):
     /usr/bin/python3.11 bench/fem_accuracy.py                      # every case, docs/fem-accuracy.md
     /usr/bin/python3.11 bench/fem_accuracy.py --cases plate --no-doc
 It starts one freecadcmd per case and source mesh (the module and the add-on from this checkout,
-a private HOME) and collects their rows; results also go to bench/results/fem-accuracy.json.
+a private HOME) and collects their rows; results also go to bench/results/fem-accuracy.json
+(--output another file). --recombine-options adds engine options to every recombination variant,
+e.g. the post-merge stage of issue 19:
+    /usr/bin/python3.11 bench/fem_accuracy.py --cases cantilever,plate --kinds gmsh --no-doc \
+        --recombine-options '{"same_nodes": false}' --paired \
+        --output bench/results/fem-accuracy-post-merge.json
+(--paired: each variant without and with those options, on the same Gmsh mesh.)
 """
 
 import argparse
@@ -400,6 +406,13 @@ def volume_fractions(report):
     return {n: round(100 * float(v), 1) for n, v in zip(("tet", "pyramid", "prism", "hex"), vf)}
 
 
+def post_merge_report(report):
+    """What the engine's post-merge stage (same_nodes off) did, from its report."""
+    keys = ("post_merge", "post_merge_closed", "post_merge_lifted", "node_moves", "contractions",
+            "flips_23", "flips_32", "flips_44")
+    return {k: report[k] for k in keys if k in report}
+
+
 def worker(job):
     """One case and one source mesh (Gmsh tets, then every recombination) or one shape mesh."""
     import FreeCAD
@@ -415,22 +428,33 @@ def worker(job):
         rows.append(row(case, label, source, result, inp, seconds, {"source": label}))
         variants = VARIANTS + (LINEAR_ONLY_VARIANTS if job["order"] == "1st" else [])
         defaults = {r["name"]: r["default"] for r in engine.parameter_table()}
-        seen = set()
+        extra = job.get("recombine_options") or {}
+        runs = []
         for name, options, post in variants:
+            if extra and job.get("paired"):  # both, on the same source mesh
+                runs.append((name, options, post, ""))
+                runs.append((name, dict(options, **extra), post, " + " + ", ".join(
+                    "{}={}".format(k, json.dumps(v)) for k, v in sorted(extra.items()))))
+            else:
+                runs.append((name, dict(options, **extra), post, ""))
+        seen = set()
+        for name, options, post, suffix in runs:
             effective = tuple(sorted(dict(defaults, **{k: str(v).lower() for k, v in
                                                        options.items()}).items())) \
                 + (json.dumps(post, sort_keys=True),)
             if effective in seen:
                 continue
             seen.add(effective)
-            if not options:
+            if "pyramid_placement" not in options and options.get("make_pyramids", True):
                 name += " (pyramid_placement={})".format(defaults["pyramid_placement"])
+            name += suffix
             femmesh, report = jobs.recombine_femmesh(source, regions="none", **options)
             mesh.FemMesh = femmesh
             result, inp, seconds = solve(doc, post)
             rows.append(row(case, name, femmesh, result, inp, seconds,
                             {"source": label, "volume %": volume_fractions(report),
-                             "options": options, "post": post}))
+                             "options": options, "post": post,
+                             "post-merge": post_merge_report(report)}))
             mesh.FemMesh = source
     else:
         shape = doc.getObject(mesh.Part.Name).Shape if mesh.Part else None
@@ -648,6 +672,15 @@ def main():
     parser.add_argument("--timeout", type=float, default=900.0, help="seconds per job")
     parser.add_argument("--no-doc", action="store_true", help="do not write docs/fem-accuracy.md")
     parser.add_argument("--table", help="print the table of an earlier JSON run")
+    parser.add_argument("--recombine-options", default="{}",
+                        help='JSON: engine options added to every recombination variant of the '
+                        'Gmsh meshes, e.g. \'{"same_nodes": false}\' (the post-merge stage)')
+    parser.add_argument("--paired", action="store_true",
+                        help="with --recombine-options: solve each variant without and with "
+                        "them, on the same Gmsh mesh (Gmsh's meshes differ from run to run)")
+    parser.add_argument("--output", default=os.path.join(ROOT, "bench", "results",
+                                                         "fem-accuracy.json"),
+                        help="the JSON results file (default bench/results/fem-accuracy.json)")
     parser.add_argument("--shape-options", default="{}",
                         help='JSON: more mesher parameters for the meshes from the shape, e.g. '
                         '\'{"layer_thickness": 0.15}\'')
@@ -664,16 +697,24 @@ def main():
             SIZES[case] = tuple(float(s) for s in sizes.split(","))
     rows = []
     t = time.perf_counter()
-    os.makedirs(os.path.join(ROOT, "bench", "results"), exist_ok=True)
+    os.makedirs(os.path.dirname(os.path.abspath(args.output)), exist_ok=True)
+    recombine_options = json.loads(args.recombine_options)
     for job in jobs_for(cases, args.kinds.split(","), args.orders.split(",")):
         if job.get("kind", "shape") == "shape":
             job["shape_options"] = json.loads(args.shape_options)
+        else:
+            job["recombine_options"] = recombine_options
+            job["paired"] = args.paired
         try:
             rows += run_job(job, args.timeout)
         except (RuntimeError, subprocess.TimeoutExpired) as e:
             print("  FAILED: {}".format(e), flush=True)
         header = header_text() + " Whole run {:.0f} s.".format(time.perf_counter() - t)
-        with open(os.path.join(ROOT, "bench", "results", "fem-accuracy.json"), "w") as f:
+        if recombine_options:
+            header += " Recombination options {}: {}.".format(
+                "beside every variant (rows ' + ...')" if args.paired else "on every variant",
+                json.dumps(recombine_options, sort_keys=True))
+        with open(args.output, "w") as f:
             json.dump({"header": header, "rows": rows}, f, indent=1)  # after every job
     table = markdown(rows, header)
     print(table)

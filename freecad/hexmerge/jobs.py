@@ -33,6 +33,27 @@ def addon_report(input_cells, regions, region_count, group_names, pyramids_as_he
     }
 
 
+def changed_nodes(mesh, point_ids, point_index, blocks):
+    """The nodes of an engine result whose post-merge stage (same_nodes off) changed nodes:
+    (points, point_ids, blocks). Positions are the engine's (a moved node at its new place, not
+    the source's), a node past the source's gets an id after the largest, and a changed node
+    that no cell uses (contracted away) is left out; the other ids stay the source's."""
+    points = np.asarray(mesh.points, dtype=np.float64)
+    known = point_ids if point_index is None else point_ids[point_index]
+    ids = np.empty(len(points), dtype=np.int64)
+    ids[:len(known)] = known
+    first = int(point_ids.max()) + 1 if len(point_ids) else 1
+    ids[len(known):] = np.arange(first, first + len(points) - len(known))
+    keep = np.ones(len(points), dtype=bool)
+    keep[np.asarray(mesh.changed_nodes, dtype=np.int64)] = False
+    for _, cells in blocks:
+        keep[cells.reshape(-1)] = True
+    if keep.all():
+        return points, ids, blocks
+    new_id = np.cumsum(keep) - 1
+    return points[keep], ids[keep], [(name, new_id[cells]) for name, cells in blocks]
+
+
 class RecombineJob:
     """One recombination of a tetrahedral FemMesh; see the module docstring."""
 
@@ -94,7 +115,11 @@ class RecombineJob:
         t = time.perf_counter()
         blocks, block_regions, point_index = results.result_blocks(self.result)
         points, point_ids = self.arrays.points, self.arrays.point_ids
-        if point_index is not None:
+        changed = self.result[0].changed_nodes
+        if changed is not None and len(changed):
+            points, point_ids, blocks = changed_nodes(self.result[0], point_ids, point_index,
+                                                      blocks)
+        elif point_index is not None:
             points, point_ids = points[point_index], point_ids[point_index]
         names = self.regions.names if self.regions is not None else None
         femmesh, _ = femmesh_arrays.arrays_to_femmesh(

@@ -70,6 +70,29 @@ class Box(unittest.TestCase):
         self.assertEqual(report["freecad"]["pyramids_as_collapsed_hexahedra"], True)
         self.assertEqual(femmesh.PyramidCount, 0)
 
+    def test_post_merge_node_moves_reach_the_femmesh(self):
+        """same_nodes off (issue 19): the FemMesh has the engine's node positions (a moved node
+        at its new place, not the source's), and the nodes contracted away are left out."""
+        from freecad.hexmerge import jobs, results
+        doc, mesh = box_doc("1st", size=6.0)
+        source = fa.femmesh_to_arrays(mesh.FemMesh)
+        job = jobs.RecombineJob.prepare(mesh.FemMesh, {"same_nodes": False}, regions="none")
+        job.run()
+        femmesh, report = job.finish()
+        result = job.result[0]
+        self.assertEqual(report["post_merge"], "kept")
+        self.assertGreater(report["node_moves"], 0)
+        blocks = results.result_blocks(job.result)[0]
+        used = np.unique(np.concatenate([cells.reshape(-1) for _, cells in blocks]))
+        self.assertEqual(femmesh.NodeCount, len(used))
+        ids = source.point_ids[np.asarray(result.point_map)[used]]
+        nodes = femmesh.Nodes
+        got = np.array([tuple(nodes[int(i)]) for i in ids])
+        np.testing.assert_array_equal(got, result.points[used])
+        moved = np.linalg.norm(got - source.points[np.asarray(result.point_map)[used]], axis=1)
+        self.assertGreater(int((moved > 1e-9).sum()), 0)
+        self.assertEqual(femmesh.VolumeCount, report["output_cells"])
+
 
 class Cantilever(unittest.TestCase):
     """FreeCAD's ccx_cantilever_faceload, Gmsh Tet4 (h = 200 mm), solved with CalculiX."""
