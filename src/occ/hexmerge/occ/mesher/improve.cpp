@@ -79,10 +79,11 @@ void improve_tets(TetMesh& mesh, const std::vector<double>& frame_points,
     face_marker[face_key(corners[0], corners[1], corners[2])] = boundary_face[i];
   }
   // Boundary nodes inside a CAD face move along it, inside a CAD edge along that (a tet on a
-  // needle of the surface gets better only so).
-  if (parameters.surface && parameters.sweep_axis < 0)
+  // needle of the surface gets better only so); swept, none.
+  SurfacePath* const surface = parameters.sweep_axis < 0 ? parameters.surface : nullptr;
+  if (surface)
     for (std::size_t v = 0; v < made; ++v)
-      if (on_boundary[v] && parameters.surface->dimension(static_cast<index_t>(v)) > 0)
+      if (on_boundary[v] && surface->dimension(static_cast<index_t>(v)) > 0)
         movable[v] = kOnSurface;
   for (int round = 0; round < kQualityRounds; ++round) {
     std::vector<char> fixed(mesh.nb_tets(), 0);
@@ -110,8 +111,7 @@ void improve_tets(TetMesh& mesh, const std::vector<double>& frame_points,
     report.boundary_swaps += flips.boundary_swaps;
     if (round + 1 == kQualityRounds) break;
     SmoothNodesReport moves;
-    smooth_nodes(mesh, movable, SmoothNodesParameters{}, moves,
-                 parameters.sweep_axis < 0 ? parameters.surface : nullptr);
+    smooth_nodes(mesh, movable, SmoothNodesParameters{}, moves, surface);
     report.node_moves += moves.moves;
     report.boundary_node_moves += moves.surface_moves;
     if (moves.moves == 0) break;

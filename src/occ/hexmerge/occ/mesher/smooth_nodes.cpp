@@ -8,6 +8,7 @@
 #include "hexmerge/core/error.h"
 #include "hexmerge/geometry/quality.h"
 #include "hexmerge/geometry/vec3.h"
+#include "hexmerge/occ/mesher/surface.h"
 
 namespace hexmerge {
 namespace {
@@ -15,11 +16,6 @@ namespace {
 // A node on a surface may make the smallest angle of the boundary triangles at it smaller only
 // while it stays above this (degrees).
 constexpr double kRimAngle = 10.0;
-
-// The angle between u and w, in degrees (atan2: exact down to tiny angles).
-double angle_between(const Vec3& u, const Vec3& w) {
-  return std::atan2(u.cross(w).norm(), u.dot(w)) * 180 / M_PI;
-}
 
 }  // namespace
 
@@ -170,14 +166,12 @@ void smooth_nodes(TetMesh& mesh, const std::vector<char>& movable,
         // The smallest angle of those triangles: a move keeps it at least as large, or above
         // kRimAngle.
         const auto rim_angle = [&] {
-          double least = 180;
+          double least = M_PI;
           const Vec3 p = Vec3::of(mesh.point(v));
-          for (const auto& [x, y] : rim) {
-            const Vec3 q = Vec3::of(mesh.point(x)), r = Vec3::of(mesh.point(y));
-            least = std::min({least, angle_between(q - p, r - p), angle_between(p - q, r - q),
-                              angle_between(p - r, q - r)});
-          }
-          return least;
+          for (const auto& [x, y] : rim)
+            least = std::min(
+                least, mesher::smallest_angle(p, Vec3::of(mesh.point(x)), Vec3::of(mesh.point(y))));
+          return least * 180 / M_PI;
         };
         double angle = rim_angle();
         auto try_along = [&](double ta, double tb) {

@@ -6,8 +6,6 @@
 #include <ShapeAnalysis_Surface.hxx>
 #include <TopoDS.hxx>
 #include <cmath>
-#include <cstdio>
-#include <cstdlib>
 #include <gp_Pnt2d.hxx>
 #include <memory>
 #include <optional>
