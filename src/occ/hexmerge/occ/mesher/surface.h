@@ -60,9 +60,13 @@ struct Surface {
   std::vector<int> unrefined_faces;
 };
 
-/// BRepMesh's angular deflection in triangulate() (radians): the widest angle a triangle spans
-/// on a curved face (20 degrees: 18 strips around a cylinder whatever its radius).
-constexpr double kSurfaceAngle = 0.35;
+/// BRepMesh's angular deflection in triangulate() (radians). Its CAD edges' segments turn by at
+/// most half of it, 45 degrees: at least 8 segments on a circle (Gmsh puts at least 7 points),
+/// more where the chord deflection asks (a radius of r takes segments of 0.4 sqrt(r h) at the
+/// default 0.02 h). At 0.35 a 4 mm hole had 36 nodes at h 3.4 (0.1 h apart) and every small
+/// fillet's arc 9 segments: the tets between them and the lattice h away were needles
+/// (holed_plate at h 3.4: prisms below scaled Jacobian 0.2 1,840 -> 0).
+constexpr double kSurfaceAngle = 1.57;
 
 /// The shape's faces triangulated by OpenCASCADE (BRepMesh, chord deflection `deflection`,
 /// angular deflection kSurfaceAngle), nodes closer than `tolerance` merged into one.
