@@ -12,12 +12,13 @@ HEXMERGE_PYTHON=/usr/bin/python3.11
 # TetGen (test meshes; TetGen is also the CAD mesher's tetrahedraliser), GoogleTest, OpenCASCADE
 # (src/occ: the mesher from CAD and regions by solid; STEP and IGES need
 # libocct-data-exchange-dev; Debian 12 ships one header OCCT needs in libocct-visualization-dev,
-# and OCCT's CMake targets link libtbb-dev's files), GLPK (the optimality bound).
+# and OCCT's CMake targets link libtbb-dev's files), GLPK (the optimality bound), CGAL (the
+# facets TetGen gets triangulated, src/tetgen).
 HEXMERGE_BASE_PACKAGES=(g++ cmake make pybind11-dev python3-dev python3-numpy python3-meshio
                         gmsh tetgen libgtest-dev
                         libocct-foundation-dev libocct-modeling-data-dev
                         libocct-modeling-algorithms-dev libocct-data-exchange-dev
-                        libocct-visualization-dev libtbb-dev libglpk-dev)
+                        libocct-visualization-dev libtbb-dev libglpk-dev libcgal-dev)
 
 # scripts/fuzz.sh: clang with its sanitizer runtimes (AddressSanitizer, UBSan).
 HEXMERGE_FUZZ_PACKAGES=(clang)

@@ -9,8 +9,10 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <unordered_set>
 
 #include "hexmerge/core/error.h"
+#include "hexmerge/tetgen/triangulate_facets.h"
 
 namespace hexmerge::tetgen {
 namespace {
@@ -218,6 +220,28 @@ TetrahedralizeOutput Tetrahedralizer::run(TetrahedralizeInput input) const {
   WorkDirectory work(parameters_.work_directory);
   // No facets: the points alone, in a .node file (TetGen's Delaunay tetrahedralisation).
   const bool delaunay = facets.empty();
+  // The facets with loops go to TetGen as triangles (triangulate_facets.h: its own flips on
+  // them did not end), cocircular points joined as in TetGen's Delaunay tetrahedralisation of
+  // the points (a run of its own, about a tenth of the whole); one it cannot take stays a loop,
+  // for the restarts below.
+  if (std::any_of(facets.begin(), facets.end(), [](const Facet& f) {
+        return std::any_of(f.polygons.begin(), f.polygons.end(),
+                           [](const auto& polygon) { return polygon.size() > 3; });
+      })) {
+    TetrahedralizeParameters alone = parameters_;
+    alone.work_directory.clear();
+    TetrahedralizeInput points_alone;
+    points_alone.points = points;
+    const TetrahedralizeOutput tets = Tetrahedralizer(alone).run(std::move(points_alone));
+    std::unordered_set<std::uint64_t> sides;
+    sides.reserve(tets.tets.size() * 2);
+    for (std::size_t t = 0; t < tets.tets.size(); t += 4)
+      for (int a = 0; a < 4; ++a)
+        for (int b = a + 1; b < 4; ++b)
+          sides.insert(
+              side_key(static_cast<int>(tets.tets[t + a]), static_cast<int>(tets.tets[t + b])));
+    triangulate_facets(facets, points, &sides);
+  }
   const fs::path poly = work.path() / (delaunay ? "shape.node" : "shape.poly");
   auto write_poly = [&] {
     std::ofstream out(poly);
@@ -258,9 +282,10 @@ TetrahedralizeOutput Tetrahedralizer::run(TetrahedralizeInput input) const {
   // ("Invalid PLC. Two segments ... intersect" or a failed assertion on a valid face: thin
   // bracket at h 0.6, a base face with a slot, fails or not with the loop's first vertex). Nearly
   // collinear loop nodes did it (align_straight_edges() now prevents that), and whether it
-  // happened depended on the vertex the loop started at. So TetGen runs under a time limit, far
-  // above its own time (about 1 s per 20k points), and after such a failure the loops start
-  // elsewhere.
+  // happened depended on the vertex the loop started at; cocircular nodes on straight sides
+  // too (its flips never end), which triangulate_facets() now takes away. So TetGen runs under
+  // a time limit, far above its own time (about 1 s per 20k points), and after such a failure
+  // the loops left start elsewhere.
   const double time_limit = parameters_.time_limit > 0
                                 ? parameters_.time_limit
                                 : 30 + 1e-3 * static_cast<double>(points.size());
@@ -290,13 +315,15 @@ TetrahedralizeOutput Tetrahedralizer::run(TetrahedralizeInput input) const {
         (limited + output.command + " > " + shell_quote(log.string()) + " 2>&1").c_str());
     const bool timed_out = WIFEXITED(status) && WEXITSTATUS(status) == 124;
     if (timed_out || (status == 0 && !fs::exists(work.path() / "shape.1.ele"))) {
-      if (++restarts > parameters_.restarts)
+      // With no loop left, the same input would fail in the same way.
+      if (!has_loops || ++restarts > parameters_.restarts)
         throw TetrahedralizeFailure(
             std::string("TetGen ") +
             (timed_out ? "did not finish within " + limit_text.str() + " s"
                        : "lost the shape's surface (no tets inside)") +
-            ", " + std::to_string(restarts) +
-            " times with the lattice faces' loops started at other vertices");
+            (has_loops ? ", " + std::to_string(restarts) +
+                             " times with the lattice faces' loops started at other vertices"
+                       : std::string()));
       start_loops_elsewhere();
       continue;
     }

@@ -7,8 +7,9 @@
 /// with no facets, the Delaunay tetrahedralisation of the points.
 ///
 /// Today's implementation runs the `tetgen` program (TetGen 1.5, `-pYz`) through its files,
-/// under a time limit, restarting it with the facets' polygons started at other vertices when a
-/// run does not finish or loses the surface, and nudging isolated points it leaves out. A
+/// under a time limit, the facets with loops triangulated first (triangulate_facets.h; one it
+/// cannot take is restarted with its loops started at other vertices when a run does not finish
+/// or loses the surface), and nudging isolated points it leaves out. A
 /// version on TetGen as a library (libtet1.5-dev: tetgenio and tetrahedralize()) fits the same
 /// declarations: only Tetrahedralizer's constructor and run() would change.
 
@@ -63,7 +64,8 @@ struct TetrahedralizeParameters {
   std::string work_directory;
   /// Time limit of one run, in seconds; 0: 30 s plus 1 ms per point.
   double time_limit = 0.0;
-  /// Runs made again after one that does not finish or leaves no tet, before failing.
+  /// Runs made again after one that does not finish or leaves no tet, before failing, when a
+  /// facet is still given as loops (none else: the same input fails the same way).
   int restarts = 5;
   /// Length an isolated point left out moves (along (1, 0.7, 0.3)) before the one rerun.
   double nudge = 0.0;
@@ -96,8 +98,8 @@ class Tetrahedralizer {
 
   /// The tets of the complex.
   /// @throws InputError when the complex cannot be tetrahedralised: a run past the time limit
-  ///         or losing the surface `restarts` + 1 times, the program failing (with its output),
-  ///         points left out (naming them), or unreadable output
+  ///         or losing the surface (`restarts` + 1 times with loops), the program failing (with its
+  ///         output), points left out (naming them), or unreadable output
   TetrahedralizeOutput run(TetrahedralizeInput input) const;
 
  private:

@@ -1,0 +1,164 @@
+#include "hexmerge/tetgen/triangulate_facets.h"
+
+#include <CGAL/Constrained_Delaunay_triangulation_2.h>
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/Triangulation_face_base_with_info_2.h>
+#include <CGAL/Triangulation_vertex_base_with_info_2.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <optional>
+#include <unordered_map>
+#include <utility>
+
+namespace hexmerge::tetgen {
+namespace {
+
+using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
+using VertexBase = CGAL::Triangulation_vertex_base_with_info_2<int, Kernel>;
+using FaceInfo = CGAL::Triangulation_face_base_with_info_2<char, Kernel>;  // 1: left out
+using FaceBase = CGAL::Constrained_triangulation_face_base_2<Kernel, FaceInfo>;
+using Tds = CGAL::Triangulation_data_structure_2<VertexBase, FaceBase>;
+// Sides that cross, or a side through a point, throw: nothing is added.
+using Cdt =
+    CGAL::Constrained_Delaunay_triangulation_2<Kernel, Tds, CGAL::No_constraint_intersection_tag>;
+
+double coord(const Vec3& p, int axis) { return axis == 0 ? p.x : axis == 1 ? p.y : p.z; }
+
+// Marks the faces reachable from `start` without crossing a side.
+void leave_out(Cdt::Face_handle start) {
+  if (start->info()) return;
+  std::vector<Cdt::Face_handle> stack{start};
+  start->info() = 1;
+  while (!stack.empty()) {
+    const Cdt::Face_handle f = stack.back();
+    stack.pop_back();
+    for (int i = 0; i < 3; ++i) {
+      const Cdt::Face_handle next = f->neighbor(i);
+      if (f->is_constrained(i) || next->info()) continue;
+      next->info() = 1;
+      stack.push_back(next);
+    }
+  }
+}
+
+// The facet's triangles, or nothing when it is left to TetGen.
+std::optional<std::vector<std::array<int, 3>>> triangulate(
+    const Facet& facet, const std::vector<Vec3>& points,
+    const std::unordered_set<std::uint64_t>* delaunay_edges) {
+  // Its plane: Newell's normal of its loops, the axis it is closest to dropped.
+  Vec3 normal{0, 0, 0}, low{1e300, 1e300, 1e300}, high{-1e300, -1e300, -1e300};
+  for (const auto& polygon : facet.polygons) {
+    for (std::size_t k = 0; k < polygon.size(); ++k) {
+      const Vec3& a = points[static_cast<std::size_t>(polygon[k])];
+      low = {std::min(low.x, a.x), std::min(low.y, a.y), std::min(low.z, a.z)};
+      high = {std::max(high.x, a.x), std::max(high.y, a.y), std::max(high.z, a.z)};
+      if (polygon.size() < 3) continue;
+      const Vec3& b = points[static_cast<std::size_t>(polygon[(k + 1) % polygon.size()])];
+      normal = normal + Vec3{(a.y - b.y) * (a.z + b.z), (a.z - b.z) * (a.x + b.x),
+                             (a.x - b.x) * (a.y + b.y)};
+    }
+  }
+  const double size = (high - low).norm();
+  if (!(normal.norm() > 0) || !(size > 0)) return std::nullopt;
+  normal = normal * (1 / normal.norm());
+  const Vec3& origin = points[static_cast<std::size_t>(facet.polygons.front().front())];
+  for (const auto& polygon : facet.polygons)
+    for (int v : polygon)
+      if (std::abs((points[static_cast<std::size_t>(v)] - origin).dot(normal)) > 1e-6 * size)
+        return std::nullopt;
+  const double n[3] = {std::abs(normal.x), std::abs(normal.y), std::abs(normal.z)};
+  const int axis = static_cast<int>(std::max_element(n, n + 3) - n);
+  const int u = (axis + 1) % 3, v = (axis + 2) % 3;
+  const auto in_plane = [&](const Vec3& p) { return Kernel::Point_2(coord(p, u), coord(p, v)); };
+
+  Cdt cdt;
+  std::unordered_map<int, Cdt::Vertex_handle> vertex;
+  for (const auto& polygon : facet.polygons)
+    for (int id : polygon) {
+      if (vertex.count(id)) continue;
+      const std::size_t before = cdt.number_of_vertices();
+      const Cdt::Vertex_handle h = cdt.insert(in_plane(points[static_cast<std::size_t>(id)]));
+      if (cdt.number_of_vertices() == before) return std::nullopt;  // two points at one place
+      h->info() = id + 1;
+      vertex.emplace(id, h);
+    }
+  try {
+    for (const auto& polygon : facet.polygons) {
+      if (polygon.size() < 2) continue;
+      const std::size_t sides = polygon.size() == 2 ? 1 : polygon.size();
+      for (std::size_t k = 0; k < sides; ++k)
+        cdt.insert_constraint(vertex.at(polygon[k]), vertex.at(polygon[(k + 1) % polygon.size()]));
+    }
+  } catch (const Cdt::Intersection_of_constraints_exception&) {
+    return std::nullopt;
+  }
+  if (cdt.number_of_vertices() != vertex.size()) return std::nullopt;
+  // Four cocircular points: the side TetGen's own tetrahedralisation has (it would else recover
+  // ours by flips, through the lattice's cells).
+  if (delaunay_edges) {
+    for (bool flipped = true; flipped;) {
+      flipped = false;
+      std::vector<std::pair<Cdt::Vertex_handle, Cdt::Vertex_handle>> sides;
+      for (const Cdt::Edge& e : cdt.finite_edges())
+        if (!cdt.is_constrained(e))
+          sides.emplace_back(e.first->vertex(Cdt::cw(e.second)),
+                             e.first->vertex(Cdt::ccw(e.second)));
+      for (const auto& [a, b] : sides) {
+        Cdt::Face_handle f;
+        int i = 0;
+        if (!cdt.is_edge(a, b, f, i)) continue;
+        const Cdt::Face_handle g = f->neighbor(i);
+        if (cdt.is_infinite(f) || cdt.is_infinite(g)) continue;
+        const Cdt::Vertex_handle c = f->vertex(i), d = cdt.mirror_vertex(f, i);
+        if (delaunay_edges->count(side_key(a->info() - 1, b->info() - 1)) ||
+            !delaunay_edges->count(side_key(c->info() - 1, d->info() - 1)) ||
+            cdt.side_of_oriented_circle(f, d->point(), false) != CGAL::ON_ORIENTED_BOUNDARY)
+          continue;
+        cdt.flip(f, i);
+        flipped = true;
+      }
+    }
+  }
+
+  for (Cdt::Face_handle f : cdt.all_face_handles()) f->info() = 0;
+  leave_out(cdt.infinite_face());
+  for (const Vec3& hole : facet.holes) leave_out(cdt.locate(in_plane(hole)));
+  std::vector<std::array<int, 3>> triangles;
+  for (Cdt::Face_handle f : cdt.finite_face_handles())
+    if (!f->info())
+      triangles.push_back(
+          {f->vertex(0)->info() - 1, f->vertex(1)->info() - 1, f->vertex(2)->info() - 1});
+  return triangles;
+}
+
+}  // namespace
+
+std::uint64_t side_key(int a, int b) {
+  const auto [low, high] = std::minmax(a, b);
+  return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(low)) << 32) |
+         static_cast<std::uint32_t>(high);
+}
+
+std::size_t triangulate_facets(std::vector<Facet>& facets, const std::vector<Vec3>& points,
+                               const std::unordered_set<std::uint64_t>* delaunay_edges) {
+  std::vector<Facet> out;
+  std::size_t triangulated = 0;
+  for (Facet& facet : facets) {
+    const bool loops = std::any_of(facet.polygons.begin(), facet.polygons.end(),
+                                   [](const auto& polygon) { return polygon.size() > 3; });
+    std::optional<std::vector<std::array<int, 3>>> triangles;
+    if (loops) triangles = triangulate(facet, points, delaunay_edges);
+    if (!triangles) {
+      out.push_back(std::move(facet));
+      continue;
+    }
+    ++triangulated;
+    for (const auto& t : *triangles) out.push_back(Facet{{{t[0], t[1], t[2]}}, {}, facet.marker});
+  }
+  facets = std::move(out);
+  return triangulated;
+}
+
+}  // namespace hexmerge::tetgen
