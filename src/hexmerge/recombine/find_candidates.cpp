@@ -82,7 +82,10 @@ index_t unique_other_neighbor(index_t v, const std::array<index_t, 4>* faces, co
     const int n = sizes[f];
     for (int i = 0; i < n; ++i) {
       if (faces[f][i] != v) continue;
-      for (const index_t u : {faces[f][(i + 1) % n], faces[f][(i + n - 1) % n]}) {
+      // Its two neighbours along the face (no modulo: a division per vertex of every face).
+      const index_t around[2] = {faces[f][i + 1 == n ? 0 : i + 1],
+                                 faces[f][i == 0 ? n - 1 : i - 1]};
+      for (const index_t u : around) {
         if (contains(exclude, nex, u)) continue;
         if (found != NO_VERTEX && found != u) return NO_VERTEX;
         found = u;
@@ -395,6 +398,8 @@ class Matcher {
         input_id_(input_id),
         criteria_(criteria),
         tree_(tree),
+        programs_(search_programs()),
+        split_regions_(criteria.respect_regions && !mesh.regions.empty()),
         found_(tree.nb_programs()),
         found_quads_(tree.nb_programs()),
         out_(out) {}
@@ -402,6 +407,7 @@ class Matcher {
   void run_from(index_t root) {
     root_ = root;
     root_input_id_ = input_id_[root];
+    root_region_ = mesh_.region(root);
     const int root_quad_faces = quad_faces(root, -1);
     for (const int gate : tree_.node(0).children) {
       if (root_quad_faces < tree_.node(gate).quad_degree) continue;
@@ -444,7 +450,7 @@ class Matcher {
 
   // The programs ending at `n` have a match; its children continue the others.
   void descend(const SearchTree::Node& n) {
-    for (const int p : n.programs) finish(search_programs()[p], found_[p], found_quads_[p]);
+    for (const int p : n.programs) finish(programs_[p], found_[p], found_quads_[p]);
     for (const int c : n.children) step(tree_.node(c));
   }
 
@@ -456,14 +462,17 @@ class Matcher {
         const int f = lowest_bit(free);
         const index_t nb = topology_.neighbor(ta, f);
         // The root is the group's smallest tet: each group is found from one root only.
-        if (nb == NO_CELL || input_id_[nb] < root_input_id_ || in_match(nb)) continue;
-        if (criteria_.respect_regions && mesh_.region(nb) != mesh_.region(root_)) continue;
+        if (nb == NO_CELL || input_id_[nb] < root_input_id_) continue;
+        if (split_regions_ && mesh_.regions[nb] != root_region_) continue;
         const int fn = topology_.neighbor_face(ta, f);
         // The node's tet needs as many faces that can pair into quads as the node has quads.
         if (quad_faces(nb, fn) < n.quad_degree) continue;
         const index_t apex = mesh_.tet(nb)[fn];
         const bool new_vertex = !has_vertex(apex);
         if (new_vertex != (n.adds_vertex != 0)) continue;
+        // A tet of the match has all its vertices in it: asked last, and only when the apex is
+        // not new (the cheaper tests reject most neighbours, and the answer is the same).
+        if (!new_vertex && in_match(nb)) continue;
         if (new_vertex) vertex_[nb_vertices_++] = apex;
         node_[nb_assigned_] = nb;
         used_[nb_assigned_] = static_cast<unsigned char>(1u << fn);
@@ -623,12 +632,15 @@ class Matcher {
   const std::vector<index_t>& input_id_;
   const AcceptanceCriteria& criteria_;
   const SearchTree& tree_;
+  const std::vector<SearchProgram>& programs_;     // search_programs()
+  bool split_regions_;                             // respect_regions, and the mesh has regions
   std::vector<std::vector<Match>> found_;          // this root's matches, per program
   std::vector<std::vector<QuadSet>> found_quads_;  // and their quad_set()s
   std::vector<Match> kept_;                        // this root's matches kept
   ChunkMatches& out_;
   index_t root_ = 0;
   index_t root_input_id_ = 0;
+  std::int32_t root_region_ = 0;
   int nb_assigned_ = 0;
   std::array<index_t, kMaxNodes> node_{};
   std::array<unsigned char, kMaxNodes> used_{};  // faces of each node taken by a LINK or QUAD
