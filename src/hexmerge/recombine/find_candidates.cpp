@@ -328,15 +328,33 @@ Candidates in_root_order(const TetMesh& input, std::vector<ChunkMatches>& per_ch
 
 // The enabled search programs merged into one tree: programs that begin with the same steps
 // (the same instruction with the same filters) run those steps once for all of them. Node 0 is
-// the root; each other node is one instruction, and lists the programs whose code ends there.
+// the root (no instruction); each other node is one instruction, and lists the programs whose
+// code ends there.
+//
+// A node's children that run the same instruction with different filters (a new node's
+// quad_degree and adds_vertex, the root's quad_degree) form one group: the instruction runs once
+// for the group (one walk over a tet's free faces, over a face's quad partners), and each of its
+// results goes on into the members whose filters it passes. That interleaves the members'
+// programs, but not the steps of any one program, whose matches come in the same order as when
+// it ran alone: run_from keeps them program by program.
 class SearchTree {
  public:
   struct Node {
     Instruction in{};
-    unsigned char adds_vertex = 0;  // a LINK to a new node: SearchProgram::adds_vertex
-    unsigned char quad_degree = 0;  // the new node's SearchProgram::quad_degree (root: node 0's)
+    unsigned char adds_vertex = 0;       // a LINK to a new node: SearchProgram::adds_vertex
+    unsigned char quad_degree = 0;       // a LINK: the new node's SearchProgram::quad_degree
+    unsigned char root_quad_degree = 0;  // a program's first instruction: its node 0's
     std::vector<int> children;
     std::vector<int> programs;  // indices into search_programs()
+  };
+  /// Children of one node that run the same instruction, in the order of their first member;
+  /// their filters as masks of members (bit i: members[i]).
+  struct Group {
+    Instruction in{};
+    std::vector<int> members;                          // nodes, at most 32
+    unsigned adds_vertex = 0;                          // adds_vertex set
+    std::array<unsigned, 5> quad_degree_up_to{};       // [k]: quad_degree <= k
+    std::array<unsigned, 5> root_quad_degree_up_to{};  // [k]: root_quad_degree <= k
   };
 
   explicit SearchTree(const std::array<bool, NB_CELL_TYPES>& types) {
@@ -344,21 +362,41 @@ class SearchTree {
     for (int p = 0; p < static_cast<int>(programs.size()); ++p) {
       const SearchProgram& program = programs[p];
       if (!types[static_cast<int>(program.type)]) continue;
-      Node root_gate;
-      root_gate.quad_degree = program.quad_degree[0];
-      int at = child(0, root_gate);
+      int at = 0;
       for (std::size_t pc = 0; pc < program.code.size(); ++pc) {
         Node step;
         step.in = program.code[pc];
         step.adds_vertex = program.adds_vertex[pc];
         if (step.in.op == Instruction::Link) step.quad_degree = program.quad_degree[step.in.b];
+        if (pc == 0) step.root_quad_degree = program.quad_degree[0];
         at = child(at, step);
       }
       nodes_[at].programs.push_back(p);
     }
+    groups_.resize(nodes_.size());
+    for (std::size_t i = 0; i < nodes_.size(); ++i) {
+      for (const int c : nodes_[i].children) {
+        const Instruction& in = nodes_[c].in;
+        auto g = std::find_if(groups_[i].begin(), groups_[i].end(), [&](const Group& o) {
+          return o.in.op == in.op && o.in.a == in.a && o.in.b == in.b;
+        });
+        if (g == groups_[i].end()) g = groups_[i].insert(g, Group{in, {}});
+        HEXMERGE_ASSERT(g->members.size() < 32, "SearchTree: a group's members are a 32-bit mask");
+        const unsigned bit = 1u << g->members.size();
+        const Node& n = nodes_[c];
+        g->members.push_back(c);
+        if (n.adds_vertex != 0) g->adds_vertex |= bit;
+        for (int k = 0; k < 5; ++k) {
+          if (n.quad_degree <= k) g->quad_degree_up_to[k] |= bit;
+          if (n.root_quad_degree <= k) g->root_quad_degree_up_to[k] |= bit;
+        }
+      }
+    }
   }
 
   const Node& node(int i) const { return nodes_[i]; }
+  /// The groups of node i's children.
+  const std::vector<Group>& groups(int i) const { return groups_[i]; }
   int nb_programs() const { return static_cast<int>(search_programs().size()); }
 
  private:
@@ -367,7 +405,8 @@ class SearchTree {
     for (const int c : nodes_[parent].children) {
       const Node& n = nodes_[c];
       if (n.in.op == step.in.op && n.in.a == step.in.a && n.in.b == step.in.b &&
-          n.adds_vertex == step.adds_vertex && n.quad_degree == step.quad_degree) {
+          n.adds_vertex == step.adds_vertex && n.quad_degree == step.quad_degree &&
+          n.root_quad_degree == step.root_quad_degree) {
         return c;
       }
     }
@@ -377,6 +416,7 @@ class SearchTree {
   }
 
   std::vector<Node> nodes_{1};
+  std::vector<std::vector<Group>> groups_;  // per node
 };
 
 // One search: the interpreter's state while it runs the search tree from one root tet.
@@ -408,20 +448,17 @@ class Matcher {
     root_ = root;
     root_input_id_ = input_id_[root];
     root_region_ = mesh_.region(root);
-    const int root_quad_faces = quad_faces(root, -1);
-    for (const int gate : tree_.node(0).children) {
-      if (root_quad_faces < tree_.node(gate).quad_degree) continue;
-      nb_assigned_ = 1;
-      node_.fill(NO_CELL);
-      node_[0] = root;
-      used_[0] = 0;
-      const index_t* q = mesh_.tet(root);
-      nb_vertices_ = 4;
-      vertex_.fill(NO_VERTEX);
-      std::copy(q, q + 4, vertex_.begin());
-      nb_quads_ = 0;
-      descend(tree_.node(gate));
-    }
+    root_quad_faces_ = quad_faces(root, -1);
+    nb_assigned_ = 1;
+    node_.fill(NO_CELL);
+    node_[0] = root;
+    used_[0] = 0;
+    const index_t* q = mesh_.tet(root);
+    nb_vertices_ = 4;
+    vertex_.fill(NO_VERTEX);
+    std::copy(q, q + 4, vertex_.begin());
+    nb_quads_ = 0;
+    descend(0);
     // Program by program, as if each ran alone in turn: the same group may be matched again
     // through an automorphism that fixes the root, and the first match is kept.
     kept_.clear();
@@ -448,16 +485,19 @@ class Matcher {
     return found;
   }
 
-  // The programs ending at `n` have a match; its children continue the others.
-  void descend(const SearchTree::Node& n) {
-    for (const int p : n.programs) finish(programs_[p], found_[p], found_quads_[p]);
-    for (const int c : n.children) step(tree_.node(c));
+  // The programs ending at node `i` have a match; its children continue the others.
+  void descend(int i) {
+    for (const int p : tree_.node(i).programs) finish(programs_[p], found_[p], found_quads_[p]);
+    for (const SearchTree::Group& g : tree_.groups(i)) step(g);
   }
 
-  void step(const SearchTree::Node& n) {
-    const Instruction& in = n.in;
+  void step(const SearchTree::Group& g) {
+    const Instruction& in = g.in;
     const index_t ta = node_[in.a];
     if (in.op == Instruction::Link && in.b == nb_assigned_) {
+      // The members whose filter on the root passes (it is 0 but in programs' first steps).
+      const unsigned live = g.root_quad_degree_up_to[root_quad_faces_];
+      if (live == 0) return;
       for (unsigned free = ~used_[in.a] & 15u; free != 0; free &= free - 1) {
         const int f = lowest_bit(free);
         const index_t nb = topology_.neighbor(ta, f);
@@ -466,10 +506,12 @@ class Matcher {
         if (split_regions_ && mesh_.regions[nb] != root_region_) continue;
         const int fn = topology_.neighbor_face(ta, f);
         // The node's tet needs as many faces that can pair into quads as the node has quads.
-        if (quad_faces(nb, fn) < n.quad_degree) continue;
+        const unsigned fit = live & g.quad_degree_up_to[quad_faces(nb, fn)];
+        if (fit == 0) continue;
         const index_t apex = mesh_.tet(nb)[fn];
         const bool new_vertex = !has_vertex(apex);
-        if (new_vertex != (n.adds_vertex != 0)) continue;
+        const unsigned pass = fit & (new_vertex ? g.adds_vertex : ~g.adds_vertex);
+        if (pass == 0) continue;
         // A tet of the match has all its vertices in it: asked last, and only when the apex is
         // not new (the cheaper tests reject most neighbours, and the answer is the same).
         if (!new_vertex && in_match(nb)) continue;
@@ -478,7 +520,7 @@ class Matcher {
         used_[nb_assigned_] = static_cast<unsigned char>(1u << fn);
         ++nb_assigned_;
         used_[in.a] |= static_cast<unsigned char>(1u << f);
-        descend(n);
+        for (unsigned m = pass; m != 0; m &= m - 1) descend(g.members[lowest_set_bit(m)]);
         used_[in.a] &= static_cast<unsigned char>(~(1u << f));
         node_[--nb_assigned_] = NO_CELL;
         if (new_vertex) vertex_[--nb_vertices_] = NO_VERTEX;
@@ -491,7 +533,7 @@ class Matcher {
         if ((used_[in.a] & (1u << f)) || (used_[in.b] & (1u << fb))) return;
         used_[in.a] |= static_cast<unsigned char>(1u << f);
         used_[in.b] |= static_cast<unsigned char>(1u << fb);
-        descend(n);
+        for (const int c : g.members) descend(c);
         used_[in.a] &= static_cast<unsigned char>(~(1u << f));
         used_[in.b] &= static_cast<unsigned char>(~(1u << fb));
         return;
@@ -513,13 +555,20 @@ class Matcher {
           used_[in.b] |= static_cast<unsigned char>(1u << fb);
           quad_[nb_quads_] = {4 * ta + fa, p->face};
           ++nb_quads_;
-          descend(n);
+          for (const int c : g.members) descend(c);
           --nb_quads_;
           used_[in.a] &= static_cast<unsigned char>(~(1u << fa));
           used_[in.b] &= static_cast<unsigned char>(~(1u << fb));
         }
       }
     }
+  }
+
+  // The lowest set bit of a nonzero mask.
+  static int lowest_set_bit(unsigned m) {
+    int i = 0;
+    for (; (m & 15u) == 0; m >>= 4) i += 4;
+    return i + lowest_bit(m & 15u);
   }
 
   // The lowest set bit of a nonzero 4-bit mask.
@@ -641,6 +690,7 @@ class Matcher {
   index_t root_ = 0;
   index_t root_input_id_ = 0;
   std::int32_t root_region_ = 0;
+  int root_quad_faces_ = 0;  // quad_faces(root, -1)
   int nb_assigned_ = 0;
   std::array<index_t, kMaxNodes> node_{};
   std::array<unsigned char, kMaxNodes> used_{};  // faces of each node taken by a LINK or QUAD
