@@ -344,15 +344,18 @@ class SearchTree {
     unsigned char adds_vertex = 0;       // a LINK to a new node: SearchProgram::adds_vertex
     unsigned char quad_degree = 0;       // a LINK: the new node's SearchProgram::quad_degree
     unsigned char root_quad_degree = 0;  // a program's first instruction: its node 0's
+    bool assigns = false;                // a LINK to a new node
     std::vector<int> children;
     std::vector<int> programs;  // indices into search_programs()
   };
   /// Children of one node that run the same instruction, in the order of their first member;
   /// their filters as masks of members (bit i: members[i]).
   struct Group {
+    enum Kind : unsigned char { LinkNew, LinkClose, Quad };
     Instruction in{};
-    std::vector<int> members;                          // nodes, at most 32
-    unsigned adds_vertex = 0;                          // adds_vertex set
+    Kind kind = LinkNew;       // a LINK to a new node, a LINK closing a cycle, a QUAD
+    std::vector<int> members;  // nodes, at most 32
+    unsigned adds_vertex = 0;  // adds_vertex set
     std::array<unsigned, 5> quad_degree_up_to{};       // [k]: quad_degree <= k
     std::array<unsigned, 5> root_quad_degree_up_to{};  // [k]: root_quad_degree <= k
   };
@@ -363,9 +366,12 @@ class SearchTree {
       const SearchProgram& program = programs[p];
       if (!types[static_cast<int>(program.type)]) continue;
       int at = 0;
+      int nb_assigned = 1;
       for (std::size_t pc = 0; pc < program.code.size(); ++pc) {
         Node step;
         step.in = program.code[pc];
+        step.assigns = step.in.op == Instruction::Link && step.in.b == nb_assigned;
+        nb_assigned += step.assigns;
         step.adds_vertex = program.adds_vertex[pc];
         if (step.in.op == Instruction::Link) step.quad_degree = program.quad_degree[step.in.b];
         if (pc == 0) step.root_quad_degree = program.quad_degree[0];
@@ -380,7 +386,12 @@ class SearchTree {
         auto g = std::find_if(groups_[i].begin(), groups_[i].end(), [&](const Group& o) {
           return o.in.op == in.op && o.in.a == in.a && o.in.b == in.b;
         });
-        if (g == groups_[i].end()) g = groups_[i].insert(g, Group{in, {}});
+        if (g == groups_[i].end()) {
+          const Group::Kind kind = in.op == Instruction::Quad ? Group::Quad
+                                   : nodes_[c].assigns        ? Group::LinkNew
+                                                              : Group::LinkClose;
+          g = groups_[i].insert(g, Group{in, kind, {}});
+        }
         HEXMERGE_ASSERT(g->members.size() < 32, "SearchTree: a group's members are a 32-bit mask");
         const unsigned bit = 1u << g->members.size();
         const Node& n = nodes_[c];
@@ -488,78 +499,94 @@ class Matcher {
   // The programs ending at node `i` have a match; its children continue the others.
   void descend(int i) {
     for (const int p : tree_.node(i).programs) finish(programs_[p], found_[p], found_quads_[p]);
-    for (const SearchTree::Group& g : tree_.groups(i)) step(g);
+    for (const SearchTree::Group& g : tree_.groups(i)) {
+      if (g.kind == SearchTree::Group::LinkNew)
+        link_new(g);
+      else if (g.kind == SearchTree::Group::LinkClose)
+        link_close(g);
+      else
+        quad(g);
+    }
   }
 
-  void step(const SearchTree::Group& g) {
+  // The group's instruction: a LINK to a new node.
+  void link_new(const SearchTree::Group& g) {
     const Instruction& in = g.in;
     const index_t ta = node_[in.a];
-    if (in.op == Instruction::Link && in.b == nb_assigned_) {
-      // The members whose filter on the root passes (it is 0 but in programs' first steps).
-      const unsigned live = g.root_quad_degree_up_to[root_quad_faces_];
-      if (live == 0) return;
-      for (unsigned free = ~used_[in.a] & 15u; free != 0; free &= free - 1) {
-        const int f = lowest_bit(free);
-        const index_t nb = topology_.neighbor(ta, f);
-        // The root is the group's smallest tet: each group is found from one root only.
-        if (nb == NO_CELL || input_id_[nb] < root_input_id_) continue;
-        if (split_regions_ && mesh_.regions[nb] != root_region_) continue;
-        const int fn = topology_.neighbor_face(ta, f);
-        // The node's tet needs as many faces that can pair into quads as the node has quads.
-        const unsigned fit = live & g.quad_degree_up_to[quad_faces(nb, fn)];
-        if (fit == 0) continue;
-        const index_t apex = mesh_.tet(nb)[fn];
-        const bool new_vertex = !has_vertex(apex);
-        const unsigned pass = fit & (new_vertex ? g.adds_vertex : ~g.adds_vertex);
-        if (pass == 0) continue;
-        // A tet of the match has all its vertices in it: asked last, and only when the apex is
-        // not new (the cheaper tests reject most neighbours, and the answer is the same).
-        if (!new_vertex && in_match(nb)) continue;
-        if (new_vertex) vertex_[nb_vertices_++] = apex;
-        node_[nb_assigned_] = nb;
-        used_[nb_assigned_] = static_cast<unsigned char>(1u << fn);
-        ++nb_assigned_;
-        used_[in.a] |= static_cast<unsigned char>(1u << f);
-        for (unsigned m = pass; m != 0; m &= m - 1) descend(g.members[lowest_set_bit(m)]);
-        used_[in.a] &= static_cast<unsigned char>(~(1u << f));
-        node_[--nb_assigned_] = NO_CELL;
-        if (new_vertex) vertex_[--nb_vertices_] = NO_VERTEX;
-      }
-    } else if (in.op == Instruction::Link) {
-      const index_t tb = node_[in.b];
-      for (int f = 0; f < 4; ++f) {
-        if (topology_.neighbor(ta, f) != tb) continue;
-        const int fb = topology_.neighbor_face(ta, f);
-        if ((used_[in.a] & (1u << f)) || (used_[in.b] & (1u << fb))) return;
-        used_[in.a] |= static_cast<unsigned char>(1u << f);
+    // The members whose filter on the root passes (it is 0 but in programs' first steps).
+    const unsigned live = g.root_quad_degree_up_to[root_quad_faces_];
+    if (live == 0) return;
+    for (unsigned free = ~used_[in.a] & 15u; free != 0; free &= free - 1) {
+      const int f = lowest_bit(free);
+      const index_t nb = topology_.neighbor(ta, f);
+      // The root is the group's smallest tet: each group is found from one root only.
+      if (nb == NO_CELL || input_id_[nb] < root_input_id_) continue;
+      if (split_regions_ && mesh_.regions[nb] != root_region_) continue;
+      const int fn = topology_.neighbor_face(ta, f);
+      // The node's tet needs as many faces that can pair into quads as the node has quads.
+      const unsigned fit = live & g.quad_degree_up_to[quad_faces(nb, fn)];
+      if (fit == 0) continue;
+      const index_t apex = mesh_.tet(nb)[fn];
+      const bool new_vertex = !has_vertex(apex);
+      const unsigned pass = fit & (new_vertex ? g.adds_vertex : ~g.adds_vertex);
+      if (pass == 0) continue;
+      // A tet of the match has all its vertices in it: asked last, and only when the apex is
+      // not new (the cheaper tests reject most neighbours, and the answer is the same).
+      if (!new_vertex && in_match(nb)) continue;
+      if (new_vertex) vertex_[nb_vertices_++] = apex;
+      node_[nb_assigned_] = nb;
+      used_[nb_assigned_] = static_cast<unsigned char>(1u << fn);
+      ++nb_assigned_;
+      used_[in.a] |= static_cast<unsigned char>(1u << f);
+      for (unsigned m = pass; m != 0; m &= m - 1) descend(g.members[lowest_set_bit(m)]);
+      used_[in.a] &= static_cast<unsigned char>(~(1u << f));
+      node_[--nb_assigned_] = NO_CELL;
+      if (new_vertex) vertex_[--nb_vertices_] = NO_VERTEX;
+    }
+  }
+
+  // A LINK between two assigned nodes: they share a face, free on both.
+  void link_close(const SearchTree::Group& g) {
+    const Instruction& in = g.in;
+    const index_t ta = node_[in.a];
+    const index_t tb = node_[in.b];
+    for (int f = 0; f < 4; ++f) {
+      if (topology_.neighbor(ta, f) != tb) continue;
+      const int fb = topology_.neighbor_face(ta, f);
+      if ((used_[in.a] & (1u << f)) || (used_[in.b] & (1u << fb))) return;
+      used_[in.a] |= static_cast<unsigned char>(1u << f);
+      used_[in.b] |= static_cast<unsigned char>(1u << fb);
+      for (const int c : g.members) descend(c);
+      used_[in.a] &= static_cast<unsigned char>(~(1u << f));
+      used_[in.b] &= static_cast<unsigned char>(~(1u << fb));
+      return;
+    }
+  }
+
+  // A QUAD: a free face of each pairs into a quad.
+  void quad(const SearchTree::Group& g) {
+    const Instruction& in = g.in;
+    const index_t ta = node_[in.a];
+    const index_t tb = node_[in.b];
+    if (!pairs_.may_pair(ta, tb)) return;
+    for (unsigned free = pairs_.mask(ta) & ~used_[in.a] & 15u; free != 0; free &= free - 1) {
+      const int fa = lowest_bit(free);
+      // Whether face fa is internal is asked only once a partner on tb is found.
+      int external = -1;
+      for (const QuadPartner* p = pairs_.begin(ta, fa); p != pairs_.end(ta, fa); ++p) {
+        if (p->face / 4 != tb) continue;
+        if (external < 0) external = !internal(topology_.neighbor(ta, fa));
+        if (!external) break;
+        const int fb = static_cast<int>(p->face % 4);
+        if ((used_[in.b] & (1u << fb)) || internal(topology_.neighbor(tb, fb))) continue;
+        used_[in.a] |= static_cast<unsigned char>(1u << fa);
         used_[in.b] |= static_cast<unsigned char>(1u << fb);
+        quad_[nb_quads_] = {4 * ta + fa, p->face};
+        ++nb_quads_;
         for (const int c : g.members) descend(c);
-        used_[in.a] &= static_cast<unsigned char>(~(1u << f));
+        --nb_quads_;
+        used_[in.a] &= static_cast<unsigned char>(~(1u << fa));
         used_[in.b] &= static_cast<unsigned char>(~(1u << fb));
-        return;
-      }
-    } else {
-      const index_t tb = node_[in.b];
-      if (!pairs_.may_pair(ta, tb)) return;
-      for (unsigned free = pairs_.mask(ta) & ~used_[in.a] & 15u; free != 0; free &= free - 1) {
-        const int fa = lowest_bit(free);
-        // Whether face fa is internal is asked only once a partner on tb is found.
-        int external = -1;
-        for (const QuadPartner* p = pairs_.begin(ta, fa); p != pairs_.end(ta, fa); ++p) {
-          if (p->face / 4 != tb) continue;
-          if (external < 0) external = !internal(topology_.neighbor(ta, fa));
-          if (!external) break;
-          const int fb = static_cast<int>(p->face % 4);
-          if ((used_[in.b] & (1u << fb)) || internal(topology_.neighbor(tb, fb))) continue;
-          used_[in.a] |= static_cast<unsigned char>(1u << fa);
-          used_[in.b] |= static_cast<unsigned char>(1u << fb);
-          quad_[nb_quads_] = {4 * ta + fa, p->face};
-          ++nb_quads_;
-          for (const int c : g.members) descend(c);
-          --nb_quads_;
-          used_[in.a] &= static_cast<unsigned char>(~(1u << fa));
-          used_[in.b] &= static_cast<unsigned char>(~(1u << fb));
-        }
       }
     }
   }
