@@ -132,7 +132,13 @@ bool assemble_cell(const TetMesh& mesh, const TetTopology& topology, CellType ty
     return assemble_pyramid(mesh, topology, tets, nb, quad_pairs, nb_quad_pairs, vertices);
   }
   const CellDescriptor& d = descriptor(type);
-  auto in_group = [&](index_t t) { return contains(tets, nb, t); };
+  // The group's ids modulo 64 as bits first: about half the neighbours are outside, and most of
+  // those are told apart without the search.
+  std::uint64_t group_bits = 0;
+  for (int i = 0; i < nb; ++i) group_bits |= std::uint64_t{1} << (tets[i] & 63u);
+  auto in_group = [&](index_t t) {
+    return ((group_bits >> (t & 63u)) & 1u) != 0 && contains(tets, nb, t);
+  };
   // The group's boundary triangles (4 * tet + face), each marked when a quad uses it.
   std::array<index_t, 24> boundary;
   std::array<bool, 24> used{};
