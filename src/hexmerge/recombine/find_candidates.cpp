@@ -84,8 +84,15 @@ index_t unique_other_neighbor(index_t v, const std::array<index_t, 4>* faces, co
   index_t found = NO_VERTEX;
   for (int f = 0; f < nb_faces; ++f) {
     const int n = sizes[f];
-    for (int i = 0; i < n; ++i) {
-      if (faces[f][i] != v) continue;
+    // v's places in the face, bit i (four compares, the fourth masked off for a triangle): most
+    // faces do not hold v.
+    const std::array<index_t, 4>& face = faces[f];
+    unsigned at = static_cast<unsigned>(face[0] == v) | static_cast<unsigned>(face[1] == v) << 1 |
+                  static_cast<unsigned>(face[2] == v) << 2 |
+                  static_cast<unsigned>(n == 4 && face[3] == v) << 3;
+    for (; at != 0; at &= at - 1) {
+      static constexpr signed char kLowest[16] = {-1, 0, 1, 0, 2, 0, 1, 0, 3, 0, 1, 0, 2, 0, 1, 0};
+      const int i = kLowest[at];
       // Its two neighbours along the face (no modulo: a division per vertex of every face).
       const index_t around[2] = {faces[f][i + 1 == n ? 0 : i + 1],
                                  faces[f][i == 0 ? n - 1 : i - 1]};
@@ -583,7 +590,8 @@ class Matcher {
       const int fa = lowest_bit(free);
       // Whether face fa is internal is asked only once a partner on tb is found.
       int external = -1;
-      for (const QuadPartner* p = pairs_.begin(ta, fa); p != pairs_.end(ta, fa); ++p) {
+      const QuadPartner* const last = pairs_.end(ta, fa);  // (read once: descend writes)
+      for (const QuadPartner* p = pairs_.begin(ta, fa); p != last; ++p) {
         if (p->face / 4 != tb) continue;
         if (external < 0) external = !internal(topology_.neighbor(ta, fa));
         if (!external) break;
