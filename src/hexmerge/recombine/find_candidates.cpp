@@ -480,11 +480,13 @@ class Matcher {
     nb_assigned_ = 1;
     node_.fill(NO_CELL);
     node_[0] = root;
+    node_bits_[1] = bit_of(root);
     used_[0] = 0;
     const index_t* q = mesh_.tet(root);
     nb_vertices_ = 4;
     vertex_.fill(NO_VERTEX);
     std::copy(q, q + 4, vertex_.begin());
+    for (int i = 0; i < 4; ++i) vertex_bits_[i + 1] = vertex_bits_[i] | bit_of(q[i]);
     nb_quads_ = 0;
     descend(0);
     // Program by program, as if each ran alone in turn: the same group may be matched again
@@ -503,15 +505,20 @@ class Matcher {
  private:
   // Unassigned node_ and vertex_ slots hold NO_INDEX, so these look-ups need no branch.
   bool in_match(index_t t) const {
+    if ((node_bits_[nb_assigned_] & bit_of(t)) == 0) return false;
     bool found = false;
     for (const index_t n : node_) found |= n == t;
     return found;
   }
+  // (Most tets and apexes asked about are not there: their bit among the match's ids modulo 64
+  // tells, without the compares.)
   bool has_vertex(index_t v) const {
+    if ((vertex_bits_[nb_vertices_] & bit_of(v)) == 0) return false;
     bool found = false;
     for (const index_t u : vertex_) found |= u == v;
     return found;
   }
+  static std::uint64_t bit_of(index_t v) { return std::uint64_t{1} << (v & 63u); }
 
   // The programs ending at node `i` have a match; its children continue the others.
   void descend(int i) {
@@ -550,8 +557,12 @@ class Matcher {
       // A tet of the match has all its vertices in it: asked last, and only when the apex is
       // not new (the cheaper tests reject most neighbours, and the answer is the same).
       if (!new_vertex && in_match(nb)) continue;
-      if (new_vertex) vertex_[nb_vertices_++] = apex;
+      if (new_vertex) {
+        vertex_bits_[nb_vertices_ + 1] = vertex_bits_[nb_vertices_] | bit_of(apex);
+        vertex_[nb_vertices_++] = apex;
+      }
       node_[nb_assigned_] = nb;
+      node_bits_[nb_assigned_ + 1] = node_bits_[nb_assigned_] | bit_of(nb);
       used_[nb_assigned_] = static_cast<unsigned char>(1u << fn);
       ++nb_assigned_;
       used_[in.a] |= static_cast<unsigned char>(1u << f);
@@ -738,9 +749,13 @@ class Matcher {
   int root_quad_faces_ = 0;  // quad_faces(root, -1)
   int nb_assigned_ = 0;
   std::array<index_t, kMaxNodes> node_{};
+  // [k]: the first k nodes' ids modulo 64 as bits (in_match)
+  std::array<std::uint64_t, kMaxNodes + 1> node_bits_{};
   std::array<unsigned char, kMaxNodes> used_{};  // faces of each node taken by a LINK or QUAD
   std::array<index_t, 8> vertex_{};
   int nb_vertices_ = 0;
+  // [k]: the first k vertices' ids modulo 64 as bits (has_vertex)
+  std::array<std::uint64_t, 9> vertex_bits_{};
   std::array<std::array<index_t, 2>, kMaxQuads> quad_{};
   int nb_quads_ = 0;
 };
