@@ -73,17 +73,31 @@ std::array<index_t, 8> sorted(const std::array<index_t, 8>& a) {
   return sorted_by(a, kNetwork);
 }
 
-// The vertex joined to v by an edge of one of the faces, not in `exclude`. NO_VERTEX when there
-// is none or more than one.
+// The vertex joined to v by an edge of one of the faces, not in `exclude` (3 or 4 vertices: a
+// prism's or a hexahedron's base). NO_VERTEX when there is none or more than one.
 index_t unique_other_neighbor(index_t v, const std::array<index_t, 4>* faces, const int* sizes,
                               int nb_faces, const index_t* exclude, int nex) {
+  HEXMERGE_ASSERT(nex == 3 || nex == 4, "unique_other_neighbor: a base has 3 or 4 vertices");
+  // Four compares whatever nex (the fourth repeats the first for a triangle): a loop of nex
+  // steps was 3k instructions per tet on lattice meshes.
+  const index_t e0 = exclude[0], e1 = exclude[1], e2 = exclude[2], e3 = exclude[nex - 1];
   index_t found = NO_VERTEX;
   for (int f = 0; f < nb_faces; ++f) {
     const int n = sizes[f];
-    for (int i = 0; i < n; ++i) {
-      if (faces[f][i] != v) continue;
-      for (const index_t u : {faces[f][(i + 1) % n], faces[f][(i + n - 1) % n]}) {
-        if (contains(exclude, nex, u)) continue;
+    // v's places in the face, bit i (four compares, the fourth masked off for a triangle): most
+    // faces do not hold v.
+    const std::array<index_t, 4>& face = faces[f];
+    unsigned at = static_cast<unsigned>(face[0] == v) | static_cast<unsigned>(face[1] == v) << 1 |
+                  static_cast<unsigned>(face[2] == v) << 2 |
+                  static_cast<unsigned>(n == 4 && face[3] == v) << 3;
+    for (; at != 0; at &= at - 1) {
+      static constexpr signed char kLowest[16] = {-1, 0, 1, 0, 2, 0, 1, 0, 3, 0, 1, 0, 2, 0, 1, 0};
+      const int i = kLowest[at];
+      // Its two neighbours along the face (no modulo: a division per vertex of every face).
+      const index_t around[2] = {faces[f][i + 1 == n ? 0 : i + 1],
+                                 faces[f][i == 0 ? n - 1 : i - 1]};
+      for (const index_t u : around) {
+        if ((u == e0) | (u == e1) | (u == e2) | (u == e3)) continue;
         if (found != NO_VERTEX && found != u) return NO_VERTEX;
         found = u;
       }
@@ -129,7 +143,13 @@ bool assemble_cell(const TetMesh& mesh, const TetTopology& topology, CellType ty
     return assemble_pyramid(mesh, topology, tets, nb, quad_pairs, nb_quad_pairs, vertices);
   }
   const CellDescriptor& d = descriptor(type);
-  auto in_group = [&](index_t t) { return contains(tets, nb, t); };
+  // The group's ids modulo 64 as bits first: about half the neighbours are outside, and most of
+  // those are told apart without the search.
+  std::uint64_t group_bits = 0;
+  for (int i = 0; i < nb; ++i) group_bits |= std::uint64_t{1} << (tets[i] & 63u);
+  auto in_group = [&](index_t t) {
+    return ((group_bits >> (t & 63u)) & 1u) != 0 && contains(tets, nb, t);
+  };
   // The group's boundary triangles (4 * tet + face), each marked when a quad uses it.
   std::array<index_t, 24> boundary;
   std::array<bool, 24> used{};
@@ -325,15 +345,36 @@ Candidates in_root_order(const TetMesh& input, std::vector<ChunkMatches>& per_ch
 
 // The enabled search programs merged into one tree: programs that begin with the same steps
 // (the same instruction with the same filters) run those steps once for all of them. Node 0 is
-// the root; each other node is one instruction, and lists the programs whose code ends there.
+// the root (no instruction); each other node is one instruction, and lists the programs whose
+// code ends there.
+//
+// A node's children that run the same instruction with different filters (a new node's
+// quad_degree and adds_vertex, the root's quad_degree) form one group: the instruction runs once
+// for the group (one walk over a tet's free faces, over a face's quad partners), and each of its
+// results goes on into the members whose filters it passes. That interleaves the members'
+// programs, but not the steps of any one program, whose matches come in the same order as when
+// it ran alone: run_from keeps them program by program.
 class SearchTree {
  public:
   struct Node {
     Instruction in{};
-    unsigned char adds_vertex = 0;  // a LINK to a new node: SearchProgram::adds_vertex
-    unsigned char quad_degree = 0;  // the new node's SearchProgram::quad_degree (root: node 0's)
+    unsigned char adds_vertex = 0;       // a LINK to a new node: SearchProgram::adds_vertex
+    unsigned char quad_degree = 0;       // a LINK: the new node's SearchProgram::quad_degree
+    unsigned char root_quad_degree = 0;  // a program's first instruction: its node 0's
+    bool assigns = false;                // a LINK to a new node
     std::vector<int> children;
     std::vector<int> programs;  // indices into search_programs()
+  };
+  /// Children of one node that run the same instruction, in the order of their first member;
+  /// their filters as masks of members (bit i: members[i]).
+  struct Group {
+    enum Kind : unsigned char { LinkNew, LinkClose, Quad };
+    Instruction in{};
+    Kind kind = LinkNew;       // a LINK to a new node, a LINK closing a cycle, a QUAD
+    std::vector<int> members;  // nodes, at most 32
+    unsigned adds_vertex = 0;  // adds_vertex set
+    std::array<unsigned, 5> quad_degree_up_to{};       // [k]: quad_degree <= k
+    std::array<unsigned, 5> root_quad_degree_up_to{};  // [k]: root_quad_degree <= k
   };
 
   explicit SearchTree(const std::array<bool, NB_CELL_TYPES>& types) {
@@ -341,21 +382,49 @@ class SearchTree {
     for (int p = 0; p < static_cast<int>(programs.size()); ++p) {
       const SearchProgram& program = programs[p];
       if (!types[static_cast<int>(program.type)]) continue;
-      Node root_gate;
-      root_gate.quad_degree = program.quad_degree[0];
-      int at = child(0, root_gate);
+      int at = 0;
+      int nb_assigned = 1;
       for (std::size_t pc = 0; pc < program.code.size(); ++pc) {
         Node step;
         step.in = program.code[pc];
+        step.assigns = step.in.op == Instruction::Link && step.in.b == nb_assigned;
+        nb_assigned += step.assigns;
         step.adds_vertex = program.adds_vertex[pc];
         if (step.in.op == Instruction::Link) step.quad_degree = program.quad_degree[step.in.b];
+        if (pc == 0) step.root_quad_degree = program.quad_degree[0];
         at = child(at, step);
       }
       nodes_[at].programs.push_back(p);
     }
+    groups_.resize(nodes_.size());
+    for (std::size_t i = 0; i < nodes_.size(); ++i) {
+      for (const int c : nodes_[i].children) {
+        const Instruction& in = nodes_[c].in;
+        auto g = std::find_if(groups_[i].begin(), groups_[i].end(), [&](const Group& o) {
+          return o.in.op == in.op && o.in.a == in.a && o.in.b == in.b;
+        });
+        if (g == groups_[i].end()) {
+          const Group::Kind kind = in.op == Instruction::Quad ? Group::Quad
+                                   : nodes_[c].assigns        ? Group::LinkNew
+                                                              : Group::LinkClose;
+          g = groups_[i].insert(g, Group{in, kind, {}});
+        }
+        HEXMERGE_ASSERT(g->members.size() < 32, "SearchTree: a group's members are a 32-bit mask");
+        const unsigned bit = 1u << g->members.size();
+        const Node& n = nodes_[c];
+        g->members.push_back(c);
+        if (n.adds_vertex != 0) g->adds_vertex |= bit;
+        for (int k = 0; k < 5; ++k) {
+          if (n.quad_degree <= k) g->quad_degree_up_to[k] |= bit;
+          if (n.root_quad_degree <= k) g->root_quad_degree_up_to[k] |= bit;
+        }
+      }
+    }
   }
 
   const Node& node(int i) const { return nodes_[i]; }
+  /// The groups of node i's children.
+  const std::vector<Group>& groups(int i) const { return groups_[i]; }
   int nb_programs() const { return static_cast<int>(search_programs().size()); }
 
  private:
@@ -364,7 +433,8 @@ class SearchTree {
     for (const int c : nodes_[parent].children) {
       const Node& n = nodes_[c];
       if (n.in.op == step.in.op && n.in.a == step.in.a && n.in.b == step.in.b &&
-          n.adds_vertex == step.adds_vertex && n.quad_degree == step.quad_degree) {
+          n.adds_vertex == step.adds_vertex && n.quad_degree == step.quad_degree &&
+          n.root_quad_degree == step.root_quad_degree) {
         return c;
       }
     }
@@ -374,6 +444,7 @@ class SearchTree {
   }
 
   std::vector<Node> nodes_{1};
+  std::vector<std::vector<Group>> groups_;  // per node
 };
 
 // One search: the interpreter's state while it runs the search tree from one root tet.
@@ -395,6 +466,8 @@ class Matcher {
         input_id_(input_id),
         criteria_(criteria),
         tree_(tree),
+        programs_(search_programs()),
+        split_regions_(criteria.respect_regions && !mesh.regions.empty()),
         found_(tree.nb_programs()),
         found_quads_(tree.nb_programs()),
         out_(out) {}
@@ -402,20 +475,20 @@ class Matcher {
   void run_from(index_t root) {
     root_ = root;
     root_input_id_ = input_id_[root];
-    const int root_quad_faces = quad_faces(root, -1);
-    for (const int gate : tree_.node(0).children) {
-      if (root_quad_faces < tree_.node(gate).quad_degree) continue;
-      nb_assigned_ = 1;
-      node_.fill(NO_CELL);
-      node_[0] = root;
-      used_[0] = 0;
-      const index_t* q = mesh_.tet(root);
-      nb_vertices_ = 4;
-      vertex_.fill(NO_VERTEX);
-      std::copy(q, q + 4, vertex_.begin());
-      nb_quads_ = 0;
-      descend(tree_.node(gate));
-    }
+    root_region_ = mesh_.region(root);
+    root_quad_faces_ = quad_faces(root, -1);
+    nb_assigned_ = 1;
+    node_.fill(NO_CELL);
+    node_[0] = root;
+    node_bits_[1] = bit_of(root);
+    used_[0] = 0;
+    const index_t* q = mesh_.tet(root);
+    nb_vertices_ = 4;
+    vertex_.fill(NO_VERTEX);
+    std::copy(q, q + 4, vertex_.begin());
+    for (int i = 0; i < 4; ++i) vertex_bits_[i + 1] = vertex_bits_[i] | bit_of(q[i]);
+    nb_quads_ = 0;
+    descend(0);
     // Program by program, as if each ran alone in turn: the same group may be matched again
     // through an automorphism that fixes the root, and the first match is kept.
     kept_.clear();
@@ -432,85 +505,126 @@ class Matcher {
  private:
   // Unassigned node_ and vertex_ slots hold NO_INDEX, so these look-ups need no branch.
   bool in_match(index_t t) const {
+    if ((node_bits_[nb_assigned_] & bit_of(t)) == 0) return false;
     bool found = false;
     for (const index_t n : node_) found |= n == t;
     return found;
   }
+  // (Most tets and apexes asked about are not there: their bit among the match's ids modulo 64
+  // tells, without the compares.)
   bool has_vertex(index_t v) const {
+    if ((vertex_bits_[nb_vertices_] & bit_of(v)) == 0) return false;
     bool found = false;
     for (const index_t u : vertex_) found |= u == v;
     return found;
   }
+  static std::uint64_t bit_of(index_t v) { return std::uint64_t{1} << (v & 63u); }
 
-  // The programs ending at `n` have a match; its children continue the others.
-  void descend(const SearchTree::Node& n) {
-    for (const int p : n.programs) finish(search_programs()[p], found_[p], found_quads_[p]);
-    for (const int c : n.children) step(tree_.node(c));
+  // The programs ending at node `i` have a match; its children continue the others.
+  void descend(int i) {
+    for (const int p : tree_.node(i).programs) finish(programs_[p], found_[p], found_quads_[p]);
+    for (const SearchTree::Group& g : tree_.groups(i)) {
+      if (g.kind == SearchTree::Group::LinkNew)
+        link_new(g);
+      else if (g.kind == SearchTree::Group::LinkClose)
+        link_close(g);
+      else
+        quad(g);
+    }
   }
 
-  void step(const SearchTree::Node& n) {
-    const Instruction& in = n.in;
+  // The group's instruction: a LINK to a new node.
+  void link_new(const SearchTree::Group& g) {
+    const Instruction& in = g.in;
     const index_t ta = node_[in.a];
-    if (in.op == Instruction::Link && in.b == nb_assigned_) {
-      for (unsigned free = ~used_[in.a] & 15u; free != 0; free &= free - 1) {
-        const int f = lowest_bit(free);
-        const index_t nb = topology_.neighbor(ta, f);
-        // The root is the group's smallest tet: each group is found from one root only.
-        if (nb == NO_CELL || input_id_[nb] < root_input_id_ || in_match(nb)) continue;
-        if (criteria_.respect_regions && mesh_.region(nb) != mesh_.region(root_)) continue;
-        const int fn = topology_.neighbor_face(ta, f);
-        // The node's tet needs as many faces that can pair into quads as the node has quads.
-        if (quad_faces(nb, fn) < n.quad_degree) continue;
-        const index_t apex = mesh_.tet(nb)[fn];
-        const bool new_vertex = !has_vertex(apex);
-        if (new_vertex != (n.adds_vertex != 0)) continue;
-        if (new_vertex) vertex_[nb_vertices_++] = apex;
-        node_[nb_assigned_] = nb;
-        used_[nb_assigned_] = static_cast<unsigned char>(1u << fn);
-        ++nb_assigned_;
-        used_[in.a] |= static_cast<unsigned char>(1u << f);
-        descend(n);
-        used_[in.a] &= static_cast<unsigned char>(~(1u << f));
-        node_[--nb_assigned_] = NO_CELL;
-        if (new_vertex) vertex_[--nb_vertices_] = NO_VERTEX;
+    // The members whose filter on the root passes (it is 0 but in programs' first steps).
+    const unsigned live = g.root_quad_degree_up_to[root_quad_faces_];
+    if (live == 0) return;
+    for (unsigned free = ~used_[in.a] & 15u; free != 0; free &= free - 1) {
+      const int f = lowest_bit(free);
+      const index_t nb = topology_.neighbor(ta, f);
+      // The root is the group's smallest tet: each group is found from one root only.
+      if (nb == NO_CELL || input_id_[nb] < root_input_id_) continue;
+      if (split_regions_ && mesh_.regions[nb] != root_region_) continue;
+      const int fn = topology_.neighbor_face(ta, f);
+      // The node's tet needs as many faces that can pair into quads as the node has quads.
+      const unsigned fit = live & g.quad_degree_up_to[quad_faces(nb, fn)];
+      if (fit == 0) continue;
+      const index_t apex = mesh_.tet(nb)[fn];
+      const bool new_vertex = !has_vertex(apex);
+      const unsigned pass = fit & (new_vertex ? g.adds_vertex : ~g.adds_vertex);
+      if (pass == 0) continue;
+      // A tet of the match has all its vertices in it: asked last, and only when the apex is
+      // not new (the cheaper tests reject most neighbours, and the answer is the same).
+      if (!new_vertex && in_match(nb)) continue;
+      if (new_vertex) {
+        vertex_bits_[nb_vertices_ + 1] = vertex_bits_[nb_vertices_] | bit_of(apex);
+        vertex_[nb_vertices_++] = apex;
       }
-    } else if (in.op == Instruction::Link) {
-      const index_t tb = node_[in.b];
-      for (int f = 0; f < 4; ++f) {
-        if (topology_.neighbor(ta, f) != tb) continue;
-        const int fb = topology_.neighbor_face(ta, f);
-        if ((used_[in.a] & (1u << f)) || (used_[in.b] & (1u << fb))) return;
-        used_[in.a] |= static_cast<unsigned char>(1u << f);
+      node_[nb_assigned_] = nb;
+      node_bits_[nb_assigned_ + 1] = node_bits_[nb_assigned_] | bit_of(nb);
+      used_[nb_assigned_] = static_cast<unsigned char>(1u << fn);
+      ++nb_assigned_;
+      used_[in.a] |= static_cast<unsigned char>(1u << f);
+      for (unsigned m = pass; m != 0; m &= m - 1) descend(g.members[lowest_set_bit(m)]);
+      used_[in.a] &= static_cast<unsigned char>(~(1u << f));
+      node_[--nb_assigned_] = NO_CELL;
+      if (new_vertex) vertex_[--nb_vertices_] = NO_VERTEX;
+    }
+  }
+
+  // A LINK between two assigned nodes: they share a face, free on both.
+  void link_close(const SearchTree::Group& g) {
+    const Instruction& in = g.in;
+    const index_t ta = node_[in.a];
+    const index_t tb = node_[in.b];
+    for (int f = 0; f < 4; ++f) {
+      if (topology_.neighbor(ta, f) != tb) continue;
+      const int fb = topology_.neighbor_face(ta, f);
+      if ((used_[in.a] & (1u << f)) || (used_[in.b] & (1u << fb))) return;
+      used_[in.a] |= static_cast<unsigned char>(1u << f);
+      used_[in.b] |= static_cast<unsigned char>(1u << fb);
+      for (const int c : g.members) descend(c);
+      used_[in.a] &= static_cast<unsigned char>(~(1u << f));
+      used_[in.b] &= static_cast<unsigned char>(~(1u << fb));
+      return;
+    }
+  }
+
+  // A QUAD: a free face of each pairs into a quad.
+  void quad(const SearchTree::Group& g) {
+    const Instruction& in = g.in;
+    const index_t ta = node_[in.a];
+    const index_t tb = node_[in.b];
+    if (!pairs_.may_pair(ta, tb)) return;
+    for (unsigned free = pairs_.mask(ta) & ~used_[in.a] & 15u; free != 0; free &= free - 1) {
+      const int fa = lowest_bit(free);
+      // Whether face fa is internal is asked only once a partner on tb is found.
+      int external = -1;
+      const QuadPartner* const last = pairs_.end(ta, fa);  // (read once: descend writes)
+      for (const QuadPartner* p = pairs_.begin(ta, fa); p != last; ++p) {
+        if (p->face / 4 != tb) continue;
+        if (external < 0) external = !internal(topology_.neighbor(ta, fa));
+        if (!external) break;
+        const int fb = static_cast<int>(p->face % 4);
+        if ((used_[in.b] & (1u << fb)) || internal(topology_.neighbor(tb, fb))) continue;
+        used_[in.a] |= static_cast<unsigned char>(1u << fa);
         used_[in.b] |= static_cast<unsigned char>(1u << fb);
-        descend(n);
-        used_[in.a] &= static_cast<unsigned char>(~(1u << f));
+        quad_[nb_quads_] = {4 * ta + fa, p->face};
+        ++nb_quads_;
+        for (const int c : g.members) descend(c);
+        --nb_quads_;
+        used_[in.a] &= static_cast<unsigned char>(~(1u << fa));
         used_[in.b] &= static_cast<unsigned char>(~(1u << fb));
-        return;
-      }
-    } else {
-      const index_t tb = node_[in.b];
-      if (!pairs_.may_pair(ta, tb)) return;
-      for (unsigned free = pairs_.mask(ta) & ~used_[in.a] & 15u; free != 0; free &= free - 1) {
-        const int fa = lowest_bit(free);
-        // Whether face fa is internal is asked only once a partner on tb is found.
-        int external = -1;
-        for (const QuadPartner* p = pairs_.begin(ta, fa); p != pairs_.end(ta, fa); ++p) {
-          if (p->face / 4 != tb) continue;
-          if (external < 0) external = !internal(topology_.neighbor(ta, fa));
-          if (!external) break;
-          const int fb = static_cast<int>(p->face % 4);
-          if ((used_[in.b] & (1u << fb)) || internal(topology_.neighbor(tb, fb))) continue;
-          used_[in.a] |= static_cast<unsigned char>(1u << fa);
-          used_[in.b] |= static_cast<unsigned char>(1u << fb);
-          quad_[nb_quads_] = {4 * ta + fa, p->face};
-          ++nb_quads_;
-          descend(n);
-          --nb_quads_;
-          used_[in.a] &= static_cast<unsigned char>(~(1u << fa));
-          used_[in.b] &= static_cast<unsigned char>(~(1u << fb));
-        }
       }
     }
+  }
+
+  // The lowest set bit of a nonzero mask.
+  static int lowest_set_bit(unsigned m) {
+    int i = 0;
+    for (; (m & 15u) == 0; m >>= 4) i += 4;
+    return i + lowest_bit(m & 15u);
   }
 
   // The lowest set bit of a nonzero 4-bit mask.
@@ -623,17 +737,25 @@ class Matcher {
   const std::vector<index_t>& input_id_;
   const AcceptanceCriteria& criteria_;
   const SearchTree& tree_;
+  const std::vector<SearchProgram>& programs_;     // search_programs()
+  bool split_regions_;                             // respect_regions, and the mesh has regions
   std::vector<std::vector<Match>> found_;          // this root's matches, per program
   std::vector<std::vector<QuadSet>> found_quads_;  // and their quad_set()s
   std::vector<Match> kept_;                        // this root's matches kept
   ChunkMatches& out_;
   index_t root_ = 0;
   index_t root_input_id_ = 0;
+  std::int32_t root_region_ = 0;
+  int root_quad_faces_ = 0;  // quad_faces(root, -1)
   int nb_assigned_ = 0;
   std::array<index_t, kMaxNodes> node_{};
+  // [k]: the first k nodes' ids modulo 64 as bits (in_match)
+  std::array<std::uint64_t, kMaxNodes + 1> node_bits_{};
   std::array<unsigned char, kMaxNodes> used_{};  // faces of each node taken by a LINK or QUAD
   std::array<index_t, 8> vertex_{};
   int nb_vertices_ = 0;
+  // [k]: the first k vertices' ids modulo 64 as bits (has_vertex)
+  std::array<std::uint64_t, 9> vertex_bits_{};
   std::array<std::array<index_t, 2>, kMaxQuads> quad_{};
   int nb_quads_ = 0;
 };

@@ -90,38 +90,51 @@ class Builder {
     };
     std::array<Ring, 6> rings;
     const index_t* q = mesh_.tet(t);
-    for (int i = 0, e = 0; i < 4; ++i) {
-      for (int j = i + 1; j < 4; ++j, ++e) {
-        Ring& r = rings[e];
-        int k = 0;
-        for (int l = 0; l < 4; ++l) {
-          if (l != i && l != j) r.others[k++] = l;
-        }
-        r.n = tets_around_edge(t, q[i], q[j], r.others, r.faces, cut);
+    // Edge e's two vertices, and the other two (the faces opposite them hold the edge).
+    static constexpr int kEnds[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
+    static constexpr int kOthers[6][2] = {{2, 3}, {1, 3}, {1, 2}, {0, 3}, {0, 2}, {0, 1}};
+    for (int e = 0; e < 6; ++e) {
+      Ring& r = rings[e];
+      r.others[0] = kOthers[e][0];
+      r.others[1] = kOthers[e][1];
+      r.n = tets_around_edge(t, q[kEnds[e][0]], q[kEnds[e][1]], r.others, r.faces, cut);
+    }
+    // Grouped by face for the CSR; per face, in edge order then walk order. Each ring is read
+    // once for both of t's faces on its edge, their entries kept apart until the end.
+    std::array<std::array<Entry, 3 * 64>, 4> entries;  // not initialised: the first n[f] are
+    int n[4] = {0, 0, 0, 0};
+    for (const Ring& r : rings) {
+      const int f0 = r.others[0], f1 = r.others[1];
+      const float* n0 = &normals_[12 * std::size_t(t) + 3 * f0];
+      const float* n1 = &normals_[12 * std::size_t(t) + 3 * f1];
+      for (int a = 0; a < r.n; ++a) {
+        const auto [s, g] = r.faces[a];
+        const float* ns = &normals_[12 * std::size_t(s) + 3 * g];
+        const bool pass0 = !(n0[0] * ns[0] + n0[1] * ns[1] + n0[2] * ns[2] < min_cos_);
+        const bool pass1 = !(n1[0] * ns[0] + n1[1] * ns[1] + n1[2] * ns[2] < min_cos_);
+        if (!pass0 && !pass1) continue;
+        // (The filter is symmetric: the partner's walk meets this pair too.)
+        const index_t partner = 4 * s + g;
+        if (pass0) add(t, f0, s, g, partner, entries[f0], n[f0]);
+        if (pass1) add(t, f1, s, g, partner, entries[f1], n[f1]);
       }
     }
-    // Grouped by face for the CSR; per face, in edge order then walk order.
     for (int f = 0; f < 4; ++f) {
-      const std::size_t size_before = out.size();
-      const float* nt = &normals_[12 * std::size_t(t) + 3 * f];
-      for (const Ring& r : rings) {
-        if (r.others[0] != f && r.others[1] != f) continue;
-        for (int a = 0; a < r.n; ++a) {
-          const auto [s, g] = r.faces[a];
-          const float* ns = &normals_[12 * std::size_t(s) + 3 * g];
-          if (nt[0] * ns[0] + nt[1] * ns[1] + nt[2] * ns[2] < min_cos_) continue;
-          // (The filter is symmetric: the partner's walk meets this pair too.)
-          const index_t face = 4 * t + f, partner = 4 * s + g;
-          const std::uint8_t state = face < partner ? accept_both(t, f, s, g) : kPending;
-          if (state != 0) out.push_back({partner, state});
-        }
-      }
-      counts[f] = static_cast<index_t>(out.size() - size_before);
+      out.insert(out.end(), entries[f].begin(), entries[f].begin() + n[f]);
+      counts[f] = static_cast<index_t>(n[f]);
     }
     return cut;
   }
 
  private:
+  // The entry of face f of tet t for face g of tet s (partner: its code), when it has one.
+  void add(index_t t, int f, index_t s, int g, index_t partner, std::array<Entry, 3 * 64>& list,
+           int& n) const {
+    const index_t face = 4 * t + f;
+    const std::uint8_t state = face < partner ? accept_both(t, f, s, g) : kPending;
+    if (state != 0) list[n++] = {partner, state};
+  }
+
   // Faces (tet, local face) holding edge x-y of the tets around it other than t: walk from t
   // across each of its two faces on the edge until the walk returns or leaves the domain.
   int tets_around_edge(index_t t, index_t x, index_t y, const int others[2],
