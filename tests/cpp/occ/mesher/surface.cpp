@@ -89,6 +89,40 @@ TEST(refine, sides_at_most_h_on_the_cad) {
   EXPECT_LE(p.surface.nodes.size(), before);
 }
 
+// A cap of three nodes of one CAD edge (BRepMesh's node inside a short curved edge): its middle
+// node goes onto one of the others, with the cap and the other face's triangle on that side; the
+// chord becomes the edge's segment, and the other face's triangles keep their own parameters.
+TEST(collapse_sides, a_cap_on_a_cad_edge_loses_its_middle_node) {
+  Surface surface;
+  // The edge a r b (edge 0, parameters 0, 0.5, 1) between face 0 (z = 0, y > 0) and face 1
+  // (y = 0, z < 0); r bulges 0.005 off the chord.
+  const int a = 0, r = 1, b = 2, c = 3, d = 4;
+  surface.nodes = {{0, 0, 0}, {0.5, -0.005, 0}, {1, 0, 0}, {0.5, 1, 0}, {0.5, 0, -1}};
+  surface.node_face = {0, 0, 0, 0, 1};
+  const mesher::UV on0{3, 3}, on1{7, 7};
+  surface.triangles = {{{a, r, b}, {on0, on0, on0}, 0},  // the cap
+                       {{a, b, c}, {on0, on0, on0}, 0},
+                       {{r, a, d}, {on1, on1, on1}, 1},
+                       {{b, r, d}, {on1, on1, on1}, 1}};
+  surface.segments[mesher::pair_key(a, r)] = {0, 0.0, 0.5};
+  surface.segments[mesher::pair_key(r, b)] = {0, 0.5, 1.0};
+  mesher::collapse_sides(surface, 1.0, 10.0, {false, false});
+
+  ASSERT_EQ(surface.nodes.size(), 4u);  // r gone, the others in their order
+  EXPECT_EQ(surface.seed, (std::vector<int>{a, b, c, d}));
+  ASSERT_EQ(surface.triangles.size(), 2u);
+  for (const mesher::SurfaceTriangle& t : surface.triangles) {
+    EXPECT_GT(mesher::smallest_angle(surface.nodes, t.node), 0.5) << "face " << t.face;
+    for (const mesher::UV& uv : t.uv) EXPECT_EQ(uv.u, t.face == 0 ? 3 : 7) << "face " << t.face;
+  }
+  ASSERT_EQ(surface.segments.size(), 1u);
+  const auto& [key, segment] = *surface.segments.begin();
+  EXPECT_EQ(key, mesher::pair_key(0, 1));  // a and b, renumbered
+  EXPECT_EQ(segment.edge, 0);
+  EXPECT_EQ(segment.t_lo, 0.0);
+  EXPECT_EQ(segment.t_hi, 1.0);
+}
+
 TEST(coordinates_across, seen_along_each_axis) {
   // The triangle (0,0,0) (2,0,0) (0,2,0) seen along z; q = p0 + s (p1 - p0) + r (p2 - p0).
   const Vec3 p0{0, 0, 0}, p1{2, 0, 0}, p2{0, 2, 0};
