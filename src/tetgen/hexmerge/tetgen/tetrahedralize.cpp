@@ -224,10 +224,7 @@ TetrahedralizeOutput Tetrahedralizer::run(TetrahedralizeInput input) const {
   // them did not end), cocircular points joined as in TetGen's Delaunay tetrahedralisation of
   // the points (a run of its own, about a tenth of the whole); one it cannot take stays a loop,
   // for the restarts below.
-  if (std::any_of(facets.begin(), facets.end(), [](const Facet& f) {
-        return std::any_of(f.polygons.begin(), f.polygons.end(),
-                           [](const auto& polygon) { return polygon.size() > 3; });
-      })) {
+  if (std::any_of(facets.begin(), facets.end(), has_loop)) {
     TetrahedralizeParameters alone = parameters_;
     alone.work_directory.clear();
     TetrahedralizeInput points_alone;
@@ -293,10 +290,7 @@ TetrahedralizeOutput Tetrahedralizer::run(TetrahedralizeInput input) const {
   limit_text << time_limit;
   // TetGen's output line-buffered, so that its reason survives an abort.
   const std::string limited = "timeout -k 5 " + limit_text.str() + " stdbuf -oL ";
-  const bool has_loops = std::any_of(facets.begin(), facets.end(), [](const Facet& f) {
-    return std::any_of(f.polygons.begin(), f.polygons.end(),
-                       [](const auto& polygon) { return polygon.size() > 3; });
-  });
+  const bool has_loops = std::any_of(facets.begin(), facets.end(), has_loop);
   int restarts = 0;
   const auto start_loops_elsewhere = [&] {
     for (Facet& facet : facets)

@@ -135,6 +135,11 @@ std::optional<std::vector<std::array<int, 3>>> triangulate(
 
 }  // namespace
 
+bool has_loop(const Facet& facet) {
+  return std::any_of(facet.polygons.begin(), facet.polygons.end(),
+                     [](const auto& polygon) { return polygon.size() > 3; });
+}
+
 std::uint64_t side_key(int a, int b) {
   const auto [low, high] = std::minmax(a, b);
   return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(low)) << 32) |
@@ -146,10 +151,8 @@ std::size_t triangulate_facets(std::vector<Facet>& facets, const std::vector<Vec
   std::vector<Facet> out;
   std::size_t triangulated = 0;
   for (Facet& facet : facets) {
-    const bool loops = std::any_of(facet.polygons.begin(), facet.polygons.end(),
-                                   [](const auto& polygon) { return polygon.size() > 3; });
     std::optional<std::vector<std::array<int, 3>>> triangles;
-    if (loops) triangles = triangulate(facet, points, delaunay_edges);
+    if (has_loop(facet)) triangles = triangulate(facet, points, delaunay_edges);
     if (!triangles) {
       out.push_back(std::move(facet));
       continue;

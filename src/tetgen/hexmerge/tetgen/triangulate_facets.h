@@ -37,6 +37,9 @@ namespace hexmerge::tetgen {
 std::size_t triangulate_facets(std::vector<Facet>& facets, const std::vector<Vec3>& points,
                                const std::unordered_set<std::uint64_t>* delaunay_edges);
 
+/// Whether the facet has a loop (a polygon of more than three points) for TetGen to triangulate.
+bool has_loop(const Facet& facet);
+
 /// The key of the side between points a and b, either way round.
 std::uint64_t side_key(int a, int b);
 

@@ -482,6 +482,33 @@ void collapse_sides(Surface& surface, double target, double max_side,
   auto has = [](const SurfaceTriangle& t, int n) {
     return t.node[0] == n || t.node[1] == n || t.node[2] == n;
   };
+  // Link condition for moving node r onto node k: the ends have two common neighbours (the
+  // third nodes of the two triangles on the side r k).
+  auto link_holds = [&](int r, int k) {
+    std::unordered_set<int> near_r, common;
+    for (int ti : around[r])
+      for (int n : tris[ti].node) near_r.insert(n);
+    for (int ti : around[k])
+      for (int n : tris[ti].node)
+        if (n != r && n != k && near_r.count(n)) common.insert(n);
+    return common.size() == 2;
+  };
+  // The smallest angle of node r's triangles that do not have node k once r is on k, or -1 when
+  // one of them gets a side longer than `limit` or turns over from `reference`.
+  auto moved_angle = [&](int r, int k, double limit, const Vec3& reference) {
+    double after = M_PI;
+    for (int ti : around[r]) {
+      if (has(tris[ti], k)) continue;
+      std::array<int, 3> v = tris[ti].node;
+      for (int& n : v)
+        if (n == r) n = k;
+      for (int n : v)
+        if ((nodes[n] - nodes[k]).norm() > limit) return -1.0;
+      if (turned_over(normal_of(v), reference)) return -1.0;
+      after = std::min(after, smallest_angle(v));
+    }
+    return after;
+  };
   // The smallest angle after moving node r onto node k, or -1 when that is not allowed.
   auto try_collapse = [&](int r, int k, double limit) {
     if (on_edge[r] || around[r].empty()) return -1.0;
@@ -494,31 +521,15 @@ void collapse_sides(Surface& surface, double target, double max_side,
       if (has(tris[ti], k)) shared.push_back(ti);
       reference = reference + normal_of(tris[ti].node);
     }
-    if (shared.size() != 2) return -1.0;
-    // Link condition: the ends' common neighbours are the shared triangles' third nodes.
-    std::unordered_set<int> near_r, common;
-    for (int ti : around[r])
-      for (int n : tris[ti].node) near_r.insert(n);
-    for (int ti : around[k])
-      for (int n : tris[ti].node)
-        if (n != r && n != k && near_r.count(n)) common.insert(n);
-    if (common.size() != 2) return -1.0;
+    if (shared.size() != 2 || !link_holds(r, k)) return -1.0;
     double before = M_PI, after = M_PI;
     for (int ti : around[k]) before = std::min(before, smallest_angle(tris[ti].node));
     for (int ti : around[k])
       if (!has(tris[ti], r)) after = std::min(after, smallest_angle(tris[ti].node));
-    for (int ti : around[r]) {
-      before = std::min(before, smallest_angle(tris[ti].node));
-      if (has(tris[ti], k)) continue;
-      std::array<int, 3> v = tris[ti].node;
-      for (int& n : v)
-        if (n == r) n = k;
-      for (int n : v)
-        if ((nodes[n] - nodes[k]).norm() > limit) return -1.0;
-      const Vec3 now = normal_of(v);
-      if (turned_over(now, reference)) return -1.0;
-      after = std::min(after, smallest_angle(v));
-    }
+    for (int ti : around[r]) before = std::min(before, smallest_angle(tris[ti].node));
+    const double moved = moved_angle(r, k, limit, reference);
+    if (moved < 0) return -1.0;
+    after = std::min(after, moved);
     return after >= before ? after : -1.0;
   };
   // A side whose collapse failed is tried again only after a collapse changed the triangles
@@ -683,25 +694,9 @@ void collapse_sides(Surface& surface, double target, double max_side,
       double best = -1.0;
       int onto = -1;
       for (int k : {a, b}) {
-        std::unordered_set<int> near_r, common;
-        for (int tj : around[r])
-          for (int n : tris[tj].node) near_r.insert(n);
-        for (int tj : around[k])
-          for (int n : tris[tj].node)
-            if (n != r && n != k && near_r.count(n)) common.insert(n);
-        if (common.size() != 2) continue;
-        double after = M_PI;
-        bool allowed = true;
-        for (int tj : around[r]) {
-          if (has(tris[tj], k)) continue;
-          std::array<int, 3> v = tris[tj].node;
-          for (int& n : v)
-            if (n == r) n = k;
-          for (int n : v) allowed = allowed && (nodes[n] - nodes[k]).norm() <= max_side;
-          allowed = allowed && !turned_over(normal_of(v), reference);
-          after = std::min(after, smallest_angle(v));
-        }
-        if (allowed && after > before && after > best) best = after, onto = k;
+        if (!link_holds(r, k)) continue;
+        const double after = moved_angle(r, k, max_side, reference);
+        if (after > before && after > best) best = after, onto = k;
       }
       if (onto < 0) continue;
       const auto t_at = [](const std::pair<const std::uint64_t, EdgeSegment>& segment, int n) {
