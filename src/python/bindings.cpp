@@ -484,6 +484,18 @@ py::tuple run_mesh_shape(const std::string& brep, const std::map<std::string, st
   d["nb_boundary_swaps"] = report.nb_boundary_swaps;
   d["nb_node_moves"] = report.nb_node_moves;
   d["nb_boundary_node_moves"] = report.nb_boundary_node_moves;
+  d["nb_inserted_points"] = report.nb_inserted_points;
+  py::list sharp;
+  for (const SharpFeatureReport& f : report.sharp_features) {
+    py::dict e;
+    e["kind"] = f.kind, e["faces"] = f.faces, e["edges"] = f.edges, e["angle"] = f.angle;
+    e["point"] = py::make_tuple(f.point[0], f.point[1], f.point[2]);
+    sharp.append(e);
+  }
+  d["sharp_features"] = sharp;
+  py::list sharp_nodes;
+  for (const index_t n : report.sharp_nodes) sharp_nodes.append(n);
+  d["sharp_nodes"] = sharp_nodes;
   d["sweep_axis"] = report.sweep_axis;
   py::list axes;
   for (const auto& axis : report.frame) axes.append(py::make_tuple(axis[0], axis[1], axis[2]));

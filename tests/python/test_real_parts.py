@@ -180,3 +180,21 @@ def test_nodes_of_an_axis_parallel_edge_share_their_other_coordinates() -> None:
     assert meshing["nb_tetgen_restarts"] == 0
     assert meshing["failed_strategies"] == []
     assert meshing["strategy"] == "lattice"
+
+
+def test_cusps_where_a_hole_touches_a_side_are_reported() -> None:
+    """gmsh_as1-tu-203's plates 148 and 69 each have a hole whose circle touches a straight side:
+    on both sides of each point of contact the face narrows to nothing, a corner of 0 degrees no
+    element at it can be usable in. The report names the eight corners, and sharp_nodes holds a
+    node at each (the mesh's worst boundary triangle, 0.9 degrees at 50k tets, sits at one)."""
+    import numpy as np
+
+    tets, report = hexmerge.mesh_shape(CAD / "gmsh_as1-tu-203.stp", 12.0, recombine=False)
+    meshing = report["meshing"]
+    corners = [f for f in meshing["sharp_features"] if f["kind"] == "corner"]
+    assert len(corners) == 8
+    assert sorted({f["faces"][0] for f in corners}) == [69, 148]
+    assert all(f["angle"] < 1e-4 and len(f["edges"]) == 2 for f in corners)  # degrees
+    nodes = tets.points[np.asarray(meshing["sharp_nodes"], dtype=np.int64)]
+    for f in corners:
+        assert np.linalg.norm(nodes - np.asarray(f["point"]), axis=1).min() < 1e-9

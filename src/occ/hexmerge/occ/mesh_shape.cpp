@@ -23,6 +23,7 @@
 #include "hexmerge/occ/mesher/local_size.h"
 #include "hexmerge/occ/mesher/second_order.h"
 #include "hexmerge/occ/mesher/shape.h"
+#include "hexmerge/occ/mesher/sharp_features.h"
 #include "hexmerge/occ/mesher/size_estimate.h"
 #include "hexmerge/occ/mesher/solid_regions.h"
 #include "hexmerge/occ/mesher/surface.h"
@@ -159,6 +160,35 @@ void check_face_layers_placed(const std::vector<FaceLayers>& entries,
                        "solids)"),
         Entity::Parameter);
   }
+}
+
+// The number (1-based) the shape as given has for item `item` of the shape meshed (gluing
+// touching solids splits and merges items: the first given item naming it); 0 for none.
+int given_number(const ItemNumbering& numbering, int item) {
+  for (std::size_t g = 0; g < numbering.to_shape.size(); ++g) {
+    const std::vector<int>& to = numbering.to_shape[g];
+    if (std::find(to.begin(), to.end(), item) != to.end()) return static_cast<int>(g) + 1;
+  }
+  return 0;
+}
+
+// The sharp features for the report, faces and edges named as in the shape given.
+std::vector<SharpFeatureReport> sharp_feature_reports(const SharpFeatures& sharp,
+                                                      const GivenItems& given) {
+  std::vector<SharpFeatureReport> out;
+  for (const SharpCorner& c : sharp.corners)
+    out.push_back({"corner",
+                   {given_number(given.faces, c.face)},
+                   {given_number(given.edges, c.edges[0]), given_number(given.edges, c.edges[1])},
+                   c.angle,
+                   {c.point.x, c.point.y, c.point.z}});
+  for (const SharpEdge& e : sharp.edges)
+    out.push_back({"edge",
+                   {given_number(given.faces, e.faces[0]), given_number(given.faces, e.faces[1])},
+                   {given_number(given.edges, e.edge)},
+                   e.angle,
+                   {e.point.x, e.point.y, e.point.z}});
+  return out;
 }
 
 // One attempt: steps 3 to 14 of mesh_shape() with one strategy; the Tet10 mesh too when
@@ -427,6 +457,12 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
   const std::vector<Vec3> nodes = frame_nodes(shape, surface, lattice, sweep_axis, swept);
   report.nb_surface_nodes = nodes.size();
   report.nb_surface_triangles = surface.triangles.size();
+  // The CAD's sharp corners and edges (named as in the shape given) and the surface's nodes at
+  // them, which are the tets' first nodes.
+  const SharpFeatures sharp = sharp_features(shape, kSharpAngle);
+  report.sharp_features = sharp_feature_reports(sharp, given_items);
+  for (const int n : nodes_at(sharp, surface))
+    report.sharp_nodes.push_back(static_cast<index_t>(n));
   Surroundings around(nodes, surface, lattice, h);
 
   // 7. The lattice points kept: inside, lattice_margin from the faces that are not lattice faces
@@ -541,6 +577,9 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
       nodes.size() +
       (nb_face_layer_points > 0 && sweep_axis < 0 ? nb_on_faces + nb_face_layer_points : 0);
   improve.max_boundary_shift = deflection;
+  // A tet under 0.2 (an element a solver should not get) that no flip improves gets a vertex
+  // inside; swept, the columns stay.
+  improve.insert_below = sweep_axis < 0 ? 0.2 : 0.0;
   std::vector<std::int32_t> boundary_face(tets.boundary_marker.size());
   for (std::size_t i = 0; i < boundary_face.size(); ++i)
     boundary_face[i] = static_cast<std::int32_t>(tets.boundary_marker[i]) - 1;
@@ -568,6 +607,7 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
   report.nb_boundary_swaps = improved.boundary_swaps;
   report.nb_node_moves = improved.node_moves;
   report.nb_boundary_node_moves = improved.boundary_node_moves;
+  report.nb_inserted_points = improved.inserted_vertices;
   step("slivers", 0.9);
   // A tet the flips and moves left flat or folded (gmsh_Block at h 1.18: scaled Jacobian
   // 1e-13) fails this way of placing the points, not the whole run: the next way is tried.

@@ -178,6 +178,17 @@ const ParameterTable<MeshShapeParameters>& mesh_shape_parameter_table();
 void validate_mesh_shape_parameters(const MeshShapeParameters& parameters);
 
 /// What mesh_shape() did.
+/// A CAD feature sharper than usable elements can follow: a face corner or an edge whose angle
+/// inside the solid is under 8.13 degrees (a tet with a corner there has a scaled Jacobian of at
+/// most sqrt(2) sin(angle) < 0.2, a boundary triangle in a corner at most its angle).
+struct SharpFeatureReport {
+  std::string kind;               ///< "corner" (of a face) or "edge" (the solid's dihedral angle)
+  std::vector<int> faces;         ///< 1-based, as given: the corner's face, the edge's two faces
+  std::vector<int> edges;         ///< 1-based, as given: the corner's two edges, or the edge
+  double angle = 0.0;             ///< degrees
+  std::array<double, 3> point{};  ///< the corner, or where the edge's angle is smallest
+};
+
 struct MeshShapeReport {
   std::size_t nb_solids = 0;
   std::size_t nb_faces = 0;
@@ -198,6 +209,11 @@ struct MeshShapeReport {
   std::size_t nb_node_moves = 0;  ///< moves of boundary-layer and Steiner points (smooth_nodes)
   /// of those, moves of boundary nodes along their CAD face or edge
   std::size_t nb_boundary_node_moves = 0;
+  std::size_t nb_inserted_points = 0;  ///< points inserted into tets under 0.2 no flip improved
+  std::vector<SharpFeatureReport> sharp_features;  ///< the CAD's, see SharpFeatureReport
+  /// The mesh's nodes at them: the corners' vertices and the sharp edges' nodes (a tet under a
+  /// scaled Jacobian of 0.2 at one of them may be forced so by the CAD).
+  std::vector<index_t> sharp_nodes;
   int sweep_axis = -1;  ///< the lattice axis the tets are swept along (0..2), -1: not swept
   /// Swept: the cross-section's triangles whose columns of prisms make the tets (0: TetGen's
   /// tets kept, see mesher::extrude_tets()).

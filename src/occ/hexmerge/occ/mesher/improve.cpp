@@ -104,7 +104,14 @@ void improve_tets(TetMesh& mesh, const std::vector<double>& frame_points,
     // than the surface's chord deflection (a flat tet on two triangles across a seam).
     RemoveSliversParameters flip_parameters;
     flip_parameters.max_boundary_shift = parameters.max_boundary_shift;
+    flip_parameters.insert_below = parameters.insert_below;
     remove_slivers(mesh, fixed, boundary_patch, flip_parameters, flips);
+    // The inserted vertices: free, off the lattice, inside.
+    half_lattice.resize(mesh.nb_vertices(), 0);
+    cell_of.resize(mesh.nb_vertices());
+    on_boundary.resize(mesh.nb_vertices(), 0);
+    movable.resize(mesh.nb_vertices(), parameters.sweep_axis < 0 ? kFree : kFixed);
+    report.inserted_vertices += flips.insertions;
     if (round == 0) report.min_quality_before = flips.min_before;
     report.face_flips += flips.face_removals;
     report.edge_flips += flips.edge_removals;

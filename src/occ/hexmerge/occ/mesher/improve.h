@@ -22,6 +22,7 @@ struct ImproveReport {
   std::size_t boundary_swaps = 0;       ///< of which on the boundary, inside one CAD face
   std::size_t node_moves = 0;           ///< moves of free nodes
   std::size_t boundary_node_moves = 0;  ///< of those, of boundary nodes along a CAD face or edge
+  std::size_t inserted_vertices = 0;    ///< vertices inserted into tets no flip improved
 };
 
 /// How improve_tets() works.
@@ -37,6 +38,9 @@ struct ImproveParameters {
   /// none move). They move while a tet at them is below 0.2, no more of their tets below it and
   /// their boundary triangles' smallest angle kept (or above 10 degrees).
   SurfacePath* surface = nullptr;
+  /// A tet below this scaled Jacobian that no flip improves gets a vertex inside
+  /// (RemoveSliversParameters::insert_below); 0: never.
+  double insert_below = 0.0;
 };
 
 /// Flips take out slivers, then the free nodes (not on the surface, not on the half lattice,

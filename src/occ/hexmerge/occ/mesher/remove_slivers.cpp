@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <limits>
 #include <unordered_map>
@@ -38,7 +39,7 @@ bool same_orientation(const Tet& t, index_t w, index_t x, index_t y, index_t z) 
 // The mesh while it is flipped: tets by slot (dead slots stay), the tets at each vertex.
 class FlipMesh {
  public:
-  FlipMesh(const TetMesh& mesh, const std::vector<char>& fixed,
+  FlipMesh(TetMesh& mesh, const std::vector<char>& fixed,
            const std::vector<std::int32_t>& boundary_patch)
       : points_(mesh.points) {
     at_vertex_.resize(mesh.nb_vertices());
@@ -79,8 +80,28 @@ class FlipMesh {
     alive_.push_back(1);
     quality_.push_back(quality(t));
     examined_.push_back(0);
+    tried_.push_back(0);
     for (index_t v : t) at_vertex_[v].push_back(id), changed_[v] = clock_;
   }
+  // A new vertex at p, in no tet yet; its position may change (place) until a tet holds it.
+  index_t add_vertex(const Vec3& p) {
+    points_.insert(points_.end(), {p.x, p.y, p.z});
+    at_vertex_.emplace_back();
+    changed_.push_back(clock_);
+    return static_cast<index_t>(at_vertex_.size() - 1);
+  }
+  void place(index_t v, const Vec3& p) {
+    double* x = &points_[3 * static_cast<std::size_t>(v)];
+    x[0] = p.x, x[1] = p.y, x[2] = p.z;
+  }
+  // The last vertex added, while no tet holds it.
+  void remove_last_vertex() {
+    points_.resize(points_.size() - 3);
+    at_vertex_.pop_back();
+    changed_.pop_back();
+  }
+  std::size_t nb_vertices() const { return at_vertex_.size(); }
+
   void remove(index_t t) {
     alive_[t] = 0;
     for (index_t v : tets_[t]) {
@@ -101,6 +122,14 @@ class FlipMesh {
   }
   // Marks t examined now: the changes from now on stamp at least this clock.
   void examine(index_t t) { examined_[t] = ++clock_; }
+  // The same for vertex insertion into t: not tried again while the tets at its vertices stay
+  // (its larger cavities reach farther, but seldom change alone).
+  bool changed_since_tried(index_t t) const {
+    const std::uint64_t seen = tried_[t];
+    return seen == 0 || std::any_of(tets_[t].begin(), tets_[t].end(),
+                                    [&](index_t v) { return changed_[v] >= seen; });
+  }
+  void try_insertion(index_t t) { tried_[t] = ++clock_; }
 
   // The tets around edge (a, b), in `around`, and their other vertices in `ring`, so that tet i
   // is (a, b, ring[i], ring[i + 1]) in positive order (ring[n] = ring[0] for a closed ring, an
@@ -188,7 +217,7 @@ class FlipMesh {
   }
 
  private:
-  const std::vector<double>& points_;
+  std::vector<double>& points_;
   std::vector<Tet> tets_;
   std::vector<std::int32_t> region_;
   std::vector<char> fixed_, alive_;
@@ -196,7 +225,7 @@ class FlipMesh {
   std::vector<std::vector<index_t>> at_vertex_;
   // Change stamps: per tet the clock when it was last examined, per vertex when a tet at it was
   // last added or removed (see changed_since_examined).
-  std::vector<std::uint64_t> examined_, changed_;
+  std::vector<std::uint64_t> examined_, tried_, changed_;
   std::uint64_t clock_ = 1;
   std::unordered_map<FaceKey, std::int32_t, FaceKeyHash> patch_;
 };
@@ -304,16 +333,208 @@ void best_face_removal(const FlipMesh& m, index_t t, int opposite, Flip& best) {
   if (flip.quality > best.quality) best = std::move(flip);
 }
 
+// Vertex insertion: the tets of a cavity around a tet are replaced by the tets joining its
+// boundary faces to a new vertex, placed where the worst of them is best.
+struct Insertion {
+  std::vector<index_t> old_tets;
+  std::vector<Tet> new_tets;  // holding the new vertex, index FlipMesh::nb_vertices() before it
+  Vec3 point{0, 0, 0};
+  double quality = -kInfinity;
+  double deficit = kInfinity;  // the sum of floor - quality over the new tets below the floor
+};
+
+// The tets joining the boundary faces of `cavity` (tets of a valid mesh) to vertex p, each the
+// cavity's tet with the vertex opposite the face replaced by p (so positive where p lies inside
+// the face's half-space). False when the cavity is no ball with every vertex on its boundary:
+// its boundary must be a closed surface of two faces at every side and Euler characteristic 2
+// (then, by the kernel theorem, p sees every face positively only inside the cavity's kernel
+// and the tets tile the cavity).
+bool star_of_cavity(const FlipMesh& m, const std::vector<index_t>& cavity, index_t p,
+                    std::vector<Tet>& made) {
+  made.clear();
+  std::vector<index_t> vertices, on_boundary;
+  std::vector<std::pair<index_t, index_t>> sides;
+  for (index_t u : cavity)
+    for (int k = 0; k < 4; ++k) {
+      vertices.push_back(m.tet(u)[k]);
+      const index_t w = m.across(u, k);
+      if (w != NO_CELL && std::find(cavity.begin(), cavity.end(), w) != cavity.end()) continue;
+      Tet n = m.tet(u);
+      n[k] = p;
+      made.push_back(n);
+      const index_t f[3] = {n[(k + 1) % 4], n[(k + 2) % 4], n[(k + 3) % 4]};
+      for (int i = 0; i < 3; ++i) {
+        on_boundary.push_back(f[i]);
+        sides.emplace_back(std::min(f[i], f[(i + 1) % 3]), std::max(f[i], f[(i + 1) % 3]));
+      }
+    }
+  for (auto* list : {&vertices, &on_boundary}) {
+    std::sort(list->begin(), list->end());
+    list->erase(std::unique(list->begin(), list->end()), list->end());
+  }
+  if (vertices != on_boundary) return false;
+  std::sort(sides.begin(), sides.end());
+  for (std::size_t i = 0; i < sides.size(); i += 2)
+    if (i + 1 >= sides.size() || sides[i] != sides[i + 1] ||
+        (i + 2 < sides.size() && sides[i + 2] == sides[i]))
+      return false;
+  const auto v = static_cast<long>(on_boundary.size()), e = static_cast<long>(sides.size() / 2),
+             f = static_cast<long>(made.size());
+  return v - e + f == 2;
+}
+
+// The centre and squared radius of tet t's circumsphere (radius infinite for a flat tet).
+void circumsphere(const FlipMesh& m, const Tet& t, Vec3& centre, double& radius2) {
+  const Vec3 a = Vec3::of(m.point(t[0]));
+  const Vec3 u = Vec3::of(m.point(t[1])) - a, v = Vec3::of(m.point(t[2])) - a,
+             w = Vec3::of(m.point(t[3])) - a;
+  const double det = 2 * det3(u, v, w);
+  const Vec3 offset =
+      (v.cross(w) * u.dot(u) + w.cross(u) * v.dot(v) + u.cross(v) * w.dot(w)) * (1 / det);
+  centre = a + offset;
+  radius2 = det != 0 ? offset.dot(offset) : kInfinity;
+}
+
+// The best insertion at t, into one of three cavities (tets within t's region, none fixed):
+// the tets whose circumspheres hold t's circumcentre, reached from t across faces (Bowyer and
+// Watson's cavity, star-shaped from the centre where the tets are Delaunay); t and the tets
+// across its faces; those and the tets across theirs. The new vertex moves by a compass search
+// (the axes and the cube's diagonals, steps from a quarter of its distance to the nearest cavity
+// vertex down to a hundredth) from the best of the circumcentre, t's centroid and the cavity's
+// vertices' centroid, raising the worst new tet; then the same search lowers the new tets'
+// deficit (the sum of `floor` - quality over those below `floor`), the worst kept above the
+// cavity's. An insertion counts where it raises the worst and lowers the deficit or leaves at
+// most one more tet below `floor`; the least deficit wins.
+void best_insertion(FlipMesh& m, index_t t, double floor, Insertion& best) {
+  const std::int32_t region = m.region(t);
+  Vec3 t_centroid{0, 0, 0}, centre;
+  for (index_t v : m.tet(t)) t_centroid = t_centroid + Vec3::of(m.point(v)) * 0.25;
+  double radius2 = 0;
+  circumsphere(m, m.tet(t), centre, radius2);
+  const index_t p = m.add_vertex(t_centroid);
+  std::vector<index_t> cavity;
+  std::vector<Tet> made;
+  for (int kind = 0; kind < 3; ++kind) {
+    if (kind == 0) {
+      if (!(radius2 < kInfinity)) continue;
+      cavity = {t};
+      for (std::size_t i = 0; i < cavity.size(); ++i)
+        for (int k = 0; k < 4; ++k) {
+          const index_t w = m.across(cavity[i], k);
+          if (w == NO_CELL || !m.movable(w, region) ||
+              std::find(cavity.begin(), cavity.end(), w) != cavity.end())
+            continue;
+          Vec3 c;
+          double r2 = 0;
+          circumsphere(m, m.tet(w), c, r2);
+          if ((centre - c).dot(centre - c) < r2) cavity.push_back(w);
+        }
+    } else {
+      if (kind == 1) cavity = {t};
+      const std::size_t grown = cavity.size();
+      for (std::size_t i = 0; i < grown; ++i)
+        for (int k = 0; k < 4; ++k) {
+          const index_t w = m.across(cavity[i], k);
+          if (w != NO_CELL && m.movable(w, region) &&
+              std::find(cavity.begin(), cavity.end(), w) == cavity.end())
+            cavity.push_back(w);
+        }
+      if (cavity.size() == grown) continue;
+    }
+    if (!star_of_cavity(m, cavity, p, made)) continue;
+    // The cavity's worst tet and its deficit.
+    double before = kInfinity, deficit_before = 0;
+    for (index_t u : cavity)
+      before = std::min(before, m.quality(u)),
+      deficit_before += std::max(0.0, floor - m.quality(u));
+    // The worst new tet with the vertex at q, or some value <= bound as soon as one is.
+    const auto worst_at = [&](const Vec3& q, double bound) {
+      m.place(p, q);
+      double worst = kInfinity;
+      for (const Tet& n : made)
+        if ((worst = std::min(worst, m.quality(n))) <= bound) break;
+      return worst;
+    };
+    // The new tets' deficit with the vertex at q, infinite where one is not above `before`
+    // (or some value >= bound as soon as the sum reaches it).
+    const auto deficit_at = [&](const Vec3& q, double bound) {
+      m.place(p, q);
+      double deficit = 0;
+      for (const Tet& n : made) {
+        const double value = m.quality(n);
+        if (!(value > before + 1e-12)) return kInfinity;
+        if ((deficit += std::max(0.0, floor - value)) >= bound) break;
+      }
+      return deficit;
+    };
+    Vec3 centroid{0, 0, 0};
+    std::vector<index_t> corners;
+    for (const Tet& n : made)
+      for (index_t v : n)
+        if (v != p) corners.push_back(v);
+    std::sort(corners.begin(), corners.end());
+    corners.erase(std::unique(corners.begin(), corners.end()), corners.end());
+    for (index_t v : corners) centroid = centroid + Vec3::of(m.point(v));
+    centroid = centroid * (1.0 / static_cast<double>(corners.size()));
+    Vec3 here = t_centroid;
+    double quality = -kInfinity;
+    for (const Vec3& start : {centre, t_centroid, centroid})
+      if (const double q = worst_at(start, quality); q > quality) quality = q, here = start;
+    double nearest = kInfinity;
+    for (index_t v : corners) nearest = std::min(nearest, (Vec3::of(m.point(v)) - here).norm());
+    // A compass search that raises `value` (the worst tet, then minus the deficit).
+    const double r3 = 1 / std::sqrt(3.0);
+    const auto search = [&](const auto& value, double& best_value) {
+      for (double step = 0.25 * nearest; step > 1e-2 * nearest;) {
+        bool better = false;
+        for (int d = 0; d < 14; ++d) {
+          const Vec3 direction =
+              d < 6 ? Vec3{d == 0   ? 1.0
+                           : d == 1 ? -1.0
+                                    : 0.0,
+                           d == 2   ? 1.0
+                           : d == 3 ? -1.0
+                                    : 0.0,
+                           d == 4   ? 1.0
+                           : d == 5 ? -1.0
+                                    : 0.0}
+                    : Vec3{(d - 6) & 1 ? r3 : -r3, (d - 6) & 2 ? r3 : -r3, (d - 6) & 4 ? r3 : -r3};
+          const Vec3 q = here + direction * step;
+          const double v = value(q, best_value + 1e-12);
+          if (v > best_value + 1e-12) best_value = v, here = q, better = true;
+        }
+        if (!better) step *= 0.5;
+      }
+    };
+    search(worst_at, quality);
+    if (!(quality > std::max(before, 0.0) + 1e-12)) continue;
+    double minus_deficit = -deficit_at(here, kInfinity);
+    search([&](const Vec3& q, double bound) { return -deficit_at(q, -bound); }, minus_deficit);
+    std::ptrdiff_t below = 0;
+    for (index_t u : cavity) below += m.quality(u) < floor;
+    m.place(p, here);
+    for (const Tet& n : made) below -= m.quality(n) < floor;
+    if (!(-minus_deficit < deficit_before - 1e-12) && below < -1) continue;
+    quality = worst_at(here, -kInfinity);
+    if (-minus_deficit < best.deficit)
+      best.quality = quality, best.deficit = -minus_deficit, best.point = here,
+      best.old_tets = cavity, best.new_tets = made;
+    if (best.deficit == 0) break;  // every new tet above the floor: no other cavity needed
+  }
+  m.remove_last_vertex();
+}
 }  // namespace
 
 void remove_slivers(TetMesh& mesh, const std::vector<char>& fixed,
                     const std::vector<std::int32_t>& boundary_patch,
                     const RemoveSliversParameters& parameters, RemoveSliversReport& report) {
   if (!(parameters.target > 0 && parameters.target <= 1) || parameters.max_passes < 1 ||
-      parameters.max_ring < 3 || parameters.max_ring > 10 || !(parameters.max_boundary_shift >= 0))
+      parameters.max_ring < 3 || parameters.max_ring > 10 ||
+      !(parameters.max_boundary_shift >= 0) ||
+      !(parameters.insert_below >= 0 && parameters.insert_below <= 1))
     throw InputError(
         "remove_slivers: target must be in (0, 1], max_passes >= 1, max_ring in [3, 10], "
-        "max_boundary_shift >= 0",
+        "max_boundary_shift >= 0, insert_below in [0, 1]",
         Entity::Parameter);
   if (!fixed.empty() && fixed.size() != mesh.nb_tets())
     throw InputError("remove_slivers: one fixed flag per tet", Entity::Parameter);
@@ -370,8 +591,8 @@ void remove_slivers(TetMesh& mesh, const std::vector<char>& fixed,
       double replaced = kInfinity;
       for (index_t u : best.old_tets) replaced = std::min(replaced, m.quality(u));
       // Never an inverted or flat tet, even in place of one.
-      if (best.old_tets.empty() || !(best.quality > std::max(replaced, 0.0) + 1e-12)) continue;
       const std::int32_t region = m.region(t);
+      if (best.old_tets.empty() || !(best.quality > std::max(replaced, 0.0) + 1e-12)) continue;
       for (index_t u : best.old_tets) m.remove(u);
       for (const Tet& n : best.new_tets) m.add(n, region);
       const auto [a, b, c, d] = best.boundary_swap;
@@ -388,7 +609,28 @@ void remove_slivers(TetMesh& mesh, const std::vector<char>& fixed,
                                                                 : report.edge_removals);
       ++flips;
     }
-    if (flips == 0) break;
+    // Once the flips are done (or on the last pass), the tets no flip improved get a vertex
+    // each where that helps (insert_below), and the flips go on around the new vertices.
+    if (flips > 0 && pass + 1 < parameters.max_passes) continue;
+    std::size_t inserted = 0;
+    for (index_t t : work) {  // worst first
+      if (!m.alive(t) || !(m.quality(t) < parameters.insert_below) || !m.changed_since_tried(t))
+        continue;
+      m.try_insertion(t);
+      Insertion insertion;
+      best_insertion(m, t, parameters.insert_below, insertion);
+      double replaced = kInfinity;
+      for (index_t u : insertion.old_tets) replaced = std::min(replaced, m.quality(u));
+      if (insertion.old_tets.empty() || !(insertion.quality > std::max(replaced, 0.0) + 1e-12))
+        continue;
+      const std::int32_t region = m.region(t);
+      m.add_vertex(insertion.point);
+      for (index_t u : insertion.old_tets) m.remove(u);
+      for (const Tet& n : insertion.new_tets) m.add(n, region);
+      ++inserted;
+    }
+    report.insertions += inserted;
+    if (inserted == 0) break;
   }
   summarise(report.min_after, report.below_after);
   m.write(mesh);

@@ -22,6 +22,12 @@ struct RemoveSliversParameters {
   /// and the new side are no farther apart than this (the boundary moves by no more: on a curved
   /// patch, the chord's sagitta); 0: only triangles in one plane. >= 0.
   double max_boundary_shift = 0.0;
+  /// A tet below this that no flip improves gets a vertex: the tets of a cavity around it
+  /// (itself and the tets across its faces, or those and the tets across theirs; within its
+  /// region, none fixed) are replaced by the tets joining the cavity's boundary faces to a new
+  /// vertex inside, where the worst of them is best (Klingner and Shewchuk's vertex insertion).
+  /// 0: never. In [0, 1].
+  double insert_below = 0.0;
 };
 
 /// What remove_slivers() did.
@@ -33,6 +39,7 @@ struct RemoveSliversReport {
   std::size_t face_removals = 0;   ///< 2-3 flips done
   std::size_t edge_removals = 0;   ///< n-to-(2n-4) flips done (3-2, 4-4, ...), boundary included
   std::size_t boundary_swaps = 0;  ///< of which on a boundary edge (see max_boundary_shift)
+  std::size_t insertions = 0;      ///< vertices inserted (see insert_below), appended to the points
 };
 
 /// Raises the smallest scaled Jacobian (quality.h) of a tet mesh by flips, Shewchuk's "face
@@ -40,14 +47,15 @@ struct RemoveSliversReport {
 /// "edge removal" (the n tets around an interior edge become 2n - 4, the best triangulation of
 /// the ring of their other vertices, found by dynamic programming). A flip is done only when the
 /// smallest scaled Jacobian of the tets it makes is larger than that of the tets it replaces, so
-/// the mesh's minimum never decreases. Points never move or appear; faces between tets of two
+/// the mesh's minimum never decreases. A tet no flip improves may get a new vertex inside
+/// (insert_below; the points before stay where they are); faces between tets of two
 /// regions and the tets marked `fixed` never change, nor does the boundary of the domain as a
 /// surface: its triangles change only where two of them on one patch, in one plane or within
 /// max_boundary_shift of it, swap their shared side (edge removal on a boundary edge, the ring
 /// closed by the new side).
 ///
 /// @param[in,out] mesh            a valid tet mesh (validate_tet_mesh); tets are renumbered,
-///                                regions follow their tets
+///                                regions follow their tets, inserted vertices are appended
 /// @param[in]     fixed           #T flags (or empty: none): tets kept as they are
 /// @param[in]     boundary_patch  #T by 4 (or empty: no boundary triangle changes): the patch
 ///                                (say, the CAD face) of face f (opposite vertex f) of tet t when

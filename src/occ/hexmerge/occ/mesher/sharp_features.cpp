@@ -1,0 +1,279 @@
+#include "hexmerge/occ/mesher/sharp_features.h"
+
+#include <BRepAdaptor_Curve.hxx>
+#include <BRepAdaptor_Surface.hxx>
+#include <BRepLProp_SLProps.hxx>
+#include <BRepTools_WireExplorer.hxx>
+#include <BRep_Tool.hxx>
+#include <Geom2d_Curve.hxx>
+#include <TopExp_Explorer.hxx>
+#include <TopTools_IndexedMapOfShape.hxx>
+#include <TopoDS.hxx>
+#include <TopoDS_Edge.hxx>
+#include <TopoDS_Face.hxx>
+#include <TopoDS_Vertex.hxx>
+#include <TopoDS_Wire.hxx>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <optional>
+#include <utility>
+
+#include "hexmerge/occ/mesher/shape.h"
+#include "hexmerge/occ/mesher/surface.h"
+
+namespace hexmerge::mesher {
+namespace {
+
+constexpr double kDegrees = 180.0 / M_PI;
+// Points sampled along each edge for its dihedral angle (inside it: its ends are corners).
+constexpr int kEdgeSamples = 9;
+
+// The face's outward normal at (u, v) (the face's orientation applied), or nothing where the
+// surface has none (a cone's apex, a sphere's pole).
+std::optional<Vec3> normal_at(const TopoDS_Face& face, double u, double v) {
+  BRepAdaptor_Surface surface(face);
+  BRepLProp_SLProps props(surface, u, v, 1, 1e-9);
+  if (!props.IsNormalDefined()) return std::nullopt;
+  Vec3 n = of(props.Normal());
+  if (face.Orientation() == TopAbs_REVERSED) n = n * -1.0;
+  return n;
+}
+
+// The unit tangent of an edge at parameter t, along the edge's orientation; at an end where the
+// derivative vanishes, the chord to a point a thousandth of its range inside.
+std::optional<Vec3> tangent_at(const TopoDS_Edge& edge, double t) {
+  const BRepAdaptor_Curve curve(edge);
+  gp_Pnt p;
+  gp_Vec d;
+  curve.D1(t, p, d);
+  Vec3 tangent{d.X(), d.Y(), d.Z()};
+  const double range = curve.LastParameter() - curve.FirstParameter();
+  if (tangent.norm() <= 1e-12 * std::max(1.0, range)) {
+    const double step = 1e-3 * range * (t < curve.FirstParameter() + 0.5 * range ? 1 : -1);
+    tangent = (of(curve.Value(t + step)) - of(p)) * (step > 0 ? 1.0 : -1.0);
+  }
+  const double length = tangent.norm();
+  if (!(length > 0)) return std::nullopt;
+  tangent = tangent * (1 / length);
+  if (edge.Orientation() == TopAbs_REVERSED) tangent = tangent * -1.0;
+  return tangent;
+}
+
+// The direction in which an edge leaves one of its ends, `first` or last by its own parameter:
+// its unit tangent there, and the unit chord to the point a thousandth of its range inside
+// (which parts two edges tangent at the vertex, a line and a circle touching it, by their
+// curvature, as their faces part).
+struct EndDirection {
+  Vec3 tangent, chord;
+};
+std::optional<EndDirection> direction_from_end(const TopoDS_Edge& edge, bool first) {
+  const BRepAdaptor_Curve curve(edge);
+  const double a = curve.FirstParameter(), b = curve.LastParameter();
+  const double from = first ? a : b, to = from + (first ? 1e-3 : -1e-3) * (b - a);
+  gp_Pnt p;
+  gp_Vec d;
+  curve.D1(from, p, d);
+  Vec3 chord = of(curve.Value(to)) - of(p),
+       tangent = Vec3{d.X(), d.Y(), d.Z()} * (first ? 1.0 : -1.0);
+  if (!(chord.norm() > 0)) return std::nullopt;
+  chord = chord * (1 / chord.norm());
+  // Where the derivative vanishes (a singular parameterisation), the chord.
+  tangent = tangent.norm() > 1e-12 * std::max(1.0, b - a) ? tangent * (1 / tangent.norm()) : chord;
+  return EndDirection{tangent, chord};
+}
+
+// The angle in [0, 360) degrees from `from` to `to` turning about `axis`.
+double turn(const Vec3& from, const Vec3& to, const Vec3& axis) {
+  double a = std::atan2(from.cross(to).dot(axis), from.dot(to)) * kDegrees;
+  return a < 0 ? a + 360 : a;
+}
+
+// The corners of `face` under `limit`. At each vertex, the directions of the face's edges
+// leaving it (a wire's edge leaving the vertex, or the reverse of one arriving), in turn about
+// the outward normal: the face lies on the left of its oriented edges, so its sectors there run
+// from a leaving edge to the next direction (the reverse of an arriving one). A vertex where two
+// wires meet (a hole touching the outer boundary: gmsh_as1-tu-203's circle tangent to a line)
+// has a sector per wire's pass.
+void face_corners(const Shape& shape, int face_index, double limit, std::vector<SharpCorner>& out) {
+  const TopoDS_Face& face = TopoDS::Face(shape.faces(face_index + 1));
+  struct Direction {
+    EndDirection u;
+    bool leaving;
+    int edge;
+    double turn = 0;  // of its chord about the normal, from the vertex's first chord
+  };
+  TopTools_IndexedMapOfShape vertices;
+  std::vector<std::vector<Direction>> at;  // per vertex of `vertices`
+  for (TopExp_Explorer wires(face, TopAbs_WIRE); wires.More(); wires.Next()) {
+    // The wire's edges in order, each with the vertex it leaves from.
+    std::vector<std::pair<TopoDS_Edge, TopoDS_Vertex>> loop;
+    for (BRepTools_WireExplorer e(TopoDS::Wire(wires.Current()), face); e.More(); e.Next())
+      loop.emplace_back(e.Current(), e.CurrentVertex());
+    for (std::size_t i = 0; i < loop.size(); ++i) {
+      const TopoDS_Edge& arriving = loop[(i + loop.size() - 1) % loop.size()].first;
+      const auto& [leaving, vertex] = loop[i];
+      if (BRep_Tool::Degenerated(arriving) || BRep_Tool::Degenerated(leaving)) continue;
+      // The arriving edge ends at the vertex, the leaving one starts there (in the wire's
+      // direction, against or along the edges' own).
+      const std::optional<EndDirection> u_in =
+          direction_from_end(arriving, arriving.Orientation() == TopAbs_REVERSED);
+      const std::optional<EndDirection> u_out =
+          direction_from_end(leaving, leaving.Orientation() != TopAbs_REVERSED);
+      if (!u_in || !u_out) continue;
+      const int v = vertices.Add(vertex);
+      if (v > static_cast<int>(at.size())) at.resize(static_cast<std::size_t>(v));
+      // A seam is no boundary of the face in space: its two passes go.
+      if (!BRep_Tool::IsClosed(leaving, face))
+        at[v - 1].push_back({*u_out, true, shape.edges.FindIndex(leaving) - 1});
+      if (!BRep_Tool::IsClosed(arriving, face))
+        at[v - 1].push_back({*u_in, false, shape.edges.FindIndex(arriving) - 1});
+    }
+  }
+  for (int v = 1; v <= vertices.Extent(); ++v) {
+    const TopoDS_Vertex& vertex = TopoDS::Vertex(vertices(v));
+    const gp_Pnt2d uv = BRep_Tool::Parameters(vertex, face);
+    const std::optional<Vec3> n = normal_at(face, uv.X(), uv.Y());
+    if (!n) continue;
+    std::vector<Direction>& directions = at[v - 1];
+    // In turn about the normal by their chords (tangent edges part by them), leaving first at
+    // equal turns; a sector's angle is the turn between the chords corrected to the tangents'.
+    const Vec3 first = directions.front().u.chord;
+    for (Direction& d : directions) d.turn = turn(first, d.u.chord, *n);
+    std::stable_sort(directions.begin(), directions.end(),
+                     [](const Direction& a, const Direction& b) {
+                       return a.turn < b.turn || (a.turn == b.turn && a.leaving && !b.leaving);
+                     });
+    // The signed turn from a direction's tangent to its chord.
+    const auto bend = [&](const Direction& d) {
+      const double t = turn(d.u.tangent, d.u.chord, *n);
+      return t > 180 ? t - 360 : t;
+    };
+    for (std::size_t k = 0; k < directions.size(); ++k) {
+      const Direction& from = directions[k];
+      if (!from.leaving) continue;
+      // The next direction in turn that is an arriving one's (the sector ends there).
+      std::size_t next = (k + 1) % directions.size();
+      while (next != k && directions[next].leaving) next = (next + 1) % directions.size();
+      if (next == k) continue;
+      const double chords = directions[next].turn - from.turn + (next > k ? 0 : 360);
+      const double angle = std::clamp(chords + bend(from) - bend(directions[next]), 0.0, 360.0);
+      if (angle >= limit) continue;
+      SharpCorner corner;
+      corner.face = face_index;
+      corner.edges[0] = directions[next].edge;
+      corner.edges[1] = from.edge;
+      corner.angle = angle;
+      corner.point = of(BRep_Tool::Pnt(vertex));
+      out.push_back(corner);
+    }
+  }
+}
+
+}  // namespace
+
+SharpFeatures sharp_features(const Shape& shape, double limit) {
+  SharpFeatures features;
+  for (int f = 0; f < shape.faces.Extent(); ++f) face_corners(shape, f, limit, features.corners);
+  // Per solid, each edge's faces as the solid holds them (orientations composed), the edge as
+  // each face holds it.
+  for (int s = 1; s <= shape.solids.Extent(); ++s) {
+    std::vector<std::vector<std::pair<TopoDS_Face, TopoDS_Edge>>> at_edge(
+        static_cast<std::size_t>(shape.edges.Extent()));
+    for (TopExp_Explorer faces(shape.solids(s), TopAbs_FACE); faces.More(); faces.Next()) {
+      const TopoDS_Face& face = TopoDS::Face(faces.Current());
+      for (TopExp_Explorer edges(face, TopAbs_EDGE); edges.More(); edges.Next()) {
+        const int e = shape.edges.FindIndex(edges.Current()) - 1;
+        if (e >= 0) at_edge[e].emplace_back(face, TopoDS::Edge(edges.Current()));
+      }
+    }
+    for (int e = 0; e < shape.edges.Extent(); ++e) {
+      const auto& sides = at_edge[e];
+      if (sides.size() != 2 || sides[0].first.IsSame(sides[1].first)) continue;
+      const TopoDS_Edge& edge = TopoDS::Edge(shape.edges(e + 1));
+      if (BRep_Tool::Degenerated(edge)) continue;
+      const BRepAdaptor_Curve curve(edge);
+      SharpEdge sharp;
+      sharp.angle = 360;
+      for (int k = 0; k < kEdgeSamples; ++k) {
+        const double t =
+            curve.FirstParameter() +
+            (k + 0.5) / kEdgeSamples * (curve.LastParameter() - curve.FirstParameter());
+        const Vec3 p = of(curve.Value(t));
+        // Per side: the direction into the face, normal to the edge (left of the edge as the
+        // face holds it), and the face's outward normal.
+        Vec3 into[2], normal[2];
+        bool defined = true;
+        for (int i = 0; i < 2 && defined; ++i) {
+          const auto& [face, oriented] = sides[i];
+          double first = 0, last = 0;
+          const Handle(Geom2d_Curve) pcurve =
+              BRep_Tool::CurveOnSurface(oriented, face, first, last);
+          const std::optional<Vec3> tangent = tangent_at(oriented, t);
+          if (pcurve.IsNull() || !tangent) {
+            defined = false;
+            break;
+          }
+          const gp_Pnt2d uv = pcurve->Value(t);
+          const std::optional<Vec3> n = normal_at(face, uv.X(), uv.Y());
+          if (!n) {
+            defined = false;
+            break;
+          }
+          normal[i] = *n;
+          into[i] = n->cross(*tangent);
+        }
+        if (!defined || into[0].norm() == 0 || into[1].norm() == 0) continue;
+        // Convex (the solid inside the wedge between the faces) where face 0 runs against
+        // face 1's outward normal.
+        const double between =
+            std::acos(
+                std::clamp(into[0].dot(into[1]) / (into[0].norm() * into[1].norm()), -1.0, 1.0)) *
+            kDegrees;
+        const double angle = into[0].dot(normal[1]) < 0 ? between : 360 - between;
+        if (angle < sharp.angle) sharp.angle = angle, sharp.point = p;
+      }
+      if (sharp.angle >= limit) continue;
+      sharp.edge = e;
+      sharp.faces[0] = shape.faces.FindIndex(sides[0].first) - 1;
+      sharp.faces[1] = shape.faces.FindIndex(sides[1].first) - 1;
+      features.edges.push_back(sharp);
+    }
+  }
+  return features;
+}
+
+std::vector<int> nodes_at(const SharpFeatures& features, const Surface& surface) {
+  std::vector<char> wanted;  // per edge: 1 sharp, 2 at a sharp corner
+  const auto want = [&](int edge, char kind) {
+    if (edge >= static_cast<int>(wanted.size()))
+      wanted.resize(static_cast<std::size_t>(edge) + 1, 0);
+    wanted[edge] = std::max(wanted[edge], kind);
+  };
+  for (const SharpEdge& e : features.edges) want(e.edge, 1);
+  for (const SharpCorner& c : features.corners) want(c.edges[0], 2), want(c.edges[1], 2);
+  std::vector<int> out;
+  std::vector<std::vector<int>> ends(wanted.size());  // per edge at a corner: its nodes
+  for (const auto& [key, segment] : surface.segments) {
+    if (segment.edge < 0 || segment.edge >= static_cast<int>(wanted.size()) ||
+        !wanted[segment.edge])
+      continue;
+    for (const int n : {static_cast<int>(key >> 32), static_cast<int>(key & 0xffffffffu)}) {
+      if (wanted[segment.edge] == 1) out.push_back(n);
+      ends[segment.edge].push_back(n);
+    }
+  }
+  for (const SharpCorner& c : features.corners) {
+    int nearest = -1;
+    double best = std::numeric_limits<double>::infinity();
+    for (const int e : c.edges)
+      for (const int n : ends[e])
+        if (const double d = (surface.nodes[n] - c.point).norm(); d < best) best = d, nearest = n;
+    if (nearest >= 0) out.push_back(nearest);
+  }
+  std::sort(out.begin(), out.end());
+  out.erase(std::unique(out.begin(), out.end()), out.end());
+  return out;
+}
+
+}  // namespace hexmerge::mesher
