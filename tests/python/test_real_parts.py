@@ -182,11 +182,12 @@ def test_nodes_of_an_axis_parallel_edge_share_their_other_coordinates() -> None:
     assert meshing["strategy"] == "lattice"
 
 
-def test_cusps_where_a_hole_touches_a_side_are_reported() -> None:
+def test_cusps_where_a_hole_touches_a_side_are_reported(tmp_path, capsys) -> None:
     """gmsh_as1-tu-203's plates 148 and 69 each have a hole whose circle touches a straight side:
     on both sides of each point of contact the face narrows to nothing, a corner of 0 degrees no
     element at it can be usable in. The report names the eight corners, and sharp_nodes holds a
-    node at each (the mesh's worst boundary triangle, 0.9 degrees at 50k tets, sits at one)."""
+    node at each (the mesh's worst boundary triangle, 0.9 degrees at 50k tets, sits at one); the
+    CLI's notes name them."""
     import numpy as np
 
     tets, report = hexmerge.mesh_shape(CAD / "gmsh_as1-tu-203.stp", 12.0, recombine=False)
@@ -198,3 +199,11 @@ def test_cusps_where_a_hole_touches_a_side_are_reported() -> None:
     nodes = tets.points[np.asarray(meshing["sharp_nodes"], dtype=np.int64)]
     for f in corners:
         assert np.linalg.norm(nodes - np.asarray(f["point"]), axis=1).min() < 1e-9
+    # The CLI names them.
+    from hexmerge import cli
+
+    assert cli.main(["mesh", str(CAD / "gmsh_as1-tu-203.stp"), "-h", "12", "-o",
+                     str(tmp_path / "as1.vtu")]) == 0
+    err = capsys.readouterr().err
+    assert "the CAD has 8 corner(s) or edge(s) sharper than 8.13 degrees" in err, err
+    assert "Face148's corner between Edge" in err and "and 3 more" in err, err

@@ -74,7 +74,9 @@ TEST(refine, to_the_local_sizes) {
       const double side = (p.surface.nodes[a] - p.surface.nodes[b]).norm();
       const double wanted = std::min(field.at(p.surface.nodes[a]), field.at(p.surface.nodes[b]));
       EXPECT_LE(side, wanted * (1 + 1e-9)) << "face " << t.face;
-      if (t.face == hole) EXPECT_LE(side, fine * (1 + 1e-9));
+      if (t.face == hole) {
+        EXPECT_LE(side, fine * (1 + 1e-9));
+      }
     }
     on_hole += t.face == hole;
   }
