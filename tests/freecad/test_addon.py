@@ -227,6 +227,34 @@ class ShapeMode(unittest.TestCase):
         self.assertEqual(obj.FemMesh.HexaCount, report["output_counts"]["hex"])
         self.assertGreaterEqual(min(report["min_scaled_jacobian"][k] for k, n in report["output_counts"].items() if n), 0.2)
 
+    def test_sharp_cad_is_named(self):
+        """A prism over a triangle with a 5-degree corner: no element at that corner or along
+        its edge can reach a scaled Jacobian of 0.2, and the console says where, in FreeCAD's
+        numbers (issue 13: the CAD-forced exceptions named with their angle)."""
+        import math
+        import Part
+        doc = FreeCAD.newDocument("HexMergeWedge")
+        a = math.radians(5)
+        triangle = Part.makePolygon([FreeCAD.Vector(0, 0, 0), FreeCAD.Vector(50, 0, 0),
+                                     FreeCAD.Vector(50 * math.cos(a), 50 * math.sin(a), 0),
+                                     FreeCAD.Vector(0, 0, 0)])
+        wedge = doc.addObject("Part::Feature", "Wedge")
+        wedge.Shape = Part.Face(triangle).extrude(FreeCAD.Vector(0, 0, 10))
+        doc.recompute()
+        obj = hm.make_hexdominant_mesh(doc, wedge, target_size=2, second_order=False)
+        report = mesh_hexdominant.report_dict(obj)
+        sharp = report["meshing"]["sharp_features"]
+        self.assertEqual(sorted(f["kind"] for f in sharp), ["corner", "corner", "edge"])
+        for f in sharp:
+            self.assertAlmostEqual(f["angle"], 5, places=6)
+            self.assertAlmostEqual(f["point"][0], 0, places=9)
+            self.assertAlmostEqual(f["point"][1], 0, places=9)
+        [warning] = [w for w in report["freecad"]["warnings"] if "sharper than 8.13 degrees" in w]
+        self.assertIn("the CAD has 3 corner(s) or edge(s)", warning)
+        edge = next(f for f in sharp if f["kind"] == "edge")["edges"][0]
+        self.assertIn("Edge{} between Face".format(edge), warning)
+        self.assertGreater(obj.FemMesh.VolumeCount, 0)
+
     def test_second_order_default_and_options(self):
         doc, box = self.box()
         obj = hm.make_hexdominant_mesh(doc, box, boundary_layers=0, min_scaled_jacobian=0.4)

@@ -21,7 +21,7 @@ except ImportError as e:  # pragma: no cover - depends on the build
 
 from ._api import CellBlock, MixedMesh, cell_types, check, parameters, recombine, validate
 from ._regions import WITH_OPENCASCADE, regions_by_solid
-from ._shape import mesh_parameters, mesh_shape
+from ._shape import mesh_parameters, mesh_shape, sharp_feature_note
 
 InputError = _core.InputError
 Cancelled = _core.Cancelled
@@ -43,5 +43,6 @@ __all__ = [
     "parameters",
     "recombine",
     "regions_by_solid",
+    "sharp_feature_note",
     "validate",
 ]

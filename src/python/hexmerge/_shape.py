@@ -302,3 +302,29 @@ def mesh_shape(
     report = dict(report)
     report["meshing"] = meshing
     return mesh, report
+
+
+def sharp_feature_note(meshing: dict[str, Any]) -> str | None:
+    """A line naming the CAD's face corners and edges sharper than 8.13 degrees that
+    mesh_shape() found (its report's ``meshing``; the five sharpest, faces and edges numbered as
+    FreeCAD's FaceN, EdgeN), where no element can reach a scaled Jacobian of 0.2; None when
+    there are none."""
+    sharp = sorted(meshing.get("sharp_features", []), key=lambda f: f["angle"])
+    if not sharp:
+        return None
+    named = "; ".join(_sharp_feature_text(f) for f in sharp[:5])
+    more = f"; and {len(sharp) - 5} more (the report's sharp_features)" if len(sharp) > 5 else ""
+    return (f"the CAD has {len(sharp)} corner(s) or edge(s) sharper than 8.13 degrees, where no "
+            f"element can reach a scaled Jacobian of 0.2: {named}{more}")
+
+
+def _sharp_feature_text(feature: dict[str, Any]) -> str:
+    at = ", ".join(f"{x:.6g}" for x in feature["point"])
+    if feature["kind"] == "corner":
+        first, second = feature["edges"]
+        return (f"Face{feature['faces'][0]}'s corner between Edge{first} and Edge{second}, "
+                f"{feature['angle']:.3g} degrees, at ({at})")
+    first, second = feature["faces"]
+    return (f"Edge{feature['edges'][0]} between Face{first} and Face{second}, "
+            f"{feature['angle']:.3g} degrees inside the solid, at ({at})")
+

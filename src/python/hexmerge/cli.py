@@ -390,27 +390,12 @@ def _mesh_notes(meshing: dict[str, Any]) -> list[str]:
             notes.append(f"local size {applied['size']:g} on {','.join(items)}: sides up to "
                          f"{applied['max_side']:.3g} remain there (a face that did not refine)")
     notes += face_layer_notes(meshing)
-    sharp = sorted(meshing.get("sharp_features", []), key=lambda f: f["angle"])
+    sharp = _shape.sharp_feature_note(meshing)
     if sharp:
-        named = "; ".join(_sharp_feature_text(f) for f in sharp[:5])
-        more = f"; and {len(sharp) - 5} more (the report's sharp_features)" if len(sharp) > 5 else ""
-        notes.append(f"the CAD has {len(sharp)} corner(s) or edge(s) sharper than 8.13 degrees, where "
-                     f"no element can reach a scaled Jacobian of 0.2: {named}{more}")
+        notes.append(sharp)
     if meshing.get("sweep_skipped"):
         notes.append(meshing["sweep_skipped"])
     return notes
-
-
-def _sharp_feature_text(feature: dict[str, Any]) -> str:
-    """A sharp corner or edge of the report in words, faces and edges numbered as FreeCAD does."""
-    at = ", ".join(f"{x:.6g}" for x in feature["point"])
-    if feature["kind"] == "corner":
-        first, second = feature["edges"]
-        return (f"Face{feature['faces'][0]}'s corner between Edge{first} and Edge{second}, "
-                f"{feature['angle']:.3g} degrees, at ({at})")
-    first, second = feature["faces"]
-    return (f"Edge{feature['edges'][0]} between Face{first} and Face{second}, "
-            f"{feature['angle']:.3g} degrees inside the solid, at ({at})")
 
 
 def face_layer_notes(meshing: dict[str, Any]) -> list[str]:
