@@ -7,11 +7,14 @@
 #include <BRepBuilderAPI_MakePolygon.hxx>
 #include <BRepPrimAPI_MakeCylinder.hxx>
 #include <BRepPrimAPI_MakePrism.hxx>
+#include <BRepPrimAPI_MakeTorus.hxx>
 #include <algorithm>
 #include <cmath>
 #include <gp_Ax2.hxx>
 #include <vector>
 
+#include "hexmerge/occ/mesher/common.h"
+#include "hexmerge/occ/mesher/surface.h"
 #include "mesher_fixtures.h"
 
 namespace hexmerge::test {
@@ -72,6 +75,27 @@ TEST(sharp_features, a_hole_tangent_to_a_side_makes_cusps) {
   for (const mesher::SharpEdge& e : sharp.edges) EXPECT_LT(e.angle, mesher::kSharpAngle);
 }
 
+// The surface's nodes at them: every node of a sharp edge's segments, also where the edge bounds
+// a sharp corner too, and the node at the corner's vertex.
+TEST(sharp_features, nodes_at_take_the_sharp_edges_and_the_corners) {
+  mesher::Surface surface;
+  surface.nodes = {{0, 0, 0}, {1, 0, 0}, {2, 0, 0}, {3, 1, 0}, {4, 2, 0}};
+  surface.segments[mesher::pair_key(0, 1)] = {7, 0.0, 0.5};
+  surface.segments[mesher::pair_key(1, 2)] = {7, 0.5, 1.0};
+  surface.segments[mesher::pair_key(2, 3)] = {8, 0.0, 0.5};
+  surface.segments[mesher::pair_key(3, 4)] = {8, 0.5, 1.0};
+  mesher::SharpFeatures sharp;
+  mesher::SharpEdge edge;
+  edge.edge = 7;
+  sharp.edges.push_back(edge);
+  mesher::SharpCorner corner;
+  corner.edges[0] = 7, corner.edges[1] = 8, corner.point = {2, 0, 0};
+  sharp.corners.push_back(corner);
+  EXPECT_EQ(mesher::nodes_at(sharp, surface), (std::vector<int>{0, 1, 2}));
+  sharp.edges.clear();
+  EXPECT_EQ(mesher::nodes_at(sharp, surface), (std::vector<int>{2}));
+}
+
 // Right angles, concave edges and a hole's round edges (the bracket), a cylinder: nothing is
 // under 90; at 90.001 the box's 12 edges and 24 face corners.
 TEST(sharp_features, right_and_reflex_angles_are_not_sharp) {
@@ -95,6 +119,10 @@ TEST(sharp_features, right_and_reflex_angles_are_not_sharp) {
       1);
   const mesher::SharpFeatures cylinder = mesher::sharp_features(load(occ_cylinder(5, 10)), 89.999);
   EXPECT_TRUE(cylinder.corners.empty() && cylinder.edges.empty());
+  // A torus: one face, its one vertex on seams only (it crashed the corners' sort once).
+  const mesher::SharpFeatures torus =
+      mesher::sharp_features(load(BRepPrimAPI_MakeTorus(20, 5).Shape()), 360);
+  EXPECT_TRUE(torus.corners.empty() && torus.edges.empty());
   const mesher::SharpFeatures box = mesher::sharp_features(load(occ_box(0, 0, 0, 1, 2, 3)), 90.001);
   EXPECT_EQ(box.edges.size(), 12u);
   EXPECT_EQ(box.corners.size(), 24u);

@@ -29,21 +29,19 @@ constexpr double kDegrees = 180.0 / M_PI;
 // Points sampled along each edge for its dihedral angle (inside it: its ends are corners).
 constexpr int kEdgeSamples = 9;
 
-// The face's outward normal at (u, v) (the face's orientation applied), or nothing where the
-// surface has none (a cone's apex, a sphere's pole).
-std::optional<Vec3> normal_at(const TopoDS_Face& face, double u, double v) {
-  BRepAdaptor_Surface surface(face);
+// The face's outward normal at (u, v) of its surface (`reversed`: the face's orientation is
+// reversed), or nothing where the surface has none (a cone's apex, a sphere's pole).
+std::optional<Vec3> normal_at(const BRepAdaptor_Surface& surface, bool reversed, double u,
+                              double v) {
   BRepLProp_SLProps props(surface, u, v, 1, 1e-9);
   if (!props.IsNormalDefined()) return std::nullopt;
-  Vec3 n = of(props.Normal());
-  if (face.Orientation() == TopAbs_REVERSED) n = n * -1.0;
-  return n;
+  const Vec3 n = of(props.Normal());
+  return reversed ? n * -1.0 : n;
 }
 
-// The unit tangent of an edge at parameter t, along the edge's orientation; at an end where the
-// derivative vanishes, the chord to a point a thousandth of its range inside.
-std::optional<Vec3> tangent_at(const TopoDS_Edge& edge, double t) {
-  const BRepAdaptor_Curve curve(edge);
+// The unit tangent of a curve at parameter t, along its parameter; where the derivative
+// vanishes, the chord to a point a thousandth of its range on.
+std::optional<Vec3> tangent_at(const BRepAdaptor_Curve& curve, double t) {
   gp_Pnt p;
   gp_Vec d;
   curve.D1(t, p, d);
@@ -55,9 +53,7 @@ std::optional<Vec3> tangent_at(const TopoDS_Edge& edge, double t) {
   }
   const double length = tangent.norm();
   if (!(length > 0)) return std::nullopt;
-  tangent = tangent * (1 / length);
-  if (edge.Orientation() == TopAbs_REVERSED) tangent = tangent * -1.0;
-  return tangent;
+  return tangent * (1 / length);
 }
 
 // The direction in which an edge leaves one of its ends, `first` or last by its own parameter:
@@ -97,6 +93,7 @@ double turn(const Vec3& from, const Vec3& to, const Vec3& axis) {
 // has a sector per wire's pass.
 void face_corners(const Shape& shape, int face_index, double limit, std::vector<SharpCorner>& out) {
   const TopoDS_Face& face = TopoDS::Face(shape.faces(face_index + 1));
+  const BRepAdaptor_Surface surface(face);
   struct Direction {
     EndDirection u;
     bool leaving;
@@ -133,9 +130,11 @@ void face_corners(const Shape& shape, int face_index, double limit, std::vector<
   for (int v = 1; v <= vertices.Extent(); ++v) {
     const TopoDS_Vertex& vertex = TopoDS::Vertex(vertices(v));
     const gp_Pnt2d uv = BRep_Tool::Parameters(vertex, face);
-    const std::optional<Vec3> n = normal_at(face, uv.X(), uv.Y());
+    const std::optional<Vec3> n =
+        normal_at(surface, face.Orientation() == TopAbs_REVERSED, uv.X(), uv.Y());
     if (!n) continue;
     std::vector<Direction>& directions = at[v - 1];
+    if (directions.empty()) continue;  // only seams there (a torus's one vertex)
     // In turn about the normal by their chords (tangent edges part by them), leaving first at
     // equal turns; a sector's angle is the turn between the chords corrected to the tangents'.
     const Vec3 first = directions.front().u.chord;
@@ -193,6 +192,21 @@ SharpFeatures sharp_features(const Shape& shape, double limit) {
       const TopoDS_Edge& edge = TopoDS::Edge(shape.edges(e + 1));
       if (BRep_Tool::Degenerated(edge)) continue;
       const BRepAdaptor_Curve curve(edge);
+      // Per side: its surface, the edge's curve on it, and the edge's direction as the face
+      // holds it.
+      struct Side {
+        BRepAdaptor_Surface surface;
+        Handle(Geom2d_Curve) pcurve;
+        bool reversed_face, reversed_edge;
+      };
+      std::vector<Side> side;
+      for (const auto& [face, oriented] : sides) {
+        double first = 0, last = 0;
+        side.push_back(
+            {BRepAdaptor_Surface(face), BRep_Tool::CurveOnSurface(oriented, face, first, last),
+             face.Orientation() == TopAbs_REVERSED, oriented.Orientation() == TopAbs_REVERSED});
+      }
+      if (side[0].pcurve.IsNull() || side[1].pcurve.IsNull()) continue;
       SharpEdge sharp;
       sharp.angle = 360;
       for (int k = 0; k < kEdgeSamples; ++k) {
@@ -200,28 +214,20 @@ SharpFeatures sharp_features(const Shape& shape, double limit) {
             curve.FirstParameter() +
             (k + 0.5) / kEdgeSamples * (curve.LastParameter() - curve.FirstParameter());
         const Vec3 p = of(curve.Value(t));
+        const std::optional<Vec3> tangent = tangent_at(curve, t);
+        if (!tangent) continue;
         // Per side: the direction into the face, normal to the edge (left of the edge as the
         // face holds it), and the face's outward normal.
         Vec3 into[2], normal[2];
         bool defined = true;
         for (int i = 0; i < 2 && defined; ++i) {
-          const auto& [face, oriented] = sides[i];
-          double first = 0, last = 0;
-          const Handle(Geom2d_Curve) pcurve =
-              BRep_Tool::CurveOnSurface(oriented, face, first, last);
-          const std::optional<Vec3> tangent = tangent_at(oriented, t);
-          if (pcurve.IsNull() || !tangent) {
-            defined = false;
-            break;
-          }
-          const gp_Pnt2d uv = pcurve->Value(t);
-          const std::optional<Vec3> n = normal_at(face, uv.X(), uv.Y());
-          if (!n) {
-            defined = false;
-            break;
-          }
+          const gp_Pnt2d uv = side[i].pcurve->Value(t);
+          const std::optional<Vec3> n =
+              normal_at(side[i].surface, side[i].reversed_face, uv.X(), uv.Y());
+          defined = n.has_value();
+          if (!defined) break;
           normal[i] = *n;
-          into[i] = n->cross(*tangent);
+          into[i] = n->cross(side[i].reversed_edge ? *tangent * -1.0 : *tangent);
         }
         if (!defined || into[0].norm() == 0 || into[1].norm() == 0) continue;
         // Convex (the solid inside the wedge between the faces) where face 0 runs against
@@ -244,11 +250,11 @@ SharpFeatures sharp_features(const Shape& shape, double limit) {
 }
 
 std::vector<int> nodes_at(const SharpFeatures& features, const Surface& surface) {
-  std::vector<char> wanted;  // per edge: 1 sharp, 2 at a sharp corner
+  std::vector<char> wanted;  // per edge: 1 sharp, 2 at a sharp corner, 3 both
   const auto want = [&](int edge, char kind) {
     if (edge >= static_cast<int>(wanted.size()))
       wanted.resize(static_cast<std::size_t>(edge) + 1, 0);
-    wanted[edge] = std::max(wanted[edge], kind);
+    wanted[edge] |= kind;
   };
   for (const SharpEdge& e : features.edges) want(e.edge, 1);
   for (const SharpCorner& c : features.corners) want(c.edges[0], 2), want(c.edges[1], 2);
@@ -259,7 +265,7 @@ std::vector<int> nodes_at(const SharpFeatures& features, const Surface& surface)
         !wanted[segment.edge])
       continue;
     for (const int n : {static_cast<int>(key >> 32), static_cast<int>(key & 0xffffffffu)}) {
-      if (wanted[segment.edge] == 1) out.push_back(n);
+      if (wanted[segment.edge] & 1) out.push_back(n);
       ends[segment.edge].push_back(n);
     }
   }
