@@ -124,6 +124,13 @@ double min_quality(const TetMesh& mesh) {
   return q;
 }
 
+std::size_t count_below(const TetMesh& mesh, double quality) {
+  std::size_t n = 0;
+  for (index_t t = 0; t < mesh.nb_tets(); ++t)
+    n += scaled_jacobian(CellType::Tet, mesh.points.data(), mesh.tet(t)) < quality;
+  return n;
+}
+
 TetMesh tetgen_mesh(const std::vector<Point>& points) {
   std::optional<tetgen::Tetrahedralizer> tetgen;
   try {

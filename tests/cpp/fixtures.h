@@ -5,6 +5,7 @@
 /// maps and perturbations; and a TetMesh builder.
 
 #include <array>
+#include <cstddef>
 #include <cstdint>
 #include <random>
 #include <string>
@@ -40,6 +41,8 @@ void add_tet(TetMesh& mesh, index_t a, index_t b, index_t c, index_t d);
 
 /// The smallest scaled Jacobian of the mesh's tets (1 for none).
 double min_quality(const TetMesh& mesh);
+/// The mesh's tets whose scaled Jacobian is below `quality`.
+std::size_t count_below(const TetMesh& mesh, double quality);
 
 /// Swaps two vertices of every negatively oriented tet so that all have positive volume.
 void orient_positively(TetMesh& mesh);

@@ -192,11 +192,12 @@ std::vector<SharpFeatureReport> sharp_feature_reports(const SharpFeatures& sharp
 }
 
 // One attempt: steps 3 to 14 of mesh_shape() with one strategy; the Tet10 mesh too when
-// `tet10` is given.
+// `tet10` is given. `sharp`: the shape's sharp features (the report has them), whose surface
+// nodes the attempt reports.
 TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Frame& frame,
-                     const std::string& regions_brep, const MeshShapeParameters& parameters,
-                     const Strategy& strategy, MeshShapeReport& report, Tet10Mesh* tet10,
-                     const ProgressCallback& progress);
+                     const SharpFeatures& sharp, const std::string& regions_brep,
+                     const MeshShapeParameters& parameters, const Strategy& strategy,
+                     MeshShapeReport& report, Tet10Mesh* tet10, const ProgressCallback& progress);
 
 // mesh_shape() and, with `tet10`, mesh_shape_tet10().
 TetMesh mesh_shape_impl(const std::string& brep, const MeshShapeParameters& parameters,
@@ -255,6 +256,9 @@ TetMesh mesh_shape_impl(const std::string& brep, const MeshShapeParameters& para
   // Face layers on faces the shape has not, or thicker than h, fail now too.
   face_layer_specs(parse_face_layers(parameters.face_layers), given_items.faces, parameters.size);
   const std::string regions_brep = glue.glued ? write_brep(shape.shape) : brep;
+  // The CAD's sharp corners and edges, named as in the shape given.
+  const SharpFeatures sharp = sharp_features(shape, kSharpAngle);
+  report.sharp_features = sharp_feature_reports(sharp, given_items);
 
   // 2. A size whose mesh would not fit in memory is refused before any work.
   SizeEstimate estimate =
@@ -292,8 +296,8 @@ TetMesh mesh_shape_impl(const std::string& brep, const MeshShapeParameters& para
     MeshShapeReport attempt = report;
     const auto attempt_start = PhaseTimer::Clock::now();
     try {
-      TetMesh mesh = mesh_attempt(shape, given_items, frame, regions_brep, parameters, strategy,
-                                  attempt, tet10, progress);
+      TetMesh mesh = mesh_attempt(shape, given_items, frame, sharp, regions_brep, parameters,
+                                  strategy, attempt, tet10, progress);
       attempt.strategy = strategy.name;
       add_phase_seconds(attempt.phase_seconds, "shape", shape_seconds);
       if (failed_seconds > 0)
@@ -313,9 +317,9 @@ TetMesh mesh_shape_impl(const std::string& brep, const MeshShapeParameters& para
 }
 
 TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Frame& frame,
-                     const std::string& regions_brep, const MeshShapeParameters& parameters,
-                     const Strategy& strategy, MeshShapeReport& report, Tet10Mesh* tet10,
-                     const ProgressCallback& progress) {
+                     const SharpFeatures& sharp, const std::string& regions_brep,
+                     const MeshShapeParameters& parameters, const Strategy& strategy,
+                     MeshShapeReport& report, Tet10Mesh* tet10, const ProgressCallback& progress) {
   PhaseTimer clock(report.phase_seconds);
   // Each step's end: its time, and the progress of this way of placing the points ("mesh shape:
   // <step>", the way's name after the first); a callback asking to stop cancels here.
@@ -457,10 +461,7 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
   const std::vector<Vec3> nodes = frame_nodes(shape, surface, lattice, sweep_axis, swept);
   report.nb_surface_nodes = nodes.size();
   report.nb_surface_triangles = surface.triangles.size();
-  // The CAD's sharp corners and edges (named as in the shape given) and the surface's nodes at
-  // them, which are the tets' first nodes.
-  const SharpFeatures sharp = sharp_features(shape, kSharpAngle);
-  report.sharp_features = sharp_feature_reports(sharp, given_items);
+  // The surface's nodes at the CAD's sharp corners and edges (the tets' first nodes).
   for (const int n : nodes_at(sharp, surface))
     report.sharp_nodes.push_back(static_cast<index_t>(n));
   Surroundings around(nodes, surface, lattice, h);

@@ -24,22 +24,6 @@ std::vector<std::array<index_t, 3>> boundary_of(const TetMesh& mesh) {
   return out;
 }
 
-double total_volume(const TetMesh& mesh) {
-  double v = 0;
-  for (index_t t = 0; t < mesh.nb_tets(); ++t) {
-    const auto p = [&](int k) { return Vec3::of(mesh.point(mesh.tet(t)[k])); };
-    v += det3(p(1) - p(0), p(2) - p(0), p(3) - p(0)) / 6;
-  }
-  return v;
-}
-
-std::size_t count_below(const TetMesh& mesh, double quality) {
-  std::size_t n = 0;
-  for (index_t t = 0; t < mesh.nb_tets(); ++t)
-    n += scaled_jacobian(CellType::Tet, mesh.points.data(), mesh.tet(t)) < quality;
-  return n;
-}
-
 mesher::ImproveReport improve(TetMesh& mesh) {
   const auto boundary = boundary_of(mesh);
   mesher::ImproveParameters parameters;

@@ -145,22 +145,6 @@ TEST(remove_slivers, a_bent_boundary_side_swaps_within_the_shift_allowed) {
   EXPECT_THROW(remove_slivers(m, {}, {}, p, report), InputError);
 }
 
-double volume_of(const TetMesh& m) {
-  double v = 0;
-  for (index_t t = 0; t < m.nb_tets(); ++t) {
-    const index_t* k = m.tet(t);
-    v += cell_volume(CellType::Tet, m.points.data(), k);
-  }
-  return v;
-}
-
-std::size_t count_below(const TetMesh& m, double quality) {
-  std::size_t n = 0;
-  for (index_t t = 0; t < m.nb_tets(); ++t)
-    n += scaled_jacobian(CellType::Tet, m.points.data(), m.tet(t)) < quality;
-  return n;
-}
-
 // Jittered lattice points through TetGen: tets no flip improves remain under 0.2; vertices
 // inserted into them (insert_below) leave fewer, never a lower minimum, the same boundary and
 // volume, the given points where they were, a valid mesh.
@@ -180,11 +164,11 @@ TEST(remove_slivers, inserted_vertices_take_out_tets_no_flip_improves) {
   ASSERT_GT(inserted.insertions, 0u);
   EXPECT_EQ(m.nb_vertices(), given.nb_vertices() + inserted.insertions);
   EXPECT_TRUE(std::equal(given.points.begin(), given.points.end(), m.points.begin()));
-  EXPECT_LT(count_below(m, 0.2), count_below(flips_only, 0.2));
-  EXPECT_EQ(inserted.below_after, count_below(m, p.target));
+  EXPECT_LT(test::count_below(m, 0.2), test::count_below(flips_only, 0.2));
+  EXPECT_EQ(inserted.below_after, test::count_below(m, p.target));
   EXPECT_GE(min_quality(m), flipped.min_after);
   EXPECT_EQ(boundary_faces(m), boundary_faces(given));
-  EXPECT_NEAR(volume_of(m), volume_of(given), 1e-9 * volume_of(given));
+  EXPECT_NEAR(test::total_volume(m), test::total_volume(given), 1e-9 * test::total_volume(given));
   p.insert_below = 1.5;
   EXPECT_THROW(remove_slivers(m, {}, {}, p, inserted), InputError);
 }

@@ -100,7 +100,6 @@ class FlipMesh {
     at_vertex_.pop_back();
     changed_.pop_back();
   }
-  std::size_t nb_vertices() const { return at_vertex_.size(); }
 
   void remove(index_t t) {
     alive_[t] = 0;
@@ -337,9 +336,8 @@ void best_face_removal(const FlipMesh& m, index_t t, int opposite, Flip& best) {
 // boundary faces to a new vertex, placed where the worst of them is best.
 struct Insertion {
   std::vector<index_t> old_tets;
-  std::vector<Tet> new_tets;  // holding the new vertex, index FlipMesh::nb_vertices() before it
+  std::vector<Tet> new_tets;  // holding the new vertex, the index add_vertex() gives it next
   Vec3 point{0, 0, 0};
-  double quality = -kInfinity;
   double deficit = kInfinity;  // the sum of floor - quality over the new tets below the floor
 };
 
@@ -394,6 +392,23 @@ void circumsphere(const FlipMesh& m, const Tet& t, Vec3& centre, double& radius2
   centre = a + offset;
   radius2 = det != 0 ? offset.dot(offset) : kInfinity;
 }
+
+// The insertion's search directions, in the order tried: the axes, then the cube's diagonals.
+const double kDiagonal = 1 / std::sqrt(3.0);
+const Vec3 kCompassDirections[14] = {{1, 0, 0},
+                                     {-1, 0, 0},
+                                     {0, 1, 0},
+                                     {0, -1, 0},
+                                     {0, 0, 1},
+                                     {0, 0, -1},
+                                     {-kDiagonal, -kDiagonal, -kDiagonal},
+                                     {kDiagonal, -kDiagonal, -kDiagonal},
+                                     {-kDiagonal, kDiagonal, -kDiagonal},
+                                     {kDiagonal, kDiagonal, -kDiagonal},
+                                     {-kDiagonal, -kDiagonal, kDiagonal},
+                                     {kDiagonal, -kDiagonal, kDiagonal},
+                                     {-kDiagonal, kDiagonal, kDiagonal},
+                                     {kDiagonal, kDiagonal, kDiagonal}};
 
 // The best insertion at t, into one of three cavities (tets within t's region, none fixed):
 // the tets whose circumspheres hold t's circumcentre, reached from t across faces (Bowyer and
@@ -487,22 +502,10 @@ void best_insertion(FlipMesh& m, index_t t, double floor, Insertion& best) {
     double nearest = kInfinity;
     for (index_t v : corners) nearest = std::min(nearest, (Vec3::of(m.point(v)) - here).norm());
     // A compass search that raises `value` (the worst tet, then minus the deficit).
-    const double r3 = 1 / std::sqrt(3.0);
     const auto search = [&](const auto& value, double& best_value) {
       for (double step = 0.25 * nearest; step > 1e-2 * nearest;) {
         bool better = false;
-        for (int d = 0; d < 14; ++d) {
-          const Vec3 direction =
-              d < 6 ? Vec3{d == 0   ? 1.0
-                           : d == 1 ? -1.0
-                                    : 0.0,
-                           d == 2   ? 1.0
-                           : d == 3 ? -1.0
-                                    : 0.0,
-                           d == 4   ? 1.0
-                           : d == 5 ? -1.0
-                                    : 0.0}
-                    : Vec3{(d - 6) & 1 ? r3 : -r3, (d - 6) & 2 ? r3 : -r3, (d - 6) & 4 ? r3 : -r3};
+        for (const Vec3& direction : kCompassDirections) {
           const Vec3 q = here + direction * step;
           const double v = value(q, best_value + 1e-12);
           if (v > best_value + 1e-12) best_value = v, here = q, better = true;
@@ -519,10 +522,10 @@ void best_insertion(FlipMesh& m, index_t t, double floor, Insertion& best) {
     m.place(p, here);
     for (const Tet& n : made) below -= m.quality(n) < floor;
     if (!(-minus_deficit < deficit_before - 1e-12) && below < -1) continue;
-    quality = worst_at(here, -kInfinity);
+    // (Every new tet stays above the cavity's worst: deficit_at() has it.)
     if (-minus_deficit < best.deficit)
-      best.quality = quality, best.deficit = -minus_deficit, best.point = here,
-      best.old_tets = cavity, best.new_tets = made;
+      best.deficit = -minus_deficit, best.point = here, best.old_tets = cavity,
+      best.new_tets = made;
     if (best.deficit == 0) break;  // every new tet above the floor: no other cavity needed
   }
   m.remove_last_vertex();
@@ -595,8 +598,8 @@ void remove_slivers(TetMesh& mesh, const std::vector<char>& fixed,
       double replaced = kInfinity;
       for (index_t u : best.old_tets) replaced = std::min(replaced, m.quality(u));
       // Never an inverted or flat tet, even in place of one.
-      const std::int32_t region = m.region(t);
       if (best.old_tets.empty() || !(best.quality > std::max(replaced, 0.0) + 1e-12)) continue;
+      const std::int32_t region = m.region(t);
       for (index_t u : best.old_tets) m.remove(u);
       for (const Tet& n : best.new_tets) m.add(n, region);
       const auto [a, b, c, d] = best.boundary_swap;
@@ -623,10 +626,7 @@ void remove_slivers(TetMesh& mesh, const std::vector<char>& fixed,
       m.try_insertion(t);
       Insertion insertion;
       best_insertion(m, t, parameters.insert_below, insertion);
-      double replaced = kInfinity;
-      for (index_t u : insertion.old_tets) replaced = std::min(replaced, m.quality(u));
-      if (insertion.old_tets.empty() || !(insertion.quality > std::max(replaced, 0.0) + 1e-12))
-        continue;
+      if (insertion.old_tets.empty()) continue;  // none raises the cavity's worst
       const std::int32_t region = m.region(t);
       m.add_vertex(insertion.point);
       for (index_t u : insertion.old_tets) m.remove(u);
