@@ -207,3 +207,19 @@ def test_cusps_where_a_hole_touches_a_side_are_reported(tmp_path, capsys) -> Non
     err = capsys.readouterr().err
     assert "the CAD has 8 corner(s) or edge(s) sharper than 8.13 degrees" in err, err
     assert "Face148's corner between Edge" in err and "and 3 more" in err, err
+
+
+def test_a_part_whose_faces_meet_off_their_edges_is_refused_by_name() -> None:
+    """pyocc_11752 (a 1.28 m part, 1,018 faces): at its ends, a plane's circular edge (Face810's,
+    Face793's) lies on a cylinder (Face1013, Face1016, Face1017) that does not have it as an edge
+    (its own arcs run there, shared with a disk): faces not sewn together, which Gmsh also stops
+    at ("overlapping facets"). The surface's triangles crossed there and TetGen's boundary
+    recovery ran to its time limit in each of the six ways of placing the points (over 15
+    minutes, then "could not tetrahedralise"). The crossings are found before TetGen now, and the
+    shape is refused in seconds, naming the faces."""
+    with pytest.raises(ValueError, match="the shape is broken: faces meet where they share no "
+                       "edge") as refused:
+        hexmerge.mesh_shape(CAD / "pyocc_11752.stp", 40.0, recombine=False)
+    message = str(refused.value)
+    assert "Face793 and Face1016 near (" in message, message
+    assert "(meeting there)" in message and "Part > Check geometry" in message, message

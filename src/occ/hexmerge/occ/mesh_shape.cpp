@@ -27,6 +27,7 @@
 #include "hexmerge/occ/mesher/size_estimate.h"
 #include "hexmerge/occ/mesher/solid_regions.h"
 #include "hexmerge/occ/mesher/surface.h"
+#include "hexmerge/occ/mesher/surface_check.h"
 #include "hexmerge/occ/mesher/surface_path.h"
 #include "hexmerge/occ/mesher/surface_repair.h"
 #include "hexmerge/occ/mesher/sweep.h"
@@ -447,14 +448,38 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
     report.sweep_axis = sweep->axis;
   } else {
     // BRepMesh's caps go first: bisecting their sides makes flat triangles.
-    collapse_sides(surface, h, std::numeric_limits<double>::infinity(), lattice.lattice_face,
-                   local);
-    refine(shape, surface, h, lattice.lattice_face, lattice.lattice_edge, local);
+    collapse_sides(shape, surface, h, std::numeric_limits<double>::infinity(), deflection,
+                   lattice.lattice_face, local);
+    refine(shape, surface, h, deflection, lattice.lattice_face, lattice.lattice_edge, local);
     report.nb_unrefined_faces = surface.unrefined_faces.size();
-    collapse_sides(surface, h, h, lattice.lattice_face, local);
+    collapse_sides(shape, surface, h, h, deflection, lattice.lattice_face, local);
     remove_folds(surface, 1e-8 * shape.diagonal);  // TetGen's own coincidence tolerance
   }
   const int sweep_axis = report.sweep_axis;
+  // A surface whose triangles cross cannot be kept by TetGen (its boundary recovery never
+  // ends): refused here, by name, when the CAD's faces themselves meet where they share no edge;
+  // else this way fails (another size may not cross).
+  const std::vector<Crossing> crossings = find_crossings(surface.nodes, surface.triangles);
+  if (!crossings.empty()) {
+    std::vector<std::string> face_names(static_cast<std::size_t>(shape.faces.Extent()));
+    for (std::size_t f = 0; f < face_names.size(); ++f) {
+      const int number = given_number(given_items.faces, static_cast<int>(f));
+      face_names[f] = number > 0 ? "Face" + std::to_string(number)
+                                 : "face " + std::to_string(f + 1) + " of the glued solids";
+    }
+    bool cad_at_fault = false;
+    const std::string where = describe_crossings(shape, surface.nodes, surface.triangles, crossings,
+                                                 1e-4 * h, face_names, cad_at_fault);
+    if (cad_at_fault)
+      throw InputError(
+          "mesh_shape: the shape is broken: faces meet where they share no edge (an edge of "
+          "one lies on the other without being one of its edges), so no mesh can follow them. "
+          "The surface's triangles cross at " +
+          where +
+          ". Repair the shape (FreeCAD's Part > Check geometry, with its BOP check, lists such "
+          "faces)");
+    throw TetrahedralizeFailure("the surface's triangles at this size cross (" + where + ")");
+  }
   step("surface", 0.15);
 
   // 6. Everything below in frame coordinates, the nodes of lattice faces exactly on their planes.

@@ -18,8 +18,8 @@ TEST(place_layers, around_the_curved_faces_at_their_depths) {
   for (int layers : {1, 2}) {
     SCOPED_TRACE(layers);
     Prepared p = prepare(occ_plate_with_hole(), h);
-    mesher::refine(p.shape, p.surface, h, p.lattice.lattice_face, p.lattice.lattice_edge);
-    mesher::collapse_sides(p.surface, h, h, p.lattice.lattice_face);
+    mesher::refine(p.shape, p.surface, h, 0.02 * h, p.lattice.lattice_face, p.lattice.lattice_edge);
+    mesher::collapse_sides(p.shape, p.surface, h, h, 0.02 * h, p.lattice.lattice_face);
     const std::vector<Vec3> nodes =
         mesher::frame_nodes(p.shape, p.surface, p.lattice, -1, mesher::SweptSurface{});
     mesher::Surroundings around(nodes, p.surface, p.lattice, h);
@@ -59,8 +59,8 @@ TEST(place_layers, keep_out_of_the_core_laid_first) {
   const double h = 2.0, thickness = 0.3 * h, margin = 0.3 * h;
   const int layers = 2;
   Prepared p = prepare(occ_plate_with_hole(), h);
-  mesher::refine(p.shape, p.surface, h, p.lattice.lattice_face, p.lattice.lattice_edge);
-  mesher::collapse_sides(p.surface, h, h, p.lattice.lattice_face);
+  mesher::refine(p.shape, p.surface, h, 0.02 * h, p.lattice.lattice_face, p.lattice.lattice_edge);
+  mesher::collapse_sides(p.shape, p.surface, h, h, 0.02 * h, p.lattice.lattice_face);
   const std::vector<Vec3> nodes =
       mesher::frame_nodes(p.shape, p.surface, p.lattice, -1, mesher::SweptSurface{});
   const auto core_then_layers = [&](bool core_first, mesher::CoreCounts& core,

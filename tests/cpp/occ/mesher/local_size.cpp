@@ -59,8 +59,9 @@ TEST(refine, to_the_local_sizes) {
   items.face_size[hole] = fine;
   const mesher::SizeField field =
       mesher::make_size_field(p.surface, items, h, 0.5, 0.02 * h, p.shape.diagonal);
-  mesher::refine(p.shape, p.surface, h, p.lattice.lattice_face, p.lattice.lattice_edge, &field);
-  mesher::collapse_sides(p.surface, h, h, p.lattice.lattice_face, &field);
+  mesher::refine(p.shape, p.surface, h, 0.02 * h, p.lattice.lattice_face, p.lattice.lattice_edge,
+                 &field);
+  mesher::collapse_sides(p.shape, p.surface, h, h, 0.02 * h, p.lattice.lattice_face, &field);
   ASSERT_TRUE(p.surface.unrefined_faces.empty());
   std::string problem;
   EXPECT_TRUE(closed_and_oriented(p.surface.triangles, problem)) << problem;
@@ -96,8 +97,9 @@ TEST(place_graded_points, fill_the_graded_zone_inside) {
     if (!p.lattice.lattice_face[t.face]) items.face_size[t.face] = fine;  // the hole's wall
   const mesher::SizeField field =
       mesher::make_size_field(p.surface, items, h, 0.5, 0.02 * h, p.shape.diagonal);
-  mesher::refine(p.shape, p.surface, h, p.lattice.lattice_face, p.lattice.lattice_edge, &field);
-  mesher::collapse_sides(p.surface, h, h, p.lattice.lattice_face, &field);
+  mesher::refine(p.shape, p.surface, h, 0.02 * h, p.lattice.lattice_face, p.lattice.lattice_edge,
+                 &field);
+  mesher::collapse_sides(p.shape, p.surface, h, h, 0.02 * h, p.lattice.lattice_face, &field);
   const std::vector<Vec3> nodes =
       mesher::frame_nodes(p.shape, p.surface, p.lattice, -1, mesher::SweptSurface{});
   mesher::Surroundings around(nodes, p.surface, p.lattice, h);

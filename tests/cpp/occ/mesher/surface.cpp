@@ -63,7 +63,7 @@ TEST(refine, sides_at_most_h_on_the_cad) {
   const double h = 3;
   Prepared p = prepare(occ_plate_with_hole(), h);
   const auto& lattice = p.lattice;
-  mesher::refine(p.shape, p.surface, h, lattice.lattice_face, lattice.lattice_edge);
+  mesher::refine(p.shape, p.surface, h, 0.02 * h, lattice.lattice_face, lattice.lattice_edge);
   const double volume = 60 * 40 * 10 - M_PI * 8 * 8 * 10;
   expect_sound_surface(p, p.surface, volume, 0.01, 1e-6 * h);
   std::size_t checked = 0;
@@ -81,7 +81,7 @@ TEST(refine, sides_at_most_h_on_the_cad) {
   EXPECT_GT(checked, 100u);  // the hole's wall
 
   const std::size_t before = p.surface.nodes.size();
-  mesher::collapse_sides(p.surface, h, h, lattice.lattice_face);
+  mesher::collapse_sides(p.shape, p.surface, h, h, 0.02 * h, lattice.lattice_face);
   expect_sound_surface(p, p.surface, volume, 0.01, 1e-6 * h);
   ASSERT_EQ(p.surface.seed.size(), p.surface.nodes.size());
   for (std::size_t n = 1; n < p.surface.seed.size(); ++n)
@@ -94,26 +94,35 @@ TEST(refine, sides_at_most_h_on_the_cad) {
 // chord becomes the edge's segment, and the other face's triangles keep their own parameters.
 TEST(collapse_sides, a_cap_on_a_cad_edge_loses_its_middle_node) {
   Surface surface;
-  // The edge a r b (edge 0, parameters 0, 0.5, 1) between face 0 (z = 0, y > 0) and face 1
-  // (y = 0, z < 0); r bulges 0.005 off the chord.
+  // The edge a r b (edge 0, parameters 0, 0.5, 1) between face z0 (the plane z = 0, here y > 0)
+  // and face y0 (the plane y = 0, here z < 0) of a box; r bulges 0.005 off the chord.
+  const Prepared box = prepare(occ_box(-1, 0, 0, 2, 2, 2), 1.0);
+  int z0 = -1, y0 = -1;
+  for (int f = 0; f < box.shape.faces.Extent(); ++f) {
+    if (distance_to_face(box.shape, f, {0.5, 1, 0}) < 1e-12) z0 = f;
+    if (distance_to_face(box.shape, f, {0.5, 0, -1}) < 1e-12) y0 = f;
+  }
+  ASSERT_GE(z0, 0);
+  ASSERT_GE(y0, 0);
   const int a = 0, r = 1, b = 2, c = 3, d = 4;
   surface.nodes = {{0, 0, 0}, {0.5, -0.005, 0}, {1, 0, 0}, {0.5, 1, 0}, {0.5, 0, -1}};
-  surface.node_face = {0, 0, 0, 0, 1};
+  surface.node_face = {z0, z0, z0, z0, y0};
   const mesher::UV on0{3, 3}, on1{7, 7};
-  surface.triangles = {{{a, r, b}, {on0, on0, on0}, 0},  // the cap
-                       {{a, b, c}, {on0, on0, on0}, 0},
-                       {{r, a, d}, {on1, on1, on1}, 1},
-                       {{b, r, d}, {on1, on1, on1}, 1}};
+  surface.triangles = {{{a, r, b}, {on0, on0, on0}, z0},  // the cap
+                       {{a, b, c}, {on0, on0, on0}, z0},
+                       {{r, a, d}, {on1, on1, on1}, y0},
+                       {{b, r, d}, {on1, on1, on1}, y0}};
   surface.segments[mesher::pair_key(a, r)] = {0, 0.0, 0.5};
   surface.segments[mesher::pair_key(r, b)] = {0, 0.5, 1.0};
-  mesher::collapse_sides(surface, 1.0, 10.0, {false, false});
+  mesher::collapse_sides(box.shape, surface, 1.0, 10.0, 0.02,
+                         std::vector<bool>(box.shape.faces.Extent(), false));
 
   ASSERT_EQ(surface.nodes.size(), 4u);  // r gone, the others in their order
   EXPECT_EQ(surface.seed, (std::vector<int>{a, b, c, d}));
   ASSERT_EQ(surface.triangles.size(), 2u);
   for (const mesher::SurfaceTriangle& t : surface.triangles) {
     EXPECT_GT(mesher::smallest_angle(surface.nodes, t.node), 0.5) << "face " << t.face;
-    for (const mesher::UV& uv : t.uv) EXPECT_EQ(uv.u, t.face == 0 ? 3 : 7) << "face " << t.face;
+    for (const mesher::UV& uv : t.uv) EXPECT_EQ(uv.u, t.face == z0 ? 3 : 7) << "face " << t.face;
   }
   ASSERT_EQ(surface.segments.size(), 1u);
   const auto& [key, segment] = *surface.segments.begin();

@@ -10,6 +10,7 @@
 #include <TopoDS_Edge.hxx>
 #include <TopoDS_Face.hxx>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <gp_Pnt2d.hxx>
@@ -59,14 +60,55 @@ constexpr double kEdgeSagitta = 0.02;
 
 gp_Pnt2d point2d(const UV& uv) { return gp_Pnt2d(uv.u, uv.v); }
 
+// How far the triangles are from the CAD faces they stand for: the distance from a triangle's
+// centroid to its face's surface (projected from the middle of the triangle's parameters). The
+// repairs below (flips, node moves, collapses) make no triangle further than the chord
+// deflection, unless none of the triangles it replaces was nearer: on a face far narrower than
+// the target, a flip or a collapse otherwise joins nodes across the face, and the triangle cuts
+// through the solid (pyocc_11752 at h 13: tubes of radius 1.1 and 1.6, triangles of each wall
+// through the other, 1.8 million intersecting pairs, TetGen never ending).
+class FaceGaps {
+ public:
+  FaceGaps(const Shape& s, double deflection)
+      : s_(s), deflection_(deflection), surfaces_(s.faces.Extent()) {}
+  // The centroid's distance to `face`, for a triangle of corners p at parameters uv.
+  double of(int face, const std::array<Vec3, 3>& p, const std::array<UV, 3>& uv) {
+    if (!surfaces_[face])
+      surfaces_[face] = std::make_unique<ShapeAnalysis_Surface>(
+          BRep_Tool::Surface(TopoDS::Face(s_.faces(face + 1))));
+    ShapeAnalysis_Surface& surface = *surfaces_[face];
+    const Vec3 c = (p[0] + p[1] + p[2]) * (1.0 / 3);
+    const gp_Pnt2d middle((uv[0].u + uv[1].u + uv[2].u) / 3, (uv[0].v + uv[1].v + uv[2].v) / 3);
+    surface.NextValueOfUV(middle, gp_Pnt(c.x, c.y, c.z), 1e-3 * deflection_);
+    return surface.Gap();
+  }
+  double of(const std::vector<Vec3>& nodes, const SurfaceTriangle& t) {
+    return of(t.face, {nodes[t.node[0]], nodes[t.node[1]], nodes[t.node[2]]}, t.uv);
+  }
+  // Whether triangles at gaps `made` may replace triangles at gaps `replaced` (evaluated only
+  // when one of `made` is beyond the deflection).
+  template <class Made, class Replaced>
+  bool keeps_close(Made made, Replaced replaced) const {
+    const double worst = made();
+    return worst <= deflection_ || worst <= replaced();
+  }
+
+ private:
+  const Shape& s_;
+  double deflection_;
+  std::vector<std::unique_ptr<ShapeAnalysis_Surface>> surfaces_;
+};
+
 }  // namespace
 
 // Splits the triangles of the faces that are not lattice faces until no side is longer than
 // `target` (sides on edges between lattice faces excepted); lattice-face triangles are split
 // only where a neighbour's side must be. New nodes lie on the CAD edge (sides on an edge) or on
 // the face's surface.
-void refine(const Shape& s, Surface& surface, double target, const std::vector<bool>& lattice_face,
-            const std::vector<bool>& lattice_edge, const SizeField* field) {
+void refine(const Shape& s, Surface& surface, double target, double deflection,
+            const std::vector<bool>& lattice_face, const std::vector<bool>& lattice_edge,
+            const SizeField* field) {
+  FaceGaps gaps(s, deflection);
   std::vector<std::unique_ptr<BRepAdaptor_Surface>> surfaces(s.faces.Extent());
   std::vector<std::unique_ptr<BRepAdaptor_Curve>> curves(s.edges.Extent());
   // Per face, the pcurves of its edges (a seam has two: one per orientation).
@@ -293,6 +335,14 @@ void refine(const Shape& s, Surface& surface, double target, const std::vector<b
         continue;
       const UV up = a.uv[c1], uq = a.uv[(c1 + 1) % 3], um = a.uv[(c1 + 2) % 3];
       const UV ux = b.uv[(c2 + 2) % 3];
+      const std::vector<Vec3>& at = surface.nodes;
+      if (!gaps.keeps_close(
+              [&] {
+                return std::max(gaps.of(a.face, {at[m], at[p], at[x]}, {um, up, ux}),
+                                gaps.of(a.face, {at[x], at[q], at[m]}, {ux, uq, um}));
+              },
+              [&] { return std::max(gaps.of(at, a), gaps.of(at, b)); }))
+        continue;
       unlink(t1);
       unlink(t2);
       at_edge.erase(key);
@@ -416,6 +466,12 @@ void refine(const Shape& s, Surface& surface, double target, const std::vector<b
       for (int ti : around[n])
         reference = reference + normal_of(tris[ti].node[0], tris[ti].node[1], tris[ti].node[2]);
       const double before = smallest_angle(n), shortest = shortest_side(n);
+      auto worst_gap = [&] {
+        double worst = 0;
+        for (int ti : around[n]) worst = std::max(worst, gaps.of(surface.nodes, tris[ti]));
+        return worst;
+      };
+      const double gap_before = worst_gap();
       // With local sizes, no side grows past the size wanted (unless it already was longer).
       const double longest_before = field ? std::max(longest_around(n), size_at(n)) : 0.0;
       // To the centroid, else half or a quarter of the way, put back on the surface: better
@@ -437,6 +493,7 @@ void refine(const Shape& s, Surface& surface, double target, const std::vector<b
           const auto& v = tris[around[n][k]].node;
           keep = !turned_over(normal_of(v[0], v[1], v[2]), reference);
         }
+        keep = keep && gaps.keeps_close(worst_gap, [&] { return gap_before; });
         if (keep) break;
       }
       if (!keep) surface.nodes[n] = old;
@@ -459,8 +516,10 @@ void refine(const Shape& s, Surface& surface, double target, const std::vector<b
 // BRepMesh leaves nodes a few thousandths of h from a CAD edge on B-spline faces (gmsh_t20_data),
 // and bisecting the sides of such a cap makes triangles whose three nodes lie on one line. The
 // removed nodes are dropped and the rest renumbered.
-void collapse_sides(Surface& surface, double target, double max_side,
-                    const std::vector<bool>& lattice_face, const SizeField* field) {
+void collapse_sides(const Shape& s, Surface& surface, double target, double max_side,
+                    double deflection, const std::vector<bool>& lattice_face,
+                    const SizeField* field) {
+  FaceGaps gaps(s, deflection);
   std::vector<SurfaceTriangle>& tris = surface.triangles;
   const std::vector<Vec3>& nodes = surface.nodes;
   const int nb_nodes = static_cast<int>(nodes.size());
@@ -509,6 +568,28 @@ void collapse_sides(Surface& surface, double target, double max_side,
     }
     return after;
   };
+  // The farthest from its face of node r's triangles now (with the two it shares with k), and
+  // of those that do not have k once r is on k (at k's parameters on their face).
+  auto gap_around = [&](int r) {
+    double worst = 0;
+    for (int ti : around[r]) worst = std::max(worst, gaps.of(nodes, tris[ti]));
+    return worst;
+  };
+  auto moved_gap = [&](int r, int k) {
+    std::unordered_map<int, UV> uv_k;  // per face (a node on a CAD edge has one on each)
+    for (int ti : around[r])
+      for (int c = 0; c < 3; ++c)
+        if (tris[ti].node[c] == k) uv_k[tris[ti].face] = tris[ti].uv[c];
+    double worst = 0;
+    for (int ti : around[r]) {
+      if (has(tris[ti], k)) continue;
+      SurfaceTriangle t = tris[ti];
+      for (int c = 0; c < 3; ++c)
+        if (t.node[c] == r) t.node[c] = k, t.uv[c] = uv_k[t.face];
+      worst = std::max(worst, gaps.of(nodes, t));
+    }
+    return worst;
+  };
   // The smallest angle after moving node r onto node k, or -1 when that is not allowed.
   auto try_collapse = [&](int r, int k, double limit) {
     if (on_edge[r] || around[r].empty()) return -1.0;
@@ -530,7 +611,10 @@ void collapse_sides(Surface& surface, double target, double max_side,
     const double moved = moved_angle(r, k, limit, reference);
     if (moved < 0) return -1.0;
     after = std::min(after, moved);
-    return after >= before ? after : -1.0;
+    if (after < before ||
+        !gaps.keeps_close([&] { return moved_gap(r, k); }, [&] { return gap_around(r); }))
+      return -1.0;
+    return after;
   };
   // A side whose collapse failed is tried again only after a collapse changed the triangles
   // around one of its ends (its outcome depends on nothing else): per node, the collapse count
@@ -625,17 +709,23 @@ void collapse_sides(Surface& surface, double target, double max_side,
         }
       }
     if (!(at(0, m - 1) > before)) return false;
-    std::vector<std::array<int, 3>> made;
+    std::vector<SurfaceTriangle> made;
     std::vector<std::pair<int, int>> stack{{0, m - 1}};
     while (!stack.empty()) {
       const auto [i, j] = stack.back();
       stack.pop_back();
       if (j - i < 2) continue;
       const int k = split[static_cast<std::size_t>(i * m + j)];
-      made.push_back({v[i], v[k], v[j]});
+      made.push_back({{v[i], v[k], v[j]}, {uv[v[i]], uv[v[k]], uv[v[j]]}, face});
       stack.push_back({i, k});
       stack.push_back({k, j});
     }
+    auto made_gap = [&] {
+      double worst = 0;
+      for (const SurfaceTriangle& t : made) worst = std::max(worst, gaps.of(nodes, t));
+      return worst;
+    };
+    if (!gaps.keeps_close(made_gap, [&] { return gap_around(r); })) return false;
     ++nb_collapses;
     for (int ti : around[r])
       for (int n : tris[ti].node) changed_at[n] = nb_collapses;
@@ -649,11 +739,8 @@ void collapse_sides(Surface& surface, double target, double max_side,
         dead[ti] = 1;
         continue;
       }
-      for (int c = 0; c < 3; ++c) {
-        tris[ti].node[c] = made[k][c];
-        tris[ti].uv[c] = uv[made[k][c]];
-        around[made[k][c]].push_back(ti);
-      }
+      tris[ti] = made[k];
+      for (int n : made[k].node) around[n].push_back(ti);
     }
     removed[r] = 1;
     return true;
@@ -696,7 +783,9 @@ void collapse_sides(Surface& surface, double target, double max_side,
       for (int k : {a, b}) {
         if (!link_holds(r, k)) continue;
         const double after = moved_angle(r, k, max_side, reference);
-        if (after > before && after > best) best = after, onto = k;
+        if (after > before && after > best &&
+            gaps.keeps_close([&] { return moved_gap(r, k); }, [&] { return gap_around(r); }))
+          best = after, onto = k;
       }
       if (onto < 0) continue;
       const auto t_at = [](const std::pair<const std::uint64_t, EdgeSegment>& segment, int n) {

@@ -25,16 +25,22 @@ class SizeField;
 ///                   field gives at its ends, lattice faces' sides on CAD edges too
 /// A face whose refinement adds far more nodes than its area needs (it is not converging) is
 /// left as it is then, and listed in Surface::unrefined_faces.
-void refine(const Shape& s, Surface& surface, double target, const std::vector<bool>& lattice_face,
-            const std::vector<bool>& lattice_edge, const SizeField* field = nullptr);
+/// @param[in] deflection  no flip or node move takes a triangle's centroid further than this
+///                        from its face (or further than the triangles it replaces were)
+void refine(const Shape& s, Surface& surface, double target, double deflection,
+            const std::vector<bool>& lattice_face, const std::vector<bool>& lattice_edge,
+            const SizeField* field = nullptr);
 
 /// Collapses the sides of needles and caps (an angle under 5 degrees) and the short sides (under
 /// target / 4) inside a face (not on a CAD edge, not on a lattice face) where no triangle gets
 /// worse and no side gets longer than `max_side`; the removed nodes are dropped, the rest
 /// renumbered, and Surface::seed gives each node's index before. With local sizes (`field`),
-/// `target` and `max_side` shrink with the size the field gives at the side's nodes.
-void collapse_sides(Surface& surface, double target, double max_side,
-                    const std::vector<bool>& lattice_face, const SizeField* field = nullptr);
+/// `target` and `max_side` shrink with the size the field gives at the side's nodes. No
+/// collapse takes a triangle's centroid further than `deflection` from its face of `s` (or
+/// further than the triangles it replaces were).
+void collapse_sides(const Shape& s, Surface& surface, double target, double max_side,
+                    double deflection, const std::vector<bool>& lattice_face,
+                    const SizeField* field = nullptr);
 
 /// Puts the nodes (frame coordinates, `nodes`, numbered as `surface`'s) of each straight CAD
 /// edge that bounds a lattice face and runs across two frame axes exactly on one line.

@@ -1,0 +1,180 @@
+#include "hexmerge/occ/mesher/surface_check.h"
+
+// CGAL before OpenCASCADE: OCCT's Handle() macro breaks CGAL's headers.
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/intersections.h>
+
+#include <BRepAdaptor_Curve.hxx>
+#include <BRepBuilderAPI_MakeVertex.hxx>
+#include <BRepExtrema_DistShapeShape.hxx>
+#include <BRep_Tool.hxx>
+#include <TopExp_Explorer.hxx>
+#include <TopoDS.hxx>
+#include <TopoDS_Edge.hxx>
+#include <TopoDS_Face.hxx>
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <map>
+#include <set>
+#include <sstream>
+#include <utility>
+
+#include "hexmerge/occ/mesher/shape.h"
+#include "hexmerge/occ/mesher/spatial.h"
+
+namespace hexmerge::mesher {
+namespace {
+
+using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
+using Point = Kernel::Point_3;
+using Segment = Kernel::Segment_3;
+using Triangle = Kernel::Triangle_3;
+
+Point point(const Vec3& p) { return Point(p.x, p.y, p.z); }
+
+// The pairs of faces a description names at most.
+constexpr std::size_t kListed = 3;
+
+// Whether triangles a and b (node indices) cross, given their shared nodes: none, a general
+// test; one, whether the side of either opposite the shared node meets the other (where two
+// triangles with a common node meet beyond it, one of those sides reaches the other triangle);
+// two or three (a common side), not tested: the surface's folds are removed before.
+bool cross(const std::vector<Vec3>& nodes, const std::array<int, 3>& a,
+           const std::array<int, 3>& b) {
+  int shared = 0, in_a = -1, in_b = -1;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j)
+      if (a[i] == b[j]) ++shared, in_a = i, in_b = j;
+  const Triangle ta(point(nodes[a[0]]), point(nodes[a[1]]), point(nodes[a[2]]));
+  const Triangle tb(point(nodes[b[0]]), point(nodes[b[1]]), point(nodes[b[2]]));
+  if (ta.is_degenerate() || tb.is_degenerate()) return false;  // collinear nodes: no area
+  if (shared == 0) return CGAL::do_intersect(ta, tb);
+  if (shared > 1) return false;
+  const Segment opposite_a(point(nodes[a[(in_a + 1) % 3]]), point(nodes[a[(in_a + 2) % 3]]));
+  const Segment opposite_b(point(nodes[b[(in_b + 1) % 3]]), point(nodes[b[(in_b + 2) % 3]]));
+  return CGAL::do_intersect(opposite_a, tb) || CGAL::do_intersect(opposite_b, ta);
+}
+
+Vec3 centroid(const std::vector<Vec3>& nodes, const SurfaceTriangle& t) {
+  return (nodes[t.node[0]] + nodes[t.node[1]] + nodes[t.node[2]]) * (1.0 / 3);
+}
+
+}  // namespace
+
+std::vector<Crossing> find_crossings(const std::vector<Vec3>& nodes,
+                                     const std::vector<SurfaceTriangle>& triangles) {
+  std::vector<Crossing> found;
+  if (triangles.empty()) return found;
+  // Buckets of about the median side: a triangle meets a few dozen others' boxes.
+  Vec3 lo = nodes[triangles[0].node[0]], hi = lo;
+  std::vector<double> sides;
+  std::vector<std::pair<Vec3, Vec3>> box(triangles.size());
+  for (std::size_t t = 0; t < triangles.size(); ++t) {
+    const auto& v = triangles[t].node;
+    box[t] = {vmin(nodes[v[0]], vmin(nodes[v[1]], nodes[v[2]])),
+              vmax(nodes[v[0]], vmax(nodes[v[1]], nodes[v[2]]))};
+    lo = vmin(lo, box[t].first);
+    hi = vmax(hi, box[t].second);
+    if (t % 16 == 0) sides.push_back((nodes[v[0]] - nodes[v[1]]).norm());
+  }
+  std::nth_element(sides.begin(), sides.begin() + sides.size() / 2, sides.end());
+  const double extent = std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z});
+  // (Not finer than 1/500 of the extent: the grid's buckets stay under 1.25e8.)
+  const double cell = std::max({sides[sides.size() / 2], extent / 500, 1e-12});
+  BucketGrid grid(lo, hi, cell);
+  for (std::size_t t = 0; t < triangles.size(); ++t)
+    grid.add(static_cast<int>(t), box[t].first, box[t].second);
+  std::vector<int> seen(triangles.size(), -1);
+  std::set<std::pair<int, int>> faces_found;
+  for (std::size_t t = 0; t < triangles.size(); ++t) {
+    const int i = static_cast<int>(t);
+    grid.any_in(box[t].first, box[t].second, [&](int j) {
+      if (j <= i || seen[j] == i) return false;
+      seen[j] = i;
+      const auto &a = box[t], &b = box[j];
+      if (a.second.x < b.first.x || b.second.x < a.first.x || a.second.y < b.first.y ||
+          b.second.y < a.first.y || a.second.z < b.first.z || b.second.z < a.first.z)
+        return false;
+      const int fa = triangles[t].face, fb = triangles[j].face;
+      const std::pair<int, int> faces{std::min(fa, fb), std::max(fa, fb)};
+      if (!faces_found.count(faces) && cross(nodes, triangles[t].node, triangles[j].node)) {
+        faces_found.insert(faces);
+        found.push_back({i, j});
+      }
+      return false;
+    });
+  }
+  return found;
+}
+
+std::string describe_crossings(const Shape& s, const std::vector<Vec3>& nodes,
+                               const std::vector<SurfaceTriangle>& triangles,
+                               const std::vector<Crossing>& crossings, double tolerance,
+                               const std::vector<std::string>& face_names, bool& cad_at_fault) {
+  cad_at_fault = false;
+  // The crossing of each pair of faces (the smaller face first).
+  std::map<std::pair<int, int>, Crossing> pairs;
+  for (const Crossing& c : crossings) {
+    const int a = triangles[c.first].face, b = triangles[c.second].face;
+    pairs.emplace(std::make_pair(std::min(a, b), std::max(a, b)), c);
+  }
+  // Whether an edge of face a that is not one of face b's runs on face b: its points at 1/4,
+  // 1/2 and 3/4 within `tolerance` of it.
+  auto edge_on = [&](int a, int b) {
+    const TopoDS_Face& fa = TopoDS::Face(s.faces(a + 1));
+    const TopoDS_Face& fb = TopoDS::Face(s.faces(b + 1));
+    std::set<int> edges_of_b;
+    for (TopExp_Explorer ex(fb, TopAbs_EDGE); ex.More(); ex.Next())
+      edges_of_b.insert(s.edges.FindIndex(ex.Current()));
+    for (TopExp_Explorer ex(fa, TopAbs_EDGE); ex.More(); ex.Next()) {
+      if (edges_of_b.count(s.edges.FindIndex(ex.Current())) ||
+          BRep_Tool::Degenerated(TopoDS::Edge(ex.Current())))
+        continue;
+      const BRepAdaptor_Curve curve(TopoDS::Edge(ex.Current()));
+      bool on = true;
+      for (double f : {0.5, 0.25, 0.75}) {
+        const gp_Pnt p = curve.Value(curve.FirstParameter() +
+                                     f * (curve.LastParameter() - curve.FirstParameter()));
+        BRepExtrema_DistShapeShape distance(BRepBuilderAPI_MakeVertex(p).Vertex(), fb);
+        on = distance.IsDone() && distance.Value() <= tolerance;
+        if (!on) break;
+      }
+      if (on) return true;
+    }
+    return false;
+  };
+  // The pairs whose CAD faces meet first, then the others, in the faces' order.
+  std::vector<std::pair<bool, std::pair<int, int>>> order;
+  for (const auto& [faces, c] : pairs) {
+    const auto [a, b] = faces;
+    const bool meet = a != b && (edge_on(a, b) || edge_on(b, a));
+    cad_at_fault = cad_at_fault || meet;
+    order.push_back({!meet, faces});
+  }
+  std::sort(order.begin(), order.end());
+  const auto meeting = static_cast<std::size_t>(
+      std::count_if(order.begin(), order.end(), [](const auto& o) { return !o.first; }));
+  std::ostringstream text;
+  text.precision(6);
+  std::size_t listed = 0;
+  for (const auto& [apart, faces] : order) {
+    if (listed == kListed) {
+      text << "; and " << order.size() - listed << " more pairs of faces";
+      if (meeting > listed) text << ", " << meeting - listed << " of them meeting";
+      break;
+    }
+    const auto [a, b] = faces;
+    const Crossing& c = pairs.at(faces);
+    const Vec3 at =
+        (centroid(nodes, triangles[c.first]) + centroid(nodes, triangles[c.second])) * 0.5;
+    text << (listed ? "; " : "") << face_names[a];
+    if (a != b) text << " and " << face_names[b];
+    text << " near (" << at.x << ", " << at.y << ", " << at.z << ")";
+    if (!apart) text << " (meeting there)";
+    ++listed;
+  }
+  return text.str();
+}
+
+}  // namespace hexmerge::mesher

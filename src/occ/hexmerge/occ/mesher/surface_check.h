@@ -1,0 +1,41 @@
+#pragma once
+/// @file
+/// The surface triangulation checked before it goes to the tetrahedraliser (internal header of
+/// mesh_shape(); no OpenCASCADE): triangles that cross one another, and whether the CAD itself
+/// makes them (faces that meet where they share no edge).
+
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include "hexmerge/geometry/vec3.h"
+#include "hexmerge/occ/mesher/surface.h"
+
+namespace hexmerge::mesher {
+
+struct Shape;
+
+/// Two triangles of a surface that cross: they share no side, and they meet other than at the
+/// node they share (if one).
+struct Crossing {
+  int first, second;  ///< the triangles (indices into the surface's)
+};
+
+/// Of each pair of faces (or face with itself) whose triangles cross (exact predicates), the
+/// first two triangles found crossing. A tetrahedraliser cannot keep such a surface (TetGen 1.5
+/// recovers its boundary for ever).
+std::vector<Crossing> find_crossings(const std::vector<Vec3>& nodes,
+                                     const std::vector<SurfaceTriangle>& triangles);
+
+/// What the crossings say, for the user: per pair of faces whose triangles cross (up to three,
+/// those whose CAD faces meet first), the faces (by `face_names`) and a point, and whether the
+/// CAD's own faces meet: an
+/// edge of one lies on the other (within `tolerance`) without being one of its edges (faces
+/// not sewn together, or overlapping), which no size repairs ("(meeting there)").
+/// @param[out] cad_at_fault  whether any pair's CAD faces meet so
+std::string describe_crossings(const Shape& s, const std::vector<Vec3>& nodes,
+                               const std::vector<SurfaceTriangle>& triangles,
+                               const std::vector<Crossing>& crossings, double tolerance,
+                               const std::vector<std::string>& face_names, bool& cad_at_fault);
+
+}  // namespace hexmerge::mesher

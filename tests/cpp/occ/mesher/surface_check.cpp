@@ -1,0 +1,75 @@
+#include "hexmerge/occ/mesher/surface_check.h"
+
+#include <gtest/gtest.h>
+
+#include <BRepAlgoAPI_Cut.hxx>
+#include <limits>
+#include <vector>
+
+#include "hexmerge/occ/mesher/surface_repair.h"
+#include "mesher_fixtures.h"
+
+namespace hexmerge::test {
+namespace {
+
+using mesher::SurfaceTriangle;
+
+SurfaceTriangle triangle(int a, int b, int c, int face = 0) { return {{a, b, c}, {}, face}; }
+
+// Two triangles crossing through each other, side by side, sharing a node (meeting beyond it or
+// not), sharing a side.
+TEST(find_crossings, by_exact_predicates) {
+  const std::vector<Vec3> nodes = {
+      {0, 0, 0},      {2, 0, 0},     {0, 2, 0},  // 0-2: a triangle in z = 0
+      {0.5, 0.5, -1}, {0.5, 0.5, 1}, {3, 3, 0},  // 3-5: through it at (0.5, 0.5)
+      {5, 0, 0},      {6, 0, 0},     {5, 1, 0},  // 6-8: beside it
+      {1, 1, 1},      {1, 1, -1},                // 9, 10: with node 0, through (1, 1, 0)
+      {0, -1, 0},     {-1, 0, 0}};               // 11, 12: with node 0, outside it
+  const auto find = [&](const std::vector<SurfaceTriangle>& triangles) {
+    return mesher::find_crossings(nodes, triangles);
+  };
+  const std::vector<mesher::Crossing> crossing = find({triangle(0, 1, 2), triangle(3, 4, 5)});
+  ASSERT_EQ(crossing.size(), 1u);
+  EXPECT_EQ(crossing[0].first, 0);
+  EXPECT_EQ(crossing[0].second, 1);
+  EXPECT_TRUE(find({triangle(0, 1, 2), triangle(6, 7, 8)}).empty());
+  // Node 0 shared; the side 9-10 passes through (1, 1, 0), on the first's side 1-2: they meet
+  // beyond the node.
+  EXPECT_EQ(find({triangle(0, 1, 2), triangle(0, 9, 10)}).size(), 1u);
+  EXPECT_TRUE(find({triangle(0, 1, 2), triangle(0, 11, 12)}).empty());
+  EXPECT_TRUE(find({triangle(0, 1, 2), triangle(1, 0, 11)}).empty());
+  // One crossing per pair of faces: faces 0 and 1 cross twice, 0 and 2 once.
+  EXPECT_EQ(find({triangle(0, 1, 2), triangle(3, 4, 5, 1), triangle(3, 5, 4, 1)}).size(), 1u);
+  EXPECT_EQ(find({triangle(0, 1, 2), triangle(3, 4, 5, 1), triangle(3, 5, 4, 2)}).size(), 2u);
+}
+
+// A tube 1140 long with walls of radius 1.0795 and 1.5875 (0.508 thick, as pyocc_11752's 178)
+// at h 13, its faces about eight strips around: the refinement's flips and node moves and the
+// collapses kept every triangle within the chord deflection of its face (split sides aside);
+// they joined nodes across the wall before (triangles 1.5 off the outer wall, through the
+// inner one, TetGen's boundary recovery never ending).
+TEST(find_crossings, none_on_a_thin_tube_at_a_coarse_size) {
+  const double h = 13, deflection = 0.02 * h;
+  const TopoDS_Shape tube =
+      BRepAlgoAPI_Cut(occ_cylinder(1.5875, 1140), occ_cylinder(1.0795, 1140)).Shape();
+  Prepared p = prepare(tube, h);
+  mesher::collapse_sides(p.shape, p.surface, h, std::numeric_limits<double>::infinity(), deflection,
+                         p.lattice.lattice_face);
+  mesher::refine(p.shape, p.surface, h, deflection, p.lattice.lattice_face, p.lattice.lattice_edge);
+  mesher::collapse_sides(p.shape, p.surface, h, h, deflection, p.lattice.lattice_face);
+  std::string problem;
+  EXPECT_TRUE(closed_and_oriented(p.surface.triangles, problem)) << problem;
+  EXPECT_GT(p.surface.triangles.size(), 1000u);
+  EXPECT_TRUE(mesher::find_crossings(p.surface.nodes, p.surface.triangles).empty());
+  double worst = 0;
+  for (const SurfaceTriangle& t : p.surface.triangles) {
+    const Vec3 c =
+        (p.surface.nodes[t.node[0]] + p.surface.nodes[t.node[1]] + p.surface.nodes[t.node[2]]) *
+        (1.0 / 3);
+    worst = std::max(worst, distance_to_face(p.shape, t.face, c));
+  }
+  EXPECT_LT(worst, 1.25 * deflection);  // half the wall
+}
+
+}  // namespace
+}  // namespace hexmerge::test
