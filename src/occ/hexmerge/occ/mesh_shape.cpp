@@ -459,14 +459,37 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
   // A surface whose triangles cross cannot be kept by TetGen (its boundary recovery never
   // ends): refused here, by name, when the CAD's faces themselves meet where they share no edge;
   // else this way fails (another size may not cross).
+  std::vector<std::string> face_names(static_cast<std::size_t>(shape.faces.Extent()));
+  for (std::size_t f = 0; f < face_names.size(); ++f) {
+    const int number = given_number(given_items.faces, static_cast<int>(f));
+    face_names[f] = number > 0 ? "Face" + std::to_string(number)
+                               : "face " + std::to_string(f + 1) + " of the glued solids";
+  }
+  // Where a solid's boundary passes a side twice, two CAD edges lie at one place (their nodes
+  // merged): the solid touches itself there, which TetGen cannot mesh either.
+  const std::vector<OverusedSide> overused =
+      find_overused_sides(surface, face_solids(shape), shape.edge_faces);
+  if (!overused.empty()) {
+    std::ostringstream text;
+    text.precision(6);
+    text << "mesh_shape: the shape is broken: its surface touches itself along a curve, where "
+            "two of its edges lie at one place without being one edge: ";
+    for (std::size_t i = 0; i < overused.size() && i < 3; ++i) {
+      const Vec3 at = (surface.nodes[overused[i].a] + surface.nodes[overused[i].b]) * 0.5;
+      for (std::size_t k = 0; k < overused[i].faces.size(); ++k)
+        text << (k == 0                              ? (i == 0 ? "" : "; ")
+                 : k + 1 == overused[i].faces.size() ? " and "
+                                                     : ", ")
+             << face_names[static_cast<std::size_t>(overused[i].faces[k])];
+      text << " meet near (" << at.x << ", " << at.y << ", " << at.z << ")";
+    }
+    if (overused.size() > 3) text << "; and " << overused.size() - 3 << " more such places";
+    text << ". Repair the shape (FreeCAD's Part > Check geometry, with its BOP check, lists such "
+            "faces)";
+    throw InputError(text.str());
+  }
   const std::vector<Crossing> crossings = find_crossings(surface.nodes, surface.triangles);
   if (!crossings.empty()) {
-    std::vector<std::string> face_names(static_cast<std::size_t>(shape.faces.Extent()));
-    for (std::size_t f = 0; f < face_names.size(); ++f) {
-      const int number = given_number(given_items.faces, static_cast<int>(f));
-      face_names[f] = number > 0 ? "Face" + std::to_string(number)
-                                 : "face " + std::to_string(f + 1) + " of the glued solids";
-    }
     bool cad_at_fault = false;
     const std::string where = describe_crossings(shape, surface.nodes, surface.triangles, crossings,
                                                  1e-4 * h, face_names, cad_at_fault);

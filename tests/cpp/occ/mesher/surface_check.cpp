@@ -43,6 +43,35 @@ TEST(find_crossings, by_exact_predicates) {
   EXPECT_EQ(find({triangle(0, 1, 2), triangle(3, 4, 5, 1), triangle(3, 5, 4, 2)}).size(), 2u);
 }
 
+// Four triangles on the side 0-1, of faces 0 to 3: one solid's boundary passing there twice (two
+// CAD edges at one place) is found, unless one CAD edge bounds the four faces (a non-manifold
+// solid's edge); faces of touching solids glued (face 2 bounding both) pass it once each.
+TEST(find_overused_sides, a_solid_touching_itself_along_a_side) {
+  mesher::Surface surface;
+  surface.nodes = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+  surface.triangles = {triangle(0, 1, 2, 0), triangle(1, 0, 4, 1), triangle(0, 1, 3, 2),
+                       triangle(1, 0, 5, 3)};
+  const std::vector<std::vector<int>> one_solid = {{0}, {0}, {0}, {0}};
+  const std::vector<std::vector<int>> edge_faces = {{0, 1}, {2, 3}, {0, 1, 2, 3}};
+  std::vector<mesher::OverusedSide> found =
+      mesher::find_overused_sides(surface, one_solid, edge_faces);
+  ASSERT_EQ(found.size(), 1u);
+  EXPECT_EQ(std::min(found[0].a, found[0].b), 0);
+  EXPECT_EQ(std::max(found[0].a, found[0].b), 1);
+  EXPECT_EQ(found[0].faces, (std::vector<int>{0, 1, 2, 3}));
+  surface.segments[mesher::pair_key(0, 1)] = {0, 0.0, 1.0};  // edge 0 bounds faces 0 and 1 only
+  EXPECT_EQ(mesher::find_overused_sides(surface, one_solid, edge_faces).size(), 1u);
+  surface.segments[mesher::pair_key(0, 1)] = {2, 0.0, 1.0};  // edge 2 bounds all four
+  EXPECT_TRUE(mesher::find_overused_sides(surface, one_solid, edge_faces).empty());
+  surface.segments.clear();
+  // Two solids: faces 0, 1 bound solid 0, faces 2, 3 solid 1 (boxes touching along an edge
+  // glued are one edge; here even without one, each solid passes twice).
+  EXPECT_TRUE(mesher::find_overused_sides(surface, {{0}, {0}, {1}, {1}}, edge_faces).empty());
+  // A glued interface: three triangles, face 2 bounding both solids.
+  surface.triangles.pop_back();
+  EXPECT_TRUE(mesher::find_overused_sides(surface, {{0}, {1}, {0, 1}}, edge_faces).empty());
+}
+
 // A tube 1140 long with walls of radius 1.0795 and 1.5875 (0.508 thick, as pyocc_11752's 178)
 // at h 13, its faces about eight strips around: the refinement's flips and node moves and the
 // collapses kept every triangle within the chord deflection of its face (split sides aside);

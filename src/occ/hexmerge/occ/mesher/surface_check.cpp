@@ -15,9 +15,11 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdint>
 #include <map>
 #include <set>
 #include <sstream>
+#include <unordered_map>
 #include <utility>
 
 #include "hexmerge/occ/mesher/shape.h"
@@ -106,6 +108,53 @@ std::vector<Crossing> find_crossings(const std::vector<Vec3>& nodes,
     });
   }
   return found;
+}
+
+std::vector<OverusedSide> find_overused_sides(const Surface& surface,
+                                              const std::vector<std::vector<int>>& face_solids,
+                                              const std::vector<std::vector<int>>& edge_faces) {
+  const std::vector<SurfaceTriangle>& triangles = surface.triangles;
+  std::unordered_map<std::uint64_t, std::vector<int>> at_side;  // triangles per side
+  for (std::size_t t = 0; t < triangles.size(); ++t)
+    for (int c = 0; c < 3; ++c) at_side[side_key(triangles[t], c)].push_back(static_cast<int>(t));
+  std::vector<OverusedSide> found;
+  std::set<std::vector<int>> face_sets;
+  for (const auto& [key, around] : at_side) {
+    if (around.size() <= 2) continue;
+    std::map<int, int> per_solid;
+    for (int t : around)
+      for (int solid : face_solids[static_cast<std::size_t>(triangles[t].face)]) ++per_solid[solid];
+    if (std::none_of(per_solid.begin(), per_solid.end(),
+                     [](const auto& count) { return count.second > 2; }))
+      continue;
+    std::vector<int> faces;
+    for (int t : around) faces.push_back(triangles[t].face);
+    std::sort(faces.begin(), faces.end());
+    faces.erase(std::unique(faces.begin(), faces.end()), faces.end());
+    const auto segment = surface.segments.find(key);
+    if (segment != surface.segments.end()) {
+      const std::vector<int>& bounded = edge_faces[static_cast<std::size_t>(segment->second.edge)];
+      if (std::all_of(faces.begin(), faces.end(), [&](int f) {
+            return std::find(bounded.begin(), bounded.end(), f) != bounded.end();
+          }))
+        continue;  // one edge of them all
+    }
+    if (face_sets.insert(faces).second)
+      found.push_back({static_cast<int>(key >> 32), static_cast<int>(key & 0xffffffffu), faces});
+  }
+  std::sort(found.begin(), found.end(),
+            [](const OverusedSide& x, const OverusedSide& y) { return x.faces < y.faces; });
+  return found;
+}
+
+std::vector<std::vector<int>> face_solids(const Shape& s) {
+  std::vector<std::vector<int>> out(static_cast<std::size_t>(s.faces.Extent()));
+  for (int i = 1; i <= s.solids.Extent(); ++i)
+    for (TopExp_Explorer ex(s.solids(i), TopAbs_FACE); ex.More(); ex.Next()) {
+      std::vector<int>& solids = out[static_cast<std::size_t>(s.faces.FindIndex(ex.Current()) - 1)];
+      if (std::find(solids.begin(), solids.end(), i - 1) == solids.end()) solids.push_back(i - 1);
+    }
+  return out;
 }
 
 std::string describe_crossings(const Shape& s, const std::vector<Vec3>& nodes,

@@ -27,6 +27,26 @@ struct Crossing {
 std::vector<Crossing> find_crossings(const std::vector<Vec3>& nodes,
                                      const std::vector<SurfaceTriangle>& triangles);
 
+/// A side of the surface's triangles where a solid's boundary passes more than once: more than
+/// two of its triangles on the faces of one solid (the faces of touching solids glued together
+/// bound both).
+struct OverusedSide {
+  int a, b;                ///< its nodes
+  std::vector<int> faces;  ///< the faces of its triangles (each once, in order)
+};
+
+/// The sides where a solid's boundary touches itself (`face_solids`: per face, the solids it
+/// bounds) though no one CAD edge bounds all their faces there (`edge_faces`: per edge, the
+/// faces it bounds): two CAD edges at one place, their nodes merged, and TetGen 1.5 never ends
+/// on such a surface. (An edge of a non-manifold solid, shared by four faces, is not one.) One
+/// per set of faces.
+std::vector<OverusedSide> find_overused_sides(const Surface& surface,
+                                              const std::vector<std::vector<int>>& face_solids,
+                                              const std::vector<std::vector<int>>& edge_faces);
+
+/// Per face of the shape, the solids (0-based) it bounds.
+std::vector<std::vector<int>> face_solids(const Shape& s);
+
 /// What the crossings say, for the user: per pair of faces whose triangles cross (up to three,
 /// those whose CAD faces meet first), the faces (by `face_names`) and a point, and whether the
 /// CAD's own faces meet: an
