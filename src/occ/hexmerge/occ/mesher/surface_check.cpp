@@ -42,20 +42,47 @@ constexpr std::size_t kListed = 3;
 // test; one, whether the side of either opposite the shared node meets the other (where two
 // triangles with a common node meet beyond it, one of those sides reaches the other triangle);
 // two or three (a common side), not tested: the surface's folds are removed before.
+// Whether points p lie strictly on one side of the plane through a, b, c, by a margin far above
+// the rounding of the floating-point test (false when unsure: the exact test decides then).
+template <std::size_t N>
+bool one_side(const Vec3& a, const Vec3& b, const Vec3& c, const std::array<Vec3, N>& p) {
+  const Vec3 n = (b - a).cross(c - a);
+  const double reach = (b - a).norm() + (c - a).norm();
+  int sign = 0;
+  for (const Vec3& q : p) {
+    const double d = n.dot(q - a);
+    if (std::abs(d) <= 1e-12 * n.norm() * (reach + (q - a).norm())) return false;
+    const int s = d > 0 ? 1 : -1;
+    if (sign != 0 && s != sign) return false;
+    sign = s;
+  }
+  return true;
+}
+
 bool cross(const std::vector<Vec3>& nodes, const std::array<int, 3>& a,
            const std::array<int, 3>& b) {
   int shared = 0, in_a = -1, in_b = -1;
   for (int i = 0; i < 3; ++i)
     for (int j = 0; j < 3; ++j)
       if (a[i] == b[j]) ++shared, in_a = i, in_b = j;
-  const Triangle ta(point(nodes[a[0]]), point(nodes[a[1]]), point(nodes[a[2]]));
-  const Triangle tb(point(nodes[b[0]]), point(nodes[b[1]]), point(nodes[b[2]]));
-  if (ta.is_degenerate() || tb.is_degenerate()) return false;  // collinear nodes: no area
-  if (shared == 0) return CGAL::do_intersect(ta, tb);
   if (shared > 1) return false;
-  const Segment opposite_a(point(nodes[a[(in_a + 1) % 3]]), point(nodes[a[(in_a + 2) % 3]]));
-  const Segment opposite_b(point(nodes[b[(in_b + 1) % 3]]), point(nodes[b[(in_b + 2) % 3]]));
-  return CGAL::do_intersect(opposite_a, tb) || CGAL::do_intersect(opposite_b, ta);
+  const std::array<Vec3, 3> pa{nodes[a[0]], nodes[a[1]], nodes[a[2]]};
+  const std::array<Vec3, 3> pb{nodes[b[0]], nodes[b[1]], nodes[b[2]]};
+  const Triangle ta(point(pa[0]), point(pa[1]), point(pa[2]));
+  const Triangle tb(point(pb[0]), point(pb[1]), point(pb[2]));
+  if (shared == 0) {
+    // Most pairs near each other lie on one side of the other's plane.
+    if (one_side(pa[0], pa[1], pa[2], pb) || one_side(pb[0], pb[1], pb[2], pa)) return false;
+    return !ta.is_degenerate() && !tb.is_degenerate() && CGAL::do_intersect(ta, tb);
+  }
+  if (ta.is_degenerate() || tb.is_degenerate()) return false;  // collinear nodes: no area
+  // The side of each opposite the shared node, against the other triangle.
+  const std::array<Vec3, 2> side_a{pa[(in_a + 1) % 3], pa[(in_a + 2) % 3]};
+  const std::array<Vec3, 2> side_b{pb[(in_b + 1) % 3], pb[(in_b + 2) % 3]};
+  return (!one_side(pb[0], pb[1], pb[2], side_a) &&
+          CGAL::do_intersect(Segment(point(side_a[0]), point(side_a[1])), tb)) ||
+         (!one_side(pa[0], pa[1], pa[2], side_b) &&
+          CGAL::do_intersect(Segment(point(side_b[0]), point(side_b[1])), ta));
 }
 
 Vec3 centroid(const std::vector<Vec3>& nodes, const SurfaceTriangle& t) {
