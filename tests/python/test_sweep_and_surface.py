@@ -194,3 +194,28 @@ def test_tetgen_failing_on_the_slab_leaves_the_whole_volume_to_it(tmp_path) -> N
     assert np.array_equal(tets.points, slab.points)
     same = [np.unique(np.sort(m.cell_vertices.reshape(-1, 4), axis=1), axis=0) for m in (tets, slab)]
     assert np.array_equal(same[0], same[1])
+
+
+# A tube 100 long, walls of radius 1.0795 and 1.5875 (0.508 thick), along x.
+TUBE_GEO = """SetFactory("OpenCASCADE");
+Cylinder(1) = {0, 0, 0, 100, 0, 0, 1.5875};
+Cylinder(2) = {-1, 0, 0, 102, 0, 0, 1.0795};
+BooleanDifference(3) = { Volume{1}; Delete; }{ Volume{2}; Delete; };
+"""
+
+
+def test_a_size_at_which_the_surface_crosses_itself_fails_fast_and_says_so(tmp_path) -> None:
+    """A thin tube meshes at h 13 (its walls' triangles within the chord deflection of their
+    faces, not across the tube); at h 40 the deflection (0.8) exceeds the wall (0.508) and the
+    walls' triangles cross: every way fails at once, before TetGen (whose boundary recovery
+    would run to its time limit), saying which faces cross and that a smaller size helps."""
+    tube = gmsh_brep(tmp_path, "tube", TUBE_GEO)
+    tets, report = hexmerge.mesh_shape(tube, 13.0, recombine=False)
+    assert report["meshing"]["failed_strategies"] == []
+    volume = np.pi * (1.5875**2 - 1.0795**2) * 100
+    assert abs(tet_volume(tets) - volume) < 0.05 * volume  # chords of 45-degree strips
+    with pytest.raises(ValueError, match="could not tetrahedralise") as failed:
+        hexmerge.mesh_shape(tube, 40.0, recombine=False)
+    message = str(failed.value)
+    assert message.count("the surface's triangles at this size cross (Face") == 6, message
+    assert "a smaller size keeps them apart" in message

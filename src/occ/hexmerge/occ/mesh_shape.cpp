@@ -501,7 +501,9 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
           where +
           ". Repair the shape (FreeCAD's Part > Check geometry, with its BOP check, lists such "
           "faces)");
-    throw TetrahedralizeFailure("the surface's triangles at this size cross (" + where + ")");
+    throw TetrahedralizeFailure("the surface's triangles at this size cross (" + where +
+                                "): the faces there come closer than their triangles' chord "
+                                "deflection, and a smaller size keeps them apart");
   }
   step("surface", 0.15);
 
