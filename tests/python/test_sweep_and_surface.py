@@ -205,13 +205,15 @@ BooleanDifference(3) = { Volume{1}; Delete; }{ Volume{2}; Delete; };
 
 
 def test_a_size_at_which_the_surface_crosses_itself_fails_fast_and_says_so(tmp_path) -> None:
-    """A thin tube meshes at h 13 (its walls' triangles within the chord deflection of their
-    faces, not across the tube); at h 40 the deflection (0.8) exceeds the wall (0.508) and the
+    """A thin tube meshes at h 13 (the surface repairs run again with their triangles kept
+    within the chord deflection of their faces, not across the tube); at h 40 the deflection (0.8) exceeds the wall (0.508) and the
     walls' triangles cross: every way fails at once, before TetGen (whose boundary recovery
     would run to its time limit), saying which faces cross and that a smaller size helps."""
     tube = gmsh_brep(tmp_path, "tube", TUBE_GEO)
     tets, report = hexmerge.mesh_shape(tube, 13.0, recombine=False)
     assert report["meshing"]["failed_strategies"] == []
+    # The repairs unbounded first joined nodes across the tube; bounded, they did not.
+    assert report["meshing"]["bounded_surface_repairs"]
     volume = np.pi * (1.5875**2 - 1.0795**2) * 100
     assert abs(tet_volume(tets) - volume) < 0.05 * volume  # chords of 45-degree strips
     with pytest.raises(ValueError, match="could not tetrahedralise") as failed:

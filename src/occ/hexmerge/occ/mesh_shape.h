@@ -225,6 +225,9 @@ struct MeshShapeReport {
   /// Faces whose surface refinement to h did not converge and was given up (sides longer
   /// than h remain on them)
   std::size_t nb_unrefined_faces = 0;
+  /// whether the surface repairs ran again from BRepMesh's triangles, each kept within the chord
+  /// deflection of its face, because the surface they made first crossed itself
+  bool bounded_surface_repairs = false;
   std::size_t nb_shared_faces = 0;  ///< faces between two solids (touching solids glued)
   /// The local sizes (MeshShapeParameters::local_sizes) as applied, in their order
   std::vector<LocalSizeApplied> local_sizes;

@@ -89,6 +89,7 @@ class FaceGaps {
   // when one of `made` is beyond the deflection).
   template <class Made, class Replaced>
   bool keeps_close(Made made, Replaced replaced) const {
+    if (std::isinf(deflection_)) return true;  // unbounded
     const double worst = made();
     return worst <= deflection_ || worst <= replaced();
   }

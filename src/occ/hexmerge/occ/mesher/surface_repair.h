@@ -26,7 +26,8 @@ class SizeField;
 /// A face whose refinement adds far more nodes than its area needs (it is not converging) is
 /// left as it is then, and listed in Surface::unrefined_faces.
 /// @param[in] deflection  no flip or node move takes a triangle's centroid further than this
-///                        from its face (or further than the triangles it replaces were)
+///                        from its face (or further than the triangles it replaces were);
+///                        infinity: no bound
 void refine(const Shape& s, Surface& surface, double target, double deflection,
             const std::vector<bool>& lattice_face, const std::vector<bool>& lattice_edge,
             const SizeField* field = nullptr);
@@ -37,7 +38,7 @@ void refine(const Shape& s, Surface& surface, double target, double deflection,
 /// renumbered, and Surface::seed gives each node's index before. With local sizes (`field`),
 /// `target` and `max_side` shrink with the size the field gives at the side's nodes. No
 /// collapse takes a triangle's centroid further than `deflection` from its face of `s` (or
-/// further than the triangles it replaces were).
+/// further than the triangles it replaces were; infinity: no bound).
 void collapse_sides(const Shape& s, Surface& surface, double target, double max_side,
                     double deflection, const std::vector<bool>& lattice_face,
                     const SizeField* field = nullptr);
