@@ -349,6 +349,40 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
   // would merge them itself and renumber the points after them.
   Surface surface = triangulate(shape, deflection, 1e-9 * h + 2e-8 * shape.diagonal + 1e-12);
   Lattice lattice = lay_lattice(shape, frame, surface.nodes, h, strategy.lattice_faces);
+  std::vector<std::string> face_names(static_cast<std::size_t>(shape.faces.Extent()));
+  for (std::size_t f = 0; f < face_names.size(); ++f) {
+    const int number = given_number(given_items.faces, static_cast<int>(f));
+    face_names[f] = number > 0 ? "Face" + std::to_string(number)
+                               : "face " + std::to_string(f + 1) + " of the glued solids";
+  }
+  // Where a solid's boundary passes a side twice, two CAD edges lie at one place (their nodes
+  // merged): the solid touches itself there, which TetGen cannot mesh either. Checked on
+  // BRepMesh's triangles (before the repairs, which take minutes on such a shape's 825k
+  // triangles) and on the surface that goes to TetGen.
+  const auto refuse_touching_itself = [&] {
+    const std::vector<OverusedSide> overused =
+        find_overused_sides(surface, face_solids(shape), shape.edge_faces);
+    if (overused.empty()) return;
+    std::ostringstream text;
+    text.precision(6);
+    text << "mesh_shape: the shape is broken: its surface touches itself along a curve, where "
+            "two of its edges lie at one place without being one edge: ";
+    for (std::size_t i = 0; i < overused.size() && i < 3; ++i) {
+      const Vec3 at = (surface.nodes[overused[i].a] + surface.nodes[overused[i].b]) * 0.5;
+      for (std::size_t k = 0; k < overused[i].faces.size(); ++k)
+        text << (k == 0                              ? (i == 0 ? "" : "; ")
+                 : k + 1 == overused[i].faces.size() ? " and "
+                                                     : ", ")
+             << face_names[static_cast<std::size_t>(overused[i].faces[k])];
+      text << " meet near (" << at.x << ", " << at.y << ", " << at.z << ")";
+    }
+    if (overused.size() > 3) text << "; and " << overused.size() - 3 << " more such places";
+    text << ". Repair the shape (FreeCAD's Part > Check geometry, with its BOP check, lists such "
+            "faces)";
+    throw InputError(text.str());
+  };
+  refuse_touching_itself();
+
   // Local sizes (the attempts at other sizes keep them, up to their h): their faces are no
   // lattice faces (refined like curved ones), their edges and those faces' edges no lattice
   // edges; the size field from the surface as BRepMesh made it.
@@ -470,38 +504,10 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
     }
   }
   const int sweep_axis = report.sweep_axis;
+  refuse_touching_itself();
   // A surface whose triangles cross cannot be kept by TetGen (its boundary recovery never
   // ends): refused here, by name, when the CAD's faces themselves meet where they share no edge;
   // else this way fails (another size may not cross).
-  std::vector<std::string> face_names(static_cast<std::size_t>(shape.faces.Extent()));
-  for (std::size_t f = 0; f < face_names.size(); ++f) {
-    const int number = given_number(given_items.faces, static_cast<int>(f));
-    face_names[f] = number > 0 ? "Face" + std::to_string(number)
-                               : "face " + std::to_string(f + 1) + " of the glued solids";
-  }
-  // Where a solid's boundary passes a side twice, two CAD edges lie at one place (their nodes
-  // merged): the solid touches itself there, which TetGen cannot mesh either.
-  const std::vector<OverusedSide> overused =
-      find_overused_sides(surface, face_solids(shape), shape.edge_faces);
-  if (!overused.empty()) {
-    std::ostringstream text;
-    text.precision(6);
-    text << "mesh_shape: the shape is broken: its surface touches itself along a curve, where "
-            "two of its edges lie at one place without being one edge: ";
-    for (std::size_t i = 0; i < overused.size() && i < 3; ++i) {
-      const Vec3 at = (surface.nodes[overused[i].a] + surface.nodes[overused[i].b]) * 0.5;
-      for (std::size_t k = 0; k < overused[i].faces.size(); ++k)
-        text << (k == 0                              ? (i == 0 ? "" : "; ")
-                 : k + 1 == overused[i].faces.size() ? " and "
-                                                     : ", ")
-             << face_names[static_cast<std::size_t>(overused[i].faces[k])];
-      text << " meet near (" << at.x << ", " << at.y << ", " << at.z << ")";
-    }
-    if (overused.size() > 3) text << "; and " << overused.size() - 3 << " more such places";
-    text << ". Repair the shape (FreeCAD's Part > Check geometry, with its BOP check, lists such "
-            "faces)";
-    throw InputError(text.str());
-  }
   const std::vector<Crossing> crossings = find_crossings(surface.nodes, surface.triangles);
   if (!crossings.empty()) {
     bool cad_at_fault = false;
