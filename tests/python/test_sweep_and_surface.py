@@ -221,3 +221,24 @@ def test_a_size_at_which_the_surface_crosses_itself_fails_fast_and_says_so(tmp_p
     message = str(failed.value)
     assert message.count("the surface's triangles at this size cross (Face") == 6, message
     assert "a smaller size keeps them apart" in message
+
+
+CONE_GEO = """SetFactory("OpenCASCADE");
+Cone(1) = {0, 0, 0, 0, 0, 20, 8, 0};
+"""
+
+
+def test_the_repairs_are_bounded_only_where_the_surface_crosses(tmp_path) -> None:
+    """A cone of radius 8 and height 20 at h 1.5: the repaired triangles fold at its apex at
+    that size (the first way fails before TetGen, saying so) and the cone meshes at 0.95 of the
+    size, where the unbounded repairs unfold the apex. Bounded everywhere (kept within the chord
+    deflection of their faces), they folded it at 1.425 and 1.65 too, and every way failed."""
+    cone = gmsh_brep(tmp_path, "cone", CONE_GEO)
+    tets, report = hexmerge.mesh_shape(cone, 1.5, recombine=False)
+    meshing = report["meshing"]
+    assert meshing["strategy"] == "lattice at 0.95 of the size"
+    assert len(meshing["failed_strategies"]) == 1
+    assert "the surface's triangles at this size cross (Face1 near" in meshing["failed_strategies"][0]
+    assert not meshing["bounded_surface_repairs"]
+    volume = np.pi * 8**2 * 20 / 3
+    assert abs(tet_volume(tets) - volume) < 0.01 * volume
