@@ -359,27 +359,15 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
   // merged): the solid touches itself there, which TetGen cannot mesh either. Checked on
   // BRepMesh's triangles (before the repairs, which take minutes on such a shape's 825k
   // triangles) and on the surface that goes to TetGen.
+  const std::vector<std::vector<int>> solids_of_face = face_solids(shape);
   const auto refuse_touching_itself = [&] {
     const std::vector<OverusedSide> overused =
-        find_overused_sides(surface, face_solids(shape), shape.edge_faces);
-    if (overused.empty()) return;
-    std::ostringstream text;
-    text.precision(6);
-    text << "mesh_shape: the shape is broken: its surface touches itself along a curve, where "
-            "two of its edges lie at one place without being one edge: ";
-    for (std::size_t i = 0; i < overused.size() && i < 3; ++i) {
-      const Vec3 at = (surface.nodes[overused[i].a] + surface.nodes[overused[i].b]) * 0.5;
-      for (std::size_t k = 0; k < overused[i].faces.size(); ++k)
-        text << (k == 0                              ? (i == 0 ? "" : "; ")
-                 : k + 1 == overused[i].faces.size() ? " and "
-                                                     : ", ")
-             << face_names[static_cast<std::size_t>(overused[i].faces[k])];
-      text << " meet near (" << at.x << ", " << at.y << ", " << at.z << ")";
-    }
-    if (overused.size() > 3) text << "; and " << overused.size() - 3 << " more such places";
-    text << ". Repair the shape (FreeCAD's Part > Check geometry, with its BOP check, lists such "
-            "faces)";
-    throw InputError(text.str());
+        find_overused_sides(surface, solids_of_face, shape.edge_faces);
+    if (!overused.empty())
+      throw InputError(
+          "mesh_shape: the shape is broken: its surface touches itself along a curve, where two "
+          "of its edges lie at one place without being one edge: " +
+          describe_overused_sides(surface.nodes, overused, face_names) + kRepairTheShape);
   };
   refuse_touching_itself();
 
@@ -478,8 +466,10 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
     report.sweep_skipped =
         "not swept, though an extrusion: its sweep failed with the local sizes and face layers "
         "applied (walls split to a local size, or made no lattice faces for layers)";
+  std::vector<Crossing> crossings;
   if (sweep) {
     report.sweep_axis = sweep->axis;
+    crossings = find_crossings(surface.nodes, surface.triangles);
   } else {
     // The repairs, their triangles as far from their faces as they come; where they then cross
     // (faces far narrower than h: pyocc_11752's tubes, triangles joining nodes across them),
@@ -497,10 +487,12 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
     };
     const Surface triangulated = surface;
     repair(std::numeric_limits<double>::infinity());
-    if (!find_crossings(surface.nodes, surface.triangles).empty()) {
+    crossings = find_crossings(surface.nodes, surface.triangles);
+    if (!crossings.empty()) {
       surface = triangulated;
       repair(deflection);
       report.bounded_surface_repairs = true;
+      crossings = find_crossings(surface.nodes, surface.triangles);
     }
   }
   const int sweep_axis = report.sweep_axis;
@@ -508,7 +500,6 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
   // A surface whose triangles cross cannot be kept by TetGen (its boundary recovery never
   // ends): refused here, by name, when the CAD's faces themselves meet where they share no edge;
   // else this way fails (another size may not cross).
-  const std::vector<Crossing> crossings = find_crossings(surface.nodes, surface.triangles);
   if (!crossings.empty()) {
     bool cad_at_fault = false;
     const std::string where = describe_crossings(shape, surface.nodes, surface.triangles, crossings,
@@ -518,9 +509,7 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
           "mesh_shape: the shape is broken: faces meet where they share no edge (an edge of "
           "one lies on the other without being one of its edges), so no mesh can follow them. "
           "The surface's triangles cross at " +
-          where +
-          ". Repair the shape (FreeCAD's Part > Check geometry, with its BOP check, lists such "
-          "faces)");
+          where + kRepairTheShape);
     throw TetrahedralizeFailure("the surface's triangles at this size cross (" + where +
                                 "): the faces there come closer than their triangles' chord "
                                 "deflection, and a smaller size keeps them apart");

@@ -19,6 +19,7 @@
 #include <map>
 #include <set>
 #include <sstream>
+#include <tuple>
 #include <unordered_map>
 #include <utility>
 
@@ -174,6 +175,26 @@ std::vector<OverusedSide> find_overused_sides(const Surface& surface,
   return found;
 }
 
+std::string describe_overused_sides(const std::vector<Vec3>& nodes,
+                                    const std::vector<OverusedSide>& overused,
+                                    const std::vector<std::string>& face_names) {
+  std::ostringstream text;
+  text.precision(6);
+  for (std::size_t i = 0; i < overused.size() && i < kListed; ++i) {
+    const std::vector<int>& faces = overused[i].faces;
+    for (std::size_t k = 0; k < faces.size(); ++k)
+      text << (k == 0                  ? (i == 0 ? "" : "; ")
+               : k + 1 == faces.size() ? " and "
+                                       : ", ")
+           << face_names[static_cast<std::size_t>(faces[k])];
+    const Vec3 at = (nodes[overused[i].a] + nodes[overused[i].b]) * 0.5;
+    text << " meet near (" << at.x << ", " << at.y << ", " << at.z << ")";
+  }
+  if (overused.size() > kListed)
+    text << "; and " << overused.size() - kListed << " more such places";
+  return text.str();
+}
+
 std::vector<std::vector<int>> face_solids(const Shape& s) {
   std::vector<std::vector<int>> out(static_cast<std::size_t>(s.faces.Extent()));
   for (int i = 1; i <= s.solids.Extent(); ++i)
@@ -189,12 +210,6 @@ std::string describe_crossings(const Shape& s, const std::vector<Vec3>& nodes,
                                const std::vector<Crossing>& crossings, double tolerance,
                                const std::vector<std::string>& face_names, bool& cad_at_fault) {
   cad_at_fault = false;
-  // The crossing of each pair of faces (the smaller face first).
-  std::map<std::pair<int, int>, Crossing> pairs;
-  for (const Crossing& c : crossings) {
-    const int a = triangles[c.first].face, b = triangles[c.second].face;
-    pairs.emplace(std::make_pair(std::min(a, b), std::max(a, b)), c);
-  }
   // Whether an edge of face a that is not one of face b's runs on face b: its points at 1/4,
   // 1/2 and 3/4 within `tolerance` of it.
   auto edge_on = [&](int a, int b) {
@@ -220,28 +235,36 @@ std::string describe_crossings(const Shape& s, const std::vector<Vec3>& nodes,
     }
     return false;
   };
-  // The pairs whose CAD faces meet first, then the others, in the faces' order.
-  std::vector<std::pair<bool, std::pair<int, int>>> order;
-  for (const auto& [faces, c] : pairs) {
-    const auto [a, b] = faces;
+  // The pairs of faces (one crossing each, the smaller face first) whose CAD faces meet first,
+  // then the others, in the faces' order.
+  struct Pair {
+    bool apart;
+    std::pair<int, int> faces;
+    Crossing crossing;
+  };
+  std::vector<Pair> order;
+  for (const Crossing& c : crossings) {
+    const int a = std::min(triangles[c.first].face, triangles[c.second].face);
+    const int b = std::max(triangles[c.first].face, triangles[c.second].face);
     const bool meet = a != b && (edge_on(a, b) || edge_on(b, a));
     cad_at_fault = cad_at_fault || meet;
-    order.push_back({!meet, faces});
+    order.push_back({!meet, {a, b}, c});
   }
-  std::sort(order.begin(), order.end());
+  std::sort(order.begin(), order.end(), [](const Pair& x, const Pair& y) {
+    return std::tie(x.apart, x.faces) < std::tie(y.apart, y.faces);
+  });
   const auto meeting = static_cast<std::size_t>(
-      std::count_if(order.begin(), order.end(), [](const auto& o) { return !o.first; }));
+      std::count_if(order.begin(), order.end(), [](const Pair& o) { return !o.apart; }));
   std::ostringstream text;
   text.precision(6);
   std::size_t listed = 0;
-  for (const auto& [apart, faces] : order) {
+  for (const auto& [apart, faces, c] : order) {
     if (listed == kListed) {
       text << "; and " << order.size() - listed << " more pairs of faces";
       if (meeting > listed) text << ", " << meeting - listed << " of them meeting";
       break;
     }
     const auto [a, b] = faces;
-    const Crossing& c = pairs.at(faces);
     const Vec3 at =
         (centroid(nodes, triangles[c.first]) + centroid(nodes, triangles[c.second])) * 0.5;
     text << (listed ? "; " : "") << face_names[a];

@@ -44,6 +44,17 @@ std::vector<OverusedSide> find_overused_sides(const Surface& surface,
                                               const std::vector<std::vector<int>>& face_solids,
                                               const std::vector<std::vector<int>>& edge_faces);
 
+/// The places find_overused_sides() found, for the user: up to three, each its faces (by
+/// `face_names`) and a point ("Face810, Face876, Face1013 and Face1014 meet near (x, y, z)"),
+/// and how many more there are.
+std::string describe_overused_sides(const std::vector<Vec3>& nodes,
+                                    const std::vector<OverusedSide>& overused,
+                                    const std::vector<std::string>& face_names);
+
+/// How the mesher's errors on a broken shape end: where the user finds such faces.
+inline constexpr const char* kRepairTheShape =
+    ". Repair the shape (FreeCAD's Part > Check geometry, with its BOP check, lists such faces)";
+
 /// Per face of the shape, the solids (0-based) it bounds.
 std::vector<std::vector<int>> face_solids(const Shape& s);
 

@@ -87,9 +87,11 @@ class FaceGaps {
   }
   // Whether triangles at gaps `made` may replace triangles at gaps `replaced` (evaluated only
   // when one of `made` is beyond the deflection).
+  // Whether any bound applies (the deflection is finite).
+  bool bounded() const { return !std::isinf(deflection_); }
   template <class Made, class Replaced>
   bool keeps_close(Made made, Replaced replaced) const {
-    if (std::isinf(deflection_)) return true;  // unbounded
+    if (!bounded()) return true;
     const double worst = made();
     return worst <= deflection_ || worst <= replaced();
   }
@@ -472,7 +474,7 @@ void refine(const Shape& s, Surface& surface, double target, double deflection,
         for (int ti : around[n]) worst = std::max(worst, gaps.of(surface.nodes, tris[ti]));
         return worst;
       };
-      const double gap_before = worst_gap();
+      const double gap_before = gaps.bounded() ? worst_gap() : 0.0;
       // With local sizes, no side grows past the size wanted (unless it already was longer).
       const double longest_before = field ? std::max(longest_around(n), size_at(n)) : 0.0;
       // To the centroid, else half or a quarter of the way, put back on the surface: better
