@@ -510,9 +510,18 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
           "one lies on the other without being one of its edges), so no mesh can follow them. "
           "The surface's triangles cross at " +
           where + kRepairTheShape);
-    throw TetrahedralizeFailure("the surface's triangles at this size cross (" + where +
-                                "): the faces there come closer than their triangles' chord "
-                                "deflection, and a smaller size keeps them apart");
+    // Triangles of one face crossing each other: the repairs folded it (a cone's apex, needles
+    // along a half cone's seam), which another size may not; of two faces: they come closer
+    // than the chord deflection.
+    const bool folds = std::all_of(crossings.begin(), crossings.end(), [&](const Crossing& c) {
+      return surface.triangles[c.first].face == surface.triangles[c.second].face;
+    });
+    throw TetrahedralizeFailure(
+        "the surface's triangles at this size cross (" + where +
+        (folds ? "): the triangles of a face fold over each other at this size, which another "
+                 "size may not do"
+               : "): the faces there come closer than their triangles' chord deflection, and a "
+                 "smaller size keeps them apart"));
   }
   step("surface", 0.15);
 
