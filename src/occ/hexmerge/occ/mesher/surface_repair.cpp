@@ -317,6 +317,14 @@ void refine(const Shape& s, Surface& surface, double target, double deflection,
       const int p = a.node[c1], q = a.node[(c1 + 1) % 3], m = a.node[(c1 + 2) % 3];
       const int x = b.node[(c2 + 2) % 3];
       if (b.node[c2] != q || m == x) continue;
+      // No flip to a side that exists already: two more triangles on it, the surface no longer a
+      // manifold. Among nearly collinear nodes the 3D test can ask for one (gmsh_Kurbelwelle at
+      // h 0.57, needles along a half cone's seam): the sides split there came back, were split
+      // again onto the nodes already there until the face was given up, and TetGen got triangles
+      // of 177 degrees, the tets on them of scaled Jacobian 0.003.
+      if (const auto there = at_edge.find(pair_key(m, x));
+          there != at_edge.end() && !there->second.empty())
+        continue;
       // Off the plane the test can fail both ways: flip only to a strictly better pair.
       const double now = angle_at(m, p, q) + angle_at(x, q, p);
       if (now <= M_PI * (1 + 1e-9) || angle_at(p, x, m) + angle_at(q, m, x) >= now - 1e-9) continue;
