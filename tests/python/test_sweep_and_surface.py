@@ -215,7 +215,10 @@ def test_a_size_at_which_the_surface_crosses_itself_fails_fast_and_says_so(tmp_p
     # The repairs unbounded first joined nodes across the tube; bounded, they did not.
     assert report["meshing"]["bounded_surface_repairs"]
     volume = np.pi * (1.5875**2 - 1.0795**2) * 100
-    assert abs(tet_volume(tets) - volume) < 0.05 * volume  # chords of 45-degree strips
+    # Chords of 45-degree strips: octagons hold 0.900 of their circles' area, so 0.900 of the
+    # volume (383.2) where every node lies on a strip's edge; the bisection's nodes in between
+    # bring it nearer (389.2; 416.9 before it followed Rivara's longest-edge paths).
+    assert 0.895 * volume < tet_volume(tets) < volume
     with pytest.raises(ValueError, match="could not tetrahedralise") as failed:
         hexmerge.mesh_shape(tube, 40.0, recombine=False)
     message = str(failed.value)

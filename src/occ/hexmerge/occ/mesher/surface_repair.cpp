@@ -302,7 +302,8 @@ void refine(const Shape& s, Surface& surface, double target, double deflection,
   // faces (a cylinder is strips from cap to cap); the flips give them up.
   auto angle_at = [&](int v, int a, int b) { return mesher::angle_at(surface.nodes, v, a, b); };
   auto normal_of = [&](int a, int b, int c) { return mesher::normal_of(surface.nodes, a, b, c); };
-  auto restore_delaunay = [&](std::vector<std::uint64_t> stack) {
+  // (`keep_sizes`: after the refinement, no flip makes a side longer than the size wanted.)
+  auto restore_delaunay = [&](std::vector<std::uint64_t> stack, bool keep_sizes) {
     std::size_t flips = 0;
     while (!stack.empty() && flips < 10000) {
       const std::uint64_t key = stack.back();
@@ -317,6 +318,7 @@ void refine(const Shape& s, Surface& surface, double target, double deflection,
       const int p = a.node[c1], q = a.node[(c1 + 1) % 3], m = a.node[(c1 + 2) % 3];
       const int x = b.node[(c2 + 2) % 3];
       if (b.node[c2] != q || m == x) continue;
+      if (keep_sizes && length(m, x) > side_target(m, x)) continue;
       // No flip to a side that exists already: two more triangles on it, the surface no longer a
       // manifold. Among nearly collinear nodes the 3D test can ask for one (gmsh_Kurbelwelle at
       // h 0.57, needles along a half cone's seam): the sides split there came back, were split
@@ -391,9 +393,30 @@ void refine(const Shape& s, Surface& surface, double target, double deflection,
     return length(a, b) > wanted && !unsplittable.count(pair_key(a, b)) ? c : -1;
   };
   // Splits side c of triangle ti (in every triangle that has it), then restores the Delaunay
-  // property around the new node.
+  // property around the new node. Rivara's longest-edge propagation: the side is split only
+  // where it is also the longest side of the triangle across (or there is none of the face);
+  // else that triangle's longer side goes first, and so on along the path. Splitting a side that
+  // is not the longest of the triangle across made needles there, which the next splits made
+  // worse: gmsh_U_Joint_2 at h 0.96 (its 1M size), three half cylinders whose BRepMesh strips
+  // are 76 mm long got 19k sides under h / 8 and nodes 0.001 mm off their straight edges, four
+  // times the nodes their area needs (refine 7.5 s, the second collapse 7.1 s, then crossing
+  // triangles and the repairs again).
   auto split = [&](int ti, int c) {
-    restore_delaunay(split_side(tris[ti].node[c], tris[ti].node[(c + 1) % 3]));
+    int t = ti, side = c;
+    while (true) {
+      const std::uint64_t key = side_key(tris[t], side);
+      const auto it = at_edge.find(key);
+      if (it == at_edge.end() || it->second.size() != 2) break;
+      const int tj = it->second[0] == t ? it->second[1] : it->second[0];
+      if (tris[tj].face != tris[t].face) break;
+      const int cj = side_to_split(tj);
+      if (cj < 0 || side_key(tris[tj], cj) == key) break;
+      if (!(length(tris[tj].node[cj], tris[tj].node[(cj + 1) % 3]) >
+            length(tris[t].node[side], tris[t].node[(side + 1) % 3])))
+        break;
+      t = tj, side = cj;
+    }
+    restore_delaunay(split_side(tris[t].node[side], tris[t].node[(side + 1) % 3]), false);
   };
   // Per face: a face whose refinement adds more nodes than twenty times its area over the
   // target's square (plus 200) is not converging there (a distorted parametrisation, flips that
@@ -405,9 +428,10 @@ void refine(const Shape& s, Surface& surface, double target, double deflection,
     for (int n : t.node) face_target[t.face] = std::min(face_target[t.face], size_at(n));
   }
   std::vector<std::size_t> added(s.faces.Extent(), 0);
-  // With local sizes, passes until no side is longer than wanted: a flip after a split can
-  // make a side of a triangle passed before longer (a few of them, by under 1 %).
-  for (int pass = 0, splits = 1; splits > 0 && pass < (field ? 4 : 1); ++pass) {
+  // Passes until no side is longer than wanted: a flip after a split (or a split along the
+  // propagation path) can make a side of a triangle passed before longer (a few of them, by
+  // under 1 %).
+  for (int pass = 0, splits = 1; splits > 0 && pass < 4; ++pass) {
     splits = 0;
     for (int ti = 0; ti < static_cast<int>(tris.size()); ++ti)
       for (int c = -1; !given_up[tris[ti].face] && (c = side_to_split(ti)) >= 0; ++splits) {
@@ -483,8 +507,8 @@ void refine(const Shape& s, Surface& surface, double target, double deflection,
         return worst;
       };
       const double gap_before = gaps.bounded() ? worst_gap() : 0.0;
-      // With local sizes, no side grows past the size wanted (unless it already was longer).
-      const double longest_before = field ? std::max(longest_around(n), size_at(n)) : 0.0;
+      // No side grows past the size wanted (unless it already was longer).
+      const double longest_before = std::max(longest_around(n), size_at(n));
       // To the centroid, else half or a quarter of the way, put back on the surface: better
       // angles, no triangle turned more than 20 degrees from the reference, and no nearer than
       // h / 8 to a neighbour (unless it was already): nodes must not gather (TetGen drops points
@@ -499,7 +523,7 @@ void refine(const Shape& s, Surface& surface, double target, double deflection,
         surface.nodes[n] = of(analysis[face]->Value(uv));
         keep = smallest_angle(n) > before &&
                shortest_side(n) >= std::min(shortest, kNeedleNearest * size_at(n)) &&
-               (!field || longest_around(n) <= longest_before);
+               longest_around(n) <= longest_before;
         for (std::size_t k = 0; k < around[n].size() && keep; ++k) {
           const auto& v = tris[around[n][k]].node;
           keep = !turned_over(normal_of(v[0], v[1], v[2]), reference);
@@ -512,7 +536,7 @@ void refine(const Shape& s, Surface& surface, double target, double deflection,
     std::vector<std::uint64_t> all_sides;
     for (const SurfaceTriangle& t : tris)
       for (int c = 0; c < 3; ++c) all_sides.push_back(side_key(t, c));
-    restore_delaunay(all_sides);
+    restore_delaunay(all_sides, true);
   }
 }
 
