@@ -138,6 +138,18 @@ def test_nodes_of_faces_without_area_are_dropped_before_tetgen() -> None:
     assert check["valid"], check["problems"]
 
 
+def test_b_spline_strips_are_refined_to_the_size() -> None:
+    """gmsh_U_Joint_2 at h 3.696 (its 50k size): three B-spline strips 0.1 h wide with a side
+    collapsed to a point (Face79, Face80, Face83) were given up by the refinement, each after 100
+    new nodes stacked at the collapsed side: splits of sides that were not the longest side of
+    the triangle across left needles there. Bisected along longest-edge paths (Rivara), every
+    face is brought to the size."""
+    tets, report = hexmerge.mesh_shape(CAD / "gmsh_U_Joint_2.stp", 3.696, recombine=False)
+    meshing = report["meshing"]
+    assert meshing["failed_strategies"] == []
+    assert meshing["nb_unrefined_faces"] == 0
+
+
 def test_no_closing_pyramid_apex_on_a_face() -> None:
     """gmsh_SampleCrankshaft4A at h 4.61: an end face perpendicular to the lattice's z axis lies
     half a cell off the lattice planes, where the closing pyramids' apexes (cell centres) are; the
