@@ -99,8 +99,16 @@ struct Fuzzer {
   }
   double uniform(double a, double b) { return std::uniform_real_distribution<double>(a, b)(rng); }
 
+  // Whether vertex id v of a tet names a node (an earlier mutation may have put any id there).
+  static bool names_a_node(const TetMesh& mesh, index_t v) { return v < mesh.nb_vertices(); }
+
+  // The length of tet 0's first edge; NaN where there is none (no tet left, or an earlier
+  // mutation gave it a vertex id out of range: reading that node overran the points, run 15619
+  // of seed 20261203).
   double edge_scale(const TetMesh& mesh) {
+    if (mesh.nb_tets() == 0) return std::nan("");
     const index_t* q = mesh.tet(0);
+    if (!names_a_node(mesh, q[0]) || !names_a_node(mesh, q[1])) return std::nan("");
     double d = 0.0;
     for (int c = 0; c < 3; ++c) d += std::pow(mesh.point(q[1])[c] - mesh.point(q[0])[c], 2);
     return std::sqrt(d);
@@ -109,6 +117,7 @@ struct Fuzzer {
   void mutate(TetMesh& mesh) {
     const index_t nv = mesh.nb_vertices();
     const index_t nt = mesh.nb_tets();
+    if (nt == 0 || nv == 0) return;  // nothing left to pick from
     double h = edge_scale(mesh);
     if (!(std::isfinite(h) && h > 0.0)) h = 1.0;  // after a non-finite or coincident node
     switch (pick(13)) {
@@ -170,6 +179,7 @@ struct Fuzzer {
       case 8: {  // flatten a tet: its last vertex onto the plane of the other three (to round-off)
         const index_t t = pick(nt);
         const index_t* q = mesh.tet(t);
+        if (!std::all_of(q, q + 4, [&](index_t v) { return names_a_node(mesh, v); })) break;
         double p[3][3], *d = &mesh.points[3 * q[3]];
         for (int i = 0; i < 3; ++i)
           for (int c = 0; c < 3; ++c) p[i][c] = mesh.point(q[i])[c];
@@ -190,7 +200,8 @@ struct Fuzzer {
         const int nr = 1 + static_cast<int>(pick(3));
         const int axis = static_cast<int>(pick(3));
         for (index_t t = 0; t < mesh.nb_tets(); ++t) {
-          const double x = mesh.point(mesh.tet(t)[0])[axis];
+          const index_t v = mesh.tet(t)[0];
+          const double x = names_a_node(mesh, v) ? mesh.point(v)[axis] : NAN;
           const double slab = std::fmod(std::fabs(x / h), nr);  // NaN for a NaN node
           mesh.regions[t] = std::isfinite(slab) ? static_cast<std::int32_t>(slab) : 0;
         }
