@@ -102,11 +102,10 @@ struct Fuzzer {
   // Whether vertex id v of a tet names a node (an earlier mutation may have put any id there).
   static bool names_a_node(const TetMesh& mesh, index_t v) { return v < mesh.nb_vertices(); }
 
-  // The length of tet 0's first edge; NaN where there is none (no tet left, or an earlier
-  // mutation gave it a vertex id out of range: reading that node overran the points, run 15619
-  // of seed 20261203).
+  // The length of tet 0's first edge (mutate() calls it with a tet left); NaN where an earlier
+  // mutation gave that edge a vertex id out of range (reading that node overran the points, run
+  // 15619 of seed 20261203).
   double edge_scale(const TetMesh& mesh) {
-    if (mesh.nb_tets() == 0) return std::nan("");
     const index_t* q = mesh.tet(0);
     if (!names_a_node(mesh, q[0]) || !names_a_node(mesh, q[1])) return std::nan("");
     double d = 0.0;
