@@ -16,6 +16,7 @@ Usage (after building the module, see bench/README.md):
   ... mesher_hashes.py --compare /tmp/before.json
   ... mesher_hashes.py --cases cylinder-2.57,plate-6 --compare /tmp/before.json
   ... mesher_hashes.py --compare /tmp/before.json --ignore-new-keys   (a change adding report keys)
+  ... mesher_hashes.py --compare /tmp/before.json --option feature_size=0   (a new option off)
 """
 import argparse
 import hashlib
@@ -157,6 +158,9 @@ def main() -> int:
     ap.add_argument("--cases", help="comma-separated case names (default: all)")
     ap.add_argument("--cad", default="/work/shared/cad", help="folder of the STEP parts")
     ap.add_argument("--tetgen", default="tetgen")
+    ap.add_argument("--option", action="append", default=[], metavar="NAME=VALUE",
+                    help="a mesher option for every case (repeatable; a case's own wins), e.g. "
+                    "feature_size=0 to compare with a version before that option")
     ap.add_argument("--output", help="JSON file to write")
     ap.add_argument("--compare", metavar="JSON", help="an earlier output to compare with")
     ap.add_argument("--ignore-new-keys", action="store_true",
@@ -170,6 +174,13 @@ def main() -> int:
 
     from hexmerge import _core
 
+    common = {}
+    for text in args.option:
+        key, _, value = text.partition("=")
+        try:
+            common[key] = json.loads(value)  # numbers, true / false
+        except json.JSONDecodeError:
+            common[key] = value
     wanted = set(args.cases.split(",")) if args.cases else None
     cases = [c for c in CASES if wanted is None or c[0] in wanted]
     if wanted is not None and len(cases) != len(wanted):
@@ -186,7 +197,7 @@ def main() -> int:
             run_dir = os.path.join(work, "run")
             start = time.perf_counter()
             try:
-                given = dict(options, size=size, tetgen=args.tetgen, work_directory=run_dir)
+                given = dict(common, **options, size=size, tetgen=args.tetgen, work_directory=run_dir)
                 points, tets, regions, report = _core.mesh_shape(brep, option_texts(given))
             except ValueError as e:  # InputError: the failure's message is the fingerprint
                 sha = hashlib.sha1(("error: " + str(e).replace(run_dir, "<work>")).encode()).hexdigest()

@@ -18,7 +18,7 @@ import pytest
 import hexmerge
 from hexmerge import _core, cli
 from real_parts import tet_scaled_jacobians
-from test_mesh_shape import PLATE, SURFACES, assert_checked, boundary_nodes
+from test_mesh_shape import PLATE, SURFACES, assert_checked, boundary_nodes, gmsh_brep
 
 pytestmark = [
     pytest.mark.skipif(not hexmerge.WITH_OPENCASCADE or not hasattr(_core, "mesh_shape"),
@@ -267,3 +267,62 @@ def test_local_sizes_on_the_caps_edges_are_swept() -> None:
     assert_checked(mesh, tets, rep, H)
     assert rep["output_counts"]["tet"] == 0 and rep["output_counts"]["pyramid"] == 0
     assert rep["volume_fraction"]["hex"] >= 0.95
+
+
+# feature_size: the CAD's short edges get local sizes of their own. A box (40 x 30 x 20) with a
+# 0.4 mm cube cut from a corner (nine edges 0.4 long) and a groove of radius 0.45 across its top.
+NOTCHED_BOX_GEO = """SetFactory("OpenCASCADE");
+Box(1) = {0, 0, 0, 40, 30, 20};
+Box(2) = {39.6, 29.6, 19.6, 1, 1, 1};
+Cylinder(3) = {10, -1, 20, 0, 32, 0, 0.45};
+BooleanDifference{ Volume{1}; Delete; }{ Volume{2,3}; Delete; }
+"""
+
+
+def test_short_cad_edges_get_sizes_of_their_own(tmp_path) -> None:
+    """At h 4 the notch's nine 0.4 mm edges (0.1 h) get a local size of 0.4 (feature_size 0.1:
+    edges under 0.2 h): the surface and the inside grade out from them. Without (feature_size 0)
+    BRepMesh joins their ends to nodes 4 mm away: boundary triangles 5.7 mm long beside 0.4 mm
+    sides, tets down to 0.051 there (measured when feature_size was added); with them 0.73 mm
+    and 0.210."""
+    shape = gmsh_brep(tmp_path, "notched_box", NOTCHED_BOX_GEO)
+    h = 4.0
+
+    def at_notch(feature_size: float):
+        tets, report = hexmerge.mesh_shape(shape, h, recombine=False, feature_size=feature_size)
+        points = tets.points
+        cells = tets.cell_vertices.reshape(-1, 4).astype(np.int64)
+        near = (points[:, 0] > 39.5) & (points[:, 1] > 29.5) & (points[:, 2] > 19.5)
+        triangles = boundary_triangles(tets)
+        longest = longest_sides(points, triangles[near[triangles].any(axis=1)]).max()
+        quality = tet_scaled_jacobians(points, cells)[near[cells].any(axis=1)].min()
+        return report["meshing"], longest, quality
+
+    meshing, longest, quality = at_notch(0.1)
+    assert meshing["nb_feature_edges"] == 9
+    assert meshing["nb_graded_points"] > 0
+    assert longest < 2 * 0.4  # graded by half the distance from 0.4
+    assert quality >= 0.2
+    off, longest_off, quality_off = at_notch(0.0)
+    assert off["nb_feature_edges"] == 0 and off["nb_graded_points"] == 0
+    assert longest_off > h and quality_off < quality
+    # The recombination of the graded tets passes the checker.
+    mesh, report = hexmerge.mesh_shape(shape, h)
+    tets, _ = hexmerge.mesh_shape(shape, h, recombine=False)
+    assert_checked(mesh, tets, report, h)
+
+
+def test_no_lattice_point_beside_a_node_of_a_split_lattice_edge() -> None:
+    """A local size on the plate's Face1 and two edges splits the sides of the lattice faces'
+    edges near them off the lattice; a lattice point kept on such an edge 0.19 mm from the node
+    that split it gave boundary sides of 0.19 mm (local sizes 2 and 3) and tets of 0.040. Lattice
+    points on a lattice face are dropped near a surface node that is not at them: 0.625 mm."""
+    tets, _ = hexmerge.mesh_shape(PLATE, 6.0, recombine=False, feature_size=0.0,
+                                  local_sizes="Face1:3; Edge2,Edge3:2")
+    points = tets.points
+    triangles = boundary_triangles(tets)
+    sides = np.concatenate([np.linalg.norm(points[triangles[:, a]] - points[triangles[:, b]], axis=1)
+                            for a, b in ((0, 1), (1, 2), (2, 0))])
+    assert sides.min() > 0.25 * 2
+    cells = tets.cell_vertices.reshape(-1, 4)
+    assert tet_scaled_jacobians(points, cells).min() > 0.1

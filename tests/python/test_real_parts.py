@@ -246,3 +246,22 @@ def test_a_part_whose_faces_meet_off_their_edges_is_refused_by_name() -> None:
     message = str(refused.value)
     assert "Face793 and Face1016 near (" in message, message
     assert "(meeting there)" in message and "Part > Check geometry" in message, message
+
+
+def test_short_cad_edges_graded_on_a_crankshaft() -> None:
+    """gmsh_Kurbelwelle at its 50k size (h 1.15): its 13 CAD edges under 0.2 h get local sizes
+    of their own (feature_size 0.1): tets under 0.2 19 -> 5, the smallest 0.108 -> 0.154
+    (measured when feature_size was added)."""
+    import numpy as np
+
+    def quality(feature_size: float) -> tuple[int, float, dict]:
+        tets, report = hexmerge.mesh_shape(CAD / "gmsh_Kurbelwelle.stp", 1.1496355223176784,
+                                           recombine=False, feature_size=feature_size)
+        sj = tet_scaled_jacobians(tets.points, tets.cell_vertices.reshape(-1, 4).astype(np.int64))
+        return int((sj < SJ_FLOOR).sum()), float(sj.min()), report["meshing"]
+
+    bad, smallest, meshing = quality(0.1)
+    bad_off, smallest_off, off = quality(0.0)
+    assert meshing["nb_feature_edges"] > 0 and off["nb_feature_edges"] == 0
+    assert bad <= 10 and smallest > 0.13
+    assert bad < bad_off and smallest > smallest_off

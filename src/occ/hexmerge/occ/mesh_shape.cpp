@@ -264,9 +264,13 @@ TetMesh mesh_shape_impl(const std::string& brep, const MeshShapeParameters& para
   // 2. A size whose mesh would not fit in memory is refused before any work.
   SizeEstimate estimate =
       estimate_size(shape.shape, parameters.size, parameters.surface_deflection * parameters.size);
-  if (!local_sizes.empty()) {
+  // The sizes at short edges counted too (swept shapes, which go without them, overestimated).
+  std::vector<double> estimated_edge_size = local_items.edge_size;
+  if (!local_sizes.empty() ||
+      add_short_edge_sizes(shape.edge_length, parameters.size, parameters.feature_size,
+                           estimated_edge_size) > 0) {
     const double extra = estimate_local_tets(shape.faces, shape.edges, local_items.face_size,
-                                             local_items.edge_size, parameters.size, kLocalGrading);
+                                             estimated_edge_size, parameters.size, kLocalGrading);
     estimate.tets += extra;
     estimate.bytes += extra * kBytesPerTet;
   }
@@ -381,6 +385,14 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
   LocalSizeItems items_at_h = local_items;
   for (double& size : items_at_h.face_size) size = std::min(size, h);
   for (double& size : items_at_h.edge_size) size = std::min(size, h);
+  // The CAD's short edges get sizes of their own (feature_size), but for an extrusion that will
+  // be swept: its cross-section is repeated as it is.
+  const bool swept_as_found = parameters.sweep && strategy.lattice_faces &&
+                              find_sweep(shape, lattice.frame, lattice.face_plane,
+                                         lattice.lattice_face, lattice.cells, lattice.spacing, h);
+  if (!swept_as_found)
+    report.nb_feature_edges =
+        add_short_edge_sizes(shape.edge_length, h, parameters.feature_size, items_at_h.edge_size);
   // Face layers (none when this way places no layers): their faces are no lattice faces either.
   const std::vector<FaceLayers> layer_entries = parse_face_layers(parameters.face_layers);
   const std::vector<FaceLayerSpec> layer_specs =
@@ -467,9 +479,12 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
         "not swept, though an extrusion: its sweep failed with the local sizes and face layers "
         "applied (walls split to a local size, or made no lattice faces for layers)";
   std::vector<Crossing> crossings;
+  // The triangles checked: a lattice face's as its loops will be triangulated (facet_triangles).
+  std::vector<SurfaceTriangle> checked;
   if (sweep) {
     report.sweep_axis = sweep->axis;
-    crossings = find_crossings(surface.nodes, surface.triangles);
+    checked = surface.triangles;
+    crossings = find_crossings(surface.nodes, checked);
   } else {
     // The repairs, their triangles as far from their faces as they come; where they then cross
     // (faces far narrower than h: pyocc_11752's tubes, triangles joining nodes across them),
@@ -487,12 +502,14 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
     };
     const Surface triangulated = surface;
     repair(std::numeric_limits<double>::infinity());
-    crossings = find_crossings(surface.nodes, surface.triangles);
+    checked = facet_triangles(surface, lattice.frame, lattice.lattice_face, lattice.face_plane);
+    crossings = find_crossings(surface.nodes, checked);
     if (!crossings.empty()) {
       surface = triangulated;
       repair(deflection);
       report.bounded_surface_repairs = true;
-      crossings = find_crossings(surface.nodes, surface.triangles);
+      checked = facet_triangles(surface, lattice.frame, lattice.lattice_face, lattice.face_plane);
+      crossings = find_crossings(surface.nodes, checked);
     }
   }
   const int sweep_axis = report.sweep_axis;
@@ -502,8 +519,8 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
   // else this way fails (another size may not cross).
   if (!crossings.empty()) {
     bool cad_at_fault = false;
-    const std::string where = describe_crossings(shape, surface.nodes, surface.triangles, crossings,
-                                                 1e-4 * h, face_names, cad_at_fault);
+    const std::string where = describe_crossings(shape, surface.nodes, checked, crossings, 1e-4 * h,
+                                                 face_names, cad_at_fault);
     if (cad_at_fault)
       throw InputError(
           "mesh_shape: the shape is broken: faces meet where they share no edge (an edge of "
@@ -514,7 +531,7 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
     // along a half cone's seam), which another size may not; of two faces: they come closer
     // than the chord deflection.
     const bool folds = std::all_of(crossings.begin(), crossings.end(), [&](const Crossing& c) {
-      return surface.triangles[c.first].face == surface.triangles[c.second].face;
+      return checked[c.first].face == checked[c.second].face;
     });
     throw TetrahedralizeFailure(
         "the surface's triangles at this size cross (" + where +

@@ -75,6 +75,12 @@ struct MeshShapeParameters {
   /// Chord deflection of the surface triangulation on curved faces, as a fraction of h.
   /// In [0.001, 0.5].
   double surface_deflection = 0.02;
+  /// Sizes at the CAD's short edges, as a fraction of h: an edge shorter than twice this gets a
+  /// local size of its length, at least this (as `local_sizes` on it: the surface and the inside
+  /// graded out to h), so that its short segments do not meet nodes h away in needle
+  /// triangles and flat tets; 0: none. Not applied to swept shapes (their cross-section is
+  /// repeated as it is). In [0, 0.5].
+  double feature_size = 0.1;
   /// Lattice orientation: "auto" (normals of the largest planar faces, else principal axes of
   /// inertia), "principal" (principal axes of inertia), "global" (x, y, z).
   std::string frame = "auto";
@@ -232,6 +238,7 @@ struct MeshShapeReport {
   /// The local sizes (MeshShapeParameters::local_sizes) as applied, in their order
   std::vector<LocalSizeApplied> local_sizes;
   std::size_t nb_graded_points = 0;  ///< points of the finer lattices around local sizes
+  std::size_t nb_feature_edges = 0;  ///< short CAD edges given a size by `feature_size`
   /// The face layers (MeshShapeParameters::face_layers) as applied, in their order
   std::vector<FaceLayersApplied> face_layers;
   /// Why the shape was not swept where sweep is on (empty: swept, or not an extrusion)

@@ -2,9 +2,13 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
+#include <optional>
+#include <vector>
 
 #include "hexmerge/occ/mesher/lattice.h"
+#include "hexmerge/occ/mesher/surface_check.h"
 #include "hexmerge/occ/mesher/sweep.h"
 #include "mesher_fixtures.h"
 
@@ -96,6 +100,43 @@ TEST(add_face_points, into_the_loops_and_inside) {
   }
   EXPECT_TRUE(on_side);
   EXPECT_TRUE(inside);
+}
+
+// facet_triangles: a lattice face (z = 0, 4 x 4) whose loop bulges in to (2, 2.5), as a side on
+// a CAD edge split to a local size does, over placeholder triangles that then fold (the third
+// turned over, across the second): they cross; the triangles checked instead are the loop's
+// constrained Delaunay triangulation, which does not, and covers the face's area. A triangle of
+// another face is left as it is.
+TEST(facet_triangles, lattice_faces_by_their_loops) {
+  mesher::Surface surface;
+  surface.nodes = {{0, 0, 0}, {2, 2.5, 0}, {4, 0, 0}, {4, 4, 0}, {0, 4, 0}, {0, 0, -3}};
+  surface.triangles = {
+      {{0, 2, 3}, {}, 0}, {{0, 3, 4}, {}, 0}, {{0, 1, 2}, {}, 0}, {{0, 5, 2}, {}, 1}};
+  const std::vector<bool> lattice_face = {true, false};
+  const std::vector<std::optional<mesher::AxisPlane>> face_plane = {mesher::AxisPlane{2, 0.0},
+                                                                    std::nullopt};
+  const Vec3 global[3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  const mesher::Frame frame = mesher::make_frame(global[2], &global[0], global);
+  EXPECT_FALSE(mesher::find_crossings(surface.nodes, surface.triangles).empty());
+  const std::vector<mesher::SurfaceTriangle> checked =
+      mesher::facet_triangles(surface, frame, lattice_face, face_plane);
+  EXPECT_TRUE(mesher::find_crossings(surface.nodes, checked).empty());
+  double area = 0;
+  int others = 0;
+  for (const mesher::SurfaceTriangle& t : checked) {
+    if (t.face == 1) {
+      ++others;
+      EXPECT_EQ(t.node, (std::array<int, 3>{0, 5, 2}));
+      continue;
+    }
+    const Vec3 &a = surface.nodes[t.node[0]], &b = surface.nodes[t.node[1]],
+               &c = surface.nodes[t.node[2]];
+    const Vec3 normal = (b - a).cross(c - a);
+    EXPECT_GT(normal.z, 0);  // as the face's loop runs
+    area += 0.5 * normal.norm();
+  }
+  EXPECT_EQ(others, 1);
+  EXPECT_NEAR(area, 16 - 0.5 * 4 * 2.5, 1e-12);
 }
 
 }  // namespace

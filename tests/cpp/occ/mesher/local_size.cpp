@@ -3,7 +3,9 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <vector>
 
 #include "hexmerge/occ/mesher/surface_repair.h"
 #include "hexmerge/occ/mesher/sweep.h"
@@ -29,12 +31,45 @@ TEST(SizeField, grows_from_its_items_up_to_h) {
   EXPECT_DOUBLE_EQ(field.at(Vec3{5, 6, 1}), 0.5 + grading * (1 - slack));
   EXPECT_DOUBLE_EQ(field.at(Vec3{5, 5, 4}), 0.5 + grading * (1 - slack));  // beyond its end
   EXPECT_EQ(field.at(Vec3{-9, -9, -9}), h);
-  // The graded box holds every point below h.
-  Vec3 lo, hi;
-  field.graded_box(lo, hi);
-  const double reach = (h - 0.5) / grading + slack;
-  EXPECT_DOUBLE_EQ(lo.x, -reach);
-  EXPECT_DOUBLE_EQ(hi.z, 3 + reach);
+  // The boxes below a size hold every point where the field is below it: the items finer than
+  // the size, grown by what the field grows up to it.
+  const std::vector<std::array<Vec3, 2>> below_2 = field.boxes_below(2.0);
+  ASSERT_EQ(below_2.size(), 2u);
+  EXPECT_DOUBLE_EQ(below_2[0][0].x, -((2.0 - 1.0) / grading + slack));
+  EXPECT_DOUBLE_EQ(below_2[1][1].z, 3 + (2.0 - 0.5) / grading + slack);
+  ASSERT_EQ(field.boxes_below(1.0).size(), 1u);  // the segment only
+  EXPECT_TRUE(field.boxes_below(0.5).empty());
+  for (double x = -6; x <= 10; x += 0.25)
+    for (double z = -6; z <= 10; z += 0.25) {
+      const Vec3 p{x, 0.5 * x, z};
+      bool inside = false;
+      for (const std::array<Vec3, 2>& box : below_2)
+        inside = inside || (p.x >= box[0].x && p.y >= box[0].y && p.z >= box[0].z &&
+                            p.x <= box[1].x && p.y <= box[1].y && p.z <= box[1].z);
+      if (!inside) EXPECT_GE(field.at(p), 2.0) << p.x << " " << p.y << " " << p.z;
+    }
+}
+
+// feature_size: an edge shorter than 2 fraction h gets its length, at least fraction h, unless
+// it has a finer size already; degenerated edges (length 0) and longer ones get none.
+TEST(add_short_edge_sizes, sizes_the_short_edges_only) {
+  const double h = 10, fraction = 0.1;
+  const std::vector<double> length = {0.0, 0.5, 1.5, 1.99, 2.0, 30.0, 0.3};
+  std::vector<double> size = {h, h, h, h, h, h, 0.2};
+  EXPECT_EQ(mesher::add_short_edge_sizes(length, h, fraction, size), 3u);
+  EXPECT_EQ(size, (std::vector<double>{h, 1.0, 1.5, 1.99, h, h, 0.2}));
+  std::vector<double> none = {h, h, h, h, h, h, h};
+  EXPECT_EQ(mesher::add_short_edge_sizes(length, h, 0.0, none), 0u);  // 0: off
+  EXPECT_EQ(none, std::vector<double>(7, h));
+  // On the plate with a hole every edge is longer than 2 fraction h at h 5.
+  const Prepared p = prepare(occ_plate_with_hole(), 5.0);
+  ASSERT_EQ(p.shape.edge_length.size(), static_cast<std::size_t>(p.shape.edges.Extent()));
+  double total = 0;
+  for (const double l : p.shape.edge_length) total += l;
+  std::vector<double> plate(p.shape.edge_length.size(), 5.0);
+  EXPECT_EQ(mesher::add_short_edge_sizes(p.shape.edge_length, 5.0, fraction, plate), 0u);
+  // Its lengths: the box's 12 edges (4 x 60, 4 x 40, 4 x 10), the hole's two circles and seam.
+  EXPECT_NEAR(total, 450 + 32 * M_PI, 1e-6);
 }
 
 // The hole's wall (face of radius 8 about (30, 20)) at a local size: refine() brings its sides to

@@ -8,6 +8,7 @@
 #include <utility>
 
 #include "hexmerge/occ/mesher/common.h"
+#include "hexmerge/tetgen/triangulate_facets.h"
 
 namespace hexmerge::mesher {
 
@@ -42,9 +43,11 @@ std::vector<Facet> make_facets(const Surface& surface, const std::vector<Vec3>& 
       continue;
     }
     const int axis = face_plane[face]->axis, u = (axis + 1) % 3, v = (axis + 2) % 3;
-    const SurfaceTriangle* t0 = triangles.front();
-    const Vec3 normal =
-        (nodes[t0->node[1]] - nodes[t0->node[0]]).cross(nodes[t0->node[2]] - nodes[t0->node[0]]);
+    // The face's side from all its triangles (one folded over, its sign turned, weighs less).
+    Vec3 normal{0, 0, 0};
+    for (const SurfaceTriangle* t : triangles)
+      normal = normal +
+               (nodes[t->node[1]] - nodes[t->node[0]]).cross(nodes[t->node[2]] - nodes[t->node[0]]);
     const double side = coord(normal, axis) > 0 ? 1 : -1;
     Facet facet{{}, {}, face + 1};
     while (!next.empty()) {
@@ -74,6 +77,32 @@ std::vector<Facet> make_facets(const Surface& surface, const std::vector<Vec3>& 
     facets.push_back(std::move(facet));
   }
   return facets;
+}
+
+std::vector<SurfaceTriangle> facet_triangles(
+    const Surface& surface, const Frame& frame, const std::vector<bool>& lattice_face,
+    const std::vector<std::optional<AxisPlane>>& face_plane) {
+  if (std::none_of(surface.triangles.begin(), surface.triangles.end(),
+                   [&](const SurfaceTriangle& t) { return lattice_face[t.face]; }))
+    return surface.triangles;
+  std::vector<Vec3> nodes(surface.nodes.size());
+  for (std::size_t i = 0; i < nodes.size(); ++i) nodes[i] = frame.to_frame(surface.nodes[i]);
+  std::vector<Facet> facets = make_facets(surface, nodes, lattice_face, face_plane);
+  tetgen::triangulate_facets(facets, nodes, nullptr);
+  std::vector<SurfaceTriangle> out;
+  std::vector<char> as_given(lattice_face.size(), 0);
+  for (const Facet& facet : facets) {
+    if (facet.polygons.size() == 1 && facet.polygons[0].size() == 3)
+      out.push_back(
+          SurfaceTriangle{{facet.polygons[0][0], facet.polygons[0][1], facet.polygons[0][2]},
+                          {},
+                          facet.marker - 1});
+    else
+      as_given[static_cast<std::size_t>(facet.marker - 1)] = 1;  // left as it is
+  }
+  for (const SurfaceTriangle& t : surface.triangles)
+    if (as_given[static_cast<std::size_t>(t.face)]) out.push_back(t);
+  return out;
 }
 
 // Puts the lattice points lying on lattice faces, points[first..], into the facets of those

@@ -205,6 +205,7 @@ KeptPoints keep_lattice_points(const Lattice& lattice, const Surroundings& aroun
   std::vector<int>& kept_face = out.face;
   kept.assign(static_cast<std::size_t>(n0) * n1 * n2, 0);
   kept_face.assign(kept.size(), -1);
+  const double same = 1e-6 * std::min({lattice.spacing[0], lattice.spacing[1], lattice.spacing[2]});
   for (int k = 0; k < n2; ++k)
     for (int j = 0; j < n1; ++j) {
       const std::vector<double> xs =
@@ -216,6 +217,11 @@ KeptPoints keep_lattice_points(const Lattice& lattice, const Surroundings& aroun
         if (face < 0 && !Parity::inside_given(xs, q.x)) continue;
         if (around.curved.any_within(q, keep_distance)) continue;
         if (around.layer_points.any_within(q, margin)) continue;
+        // On a lattice face, a surface node near it but not at it (a side of a lattice edge
+        // split to a local size) would leave a sliver of a side between the two.
+        if (face >= 0 && around.surface_points.any_within(q, margin) &&
+            !around.surface_points.any_within(q, same))
+          continue;
         kept[point_index(i, j, k)] = 1;
         kept_face[point_index(i, j, k)] = face;
       }

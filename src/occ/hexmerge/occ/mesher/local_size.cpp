@@ -25,6 +25,8 @@ double squared_distance_to_segment(const Vec3& p, const Vec3& a, const Vec3& b) 
 // Levels of finer lattices at most (spacing h / 2^10): a local size below h / 1024 is refused
 // before (mesh_shape's validation), so this is never reached for a valid one.
 constexpr int kMaxLevels = 10;
+// The finer lattices are scanned in blocks of kBlock^3 points near the items.
+constexpr long kBlock = 8;
 // The smallest local size, as a fraction of h (finer lattices down to h / 1024).
 constexpr double kSmallestLocalSize = 1e-3;
 
@@ -109,6 +111,21 @@ LocalSizeItems local_size_items(const std::vector<LocalSize>& sizes, const ItemN
   return items;
 }
 
+std::size_t add_short_edge_sizes(const std::vector<double>& edge_length, double h, double fraction,
+                                 std::vector<double>& edge_size) {
+  std::size_t added = 0;
+  for (std::size_t e = 0; e < edge_length.size(); ++e) {
+    const double length = edge_length[e];
+    if (length <= 0 || length >= 2 * fraction * h) continue;
+    const double size = std::max(length, fraction * h);
+    if (size < edge_size[e]) {
+      edge_size[e] = size;
+      ++added;
+    }
+  }
+  return added;
+}
+
 std::vector<LocalSizeApplied> local_sizes_applied(const std::vector<LocalSize>& sizes,
                                                   const ItemNumbering& faces,
                                                   const ItemNumbering& edges,
@@ -166,10 +183,15 @@ double SizeField::at(const Vec3& p) const {
   return best;
 }
 
-void SizeField::graded_box(Vec3& lo, Vec3& hi) const {
-  const double reach = (h_ - smallest_) / grading_ + slack_;
-  lo = items_lo_ - Vec3{reach, reach, reach};
-  hi = items_hi_ + Vec3{reach, reach, reach};
+std::vector<std::array<Vec3, 2>> SizeField::boxes_below(double size) const {
+  std::vector<std::array<Vec3, 2>> boxes;
+  for (const Item& it : items_) {
+    if (it.size >= size) continue;
+    const double reach = (size - it.size) / grading_ + slack_;
+    const Vec3 r{reach, reach, reach};
+    boxes.push_back({vmin(it.a, vmin(it.b, it.c)) - r, vmax(it.a, vmax(it.b, it.c)) + r});
+  }
+  return boxes;
 }
 
 std::string sweep_carries(const std::vector<LocalSize>& sizes, const ItemNumbering& edges,
@@ -257,18 +279,6 @@ std::size_t place_graded_points(const SizeField& field, const Lattice& lattice,
                                 const Parity& parity, const Surroundings& around, double clearance,
                                 InsertedPoints& inserted) {
   if (field.empty()) return 0;
-  // The graded zone's box in frame coordinates (its world box's corners), within the lattice's.
-  Vec3 wlo, whi;
-  field.graded_box(wlo, whi);
-  Vec3 lo{std::numeric_limits<double>::max(), std::numeric_limits<double>::max(),
-          std::numeric_limits<double>::max()};
-  Vec3 hi = lo * -1.0;
-  for (int corner = 0; corner < 8; ++corner) {
-    const Vec3 w{corner & 1 ? whi.x : wlo.x, corner & 2 ? whi.y : wlo.y,
-                 corner & 4 ? whi.z : wlo.z};
-    const Vec3 q = lattice.frame.to_frame(w);
-    lo = vmin(lo, q), hi = vmax(hi, q);
-  }
   const double h = field.h();
   const int levels =
       std::min(kMaxLevels, static_cast<int>(std::ceil(std::log2(h / field.smallest() - 1e-9))));
@@ -276,41 +286,85 @@ std::size_t place_graded_points(const SizeField& field, const Lattice& lattice,
   PointSet graded(around.box_lo, around.box_hi, h);
   for (int level = 1; level <= levels; ++level) {
     const long scale = 1L << level;
-    long first[3], last[3];
-    for (int a = 0; a < 3; ++a) {
-      const double s = lattice.spacing[a] / static_cast<double>(scale);
-      first[a] = std::max(0L, static_cast<long>(std::floor(coord(lo, a) / s)));
-      last[a] = std::min(static_cast<long>(lattice.cells[a]) * scale,
-                         static_cast<long>(std::ceil(coord(hi, a) / s)));
-    }
     // The size below which a point of this level is wanted: the spacing of the level before.
     const double wanted_below = h / static_cast<double>(scale / 2);
-    for (long k = first[2]; k <= last[2]; ++k)
-      for (long j = first[1]; j <= last[1]; ++j)
-        for (long i = first[0]; i <= last[0]; ++i) {
-          if (i % 2 == 0 && j % 2 == 0 && k % 2 == 0) continue;  // a coarser level's point
-          const long ijk[3] = {i, j, k};
-          Vec3 q{};
-          for (int a = 0; a < 3; ++a)
-            set_coord(q, a, ijk[a] * lattice.spacing[a] / static_cast<double>(scale));
-          const double size = field.at(lattice.frame.to_world(q));
-          if (size >= wanted_below) continue;
-          const double room = clearance * size;
-          // On a lattice plane, it may lie in a lattice face: then it is one of its points.
-          int index[3] = {-1, -1, -1};
-          for (int a = 0; a < 3; ++a)
-            if (ijk[a] % scale == 0) index[a] = static_cast<int>(ijk[a] / scale);
-          const int face = around.on_lattice_face(q, index);
-          if (face < 0 && (!parity.inside(q) || around.every_face.any_within(q, room))) continue;
-          if (around.curved.any_within(q, room) || around.surface_points.any_within(q, room) ||
-              around.layer_points.any_within(q, room) || around.core_points.any_within(q, room) ||
-              around.core_balls.holds(q, 0.05 * size) || graded.any_within(q, 0.5 * room))
-            continue;
-          graded.add(q);
-          inserted.points.push_back(q);
-          inserted.face.push_back(face);
-          ++placed;
+    // Only the level's points near the items finer than that can be wanted: the blocks of
+    // kBlock^3 points that their boxes touch, scanned in the order of a scan of the whole box
+    // (z, then y, then x), since each point placed keeps later ones away.
+    const double spacing[3] = {lattice.spacing[0] / static_cast<double>(scale),
+                               lattice.spacing[1] / static_cast<double>(scale),
+                               lattice.spacing[2] / static_cast<double>(scale)};
+    long last[3];
+    for (int a = 0; a < 3; ++a) last[a] = static_cast<long>(lattice.cells[a]) * scale;
+    std::vector<std::array<long, 3>> blocks;  // (z, y, x) block indices
+    for (const std::array<Vec3, 2>& box : field.boxes_below(wanted_below)) {
+      Vec3 lo{std::numeric_limits<double>::max(), std::numeric_limits<double>::max(),
+              std::numeric_limits<double>::max()};
+      Vec3 hi = lo * -1.0;
+      for (int corner = 0; corner < 8; ++corner) {
+        const Vec3 q = lattice.frame.to_frame({corner & 1 ? box[1].x : box[0].x,
+                                               corner & 2 ? box[1].y : box[0].y,
+                                               corner & 4 ? box[1].z : box[0].z});
+        lo = vmin(lo, q), hi = vmax(hi, q);
+      }
+      long from[3], to[3];
+      for (int a = 0; a < 3; ++a) {
+        from[a] = std::max(0L, static_cast<long>(std::floor(coord(lo, a) / spacing[a])));
+        to[a] = std::min(last[a], static_cast<long>(std::ceil(coord(hi, a) / spacing[a])));
+      }
+      if (from[0] > to[0] || from[1] > to[1] || from[2] > to[2]) continue;
+      for (long kb = from[2] / kBlock; kb <= to[2] / kBlock; ++kb)
+        for (long jb = from[1] / kBlock; jb <= to[1] / kBlock; ++jb)
+          for (long ib = from[0] / kBlock; ib <= to[0] / kBlock; ++ib)
+            blocks.push_back({kb, jb, ib});
+    }
+    std::sort(blocks.begin(), blocks.end());
+    blocks.erase(std::unique(blocks.begin(), blocks.end()), blocks.end());
+    const auto visit = [&](long i, long j, long k) {
+      if (i % 2 == 0 && j % 2 == 0 && k % 2 == 0) return;  // a coarser level's point
+      const long ijk[3] = {i, j, k};
+      Vec3 q{};
+      for (int a = 0; a < 3; ++a)
+        set_coord(q, a,
+                  static_cast<double>(ijk[a]) * lattice.spacing[a] / static_cast<double>(scale));
+      const double size = field.at(lattice.frame.to_world(q));
+      if (size >= wanted_below) return;
+      const double room = clearance * size;
+      // On a lattice plane, it may lie in a lattice face: then it is one of its points.
+      int index[3] = {-1, -1, -1};
+      for (int a = 0; a < 3; ++a)
+        if (ijk[a] % scale == 0) index[a] = static_cast<int>(ijk[a] / scale);
+      const int face = around.on_lattice_face(q, index);
+      if (face < 0 && (!parity.inside(q) || around.every_face.any_within(q, room))) return;
+      if (around.curved.any_within(q, room) || around.surface_points.any_within(q, room) ||
+          around.layer_points.any_within(q, room) || around.core_points.any_within(q, room) ||
+          around.core_balls.holds(q, 0.05 * size) || graded.any_within(q, 0.5 * room))
+        return;
+      graded.add(q);
+      inserted.points.push_back(q);
+      inserted.face.push_back(face);
+      ++placed;
+    };
+    // Per block layer (same z block), per point layer k; per block row (same y block) in it,
+    // per point row j; the row's blocks in x order.
+    for (std::size_t layer = 0; layer < blocks.size();) {
+      std::size_t layer_end = layer;
+      while (layer_end < blocks.size() && blocks[layer_end][0] == blocks[layer][0]) ++layer_end;
+      const long kb = blocks[layer][0];
+      for (long k = kb * kBlock; k < (kb + 1) * kBlock && k <= last[2]; ++k)
+        for (std::size_t row = layer; row < layer_end;) {
+          std::size_t row_end = row;
+          while (row_end < layer_end && blocks[row_end][1] == blocks[row][1]) ++row_end;
+          const long jb = blocks[row][1];
+          for (long j = jb * kBlock; j < (jb + 1) * kBlock && j <= last[1]; ++j)
+            for (std::size_t b = row; b < row_end; ++b)
+              for (long i = blocks[b][2] * kBlock; i < (blocks[b][2] + 1) * kBlock && i <= last[0];
+                   ++i)
+                visit(i, j, k);
+          row = row_end;
         }
+      layer = layer_end;
+    }
   }
   return placed;
 }

@@ -39,8 +39,9 @@ class SizeField {
   double h() const { return h_; }
   /// The smallest size of an item (h when none).
   double smallest() const { return smallest_; }
-  /// The box where the field is below h: the items' box grown by (h - smallest) / grading.
-  void graded_box(Vec3& lo, Vec3& hi) const;
+  /// Boxes (lo, hi) outside which the field is at least `size`: per item finer than `size`,
+  /// its box grown by (size - its size) / grading plus the slack.
+  std::vector<std::array<Vec3, 2>> boxes_below(double size) const;
 
  private:
   struct Item {
@@ -83,6 +84,15 @@ struct ItemNumbering {
 ///         larger than h or smaller than h / 1000
 LocalSizeItems local_size_items(const std::vector<LocalSize>& sizes, const ItemNumbering& faces,
                                 const ItemNumbering& edges, double h);
+
+/// Sizes at the CAD's short edges (MeshShapeParameters::feature_size): every edge shorter than
+/// 2 `fraction` h gets a local size of its length, at least `fraction` h, where `edge_size` has
+/// none finer. Degenerated edges (length 0) get none.
+/// @param[in]     edge_length  per edge, its length (0: degenerated)
+/// @param[in,out] edge_size    per edge, its local size (h: none)
+/// @return the edges given a size
+std::size_t add_short_edge_sizes(const std::vector<double>& edge_length, double h, double fraction,
+                                 std::vector<double>& edge_size);
 
 /// What the local sizes gave: per entry, the surface's triangles on its faces and segments on its
 /// edges, and their longest side (the entries' numbers as given).

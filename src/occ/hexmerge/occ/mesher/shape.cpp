@@ -84,6 +84,14 @@ Shape load_shape(const std::string& brep, double glue_tolerance, GlueSolidsRepor
     }
   }
   s.edge_faces.resize(static_cast<std::size_t>(s.edges.Extent()));
+  s.edge_length.assign(static_cast<std::size_t>(s.edges.Extent()), 0.0);
+  for (int e = 1; e <= s.edges.Extent(); ++e) {
+    const TopoDS_Edge& edge = TopoDS::Edge(s.edges(e));
+    if (BRep_Tool::Degenerated(edge)) continue;
+    GProp_GProps length;
+    BRepGProp::LinearProperties(edge, length);
+    s.edge_length[static_cast<std::size_t>(e - 1)] = length.Mass();
+  }
   TopTools_IndexedDataMapOfShapeListOfShape edge_faces;
   TopExp::MapShapesAndAncestors(s.shape, TopAbs_EDGE, TopAbs_FACE, edge_faces);
   for (int e = 1; e <= edge_faces.Extent(); ++e) {

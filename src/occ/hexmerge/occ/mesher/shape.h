@@ -25,6 +25,7 @@ struct Shape {
   TopTools_IndexedMapOfShape solids, faces, edges;
   std::vector<int> face_solid_count;         ///< per face, the solids it bounds (2: shared by two)
   std::vector<std::vector<int>> edge_faces;  ///< per edge, the faces it bounds
+  std::vector<double> edge_length;           ///< per edge, its length (0: degenerated, a pole)
   double diagonal = 0;                       ///< the diagonal of the shape's bounding box
 };
 
