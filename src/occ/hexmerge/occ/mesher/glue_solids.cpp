@@ -62,7 +62,9 @@ TopoDS_Shape glue_solids(const TopoDS_Shape& shape, double tolerance, GlueSolids
   fuse.SetArguments(arguments);
   fuse.SetNonDestructive(true);  // the caller's shape stays as it is
   fuse.SetFuzzyValue(tolerance);
-  fuse.SetRunParallel(false);
+  // OpenCASCADE's own threads (its results do not depend on them): gmsh_as1-tu-203's 18 solids
+  // in 1.8 s instead of 2.8 on two cores (the same tets). Oriented boxes (SetUseOBB) were slower.
+  fuse.SetRunParallel(true);
   try {
     fuse.Build();
   } catch (const Standard_Failure& e) {
