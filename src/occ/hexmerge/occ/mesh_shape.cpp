@@ -363,10 +363,9 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
   // merged): the solid touches itself there, which TetGen cannot mesh either. Checked on
   // BRepMesh's triangles (before the repairs, which take minutes on such a shape's 825k
   // triangles) and on the surface that goes to TetGen.
-  const std::vector<std::vector<int>> solids_of_face = face_solids(shape);
   const auto refuse_touching_itself = [&] {
     const std::vector<OverusedSide> overused =
-        find_overused_sides(surface, solids_of_face, shape.edge_faces);
+        find_overused_sides(surface, shape.face_solids, shape.edge_faces);
     if (!overused.empty())
       throw InputError(
           "mesh_shape: the shape is broken: its surface touches itself along a curve, where two "

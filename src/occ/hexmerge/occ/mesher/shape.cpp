@@ -61,13 +61,16 @@ Shape load_shape(const std::string& brep, double glue_tolerance, GlueSolidsRepor
   if (!box.IsVoid()) s.diagonal = std::sqrt(box.SquareExtent());
   TopExp::MapShapes(s.shape, TopAbs_FACE, s.faces);
   TopExp::MapShapes(s.shape, TopAbs_EDGE, s.edges);
+  s.face_solids.assign(static_cast<std::size_t>(s.faces.Extent()), {});
   s.face_solid_count.assign(static_cast<std::size_t>(s.faces.Extent()), 0);
   for (int i = 1; i <= s.solids.Extent(); ++i) {
     TopTools_IndexedMapOfShape solid_faces;
     TopExp::MapShapes(s.solids(i), TopAbs_FACE, solid_faces);
     for (int f = 1; f <= solid_faces.Extent(); ++f) {
       const int index = s.faces.FindIndex(solid_faces(f));
-      if (index > 0) ++s.face_solid_count[index - 1];
+      if (index <= 0) continue;
+      s.face_solids[static_cast<std::size_t>(index - 1)].push_back(i - 1);
+      ++s.face_solid_count[static_cast<std::size_t>(index - 1)];
     }
     // A closed shell: every edge of the solid bounds two faces, or one face twice (a seam).
     TopTools_IndexedDataMapOfShapeListOfShape edge_faces;

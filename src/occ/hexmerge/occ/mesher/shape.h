@@ -23,10 +23,11 @@ namespace hexmerge::mesher {
 struct Shape {
   TopoDS_Shape shape;
   TopTools_IndexedMapOfShape solids, faces, edges;
-  std::vector<int> face_solid_count;         ///< per face, the solids it bounds (2: shared by two)
-  std::vector<std::vector<int>> edge_faces;  ///< per edge, the faces it bounds
-  std::vector<double> edge_length;           ///< per edge, its length (0: degenerated, a pole)
-  double diagonal = 0;                       ///< the diagonal of the shape's bounding box
+  std::vector<std::vector<int>> face_solids;  ///< per face, the solids it bounds (0-based)
+  std::vector<int> face_solid_count;          ///< per face, how many (2: shared by two)
+  std::vector<std::vector<int>> edge_faces;   ///< per edge, the faces it bounds
+  std::vector<double> edge_length;            ///< per edge, its length (0: degenerated, a pole)
+  double diagonal = 0;                        ///< the diagonal of the shape's bounding box
 };
 
 /// The shape in BREP text, its solids glued where they touch (glue_solids(), within

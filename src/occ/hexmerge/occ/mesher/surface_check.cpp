@@ -195,16 +195,6 @@ std::string describe_overused_sides(const std::vector<Vec3>& nodes,
   return text.str();
 }
 
-std::vector<std::vector<int>> face_solids(const Shape& s) {
-  std::vector<std::vector<int>> out(static_cast<std::size_t>(s.faces.Extent()));
-  for (int i = 1; i <= s.solids.Extent(); ++i)
-    for (TopExp_Explorer ex(s.solids(i), TopAbs_FACE); ex.More(); ex.Next()) {
-      std::vector<int>& solids = out[static_cast<std::size_t>(s.faces.FindIndex(ex.Current()) - 1)];
-      if (std::find(solids.begin(), solids.end(), i - 1) == solids.end()) solids.push_back(i - 1);
-    }
-  return out;
-}
-
 std::string describe_crossings(const Shape& s, const std::vector<Vec3>& nodes,
                                const std::vector<SurfaceTriangle>& triangles,
                                const std::vector<Crossing>& crossings, double tolerance,

@@ -55,9 +55,6 @@ std::string describe_overused_sides(const std::vector<Vec3>& nodes,
 inline constexpr const char* kRepairTheShape =
     ". Repair the shape (FreeCAD's Part > Check geometry, with its BOP check, lists such faces)";
 
-/// Per face of the shape, the solids (0-based) it bounds.
-std::vector<std::vector<int>> face_solids(const Shape& s);
-
 /// What the crossings say, for the user: per pair of faces whose triangles cross (up to three,
 /// those whose CAD faces meet first), the faces (by `face_names`) and a point, and whether the
 /// CAD's own faces meet: an
