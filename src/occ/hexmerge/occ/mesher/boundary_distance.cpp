@@ -5,6 +5,8 @@
 #include <TopoDS.hxx>
 #include <TopoDS_Face.hxx>
 #include <algorithm>
+#include <gp_Pnt2d.hxx>
+#include <limits>
 #include <memory>
 #include <string>
 
@@ -26,6 +28,8 @@ double max_boundary_distance(const Shape& shape, const TetMesh& mesh,
         for (int k = 0; k < 4; ++k)
           if (k != f) boundary[mesh.tet(t)[k]] = 1;
   std::vector<std::unique_ptr<ShapeAnalysis_Surface>> analysis(shape.faces.Extent());
+  std::vector<gp_Pnt2d> last(analysis.size());
+  std::vector<char> has_last(analysis.size(), 0);
   double worst = 0;
   for (std::size_t v = 0; v < made; ++v) {
     if (!boundary[v]) continue;
@@ -40,9 +44,21 @@ double max_boundary_distance(const Shape& shape, const TetMesh& mesh,
       const TopoDS_Face& f = TopoDS::Face(shape.faces(face + 1));
       analysis[face] = std::make_unique<ShapeAnalysis_Surface>(BRep_Tool::Surface(f));
     }
-    // BRep_Tool::Surface(face) is the face's surface with its location applied.
-    analysis[face]->ValueOfUV(p, tolerance);
-    worst = std::max(worst, analysis[face]->Gap());
+    // BRep_Tool::Surface(face) is the face's surface with its location applied. Newton's
+    // method from the face's last node first: a point it finds within `tolerance` shows the
+    // node on the face; else the global search (Extrema's grid, which took most of the time:
+    // gmsh_917_fusee at its 50k size 1.39 -> 0.61 s), the nearer of the two taken.
+    double gap = std::numeric_limits<double>::max();
+    if (has_last[face]) {
+      last[face] = analysis[face]->NextValueOfUV(last[face], p, tolerance, -1.0);
+      gap = analysis[face]->Gap();
+    }
+    if (gap > tolerance) {
+      last[face] = analysis[face]->ValueOfUV(p, tolerance);
+      gap = std::min(gap, analysis[face]->Gap());
+      has_last[face] = 1;
+    }
+    worst = std::max(worst, gap);
   }
   return worst;
 }
