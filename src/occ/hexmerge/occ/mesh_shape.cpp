@@ -384,12 +384,15 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
   LocalSizeItems items_at_h = local_items;
   for (double& size : items_at_h.face_size) size = std::min(size, h);
   for (double& size : items_at_h.edge_size) size = std::min(size, h);
-  // The CAD's short edges get sizes of their own (feature_size), but for an extrusion that will
-  // be swept: its cross-section is repeated as it is.
-  const bool swept_as_found = parameters.sweep && strategy.lattice_faces &&
-                              find_sweep(shape, lattice.frame, lattice.face_plane,
-                                         lattice.lattice_face, lattice.cells, lattice.spacing, h);
-  if (!swept_as_found)
+  // The sweep of the shape as found (its lattice faces before local sizes and face layers take
+  // some away). The CAD's short edges get sizes of their own (feature_size), but for an
+  // extrusion that will be swept: its cross-section is repeated as it is.
+  const std::optional<Sweep> sweep_as_found =
+      parameters.sweep && strategy.lattice_faces
+          ? find_sweep(shape, lattice.frame, lattice.face_plane, lattice.lattice_face,
+                       lattice.cells, lattice.spacing, h)
+          : std::nullopt;
+  if (!sweep_as_found)
     report.nb_feature_edges =
         add_short_edge_sizes(shape.edge_length, h, parameters.feature_size, items_at_h.edge_size);
   // Face layers (none when this way places no layers): their faces are no lattice faces either.
@@ -424,16 +427,12 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
   std::optional<Sweep> sweep;
   std::vector<double> wall_size;  // swept with local sizes on its caps' edges: per wall
   bool carried = false;           // an extrusion whose local sizes and face layers the sweep takes
-  if (parameters.sweep && strategy.lattice_faces && !local && layer_specs.empty())
-    sweep = find_sweep(shape, lattice.frame, lattice.face_plane, lattice.lattice_face,
-                       lattice.cells, lattice.spacing, h);
+  if (!local && layer_specs.empty()) sweep = sweep_as_found;  // no lattice face taken away
   // The sweep carries local sizes on its caps' edges only (the walls' sides split to them), and
   // the global layers only: a shape that would be swept without its other local sizes or its
   // face layers is meshed unswept, and says why.
   if (parameters.sweep && strategy.lattice_faces && (local || !layer_specs.empty())) {
-    std::optional<Sweep> would =
-        find_sweep(shape, lattice.frame, lattice.face_plane, lattice_faces_as_found, lattice.cells,
-                   lattice.spacing, h);
+    const std::optional<Sweep>& would = sweep_as_found;
     std::string why;
     if (would)
       why = sweep_carries(local_sizes, given_items.edges, *would, shape.edge_faces,

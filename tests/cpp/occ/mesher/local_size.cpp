@@ -46,7 +46,9 @@ TEST(SizeField, grows_from_its_items_up_to_h) {
       for (const std::array<Vec3, 2>& box : below_2)
         inside = inside || (p.x >= box[0].x && p.y >= box[0].y && p.z >= box[0].z &&
                             p.x <= box[1].x && p.y <= box[1].y && p.z <= box[1].z);
-      if (!inside) EXPECT_GE(field.at(p), 2.0) << p.x << " " << p.y << " " << p.z;
+      if (!inside) {
+        EXPECT_GE(field.at(p), 2.0) << p.x << " " << p.y << " " << p.z;
+      }
     }
 }
 

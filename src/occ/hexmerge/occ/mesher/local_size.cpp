@@ -149,21 +149,13 @@ std::vector<LocalSizeApplied> local_sizes_applied(const std::vector<LocalSize>& 
 }
 
 SizeField::SizeField(double h, double grading, double slack, const Vec3& lo, const Vec3& hi)
-    : h_(h),
-      grading_(grading),
-      slack_(slack),
-      smallest_(h),
-      items_lo_(hi),
-      items_hi_(lo),
-      grid_(lo, hi, h) {}
+    : h_(h), grading_(grading), slack_(slack), smallest_(h), grid_(lo, hi, h) {}
 
 void SizeField::add(const Vec3& a, const Vec3& b, const Vec3& c, double size) {
   const Vec3 lo = vmin(a, vmin(b, c)), hi = vmax(a, vmax(b, c));
   grid_.add(static_cast<int>(items_.size()), lo, hi);
   items_.push_back({a, b, c, size});
   smallest_ = std::min(smallest_, size);
-  items_lo_ = vmin(items_lo_, lo);
-  items_hi_ = vmax(items_hi_, hi);
 }
 
 double SizeField::at(const Vec3& p) const {

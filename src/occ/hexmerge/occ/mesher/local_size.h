@@ -49,7 +49,6 @@ class SizeField {
     double size;
   };
   double h_, grading_, slack_, smallest_;
-  Vec3 items_lo_, items_hi_;
   BucketGrid grid_;
   std::vector<Item> items_;
 };
