@@ -134,7 +134,7 @@ def test_python_keywords_are_the_tables() -> None:
         # The Python table said [0.001, 0.5], the C++ check (0, 0.5]: the one table says the first.
         ("surface_deflection", "0.0005", r"parameter 'surface_deflection' must be between 0.001 and 0.5 h"),
         ("surface_deflection", "0.6", r"must be between 0.001 and 0.5 h"),
-        ("boundary_layers", "4", r"parameter 'boundary_layers' must be between 0 and 3"),
+        ("boundary_layers", "4", r"parameter 'boundary_layers' must be between -1 and 3"),
         ("boundary_layers", "1.5", r"must be a whole number"),
         ("frame", "diagonal", r"must be one of auto, principal, global"),
         ("size", "0", r"parameter 'size' must be greater than 0 mm"),

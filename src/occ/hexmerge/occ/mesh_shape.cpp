@@ -297,7 +297,14 @@ TetMesh mesh_shape_impl(const std::string& brep, const MeshShapeParameters& para
   // 3. The attempts, simplest input last; what failed is reported.
   std::string failures;
   double failed_seconds = 0;
+  int nb_tried = 0;
   for (const Strategy& strategy : kStrategies) {
+    // Without lattice faces there is no sweep, so with no layers asked for unswept shapes (0,
+    // or -1) the way without layers is the one before it again.
+    if (!strategy.lattice_faces && !strategy.layers && strategy.lattice_points &&
+        parameters.boundary_layers <= 0)
+      continue;
+    ++nb_tried;
     MeshShapeReport attempt = report;
     const auto attempt_start = PhaseTimer::Clock::now();
     try {
@@ -316,9 +323,8 @@ TetMesh mesh_shape_impl(const std::string& brep, const MeshShapeParameters& para
     }
   }
   throw InputError("mesh_shape: could not tetrahedralise the shape at size " +
-                   std::to_string(parameters.size) + " in any of " +
-                   std::to_string(std::size(kStrategies)) + " ways of placing the points (" +
-                   failures + ")");
+                   std::to_string(parameters.size) + " in any of " + std::to_string(nb_tried) +
+                   " ways of placing the points (" + failures + ")");
 }
 
 TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Frame& frame,
@@ -556,7 +562,10 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
   // whole at their depth (the walls' stress in first order follows that depth, issue 15).
   const Parity parity(nodes, surface, shape.face_solid_count, around, h);
   InsertedPoints inserted;
-  const int nb_layers = strategy.layers ? parameters.boundary_layers : 0;
+  const int nb_layers = !strategy.layers                  ? 0
+                        : parameters.boundary_layers >= 0 ? parameters.boundary_layers
+                        : sweep_axis >= 0                 ? 1
+                                                          : 0;
   const double keep_distance =
       (parameters.lattice_margin + (sweep_axis >= 0 ? nb_layers * parameters.layer_thickness : 0)) *
       h;

@@ -65,8 +65,12 @@ struct MeshShapeParameters {
   /// than the shape's largest extent.
   double size = 0.0;
   /// Layers of points offset from the curved and unaligned faces along the inward normal
-  /// (0 to 3). Each layer is `layer_thickness` h thick.
-  int boundary_layers = 1;
+  /// (0 to 3; -1: one on swept shapes, none on the others). Each layer is `layer_thickness` h
+  /// thick. On a swept shape the layer is a regular ring of prisms and hexahedra along the walls
+  /// whose depth sets a first-order element's stress there; unswept, the layer's points add
+  /// about 40 % to the tets and no prisms or hexahedra (Delaunay does not join them into
+  /// columns), so by default there is none.
+  int boundary_layers = -1;
   /// Thickness of one boundary layer, as a fraction of h, in [0.1, 1].
   double layer_thickness = 0.3;
   /// Lattice points nearer than this fraction of h to a face that is not a lattice face (swept

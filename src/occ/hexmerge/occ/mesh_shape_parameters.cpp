@@ -22,9 +22,10 @@ ParameterTable<MeshShapeParameters> make_table() {
              "Target element size h: the lattice spacing and the surface's longest edge, in the "
              "shape's units (millimetres for STEP and IGES files); not larger than the shape",
              {"--size", "TargetSize"}, /*min_exclusive=*/true),
-      whole(&P::boundary_layers, "boundary_layers", "", 0, 3, "Boundary layers",
+      whole(&P::boundary_layers, "boundary_layers", "", -1, 3, "Boundary layers",
             "Layers of points offset from the curved and unaligned faces along the inward "
-            "normal, so that the boundary becomes prisms",
+            "normal (-1: one on swept shapes, where they become a ring of prisms and hexahedra "
+            "along the walls, none on the others, where they add tets and no prisms)",
             {"--layers"}),
       number(&P::layer_thickness, "layer_thickness", "h", 0.1, 1, "Layer thickness",
              "Thickness of one boundary layer, as a fraction of the target size h"),
