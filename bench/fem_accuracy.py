@@ -67,6 +67,7 @@ VARIANTS = [
     ("recombined, defaults", {}, None),
     ("pyramids anywhere (collapsed C3D8/C3D20)", {"pyramid_placement": "anywhere"}, None),
     ("pyramids anywhere, as wedges C3D6/C3D15", {"pyramid_placement": "anywhere"}, "wedge"),
+
     ("no pyramid with a boundary face", {"pyramid_placement": "no_boundary_face"}, None),
     ("no pyramid with a boundary node (the add-on's CalculiX default)",
      {"pyramid_placement": "no_boundary_node"}, None),
@@ -74,6 +75,10 @@ VARIANTS = [
 ]
 LINEAR_ONLY_VARIANTS = [
     ("defaults, hexahedra as C3D8I", {}, {"C3D8": "C3D8I"}),
+]
+QUADRATIC_ONLY_VARIANTS = [
+    ("pyramids anywhere, as two tied C3D10 (the add-on's QuadraticPyramid)",
+     {"pyramid_placement": "anywhere"}, "split"),
 ]
 
 
@@ -266,12 +271,15 @@ def read_inp_nodes(lines):
 
 def postprocess_inp(path, mode):
     """Rewrites the .inp: mode "wedge" writes collapsed pyramids as degenerate wedges (and moves
-    their face loads to the wedge's faces); a dict {written type: type} retypes the true (not
+    their face loads to the wedge's faces); "split" second-order ones as two tied C3D10 (the
+    add-on's calculix.split_pyramids_in_input, its default); a dict {written type: type} retypes the true (not
     collapsed) hexahedra as the add-on does for its own mesh objects (calculix.retype_file:
     {"C3D8": "C3D8I"}, {"C3D20": "C3D20R"}). Returns how many elements changed."""
+    from freecad.hexmerge import calculix
     if isinstance(mode, dict):
-        from freecad.hexmerge import calculix
         return sum(calculix.retype_file(path, mode).values())
+    if mode == "split":
+        return calculix.split_pyramids_in_input(path)
     with open(path) as f:
         lines = f.read().split("\n")
     blocks = read_inp_elements(lines)
@@ -279,6 +287,7 @@ def postprocess_inp(path, mode):
     changed = {}
     out = []
     last = 0
+
     for first, end, kind, elements in blocks:
         out += lines[last:first]
         last = end
@@ -426,7 +435,8 @@ def worker(job):
         label = "Gmsh {} {:g} mm".format("Tet4" if job["order"] == "1st" else "Tet10", job["size"])
         result, inp, seconds = solve(doc)
         rows.append(row(case, label, source, result, inp, seconds, {"source": label}))
-        variants = VARIANTS + (LINEAR_ONLY_VARIANTS if job["order"] == "1st" else [])
+        variants = VARIANTS + (LINEAR_ONLY_VARIANTS if job["order"] == "1st" else
+                               QUADRATIC_ONLY_VARIANTS)
         defaults = {r["name"]: r["default"] for r in engine.parameter_table()}
         extra = job.get("recombine_options") or {}
         runs = []
@@ -473,10 +483,15 @@ def worker(job):
         offered = calculix.QUADRATIC_HEXAHEDRON if second else calculix.LINEAR_HEXAHEDRON
         if written == offered[0]:
             label += " (the add-on's default)"
-        for kind in [written] + [k for k in offered if k != written]:
-            post = None if kind == written else {written: kind}
-            name = label if kind == written else "{}, hexahedra as {}".format(
-                label, kind + (" (the add-on's default)" if kind == offered[0] else ""))
+        # Second order with pyramids: also as the add-on writes them (two tied C3D10).
+        pyramids = second and any(len(set(femmesh.getElementNodes(i))) == 13
+                                  for i in femmesh.Volumes)
+        for kind in [written] + [k for k in offered if k != written] + (["split"] if pyramids else []):
+            post = None if kind == written else "split" if kind == "split" else {written: kind}
+            name = label if kind == written else \
+                "{}, pyramids as two tied C3D10 (the add-on's default)".format(label) \
+                if kind == "split" else "{}, hexahedra as {}".format(
+                    label, kind + (" (the add-on's default)" if kind == offered[0] else ""))
             result, inp, seconds = solve(doc, post)
             rows.append(row(case, name, femmesh, result, inp, seconds,
                             {"source": label, "volume %": volume_fractions(report),
@@ -534,6 +549,92 @@ def patch_test(kind, shift, workdir=None):
         raise RuntimeError("CalculiX wrote no stresses in " + workdir)
     worst = max(calculix.distortion([points[n - 1] for n in h]) for h in hexes)
     return worst, error
+
+
+def pyramid_patch_test(split, workdir=None):
+    """A quadratic patch test of second-order pyramids: a unit cube as one C3D20 beside a unit
+    cube of six pyramids (collapsed C3D20, apex at its centre); every node on the outside held at
+    pure bending's exact displacement (curvature 1e-3 about y: u = (k x z, -nu k y z, -k (x^2 +
+    nu (z^2 - y^2)) / 2), stress sxx = E k z), the rest free. Quadratic elements that are
+    continuous reproduce it exactly. split: the pyramids as calculix.split_pyramids_in_input()
+    writes them (their split diagonals tied, not held); else collapsed C3D20. Returns the
+    largest error of the nodal displacements, in % of the largest exact one, and of the
+    integration-point stresses, in % of the largest exact one."""
+    from freecad.hexmerge import calculix
+    workdir = workdir or tempfile.mkdtemp(prefix="hexmerge_pyramid_patch_")
+    young, nu, k = 210000.0, 0.3, 1e-3
+    points, ids = [], {}
+
+    def node(p):
+        key = tuple(round(x, 9) for x in p)
+        if key not in ids:
+            ids[key] = len(points) + 1
+            points.append(key)
+        return ids[key]
+
+    def cube(x0):
+        return [(x0 + i, j, kk) for i, j, kk in ((0, 0, 0), (1, 0, 0), (1, 1, 0), (0, 1, 0),
+                                                 (0, 0, 1), (1, 0, 1), (1, 1, 1), (0, 1, 1))]
+
+    def c3d20(corners):
+        ends = [node(c) for c in corners]
+        middles = [node([(corners[u][c] + corners[v][c]) / 2 for c in range(3)])
+                   for u, v in HEX_EDGES]
+        return ends + middles
+
+    elements = [c3d20(cube(0.0))]
+    b = cube(1.0)
+    centre = (1.5, 0.5, 0.5)
+    # each face of the second cube (CalculiX's C3D8 faces, which run counterclockwise seen from
+    # inside: from the apex) as the bottom of a hexahedron whose top is the apex
+    for face in CCX_FACES["C3D8"]:
+        base = [b[i] for i in face]
+        elements.append(c3d20(base + [centre] * 4))
+    outside = [n for p, n in ids.items()
+               if min(p) < 1e-9 or p[0] > 2 - 1e-9 or p[1] > 1 - 1e-9 or p[2] > 1 - 1e-9]
+
+    def exact(p):
+        x, y, z = p
+        return (k * x * z, -nu * k * y * z, -k * (x * x + nu * (z * z - y * y)) / 2)
+
+    lines = ["*NODE,NSET=NALL"] + ["{},{!r},{!r},{!r}".format(n + 1, *p)
+                                   for n, p in enumerate(points)]
+    lines += ["*ELEMENT,TYPE=C3D20,ELSET=EALL"]
+    for e, nodes in enumerate(elements):
+        row = [e + 1] + nodes
+        lines += [",".join(str(x) for x in row[:16]) + ",", ",".join(str(x) for x in row[16:])]
+    lines += ["*MATERIAL,NAME=STEEL", "*ELASTIC", "{!r},{!r}".format(young, nu),
+              "*SOLID SECTION,ELSET=EALL,MATERIAL=STEEL", "*STEP", "*STATIC", "*BOUNDARY"]
+    for n in outside:
+        for dof, value in enumerate(exact(points[n - 1])):
+            lines.append("{},{},{},{:.12g}".format(n, dof + 1, dof + 1, value))
+    lines += ["*NODE PRINT,NSET=NALL", "U", "*EL PRINT,ELSET=EALL", "S", "*END STEP"]
+    path = os.path.join(workdir, "patch.inp")
+    with open(path, "w") as f:
+        f.write("\n".join(lines) + "\n")
+    if split and calculix.split_pyramids_in_input(path) != 6:
+        raise RuntimeError("split_pyramids_in_input did not split the six pyramids")
+    subprocess.run(["ccx", "patch"], cwd=workdir, stdout=subprocess.DEVNULL,
+                   stderr=subprocess.DEVNULL, check=True)
+    with open(path) as f:
+        where = calculix.read_nodes(f.read().split("\n"))
+    scale = max(max(abs(x) for x in exact(p)) for p in where.values())
+    displacement = stress = None
+    with open(os.path.join(workdir, "patch.dat")) as f:
+        for line in f:
+            parts = line.split()
+            if len(parts) == 4 and parts[0].isdigit():  # node, ux, uy, uz
+                u = exact(where[int(parts[0])])
+                e = max(abs(float(x) - v) for x, v in zip(parts[1:], u)) / scale
+                displacement = e if displacement is None else max(displacement, e)
+            elif len(parts) == 8 and re.match(r"^-?\d", parts[2]):
+                # sxx = E k z in [0, E k] at every integration point; the others 0
+                s = [float(x) for x in parts[2:]]
+                e = max([max(0.0, -s[0], s[0] - young * k)] + [abs(x) for x in s[1:]]) / (young * k)
+                stress = e if stress is None else max(stress, e)
+    if displacement is None or stress is None:
+        raise RuntimeError("CalculiX wrote no displacements or stresses in " + workdir)
+    return 100.0 * displacement, 100.0 * stress
 
 
 # ---- the driver ------------------------------------------------------------------------------

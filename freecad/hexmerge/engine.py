@@ -21,6 +21,12 @@ TABLE_KEYS = ("name", "type", "default", "unit", "min", "max", "min_exclusive", 
 # hexahedron, and one with a node on the boundary overstated the peak stress by up to 21 %
 # where the tets were within 1 %. The add-on's objects start from these.
 CALCULIX_DEFAULTS = {"pyramid_placement": "no_boundary_node"}
+# A mesh made from the shape starts from these instead: no_boundary_node took every hexahedron
+# of the plate with a hole made unswept (its pyramids' bases lie on the plate's faces) and most
+# of the cylinder's, while pyramids anywhere, the second-order ones written as two tied C3D10
+# (calculix.QUADRATIC_PYRAMID), were as accurate (plate 8 mm +0.38 % with 96 % hex volume;
+# cylinder 5 mm +2.98 % against +2.32 %) and first order more accurate on all four rows.
+CALCULIX_SHAPE_DEFAULTS = {"pyramid_placement": "anywhere"}
 
 
 def calculix_options(options=None):

@@ -3,7 +3,7 @@
 
 import FreeCAD
 
-from . import properties
+from . import engine, properties
 from .mesh_hexdominant import MeshHexDominant, containing_analysis, is_shape_source
 
 
@@ -80,6 +80,10 @@ def make_hexdominant_mesh(doc, source, name="HexDominantMesh", recompute=True, a
     try:
         if shape_mode and not any(k in options for k in ("size", "target_size", "TargetSize")):
             obj.TargetSize = default_target_size(source.Shape)
+        if shape_mode:  # the CalculiX defaults of a mesh made from the shape, unless given
+            names = {s.parameter: s.name for s in properties.engine_specs()}
+            set_options(obj, {k: v for k, v in engine.CALCULIX_SHAPE_DEFAULTS.items()
+                              if k not in options and names[k] not in options})
         set_options(obj, {("size" if k == "target_size" else k): v for k, v in options.items()})
     except Exception:
         doc.removeObject(obj.Name)

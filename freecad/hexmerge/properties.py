@@ -162,6 +162,11 @@ def addon_specs():
                      "quadratic_hexahedron", {"name": "quadratic_hexahedron",
                                               "label": "Quadratic hexahedra",
                                               "choices": calculix.QUADRATIC_HEXAHEDRON}),
+        PropertySpec("App::PropertyEnumeration", "QuadraticPyramid", "CalculiX",
+                     calculix.QUADRATIC_PYRAMID_DOC, calculix.QUADRATIC_PYRAMID[0],
+                     "quadratic_pyramid", {"name": "quadratic_pyramid",
+                                           "label": "Quadratic pyramids",
+                                           "choices": calculix.QUADRATIC_PYRAMID}),
     ]
 
 

@@ -24,6 +24,7 @@ COMMON = {
     "MakePyramids": "mesh", "Conformity": "mesh",
     "RespectRegions": "materials", "PyramidsAsHexahedra": "materials",
     "LinearHexahedron": "materials", "QuadraticHexahedron": "materials",
+    "QuadraticPyramid": "materials",
 }
 TOLERANCES = ("MinDihedralAngle", "MinBoundaryDihedralAngle", "MaxFaceAngle", "MinScaledJacobian")
 LABELS = {"PyramidsAsHexahedra": "Pyramids as hexahedra",

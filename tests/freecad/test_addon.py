@@ -277,7 +277,7 @@ class ShapeMode(unittest.TestCase):
         obj = hm.make_hexdominant_mesh(doc, box, recompute=False)
         rows = [r for r in hexmerge.parameters() + hexmerge.mesh_parameters() if r["freecad_property"]]
         own = {"SourceMesh", "Part", "PyramidsAsHexahedra", "SecondOrder", "LinearHexahedron",
-               "QuadraticHexahedron", "MeshRegionList", "MeshBoundaryLayerList"}
+               "QuadraticHexahedron", "QuadraticPyramid", "MeshRegionList", "MeshBoundaryLayerList"}
         report_group = {p for p in obj.PropertiesList if obj.getGroupOfProperty(p) == "Report"}
         fem_mesh = set(doc.addObject("Fem::FemMeshObjectPython", "Plain").PropertiesList)
         ours = set(obj.PropertiesList) - fem_mesh - report_group
@@ -289,6 +289,10 @@ class ShapeMode(unittest.TestCase):
             elif r["type"] == "choice" and r["name"] != "pyramid_placement":  # CalculiX's default
                 self.assertEqual(value, r["default"], r["name"])
             self.assertTrue(obj.getDocumentationOfProperty(r["freecad_property"]).startswith(r["doc"]))
+        # A mesh made from the shape starts from CALCULIX_SHAPE_DEFAULTS: pyramids anywhere (the
+        # second-order ones written as two tied C3D10); one from tets from no_boundary_node.
+        self.assertEqual(obj.PyramidPlacement, "anywhere")
+        self.assertEqual(obj.QuadraticPyramid, "two C3D10, tied")
 
     def test_save_reopen(self):
         doc, box = self.box()
