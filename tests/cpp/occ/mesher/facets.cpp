@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <optional>
@@ -62,6 +63,37 @@ TEST(make_facets, lattice_faces_as_loops) {
     if (l.lattice_face[f]) {
       EXPECT_EQ(facets_per_face[f], 1) << "face " << f;
     }
+}
+
+// A lattice face whose loops touch at a node (a square with a diamond hole whose corner lies on
+// the square's side, as a glued solid's footprint meets its face's outline): two loops sharing
+// that node, not the face's triangles (kept as triangles, each took its lattice points as points
+// inside one triangle, a hair from its sides, and TetGen's boundary recovery ran to its time
+// limit: gmsh_as1-tu-203 at h 2.239).
+TEST(make_facets, loops_touching_at_a_node) {
+  mesher::Surface surface;
+  const std::vector<Vec3> nodes = {{0, 0, 0}, {4, 0, 0}, {4, 4, 0}, {0, 4, 0},
+                                   {2, 0, 0}, {3, 1, 0}, {2, 2, 0}, {1, 1, 0}};
+  surface.nodes = nodes;
+  for (const std::array<int, 3>& t : std::vector<std::array<int, 3>>{
+           {0, 4, 7}, {4, 1, 5}, {1, 2, 5}, {5, 2, 6}, {6, 2, 3}, {6, 3, 7}, {7, 3, 0}})
+    surface.triangles.push_back(mesher::SurfaceTriangle{t, {}, 0});
+  const std::vector<bool> lattice_face = {true};
+  const std::vector<std::optional<mesher::AxisPlane>> face_plane = {mesher::AxisPlane{2, 0.0}};
+  const std::vector<mesher::Facet> facets =
+      mesher::make_facets(surface, nodes, lattice_face, face_plane);
+  ASSERT_EQ(facets.size(), 1u);
+  const mesher::Facet& facet = facets[0];
+  ASSERT_EQ(facet.polygons.size(), 2u);
+  std::vector<std::vector<int>> loops = facet.polygons;
+  for (auto& loop : loops) std::sort(loop.begin(), loop.end());
+  std::sort(loops.begin(), loops.end(),
+            [](const std::vector<int>& a, const std::vector<int>& b) { return a.size() > b.size(); });
+  EXPECT_EQ(loops[0], (std::vector<int>{0, 1, 2, 3, 4}));  // the outline, through the node
+  EXPECT_EQ(loops[1], (std::vector<int>{4, 5, 6, 7}));     // the diamond
+  ASSERT_EQ(facet.holes.size(), 1u);                       // inside the diamond
+  EXPECT_LT(std::abs(facet.holes[0].x - 2) + std::abs(facet.holes[0].y - 1), 1.0);
+  EXPECT_EQ(facet.marker, 1);
 }
 
 // Points on a lattice face go into its facet: onto a loop's side, in order along it, or as a
