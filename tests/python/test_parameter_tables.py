@@ -20,7 +20,7 @@ with_occ = pytest.mark.skipif(not _core.with_opencascade, reason="built without 
 # The add-on's own properties and the CLI's own options of `mesh`: not parameters of a table.
 # The add-on's own: the input, how pyramids reach FreeCAD, the order, the CalculiX element types.
 ADDON_PROPERTIES = {"SourceMesh", "PyramidsAsHexahedra", "SecondOrder", "LinearHexahedron",
-                    "QuadraticHexahedron"}
+                    "QuadraticHexahedron", "QuadraticPyramid"}
 
 
 def tables() -> list[tuple[str, list[dict]]]:
