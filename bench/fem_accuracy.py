@@ -223,15 +223,9 @@ HEX_EDGES = ((0, 1), (1, 2), (2, 3), (3, 0), (4, 5), (5, 6), (6, 7), (7, 4), (0,
 
 
 def collapsed_pyramid(nodes):
-    """The base (4 corners, in the hexahedron's circulation) and apex of a C3D8/C3D20 written as
-    a collapsed pyramid (one face all on one node: FreeCAD's writer puts the apex first), or
-    None."""
-    for apex_face, base_face in (((0, 1, 2, 3), (4, 5, 6, 7)), ((4, 5, 6, 7), (0, 1, 2, 3))):
-        apex = {nodes[i] for i in apex_face}
-        base = [nodes[i] for i in base_face]
-        if len(apex) == 1 and len(set(base)) == 4:
-            return base, apex.pop()
-    return None
+    """The add-on's calculix.collapsed_pyramid (FreeCAD's writer stores pyramids so)."""
+    from freecad.hexmerge import calculix
+    return calculix.collapsed_pyramid(nodes)
 
 
 def as_wedge(kind, nodes, points):

@@ -105,6 +105,21 @@ def read_nodes(lines):
     return points
 
 
+def read_element_block(lines, i, kind):
+    """The elements of the *ELEMENT block whose header is lines[i] (type `kind`): (the line after
+    the block, [(id, [node ids])])."""
+    j = i + 1
+    numbers = []
+    while j < len(lines) and not lines[j].lstrip().startswith("*"):
+        numbers += [int(x) for x in re.findall(r"-?\d+", lines[j])]
+        j += 1
+    n = NODES[kind] + 1
+    if len(numbers) % n:
+        raise ValueError("the .inp's {} block at line {} does not hold whole elements ({} "
+                         "numbers for {} per element)".format(kind, i + 1, len(numbers), n))
+    return j, [(numbers[k], numbers[k + 1:k + n]) for k in range(0, len(numbers), n)]
+
+
 def retype_lines(lines, types, max_distortion=MAX_C3D8I_DISTORTION):
     """The .inp's lines with its true hexahedra's element type changed: `types` maps a type the
     writer wrote (C3D8, C3D20) to the one wanted; C3D8I_IF_PARALLELEPIPED asks for C3D8I on the
@@ -122,16 +137,8 @@ def retype_lines(lines, types, max_distortion=MAX_C3D8I_DISTORTION):
             i += 1
             continue
         header = lines[i]
-        j = i + 1
-        numbers = []
-        while j < len(lines) and not lines[j].lstrip().startswith("*"):
-            numbers += [int(x) for x in re.findall(r"-?\d+", lines[j])]
-            j += 1
-        n = NODES[kind] + 1
-        if len(numbers) % n:
-            raise ValueError("the .inp's {} block at line {} does not hold whole elements ({} "
-                             "numbers for {} per element)".format(kind, i + 1, len(numbers), n))
-        elements = [numbers[k:k + n] for k in range(0, len(numbers), n)]
+        j, items = read_element_block(lines, i, kind)
+        elements = [[eid] + nodes for eid, nodes in items]
         new = types[kind]
         if new == C3D8I_IF_PARALLELEPIPED:
             new = "C3D8I"
@@ -187,8 +194,9 @@ _INCLUDE = re.compile(r"\*INCLUDE\s*,\s*INPUT\s*=\s*(.+?)\s*$", re.I)
 _FACE_ITEM = re.compile(r"^(\s*)(\d+)(\s*,\s*)([PSFR])(\d)\b(.*)$", re.I)
 
 
-def _pyramid(nodes):
-    """(base corners in circulation, apex) of a collapsed C3D20, or None."""
+def collapsed_pyramid(nodes):
+    """(base corners in the hexahedron's circulation, apex) of a C3D8/C3D20 written as a collapsed
+    pyramid (one face all on one node; FreeCAD's writer puts the apex first), or None."""
     for apex_face, base_face in (((0, 1, 2, 3), (4, 5, 6, 7)), ((4, 5, 6, 7), (0, 1, 2, 3))):
         apex = {nodes[i] for i in apex_face}
         base = [nodes[i] for i in base_face]
@@ -207,7 +215,7 @@ def split_pyramid(nodes, points, new_node):
     the constraints of the face's nodes) or on another pyramid (both ties give the same value):
     with the diagonal's node free there and put in the node sets that hold the whole base, the
     plate and the cylinder of docs/fem-accuracy.md read the same to 0.2 points."""
-    base, apex = _pyramid(nodes)
+    base, apex = collapsed_pyramid(nodes)
     k = base.index(min(base))
     base = base[k:] + base[:k]
     middle = {frozenset((nodes[u], nodes[v])): nodes[8 + e] for e, (u, v) in enumerate(_HEX_EDGES)
@@ -278,20 +286,14 @@ def split_pyramids_in_input(path):
             m = _ELEMENT.match(stripped)
             kind = _TYPE.search(m.group(1)).group(2).upper() if m and _TYPE.search(m.group(1)) else None
             if kind in NODES:
-                j = i + 1
-                numbers = []
-                while j < len(lines) and not lines[j].lstrip().startswith("*"):
-                    numbers += [int(x) for x in re.findall(r"-?\d+", lines[j])]
-                    j += 1
-                n = NODES[kind] + 1
-                items = [(numbers[k], numbers[k + 1:k + n]) for k in range(0, len(numbers), n)]
+                j, items = read_element_block(lines, i, kind)
                 blocks.append((name, i, j, kind, items))
                 elements.update(items)
                 i = j
                 continue
             i += 1
     pyramids = [(b, eid) for b, block in enumerate(blocks) if block[3] in ("C3D20", "C3D20R")
-                for eid, nodes in block[4] if _pyramid(nodes)]
+                for eid, nodes in block[4] if collapsed_pyramid(nodes)]
     if not pyramids:
         return 0
     next_node = [max(points) + 1]
