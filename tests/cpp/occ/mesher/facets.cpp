@@ -87,8 +87,9 @@ TEST(make_facets, loops_touching_at_a_node) {
   ASSERT_EQ(facet.polygons.size(), 2u);
   std::vector<std::vector<int>> loops = facet.polygons;
   for (auto& loop : loops) std::sort(loop.begin(), loop.end());
-  std::sort(loops.begin(), loops.end(),
-            [](const std::vector<int>& a, const std::vector<int>& b) { return a.size() > b.size(); });
+  std::sort(loops.begin(), loops.end(), [](const std::vector<int>& a, const std::vector<int>& b) {
+    return a.size() > b.size();
+  });
   EXPECT_EQ(loops[0], (std::vector<int>{0, 1, 2, 3, 4}));  // the outline, through the node
   EXPECT_EQ(loops[1], (std::vector<int>{4, 5, 6, 7}));     // the diamond
   ASSERT_EQ(facet.holes.size(), 1u);                       // inside the diamond
