@@ -109,6 +109,15 @@ constexpr Strategy kStrategies[] = {
     {"surface only", 1.0, false, false, false},
 };
 
+// The boundary layers a way places: none where the way places none, else the ones asked for;
+// -1 (the default): one on swept shapes, none on the others.
+int boundary_layers_placed(const MeshShapeParameters& parameters, const Strategy& strategy,
+                           bool swept) {
+  if (!strategy.layers) return 0;
+  if (parameters.boundary_layers >= 0) return parameters.boundary_layers;
+  return swept ? 1 : 0;
+}
+
 // The faces and edges as the user numbers them (the shape as given), and the shape's they name.
 struct GivenItems {
   ItemNumbering faces, edges;
@@ -299,10 +308,10 @@ TetMesh mesh_shape_impl(const std::string& brep, const MeshShapeParameters& para
   double failed_seconds = 0;
   int nb_tried = 0;
   for (const Strategy& strategy : kStrategies) {
-    // Without lattice faces there is no sweep, so with no layers asked for unswept shapes (0,
-    // or -1) the way without layers is the one before it again.
-    if (!strategy.lattice_faces && !strategy.layers && strategy.lattice_points &&
-        parameters.boundary_layers <= 0)
+    // The way without layers repeats the way before it (lattice points, no lattice faces, so no
+    // sweep) when that one places no layers either.
+    if (&strategy != kStrategies && !strategy.layers && !strategy.lattice_faces &&
+        strategy.lattice_points && boundary_layers_placed(parameters, *(&strategy - 1), false) == 0)
       continue;
     ++nb_tried;
     MeshShapeReport attempt = report;
@@ -562,10 +571,7 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
   // whole at their depth (the walls' stress in first order follows that depth, issue 15).
   const Parity parity(nodes, surface, shape.face_solid_count, around, h);
   InsertedPoints inserted;
-  const int nb_layers = !strategy.layers                  ? 0
-                        : parameters.boundary_layers >= 0 ? parameters.boundary_layers
-                        : sweep_axis >= 0                 ? 1
-                                                          : 0;
+  const int nb_layers = boundary_layers_placed(parameters, strategy, sweep_axis >= 0);
   const double keep_distance =
       (parameters.lattice_margin + (sweep_axis >= 0 ? nb_layers * parameters.layer_thickness : 0)) *
       h;
