@@ -80,10 +80,8 @@ def make_hexdominant_mesh(doc, source, name="HexDominantMesh", recompute=True, a
     try:
         if shape_mode and not any(k in options for k in ("size", "target_size", "TargetSize")):
             obj.TargetSize = default_target_size(source.Shape)
-        if shape_mode:  # the CalculiX defaults of a mesh made from the shape, unless given
-            names = {s.parameter: s.name for s in properties.engine_specs()}
-            set_options(obj, {k: v for k, v in engine.CALCULIX_SHAPE_DEFAULTS.items()
-                              if k not in options and names[k] not in options})
+        if shape_mode:  # the CalculiX defaults of a mesh made from the shape; the options given win
+            set_options(obj, engine.CALCULIX_SHAPE_DEFAULTS)
         set_options(obj, {("size" if k == "target_size" else k): v for k, v in options.items()})
     except Exception:
         doc.removeObject(obj.Name)
