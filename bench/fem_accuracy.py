@@ -196,23 +196,17 @@ CCX_FACES["C3D20"] = CCX_FACES["C3D8"]
 CCX_FACES["C3D15"] = CCX_FACES["C3D6"]
 def read_inp_elements(lines):
     """[(first line, last line + 1, type, [(id, nodes)])] of the .inp's volume element blocks."""
-    from freecad.hexmerge.calculix import NODES as CCX_NODES
+    from freecad.hexmerge import calculix
     blocks = []
     i = 0
     while i < len(lines):
         m = re.match(r"\*ELEMENT\s*,\s*TYPE\s*=\s*(\w+)", lines[i], re.I)
-        if not m or m.group(1).upper() not in CCX_NODES:
+        if not m or m.group(1).upper() not in calculix.NODES:
             i += 1
             continue
         kind = m.group(1).upper()
-        j = i + 1
-        numbers = []
-        while j < len(lines) and not lines[j].startswith("*"):
-            numbers += [int(x) for x in re.findall(r"\d+", lines[j])]
-            j += 1
-        n = CCX_NODES[kind] + 1
-        blocks.append((i, j, kind, [(numbers[k], numbers[k + 1:k + n])
-                                    for k in range(0, len(numbers), n)]))
+        j, items = calculix.read_element_block(lines, i, kind)
+        blocks.append((i, j, kind, items))
         i = j
     return blocks
 
@@ -251,24 +245,13 @@ def as_wedge(kind, nodes, points):
                      m(a, b1), m(b0, b1), m(b3, b2), a]
 
 
-def read_inp_nodes(lines):
-    points = {}
-    i = next(k for k, line in enumerate(lines) if re.match(r"\*NODE\b", line, re.I))
-    for line in lines[i + 1:]:
-        if line.startswith("*"):
-            break
-        parts = line.split(",")
-        if len(parts) >= 4:
-            points[int(parts[0])] = tuple(float(x) for x in parts[1:4])
-    return points
-
-
 def postprocess_inp(path, mode):
     """Rewrites the .inp: mode "wedge" writes collapsed pyramids as degenerate wedges (and moves
     their face loads to the wedge's faces); "split" second-order ones as two tied C3D10 (the
-    add-on's calculix.split_pyramids_in_input, its default); a dict {written type: type} retypes the true (not
-    collapsed) hexahedra as the add-on does for its own mesh objects (calculix.retype_file:
-    {"C3D8": "C3D8I"}, {"C3D20": "C3D20R"}). Returns how many elements changed."""
+    add-on's calculix.split_pyramids_in_input, its default); a dict {written type: type}
+    retypes the true (not collapsed) hexahedra as the add-on does for its own mesh objects
+    (calculix.retype_file: {"C3D8": "C3D8I"}, {"C3D20": "C3D20R"}). Returns how many elements
+    changed."""
     from freecad.hexmerge import calculix
     if isinstance(mode, dict):
         return sum(calculix.retype_file(path, mode).values())
@@ -277,7 +260,7 @@ def postprocess_inp(path, mode):
     with open(path) as f:
         lines = f.read().split("\n")
     blocks = read_inp_elements(lines)
-    points = read_inp_nodes(lines)
+    points = calculix.read_nodes(lines)
     changed = {}
     out = []
     last = 0

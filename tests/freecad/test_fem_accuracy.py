@@ -170,11 +170,15 @@ class QuadraticPyramids(unittest.TestCase):
                 self.assertEqual(collapsed, pyramids)
                 self.assertNotIn("*EQUATION", text)
             errors[choice] = error("plate", "P1", bench.measure("plate", result, femmesh)["P1"])
-        FreeCAD.Console.PrintMessage("HexMerge plate from shape unswept 8 mm, second order, "
-                                     "peak error: {}\n".format({k: "{:+.2%}".format(v)
-                                                                for k, v in errors.items()}))
+        print_errors("plate from shape unswept 8 mm, second order, peak", errors)
         self.assertLess(abs(errors[calculix.SPLIT_PYRAMID]), 0.01)
         self.assertGreater(errors["collapsed C3D20"], 0.03)
+
+
+def print_errors(what, errors):
+    """One line in the report view: the relative error per choice."""
+    FreeCAD.Console.PrintMessage("HexMerge {} error: {}\n".format(
+        what, {k: "{:+.2%}".format(v) for k, v in errors.items()}))
 
 
 def error(case, key, value):
@@ -208,9 +212,7 @@ class HexahedronElementTypes(unittest.TestCase):
             result, counts = self.solve_as(doc, obj, "LinearHexahedron", choice)
             self.assertEqual(counts, ({written: hexes}, 0), choice)
             tips[choice] = error("cantilever", "tip", bench.measure("cantilever", result, None)["tip"])
-        FreeCAD.Console.PrintMessage("HexMerge cantilever from shape 200 mm, first order, tip "
-                                     "error: {}\n".format({k: "{:+.2%}".format(v)
-                                                          for k, v in tips.items()}))
+        print_errors("cantilever from shape 200 mm, first order, tip", tips)
         self.assertLess(abs(tips[calculix.C3D8I_IF_PARALLELEPIPED]), 0.01)
         self.assertLess(abs(tips["C3D8I"]), 0.01)
         self.assertGreater(abs(tips["C3D8"]), 0.015)
@@ -242,9 +244,7 @@ class HexahedronElementTypes(unittest.TestCase):
                 self.assertGreater(counts.get("C3D8I", 0), counts["C3D8"])
                 self.assertEqual(counts["C3D8I"] + counts["C3D8"], femmesh.HexaCount)
             errors[choice] = error("plate", "P1", bench.measure("plate", result, femmesh)["P1"])
-        FreeCAD.Console.PrintMessage("HexMerge plate from shape 6 mm, first order, peak error: "
-                                     "{}\n".format({k: "{:+.2%}".format(v)
-                                                    for k, v in errors.items()}))
+        print_errors("plate from shape 6 mm, first order, peak", errors)
         self.assertLess(abs(errors[calculix.C3D8I_IF_PARALLELEPIPED]), 0.01)
         self.assertGreater(errors["C3D8I"], 0.02)
 
