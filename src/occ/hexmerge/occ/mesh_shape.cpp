@@ -32,6 +32,7 @@
 #include "hexmerge/occ/mesher/surface_repair.h"
 #include "hexmerge/occ/mesher/sweep.h"
 #include "hexmerge/occ/regions_by_solid.h"
+#include "hexmerge/recombine/parameters.h"
 #include "hexmerge/tetgen/tetrahedralize.h"
 
 namespace hexmerge {
@@ -679,6 +680,10 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
   // A tet under 0.2 (an element a solver should not get) that no flip improves gets a vertex
   // inside; swept, the columns stay.
   improve.insert_below = sweep_axis < 0 ? 0.2 : 0.0;
+  // The closing pyramids stay acceptable to the recombination at its default bound (a nudge
+  // that took them to 0.2-0.3 lost gmsh_part's core block at its 250k size: 78.5 % hex volume
+  // against 90.8 % kept).
+  improve.pyramid_floor = RecombineParameters{}.min_scaled_jacobian;
   std::vector<std::int32_t> boundary_face(tets.boundary_marker.size());
   for (std::size_t i = 0; i < boundary_face.size(); ++i)
     boundary_face[i] = static_cast<std::int32_t>(tets.boundary_marker[i]) - 1;

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 
 #include "fixtures.h"
 #include "hexmerge/geometry/quality.h"
@@ -71,6 +72,54 @@ TEST(improve_tets, takes_out_poor_tets_and_keeps_the_boundary) {
     if (on_boundary[v]) {
       for (int a = 0; a < 3; ++a) EXPECT_EQ(mesh.points[3 * v + a], before.points[3 * v + a]);
     }
+}
+
+// A 3^3 lattice with the centres of its middle cell and of a corner cell: the centres are the
+// apexes of the pyramids over their cells' faces, six each. A point inside the middle cell near
+// its bottom face takes that face's pyramid apart: five there.
+TEST(closing_pyramids, finds_the_pyramids_over_the_faces_of_a_centres_cell) {
+  std::vector<test::Point> points;
+  for (int k = 0; k <= 3; ++k)
+    for (int j = 0; j <= 3; ++j)
+      for (int i = 0; i <= 3; ++i) points.push_back({double(i), double(j), double(k)});
+  points.push_back({1.5, 1.5, 1.5});
+  points.push_back({0.5, 0.5, 0.5});
+  for (const bool with_point : {false, true}) {
+    std::vector<test::Point> all = points;
+    if (with_point) all.push_back({1.5, 1.5, 1.2});
+    const TetMesh mesh = tetgen_mesh(all);
+    if (mesh.nb_tets() == 0) GTEST_SKIP() << "the tetgen program is not installed";
+    std::vector<char> apex(mesh.nb_vertices(), 0);
+    apex[64] = apex[65] = 1;
+    const std::vector<double> frame = mesh.points;
+    const auto pyramids = mesher::closing_pyramids(mesh, frame, {1, 1, 1}, apex);
+    EXPECT_EQ(pyramids.size(), with_point ? 11u : 12u);
+    for (const auto& pyramid : pyramids) {
+      // A face of the apex's cell (one axis at a whole coordinate 0.5 off the apex), positive,
+      // and two tets of the mesh.
+      const Vec3 apex_at = Vec3::of(mesh.point(pyramid[4]));
+      int apex_tets = 0;
+      for (index_t t = 0; t < mesh.nb_tets(); ++t) {
+        const index_t* v = mesh.tet(t);
+        int on = 0;
+        for (int k = 0; k < 4; ++k)
+          on += std::find(pyramid.begin(), pyramid.end(), v[k]) != pyramid.end();
+        apex_tets += on == 4 && std::find(v, v + 4, pyramid[4]) != v + 4;
+      }
+      EXPECT_EQ(apex_tets, 2);
+      for (int k = 0; k < 4; ++k) {
+        const Vec3 corner = Vec3::of(mesh.point(pyramid[k]));
+        EXPECT_NEAR(std::abs(corner.x - apex_at.x), 0.5, 1e-12);
+        EXPECT_NEAR(std::abs(corner.y - apex_at.y), 0.5, 1e-12);
+        EXPECT_NEAR(std::abs(corner.z - apex_at.z), 0.5, 1e-12);
+      }
+      // Height half the side: Verdict's sqrt(2/3).
+      EXPECT_NEAR(scaled_jacobian(CellType::Pyramid, mesh.points.data(), pyramid.data()),
+                  std::sqrt(2.0 / 3), 1e-9);
+      EXPECT_NEAR(cell_volume(CellType::Pyramid, mesh.points.data(), pyramid.data()), 1.0 / 6,
+                  1e-12);
+    }
+  }
 }
 
 }  // namespace

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <vector>
 
 #include "fixtures.h"
@@ -72,6 +73,40 @@ TEST(smooth_nodes, a_nudged_node_moves_only_until_its_tets_reach_the_nudge_targe
   smooth_nodes(nudged_run, movable, parameters, report);
   EXPECT_EQ(nudged_run.points, before);
   EXPECT_EQ(report.moves, 0u);
+}
+
+// Node 6 of the star is also the apex of a pyramid over the square 2-4-3-5 (x = 0): moved to
+// the star's centre it would flatten it. Kept, the pyramid stays at pyramid_floor while the tets
+// still improve.
+TEST(smooth_nodes, a_kept_pyramid_stays_at_its_floor) {
+  TetMesh free_run = star_with_an_offset_centre(), kept_run = free_run;
+  std::array<index_t, 5> pyramid{2, 4, 3, 5, 6};
+  if (scaled_jacobian(CellType::Pyramid, kept_run.points.data(), pyramid.data()) < 0)
+    std::swap(pyramid[1], pyramid[3]);
+  const auto pyramid_quality = [&](const TetMesh& m) {
+    return scaled_jacobian(CellType::Pyramid, m.points.data(), pyramid.data());
+  };
+  ASSERT_GT(pyramid_quality(kept_run), 0.5);
+  std::vector<char> movable(free_run.nb_vertices(), kFixed);
+  movable[6] = kFree;
+  SmoothNodesParameters parameters;
+  parameters.pyramid_floor = 0.3;
+  SmoothNodesReport free_report, kept_report;
+  smooth_nodes(free_run, movable, parameters, free_report);
+  EXPECT_LT(pyramid_quality(free_run), 0.3);  // unguarded, the apex goes near the base
+  smooth_nodes(kept_run, movable, parameters, kept_report, nullptr, {pyramid});
+  EXPECT_GE(pyramid_quality(kept_run), 0.3);
+  EXPECT_GT(kept_report.min_after, kept_report.min_before);
+  EXPECT_LT(kept_report.min_after, free_report.min_after);
+  validate_tet_mesh(kept_run);
+  // A pyramid already below the floor may not get worse.
+  TetMesh low_run = star_with_an_offset_centre();
+  parameters.pyramid_floor = 1.0;
+  const double low_before = pyramid_quality(low_run);
+  smooth_nodes(low_run, movable, parameters, kept_report, nullptr, {pyramid});
+  EXPECT_GE(pyramid_quality(low_run), low_before);
+  EXPECT_THROW(smooth_nodes(low_run, movable, parameters, kept_report, nullptr, {{0, 1, 2, 3, 99}}),
+               InputError);
 }
 
 // A square pyramid (apex 4 over the ring 0-3 on z = 0) cut at node 5, which lies on the base

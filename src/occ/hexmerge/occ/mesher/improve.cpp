@@ -2,8 +2,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <unordered_map>
+#include <utility>
 
+#include "hexmerge/geometry/quality.h"
 #include "hexmerge/occ/mesher/common.h"
 #include "hexmerge/occ/mesher/remove_slivers.h"
 #include "hexmerge/occ/mesher/smooth_nodes.h"
@@ -15,6 +18,79 @@ namespace {
 constexpr int kQualityRounds = 4;
 
 }  // namespace
+
+std::vector<std::array<index_t, 5>> closing_pyramids(const TetMesh& mesh,
+                                                     const std::vector<double>& frame_points,
+                                                     const std::array<double, 3>& spacing,
+                                                     const std::vector<char>& apex_of) {
+  const std::size_t made = apex_of.size();
+  // Per vertex: its coordinates in cells, whether on the lattice (all whole).
+  std::vector<std::array<double, 3>> cell_of(made);
+  std::vector<char> on_lattice(made, 1);
+  for (std::size_t v = 0; v < made; ++v)
+    for (int a = 0; a < 3; ++a) {
+      cell_of[v][a] = frame_points[3 * v + a] / spacing[a];
+      if (std::abs(cell_of[v][a] - std::round(cell_of[v][a])) > 1e-6) on_lattice[v] = 0;
+    }
+  // Per (apex, face of its cell: axis and side): the corners met and the tets.
+  struct Face {
+    std::array<index_t, 4> corners{};
+    int nb_corners = 0, nb_tets = 0;
+  };
+  std::map<std::pair<index_t, int>, Face> faces;
+  for (index_t t = 0; t < mesh.nb_tets(); ++t) {
+    const index_t* v = mesh.tet(t);
+    int apex = -1, nb_centres = 0;
+    for (int k = 0; k < 4; ++k)
+      if (v[k] < made && apex_of[v[k]]) apex = k, ++nb_centres;
+    if (nb_centres != 1) continue;
+    const index_t c = v[apex];
+    // The side of the cell each other corner is on, per axis (-1, +1), when all are corners of
+    // the cell.
+    int side[3][3], n = 0;
+    bool corners = true;
+    for (int k = 0; k < 4 && corners; ++k) {
+      if (k == apex) continue;
+      const index_t w = v[k];
+      if (w >= made || !on_lattice[w]) corners = false;
+      for (int a = 0; a < 3 && corners; ++a) {
+        const double d = cell_of[w][a] - cell_of[c][a];
+        if (std::abs(std::abs(d) - 0.5) > 1e-6) corners = false;
+        side[n][a] = d > 0 ? 1 : -1;
+      }
+      ++n;
+    }
+    if (!corners) continue;
+    for (int a = 0; a < 3; ++a) {
+      if (side[0][a] != side[1][a] || side[0][a] != side[2][a]) continue;
+      Face& face = faces[{c, 2 * a + (side[0][a] > 0)}];
+      ++face.nb_tets;
+      for (int k = 0; k < 4; ++k) {
+        if (k == apex) continue;
+        if (std::find(face.corners.begin(), face.corners.begin() + face.nb_corners, v[k]) ==
+                face.corners.begin() + face.nb_corners &&
+            face.nb_corners < 4)
+          face.corners[face.nb_corners++] = v[k];
+      }
+    }
+  }
+  std::vector<std::array<index_t, 5>> pyramids;
+  for (const auto& [key, face] : faces) {
+    if (face.nb_tets != 2 || face.nb_corners != 4) continue;
+    const index_t c = key.first;
+    const int a = key.second / 2, b = (a + 1) % 3, d = (a + 2) % 3;
+    // Around the face: (-, -), (+, -), (+, +), (-, +) along axes b and d.
+    std::array<index_t, 5> pyramid{0, 0, 0, 0, c};
+    for (index_t w : face.corners) {
+      const bool up_b = cell_of[w][b] > cell_of[c][b], up_d = cell_of[w][d] > cell_of[c][d];
+      pyramid[up_d ? (up_b ? 2 : 3) : (up_b ? 1 : 0)] = w;
+    }
+    if (scaled_jacobian(CellType::Pyramid, mesh.points.data(), pyramid.data()) < 0)
+      std::swap(pyramid[1], pyramid[3]);
+    pyramids.push_back(pyramid);
+  }
+  return pyramids;
+}
 
 void improve_tets(TetMesh& mesh, const std::vector<double>& frame_points,
                   const std::vector<std::array<index_t, 3>>& boundary,
@@ -78,6 +154,10 @@ void improve_tets(TetMesh& mesh, const std::vector<double>& frame_points,
     for (index_t v : corners) movable[v] = kFixed, on_boundary[v] = 1;
     face_marker[face_key(corners[0], corners[1], corners[2])] = boundary_face[i];
   }
+  std::vector<char> nudged(made, 0);
+  for (std::size_t v = 0; v < made; ++v) nudged[v] = movable[v] == kNudged;
+  const std::vector<std::array<index_t, 5>> pyramids =
+      closing_pyramids(mesh, frame_points, parameters.spacing, nudged);
   // Boundary nodes inside a CAD face move along it, inside a CAD edge along that (a tet on a
   // needle of the surface gets better only so); swept, none.
   SurfacePath* const surface = parameters.sweep_axis < 0 ? parameters.surface : nullptr;
@@ -118,7 +198,9 @@ void improve_tets(TetMesh& mesh, const std::vector<double>& frame_points,
     report.boundary_swaps += flips.boundary_swaps;
     if (round + 1 == kQualityRounds) break;
     SmoothNodesReport moves;
-    smooth_nodes(mesh, movable, SmoothNodesParameters{}, moves, surface);
+    SmoothNodesParameters move_parameters;
+    move_parameters.pyramid_floor = parameters.pyramid_floor;
+    smooth_nodes(mesh, movable, move_parameters, moves, surface, pyramids);
     report.node_moves += moves.moves;
     report.boundary_node_moves += moves.surface_moves;
     if (moves.moves == 0) break;

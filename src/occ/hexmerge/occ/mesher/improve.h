@@ -41,7 +41,25 @@ struct ImproveParameters {
   /// A tet below this scaled Jacobian that no flip improves gets a vertex inside
   /// (RemoveSliversParameters::insert_below); 0: never.
   double insert_below = 0.0;
+  /// The cell centres' closing pyramids (all of whose tets are the lattice's) keep this scaled
+  /// Jacobian when their apex is nudged (SmoothNodesParameters::pyramid_floor): the
+  /// recombination's min_scaled_jacobian, so that they and the core cells' hexahedra they close
+  /// stay. In (0, 1].
+  double pyramid_floor = 0.3;
 };
+
+/// The closing pyramids at some cell centres: at each vertex v with `apex_of[v]` (a lattice cell's
+/// centre), the faces of its cell split into two tets of the mesh that join v to three of the
+/// face's four corners. Base in cell_type.h's order (around the face), apex v, positively
+/// oriented.
+/// @param[in] mesh          the tets
+/// @param[in] frame_points  their vertices in frame coordinates (lattice at multiples of
+///                          `spacing`), at least the first apex_of.size()
+/// @param[in] apex_of       per vertex (the first ones, the others not): whether it may be an apex
+std::vector<std::array<index_t, 5>> closing_pyramids(const TetMesh& mesh,
+                                                     const std::vector<double>& frame_points,
+                                                     const std::array<double, 3>& spacing,
+                                                     const std::vector<char>& apex_of);
 
 /// Flips take out slivers, then the free nodes (not on the surface, not on the half lattice,
 /// not in a swept mesh; the boundary nodes along their CAD face or edge, `surface`) move to raise

@@ -21,12 +21,14 @@ constexpr double kRimAngle = 10.0;
 
 void smooth_nodes(TetMesh& mesh, const std::vector<char>& movable,
                   const SmoothNodesParameters& parameters, SmoothNodesReport& report,
-                  SurfacePath* surface) {
+                  SurfacePath* surface, const std::vector<std::array<index_t, 5>>& pyramids) {
   if (!(parameters.target > 0 && parameters.target <= 1) ||
       !(parameters.nudge_target > 0 && parameters.nudge_target <= 1) ||
-      !(parameters.floor > 0 && parameters.floor <= 1) || parameters.max_passes < 1)
+      !(parameters.floor > 0 && parameters.floor <= 1) ||
+      !(parameters.pyramid_floor > 0 && parameters.pyramid_floor <= 1) || parameters.max_passes < 1)
     throw InputError(
-        "smooth_nodes: target, nudge_target and floor must be in (0, 1], max_passes >= 1",
+        "smooth_nodes: target, nudge_target, floor and pyramid_floor must be in (0, 1], "
+        "max_passes >= 1",
         Entity::Parameter);
   if (movable.size() != mesh.nb_vertices())
     throw InputError("smooth_nodes: one movable flag per node (" +
@@ -47,6 +49,35 @@ void smooth_nodes(TetMesh& mesh, const std::vector<char>& movable,
   }
   auto quality = [&](index_t t) {
     return scaled_jacobian(CellType::Tet, mesh.points.data(), mesh.tet(t));
+  };
+  // The kept pyramids at each apex (compressed rows), and the least each may fall to.
+  std::vector<std::size_t> apex_start(static_cast<std::size_t>(nv) + 1, 0);
+  for (std::size_t i = 0; i < pyramids.size(); ++i) {
+    for (index_t w : pyramids[i])
+      if (w >= nv)
+        throw InputError("smooth_nodes: kept pyramid " + std::to_string(i) + " has node " +
+                             std::to_string(w) + ", out of range (" + std::to_string(nv) +
+                             " nodes)",
+                         Entity::Parameter);
+    ++apex_start[pyramids[i][4] + 1];
+  }
+  for (index_t v = 0; v < nv; ++v) apex_start[v + 1] += apex_start[v];
+  std::vector<std::size_t> apex_of(pyramids.size());
+  {
+    std::vector<std::size_t> fill(apex_start.begin(), apex_start.end() - 1);
+    for (std::size_t i = 0; i < pyramids.size(); ++i) apex_of[fill[pyramids[i][4]]++] = i;
+  }
+  auto pyramid_quality = [&](std::size_t i) {
+    return scaled_jacobian(CellType::Pyramid, mesh.points.data(), pyramids[i].data());
+  };
+  std::vector<double> pyramid_bound(pyramids.size());
+  for (std::size_t i = 0; i < pyramids.size(); ++i)
+    pyramid_bound[i] = std::min(parameters.pyramid_floor, pyramid_quality(i));
+  // Whether node v's kept pyramids are all at their bounds where it stands now.
+  auto pyramids_kept = [&](index_t v) {
+    for (std::size_t i = apex_start[v]; i < apex_start[v + 1]; ++i)
+      if (pyramid_quality(apex_of[i]) < pyramid_bound[apex_of[i]]) return false;
+    return true;
   };
   // The worst tet around node v where it stands now.
   auto worst_at = [&](index_t v) {
@@ -124,7 +155,7 @@ void smooth_nodes(TetMesh& mesh, const std::vector<char>& movable,
       auto try_at = [&](const Vec3& p) {
         place(v, p);
         const double q = worst_above(v, best + 1e-12);
-        if (q > best + 1e-12) {
+        if (q > best + 1e-12 && pyramids_kept(v)) {
           best = q, here = p;
           return true;
         }

@@ -2,6 +2,7 @@
 /// @file
 /// Moving free nodes of a tet mesh to raise the worst tet around them.
 
+#include <array>
 #include <cstddef>
 #include <vector>
 
@@ -52,6 +53,10 @@ struct SmoothNodesParameters {
   double floor = 0.2;
   /// Passes over the nodes, at least 1; a pass that moves nothing ends the run.
   int max_passes = 4;
+  /// A move of a kept pyramid's apex (smooth_nodes()' `pyramids`) leaves the pyramid's scaled
+  /// Jacobian at least this, or no lower than it was where it was below: the elements that rely
+  /// on the apex stay acceptable to the recombination. In (0, 1].
+  double pyramid_floor = 0.3;
 };
 
 /// What smooth_nodes() did.
@@ -71,7 +76,8 @@ struct SmoothNodesReport {
 /// surface's two parameter directions and their diagonals (on a curve: its one direction; the
 /// centroid taken along the tangents), each position tried on the path. Only the tets around
 /// a moved node change, so the mesh's minimum never decreases and no tet turns over. The tets
-/// stay as they are (no flips; see remove_slivers()).
+/// stay as they are (no flips; see remove_slivers()). A node that is the apex of some of
+/// `pyramids` takes a position only where each of them keeps `pyramid_floor`.
 ///
 /// @param[in,out] mesh        a valid tet mesh (validate_tet_mesh); only `points` change
 /// @param[in]     movable     #V NodeMobility values: the nodes that may move and how (say,
@@ -80,9 +86,13 @@ struct SmoothNodesReport {
 /// @param[in]     parameters  see SmoothNodesParameters
 /// @param[out]    report      the minimum before and after, the moves
 /// @param[in,out] surface     where kOnSurface nodes go (null: they stay)
-/// @throws InputError for a `movable` of another size than #V or bad parameters
+/// @param[in]     pyramids    pyramids to keep (cell_type.h's order: base 0-1-2-3, apex 4),
+///                            each the union of tets of the mesh, positively oriented
+/// @throws InputError for a `movable` of another size than #V, a pyramid with a node out of
+///         range, or bad parameters
 void smooth_nodes(TetMesh& mesh, const std::vector<char>& movable,
                   const SmoothNodesParameters& parameters, SmoothNodesReport& report,
-                  SurfacePath* surface = nullptr);
+                  SurfacePath* surface = nullptr,
+                  const std::vector<std::array<index_t, 5>>& pyramids = {});
 
 }  // namespace hexmerge
