@@ -312,6 +312,15 @@ std::size_t place_graded_points(const SizeField& field, const Lattice& lattice,
     }
     std::sort(blocks.begin(), blocks.end());
     blocks.erase(std::unique(blocks.begin(), blocks.end()), blocks.end());
+    // The surface's crossings of the line through the last row asked (j, k): the points of a
+    // row share it, and the scan goes row by row.
+    long row_j = -1, row_k = -1;
+    std::vector<double> row_crossings;
+    const auto inside = [&](const Vec3& q, long j, long k) {
+      if (j != row_j || k != row_k)
+        row_crossings = parity.crossings(q.y, q.z), row_j = j, row_k = k;
+      return Parity::inside_given(row_crossings, q.x);
+    };
     const auto visit = [&](long i, long j, long k) {
       if (i % 2 == 0 && j % 2 == 0 && k % 2 == 0) return;  // a coarser level's point
       const long ijk[3] = {i, j, k};
@@ -327,11 +336,12 @@ std::size_t place_graded_points(const SizeField& field, const Lattice& lattice,
       for (int a = 0; a < 3; ++a)
         if (ijk[a] % scale == 0) index[a] = static_cast<int>(ijk[a] / scale);
       const int face = around.on_lattice_face(q, index);
-      if (face < 0 && (!parity.inside(q) || around.every_face.any_within(q, room))) return;
+      if (face < 0 && around.every_face.any_within(q, room)) return;
       if (around.curved.any_within(q, room) || around.surface_points.any_within(q, room) ||
           around.layer_points.any_within(q, room) || around.core_points.any_within(q, room) ||
           around.core_balls.holds(q, 0.05 * size) || graded.any_within(q, 0.5 * room))
         return;
+      if (face < 0 && !inside(q, j, k)) return;  // the costliest test last
       graded.add(q);
       inserted.points.push_back(q);
       inserted.face.push_back(face);
