@@ -60,6 +60,31 @@ TEST(lay_lattice, spacing_puts_planes_on_the_steps) {
     }
 }
 
+// 27.5 x 15 x 18 at h 6: the counts nearest L / h per axis (5, 2, 3: spacings 5.5, 7.5, 6)
+// put the centre of the cell across an x face 5.5 from a cell's centre, inside its circumsphere
+// (radius 5.53), and Delaunay would join it to the cell's corners. 3 cells along y (5.0) keep
+// every apex outside.
+TEST(lay_lattice, every_spacing_exceeds_half_the_cells_diagonal) {
+  const Prepared p = prepare(occ_box(0, 0, 0, 27.5, 15, 18), 6.0);
+  const auto& l = p.lattice;
+  EXPECT_EQ(l.cells[0], 5);
+  EXPECT_EQ(l.cells[1], 3);
+  EXPECT_EQ(l.cells[2], 3);
+  const double half_diagonal =
+      0.5 * std::sqrt(l.spacing[0] * l.spacing[0] + l.spacing[1] * l.spacing[1] +
+                      l.spacing[2] * l.spacing[2]);
+  for (int a = 0; a < 3; ++a) {
+    EXPECT_GT(l.spacing[a], half_diagonal) << "axis " << a;
+    EXPECT_NEAR(l.cells[a] * l.spacing[a], l.extent[a], 1e-9);
+  }
+  EXPECT_EQ(l.nb_lattice_faces, 6u);
+  // Near-cubic cells keep the counts nearest L / h.
+  const Prepared q = prepare(occ_box(0, 0, 0, 30, 15, 18), 6.0);
+  EXPECT_EQ(q.lattice.cells[0], 5);
+  EXPECT_EQ(q.lattice.cells[1], 2);
+  EXPECT_EQ(q.lattice.cells[2], 3);
+}
+
 TEST(lay_lattice, size_larger_than_the_shape_is_refused) {
   EXPECT_THROW(prepare(occ_box(0, 0, 0, 10, 10, 10), 11.0), InputError);
 }

@@ -48,7 +48,10 @@ struct Lattice {
 
 /// The lattice in `frame` through the bounding box of the surface's nodes (world coordinates):
 /// cells about h wide per axis, chosen so that as many axis-normal planar faces as possible lie
-/// on lattice planes (the box's own faces always do). Without `lattice_faces`, no face is a
+/// on lattice planes (the box's own faces always do), and every spacing exceeds half the cell's
+/// diagonal where the best few counts per axis allow (else a closing pyramid's apex, the centre
+/// of the cell across a face, lies in the cell's circumsphere and Delaunay breaks the cell).
+/// Without `lattice_faces`, no face is a
 /// lattice face (its planar faces are treated like the others).
 /// @throws InputError when h is larger than the shape's largest extent
 Lattice lay_lattice(const Shape& shape, const Frame& frame, const std::vector<Vec3>& surface_nodes,
