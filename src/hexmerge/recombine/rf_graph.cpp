@@ -202,7 +202,7 @@ std::vector<SearchProgram> compile_search_programs(const RFGraph& graph, int gra
   std::vector<SearchProgram> programs;
   for (const auto& orbit : root_orbits(graph)) {
     const int root = orbit.front();
-    SearchProgram program{graph_index, root, graph.type, graph.nb_nodes, {}};
+    SearchProgram program{graph_index, root, graph.type, graph.nb_nodes, {}, {}, {}};
     // Breadth-first assignment order over links; slot[g] = program node of graph node g.
     std::vector<int> slot(graph.nb_nodes, -1), order{root};
     slot[root] = 0;

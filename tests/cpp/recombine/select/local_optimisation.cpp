@@ -43,7 +43,9 @@ TEST(select_local_optimisation, moves_never_add_cells_and_keep_the_selection_dis
       cells[on] = selection_cells(mesh, all, s, owners);
       for (index_t t = 0; t < mesh.nb_tets(); ++t) EXPECT_LE(owners[t], 1) << "tet " << t;
       if (on) moves += s.local_moves;
-      if (!on) EXPECT_EQ(s.local_moves, 0u);
+      if (!on) {
+        EXPECT_EQ(s.local_moves, 0u);
+      }
     }
     EXPECT_LE(cells[1], cells[0]);
   }
