@@ -81,9 +81,14 @@ def test_part_hex_volume_floor(meshed: dict, name: str) -> None:
     assert sorted(shares)[1] >= HEX_FLOOR[name], shares
 
 
-# Issue 13: slivers left on real parts (every one of these three today).
-@pytest.mark.xfail(strict=True, reason="issue 13: elements with scaled Jacobian below 0.2 on real parts")
-@pytest.mark.parametrize("name", [n for n, _ in PARTS], ids=IDS)
+# Issue 13: slivers left on real parts (on the crankshaft and gmsh_part; the third part's went
+# when BRepMesh's strips along CAD edges were split, minimum 0.200).
+SLIVERS_LEFT = {"gmsh_Kurbelwelle.stp", "gmsh_part.step"}
+
+
+@pytest.mark.parametrize("name", [
+    pytest.param(n, marks=pytest.mark.xfail(strict=True, reason="issue 13: elements with scaled Jacobian below 0.2"))
+    if n in SLIVERS_LEFT else n for n, _ in PARTS], ids=IDS)
 def test_part_min_scaled_jacobian(meshed: dict, name: str) -> None:
     assert meshed[name][4]["min_scaled_jacobian"] >= SJ_FLOOR
 

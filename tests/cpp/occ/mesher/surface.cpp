@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 
@@ -87,6 +88,39 @@ TEST(refine, sides_at_most_h_on_the_cad) {
   for (std::size_t n = 1; n < p.surface.seed.size(); ++n)
     EXPECT_LT(p.surface.seed[n - 1], p.surface.seed[n]);  // the kept nodes, in their old order
   EXPECT_LE(p.surface.nodes.size(), before);
+}
+
+// A thin cylinder (radius 0.2 h, 2 h tall): BRepMesh divides its circles into eight segments of
+// 0.15 h and joins them by strips along the axis; a tet on such a strip is no better than its
+// 9-degree angle. refine() splits the strips' long sides until no triangle with a side on a
+// circle has a side over three times as long.
+TEST(refine, strips_along_a_cad_edge_are_split) {
+  const double h = 5;
+  Prepared p = prepare(occ_cylinder(0.2 * h, 2 * h), h);
+  const auto& lattice = p.lattice;
+  // The strips BRepMesh made, before.
+  const auto worst_strip = [&] {
+    double ratio = 0;
+    for (const auto& t : p.surface.triangles) {
+      if (lattice.lattice_face[t.face]) continue;
+      double shortest = 1e300, longest = 0;
+      bool short_on_edge = false;
+      for (int c = 0; c < 3; ++c) {
+        const int a = t.node[c], b = t.node[(c + 1) % 3];
+        const double l = (p.surface.nodes[a] - p.surface.nodes[b]).norm();
+        if (l < shortest)
+          shortest = l, short_on_edge = p.surface.segments.count(mesher::pair_key(a, b));
+        longest = std::max(longest, l);
+      }
+      if (short_on_edge) ratio = std::max(ratio, longest / shortest);
+    }
+    return ratio;
+  };
+  ASSERT_GT(worst_strip(), 5);
+  mesher::refine(p.shape, p.surface, h, 0.02 * h, lattice.lattice_face, lattice.lattice_edge);
+  // Closed, outward, on the CAD; its volume between the inscribed octagon's and the cylinder's.
+  expect_sound_surface(p, p.surface, M_PI * h * h * 0.04 * 2 * h, 0.1, 1e-6 * h);
+  EXPECT_LE(worst_strip(), 3 * (1 + 1e-9));
 }
 
 // A cap of three nodes of one CAD edge (BRepMesh's node inside a short curved edge): its middle

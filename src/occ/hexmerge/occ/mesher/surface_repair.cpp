@@ -47,6 +47,12 @@ constexpr int kSmoothingRounds = 5;
 constexpr double kNeedleAngle = 20.0 * M_PI / 180;
 // A needle's node moves no nearer than this fraction of h to its neighbours.
 constexpr double kNeedleNearest = 0.125;
+// A triangle whose shortest side lies on a CAD edge and whose longest side is more than this
+// many times longer (a strip of BRepMesh's between two finely divided edges: the sides of a
+// short cylinder, 0.12 x 0.75 h, 9 degrees) has its longest side split, down to
+// kStripSmallest of the size wanted: a tet on it is no better than its smallest angle.
+constexpr double kStripRatio = 3.0;
+constexpr double kStripSmallest = 0.2;
 // Sides shorter than this fraction of h inside one face are collapsed after the refinement.
 constexpr double kCollapseSide = 0.25;
 // Triangles with a smaller angle than this (radians, 5 degrees) have their nodes inside a face
@@ -105,9 +111,9 @@ class FaceGaps {
 }  // namespace
 
 // Splits the triangles of the faces that are not lattice faces until no side is longer than
-// `target` (sides on edges between lattice faces excepted); lattice-face triangles are split
-// only where a neighbour's side must be. New nodes lie on the CAD edge (sides on an edge) or on
-// the face's surface.
+// `target` (sides on edges between lattice faces excepted), nor a strip along a CAD edge
+// (kStripRatio); lattice-face triangles are split only where a neighbour's side must be. New
+// nodes lie on the CAD edge (sides on an edge) or on the face's surface.
 void refine(const Shape& s, Surface& surface, double target, double deflection,
             const std::vector<bool>& lattice_face, const std::vector<bool>& lattice_edge,
             const SizeField* field) {
@@ -390,7 +396,19 @@ void refine(const Shape& s, Surface& surface, double target, double deflection,
     auto seg = surface.segments.find(pair_key(a, b));
     if (seg != surface.segments.end() && lattice_edge[seg->second.edge] && wanted >= target)
       return -1;
-    return length(a, b) > wanted && !unsplittable.count(pair_key(a, b)) ? c : -1;
+    if (unsplittable.count(pair_key(a, b))) return -1;
+    if (length(a, b) > wanted) return c;
+    // A strip along a CAD edge (kStripRatio).
+    int shortest = 0;
+    for (int k = 1; k < 3; ++k)
+      if (length(t.node[k], t.node[(k + 1) % 3]) <
+          length(t.node[shortest], t.node[(shortest + 1) % 3]))
+        shortest = k;
+    const int p = t.node[shortest], q = t.node[(shortest + 1) % 3];
+    return length(a, b) > kStripRatio * length(p, q) && length(a, b) > kStripSmallest * wanted &&
+                   surface.segments.count(pair_key(p, q))
+               ? c
+               : -1;
   };
   // Splits side c of triangle ti (in every triangle that has it), then restores the Delaunay
   // property around the new node. Rivara's longest-edge propagation: the side is split only

@@ -16,7 +16,10 @@ struct Shape;
 class SizeField;
 
 /// Splits the triangles of the faces that are not lattice faces until no side is longer than
-/// `target` (sides on edges between lattice faces excepted); lattice-face triangles are split
+/// `target` (sides on edges between lattice faces excepted) and no triangle whose shortest side
+/// lies on a CAD edge has a side over three times longer (down to a fifth of the size wanted:
+/// BRepMesh's strips between finely divided edges, whose small angles no tet on them gets
+/// over); lattice-face triangles are split
 /// only where a neighbour's side must be. New nodes lie on the CAD edge (sides on an edge) or on
 /// the face's surface. Then needles are smoothed on their face and the Delaunay flips redone.
 /// @param[in] lattice_face  per face, whether it is a lattice face (planar, on a lattice plane)
