@@ -91,8 +91,10 @@ TEST(closing_pyramids, finds_the_pyramids_over_the_faces_of_a_centres_cell) {
     if (mesh.nb_tets() == 0) GTEST_SKIP() << "the tetgen program is not installed";
     std::vector<char> apex(mesh.nb_vertices(), 0);
     apex[64] = apex[65] = 1;
-    const std::vector<double> frame = mesh.points;
-    const auto pyramids = mesher::closing_pyramids(mesh, frame, {1, 1, 1}, apex);
+    std::vector<std::array<double, 3>> cell_of(mesh.nb_vertices());  // spacing 1
+    for (index_t v = 0; v < mesh.nb_vertices(); ++v)
+      for (int a = 0; a < 3; ++a) cell_of[v][a] = mesh.point(v)[a];
+    const auto pyramids = mesher::closing_pyramids(mesh, cell_of, apex);
     EXPECT_EQ(pyramids.size(), with_point ? 11u : 12u);
     for (const auto& pyramid : pyramids) {
       // A face of the apex's cell (one axis at a whole coordinate 0.5 off the apex), positive,

@@ -19,19 +19,15 @@ constexpr int kQualityRounds = 4;
 
 }  // namespace
 
-std::vector<std::array<index_t, 5>> closing_pyramids(const TetMesh& mesh,
-                                                     const std::vector<double>& frame_points,
-                                                     const std::array<double, 3>& spacing,
-                                                     const std::vector<char>& apex_of) {
+std::vector<std::array<index_t, 5>> closing_pyramids(
+    const TetMesh& mesh, const std::vector<std::array<double, 3>>& cell_of,
+    const std::vector<char>& apex_of) {
   const std::size_t made = apex_of.size();
-  // Per vertex: its coordinates in cells, whether on the lattice (all whole).
-  std::vector<std::array<double, 3>> cell_of(made);
+  // Per vertex: whether on the lattice (all its coordinates whole).
   std::vector<char> on_lattice(made, 1);
   for (std::size_t v = 0; v < made; ++v)
-    for (int a = 0; a < 3; ++a) {
-      cell_of[v][a] = frame_points[3 * v + a] / spacing[a];
+    for (int a = 0; a < 3; ++a)
       if (std::abs(cell_of[v][a] - std::round(cell_of[v][a])) > 1e-6) on_lattice[v] = 0;
-    }
   // Per (apex, face of its cell: axis and side): the corners met and the tets.
   struct Face {
     std::array<index_t, 4> corners{};
@@ -156,8 +152,7 @@ void improve_tets(TetMesh& mesh, const std::vector<double>& frame_points,
   }
   std::vector<char> nudged(made, 0);
   for (std::size_t v = 0; v < made; ++v) nudged[v] = movable[v] == kNudged;
-  const std::vector<std::array<index_t, 5>> pyramids =
-      closing_pyramids(mesh, frame_points, parameters.spacing, nudged);
+  const std::vector<std::array<index_t, 5>> pyramids = closing_pyramids(mesh, cell_of, nudged);
   // Boundary nodes inside a CAD face move along it, inside a CAD edge along that (a tet on a
   // needle of the surface gets better only so); swept, none.
   SurfacePath* const surface = parameters.sweep_axis < 0 ? parameters.surface : nullptr;

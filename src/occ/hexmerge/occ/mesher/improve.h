@@ -52,14 +52,13 @@ struct ImproveParameters {
 /// centre), the faces of its cell split into two tets of the mesh that join v to three of the
 /// face's four corners. Base in cell_type.h's order (around the face), apex v, positively
 /// oriented.
-/// @param[in] mesh          the tets
-/// @param[in] frame_points  their vertices in frame coordinates (lattice at multiples of
-///                          `spacing`), at least the first apex_of.size()
-/// @param[in] apex_of       per vertex (the first ones, the others not): whether it may be an apex
-std::vector<std::array<index_t, 5>> closing_pyramids(const TetMesh& mesh,
-                                                     const std::vector<double>& frame_points,
-                                                     const std::array<double, 3>& spacing,
-                                                     const std::vector<char>& apex_of);
+/// @param[in] mesh     the tets
+/// @param[in] cell_of  their vertices' frame coordinates in cells (lattice points whole), at
+///                     least the first apex_of.size()
+/// @param[in] apex_of  per vertex (the first ones, the others not): whether it may be an apex
+std::vector<std::array<index_t, 5>> closing_pyramids(
+    const TetMesh& mesh, const std::vector<std::array<double, 3>>& cell_of,
+    const std::vector<char>& apex_of);
 
 /// Flips take out slivers, then the free nodes (not on the surface, not on the half lattice,
 /// not in a swept mesh; the boundary nodes along their CAD face or edge, `surface`) move to raise

@@ -17,6 +17,25 @@ namespace {
 // while it stays above this (degrees).
 constexpr double kRimAngle = 10.0;
 
+// Items by node (compressed rows): item i names the nodes keys[per_item * i] to
+// keys[per_item * (i + 1) - 1]; the items naming node v are of[start[v]] to of[start[v + 1] - 1],
+// in item order.
+struct RowsByNode {
+  std::vector<std::size_t> start;
+  std::vector<index_t> of;
+};
+RowsByNode rows_by_node(index_t nb_nodes, const std::vector<index_t>& keys, std::size_t per_item) {
+  RowsByNode rows;
+  rows.start.assign(static_cast<std::size_t>(nb_nodes) + 1, 0);
+  for (index_t v : keys) ++rows.start[v + 1];
+  for (index_t v = 0; v < nb_nodes; ++v) rows.start[v + 1] += rows.start[v];
+  rows.of.resize(rows.start.back());
+  std::vector<std::size_t> fill(rows.start.begin(), rows.start.end() - 1);
+  for (std::size_t k = 0; k < keys.size(); ++k)
+    rows.of[fill[keys[k]]++] = static_cast<index_t>(k / per_item);
+  return rows;
+}
+
 }  // namespace
 
 void smooth_nodes(TetMesh& mesh, const std::vector<char>& movable,
@@ -37,21 +56,15 @@ void smooth_nodes(TetMesh& mesh, const std::vector<char>& movable,
                      Entity::Parameter);
   report = SmoothNodesReport{};
   const index_t nv = mesh.nb_vertices(), nt = mesh.nb_tets();
-  // The tets at each node (compressed rows).
-  std::vector<std::size_t> start(static_cast<std::size_t>(nv) + 1, 0);
-  for (index_t v : mesh.tets) ++start[v + 1];
-  for (index_t v = 0; v < nv; ++v) start[v + 1] += start[v];
-  std::vector<index_t> at(start.back());
-  {
-    std::vector<std::size_t> fill(start.begin(), start.end() - 1);
-    for (index_t t = 0; t < nt; ++t)
-      for (int k = 0; k < 4; ++k) at[fill[mesh.tet(t)[k]]++] = t;
-  }
+  // The tets at each node.
+  const RowsByNode tets_at = rows_by_node(nv, mesh.tets, 4);
+  const std::vector<std::size_t>& start = tets_at.start;
+  const std::vector<index_t>& at = tets_at.of;
   auto quality = [&](index_t t) {
     return scaled_jacobian(CellType::Tet, mesh.points.data(), mesh.tet(t));
   };
-  // The kept pyramids at each apex (compressed rows), and the least each may fall to.
-  std::vector<std::size_t> apex_start(static_cast<std::size_t>(nv) + 1, 0);
+  // The kept pyramids at each apex, and the least each may fall to.
+  std::vector<index_t> apexes(pyramids.size());
   for (std::size_t i = 0; i < pyramids.size(); ++i) {
     for (index_t w : pyramids[i])
       if (w >= nv)
@@ -59,14 +72,11 @@ void smooth_nodes(TetMesh& mesh, const std::vector<char>& movable,
                              std::to_string(w) + ", out of range (" + std::to_string(nv) +
                              " nodes)",
                          Entity::Parameter);
-    ++apex_start[pyramids[i][4] + 1];
+    apexes[i] = pyramids[i][4];
   }
-  for (index_t v = 0; v < nv; ++v) apex_start[v + 1] += apex_start[v];
-  std::vector<std::size_t> apex_of(pyramids.size());
-  {
-    std::vector<std::size_t> fill(apex_start.begin(), apex_start.end() - 1);
-    for (std::size_t i = 0; i < pyramids.size(); ++i) apex_of[fill[pyramids[i][4]]++] = i;
-  }
+  const RowsByNode pyramids_at = rows_by_node(nv, apexes, 1);
+  const std::vector<std::size_t>& apex_start = pyramids_at.start;
+  const std::vector<index_t>& apex_of = pyramids_at.of;
   auto pyramid_quality = [&](std::size_t i) {
     return scaled_jacobian(CellType::Pyramid, mesh.points.data(), pyramids[i].data());
   };
