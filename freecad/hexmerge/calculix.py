@@ -270,15 +270,13 @@ def split_pyramids_in_input(path):
     node_end = None  # (file, line) after the last *NODE block
     blocks = []  # (file, header line, end line, type, [(id, nodes)])
     for name, lines in files.items():
+        points.update(read_nodes(lines))
         i = 0
         while i < len(lines):
             stripped = lines[i].strip()
             if re.match(r"\*NODE\s*(,|$)", stripped, re.I):
                 j = i + 1
                 while j < len(lines) and not lines[j].lstrip().startswith("*"):
-                    parts = lines[j].split(",")
-                    if len(parts) >= 4 and parts[0].strip():
-                        points[int(parts[0])] = tuple(float(x) for x in parts[1:4])
                     j += 1
                 node_end = (name, j)
                 i = j
