@@ -67,7 +67,6 @@ VARIANTS = [
     ("recombined, defaults", {}, None),
     ("pyramids anywhere (collapsed C3D8/C3D20)", {"pyramid_placement": "anywhere"}, None),
     ("pyramids anywhere, as wedges C3D6/C3D15", {"pyramid_placement": "anywhere"}, "wedge"),
-
     ("no pyramid with a boundary face", {"pyramid_placement": "no_boundary_face"}, None),
     ("no pyramid with a boundary node (the add-on's CalculiX default)",
      {"pyramid_placement": "no_boundary_node"}, None),
@@ -264,7 +263,6 @@ def postprocess_inp(path, mode):
     changed = {}
     out = []
     last = 0
-
     for first, end, kind, elements in blocks:
         out += lines[last:first]
         last = end
