@@ -527,6 +527,7 @@ py::tuple run_mesh_shape(const std::string& brep, const std::map<std::string, st
   d["face_layers"] = face_layers;
   d["sweep_skipped"] = report.sweep_skipped;
   d["nb_graded_points"] = report.nb_graded_points;
+  d["nb_facet_points"] = report.nb_facet_points;
   d["nb_feature_edges"] = report.nb_feature_edges;
   if (second_order) {
     d["nb_projected_mid_nodes"] = report.nb_projected_mid_nodes;

@@ -305,7 +305,9 @@ def test_short_cad_edges_get_sizes_of_their_own(tmp_path) -> None:
     assert quality >= 0.2
     off, longest_off, quality_off = at_notch(0.0)
     assert off["nb_feature_edges"] == 0 and off["nb_graded_points"] == 0
-    assert longest_off > h and quality_off < quality
+    # (The box's faces are lattice faces, whose triangles refine_facet() keeps under 0.6 h in
+    # circumradius: 3.9 mm sides beside the 0.4 mm edges, 5.7 mm before.)
+    assert longest_off > 0.75 * h and quality_off < quality
     # The recombination of the graded tets passes the checker.
     mesh, report = hexmerge.mesh_shape(shape, h)
     tets, _ = hexmerge.mesh_shape(shape, h, recombine=False)

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <map>
 #include <unordered_set>
 #include <utility>
@@ -130,6 +131,74 @@ TEST(TriangulateFacets, AFacetItCannotTakeIsLeftToTetGen) {
     EXPECT_EQ(facets[f].polygons, before[f].polygons) << "facet " << f;
     EXPECT_EQ(facets[f].marker, before[f].marker);
   }
+}
+
+// A 10 x 4 facet on z = 2 whose bottom side has a node every 0.25 and whose top side has its
+// corners only: its triangulation fans from the top corners to the bottom's nodes (angles of a
+// few degrees). refine_facet() adds points inside it, never where `accept` refuses (a disc
+// around (8, 2)), and the triangulation with them has a larger smallest angle and fewer
+// triangles under 20 degrees.
+TEST(RefineFacet, PointsInsideRaiseTheSmallestAngle) {
+  std::vector<Vec3> points;
+  Facet facet{{{}}, {}, 4};
+  for (int i = 0; i <= 40; ++i) {
+    points.push_back({0.25 * i, 0, 2});
+    facet.polygons[0].push_back(static_cast<int>(points.size()) - 1);
+  }
+  for (const Vec3& corner : {Vec3{10, 4, 2}, Vec3{0, 4, 2}}) {
+    points.push_back(corner);
+    facet.polygons[0].push_back(static_cast<int>(points.size()) - 1);
+  }
+  const auto smallest_angles = [](const std::vector<Vec3>& p, const std::vector<Facet>& facets,
+                                  int& under_20) {
+    double least = 180;
+    under_20 = 0;
+    for (const Facet& f : facets) {
+      const std::vector<int>& t = f.polygons[0];
+      double tri = 180;
+      for (int k = 0; k < 3; ++k) {
+        const Vec3 u = p[t[(k + 1) % 3]] - p[t[k]], w = p[t[(k + 2) % 3]] - p[t[k]];
+        tri = std::min(tri, std::acos(u.dot(w) / (u.norm() * w.norm())) * 180 / M_PI);
+      }
+      least = std::min(least, tri);
+      under_20 += tri < 20;
+    }
+    return least;
+  };
+  std::vector<Facet> before{facet};
+  ASSERT_EQ(triangulate_facets(before, points, nullptr), 1u);
+  int skinny_before = 0;
+  const double least_before = smallest_angles(points, before, skinny_before);
+  ASSERT_LT(least_before, 10);
+
+  const Vec3 refused{8, 2, 2};
+  const std::vector<Vec3> added = tetgen::refine_facet(
+      facet, points, 20 * M_PI / 180, 2.0, [&](const Vec3& q) { return (q - refused).norm() > 1; },
+      1000);
+  ASSERT_FALSE(added.empty());
+  Facet refined = facet;
+  std::vector<Vec3> all = points;
+  for (const Vec3& q : added) {
+    EXPECT_GT(q.x, 0);
+    EXPECT_LT(q.x, 10);
+    EXPECT_GT(q.y, 0);
+    EXPECT_LT(q.y, 4);
+    EXPECT_EQ(q.z, 2.0);
+    EXPECT_GT((q - refused).norm(), 1);
+    refined.polygons.push_back({static_cast<int>(all.size())});
+    all.push_back(q);
+  }
+  std::vector<Facet> after{refined};
+  ASSERT_EQ(triangulate_facets(after, all, nullptr), 1u);
+  int skinny_after = 0;
+  const double least_after = smallest_angles(all, after, skinny_after);
+  EXPECT_GT(least_after, least_before);
+  EXPECT_LT(skinny_after, skinny_before);
+  // Nothing more than asked for.
+  EXPECT_LE(tetgen::refine_facet(
+                facet, points, 20 * M_PI / 180, 2.0, [](const Vec3&) { return true; }, 3)
+                .size(),
+            3u);
 }
 
 }  // namespace

@@ -242,6 +242,7 @@ struct MeshShapeReport {
   /// The local sizes (MeshShapeParameters::local_sizes) as applied, in their order
   std::vector<LocalSizeApplied> local_sizes;
   std::size_t nb_graded_points = 0;  ///< points of the finer lattices around local sizes
+  std::size_t nb_facet_points = 0;   ///< points added inside lattice faces (refine_facet)
   std::size_t nb_feature_edges = 0;  ///< short CAD edges given a size by `feature_size`
   /// The face layers (MeshShapeParameters::face_layers) as applied, in their order
   std::vector<FaceLayersApplied> face_layers;

@@ -10,6 +10,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <unordered_set>
 #include <vector>
 
@@ -36,6 +37,21 @@ namespace hexmerge::tetgen {
 /// @return the number of facets triangulated
 std::size_t triangulate_facets(std::vector<Facet>& facets, const std::vector<Vec3>& points,
                                const std::unordered_set<std::uint64_t>* delaunay_edges);
+
+/// Points inside an axis-normal facet that raise the smallest angle of its constrained Delaunay
+/// triangulation (its polygons' points and sides, its single points): in rounds, the
+/// circumcentres of the triangles with an angle under `min_angle` (radians), worst first, then of
+/// those whose circumradius exceeds `max_radius`, largest first, where
+/// the centre lies inside the facet, outside the diametral circle of every side near it (the
+/// sides are not split) and at least half the triangle's circumradius from every point and
+/// every other centre of the round, and where `accept` takes it; until no triangle gets one or
+/// `max_points` are added. The facet is not changed. Nothing for a facet triangulate_facets()
+/// would leave to TetGen.
+/// @return the points, in the facet's plane, in the points' coordinates
+std::vector<Vec3> refine_facet(const Facet& facet, const std::vector<Vec3>& points,
+                               double min_angle, double max_radius,
+                               const std::function<bool(const Vec3&)>& accept,
+                               std::size_t max_points);
 
 /// Whether the facet has a loop (a polygon of more than three points) for TetGen to triangulate.
 bool has_loop(const Facet& facet);

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 
@@ -83,6 +84,59 @@ TEST(lay_lattice, every_spacing_exceeds_half_the_cells_diagonal) {
   EXPECT_EQ(q.lattice.cells[0], 5);
   EXPECT_EQ(q.lattice.cells[1], 2);
   EXPECT_EQ(q.lattice.cells[2], 3);
+}
+
+// The step's side at x = 13 of 30: no count of equal cells about h = 3 wide puts a plane on
+// it (13 / 30 has no denominator from 7 to 13), so the planes along x are placed: 0 to 13 and 13
+// to 30 each cut into equal cells, all within the band around the uniform spacing, and every
+// planar face is a lattice face. The cells across the step keep their apexes outside their
+// circumspheres (add_core() checks it cell by cell): the block is all core, less the cells whose
+// closing pyramids would stick out.
+TEST(lay_lattice, planes_placed_on_faces_no_spacing_fits) {
+  const double h = 3.0;
+  const Prepared p = prepare(occ_step(), h);
+  const auto& l = p.lattice;
+  ASSERT_FALSE(l.uniform(0));
+  EXPECT_TRUE(l.uniform(1));
+  EXPECT_TRUE(l.uniform(2));
+  ASSERT_EQ(l.ticks[0].size(), static_cast<std::size_t>(l.cells[0]) + 1);
+  EXPECT_EQ(l.ticks[0].front(), 0.0);
+  EXPECT_NEAR(l.ticks[0].back(), 30.0, 1e-9);
+  EXPECT_TRUE(std::any_of(l.ticks[0].begin(), l.ticks[0].end(),
+                          [](double t) { return std::abs(t - 13.0) < 1e-9; }));
+  for (int i = 0; i < l.cells[0]; ++i) {
+    EXPECT_GE(l.width(0, i), 0.75 * h) << i;
+    EXPECT_LE(l.width(0, i), 1.5 * h) << i;
+    // The lattice coordinates of a plane and of a cell's middle, and back.
+    EXPECT_DOUBLE_EQ(l.at(0, i), l.ticks[0][i]);
+    EXPECT_NEAR(l.at(0, i + 0.5), 0.5 * (l.ticks[0][i] + l.ticks[0][i + 1]), 1e-12);
+    EXPECT_NEAR(l.cells_at(0, l.at(0, i + 0.25)), i + 0.25, 1e-12);
+  }
+  std::size_t planar = 0;
+  for (int f = 0; f < p.shape.faces.Extent(); ++f)
+    if (l.face_plane[f]) {
+      EXPECT_TRUE(l.lattice_face[f]) << f;
+      ++planar;
+    }
+  EXPECT_EQ(p.shape.faces.Extent(), static_cast<int>(planar));  // every face is planar
+  EXPECT_EQ(l.nb_lattice_faces, planar);
+
+  const Placed placed = place(p);
+  const mesher::KeptPoints kept =
+      mesher::keep_lattice_points(l, *placed.around, *placed.parity, 0.3 * h, 0.3 * h);
+  mesher::InsertedPoints inserted;
+  const mesher::CoreCounts core =
+      mesher::add_core(l, *placed.around, *placed.parity, kept, -1, h, inserted);
+  // Every cell of the shape is a core cell: the step's cells fill it exactly.
+  std::size_t inside = 0;
+  for (int k = 0; k < l.cells[2]; ++k)
+    for (int j = 0; j < l.cells[1]; ++j)
+      for (int i = 0; i < l.cells[0]; ++i) {
+        bool on = false;
+        inside += occ_inside(p.shape, l.frame.to_world(l.cell_centre(i, j, k)), on);
+      }
+  EXPECT_EQ(core.nb_core_cells, inside);
+  EXPECT_EQ(core.nb_apex_points, 0u);
 }
 
 TEST(lay_lattice, size_larger_than_the_shape_is_refused) {

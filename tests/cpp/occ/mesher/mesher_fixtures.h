@@ -24,6 +24,9 @@ TopoDS_Shape occ_cylinder(double r, double height);
 /// An L: a 60 x 30 x 10 foot and a 10 x 30 x 40 flange at x in [0, 10], extruded along y, with
 /// a hole of radius 4 along z through the foot at (40, 15). (No extrusion along any axis.)
 TopoDS_Shape occ_bracket();
+/// A step no one spacing fits: a 30 x 20 x 10 block and a 13 x 20 x 10 block on it at x in
+/// [0, 13] (faces normal to x at 0, 13 and 30).
+TopoDS_Shape occ_step();
 /// A 60 x 40 x 10 plate with a hole of radius 8 along z through its centre (30, 20).
 TopoDS_Shape occ_plate_with_hole();
 

@@ -3,6 +3,10 @@
 /// The lattice frame: three orthonormal axes and an origin (internal header of mesh_shape(); no
 /// OpenCASCADE). Everything from the lattice on works in frame coordinates.
 
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
 #include "hexmerge/geometry/vec3.h"
 
 namespace hexmerge::mesher {
@@ -34,6 +38,29 @@ Frame make_frame(const Vec3& e3, const Vec3* e1_hint, const Vec3 (&fallback)[3])
 struct AxisPlane {
   int axis;
   double offset;
+  double width = 0;  ///< twice its area over its perimeter (a strip's width)
 };
+
+/// Lattice coordinates along one frame axis: planes at i * spacing (`ticks` empty), or at
+/// ticks[i] (increasing, from 0). The frame coordinate of lattice coordinate t: plane t where t
+/// is whole, linear within a cell (beyond the ends, along the end cells).
+inline double lattice_coordinate(const std::vector<double>& ticks, double spacing, double t) {
+  if (ticks.empty()) return t * spacing;
+  const long last = static_cast<long>(ticks.size()) - 2;
+  const long i = std::clamp(static_cast<long>(std::floor(t)), 0L, last);
+  const double f = t - static_cast<double>(i);
+  if (f == 0) return ticks[i];
+  if (f == 1) return ticks[i + 1];
+  return ticks[i] + f * (ticks[i + 1] - ticks[i]);
+}
+
+/// The lattice coordinate of frame coordinate x (the inverse of lattice_coordinate()): whole on
+/// a plane.
+inline double cells_coordinate(const std::vector<double>& ticks, double spacing, double x) {
+  if (ticks.empty()) return x / spacing;
+  const long above = std::upper_bound(ticks.begin(), ticks.end(), x) - ticks.begin();
+  const long i = std::clamp(above - 1, 0L, static_cast<long>(ticks.size()) - 2);
+  return static_cast<double>(i) + (x - ticks[i]) / (ticks[i + 1] - ticks[i]);
+}
 
 }  // namespace hexmerge::mesher

@@ -8,6 +8,7 @@
 
 #include "hexmerge/geometry/quality.h"
 #include "hexmerge/occ/mesher/common.h"
+#include "hexmerge/occ/mesher/frame.h"
 #include "hexmerge/occ/mesher/remove_slivers.h"
 #include "hexmerge/occ/mesher/smooth_nodes.h"
 
@@ -104,7 +105,8 @@ void improve_tets(TetMesh& mesh, const std::vector<double>& frame_points,
   std::vector<std::array<double, 3>> cell_of(made);
   for (std::size_t v = 0; v < made; ++v)
     for (int a = 0; a < 3; ++a) {
-      cell_of[v][a] = frame_points[3 * v + a] / parameters.spacing[a];
+      cell_of[v][a] =
+          cells_coordinate(parameters.ticks[a], parameters.spacing[a], frame_points[3 * v + a]);
       if (std::abs(2 * cell_of[v][a] - std::round(2 * cell_of[v][a])) > 1e-6) half_lattice[v] = 0;
       if (std::abs(cell_of[v][a] - std::round(cell_of[v][a])) < 1e-6) centre[v] = 0;
     }

@@ -27,8 +27,9 @@ struct ImproveReport {
 
 /// How improve_tets() works.
 struct ImproveParameters {
-  std::array<double, 3> spacing{};  ///< the lattice's spacing per frame axis
-  int sweep_axis = -1;              ///< swept: the tets within one slab stay; -1: not swept
+  std::array<double, 3> spacing{};           ///< the lattice's spacing per frame axis
+  std::array<std::vector<double>, 3> ticks;  ///< its planes on rectilinear axes (Lattice::ticks)
+  int sweep_axis = -1;  ///< swept: the tets within one slab stay; -1: not swept
   /// Vertices below this index (the surface's nodes) move only along `surface`.
   std::size_t nb_surface_nodes = 0;
   /// Boundary triangles of one CAD face may swap their side where the boundary moves by no more

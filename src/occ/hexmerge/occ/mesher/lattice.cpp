@@ -24,7 +24,95 @@ constexpr double kApexClearance = 0.1;
 constexpr double kCellSphereClearance = 1e-3;
 // The counts per axis lay_lattice() tries together when the best per axis break that.
 constexpr std::size_t kCountChoices = 6;
+// Uniform cells are this many times h wide at least and at most.
+constexpr double kNarrowest = 0.75;
+constexpr double kWidest = 1.5;
+// A rectilinear axis's cells are within this factor of the uniform spacing the axis would have
+// (its neighbours' widths then differ little, and a closing pyramid's apex stays out of the cell's
+// circumsphere: 0.75 to 1.5 h cells beside each other lost 410 of gmsh_as1-tu-203's 1,616 cells).
+constexpr double kBand = 1.25;
+// Rectilinear lattice planes go through the planar faces this many times h wide or wider (twice
+// their area over their perimeter): a narrower face gets no lattice point inside, and as a
+// lattice face only its loops' triangles and the points refine_facet() adds (an impeller's
+// blades: 100 elements under 0.2 with its 2 uniform lattice faces, 347 with 38).
+constexpr double kWideFace = 1.0;
+
+// The planes of a rectilinear lattice axis of length L: through 0, L and as many of the planar
+// faces' offsets as can be (the most faces; then cells nearest `width`), each gap between two of
+// them cut into equal cells within kBand of `width`, as near `width` as that allows; nothing
+// when no such cut reaches L.
+std::vector<double> rectilinear_ticks(std::vector<double> offsets, double L, double h,
+                                      double width) {
+  const double tolerance = 1e-7 * h;
+  std::sort(offsets.begin(), offsets.end());
+  // Stations: 0, the distinct offsets strictly inside, L; the faces at each.
+  std::vector<double> at{0.0};
+  std::vector<int> faces{0};
+  for (double o : offsets) {
+    if (o <= tolerance || o >= L - tolerance) continue;
+    if (o - at.back() < tolerance) {
+      ++faces.back();
+    } else {
+      at.push_back(o);
+      faces.push_back(1);
+    }
+  }
+  at.push_back(L);
+  faces.push_back(0);
+  // Cells for a gap (0: none fits), and how far their width is from h, in cells times h.
+  const auto cut = [&](double gap) -> std::pair<int, double> {
+    const int fewest = std::max(1, static_cast<int>(std::ceil(gap / (kBand * width) - 1e-9)));
+    const int most = static_cast<int>(std::floor(gap * kBand / width + 1e-9));
+    if (most < fewest) return {0, 0.0};
+    const int n = std::clamp(static_cast<int>(std::lround(gap / width)), fewest, most);
+    return {n, n * std::abs(gap / n - width) / h};
+  };
+  const std::size_t m = at.size();
+  std::vector<int> best_faces(m, -1), from(m, -1);
+  std::vector<double> best_off(m, 0.0);
+  best_faces[0] = 0;
+  for (std::size_t q = 1; q < m; ++q)
+    for (std::size_t p = 0; p < q; ++p) {
+      if (best_faces[p] < 0) continue;
+      const auto [n, off] = cut(at[q] - at[p]);
+      if (n == 0) continue;
+      const int f = best_faces[p] + faces[q];
+      const double o = best_off[p] + off;
+      if (f > best_faces[q] || (f == best_faces[q] && o < best_off[q]))
+        best_faces[q] = f, best_off[q] = o, from[q] = static_cast<int>(p);
+    }
+  if (best_faces[m - 1] < 0) return {};  // shorter than a cell: no rectilinear axis
+  std::vector<std::size_t> kept;
+  for (long q = static_cast<long>(m) - 1; q >= 0; q = from[q]) {
+    kept.push_back(static_cast<std::size_t>(q));
+    if (q == 0) break;
+  }
+  std::reverse(kept.begin(), kept.end());
+  std::vector<double> ticks{0.0};
+  for (std::size_t k = 1; k < kept.size(); ++k) {
+    const double lo = at[kept[k - 1]], hi = at[kept[k]];
+    const int n = cut(hi - lo).first;
+    for (int i = 1; i < n; ++i) ticks.push_back(lo + (hi - lo) * i / n);
+    ticks.push_back(hi);
+  }
+  return ticks;
+}
 }  // namespace
+
+double Lattice::widest(int a) const {
+  if (uniform(a)) return spacing[a];
+  double w = 0;
+  for (std::size_t i = 1; i < ticks[a].size(); ++i) w = std::max(w, ticks[a][i] - ticks[a][i - 1]);
+  return w;
+}
+
+bool Lattice::on_plane(int a, double x, double tolerance) const {
+  if (uniform(a)) {
+    const double k = x / spacing[a];
+    return std::abs(k - std::round(k)) * spacing[a] < tolerance;
+  }
+  return std::abs(x - at(a, std::round(cells_at(a, x)))) < tolerance;
+}
 
 Lattice lay_lattice(const Shape& shape, const Frame& frame, const std::vector<Vec3>& surface_nodes,
                     double h, bool lattice_faces) {
@@ -48,11 +136,15 @@ Lattice lay_lattice(const Shape& shape, const Frame& frame, const std::vector<Ve
   lattice.frame.origin = frame.to_world(lo);  // lattice planes through the box's lower corner
   lattice.face_plane = face_planes(shape, lattice.frame);
   const auto& face_plane = lattice.face_plane;
-  std::vector<double> offsets[3];
+  std::vector<double> offsets[3], wide[3];  // wide: of faces at least h across (kWideFace)
   for (const auto& plane : face_plane)
-    if (plane) offsets[plane->axis].push_back(plane->offset);
+    if (plane) {
+      offsets[plane->axis].push_back(plane->offset);
+      if (plane->width >= kWideFace * h) wide[plane->axis].push_back(plane->offset);
+    }
   // Whether an offset along an axis falls on a lattice plane of the given spacing.
-  const auto on_lattice_plane = [plane_tolerance = 1e-7 * h](double offset, double spacing) {
+  const double plane_tolerance = 1e-7 * h;
+  const auto on_lattice_plane = [plane_tolerance](double offset, double spacing) {
     const double k = offset / spacing;
     return std::abs(k - std::round(k)) * spacing < plane_tolerance;
   };
@@ -66,8 +158,8 @@ Lattice lay_lattice(const Shape& shape, const Frame& frame, const std::vector<Ve
   std::array<std::vector<Count>, 3> counts;
   for (int a = 0; a < 3; ++a) {
     const double L = extent[a];
-    const int lo_n = std::max(1, static_cast<int>(std::floor(L / (1.5 * h))));
-    const int hi_n = std::max(lo_n, static_cast<int>(std::ceil(L / (0.75 * h))));
+    const int lo_n = std::max(1, static_cast<int>(std::floor(L / (kWidest * h))));
+    const int hi_n = std::max(lo_n, static_cast<int>(std::ceil(L / (kNarrowest * h))));
     for (int n = lo_n; n <= hi_n; ++n) {
       int hits = 0;
       for (double o : offsets[a]) hits += on_lattice_plane(o, L / n);
@@ -112,6 +204,25 @@ Lattice lay_lattice(const Shape& shape, const Frame& frame, const std::vector<Ve
   for (int a = 0; a < 3; ++a) {
     lattice.cells[a] = chosen[a].n;
     lattice.spacing[a] = extent[a] / chosen[a].n;
+    // Rectilinear where that puts more planar faces on lattice planes than any uniform spacing
+    // (a stepped part: faces at offsets no one spacing divides).
+    if (lattice_faces) {
+      std::vector<double> ticks = rectilinear_ticks(wide[a], extent[a], h, lattice.spacing[a]);
+      const auto wide_hits = [&](const std::vector<double>& planes, double spacing) {
+        int hits = 0;
+        for (double o : wide[a])
+          hits +=
+              std::abs(o - lattice_coordinate(planes, spacing,
+                                              std::round(cells_coordinate(planes, spacing, o)))) <
+              plane_tolerance;
+        return hits;
+      };
+      if (!ticks.empty() && wide_hits(ticks, 0) > wide_hits({}, lattice.spacing[a])) {
+        lattice.cells[a] = static_cast<int>(ticks.size()) - 1;
+        lattice.spacing[a] = extent[a] / lattice.cells[a];
+        lattice.ticks[a] = std::move(ticks);
+      }
+    }
   }
 
   std::vector<bool>& lattice_face = lattice.lattice_face;
@@ -119,7 +230,7 @@ Lattice lay_lattice(const Shape& shape, const Frame& frame, const std::vector<Ve
   for (int f = 0; f < shape.faces.Extent(); ++f) {
     if (!face_plane[f]) continue;
     lattice_face[f] = lattice_faces &&
-                      on_lattice_plane(face_plane[f]->offset, lattice.spacing[face_plane[f]->axis]);
+                      lattice.on_plane(face_plane[f]->axis, face_plane[f]->offset, plane_tolerance);
     lattice.nb_lattice_faces += lattice_face[f];
   }
   std::vector<bool>& lattice_edge = lattice.lattice_edge;
@@ -142,8 +253,8 @@ std::vector<Vec3> frame_nodes(const Shape& shape, const Surface& surface, const 
     if (lattice.lattice_face[t.face])
       for (int n : t.node) {
         const AxisPlane& plane = *lattice.face_plane[t.face];
-        const double k = std::round(coord(nodes[n], plane.axis) / lattice.spacing[plane.axis]);
-        set_coord(nodes[n], plane.axis, k * lattice.spacing[plane.axis]);
+        const double k = std::round(lattice.cells_at(plane.axis, coord(nodes[n], plane.axis)));
+        set_coord(nodes[n], plane.axis, lattice.at(plane.axis, k));
       }
   align_straight_edges(shape, surface, lattice.lattice_face, lattice.largest, nodes);
   if (sweep_axis >= 0) {
@@ -151,9 +262,9 @@ std::vector<Vec3> frame_nodes(const Shape& shape, const Surface& surface, const 
     // Every node exactly on its lattice plane, and across the axis exactly where the node on the
     // bottom plane it repeats is: the slabs are then equal to the last bit.
     for (std::size_t i = 0; i < nodes.size(); ++i) {
-      const double level = std::round(coord(nodes[i], a) / lattice.spacing[a]);
+      const double level = std::round(lattice.cells_at(a, coord(nodes[i], a)));
       Vec3 p = nodes[swept.base[i]];
-      set_coord(p, a, level * lattice.spacing[a]);
+      set_coord(p, a, lattice.at(a, level));
       nodes[i] = p;
     }
   }
@@ -180,7 +291,7 @@ Surroundings::Surroundings(const std::vector<Vec3>& nodes, const Surface& surfac
   for (const SurfaceTriangle& t : surface.triangles)
     if (lattice.lattice_face[t.face]) {
       const AxisPlane& plane = *lattice.face_plane[t.face];
-      plane_triangles_[{plane.axis, std::lround(plane.offset / lattice.spacing[plane.axis])}]
+      plane_triangles_[{plane.axis, std::lround(lattice.cells_at(plane.axis, plane.offset))}]
           .push_back(&t);
     }
 }
@@ -253,8 +364,7 @@ KeptPoints keep_lattice_points(const Lattice& lattice, const Surroundings& aroun
   const double same = 1e-6 * std::min({lattice.spacing[0], lattice.spacing[1], lattice.spacing[2]});
   for (int k = 0; k < n2; ++k)
     for (int j = 0; j < n1; ++j) {
-      const std::vector<double> xs =
-          parity.crossings(j * lattice.spacing[1], k * lattice.spacing[2]);
+      const std::vector<double> xs = parity.crossings(lattice.at(1, j), lattice.at(2, k));
       for (int i = 0; i < n0; ++i) {
         const Vec3 q = lattice.point(i, j, k);
         const int index[3] = {i, j, k};
@@ -298,9 +408,10 @@ CoreCounts add_core(const Lattice& lattice, Surroundings& around, const Parity& 
     return n[0] >= 0 && n[0] < c0 && n[1] >= 0 && n[1] < c1 && n[2] >= 0 && n[2] < c2;
   };
   auto cell_centre = [&](int i, int j, int k) { return lattice.cell_centre(i, j, k); };
-  const double half_diagonal = 0.5 * std::sqrt(lattice.spacing[0] * lattice.spacing[0] +
-                                               lattice.spacing[1] * lattice.spacing[1] +
-                                               lattice.spacing[2] * lattice.spacing[2]);
+  auto half_diagonal = [&](int i, int j, int k) {
+    const double s[3] = {lattice.width(0, i), lattice.width(1, j), lattice.width(2, k)};
+    return 0.5 * std::sqrt(s[0] * s[0] + s[1] * s[1] + s[2] * s[2]);
+  };
   std::vector<char> core(static_cast<std::size_t>(c0) * c1 * c2, 0);
   for (int k = 0; k < c2; ++k)
     for (int j = 0; j < c1; ++j)
@@ -311,22 +422,26 @@ CoreCounts add_core(const Lattice& lattice, Surroundings& around, const Parity& 
               kept[point_index(i + (corner & 1), j + ((corner >> 1) & 1), k + ((corner >> 2) & 1))];
         if (!all) continue;
         const Vec3 centre = cell_centre(i, j, k);
-        if (!parity.inside(centre) || !around.ball_is_empty(centre, half_diagonal)) continue;
+        if (!parity.inside(centre) || !around.ball_is_empty(centre, half_diagonal(i, j, k)))
+          continue;
         core[cell_index(i, j, k)] = 1;
       }
   // The sphere through the corners of face dir of cell (i, j, k) and the apex of its closing
-  // pyramid (the centre of the cell across).
-  auto pyramid_sphere = [&](int i, int j, int k, int dir) {
+  // pyramid (the centre of the cell n across).
+  auto pyramid_sphere = [&](int i, int j, int k, int dir, const int(&n)[3]) {
     const int axis = dir / 2, side = dir % 2 ? 1 : -1;
-    const double a = 0.5 * lattice.spacing[axis];
+    const int ijk[3] = {i, j, k};
+    const double a = 0.5 * lattice.width(axis, ijk[axis]);  // the cell's centre to the face
+    const double d = 0.5 * lattice.width(axis, n[axis]);    // the face to the apex
     double rho2 = 0;
     for (int b = 0; b < 3; ++b)
-      if (b != axis) rho2 += 0.25 * lattice.spacing[b] * lattice.spacing[b];
-    const double c = (a * a - rho2) / (2 * a);
-    Vec3 towards{0, 0, 0};
-    set_coord(towards, axis, side * a);  // from the face's centre to the apex
-    const Vec3 face_centre = cell_centre(i, j, k) + towards;
-    return std::pair<Vec3, double>{face_centre + towards * (c / a), a - c};
+      if (b != axis) rho2 += 0.25 * lattice.width(b, ijk[b]) * lattice.width(b, ijk[b]);
+    const double c = (d * d - rho2) / (2 * d);
+    Vec3 to_face{0, 0, 0}, towards{0, 0, 0};
+    set_coord(to_face, axis, side * a);
+    set_coord(towards, axis, side * d);  // from the face's centre to the apex
+    const Vec3 face_centre = cell_centre(i, j, k) + to_face;
+    return std::pair<Vec3, double>{face_centre + towards * (c / d), d - c};
   };
   // Per directed face (cell, direction 0..5): 0 unknown, 1 boundary (no pyramid needed),
   // 2 pyramid possible, 3 impossible.
@@ -354,7 +469,15 @@ CoreCounts add_core(const Lattice& lattice, Surroundings& around, const Parity& 
       }
       return state = 1;
     }
-    const auto [centre, r] = pyramid_sphere(i, j, k, dir);
+    // The apex outside the cell's circumsphere, or Delaunay joins it to the cell's corners (a
+    // rectilinear axis's narrow cell beside a wide one; see lay_lattice()).
+    if (0.5 * (lattice.width(axis, axis == 0   ? i
+                                   : axis == 1 ? j
+                                               : k) +
+               lattice.width(axis, n[axis])) <=
+        (1 + kCellSphereClearance) * half_diagonal(i, j, k))
+      return state = 3;
+    const auto [centre, r] = pyramid_sphere(i, j, k, dir, n);
     // The apex off every face: on a face its sphere can touch the face's plane at the apex
     // only (a face across the pyramid's axis), and the apex makes flat tets with the face's
     // triangles (gmsh_SampleCrankshaft4A at h 4.61: apexes on a planar end face half a cell
@@ -393,10 +516,10 @@ CoreCounts add_core(const Lattice& lattice, Surroundings& around, const Parity& 
           if (!across(i, j, k, dir, n) || core[cell_index(n[0], n[1], n[2])]) continue;
           if (face_kind(i, j, k, dir) != 2) continue;
           apex_cell[cell_index(n[0], n[1], n[2])] = 1;
-          const auto [centre, r] = pyramid_sphere(i, j, k, dir);
+          const auto [centre, r] = pyramid_sphere(i, j, k, dir, n);
           around.core_balls.add(centre, r);
         }
-        around.core_balls.add(cell_centre(i, j, k), half_diagonal);
+        around.core_balls.add(cell_centre(i, j, k), half_diagonal(i, j, k));
       }
   for (int k = 0; k < n2; ++k)
     for (int j = 0; j < n1; ++j)

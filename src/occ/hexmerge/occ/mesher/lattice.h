@@ -23,26 +23,43 @@ namespace hexmerge::mesher {
 struct Shape;
 struct SweptSurface;
 
-/// The lattice: cells[a] cells of spacing[a] along frame axis a, its planes through the lower
-/// corner of the surface's bounding box in the frame (the frame's origin).
+/// The lattice: cells[a] cells along frame axis a, its planes through the lower corner of the
+/// surface's bounding box in the frame (the frame's origin). Along an axis the planes are either
+/// uniform (i * spacing[a]; ticks[a] empty) or rectilinear: at ticks[a][i], placed on the planar
+/// faces normal to the axis at least h wide, each cell within a factor 1.25 of the uniform
+/// spacing the axis would have (spacing[a] is then their mean).
 struct Lattice {
   Frame frame;
   std::array<double, 3> extent{};  ///< the bounding box's size along each axis
   double largest = 0;              ///< the largest of extent
   int cells[3] = {0, 0, 0};
   std::array<double, 3> spacing{};
+  std::array<std::vector<double>, 3> ticks;  ///< rectilinear axes: the planes' offsets
   /// Per face, its plane when planar and normal to a frame axis.
   std::vector<std::optional<AxisPlane>> face_plane;
   std::vector<bool> lattice_face;  ///< per face: planar and on a lattice plane
   std::vector<bool> lattice_edge;  ///< per edge: every face it bounds is a lattice face
   std::size_t nb_lattice_faces = 0;
 
-  /// Lattice point (i, j, k) and the centre of cell (i, j, k), in frame coordinates.
-  Vec3 point(int i, int j, int k) const {
-    return Vec3{i * spacing[0], j * spacing[1], k * spacing[2]};
+  bool uniform(int a) const { return ticks[a].empty(); }
+  /// Frame coordinate along axis a of lattice coordinate t (t = i: plane i; i + 0.5: the middle
+  /// of cell i; linear within a cell).
+  double at(int a, double t) const { return lattice_coordinate(ticks[a], spacing[a], t); }
+  /// Lattice coordinate of frame coordinate x along axis a (the inverse of at()).
+  double cells_at(int a, double x) const { return cells_coordinate(ticks[a], spacing[a], x); }
+  /// Width of cell i along axis a.
+  double width(int a, int i) const {
+    return uniform(a) ? spacing[a] : ticks[a][i + 1] - ticks[a][i];
   }
+  /// The widest cell along axis a.
+  double widest(int a) const;
+  /// Whether frame coordinate x along axis a lies on a lattice plane (within `tolerance`).
+  bool on_plane(int a, double x, double tolerance) const;
+
+  /// Lattice point (i, j, k) and the centre of cell (i, j, k), in frame coordinates.
+  Vec3 point(int i, int j, int k) const { return Vec3{at(0, i), at(1, j), at(2, k)}; }
   Vec3 cell_centre(int i, int j, int k) const {
-    return Vec3{(i + 0.5) * spacing[0], (j + 0.5) * spacing[1], (k + 0.5) * spacing[2]};
+    return Vec3{at(0, i + 0.5), at(1, j + 0.5), at(2, k + 0.5)};
   }
 };
 
@@ -51,8 +68,10 @@ struct Lattice {
 /// on lattice planes (the box's own faces always do), and every spacing exceeds half the cell's
 /// diagonal where the best few counts per axis allow (else a closing pyramid's apex, the centre
 /// of the cell across a face, lies in the cell's circumsphere and Delaunay breaks the cell).
-/// Without `lattice_faces`, no face is a
-/// lattice face (its planar faces are treated like the others).
+/// An axis is rectilinear where placed planes put more planar faces at least h wide on lattice
+/// planes than the uniform spacing does (a stepped part); add_core() then drops the cells whose
+/// apexes fall in their circumspheres. Without `lattice_faces`, no face is a lattice face (its
+/// planar faces are treated like the others) and every axis is uniform.
 /// @throws InputError when h is larger than the shape's largest extent
 Lattice lay_lattice(const Shape& shape, const Frame& frame, const std::vector<Vec3>& surface_nodes,
                     double h, bool lattice_faces = true);

@@ -40,7 +40,7 @@ std::size_t clear_face_layers(const std::vector<FaceLayerSpec>& specs,
     for (const int f : spec.faces) {
       // The closing pyramids' apexes (and circumspheres) reach half a cell beyond the core.
       const double r = spec.depth(spec.layers) * (1 + kLayerJitter) + margin +
-                       0.5 * std::max({lattice.spacing[0], lattice.spacing[1], lattice.spacing[2]});
+                       0.5 * std::max({lattice.widest(0), lattice.widest(1), lattice.widest(2)});
       reach[static_cast<std::size_t>(f)] = std::max(reach[static_cast<std::size_t>(f)], r);
       deepest = std::max(deepest, r);
     }
@@ -268,7 +268,7 @@ std::size_t place_layers(const std::vector<Vec3>& nodes, const Surface& surface,
             for (int j : column[i]) {
               Vec3 r = q;
               set_coord(r, a, coord(nodes[j], a));
-              const int level = static_cast<int>(std::lround(coord(r, a) / lattice.spacing[a]));
+              const int level = static_cast<int>(std::lround(lattice.cells_at(a, coord(r, a))));
               int index[3] = {-1, -1, -1};
               index[a] = level;
               int face = around.on_lattice_face(r, index);  // a cap it lies in, on any plane
@@ -278,7 +278,7 @@ std::size_t place_layers(const std::vector<Vec3>& nodes, const Surface& surface,
               if (plane_axis >= 0 && face < 0) {
                 int on_wall[3] = {-1, -1, -1};
                 on_wall[plane_axis] = static_cast<int>(
-                    std::lround(coord(r, plane_axis) / lattice.spacing[plane_axis]));
+                    std::lround(lattice.cells_at(plane_axis, coord(r, plane_axis))));
                 face = around.on_lattice_face(r, on_wall);
                 if (face < 0) break;
               }

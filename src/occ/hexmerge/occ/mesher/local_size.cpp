@@ -283,9 +283,6 @@ std::size_t place_graded_points(const SizeField& field, const Lattice& lattice,
     // Only the level's points near the items finer than that can be wanted: the blocks of
     // kBlock^3 points that their boxes touch, scanned in the order of a scan of the whole box
     // (z, then y, then x), since each point placed keeps later ones away.
-    const double spacing[3] = {lattice.spacing[0] / static_cast<double>(scale),
-                               lattice.spacing[1] / static_cast<double>(scale),
-                               lattice.spacing[2] / static_cast<double>(scale)};
     long last[3];
     for (int a = 0; a < 3; ++a) last[a] = static_cast<long>(lattice.cells[a]) * scale;
     std::vector<std::array<long, 3>> blocks;  // (z, y, x) block indices
@@ -301,8 +298,11 @@ std::size_t place_graded_points(const SizeField& field, const Lattice& lattice,
       }
       long from[3], to[3];
       for (int a = 0; a < 3; ++a) {
-        from[a] = std::max(0L, static_cast<long>(std::floor(coord(lo, a) / spacing[a])));
-        to[a] = std::min(last[a], static_cast<long>(std::ceil(coord(hi, a) / spacing[a])));
+        // The level's points: each cell of the lattice cut into `scale` along each axis.
+        from[a] = std::max(0L, static_cast<long>(std::floor(lattice.cells_at(a, coord(lo, a)) *
+                                                            static_cast<double>(scale))));
+        to[a] = std::min(last[a], static_cast<long>(std::ceil(lattice.cells_at(a, coord(hi, a)) *
+                                                              static_cast<double>(scale))));
       }
       if (from[0] > to[0] || from[1] > to[1] || from[2] > to[2]) continue;
       for (long kb = from[2] / kBlock; kb <= to[2] / kBlock; ++kb)
@@ -326,8 +326,7 @@ std::size_t place_graded_points(const SizeField& field, const Lattice& lattice,
       const long ijk[3] = {i, j, k};
       Vec3 q{};
       for (int a = 0; a < 3; ++a)
-        set_coord(q, a,
-                  static_cast<double>(ijk[a]) * lattice.spacing[a] / static_cast<double>(scale));
+        set_coord(q, a, lattice.at(a, static_cast<double>(ijk[a]) / static_cast<double>(scale)));
       const double size = field.at(lattice.frame.to_world(q));
       if (size >= wanted_below) return;
       const double room = clearance * size;

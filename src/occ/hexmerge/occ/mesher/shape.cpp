@@ -151,7 +151,13 @@ std::vector<std::optional<AxisPlane>> face_planes(const Shape& shape, const Fram
     for (int a = 0; a < 3; ++a) {
       if (std::abs(std::abs(n.dot(frame.axis[a])) - 1) > 1e-9) continue;
       const double offset = coord(frame.to_frame(of(s.Plane().Location())), a);
-      face_plane[fi - 1] = AxisPlane{a, offset};
+      GProp_GProps area;
+      BRepGProp::SurfaceProperties(shape.faces(fi), area);
+      double perimeter = 0;
+      for (TopExp_Explorer e(shape.faces(fi), TopAbs_EDGE); e.More(); e.Next())
+        perimeter +=
+            shape.edge_length[static_cast<std::size_t>(shape.edges.FindIndex(e.Current()) - 1)];
+      face_plane[fi - 1] = AxisPlane{a, offset, perimeter > 0 ? 2 * area.Mass() / perimeter : 0};
     }
   }
   return face_plane;
