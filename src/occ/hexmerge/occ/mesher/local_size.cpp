@@ -154,18 +154,23 @@ SizeField::SizeField(double h, double grading, double slack, const Vec3& lo, con
 void SizeField::add(const Vec3& a, const Vec3& b, const Vec3& c, double size) {
   const Vec3 lo = vmin(a, vmin(b, c)), hi = vmax(a, vmax(b, c));
   grid_.add(static_cast<int>(items_.size()), lo, hi);
-  items_.push_back({a, b, c, size});
+  const Vec3 centre = (lo + hi) * 0.5;
+  items_.push_back({a, b, c, size, centre, (hi - centre).norm()});
   smallest_ = std::min(smallest_, size);
 }
 
-double SizeField::at(const Vec3& p) const {
-  if (items_.empty()) return h_;
-  // Only items nearer than (h - smallest) / grading can give less than h.
-  const double reach = (h_ - smallest_) / grading_ + slack_;
+double SizeField::at(const Vec3& p, double cap) const {
+  double best = std::min(h_, cap);
+  if (items_.empty() || best <= smallest_) return best;
+  // Only items nearer than (best - smallest) / grading can give less than best.
+  const double reach = (best - smallest_) / grading_ + slack_;
   const Vec3 r{reach, reach, reach};
-  double best = h_;
   grid_.any_in(p - r, p + r, [&](int i) {
     const Item& it = items_[i];
+    // No nearer than its ball: an item that cannot go under the best so far is not measured (a
+    // margin of 1e-9 of h against rounding in the bound).
+    const double least = std::max(0.0, (p - it.centre).norm() - it.radius - slack_);
+    if (it.size + grading_ * least > best + 1e-9 * h_) return false;
     const double d2 = it.b.x == it.c.x && it.b.y == it.c.y && it.b.z == it.c.z
                           ? squared_distance_to_segment(p, it.a, it.b)
                           : squared_distance_to_triangle(p, it.a, it.b, it.c);
@@ -327,7 +332,7 @@ std::size_t place_graded_points(const SizeField& field, const Lattice& lattice,
       Vec3 q{};
       for (int a = 0; a < 3; ++a)
         set_coord(q, a, lattice.at(a, static_cast<double>(ijk[a]) / static_cast<double>(scale)));
-      const double size = field.at(lattice.frame.to_world(q));
+      const double size = field.at(lattice.frame.to_world(q), wanted_below);
       if (size >= wanted_below) return;
       const double room = clearance * size;
       // On a lattice plane, it may lie in a lattice face: then it is one of its points.

@@ -6,6 +6,7 @@
 
 #include <array>
 #include <cstddef>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -32,8 +33,9 @@ class SizeField {
   SizeField(double h, double grading, double slack, const Vec3& lo, const Vec3& hi);
   /// A triangle (or a segment: c == b) of size `size` < h.
   void add(const Vec3& a, const Vec3& b, const Vec3& c, double size);
-  /// The size wanted at p, in (0, h].
-  double at(const Vec3& p) const;
+  /// The size wanted at p, in (0, h]; at most `cap` (a caller asking only whether the size is
+  /// under `cap` gets the same answer, and the same size where it is, from fewer items).
+  double at(const Vec3& p, double cap = std::numeric_limits<double>::infinity()) const;
   /// No item: the field is h everywhere.
   bool empty() const { return items_.empty(); }
   double h() const { return h_; }
@@ -47,6 +49,8 @@ class SizeField {
   struct Item {
     Vec3 a, b, c;
     double size;
+    Vec3 centre;    ///< of a ball holding the item (its box's centre)
+    double radius;  ///< of that ball
   };
   double h_, grading_, slack_, smallest_;
   BucketGrid grid_;
