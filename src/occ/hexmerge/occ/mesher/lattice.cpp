@@ -59,7 +59,8 @@ std::vector<double> rectilinear_ticks(std::vector<double> offsets, double L, dou
   }
   at.push_back(L);
   faces.push_back(0);
-  // Cells for a gap (0: none fits), and how far their width is from h, in cells times h.
+  // Cells for a gap (0: none fits), and how far their width is from `width`: cells times the
+  // difference, over h.
   const auto cut = [&](double gap) -> std::pair<int, double> {
     const int fewest = std::max(1, static_cast<int>(std::ceil(gap / (kBand * width) - 1e-9)));
     const int most = static_cast<int>(std::floor(gap * kBand / width + 1e-9));
@@ -204,8 +205,8 @@ Lattice lay_lattice(const Shape& shape, const Frame& frame, const std::vector<Ve
   for (int a = 0; a < 3; ++a) {
     lattice.cells[a] = chosen[a].n;
     lattice.spacing[a] = extent[a] / chosen[a].n;
-    // Rectilinear where that puts more planar faces on lattice planes than any uniform spacing
-    // (a stepped part: faces at offsets no one spacing divides).
+    // Rectilinear where that puts more planar faces at least h wide on lattice planes than the
+    // uniform spacing chosen (a stepped part: faces at offsets no one spacing divides).
     if (lattice_faces) {
       std::vector<double> ticks = rectilinear_ticks(wide[a], extent[a], h, lattice.spacing[a]);
       const auto wide_hits = [&](const std::vector<double>& planes, double spacing) {
