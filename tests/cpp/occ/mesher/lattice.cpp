@@ -2,11 +2,15 @@
 
 #include <gtest/gtest.h>
 
+#include <BRepAdaptor_Curve.hxx>
+#include <TopoDS.hxx>
+#include <TopoDS_Edge.hxx>
 #include <algorithm>
 #include <cmath>
 #include <random>
 
 #include "hexmerge/core/error.h"
+#include "hexmerge/occ/mesher/surface_repair.h"
 #include "hexmerge/occ/mesher/sweep.h"
 #include "mesher_fixtures.h"
 
@@ -137,6 +141,37 @@ TEST(lay_lattice, planes_placed_on_faces_no_spacing_fits) {
       }
   EXPECT_EQ(core.nb_core_cells, inside);
   EXPECT_EQ(core.nb_apex_points, 0u);
+}
+
+// The split box's seams (x = 10 on its four long faces) lie between coplanar lattice faces, on no
+// lattice line (x = 10 is on no plane of 8 cells of 2.875): no lattice edges, and refine() splits
+// them to h (no lattice point comes onto them, no other face's triangle splits them). The box's
+// own edges are lattice edges and keep their ends only.
+TEST(lay_lattice, seams_between_coplanar_faces_are_no_lattice_edges) {
+  const double h = 3.0;
+  Prepared p = prepare(occ_split_box(), h);
+  const auto& l = p.lattice;
+  ASSERT_EQ(l.nb_lattice_faces, static_cast<std::size_t>(p.shape.faces.Extent()));
+  EXPECT_FALSE(l.on_plane(0, 10.0, 1e-7 * h));
+  int seams = 0;
+  for (int e = 0; e < p.shape.edges.Extent(); ++e) {
+    const TopoDS_Edge& edge = TopoDS::Edge(p.shape.edges(e + 1));
+    BRepAdaptor_Curve curve(edge);
+    const gp_Pnt a = curve.Value(curve.FirstParameter()), b = curve.Value(curve.LastParameter());
+    const bool seam = std::abs(a.X() - 10) < 1e-9 && std::abs(b.X() - 10) < 1e-9;
+    seams += seam;
+    EXPECT_EQ(l.lattice_edge[e], !seam) << "edge " << e;
+  }
+  EXPECT_EQ(seams, 4);
+  mesher::refine(p.shape, p.surface, h, 0.02 * h, l.lattice_face, l.lattice_edge);
+  int on_seams = 0;
+  for (const auto& [key, segment] : p.surface.segments) {
+    const Vec3 &a = p.surface.nodes[key >> 32], &b = p.surface.nodes[key & 0xffffffffu];
+    if (std::abs(a.x - 10) > 1e-9 || std::abs(b.x - 10) > 1e-9) continue;
+    ++on_seams;
+    EXPECT_LE((a - b).norm(), h * (1 + 1e-9));
+  }
+  EXPECT_GE(on_seams, 4 * 4);  // each 10 long seam in at least 4 sides
 }
 
 TEST(lay_lattice, size_larger_than_the_shape_is_refused) {

@@ -43,6 +43,10 @@ TopoDS_Shape occ_step() {
   return BRepAlgoAPI_Fuse(occ_box(0, 0, 0, 30, 20, 10), occ_box(0, 0, 10, 13, 20, 20)).Shape();
 }
 
+TopoDS_Shape occ_split_box() {
+  return BRepAlgoAPI_Fuse(occ_box(0, 0, 0, 10, 10, 10), occ_box(10, 0, 0, 23, 10, 10)).Shape();
+}
+
 TopoDS_Shape occ_plate_with_hole() {
   const TopoDS_Shape hole =
       BRepPrimAPI_MakeCylinder(gp_Ax2(gp_Pnt(30, 20, -1), gp_Dir(0, 0, 1)), 8, 12).Shape();

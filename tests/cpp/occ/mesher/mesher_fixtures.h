@@ -27,6 +27,9 @@ TopoDS_Shape occ_bracket();
 /// A step no one spacing fits: a 30 x 20 x 10 block and a 13 x 20 x 10 block on it at x in
 /// [0, 13] (faces normal to x at 0, 13 and 30).
 TopoDS_Shape occ_step();
+/// Two boxes side by side (x in [0, 10] and [10, 23], 10 x 10), fused: the faces of y, z = 0 and
+/// 10 come split in two along x = 10 (seams between coplanar faces).
+TopoDS_Shape occ_split_box();
 /// A 60 x 40 x 10 plate with a hole of radius 8 along z through its centre (30, 20).
 TopoDS_Shape occ_plate_with_hole();
 

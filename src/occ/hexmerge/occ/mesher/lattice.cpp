@@ -238,8 +238,15 @@ Lattice lay_lattice(const Shape& shape, const Frame& frame, const std::vector<Ve
   lattice_edge.assign(shape.edges.Extent(), false);
   for (int e = 0; e < shape.edges.Extent(); ++e) {
     const auto& around = shape.edge_faces[e];
-    lattice_edge[e] = !around.empty() && std::all_of(around.begin(), around.end(),
-                                                     [&](int f) { return lattice_face[f]; });
+    // Between lattice faces on two planes: on a lattice line, where lattice points lie. A seam
+    // between faces on one plane (a planar face split in two) lies on no lattice line.
+    const auto other_plane = [&](int f) {
+      const AxisPlane &p = *face_plane[f], &q = *face_plane[around[0]];
+      return p.axis != q.axis || std::abs(p.offset - q.offset) > plane_tolerance;
+    };
+    lattice_edge[e] = !around.empty() && std::all_of(around.begin(), around.end(), [&](int f) {
+      return lattice_face[f];
+    }) && std::any_of(around.begin(), around.end(), other_plane);
   }
   return lattice;
 }

@@ -380,6 +380,18 @@ void refine(const Shape& s, Surface& surface, double target, double deflection,
   auto side_to_split = [&](int ti) {
     const SurfaceTriangle& t = tris[ti];
     if (lattice_face[t.face]) {
+      // A seam between lattice faces on one plane: no lattice point comes onto it, and no other
+      // face's triangle splits it, so it is split here to the size wanted.
+      for (int c = 0; c < 3; ++c) {
+        const int a = t.node[c], b = t.node[(c + 1) % 3];
+        const auto seg = surface.segments.find(pair_key(a, b));
+        if (seg == surface.segments.end() || lattice_edge[seg->second.edge] ||
+            unsplittable.count(pair_key(a, b)) || length(a, b) <= side_target(a, b))
+          continue;
+        const auto& around = s.edge_faces[static_cast<std::size_t>(seg->second.edge)];
+        if (std::all_of(around.begin(), around.end(), [&](int f) { return lattice_face[f]; }))
+          return c;
+      }
       if (!field) return -1;
       for (int c = 0; c < 3; ++c) {
         const int a = t.node[c], b = t.node[(c + 1) % 3];
