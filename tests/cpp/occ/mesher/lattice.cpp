@@ -221,8 +221,7 @@ TEST(keep_lattice_points, inside_and_clear_of_the_curved_faces) {
   for (int k = 0; k <= l.cells[2]; ++k)
     for (int j = 0; j <= l.cells[1]; ++j)
       for (int i = 0; i <= l.cells[0]; ++i) {
-        const std::size_t index =
-            (static_cast<std::size_t>(k) * (l.cells[1] + 1) + j) * (l.cells[0] + 1) + i;
+        const std::size_t index = l.point_index(i, j, k);
         if (!kept.kept[index]) continue;
         ++nb_kept;
         const Vec3 q = l.point(i, j, k);

@@ -63,4 +63,17 @@ inline double cells_coordinate(const std::vector<double>& ticks, double spacing,
   return static_cast<double>(i) + (x - ticks[i]) / (ticks[i + 1] - ticks[i]);
 }
 
+/// Whether frame coordinate x lies on a lattice plane (to `tolerance`) of the axis
+/// lattice_coordinate() describes.
+inline bool on_lattice_plane(const std::vector<double>& ticks, double spacing, double x,
+                             double tolerance) {
+  if (ticks.empty()) {
+    const double k = x / spacing;
+    return std::abs(k - std::round(k)) * spacing < tolerance;
+  }
+  return std::abs(x - lattice_coordinate(ticks, spacing,
+                                         std::round(cells_coordinate(ticks, spacing, x)))) <
+         tolerance;
+}
+
 }  // namespace hexmerge::mesher

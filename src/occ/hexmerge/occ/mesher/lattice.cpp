@@ -108,11 +108,7 @@ double Lattice::widest(int a) const {
 }
 
 bool Lattice::on_plane(int a, double x, double tolerance) const {
-  if (uniform(a)) {
-    const double k = x / spacing[a];
-    return std::abs(k - std::round(k)) * spacing[a] < tolerance;
-  }
-  return std::abs(x - at(a, std::round(cells_at(a, x)))) < tolerance;
+  return on_lattice_plane(ticks[a], spacing[a], x, tolerance);
 }
 
 Lattice lay_lattice(const Shape& shape, const Frame& frame, const std::vector<Vec3>& surface_nodes,
@@ -143,12 +139,7 @@ Lattice lay_lattice(const Shape& shape, const Frame& frame, const std::vector<Ve
       offsets[plane->axis].push_back(plane->offset);
       if (plane->width >= kWideFace * h) wide[plane->axis].push_back(plane->offset);
     }
-  // Whether an offset along an axis falls on a lattice plane of the given spacing.
   const double plane_tolerance = 1e-7 * h;
-  const auto on_lattice_plane = [plane_tolerance](double offset, double spacing) {
-    const double k = offset / spacing;
-    return std::abs(k - std::round(k)) * spacing < plane_tolerance;
-  };
   // Cells per axis: about h wide, chosen so that as many axis-normal planar faces as possible
   // lie on lattice planes (the box's own faces always do). Per axis, the counts from 1.5 h to
   // 0.75 h wide, best first: more faces on lattice planes, then nearer L / h.
@@ -163,7 +154,7 @@ Lattice lay_lattice(const Shape& shape, const Frame& frame, const std::vector<Ve
     const int hi_n = std::max(lo_n, static_cast<int>(std::ceil(L / (kNarrowest * h))));
     for (int n = lo_n; n <= hi_n; ++n) {
       int hits = 0;
-      for (double o : offsets[a]) hits += on_lattice_plane(o, L / n);
+      for (double o : offsets[a]) hits += on_lattice_plane({}, L / n, o, plane_tolerance);
       counts[a].push_back({n, hits, std::abs(n - L / h)});
     }
     std::stable_sort(counts[a].begin(), counts[a].end(), [](const Count& x, const Count& y) {
@@ -211,11 +202,7 @@ Lattice lay_lattice(const Shape& shape, const Frame& frame, const std::vector<Ve
       std::vector<double> ticks = rectilinear_ticks(wide[a], extent[a], h, lattice.spacing[a]);
       const auto wide_hits = [&](const std::vector<double>& planes, double spacing) {
         int hits = 0;
-        for (double o : wide[a])
-          hits +=
-              std::abs(o - lattice_coordinate(planes, spacing,
-                                              std::round(cells_coordinate(planes, spacing, o)))) <
-              plane_tolerance;
+        for (double o : wide[a]) hits += on_lattice_plane(planes, spacing, o, plane_tolerance);
         return hits;
       };
       if (!ticks.empty() && wide_hits(ticks, 0) > wide_hits({}, lattice.spacing[a])) {
@@ -361,9 +348,6 @@ KeptPoints keep_lattice_points(const Lattice& lattice, const Surroundings& aroun
                                const Parity& parity, double keep_distance, double margin) {
   // Lattice points: kept when inside (or on a lattice face) and far enough from the other faces.
   const int n0 = lattice.cells[0] + 1, n1 = lattice.cells[1] + 1, n2 = lattice.cells[2] + 1;
-  auto point_index = [&](int i, int j, int k) {
-    return (static_cast<std::size_t>(k) * n1 + j) * n0 + i;
-  };
   KeptPoints out;
   std::vector<char>& kept = out.kept;
   std::vector<int>& kept_face = out.face;
@@ -385,11 +369,27 @@ KeptPoints keep_lattice_points(const Lattice& lattice, const Surroundings& aroun
         if (face >= 0 && around.surface_points.any_within(q, margin) &&
             !around.surface_points.any_within(q, same))
           continue;
-        kept[point_index(i, j, k)] = 1;
-        kept_face[point_index(i, j, k)] = face;
+        kept[lattice.point_index(i, j, k)] = 1;
+        kept_face[lattice.point_index(i, j, k)] = face;
       }
     }
   return out;
+}
+
+bool in_kept_square(const Lattice& lattice, const KeptPoints& kept, const Vec3& q, int axis) {
+  int at[3];
+  at[axis] = static_cast<int>(std::lround(lattice.cells_at(axis, coord(q, axis))));
+  const int u = (axis + 1) % 3, v = (axis + 2) % 3;
+  for (const int c : {u, v}) {
+    at[c] = static_cast<int>(std::floor(lattice.cells_at(c, coord(q, c))));
+    if (at[c] < 0 || at[c] >= lattice.cells[c]) return false;
+  }
+  for (int corner = 0; corner < 4; ++corner) {
+    int c[3] = {at[0], at[1], at[2]};
+    c[u] += corner & 1, c[v] += corner >> 1;
+    if (!kept.kept[lattice.point_index(c[0], c[1], c[2])]) return false;
+  }
+  return true;
 }
 
 CoreCounts add_core(const Lattice& lattice, Surroundings& around, const Parity& parity,
@@ -400,9 +400,6 @@ CoreCounts add_core(const Lattice& lattice, Surroundings& around, const Parity& 
   // is that cell's centre and whose circumsphere holds nothing else, or the core cell goes.
   const int c0 = lattice.cells[0], c1 = lattice.cells[1], c2 = lattice.cells[2];
   const int n0 = lattice.cells[0] + 1, n1 = lattice.cells[1] + 1, n2 = lattice.cells[2] + 1;
-  auto point_index = [&](int i, int j, int k) {
-    return (static_cast<std::size_t>(k) * n1 + j) * n0 + i;
-  };
   const std::vector<char>& kept = kept_points.kept;
   CoreCounts counts;
   auto cell_index = [&](int i, int j, int k) {
@@ -426,8 +423,8 @@ CoreCounts add_core(const Lattice& lattice, Surroundings& around, const Parity& 
       for (int i = 0; i < c0; ++i) {
         bool all = true;
         for (int corner = 0; corner < 8 && all; ++corner)
-          all =
-              kept[point_index(i + (corner & 1), j + ((corner >> 1) & 1), k + ((corner >> 2) & 1))];
+          all = kept[lattice.point_index(i + (corner & 1), j + ((corner >> 1) & 1),
+                                         k + ((corner >> 2) & 1))];
         if (!all) continue;
         const Vec3 centre = cell_centre(i, j, k);
         if (!parity.inside(centre) || !around.ball_is_empty(centre, half_diagonal(i, j, k)))
@@ -473,16 +470,14 @@ CoreCounts add_core(const Lattice& lattice, Surroundings& around, const Parity& 
         int c[3] = {i, j, k};
         c[axis] = plane;
         c[u] += corner & 1, c[v] += corner >> 1;
-        if (kept_points.face[point_index(c[0], c[1], c[2])] < 0) return state = 3;
+        if (kept_points.face[lattice.point_index(c[0], c[1], c[2])] < 0) return state = 3;
       }
       return state = 1;
     }
     // The apex outside the cell's circumsphere, or Delaunay joins it to the cell's corners (a
     // rectilinear axis's narrow cell beside a wide one; see lay_lattice()).
-    if (0.5 * (lattice.width(axis, axis == 0   ? i
-                                   : axis == 1 ? j
-                                               : k) +
-               lattice.width(axis, n[axis])) <=
+    const int ijk[3] = {i, j, k};
+    if (0.5 * (lattice.width(axis, ijk[axis]) + lattice.width(axis, n[axis])) <=
         (1 + kCellSphereClearance) * half_diagonal(i, j, k))
       return state = 3;
     const auto [centre, r] = pyramid_sphere(i, j, k, dir, n);
@@ -532,11 +527,11 @@ CoreCounts add_core(const Lattice& lattice, Surroundings& around, const Parity& 
   for (int k = 0; k < n2; ++k)
     for (int j = 0; j < n1; ++j)
       for (int i = 0; i < n0; ++i) {
-        if (!kept[point_index(i, j, k)]) continue;
+        if (!kept[lattice.point_index(i, j, k)]) continue;
         const Vec3 q = lattice.point(i, j, k);
         if (around.surface_points.any_within(q, 1e-6 * h)) continue;  // already a surface node
         inserted.points.push_back(q);
-        inserted.face.push_back(kept_points.face[point_index(i, j, k)]);
+        inserted.face.push_back(kept_points.face[lattice.point_index(i, j, k)]);
         around.core_points.add(q);
         ++counts.nb_lattice_points;
       }

@@ -56,6 +56,10 @@ struct Lattice {
   /// Whether frame coordinate x along axis a lies on a lattice plane (within `tolerance`).
   bool on_plane(int a, double x, double tolerance) const;
 
+  /// The index of lattice point (i, j, k) in per-point arrays (i fastest, then j, then k).
+  std::size_t point_index(int i, int j, int k) const {
+    return (static_cast<std::size_t>(k) * (cells[1] + 1) + j) * (cells[0] + 1) + i;
+  }
   /// Lattice point (i, j, k) and the centre of cell (i, j, k), in frame coordinates.
   Vec3 point(int i, int j, int k) const { return Vec3{at(0, i), at(1, j), at(2, k)}; }
   Vec3 cell_centre(int i, int j, int k) const {
@@ -171,6 +175,10 @@ struct KeptPoints {
 /// is not a lattice face, nor within `margin` of a boundary-layer point.
 KeptPoints keep_lattice_points(const Lattice& lattice, const Surroundings& around,
                                const Parity& parity, double keep_distance, double margin);
+
+/// Whether q, on a lattice plane across `axis`, lies in a square of four kept lattice points of
+/// that plane (a lattice cell's face, which TetGen keeps whole, core or not).
+bool in_kept_square(const Lattice& lattice, const KeptPoints& kept, const Vec3& q, int axis);
 
 /// Counts of add_core().
 struct CoreCounts {

@@ -54,7 +54,7 @@ std::size_t clear_face_layers(const std::vector<FaceLayerSpec>& specs,
   for (int k = 0; k < n2; ++k)
     for (int j = 0; j < n1; ++j)
       for (int i = 0; i < n0; ++i) {
-        const std::size_t index = (static_cast<std::size_t>(k) * n1 + j) * n0 + i;
+        const std::size_t index = lattice.point_index(i, j, k);
         if (!kept.kept[index] || !layered.any_within(lattice.point(i, j, k), deepest)) continue;
         kept.kept[index] = 0;
         ++dropped;

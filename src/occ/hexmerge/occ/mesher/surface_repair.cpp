@@ -112,7 +112,8 @@ class FaceGaps {
 
 // Splits the triangles of the faces that are not lattice faces until no side is longer than
 // `target` (sides on edges between lattice faces excepted), nor a strip along a CAD edge
-// (kStripRatio); lattice-face triangles are split only where a neighbour's side must be. New
+// (kStripRatio); lattice-face triangles are split only where a neighbour's side must be and on a
+// seam between lattice faces on one plane. New
 // nodes lie on the CAD edge (sides on an edge) or on the face's surface.
 void refine(const Shape& s, Surface& surface, double target, double deflection,
             const std::vector<bool>& lattice_face, const std::vector<bool>& lattice_edge,

@@ -20,7 +20,8 @@ class SizeField;
 /// lies on a CAD edge has a side over three times longer (down to a fifth of the size wanted:
 /// BRepMesh's strips between finely divided edges, whose small angles no tet on them gets
 /// over); lattice-face triangles are split
-/// only where a neighbour's side must be. New nodes lie on the CAD edge (sides on an edge) or on
+/// only where a neighbour's side must be, and on a seam between lattice faces on one plane
+/// (no lattice point comes onto it). New nodes lie on the CAD edge (sides on an edge) or on
 /// the face's surface. Then needles are smoothed on their face and the Delaunay flips redone.
 /// @param[in] lattice_face  per face, whether it is a lattice face (planar, on a lattice plane)
 /// @param[in] lattice_edge  per edge, whether every face it bounds is a lattice face
