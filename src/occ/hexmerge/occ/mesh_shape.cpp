@@ -743,13 +743,14 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
   for (std::int32_t& face : swappable)
     if (face >= 0 && items_at_h.face_size[static_cast<std::size_t>(face)] < h) face = -1;
   // The boundary nodes inside a face or edge move along it (not swept: nothing moves there),
-  // but for those of lattice faces, of faces and edges with a local size or face layers, and of
-  // faces between two solids (moved, gmsh_as1-tu-203 at its 250k size lost hexahedra: 81.3 %
-  // of the volume -> 71.6-74.2 at h and 1 +- 0.001 h).
-  std::vector<bool> kept_face = lattice.lattice_face, kept_edge(items_at_h.edge_size.size());
+  // but for those of faces and edges with a local size or face layers, and the lattice points
+  // (improve_tets() keeps them). Those of lattice faces and of faces between two solids move
+  // (their tets on both sides kept positive): held, gmsh_as1-tu-203 at its 50k size kept 206 tets
+  // under 0.2, 135 of them on faces between solids; moved, 36.
+  std::vector<bool> kept_face(lattice.lattice_face.size(), false),
+      kept_edge(items_at_h.edge_size.size());
   for (std::size_t f = 0; f < kept_face.size(); ++f)
-    if (items_at_h.face_size[f] < h || layered[f] || shape.face_solid_count[f] > 1)
-      kept_face[f] = true;
+    if (items_at_h.face_size[f] < h || layered[f]) kept_face[f] = true;
   for (std::size_t e = 0; e < kept_edge.size(); ++e) kept_edge[e] = items_at_h.edge_size[e] < h;
   const std::unique_ptr<SurfacePath> along_faces =
       sweep_axis < 0 ? boundary_path(shape, surface, kept_face, kept_edge, 1e-6 * h) : nullptr;

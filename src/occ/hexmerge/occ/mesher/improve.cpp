@@ -101,14 +101,17 @@ void improve_tets(TetMesh& mesh, const std::vector<double>& frame_points,
   // closing pyramid, stay for the hexahedra, and lattice points and cell centres do not move.
   // Per vertex: whether it is a lattice point or a cell centre, whether a cell centre, and its
   // coordinates in cells.
-  std::vector<char> half_lattice(made, 1), centre(made, 1);
+  std::vector<char> half_lattice(made, 1), centre(made, 1), lattice_point(made, 1);
   std::vector<std::array<double, 3>> cell_of(made);
   for (std::size_t v = 0; v < made; ++v)
     for (int a = 0; a < 3; ++a) {
       cell_of[v][a] =
           cells_coordinate(parameters.ticks[a], parameters.spacing[a], frame_points[3 * v + a]);
       if (std::abs(2 * cell_of[v][a] - std::round(2 * cell_of[v][a])) > 1e-6) half_lattice[v] = 0;
-      if (std::abs(cell_of[v][a] - std::round(cell_of[v][a])) < 1e-6) centre[v] = 0;
+      if (std::abs(cell_of[v][a] - std::round(cell_of[v][a])) < 1e-6)
+        centre[v] = 0;
+      else
+        lattice_point[v] = 0;
     }
   // Whether tet t lies in one lattice cell or one closing pyramid (all its corners on the half
   // lattice, within one cell's width along each axis).
@@ -158,9 +161,10 @@ void improve_tets(TetMesh& mesh, const std::vector<double>& frame_points,
   // Boundary nodes inside a CAD face move along it, inside a CAD edge along that (a tet on a
   // needle of the surface gets better only so); swept, none.
   SurfacePath* const surface = parameters.sweep_axis < 0 ? parameters.surface : nullptr;
+  // A lattice point on the boundary (a corner of the core's cells on a lattice face) stays.
   if (surface)
     for (std::size_t v = 0; v < made; ++v)
-      if (on_boundary[v] && surface->dimension(static_cast<index_t>(v)) > 0)
+      if (on_boundary[v] && surface->dimension(static_cast<index_t>(v)) > 0 && !lattice_point[v])
         movable[v] = kOnSurface;
   for (int round = 0; round < kQualityRounds; ++round) {
     std::vector<char> fixed(mesh.nb_tets(), 0);
