@@ -504,6 +504,7 @@ py::tuple run_mesh_shape(const std::string& brep, const std::map<std::string, st
   d["max_boundary_distance"] = report.max_boundary_distance;
   d["estimated_tets"] = report.estimated_tets;
   d["nb_unrefined_faces"] = report.nb_unrefined_faces;
+  d["nb_flat_surface_triangles"] = report.nb_flat_surface_triangles;
   d["bounded_surface_repairs"] = report.bounded_surface_repairs;
   d["nb_extruded_triangles"] = report.nb_extruded_triangles;
   d["nb_shared_faces"] = report.nb_shared_faces;

@@ -377,6 +377,7 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
   // Nodes nearer than TetGen's own tolerance (1e-8 of the input's size) are one node: TetGen
   // would merge them itself and renumber the points after them.
   Surface surface = triangulate(shape, deflection, 1e-9 * h + 2e-8 * shape.diagonal + 1e-12);
+  report.nb_flat_surface_triangles = surface.nb_flat_triangles;
   Lattice lattice = lay_lattice(shape, frame, surface.nodes, h, strategy.lattice_faces);
   std::vector<std::string> face_names(static_cast<std::size_t>(shape.faces.Extent()));
   for (std::size_t f = 0; f < face_names.size(); ++f) {
@@ -591,8 +592,8 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
   const double keep_distance =
       (parameters.lattice_margin + (sweep_axis >= 0 ? nb_layers * parameters.layer_thickness : 0)) *
       h;
-  KeptPoints kept =
-      keep_lattice_points(lattice, around, parity, keep_distance, parameters.lattice_margin * h);
+  KeptPoints kept = keep_lattice_points(lattice, around, parity, keep_distance,
+                                        parameters.lattice_margin * h, sweep_axis < 0);
   clear_face_layers(layer_specs, nodes, surface, lattice, around, parameters.lattice_margin * h,
                     kept);
   step("lattice", 0.2);
@@ -776,6 +777,14 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
   // 13. How far the boundary nodes are from the CAD faces they lie on.
   std::vector<int> vertex_face = surface.node_face;
   vertex_face.insert(vertex_face.end(), inserted.face.begin(), inserted.face.end());
+  // The points TetGen added on the boundary (on CAD edges' segments, where it could not recover
+  // one otherwise, -Y notwithstanding: FreeCAD's I22_2_5_16withEPL22_6_16.stp at h 0.812, three)
+  // lie on the face of a boundary triangle at them.
+  vertex_face.resize(given, -1);
+  vertex_face.resize(mesh.points.size() / 3, -1);
+  for (std::size_t i = 0; i < tets.boundary.size(); ++i)
+    for (const index_t v : tets.boundary[i])
+      if (v >= given && vertex_face[v] < 0) vertex_face[v] = tets.boundary_marker[i] - 1;
   report.max_boundary_distance = max_boundary_distance(shape, mesh, vertex_face, 1e-6 * h);
   report.local_sizes =
       local_sizes_applied(local_sizes, given_items.faces, given_items.edges, surface);

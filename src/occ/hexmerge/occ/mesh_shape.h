@@ -235,6 +235,9 @@ struct MeshShapeReport {
   /// Faces whose surface refinement to h did not converge and was given up (sides longer
   /// than h remain on them)
   std::size_t nb_unrefined_faces = 0;
+  /// BRepMesh's surface triangles whose three nodes lay on one line (a face whose outline runs
+  /// along one line and back), taken out: the triangle across split at the third node
+  std::size_t nb_flat_surface_triangles = 0;
   /// whether the surface repairs ran again from BRepMesh's triangles, each kept within the chord
   /// deflection of its face, because the surface they made first crossed itself
   bool bounded_surface_repairs = false;

@@ -127,7 +127,7 @@ TEST(lay_lattice, planes_placed_on_faces_no_spacing_fits) {
 
   const Placed placed = place(p);
   const mesher::KeptPoints kept =
-      mesher::keep_lattice_points(l, *placed.around, *placed.parity, 0.3 * h, 0.3 * h);
+      mesher::keep_lattice_points(l, *placed.around, *placed.parity, 0.3 * h, 0.3 * h, true);
   mesher::InsertedPoints inserted;
   const mesher::CoreCounts core =
       mesher::add_core(l, *placed.around, *placed.parity, kept, -1, h, inserted);
@@ -216,7 +216,7 @@ TEST(keep_lattice_points, inside_and_clear_of_the_curved_faces) {
   Placed placed = place(p);
   const auto& l = p.lattice;
   const mesher::KeptPoints kept =
-      mesher::keep_lattice_points(l, *placed.around, *placed.parity, keep, 0.3 * h);
+      mesher::keep_lattice_points(l, *placed.around, *placed.parity, keep, 0.3 * h, true);
   std::size_t nb_kept = 0;
   for (int k = 0; k <= l.cells[2]; ++k)
     for (int j = 0; j <= l.cells[1]; ++j)
@@ -263,7 +263,7 @@ TEST(add_core, box_is_all_core) {
   Placed placed = place(p);
   const auto& l = p.lattice;
   const mesher::KeptPoints kept =
-      mesher::keep_lattice_points(l, *placed.around, *placed.parity, 0.6 * h, 0.3 * h);
+      mesher::keep_lattice_points(l, *placed.around, *placed.parity, 0.6 * h, 0.3 * h, true);
   for (char k : kept.kept) EXPECT_TRUE(k);
   mesher::InsertedPoints inserted;
   const mesher::CoreCounts core =

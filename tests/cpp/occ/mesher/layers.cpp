@@ -74,7 +74,7 @@ TEST(place_layers, keep_out_of_the_core_laid_first) {
     };
     std::size_t placed = core_first ? 0 : lay();
     const mesher::KeptPoints kept =
-        mesher::keep_lattice_points(p.lattice, around, parity, margin, margin);
+        mesher::keep_lattice_points(p.lattice, around, parity, margin, margin, true);
     core = mesher::add_core(p.lattice, around, parity, kept, -1, h, inserted);
     if (core_first) placed = lay();
     // The core laid again over the layers.

@@ -301,6 +301,15 @@ int Surroundings::on_lattice_face(const Vec3& q, const int (&index)[3]) const {
   return -1;
 }
 
+bool Surroundings::on_lattice_edge(const Vec3& q, const int (&index)[3]) const {
+  int planes = 0;
+  for (int a = 0; a < 3; ++a) {
+    auto it = plane_triangles_.find({a, index[a]});
+    if (it != plane_triangles_.end() && face_holding(q, it->second, nodes_, a) >= 0) ++planes;
+  }
+  return planes >= 2;
+}
+
 bool Surroundings::ball_is_empty(const Vec3& centre, double r) const {
   const double inner = r * (1 - 1e-9);
   return !curved.any_within(centre, inner) && !surface_points.any_within(centre, inner) &&
@@ -345,7 +354,8 @@ bool Parity::inside_given(const std::vector<double>& xs, double x) {
 }
 
 KeptPoints keep_lattice_points(const Lattice& lattice, const Surroundings& around,
-                               const Parity& parity, double keep_distance, double margin) {
+                               const Parity& parity, double keep_distance, double margin,
+                               bool edges_stay) {
   // Lattice points: kept when inside (or on a lattice face) and far enough from the other faces.
   const int n0 = lattice.cells[0] + 1, n1 = lattice.cells[1] + 1, n2 = lattice.cells[2] + 1;
   KeptPoints out;
@@ -362,12 +372,29 @@ KeptPoints keep_lattice_points(const Lattice& lattice, const Surroundings& aroun
         const int index[3] = {i, j, k};
         const int face = around.on_lattice_face(q, index);
         if (face < 0 && !Parity::inside_given(xs, q.x)) continue;
-        if (around.curved.any_within(q, keep_distance)) continue;
+        // A point on an edge between lattice faces (the edge's side is split at the lattice
+        // points only, and without them stays as long as the edge) stays near other faces, and
+        // near surface nodes off the edge: FreeCAD's I22_2_5_16withEPL22_6_16.stp at h 0.812,
+        // an E core's legs 0.1 mm below an I core, their top faces' sides 15.8 mm long, tets on
+        // them of scaled Jacobian 0.005.
+        int edge = -1;  // whether on an edge between lattice faces, asked where needed
+        const auto on_edge = [&] {
+          if (edge < 0) edge = edges_stay && face >= 0 && around.on_lattice_edge(q, index);
+          return edge == 1;
+        };
+        if (around.curved.any_within(q, keep_distance) && !on_edge()) continue;
         if (around.layer_points.any_within(q, margin)) continue;
         // On a lattice face, a surface node near it but not at it (a side of a lattice edge
-        // split to a local size) would leave a sliver of a side between the two.
+        // split to a local size) would leave a sliver of a side between the two; on an edge,
+        // such a node on the edge's line.
+        const auto on_its_line = [&](const Vec3& p) {
+          int planes = 0;
+          for (int a = 0; a < 3; ++a) planes += std::abs(coord(p, a) - coord(q, a)) < same;
+          return planes >= 2;
+        };
         if (face >= 0 && around.surface_points.any_within(q, margin) &&
-            !around.surface_points.any_within(q, same))
+            !around.surface_points.any_within(q, same) &&
+            (!on_edge() || around.surface_points.any_within(q, margin, on_its_line)))
           continue;
         kept[lattice.point_index(i, j, k)] = 1;
         kept_face[lattice.point_index(i, j, k)] = face;

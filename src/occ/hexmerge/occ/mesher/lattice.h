@@ -124,6 +124,9 @@ class Surroundings {
                double h);
   /// The lattice face holding q, on the lattice planes index[a] (a = 0..2; -1: none), or -1.
   int on_lattice_face(const Vec3& q, const int (&index)[3]) const;
+  /// Whether lattice point q (its index) lies on lattice faces on two planes: on the CAD edge
+  /// between them, or at a corner.
+  bool on_lattice_edge(const Vec3& q, const int (&index)[3]) const;
   /// Whether the ball (centre, r) holds no surface triangle, surface node or layer point (to
   /// 1e-9 of r).
   bool ball_is_empty(const Vec3& centre, double r) const;
@@ -172,9 +175,14 @@ struct KeptPoints {
 };
 
 /// The lattice points inside (or on a lattice face), not within `keep_distance` of a face that
-/// is not a lattice face, nor within `margin` of a boundary-layer point.
+/// is not a lattice face, nor within `margin` of a boundary-layer point; on a lattice face, not
+/// within `margin` of a surface node that is not at the point. With `edges_stay` (not swept: a
+/// sweep repeats its first plane's points), a point on an edge between lattice faces (whose
+/// sides only its lattice points split) stays within `keep_distance` of other faces, and within
+/// `margin` of surface nodes off the edge's line.
 KeptPoints keep_lattice_points(const Lattice& lattice, const Surroundings& around,
-                               const Parity& parity, double keep_distance, double margin);
+                               const Parity& parity, double keep_distance, double margin,
+                               bool edges_stay);
 
 /// Whether q, on a lattice plane across `axis`, lies in a square of four kept lattice points of
 /// that plane (a lattice cell's face, which TetGen keeps whole, core or not).

@@ -119,6 +119,13 @@ class PointSet {
     const Vec3 d{r, r, r};
     return grid_.any_in(q - d, q + d, [&](int i) { return (points_[i] - q).norm() < r; });
   }
+  /// Whether one for which `counts(point)` holds is within r of q.
+  template <typename Counts>
+  bool any_within(const Vec3& q, double r, Counts&& counts) const {
+    const Vec3 d{r, r, r};
+    return grid_.any_in(q - d, q + d,
+                        [&](int i) { return (points_[i] - q).norm() < r && counts(points_[i]); });
+  }
 
  private:
   BucketGrid grid_;

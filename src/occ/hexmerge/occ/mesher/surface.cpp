@@ -16,6 +16,7 @@
 #include <cmath>
 #include <map>
 #include <string>
+#include <unordered_map>
 #include <utility>
 #include <vector>
 
@@ -175,6 +176,93 @@ void remove_coincident_triangles(Surface& surface) {
   surface.triangles.resize(kept);
 }
 
+// A triangle whose third node is within this fraction of its longest side from that side, or
+// within the nodes' merging tolerance, is flat (an angle under 1e-4 degrees): a STEP file's
+// coordinates in single precision put collinear nodes 5e-7 apart on a side of 1.2.
+constexpr double kFlatTriangle = 1e-6;
+
+// Triangles whose three nodes lie on one line (kFlatTriangle): BRepMesh closes so a
+// face whose outline runs twice along one line (FreeCAD's SOT404.stp: a wall below a tab whose
+// outline passes along the tab's top edge and back), and the face across that line has one
+// side where the flat triangle has two (its third node lies on the side, not on the face's
+// loop). TetGen fills such a place with tets of no volume (scaled Jacobian 1e-6). The flat
+// triangle goes, and the triangle across its longest side is split at its third node, so that
+// every side stays between two triangles; a CAD edge's segment split so takes the parameter
+// at the node. Returns how many went.
+std::size_t remove_flat_triangles(Surface& surface, double tolerance) {
+  std::size_t removed = 0;
+  // Rounds: a split can leave the next flat triangle's longest side somewhere else.
+  for (int round = 0; round < 8; ++round) {
+    std::unordered_map<std::uint64_t, std::vector<std::size_t>> by_side;
+    for (std::size_t i = 0; i < surface.triangles.size(); ++i)
+      for (int c = 0; c < 3; ++c) by_side[side_key(surface.triangles[i], c)].push_back(i);
+    std::vector<char> drop(surface.triangles.size(), 0), touched(surface.triangles.size(), 0);
+    std::vector<SurfaceTriangle> added;
+    std::size_t this_round = 0;
+    for (std::size_t i = 0; i < surface.triangles.size(); ++i) {
+      const SurfaceTriangle& flat = surface.triangles[i];
+      if (touched[i]) continue;
+      // The longest side (a, b) and the node v across it, within the tolerance of the side.
+      int c = 0;
+      double longest = -1;
+      for (int k = 0; k < 3; ++k) {
+        const double l =
+            (surface.nodes[flat.node[(k + 1) % 3]] - surface.nodes[flat.node[k]]).norm();
+        if (l > longest) longest = l, c = k;
+      }
+      const int a = flat.node[c], b = flat.node[(c + 1) % 3], v = flat.node[(c + 2) % 3];
+      const Vec3 &pa = surface.nodes[a], &pb = surface.nodes[b], &pv = surface.nodes[v];
+      const Vec3 ab = pb - pa;
+      const double along = (pv - pa).dot(ab) / ab.dot(ab);
+      if (along <= 0 || along >= 1 ||
+          (pa + ab * along - pv).norm() > std::max(tolerance, kFlatTriangle * longest))
+        continue;
+      const auto it = by_side.find(pair_key(a, b));
+      if (it == by_side.end() || it->second.size() != 2) continue;
+      const std::size_t j = it->second[0] == i ? it->second[1] : it->second[0];
+      if (touched[j]) continue;
+      const SurfaceTriangle& across = surface.triangles[j];
+      if (std::find(across.node.begin(), across.node.end(), v) != across.node.end()) continue;
+      // Split `across` at v, its nodes in their order: (p, v, r) and (v, q, r) for its side
+      // (p, q) = {a, b}.
+      const int k = side_with_key(across, pair_key(a, b));
+      const int p = across.node[k], q = across.node[(k + 1) % 3], r = across.node[(k + 2) % 3];
+      const double at_p = p == a ? along : 1 - along;  // v's place from p towards q
+      const UV uv_v{across.uv[k].u + at_p * (across.uv[(k + 1) % 3].u - across.uv[k].u),
+                    across.uv[k].v + at_p * (across.uv[(k + 1) % 3].v - across.uv[k].v)};
+      SurfaceTriangle first = across, second = across;
+      first.node = {p, v, r}, first.uv = {across.uv[k], uv_v, across.uv[(k + 2) % 3]};
+      second.node = {v, q, r}, second.uv = {uv_v, across.uv[(k + 1) % 3], across.uv[(k + 2) % 3]};
+      added.push_back(first), added.push_back(second);
+      drop[i] = drop[j] = 1;
+      for (const std::size_t t : {i, j})
+        for (int s = 0; s < 3; ++s)
+          for (const std::size_t n : by_side[side_key(surface.triangles[t], s)]) touched[n] = 1;
+      // The CAD edge's segment (a, b), if any, becomes (a, v) and (v, b) where those are none.
+      const auto seg = surface.segments.find(pair_key(a, b));
+      if (seg != surface.segments.end()) {
+        const EdgeSegment whole = seg->second;
+        surface.segments.erase(seg);
+        const double t_a = a < b ? whole.t_lo : whole.t_hi, t_b = a < b ? whole.t_hi : whole.t_lo;
+        const double t_v = t_a + along * (t_b - t_a);
+        for (const auto& [x, t_x] : {std::pair<int, double>{a, t_a}, {b, t_b}})
+          if (!surface.segments.count(pair_key(x, v)))
+            surface.segments[pair_key(x, v)] =
+                x < v ? EdgeSegment{whole.edge, t_x, t_v} : EdgeSegment{whole.edge, t_v, t_x};
+      }
+      ++this_round;
+    }
+    if (this_round == 0) break;
+    std::size_t kept = 0;
+    for (std::size_t i = 0; i < surface.triangles.size(); ++i)
+      if (!drop[i]) surface.triangles[kept++] = surface.triangles[i];
+    surface.triangles.resize(kept);
+    surface.triangles.insert(surface.triangles.end(), added.begin(), added.end());
+    removed += this_round;
+  }
+  return removed;
+}
+
 // Nodes no triangle uses (all theirs were coincident or on a face without area:
 // gmsh_U_Joint_2's 0.35 mm faces) are dropped and the rest renumbered, with the segments on
 // them: TetGen leaves such a node out, which failed every way of placing the points.
@@ -313,6 +401,7 @@ Surface triangulate(const Shape& s, double deflection, double tolerance) {
   }
   remove_coincident_triangles(surface);
   remove_faces_without_area(surface);
+  surface.nb_flat_triangles = remove_flat_triangles(surface, tolerance);
   drop_unused_nodes(surface);
   return surface;
 }

@@ -58,6 +58,9 @@ struct Surface {
   std::vector<int> seed;
   /// Faces whose refinement to the target size did not converge and was given up (refine()).
   std::vector<int> unrefined_faces;
+  /// BRepMesh's triangles whose three nodes lie on one line, taken out by triangulate() (the
+  /// triangle across each one's longest side split at its third node).
+  std::size_t nb_flat_triangles = 0;
 };
 
 /// BRepMesh's angular deflection in triangulate() (radians). Its CAD edges' segments turn by at

@@ -1,0 +1,69 @@
+"""hexmerge.mesh_shape() on CAD parts that FreeCAD ships (Debian's freecad-common: the IDF
+library's STEP models of electronic packages, /usr/share/freecad/Mod/Idf/Idflibs), parts the
+mesher was not developed on (issue 13). Skipped where FreeCAD's data is not installed.
+"""
+
+from __future__ import annotations
+
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import hexmerge
+from hexmerge import _core
+from real_parts import tet_scaled_jacobians
+
+IDF = Path("/usr/share/freecad/Mod/Idf/Idflibs")
+
+pytestmark = [
+    pytest.mark.skipif(not hexmerge.WITH_OPENCASCADE or not hasattr(_core, "mesh_shape"),
+                       reason="hexmerge built without OpenCASCADE"),
+    pytest.mark.skipif(shutil.which("tetgen") is None, reason="tetgen is not installed"),
+    pytest.mark.skipif(not IDF.is_dir(), reason=f"FreeCAD's IDF library is not at {IDF} "
+                       "(Debian package freecad-common)"),
+]
+
+
+def mesh_and_check(path: Path, h: float):
+    """The tets, their report, their scaled Jacobians, and the checker's verdict on their
+    recombination."""
+    tets, report = hexmerge.mesh_shape(path, h, recombine=False)
+    cells = tets.cell_vertices.reshape(-1, 4).astype(np.int64)
+    mesh, _ = hexmerge.recombine(tets.points, cells, tets.regions)
+    check = hexmerge.check(mesh, tets.points, cells, tets.regions)
+    return report["meshing"], tet_scaled_jacobians(tets.points, cells), check
+
+
+def test_a_face_whose_outline_runs_along_a_line_and_back() -> None:
+    """SOT404.stp (a D2PAK: body, tab, two leads, a pin mark): the wall below each lead's tab is
+    one face whose outline runs along the tab's top edge and back, and BRepMesh closes it with
+    triangles whose three nodes lie on one line (5e-7 off over 1.2 mm), whose longest side is
+    one side of the top face's triangle. TetGen filled those places with tets of no volume
+    (at h 0.2851: scaled Jacobian 1.9e-6, 49 tets under 1e-3). The flat triangles go and the
+    triangles across are split at their third node: smallest 0.030 (when this was changed)."""
+    meshing, sj, check = mesh_and_check(IDF / "SOT404.stp", 0.2851)
+    assert meshing["nb_solids"] == 4
+    assert meshing["nb_flat_surface_triangles"] > 0
+    assert sj.min() > 0.01
+    assert check["valid"] and check["cracks"] == 0 and check["nonconforming_quads"] == 0
+    assert meshing["max_boundary_distance"] < 1e-3 * 0.2851
+
+
+@pytest.mark.parametrize("h", [0.812, 0.4777])
+def test_lattice_edges_near_a_face_across_a_gap(h: float) -> None:
+    """I22_2_5_16withEPL22_6_16.stp (an E core and an I core 0.1 mm above its legs): the lattice
+    points on the edges between the legs' top faces and their sides lay within the lattice margin
+    of the I core's faces and nodes, across the gap, and were dropped; the edges' sides, split
+    only at lattice points, stayed 15.8 mm long, and the tets on the top faces' triangles were
+    flat (at h 0.812: 660 elements under scaled Jacobian 0.2, smallest 0.005; at 0.4777: 2,512,
+    smallest 3e-4; before that, at 0.812, TetGen added points on those sides, which had no CAD
+    face, and the mesh was refused). Such points stay: 10 and 15 under 0.2, smallest 0.16 and
+    0.14 (when this was changed)."""
+    meshing, sj, check = mesh_and_check(IDF / "I22_2_5_16withEPL22_6_16.stp", h)
+    assert meshing["nb_solids"] == 2
+    assert sj.min() > 0.05
+    assert (sj < 0.2).sum() <= 60
+    assert check["valid"] and check["cracks"] == 0 and check["nonconforming_quads"] == 0
+    assert meshing["max_boundary_distance"] < 1e-3 * h
