@@ -16,6 +16,16 @@ for folder in (PYTHON_SRC, ROOT / "bench"):
     if str(folder) not in sys.path:
         sys.path.insert(0, str(folder))
 
+import hexmerge  # noqa: E402 (from the checkout, put on the path above)
+from hexmerge import _core  # noqa: E402
+
+# The marks of a module whose tests mesh shapes: hexmerge built with OpenCASCADE, TetGen found.
+MESHES_SHAPES = [
+    pytest.mark.skipif(not hexmerge.WITH_OPENCASCADE or not hasattr(_core, "mesh_shape"),
+                       reason="hexmerge built without OpenCASCADE"),
+    pytest.mark.skipif(shutil.which("tetgen") is None, reason="tetgen is not installed"),
+]
+
 BOX_GEO = """
 SetFactory("OpenCASCADE");
 Box(1) = {0, 0, 0, 1, 1, 1};

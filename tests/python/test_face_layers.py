@@ -10,20 +10,16 @@ is validated and its recombination checked by the independent checker.
 from __future__ import annotations
 
 import json
-import shutil
 
 import numpy as np
 import pytest
 
 import hexmerge
-from hexmerge import _core, cli
+from conftest import MESHES_SHAPES
+from hexmerge import cli
 from test_mesh_shape import GEOMETRY, PLATE, assert_checked, gmsh_brep
 
-pytestmark = [
-    pytest.mark.skipif(not hexmerge.WITH_OPENCASCADE or not hasattr(_core, "mesh_shape"),
-                       reason="hexmerge built without OpenCASCADE"),
-    pytest.mark.skipif(shutil.which("tetgen") is None, reason="tetgen is not installed"),
-]
+pytestmark = MESHES_SHAPES
 
 H = 10.0
 LAYERS, FIRST, GROWTH = 3, 1.0, 1.5

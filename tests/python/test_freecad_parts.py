@@ -5,22 +5,19 @@ mesher was not developed on (issue 13). Skipped where FreeCAD's data is not inst
 
 from __future__ import annotations
 
-import shutil
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 import hexmerge
-from hexmerge import _core
+from conftest import MESHES_SHAPES
 from real_parts import tet_scaled_jacobians
 
 IDF = Path("/usr/share/freecad/Mod/Idf/Idflibs")
 
 pytestmark = [
-    pytest.mark.skipif(not hexmerge.WITH_OPENCASCADE or not hasattr(_core, "mesh_shape"),
-                       reason="hexmerge built without OpenCASCADE"),
-    pytest.mark.skipif(shutil.which("tetgen") is None, reason="tetgen is not installed"),
+    *MESHES_SHAPES,
     pytest.mark.skipif(not IDF.is_dir(), reason=f"FreeCAD's IDF library is not at {IDF} "
                        "(Debian package freecad-common)"),
 ]

@@ -10,21 +10,17 @@ nodes checked on the CAD, its recombination checked against it by the independen
 from __future__ import annotations
 
 import json
-import shutil
 
 import numpy as np
 import pytest
 
 import hexmerge
-from hexmerge import _core, cli
+from conftest import MESHES_SHAPES
+from hexmerge import cli
 from real_parts import tet_scaled_jacobians
 from test_mesh_shape import PLATE, SURFACES, assert_checked, boundary_nodes, gmsh_brep
 
-pytestmark = [
-    pytest.mark.skipif(not hexmerge.WITH_OPENCASCADE or not hasattr(_core, "mesh_shape"),
-                       reason="hexmerge built without OpenCASCADE"),
-    pytest.mark.skipif(shutil.which("tetgen") is None, reason="tetgen is not installed"),
-]
+pytestmark = MESHES_SHAPES
 
 H = 10.0
 HOLE = 5  # the hole's wall

@@ -11,22 +11,18 @@ marked xfail(strict=True), so that they turn into failures to remove when it is 
 from __future__ import annotations
 
 import os
-import shutil
 from pathlib import Path
 
 import pytest
 
 import hexmerge
-from hexmerge import _core
-from conftest import ROOT
+from conftest import MESHES_SHAPES, ROOT
 from real_parts import boundary_triangle_angles, tet_scaled_jacobians
 
 CAD = Path(os.environ.get("HEXMERGE_CAD_DIR") or ROOT.parent / "shared" / "cad")
 
 pytestmark = [
-    pytest.mark.skipif(not hexmerge.WITH_OPENCASCADE or not hasattr(_core, "mesh_shape"),
-                       reason="hexmerge built without OpenCASCADE"),
-    pytest.mark.skipif(shutil.which("tetgen") is None, reason="tetgen is not installed"),
+    *MESHES_SHAPES,
     pytest.mark.skipif(not CAD.is_dir(), reason=f"the shared real CAD parts are not at {CAD} "
                        "(set HEXMERGE_CAD_DIR to their folder)"),
 ]

@@ -13,15 +13,10 @@ import numpy as np
 import pytest
 
 import hexmerge
-from hexmerge import _core
-from conftest import ROOT
+from conftest import MESHES_SHAPES, ROOT
 from test_mesh_shape import assert_checked, boundary_nodes, gmsh_brep, holed_plate_geo
 
-pytestmark = [
-    pytest.mark.skipif(not hexmerge.WITH_OPENCASCADE or not hasattr(_core, "mesh_shape"),
-                       reason="hexmerge built without OpenCASCADE"),
-    pytest.mark.skipif(shutil.which("tetgen") is None, reason="tetgen is not installed"),
-]
+pytestmark = MESHES_SHAPES
 
 
 def occ_volume(path: Path) -> float:
