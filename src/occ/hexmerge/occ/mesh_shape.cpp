@@ -775,16 +775,13 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
   }
 
   // 13. How far the boundary nodes are from the CAD faces they lie on.
-  std::vector<int> vertex_face = surface.node_face;
-  vertex_face.insert(vertex_face.end(), inserted.face.begin(), inserted.face.end());
-  // The points TetGen added on the boundary (on CAD edges' segments, where it could not recover
-  // one otherwise, -Y notwithstanding: FreeCAD's I22_2_5_16withEPL22_6_16.stp at h 0.812, three)
-  // lie on the face of a boundary triangle at them.
-  vertex_face.resize(given, -1);
-  vertex_face.resize(mesh.points.size() / 3, -1);
-  for (std::size_t i = 0; i < tets.boundary.size(); ++i)
-    for (const index_t v : tets.boundary[i])
-      if (v >= given && vertex_face[v] < 0) vertex_face[v] = tets.boundary_marker[i] - 1;
+  std::vector<int> given_face = surface.node_face;
+  given_face.insert(given_face.end(), inserted.face.begin(), inserted.face.end());
+  given_face.resize(given, -1);
+  // The points TetGen added on the boundary (FreeCAD's I22_2_5_16withEPL22_6_16.stp at h 0.812,
+  // three, before its lattice edges kept their points) lie on the face of a triangle at them.
+  const std::vector<int> vertex_face = point_faces(std::move(given_face), mesh.points.size() / 3,
+                                                   tets.boundary, tets.boundary_marker);
   report.max_boundary_distance = max_boundary_distance(shape, mesh, vertex_face, 1e-6 * h);
   report.local_sizes =
       local_sizes_applied(local_sizes, given_items.faces, given_items.edges, surface);

@@ -39,6 +39,30 @@ struct BoxMesh {
   }
 };
 
+// Points added on the boundary take a boundary triangle's face (marker - 1); added points
+// inside stay on none; the given points keep theirs.
+TEST(point_faces, points_added_on_the_boundary_take_a_triangles_face) {
+  const std::vector<std::array<index_t, 3>> boundary = {{0, 1, 4}, {1, 2, 4}, {2, 3, 5}};
+  const std::vector<int> marker = {3, 3, 8};
+  const std::vector<int> faces = mesher::point_faces({2, 2, 7, -1}, 7, boundary, marker);
+  EXPECT_EQ(faces, (std::vector<int>{2, 2, 7, -1, 2, 7, -1}));
+  // Given points beyond the mesh's: kept as given.
+  EXPECT_EQ(mesher::point_faces({1, 1, 1}, 2, {}, {}), (std::vector<int>{1, 1, 1}));
+}
+
+// A box's added point on its boundary, on no face before: measured (before: refused).
+TEST(point_faces, an_added_boundary_point_is_measured) {
+  BoxMesh box;
+  std::vector<int> given(box.x_face.begin(), box.x_face.begin() + 7);  // corner 7 "added"
+  // The face x = 10's two triangles (corners 1, 3, 5, 7), its marker its index + 1.
+  const std::vector<std::array<index_t, 3>> boundary = {{1, 3, 7}, {1, 7, 5}};
+  const std::vector<int> marker(2, box.x_face[7] + 1);
+  const std::vector<int> faces = mesher::point_faces(given, 8, boundary, marker);
+  EXPECT_EQ(faces[7], box.x_face[7]);
+  EXPECT_LT(mesher::max_boundary_distance(box.shape, box.mesh, faces, 1e-9), 1e-12);
+  EXPECT_THROW(mesher::max_boundary_distance(box.shape, box.mesh, given, 1e-9), InputError);
+}
+
 TEST(max_boundary_distance, nodes_on_their_faces_are_at_zero) {
   BoxMesh box;
   ASSERT_EQ(box.x_face.size(), 8u);

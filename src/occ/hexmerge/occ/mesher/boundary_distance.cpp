@@ -18,6 +18,18 @@
 
 namespace hexmerge::mesher {
 
+std::vector<int> point_faces(std::vector<int> given_face, std::size_t nb_points,
+                             const std::vector<std::array<index_t, 3>>& boundary,
+                             const std::vector<int>& boundary_marker) {
+  const std::size_t given = given_face.size();
+  given_face.resize(std::max(given, nb_points), -1);
+  for (std::size_t i = 0; i < boundary.size(); ++i)
+    for (const index_t v : boundary[i])
+      if (v >= given && v < given_face.size() && given_face[v] < 0)
+        given_face[v] = boundary_marker[i] - 1;
+  return given_face;
+}
+
 double max_boundary_distance(const Shape& shape, const TetMesh& mesh,
                              const std::vector<int>& vertex_face, double tolerance) {
   const std::size_t made = mesh.points.size() / 3;

@@ -3,6 +3,8 @@
 /// How far a tet mesh's boundary nodes are from the CAD faces they lie on (internal header of
 /// mesh_shape(); no OpenCASCADE).
 
+#include <array>
+#include <cstddef>
 #include <vector>
 
 #include "hexmerge/mesh/tet_mesh.h"
@@ -10,6 +12,15 @@
 namespace hexmerge::mesher {
 
 struct Shape;
+
+/// Per point of a tet mesh of `nb_points` points, the index of the CAD face it lies on:
+/// `given_face` for the points given to the tetrahedraliser (the first ones), -1 for the others
+/// but those on the boundary, on a segment it split where it could not recover it otherwise
+/// (TetGen, -Y notwithstanding), which take the face of a boundary triangle at them (its facet
+/// marker less one).
+std::vector<int> point_faces(std::vector<int> given_face, std::size_t nb_points,
+                             const std::vector<std::array<index_t, 3>>& boundary,
+                             const std::vector<int>& boundary_marker);
 
 /// The largest distance of a boundary node of `mesh` (a vertex of a face of one tet) to the
 /// surface of its CAD face.
