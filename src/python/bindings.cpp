@@ -508,6 +508,7 @@ py::tuple run_mesh_shape(const std::string& brep, const std::map<std::string, st
   d["bounded_surface_repairs"] = report.bounded_surface_repairs;
   d["nb_extruded_triangles"] = report.nb_extruded_triangles;
   d["nb_shared_faces"] = report.nb_shared_faces;
+  d["nb_sewn_solids"] = report.nb_sewn_solids;
   py::list local_sizes;
   for (const LocalSizeApplied& l : report.local_sizes) {
     py::dict e;

@@ -64,3 +64,39 @@ def test_lattice_edges_near_a_face_across_a_gap(h: float) -> None:
     assert (sj < 0.2).sum() <= 60
     assert check["valid"] and check["cracks"] == 0 and check["nonconforming_quads"] == 0
     assert meshing["max_boundary_distance"] < 1e-3 * h
+
+
+def test_a_file_of_faces_is_sewn_into_a_solid() -> None:
+    """SOT23.stp holds 73 faces, each in a shell of its own, and no solid (refused before: "the
+    shape holds no solid"). Sewn, they close one solid, which is meshed; the report says so.
+    SOD_323.stp's faces leave 48 in open shells: refused, naming the count, since they would be
+    lost. Local sizes name faces of the shape given, which sewing replaced: refused."""
+    meshing, sj, check = mesh_and_check(IDF / "SOT23.stp", 0.2)
+    assert meshing["nb_sewn_solids"] == 1 and meshing["nb_solids"] == 1
+    assert sj.min() > 0
+    assert check["valid"] and check["cracks"] == 0 and check["nonconforming_quads"] == 0
+    assert meshing["max_boundary_distance"] < 1e-3 * 0.2
+    with pytest.raises(hexmerge.InputError, match="48 face.s. in 2 open one"):
+        hexmerge.mesh_shape(IDF / "SOD_323.stp", 0.2, recombine=False)
+    with pytest.raises(hexmerge.InputError, match="sewn into 1 solid"):
+        hexmerge.mesh_shape(IDF / "SOT23.stp", 0.2, recombine=False, local_sizes="1:0.05")
+
+
+def test_reading_an_iges_file_prints_nothing_of_opencascade(tmp_path) -> None:
+    """OpenCASCADE's IGES reader printed "Total number of loaded entities" (in colour) on standard
+    output; hexmerge's command line prints its own lines only. SOT23.igs also holds faces only:
+    the command line notes the sewing."""
+    import subprocess
+    import sys
+
+    from conftest import PYTHON_SRC
+
+    result = subprocess.run(
+        [sys.executable, "-m", "hexmerge", "mesh", str(IDF / "SOT23.igs"), "-h", "0.3", "-o",
+         str(tmp_path / "sot23.vtu")],
+        capture_output=True, text=True, env={"PYTHONPATH": str(PYTHON_SRC), "PATH": "/usr/bin:/bin"},
+        check=False)
+    assert result.returncode == 0, result.stderr
+    assert "loaded entities" not in result.stdout + result.stderr
+    assert "sewn, they close 1 solid(s)" in result.stderr
+    assert (tmp_path / "sot23.vtu").exists()

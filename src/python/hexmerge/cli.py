@@ -378,6 +378,9 @@ def _mesh_notes(meshing: dict[str, Any]) -> list[str]:
     if meshing.get("converted_to_millimetres"):
         notes.append(f"the file declares its lengths in {meshing['file_length_unit']}: the shape is "
                      "read in millimetres, and -h and the report's lengths are millimetres")
+    if meshing.get("nb_sewn_solids"):
+        notes.append(f"the shape held faces, not solids: sewn, they close {meshing['nb_sewn_solids']} "
+                     "solid(s), which were meshed")
     notes += [f"TetGen failed with the points placed by {failure}" for failure in meshing["failed_strategies"]]
     if notes:
         notes.append(f"the tets were made with the points placed by {meshing['strategy']}")

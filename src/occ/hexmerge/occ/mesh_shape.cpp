@@ -259,6 +259,16 @@ TetMesh mesh_shape_impl(const std::string& brep, const MeshShapeParameters& para
   report.nb_solids = static_cast<std::size_t>(shape.solids.Extent());
   report.nb_faces = static_cast<std::size_t>(shape.faces.Extent());
   report.nb_shared_faces = glue.nb_shared_faces;
+  report.nb_sewn_solids = glue.nb_sewn_solids;
+  // A shape of faces sewn into solids has faces of its own: FaceN of the shape given names none.
+  if (glue.nb_sewn_solids > 0 &&
+      (!parameters.local_sizes.empty() || !parameters.face_layers.empty()))
+    throw InputError(
+        "mesh_shape: the shape holds faces, not solids, which were sewn into " +
+            std::to_string(glue.nb_sewn_solids) +
+            " solid(s) with faces of their own: local sizes and face layers name faces of a "
+            "solid; make the solids first (FreeCAD: Part > Shape builder, solid from shell)",
+        Entity::Parameter);
   const Frame frame = choose_frame(shape, parameters.frame);
   // Local sizes naming faces or edges the shape does not have, or coarser than h, fail now.
   const std::vector<LocalSize> local_sizes = parse_local_sizes(parameters.local_sizes);

@@ -242,6 +242,9 @@ struct MeshShapeReport {
   /// deflection of its face, because the surface they made first crossed itself
   bool bounded_surface_repairs = false;
   std::size_t nb_shared_faces = 0;  ///< faces between two solids (touching solids glued)
+  /// Solids made of a shape that held faces or shells only (an IGES file, a STEP file of
+  /// surfaces): its faces sewn, each closed shell a solid; 0 when it held solids
+  std::size_t nb_sewn_solids = 0;
   /// The local sizes (MeshShapeParameters::local_sizes) as applied, in their order
   std::vector<LocalSizeApplied> local_sizes;
   std::size_t nb_graded_points = 0;  ///< points of the finer lattices around local sizes

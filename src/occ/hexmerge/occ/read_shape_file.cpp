@@ -3,6 +3,9 @@
 #include <IGESControl_Reader.hxx>
 #include <IGESData_GlobalSection.hxx>
 #include <IGESData_IGESModel.hxx>
+#include <Message.hxx>
+#include <Message_Messenger.hxx>
+#include <Message_SequenceOfPrinters.hxx>
 #include <STEPControl_Reader.hxx>
 #include <Standard_Failure.hxx>
 #include <TColStd_SequenceOfAsciiString.hxx>
@@ -10,6 +13,7 @@
 #include <algorithm>
 #include <cctype>
 #include <fstream>
+#include <mutex>
 #include <sstream>
 
 #include "hexmerge/core/error.h"
@@ -42,9 +46,31 @@ std::string declared_length_unit(IGESControl_Reader& reader) {
   return name.IsNull() ? std::string() : std::string(name->ToCString());
 }
 
+// OpenCASCADE's readers print through its default messenger (the IGES reader: "Total number of
+// loaded entities", in colour, on standard output): another program's text, which the user of
+// hexmerge does not get. Its printers are taken away while a file is read, and put back.
+class QuietReading {
+ public:
+  QuietReading() : lock_(mutex()), printers_(Message::DefaultMessenger()->Printers()) {
+    Message::DefaultMessenger()->ChangePrinters().Clear();
+  }
+  ~QuietReading() { Message::DefaultMessenger()->ChangePrinters() = printers_; }
+  QuietReading(const QuietReading&) = delete;
+  QuietReading& operator=(const QuietReading&) = delete;
+
+ private:
+  static std::mutex& mutex() {
+    static std::mutex m;
+    return m;
+  }
+  std::lock_guard<std::mutex> lock_;
+  Message_SequenceOfPrinters printers_;
+};
+
 // Reads a STEP or IGES file with an XSControl reader; every root becomes one shape.
 template <typename Reader>
 TopoDS_Shape read_with(const std::string& path, const char* kind, std::string* length_unit) {
+  const QuietReading quiet;
   Reader reader;
   if (reader.ReadFile(path.c_str()) != IFSelect_RetDone)
     throw InputError("cannot read " + path + " as a " + kind + " file");

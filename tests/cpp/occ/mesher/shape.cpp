@@ -3,9 +3,12 @@
 #include <gtest/gtest.h>
 
 #include <BRepAlgoAPI_BuilderAlgo.hxx>
+#include <BRepBuilderAPI_Copy.hxx>
 #include <BRepBuilderAPI_MakeFace.hxx>
 #include <BRepBuilderAPI_Transform.hxx>
+#include <BRepGProp.hxx>
 #include <BRep_Builder.hxx>
+#include <GProp_GProps.hxx>
 #include <TopExp.hxx>
 #include <TopoDS.hxx>
 #include <TopoDS_Compound.hxx>
@@ -91,6 +94,39 @@ TEST(load_shape, no_solid_and_open_shell_are_input_errors) {
     FAIL() << "no error";
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("is not closed: edge"), std::string::npos) << e.what();
+  }
+}
+
+// A box's faces, each copied on its own (no edge shared, as an IGES file or a STEP file of
+// surfaces gives them): sewn into one solid of the box's volume; one face fewer leaves the others
+// open, and that is refused (they would be lost).
+TEST(load_shape, faces_only_are_sewn_into_solids) {
+  TopTools_IndexedMapOfShape faces;
+  TopExp::MapShapes(occ_box(0, 0, 0, 3, 2, 1), TopAbs_FACE, faces);
+  for (const int count : {6, 5}) {
+    TopoDS_Compound loose;
+    BRep_Builder builder;
+    builder.MakeCompound(loose);
+    for (int f = 1; f <= count; ++f) builder.Add(loose, BRepBuilderAPI_Copy(faces(f)).Shape());
+    mesher::GlueSolidsReport glue;
+    if (count == 6) {
+      const mesher::Shape s = mesher::load_shape(write_brep(loose), 1e-9, glue);
+      EXPECT_EQ(glue.nb_sewn_solids, 1u);
+      EXPECT_EQ(s.solids.Extent(), 1);
+      EXPECT_EQ(s.faces.Extent(), 6);
+      EXPECT_EQ(s.edges.Extent(), 12);  // sewn: each edge shared by two faces
+      GProp_GProps volume;
+      BRepGProp::VolumeProperties(s.shape, volume);
+      EXPECT_NEAR(volume.Mass(), 6.0, 1e-9);  // positive: oriented outward
+      continue;
+    }
+    try {
+      mesher::load_shape(write_brep(loose), 1e-9, glue);
+      FAIL() << "five faces of a box were loaded";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("5 face(s) in 1 open one(s)"), std::string::npos)
+          << e.what();
+    }
   }
 }
 

@@ -19,6 +19,9 @@ struct GlueSolidsReport {
   std::size_t nb_solids = 0;        ///< solids of the shape
   std::size_t nb_shared_faces = 0;  ///< faces bounding two solids after gluing
   bool glued = false;               ///< General Fuse ran (more than one solid)
+  /// Solids load_shape() made of a shape that held faces or shells only (sewn, each closed shell a
+  /// solid); 0 when the shape held solids.
+  std::size_t nb_sewn_solids = 0;
   /// Glued: per face of the shape as given (0-based, in TopExp::MapShapes(shape, TopAbs_FACE)
   /// order: FreeCAD's FaceN is face N - 1), the faces of the glued shape it became (0-based, in
   /// the same order over the glued shape): itself, its pieces, or the one face it shares with

@@ -2,6 +2,7 @@
 
 #include <BRepAdaptor_Surface.hxx>
 #include <BRepBndLib.hxx>
+#include <BRepBuilderAPI_Sewing.hxx>
 #include <BRepGProp.hxx>
 #include <BRep_Builder.hxx>
 #include <BRep_Tool.hxx>
@@ -9,6 +10,7 @@
 #include <GProp_GProps.hxx>
 #include <GProp_PrincipalProps.hxx>
 #include <GeomLib_IsPlanarSurface.hxx>
+#include <ShapeFix_Solid.hxx>
 #include <TopExp.hxx>
 #include <TopExp_Explorer.hxx>
 #include <TopTools_IndexedDataMapOfShapeListOfShape.hxx>
@@ -17,9 +19,11 @@
 #include <TopoDS_Compound.hxx>
 #include <TopoDS_Edge.hxx>
 #include <TopoDS_Face.hxx>
+#include <TopoDS_Shell.hxx>
 #include <algorithm>
 #include <cmath>
 #include <gp_Pln.hxx>
+#include <string>
 #include <utility>
 
 #include "hexmerge/core/error.h"
@@ -28,14 +32,63 @@
 
 namespace hexmerge::mesher {
 
+namespace {
+
+// A shape of faces or shells only (an IGES file, a STEP file of surfaces): its faces sewn within
+// 1e-6 of its bounding box's diagonal, and each closed shell made a solid (oriented so that it
+// bounds a finite volume). FreeCAD's SOT23.stp (73 faces, each its own shell) is one closed
+// shell so. A face left in an open shell would be lost: refused instead.
+TopoDS_Shape solids_of_faces(const TopoDS_Shape& shape, std::size_t& nb_solids) {
+  TopTools_IndexedMapOfShape faces;
+  TopExp::MapShapes(shape, TopAbs_FACE, faces);
+  if (faces.IsEmpty())
+    throw InputError(
+        "the shape holds no solid and no face (a wire or points cannot be meshed into tets): "
+        "give a closed solid");
+  Bnd_Box box;
+  BRepBndLib::Add(shape, box);
+  BRepBuilderAPI_Sewing sewing(box.IsVoid() ? 1e-7 : 1e-6 * std::sqrt(box.SquareExtent()));
+  for (int f = 1; f <= faces.Extent(); ++f) sewing.Add(faces(f));
+  sewing.Perform();
+  const TopoDS_Shape sewn = sewing.SewedShape();
+  TopoDS_Compound solids;
+  BRep_Builder builder;
+  builder.MakeCompound(solids);
+  std::size_t closed = 0, open = 0, open_faces = 0;
+  for (TopExp_Explorer ex(sewn, TopAbs_SHELL); ex.More(); ex.Next()) {
+    const TopoDS_Shell& shell = TopoDS::Shell(ex.Current());
+    if (!BRep_Tool::IsClosed(shell)) {
+      ++open;
+      for (TopExp_Explorer f(shell, TopAbs_FACE); f.More(); f.Next()) ++open_faces;
+      continue;
+    }
+    ShapeFix_Solid fix;
+    builder.Add(solids, fix.SolidFromShell(shell));
+    ++closed;
+  }
+  for (TopExp_Explorer f(sewn, TopAbs_FACE, TopAbs_SHELL); f.More(); f.Next()) ++open_faces, ++open;
+  if (open_faces > 0 || closed == 0)
+    throw InputError("the shape holds no solid, and its " + std::to_string(faces.Extent()) +
+                     " face(s) do not all close a volume: sewn together, they make " +
+                     std::to_string(closed) + " closed shell(s) and leave " +
+                     std::to_string(open_faces) + " face(s) in " + std::to_string(open) +
+                     " open one(s), which would be lost; give closed solids (FreeCAD: Part > "
+                     "Shape builder, solid from shell)");
+  nb_solids = closed;
+  return solids;
+}
+
+}  // namespace
+
 Shape load_shape(const std::string& brep, double glue_tolerance, GlueSolidsReport& glue) {
   Shape s;
   s.shape = read_brep(brep);
   TopExp::MapShapes(s.shape, TopAbs_SOLID, s.solids);
-  if (s.solids.IsEmpty())
-    throw InputError(
-        "the shape holds no solid (a face, a shell or a wire cannot be meshed "
-        "into tets): give a closed solid");
+  std::size_t nb_sewn = 0;
+  if (s.solids.IsEmpty()) {
+    s.shape = solids_of_faces(s.shape, nb_sewn);
+    TopExp::MapShapes(s.shape, TopAbs_SOLID, s.solids);
+  }
   for (int i = 1; i <= s.solids.Extent(); ++i)
     if (!TopExp_Explorer(s.solids(i), TopAbs_FACE).More())
       throw InputError("solid " + std::to_string(i - 1) +
@@ -55,6 +108,7 @@ Shape load_shape(const std::string& brep, double glue_tolerance, GlueSolidsRepor
     if (in_shape.Extent() != in_solids.Extent()) s.shape = solids;
   }
   s.shape = glue_solids(s.shape, glue_tolerance, glue);
+  glue.nb_sewn_solids = nb_sewn;
   s.solids.Clear();
   TopExp::MapShapes(s.shape, TopAbs_SOLID, s.solids);
   Bnd_Box box;
