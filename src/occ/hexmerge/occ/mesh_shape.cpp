@@ -758,7 +758,7 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
   // (improve_tets() keeps them). Those of lattice faces and of faces between two solids move
   // (their tets on both sides kept positive): held, gmsh_as1-tu-203 at its 50k size kept 206 tets
   // under 0.2, 135 of them on faces between solids; moved, 36.
-  std::vector<bool> kept_face(lattice.lattice_face.size(), false),
+  std::vector<bool> kept_face(items_at_h.face_size.size(), false),
       kept_edge(items_at_h.edge_size.size());
   for (std::size_t f = 0; f < kept_face.size(); ++f)
     if (items_at_h.face_size[f] < h || layered[f]) kept_face[f] = true;

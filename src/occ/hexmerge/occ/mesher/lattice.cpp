@@ -291,11 +291,14 @@ Surroundings::Surroundings(const std::vector<Vec3>& nodes, const Surface& surfac
     }
 }
 
+int Surroundings::face_on_plane(const Vec3& q, const int (&index)[3], int axis) const {
+  auto it = plane_triangles_.find({axis, index[axis]});
+  return it == plane_triangles_.end() ? -1 : face_holding(q, it->second, nodes_, axis);
+}
+
 int Surroundings::on_lattice_face(const Vec3& q, const int (&index)[3]) const {
   for (int a = 0; a < 3; ++a) {
-    auto it = plane_triangles_.find({a, index[a]});
-    if (it == plane_triangles_.end()) continue;
-    const int face = face_holding(q, it->second, nodes_, a);
+    const int face = face_on_plane(q, index, a);
     if (face >= 0) return face;
   }
   return -1;
@@ -303,10 +306,7 @@ int Surroundings::on_lattice_face(const Vec3& q, const int (&index)[3]) const {
 
 bool Surroundings::on_lattice_edge(const Vec3& q, const int (&index)[3]) const {
   int planes = 0;
-  for (int a = 0; a < 3; ++a) {
-    auto it = plane_triangles_.find({a, index[a]});
-    if (it != plane_triangles_.end() && face_holding(q, it->second, nodes_, a) >= 0) ++planes;
-  }
+  for (int a = 0; a < 3; ++a) planes += face_on_plane(q, index, a) >= 0;
   return planes >= 2;
 }
 

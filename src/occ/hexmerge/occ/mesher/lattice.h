@@ -143,6 +143,9 @@ class Surroundings {
   BallSet core_balls;
 
  private:
+  // The lattice face holding q on the lattice plane index[axis] across `axis`, or -1.
+  int face_on_plane(const Vec3& q, const int (&index)[3], int axis) const;
+
   const std::vector<Vec3>& nodes_;
   // Lattice faces' triangles per lattice plane (axis, index).
   std::map<std::pair<int, long>, std::vector<const SurfaceTriangle*>> plane_triangles_;

@@ -180,6 +180,10 @@ void remove_coincident_triangles(Surface& surface) {
 // within the nodes' merging tolerance, is flat (an angle under 1e-4 degrees): a STEP file's
 // coordinates in single precision put collinear nodes 5e-7 apart on a side of 1.2.
 constexpr double kFlatTriangle = 1e-6;
+// Rounds of remove_flat_triangles(): a split can bring the next flat triangle of a run along one
+// line across a new side (FreeCAD's SOT404.stp has runs of two on a face). Flat triangles left
+// after them stay as they are (not counted in nb_flat_triangles).
+constexpr int kFlatTriangleRounds = 8;
 
 // Triangles whose three nodes lie on one line (kFlatTriangle): BRepMesh closes so a
 // face whose outline runs twice along one line (FreeCAD's SOT404.stp: a wall below a tab whose
@@ -191,8 +195,7 @@ constexpr double kFlatTriangle = 1e-6;
 // at the node. Returns how many went.
 std::size_t remove_flat_triangles(Surface& surface, double tolerance) {
   std::size_t removed = 0;
-  // Rounds: a split can leave the next flat triangle's longest side somewhere else.
-  for (int round = 0; round < 8; ++round) {
+  for (int round = 0; round < kFlatTriangleRounds; ++round) {
     std::unordered_map<std::uint64_t, std::vector<std::size_t>> by_side;
     for (std::size_t i = 0; i < surface.triangles.size(); ++i)
       for (int c = 0; c < 3; ++c) by_side[side_key(surface.triangles[i], c)].push_back(i);
