@@ -85,6 +85,36 @@ def test_a_sweep_is_tetrahedralised_from_one_slab(tmp_path) -> None:
     assert result["min_scaled_jacobian"] >= 0.1
 
 
+# FreeCAD's PathTests/test_holes00.fcstd (freecad-common): a 100 x 10 x 10 bar with holes of
+# radius 0.5 to 4.5 along z, the widest 0.5 from both sides.
+HOLES_NEAR_THE_SIDES_GEO = """SetFactory("OpenCASCADE");
+Box(1) = {0, -5, -10, 100, 10, 10};
+For i In {1:9}
+  Cylinder(1 + i) = {10 * i, 0, -10, 0, 0, 10, 0.5 * i};
+EndFor
+BooleanDifference{ Volume{1}; Delete; }{ Volume{2:10}; Delete; }
+"""
+
+
+@pytest.mark.parametrize("h, floor", [(6.314, 0.1), (1.549, 0.2), (0.9396, 0.2)])
+def test_a_sweep_keeps_its_sides_split_beside_holes_near_them(tmp_path, h: float, floor: float) -> None:
+    """The bar's sides were split only at lattice points not near a hole: dropped beside the
+    holes, a side ran 56 mm (h 6.3) past the widest, the layer points offset from the holes came
+    0.037 mm from it, and the prisms there were flat (min scaled Jacobian 1.4e-4 at h 6.314,
+    0.0068 at 1.549, 0.098 at 0.9396; Gmsh's tets: 0.0083, 0.137, 0.103). A sweep keeps the
+    lattice points on its walls like those on edges between lattice faces, on every plane, and
+    its layer points clear of the walls."""
+    bar = gmsh_brep(tmp_path, "holes_near_the_sides", HOLES_NEAR_THE_SIDES_GEO)
+    tets, report = hexmerge.mesh_shape(bar, h, recombine=False)
+    assert report["meshing"]["sweep_axis"] >= 0 and report["meshing"]["nb_extruded_triangles"] > 0
+    mesh, report = hexmerge.mesh_shape(bar, h)
+    result = assert_checked(mesh, tets, report, h)
+    assert result["min_scaled_jacobian"] >= floor
+    # The holes' polygons are inscribed in their circles (at least 8 sides): a little more volume.
+    volume = occ_volume(bar)
+    assert volume <= tet_volume(tets) < 1.01 * volume
+
+
 # A cylinder revolved from its profile, the profile face left in the file beside the solid (as
 # bench/geometry/hex_bolt.geo does): its edge along the end disc crossed the disc's triangles.
 REVOLVED_WITH_PROFILE_GEO = """SetFactory("OpenCASCADE");

@@ -603,7 +603,7 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
       (parameters.lattice_margin + (sweep_axis >= 0 ? nb_layers * parameters.layer_thickness : 0)) *
       h;
   KeptPoints kept = keep_lattice_points(lattice, around, parity, keep_distance,
-                                        parameters.lattice_margin * h, sweep_axis < 0);
+                                        parameters.lattice_margin * h, sweep_axis);
   clear_face_layers(layer_specs, nodes, surface, lattice, around, parameters.lattice_margin * h,
                     kept);
   step("lattice", 0.2);

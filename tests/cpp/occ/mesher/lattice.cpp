@@ -208,6 +208,39 @@ TEST(Parity, agrees_with_the_solid_classifier) {
   }
 }
 
+// Swept along z, a lattice point on a wall (the sides y = 0 and 10) beside the hole, 0.5 from
+// both, stays on every plane: the sweep repeats its first plane, where the wall is a side that
+// only its lattice points split (dropped, the side ran past the hole, its prisms flat: FreeCAD's
+// PathTests/test_holes00). Not swept, the points between the caps go (on a lattice face within
+// keep_distance of the hole), those on the caps' edges stay.
+TEST(keep_lattice_points, a_sweep_keeps_its_walls_points_on_every_plane) {
+  const double h = 2.0, keep = 0.6 * h;
+  const Prepared p = prepare(occ_bar_with_hole_near_sides(), h);
+  Placed placed = place(p);
+  const auto& l = p.lattice;
+  ASSERT_DOUBLE_EQ(l.at(1, l.cells[1]), 10.0);
+  const mesher::KeptPoints swept =
+      mesher::keep_lattice_points(l, *placed.around, *placed.parity, keep, 0.3 * h, 2);
+  const mesher::KeptPoints unswept =
+      mesher::keep_lattice_points(l, *placed.around, *placed.parity, keep, 0.3 * h, -1);
+  int beside = 0;
+  for (int j = 0; j <= l.cells[1]; ++j)
+    for (int i = 0; i <= l.cells[0]; ++i) {
+      // Every column is kept or dropped whole.
+      const char bottom = swept.kept[l.point_index(i, j, 0)];
+      for (int k = 1; k <= l.cells[2]; ++k)
+        EXPECT_EQ(swept.kept[l.point_index(i, j, k)], bottom) << i << " " << j << " " << k;
+      const Vec3 q = l.point(i, j, 0);
+      if ((j != 0 && j != l.cells[1]) || std::hypot(q.x - 20, q.y - 5) >= 4.5 + keep) continue;
+      ++beside;
+      EXPECT_TRUE(bottom) << i << " " << j;
+      EXPECT_TRUE(unswept.kept[l.point_index(i, j, 0)]) << i << " " << j;  // the caps' edges
+      for (int k = 1; k < l.cells[2]; ++k)
+        EXPECT_FALSE(unswept.kept[l.point_index(i, j, k)]) << i << " " << j << " " << k;
+    }
+  EXPECT_GE(beside, 6);
+}
+
 // The lattice points kept are inside the solid (or on a lattice face) and at least
 // keep_distance from the faces off the lattice; the core cells have their 8 corners kept.
 TEST(keep_lattice_points, inside_and_clear_of_the_curved_faces) {
@@ -216,7 +249,7 @@ TEST(keep_lattice_points, inside_and_clear_of_the_curved_faces) {
   Placed placed = place(p);
   const auto& l = p.lattice;
   const mesher::KeptPoints kept =
-      mesher::keep_lattice_points(l, *placed.around, *placed.parity, keep, 0.3 * h, true);
+      mesher::keep_lattice_points(l, *placed.around, *placed.parity, keep, 0.3 * h, -1);
   std::size_t nb_kept = 0;
   for (int k = 0; k <= l.cells[2]; ++k)
     for (int j = 0; j <= l.cells[1]; ++j)

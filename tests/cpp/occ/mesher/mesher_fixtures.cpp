@@ -53,6 +53,12 @@ TopoDS_Shape occ_plate_with_hole() {
   return BRepAlgoAPI_Cut(occ_box(0, 0, 0, 60, 40, 10), hole).Shape();
 }
 
+TopoDS_Shape occ_bar_with_hole_near_sides() {
+  const TopoDS_Shape hole =
+      BRepPrimAPI_MakeCylinder(gp_Ax2(gp_Pnt(20, 5, -1), gp_Dir(0, 0, 1)), 4.5, 12).Shape();
+  return BRepAlgoAPI_Cut(occ_box(0, 0, 0, 40, 10, 10), hole).Shape();
+}
+
 Prepared prepare(const TopoDS_Shape& solid, double h, const std::string& frame) {
   Prepared p;
   p.h = h;

@@ -32,6 +32,8 @@ TopoDS_Shape occ_step();
 TopoDS_Shape occ_split_box();
 /// A 60 x 40 x 10 plate with a hole of radius 8 along z through its centre (30, 20).
 TopoDS_Shape occ_plate_with_hole();
+/// A 40 x 10 x 10 bar with a hole of radius 4.5 along z through (20, 5): 0.5 from both sides.
+TopoDS_Shape occ_bar_with_hole_near_sides();
 
 /// The mesher's steps up to the lattice, on a shape: load, frame, triangulation (chord
 /// deflection 0.02 h), lattice.

@@ -304,10 +304,11 @@ int Surroundings::on_lattice_face(const Vec3& q, const int (&index)[3]) const {
   return -1;
 }
 
-bool Surroundings::on_lattice_edge(const Vec3& q, const int (&index)[3]) const {
+int Surroundings::lattice_planes(const Vec3& q, const int (&index)[3]) const {
   int planes = 0;
-  for (int a = 0; a < 3; ++a) planes += face_on_plane(q, index, a) >= 0;
-  return planes >= 2;
+  for (int a = 0; a < 3; ++a)
+    if (face_on_plane(q, index, a) >= 0) planes |= 1 << a;
+  return planes;
 }
 
 bool Surroundings::ball_is_empty(const Vec3& centre, double r) const {
@@ -355,7 +356,7 @@ bool Parity::inside_given(const std::vector<double>& xs, double x) {
 
 KeptPoints keep_lattice_points(const Lattice& lattice, const Surroundings& around,
                                const Parity& parity, double keep_distance, double margin,
-                               bool edges_stay) {
+                               int sweep_axis) {
   // Lattice points: kept when inside (or on a lattice face) and far enough from the other faces.
   const int n0 = lattice.cells[0] + 1, n1 = lattice.cells[1] + 1, n2 = lattice.cells[2] + 1;
   KeptPoints out;
@@ -377,20 +378,28 @@ KeptPoints keep_lattice_points(const Lattice& lattice, const Surroundings& aroun
         // near surface nodes off the edge: FreeCAD's I22_2_5_16withEPL22_6_16.stp at h 0.812,
         // an E core's legs 0.1 mm below an I core, their top faces' sides 15.8 mm long, tets on
         // them of scaled Jacobian 0.005.
-        int edge = -1;  // whether on an edge between lattice faces, asked where needed
+        // Swept: a point on a wall (FreeCAD's PathTests/test_holes00: holes 0.5 mm from a side,
+        // h 6.3, the side's points dropped near them, its tets on a side 56 mm long flat).
+        int planes = -1;  // the planes of its edge's lines (0: on no edge), asked where needed
         const auto on_edge = [&] {
-          if (edge < 0) edge = edges_stay && face >= 0 && around.on_lattice_edge(q, index);
-          return edge == 1;
+          if (planes >= 0) return planes != 0;
+          planes = face >= 0 ? around.lattice_planes(q, index) : 0;
+          if (sweep_axis < 0)
+            planes = (planes & (planes - 1)) ? planes : 0;  // two bits or three
+          else
+            planes = (planes & ~(1 << sweep_axis)) ? planes | 1 << sweep_axis : 0;
+          return planes != 0;
         };
         if (around.curved.any_within(q, keep_distance) && !on_edge()) continue;
         if (around.layer_points.any_within(q, margin)) continue;
         // On a lattice face, a surface node near it but not at it (a side of a lattice edge
         // split to a local size) would leave a sliver of a side between the two; on an edge,
-        // such a node on the edge's line.
+        // such a node on one of its lines.
         const auto on_its_line = [&](const Vec3& p) {
-          int planes = 0;
-          for (int a = 0; a < 3; ++a) planes += std::abs(coord(p, a) - coord(q, a)) < same;
-          return planes >= 2;
+          int shared = 0;
+          for (int a = 0; a < 3; ++a)
+            shared += (planes >> a & 1) && std::abs(coord(p, a) - coord(q, a)) < same;
+          return shared >= 2;
         };
         if (face >= 0 && around.surface_points.any_within(q, margin) &&
             !around.surface_points.any_within(q, same) &&

@@ -124,16 +124,17 @@ class Surroundings {
                double h);
   /// The lattice face holding q, on the lattice planes index[a] (a = 0..2; -1: none), or -1.
   int on_lattice_face(const Vec3& q, const int (&index)[3]) const;
-  /// Whether lattice point q (its index) lies on lattice faces on two planes: on the CAD edge
-  /// between them, or at a corner.
-  bool on_lattice_edge(const Vec3& q, const int (&index)[3]) const;
+  /// The planes through lattice point q (its index) on which a lattice face holds it: bit a
+  /// for the plane across axis a. Two bits: q lies on the CAD edge between two lattice faces;
+  /// three: at a corner.
+  int lattice_planes(const Vec3& q, const int (&index)[3]) const;
   /// Whether the ball (centre, r) holds no surface triangle, surface node or layer point (to
   /// 1e-9 of r).
   bool ball_is_empty(const Vec3& centre, double r) const;
 
   const Vec3 box_lo, box_hi;  ///< the box the queries cover
   TriangleSet curved;         ///< triangles of the faces that are not lattice faces
-  TriangleSet every_face;     ///< triangles of every face
+  TriangleSet every_face;     ///< triangles of every face (in the order of surface.triangles)
   PointSet surface_points;    ///< the surface's nodes
   PointSet layer_points;      ///< boundary-layer points (place_layers() adds them)
   /// The hexahedral core's points (lattice points and apexes) and the circumspheres of its cells
@@ -179,13 +180,15 @@ struct KeptPoints {
 
 /// The lattice points inside (or on a lattice face), not within `keep_distance` of a face that
 /// is not a lattice face, nor within `margin` of a boundary-layer point; on a lattice face, not
-/// within `margin` of a surface node that is not at the point. With `edges_stay` (not swept: a
-/// sweep repeats its first plane's points), a point on an edge between lattice faces (whose
-/// sides only its lattice points split) stays within `keep_distance` of other faces, and within
-/// `margin` of surface nodes off the edge's line.
+/// within `margin` of a surface node that is not at the point. A point on an edge between
+/// lattice faces (whose sides only its lattice points split) stays within `keep_distance` of
+/// other faces, and within `margin` of surface nodes off the edge's lines (those sharing two of
+/// the coordinates of its planes). Swept along `sweep_axis` (-1: not swept), every point on a
+/// wall (a lattice face across another axis) is such a point, its planes the wall's and the one
+/// across the sweep axis: the sweep repeats the first plane, where the wall is a side.
 KeptPoints keep_lattice_points(const Lattice& lattice, const Surroundings& around,
                                const Parity& parity, double keep_distance, double margin,
-                               bool edges_stay);
+                               int sweep_axis);
 
 /// Whether q, on a lattice plane across `axis`, lies in a square of four kept lattice points of
 /// that plane (a lattice cell's face, which TetGen keeps whole, core or not).

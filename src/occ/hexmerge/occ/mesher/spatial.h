@@ -149,6 +149,16 @@ class TriangleSet {
       return squared_distance_to_triangle(q, nodes_[t[0]], nodes_[t[1]], nodes_[t[2]]) < r * r;
     });
   }
+  /// Whether one for which `counts(index)` holds (its index in the order added) is within r of q.
+  template <typename Counts>
+  bool any_within(const Vec3& q, double r, Counts&& counts) const {
+    const Vec3 d{r, r, r};
+    return grid_.any_in(q - d, q + d, [&](int i) {
+      const auto& t = tris_[i];
+      return counts(i) &&
+             squared_distance_to_triangle(q, nodes_[t[0]], nodes_[t[1]], nodes_[t[2]]) < r * r;
+    });
+  }
 
  private:
   const std::vector<Vec3>& nodes_;
