@@ -507,6 +507,7 @@ py::tuple run_mesh_shape(const std::string& brep, const std::map<std::string, st
   d["nb_flat_surface_triangles"] = report.nb_flat_surface_triangles;
   d["bounded_surface_repairs"] = report.bounded_surface_repairs;
   d["nb_extruded_triangles"] = report.nb_extruded_triangles;
+  d["nb_void_tets"] = report.nb_void_tets;
   d["nb_shared_faces"] = report.nb_shared_faces;
   d["nb_sewn_solids"] = report.nb_sewn_solids;
   py::list local_sizes;

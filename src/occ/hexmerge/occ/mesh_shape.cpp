@@ -726,6 +726,17 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
     extruded = extrude_tets(sweep_axis, lattice.spacing[sweep_axis], given, tets);
   report.nb_extruded_triangles = extruded;
 
+  // 10c. The tets TetGen put in voids the solids enclose (it carves from the convex hull only).
+  {
+    TetMesh in_frame;
+    in_frame.points = std::move(tets.points);
+    in_frame.tets = std::move(tets.tets);
+    report.nb_void_tets = remove_outside_components(
+        in_frame, tets.boundary, [&](const Vec3& q) { return parity.inside(q); });
+    tets.points = std::move(in_frame.points);
+    tets.tets = std::move(in_frame.tets);
+  }
+
   // 11. The tets in the world, regions by solid.
   TetMesh mesh = world_mesh(regions_brep, shape, surface, lattice.frame, tets);
   step("regions", 0.65);

@@ -228,6 +228,8 @@ struct MeshShapeReport {
   /// Swept: the cross-section's triangles whose columns of prisms make the tets (0: TetGen's
   /// tets kept, see mesher::extrude_tets()).
   std::size_t nb_extruded_triangles = 0;
+  /// Tets the tetrahedraliser put in voids the solids enclose, removed.
+  std::size_t nb_void_tets = 0;
   std::array<std::array<double, 3>, 3> frame{};  ///< lattice axes (rows), unit vectors
   std::array<double, 3> spacing{};               ///< lattice spacing along each axis
   double max_boundary_distance = 0.0;  ///< largest distance of a boundary node to the shape

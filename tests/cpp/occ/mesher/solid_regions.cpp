@@ -124,5 +124,36 @@ TEST(solid_regions, nothing_when_the_triangles_do_not_separate_the_solids) {
   EXPECT_FALSE(mesher::solid_regions(shape, m.mesh(), m.triangles, m.markers).has_value());
 }
 
+// The cubes' tets as two components (the square at x = 1 among the triangles): the one `inside`
+// says is out goes whole, whatever its other tets' centroids say; the regions follow the tets.
+// Without the square, one component: all stay.
+TEST(remove_outside_components, a_component_outside_goes_whole) {
+  const mesher::Shape shape = two_cubes();
+  const CubeMesh m = cube_mesh(shape);
+  TetMesh mesh = m.mesh();
+  for (std::size_t t = 0; t < 12; ++t) mesh.regions.push_back(static_cast<std::int32_t>(t));
+  std::size_t asked = 0;
+  const auto inside = [&](const Vec3& q) {
+    ++asked;
+    return q.x < 1;
+  };
+  EXPECT_EQ(mesher::remove_outside_components(mesh, m.triangles, inside), 6u);
+  EXPECT_EQ(asked, 2u);  // once per component
+  ASSERT_EQ(mesh.nb_tets(), 6u);
+  ASSERT_EQ(mesh.regions.size(), 6u);
+  for (index_t t = 0; t < 6; ++t) {
+    EXPECT_EQ(mesh.regions[t], static_cast<std::int32_t>(t));  // the first cube's, in order
+    for (int k = 0; k < 4; ++k) EXPECT_LE(m.points[mesh.tet(t)[k]].x, 1.0);
+    for (int k = 0; k < 4; ++k) EXPECT_EQ(mesh.tet(t)[k], m.tets[4 * t + k]);
+  }
+  std::vector<std::array<index_t, 3>> outer;
+  for (std::size_t i = 0; i < m.triangles.size(); ++i)
+    if (!m.shared[i]) outer.push_back(m.triangles[i]);
+  TetMesh whole = m.mesh();
+  EXPECT_EQ(
+      mesher::remove_outside_components(whole, outer, [](const Vec3& q) { return q.x < 1.5; }), 0u);
+  EXPECT_EQ(whole.nb_tets(), 12u);
+}
+
 }  // namespace
 }  // namespace hexmerge::test

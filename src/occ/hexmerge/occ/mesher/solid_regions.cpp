@@ -2,6 +2,8 @@
 
 #include <TopExp.hxx>
 #include <TopTools_IndexedMapOfShape.hxx>
+#include <algorithm>
+#include <cmath>
 #include <numeric>
 #include <unordered_map>
 #include <utility>
@@ -15,6 +17,35 @@ namespace {
 index_t find(std::vector<index_t>& parent, index_t t) {
   while (parent[t] != t) t = parent[t] = parent[parent[t]];
   return t;
+}
+
+// Per tet, the root of its component: tets joined through every face between two tets that is
+// none of the triangles; touch(t, i) for each face of tet t that is triangle i.
+template <typename Touch>
+std::vector<index_t> components(const TetMesh& mesh,
+                                const std::vector<std::array<index_t, 3>>& triangles,
+                                Touch&& touch) {
+  std::unordered_map<FaceKey, std::size_t, FaceKeyHash> on_face;
+  on_face.reserve(triangles.size());
+  for (std::size_t i = 0; i < triangles.size(); ++i)
+    on_face.emplace(face_key(triangles[i][0], triangles[i][1], triangles[i][2]), i);
+  const index_t nb_tets = mesh.nb_tets();
+  const TetTopology topology(mesh);
+  std::vector<index_t> parent(nb_tets);
+  std::iota(parent.begin(), parent.end(), index_t{0});
+  for (index_t t = 0; t < nb_tets; ++t) {
+    const index_t* v = mesh.tet(t);
+    for (int f = 0; f < 4; ++f) {
+      const auto face = on_face.find(face_key(v[(f + 1) % 4], v[(f + 2) % 4], v[(f + 3) % 4]));
+      if (face != on_face.end()) {
+        touch(t, face->second);
+      } else if (topology.neighbor(t, f) != NO_CELL) {
+        parent[find(parent, t)] = find(parent, topology.neighbor(t, f));
+      }
+    }
+  }
+  for (index_t t = 0; t < nb_tets; ++t) parent[t] = find(parent, t);
+  return parent;
 }
 
 }  // namespace
@@ -38,27 +69,11 @@ std::optional<std::vector<std::int32_t>> solid_regions(
     }
   }
   // The faces' triangles stop the flood; every other face between two tets joins them.
-  std::unordered_map<FaceKey, int, FaceKeyHash> on_face;
-  on_face.reserve(triangles.size());
-  for (std::size_t i = 0; i < triangles.size(); ++i) {
-    if (markers[i] < 1 || markers[i] > nb_faces) return std::nullopt;
-    on_face.emplace(face_key(triangles[i][0], triangles[i][1], triangles[i][2]), markers[i] - 1);
-  }
-  const TetTopology topology(mesh);
-  std::vector<index_t> parent(nb_tets);
-  std::iota(parent.begin(), parent.end(), index_t{0});
+  for (const int marker : markers)
+    if (marker < 1 || marker > nb_faces) return std::nullopt;
   std::vector<std::pair<index_t, int>> touching;  // (tet, the face one of its faces lies on)
-  for (index_t t = 0; t < nb_tets; ++t) {
-    const index_t* v = mesh.tet(t);
-    for (int f = 0; f < 4; ++f) {
-      const auto face = on_face.find(face_key(v[(f + 1) % 4], v[(f + 2) % 4], v[(f + 3) % 4]));
-      if (face != on_face.end()) {
-        touching.emplace_back(t, face->second);
-      } else if (topology.neighbor(t, f) != NO_CELL) {
-        parent[find(parent, t)] = find(parent, topology.neighbor(t, f));
-      }
-    }
-  }
+  std::vector<index_t> parent = components(
+      mesh, triangles, [&](index_t t, std::size_t i) { touching.emplace_back(t, markers[i] - 1); });
   // Per component, the solids every face it touches bounds: the first face's owners, less
   // those a later face does not name (-2: no face met yet).
   std::vector<std::pair<std::int32_t, std::int32_t>> common(nb_tets, {-2, -2});
@@ -81,6 +96,38 @@ std::optional<std::vector<std::int32_t>> solid_regions(
     region[t] = x;
   }
   return region;
+}
+
+std::size_t remove_outside_components(TetMesh& mesh,
+                                      const std::vector<std::array<index_t, 3>>& triangles,
+                                      const std::function<bool(const Vec3&)>& inside) {
+  const index_t nb_tets = mesh.nb_tets();
+  const std::vector<index_t> root = components(mesh, triangles, [](index_t, std::size_t) {});
+  const auto corner = [&](index_t t, int k) { return Vec3::of(&mesh.points[3 * mesh.tet(t)[k]]); };
+  // Per component, its largest tet (whose centroid lies furthest inside it, near no face).
+  std::unordered_map<index_t, std::pair<double, index_t>> largest;
+  for (index_t t = 0; t < nb_tets; ++t) {
+    const Vec3 a = corner(t, 0);
+    const double volume = std::abs(det3(corner(t, 1) - a, corner(t, 2) - a, corner(t, 3) - a));
+    auto& [most, which] = largest.try_emplace(root[t], -1.0, t).first->second;
+    if (volume > most) most = volume, which = t;
+  }
+  std::unordered_map<index_t, bool> keep;
+  for (const auto& [r, best] : largest) {
+    const index_t t = best.second;
+    keep[r] = inside((corner(t, 0) + corner(t, 1) + corner(t, 2) + corner(t, 3)) * 0.25);
+  }
+  index_t kept = 0;
+  for (index_t t = 0; t < nb_tets; ++t) {
+    if (!keep[root[t]]) continue;
+    if (kept != t)
+      std::copy_n(mesh.tet(t), 4, mesh.tets.begin() + 4 * static_cast<std::ptrdiff_t>(kept));
+    if (!mesh.regions.empty()) mesh.regions[kept] = mesh.regions[t];
+    ++kept;
+  }
+  mesh.tets.resize(4 * kept);
+  if (!mesh.regions.empty()) mesh.regions.resize(kept);
+  return nb_tets - kept;
 }
 
 }  // namespace hexmerge::mesher

@@ -5,10 +5,12 @@
 
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <optional>
 #include <vector>
 
 #include "hexmerge/core/index.h"
+#include "hexmerge/geometry/vec3.h"
 #include "hexmerge/mesh/tet_mesh.h"
 #include "hexmerge/occ/mesher/shape.h"
 
@@ -26,5 +28,15 @@ namespace hexmerge::mesher {
 std::optional<std::vector<std::int32_t>> solid_regions(
     const Shape& shape, const TetMesh& mesh, const std::vector<std::array<index_t, 3>>& triangles,
     const std::vector<int>& markers);
+
+/// Removes the tets outside the shape: the tets connected through faces that are none of
+/// `triangles` (the triangles on the shape's faces) form components, and a component whose
+/// largest tet's centroid is not `inside` goes whole. The tetrahedraliser carves the outside
+/// away from the convex hull only, so it fills a void the solids enclose (FreeCAD's
+/// electrostatics example: a ball less two balls inside it). Points stay (one only removed tets
+/// used is left in no tet). Returns the number of tets removed.
+std::size_t remove_outside_components(TetMesh& mesh,
+                                      const std::vector<std::array<index_t, 3>>& triangles,
+                                      const std::function<bool(const Vec3&)>& inside);
 
 }  // namespace hexmerge::mesher
