@@ -145,11 +145,20 @@ void improve_tets(TetMesh& mesh, const std::vector<double>& frame_points,
   // Free: the layer and Steiner points. Nudged: the cell centres, the apexes of the closing
   // pyramids, which lie as near the faces as the core does (a tet of three surface nodes and an
   // apex reached 0.155 on the suite's cylinder): moved only as far as lifts their tets to 0.2,
-  // which keeps their pyramids. The lattice points stay.
+  // which keeps their pyramids. The lattice points stay, but those in no tet of a cell or closing
+  // pyramid (kept, but a corner of no core cell): free, and off the lattice from then on (moving
+  // them takes no hexahedron away).
+  std::vector<char> in_lattice_tet(made, 0);
+  if (parameters.sweep_axis < 0)
+    for (index_t t = 0; t < mesh.nb_tets(); ++t)
+      if (in_one_cell(t))
+        for (int k = 0; k < 4; ++k) in_lattice_tet[mesh.tet(t)[k]] = 1;
   std::vector<char> movable(made, kFixed);
   for (std::size_t v = parameters.nb_surface_nodes; v < made; ++v)
-    if (parameters.sweep_axis < 0)
+    if (parameters.sweep_axis < 0) {
+      if (lattice_point[v] && !in_lattice_tet[v]) half_lattice[v] = lattice_point[v] = 0;
       movable[v] = !half_lattice[v] ? kFree : centre[v] ? kNudged : kFixed;
+    }
   for (std::size_t i = 0; i < boundary.size(); ++i) {
     const std::array<index_t, 3>& corners = boundary[i];
     for (index_t v : corners) movable[v] = kFixed, on_boundary[v] = 1;
