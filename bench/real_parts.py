@@ -437,9 +437,9 @@ def markdown(data, reference=None) -> str:
         lines += [f"### About {target} tets", "",
                   "| part | h | status | s (mesh + recombine) | tets | hex vol % | prism vol % | pyramid vol % "
                   "| tet vol % | min SJ | min boundary angle ° | boundary dist / h | non-conf. quads | cracks "
-                  "| SJ < 0.2 | of which at sharp CAD | min SJ off sharp CAD |"
+                  "| SJ < 0.2 | of which at sharp CAD | min SJ off sharp CAD | volume vs CAD % |"
                   + (" Gmsh min SJ | Gmsh min boundary angle ° |" if reference else ""),
-                  "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
+                  "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
                   + ("---|---|" if reference else "")]
         for r in rows:
             status = r["status"] if r["status"] == "ok" else short(f"{r['status']}: {error_summary(r)}")
@@ -451,12 +451,16 @@ def markdown(data, reference=None) -> str:
             seconds = (f"{r['mesh_s'] + r['recombine_s']:.1f}" if r.get("recombine_s") is not None
                        else (f"{r['mesh_s']:.1f} (mesh)" if r.get("mesh_s") is not None else "–"))
             bdist = (f"{r['boundary_distance'] / r['h']:.1e}" if r.get("boundary_distance") is not None else "–")
+            # The mesh's volume against OpenCASCADE's: a little less where faces are curved (their
+            # triangles are chords), more where a void was filled.
+            volume = (f"{100 * (r['volume'] - r['volume_cad']) / r['volume_cad']:+.2f}"
+                      if r.get("volume") and r.get("volume_cad") else "–")
             lines.append(" | ".join([
                 f"| {r['part']}", cell(r, "h", ".4g"), status, seconds, cell(r, "tets", ","),
                 pct(r, "hex"), pct(r, "prism"), pct(r, "pyramid"), pct(r, "tet"), cell(r, "min_sj", ".2g"),
                 cell(r, "min_boundary_angle", ".2g"), bdist, cell(r, "nonconforming_quads", ","),
                 cell(r, "cracks", ","), cell(r, "below_sj_floor", ","),
-                cell(r, "below_sj_floor_at_sharp", ","), cell(r, "min_sj_off_sharp", ".2g")]
+                cell(r, "below_sj_floor_at_sharp", ","), cell(r, "min_sj_off_sharp", ".2g"), volume]
                 + (gmsh_cells(r, gmsh.get((r["part"], target))) if reference else [])) + " |")
         ok = [r for r in rows if r["status"] == "ok"]
         both = [(r, gmsh[r["part"], target]) for r in ok if same_h_gmsh(r, gmsh.get((r["part"], target)))]

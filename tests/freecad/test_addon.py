@@ -227,6 +227,28 @@ class ShapeMode(unittest.TestCase):
         self.assertEqual(obj.FemMesh.HexaCount, report["output_counts"]["hex"])
         self.assertGreaterEqual(min(report["min_scaled_jacobian"][k] for k, n in report["output_counts"].items() if n), 0.2)
 
+    def test_the_voids_of_femexamples_two_balls_stay_empty(self):
+        """FreeCAD's FEM example equation_electrostatics_capacitance_two_balls: a ball of radius
+        5000 less two balls of 500 inside it. TetGen filled the two voids (it carves from the
+        convex hull only): the balls were meshed as material, with flat tets in them."""
+        import math
+        from femexamples.equation_electrostatics_capacitance_two_balls import setup
+        doc = setup()
+        solid = next(o for o in doc.Objects if o.Name == "Cut")
+        obj = hm.make_hexdominant_mesh(doc, solid, target_size=500, second_order=False)
+        report = mesh_hexdominant.report_dict(obj)
+        self.assertGreater(report["meshing"]["nb_void_tets"], 0)
+        expected = 4 / 3 * math.pi * (5000 ** 3 - 2 * 500 ** 3)
+        self.assertLess(abs(report["input_volume"] - expected), 0.01 * expected)
+        m = obj.FemMesh
+        for eid in m.Volumes:
+            nodes = [m.getNodeById(n) for n in m.getElementNodes(eid)]
+            c = [sum(getattr(p, a) for p in nodes) / len(nodes) for a in "xyz"]
+            for x0 in (-1000, 1000):
+                self.assertGreater(math.dist(c, (x0, 0, 0)), 450, eid)
+        self.assertGreaterEqual(min(report["min_scaled_jacobian"][k]
+                                    for k, n in report["output_counts"].items() if n), 0.2)
+
     def test_sharp_cad_is_named(self):
         """A prism over a triangle with a 5-degree corner: no element at that corner or along
         its edge can reach a scaled Jacobian of 0.2, and the console says where, in FreeCAD's
