@@ -405,6 +405,12 @@ KeptPoints keep_lattice_points(const Lattice& lattice, const Surroundings& aroun
             !around.surface_points.any_within(q, same) &&
             (!on_edge() || around.surface_points.any_within(q, margin, on_its_line)))
           continue;
+        // Swept, a wall's point near where its side meets another face (a node on its line, a
+        // bore's corner on a symmetry plane) leaves the room the layers carried onto the wall
+        // take there, as it did when dropped near the curved face.
+        if (sweep_axis >= 0 && on_edge() && !around.surface_points.any_within(q, same) &&
+            around.surface_points.any_within(q, keep_distance, on_its_line))
+          continue;
         kept[lattice.point_index(i, j, k)] = 1;
         kept_face[lattice.point_index(i, j, k)] = face;
       }

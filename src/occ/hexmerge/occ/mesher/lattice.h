@@ -185,7 +185,9 @@ struct KeptPoints {
 /// other faces, and within `margin` of surface nodes off the edge's lines (those sharing two of
 /// the coordinates of its planes). Swept along `sweep_axis` (-1: not swept), every point on a
 /// wall (a lattice face across another axis) is such a point, its planes the wall's and the one
-/// across the sweep axis: the sweep repeats the first plane, where the wall is a side.
+/// across the sweep axis: the sweep repeats the first plane, where the wall is a side; but not
+/// within `keep_distance` of a node on its line (where the side meets another face: the layers
+/// carried onto the wall go there).
 KeptPoints keep_lattice_points(const Lattice& lattice, const Surroundings& around,
                                const Parity& parity, double keep_distance, double margin,
                                int sweep_axis);
