@@ -104,17 +104,19 @@ std::size_t remove_outside_components(TetMesh& mesh,
   const index_t nb_tets = mesh.nb_tets();
   const std::vector<index_t> root = components(mesh, triangles, [](index_t, std::size_t) {});
   const auto corner = [&](index_t t, int k) { return Vec3::of(&mesh.points[3 * mesh.tet(t)[k]]); };
-  // Per component, its largest tet (whose centroid lies furthest inside it, near no face).
-  std::unordered_map<index_t, std::pair<double, index_t>> largest;
+  // Per component (by its root tet), its largest tet (whose centroid lies furthest inside it,
+  // near no face).
+  std::vector<double> most(nb_tets, -1.0);
+  std::vector<index_t> largest(nb_tets, 0);
   for (index_t t = 0; t < nb_tets; ++t) {
     const Vec3 a = corner(t, 0);
     const double volume = std::abs(det3(corner(t, 1) - a, corner(t, 2) - a, corner(t, 3) - a));
-    auto& [most, which] = largest.try_emplace(root[t], -1.0, t).first->second;
-    if (volume > most) most = volume, which = t;
+    if (volume > most[root[t]]) most[root[t]] = volume, largest[root[t]] = t;
   }
-  std::unordered_map<index_t, bool> keep;
-  for (const auto& [r, best] : largest) {
-    const index_t t = best.second;
+  std::vector<char> keep(nb_tets, 0);
+  for (index_t r = 0; r < nb_tets; ++r) {
+    if (root[r] != r) continue;
+    const index_t t = largest[r];
     keep[r] = inside((corner(t, 0) + corner(t, 1) + corner(t, 2) + corner(t, 3)) * 0.25);
   }
   index_t kept = 0;

@@ -143,11 +143,7 @@ class TriangleSet {
     tris_.push_back(t);
   }
   bool any_within(const Vec3& q, double r) const {
-    const Vec3 d{r, r, r};
-    return grid_.any_in(q - d, q + d, [&](int i) {
-      const auto& t = tris_[i];
-      return squared_distance_to_triangle(q, nodes_[t[0]], nodes_[t[1]], nodes_[t[2]]) < r * r;
-    });
+    return any_within(q, r, [](int) { return true; });
   }
   /// Whether one for which `counts(index)` holds (its index in the order added) is within r of q.
   template <typename Counts>
