@@ -34,7 +34,7 @@ PARTS = [
     ("pyocc_face_recognition_sample_part.stp", 14.0),  # 19,103 tets, 43.6 % hex, min SJ 1.3e-9
 ]
 # Hex volume floors (the median of the three sizes below): with closing pyramids' apexes down to
-# 0.02 h from faces and 0.05 h from surface nodes (70fb029) 9.11, 62.35 and 89.47 %; with 0.1 h
+# 0.02 h from faces and 0.05 h from surface nodes (3739b44) 9.11, 62.35 and 89.47 %; with 0.1 h
 # and 0.25 h 7.13, 62.35 and 86.97 % (with the rectilinear lattice 7.17, 60.14 and 86.85 %; at
 # 4a2ee94, the core down to lattice_margin, 4.89, 41.47 and 54.13 %; at f4f4969 1.63, 37.44 and
 # 53.05 %).
