@@ -58,6 +58,10 @@ enum class PyramidPlacement {
   NoBoundaryFace,
   /// Not with a vertex on the domain boundary.
   NoBoundaryNode,
+  /// Not with a face on a curved part of the domain boundary: a boundary triangle whose normal
+  /// turns by kCurvedMin to kCurvedMax degrees to one of the boundary triangles beside it (flat
+  /// faces and sharp edges allowed). The post-merge stage takes it as NoBoundaryFace.
+  NoCurvedBoundaryFace,
 };
 
 /// Parameters of hexmerge::recombine. Every field is listed in parameter_table() with its unit,

@@ -3,6 +3,8 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdlib>
 #include <map>
@@ -376,6 +378,86 @@ TEST(check_mesh, compares_every_regions_volume) {
   const CheckReport moved = check_mesh(relabelled, input);
   EXPECT_NEAR(moved.relative_volume_difference, 0.0, 1e-12);
   EXPECT_GT(moved.max_region_volume_difference, 0.1);
+}
+
+// A cylinder of 24-gon rings (the Delaunay tets of its points): its side turns by 15 degrees
+// from one strip of triangles to the next, its ends are flat. With pyramids off curved parts of
+// the boundary no output pyramid has a face on the side, though pyramids anywhere put some
+// there; on a box (a Kuhn grid: flat faces and sharp edges) the output is the one pyramids
+// anywhere give.
+TEST(recombine, pyramids_off_the_curved_boundary_keep_off_the_cylinders_side) {
+  const double radius = 6.0, height = 8.0;
+  const int sides = 24;
+  std::vector<Point> points;
+  for (int k = 0; k <= 8; ++k)
+    for (int i = 0; i < sides; ++i) {
+      const double a = 2 * M_PI * i / sides;
+      points.push_back({radius * std::cos(a), radius * std::sin(a), height * k / 8});
+    }
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (int n = 0; points.size() < 1200 && n < 20000; ++n) {
+    const Point p = {radius * u(rng), radius * u(rng), 0.5 * height * (1 + u(rng))};
+    if (std::hypot(p[0], p[1]) > radius - 0.6 || p[2] < 0.5 || p[2] > height - 0.5) continue;
+    const bool spaced = std::none_of(points.begin(), points.end(), [&](const Point& q) {
+      return std::hypot(std::hypot(p[0] - q[0], p[1] - q[1]), p[2] - q[2]) < 0.9;
+    });
+    if (spaced) points.push_back(p);
+  }
+  const TetMesh mesh = tetgen_mesh(points);
+  if (mesh.nb_tets() == 0) GTEST_SKIP() << "the tetgen program is not installed";
+  // The input's boundary triangles.
+  std::map<std::array<index_t, 3>, int> faces;
+  for (index_t t = 0; t < mesh.nb_tets(); ++t)
+    for (int f = 0; f < 4; ++f) {
+      std::array<index_t, 3> tri{};
+      for (int i = 0, n = 0; i < 4; ++i)
+        if (i != f) tri[n++] = mesh.tet(t)[i];
+      std::sort(tri.begin(), tri.end());
+      ++faces[tri];
+    }
+  // Pyramid faces (sides, or a half of the base on either diagonal) that are boundary
+  // triangles on the side.
+  const auto side_faces = [&](const MixedMesh& out) {
+    int n = 0;
+    for (index_t c = 0; c < out.nb_cells(); ++c) {
+      if (out.types[c] != CellType::Pyramid) continue;
+      const index_t* v = out.cell(c);
+      const std::array<index_t, 3> tris[] = {
+          {v[0], v[1], v[4]}, {v[1], v[2], v[4]}, {v[2], v[3], v[4]}, {v[3], v[0], v[4]},
+          {v[0], v[1], v[2]}, {v[0], v[2], v[3]}, {v[0], v[1], v[3]}, {v[1], v[2], v[3]}};
+      for (std::array<index_t, 3> tri : tris) {
+        std::sort(tri.begin(), tri.end());
+        const auto it = faces.find(tri);
+        if (it == faces.end() || it->second != 1) continue;
+        bool end = true;
+        for (index_t w : tri) {
+          const double z = out.points[3 * static_cast<std::size_t>(w) + 2];
+          end = end && (z == 0.0 || z == height);
+        }
+        n += !end;
+      }
+    }
+    return n;
+  };
+  RecombineParameters anywhere, off_curved;
+  off_curved.pyramid_placement = PyramidPlacement::NoCurvedBoundaryFace;
+  RecombineReport report;
+  const MixedMesh before = recombine(mesh, anywhere, report);
+  const MixedMesh after = recombine(mesh, off_curved, report);
+  for (const MixedMesh* out : {&before, &after}) {
+    const CheckReport check = check_mesh(*out, mesh);
+    EXPECT_TRUE(check.valid()) << (check.problems.empty() ? "" : check.problems[0]);
+    EXPECT_EQ(check.nonconforming_quads, 0u);
+  }
+  EXPECT_GT(side_faces(before), 0);
+  EXPECT_EQ(side_faces(after), 0);
+
+  const TetMesh box = kuhn_grid(4);
+  RecombineReport box_report;
+  const MixedMesh box_anywhere = recombine(box, anywhere, box_report);
+  const MixedMesh box_off = recombine(box, off_curved, box_report);
+  EXPECT_EQ(box_anywhere.cell_vertices, box_off.cell_vertices);
 }
 
 }  // namespace

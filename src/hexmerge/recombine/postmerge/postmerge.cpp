@@ -239,7 +239,8 @@ class Stage {
   /// The pyramid's region and placement pass the acceptance (its shape aside).
   bool pyramid_allowed(const QuadFace& q, index_t apex, index_t t0, index_t t1) const {
     if (m_.region(t0) != m_.region(t1)) return false;
-    if (options_.placement == PyramidPlacement::NoBoundaryFace) {
+    if (options_.placement == PyramidPlacement::NoBoundaryFace ||
+        options_.placement == PyramidPlacement::NoCurvedBoundaryFace) {
       for (index_t t : {t0, t1}) {
         for (int f = 0; f < 4; ++f) {
           if (face_on_boundary(t, f)) return false;
