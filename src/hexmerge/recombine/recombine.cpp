@@ -1,10 +1,8 @@
 #include "hexmerge/recombine/recombine.h"
 
 #include <algorithm>
-#include <array>
 #include <chrono>
 #include <cmath>
-#include <cstdint>
 #include <memory>
 #include <thread>
 
@@ -12,6 +10,8 @@
 #include "hexmerge/core/error.h"
 #include "hexmerge/core/phase_timer.h"
 #include "hexmerge/geometry/quality.h"
+#include "hexmerge/geometry/vec3.h"
+#include "hexmerge/mesh/cell_type.h"
 #include "hexmerge/mesh/tet_topology.h"
 #include "hexmerge/recombine/bound_selection.h"
 #include "hexmerge/recombine/find_candidates.h"
@@ -93,56 +93,40 @@ constexpr double kCurvedMax = 30.0;
 // Per tet and face (4 t + f): whether it is a boundary triangle on a curved part of the
 // boundary (kCurvedMin to kCurvedMax degrees to a boundary triangle across one of its sides).
 std::vector<char> curved_boundary_faces(const TetMesh& mesh, const TetTopology& topology) {
-  std::vector<char> curved(4 * static_cast<std::size_t>(mesh.nb_tets()), 0);
+  const CellDescriptor& tet = descriptor(CellType::Tet);  // faces outward (positive tets)
+  std::vector<std::size_t> slot;                          // per boundary triangle, 4 t + f
+  std::vector<Vec3> normal;                               // per boundary triangle, its unit normal
   struct Side {
-    index_t a, b;
-    std::uint32_t face;  // 4 t + f
-    bool operator<(const Side& o) const {
-      return a != o.a ? a < o.a : b != o.b ? b < o.b : face < o.face;
-    }
+    index_t a, b;     // its ends, a < b
+    std::size_t tri;  // the boundary triangle (index into slot and normal)
   };
   std::vector<Side> sides;
-  std::vector<std::array<double, 3>> normal(curved.size());
   for (index_t t = 0; t < mesh.nb_tets(); ++t)
     for (int f = 0; f < 4; ++f) {
       if (!topology.on_boundary(t, f)) continue;
-      const index_t* v = mesh.tet(t);
       index_t c[3];
-      for (int k = 0, n = 0; k < 4; ++k)
-        if (k != f) c[n++] = v[k];
-      const double* p0 = mesh.point(c[0]);
-      const double* p1 = mesh.point(c[1]);
-      const double* p2 = mesh.point(c[2]);
-      const double u[3] = {p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]};
-      const double w[3] = {p2[0] - p0[0], p2[1] - p0[1], p2[2] - p0[2]};
-      std::array<double, 3> n = {u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2],
-                                 u[0] * w[1] - u[1] * w[0]};
-      const double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
-      if (len == 0) continue;
-      // Outward: away from the tet's fourth vertex.
-      const double* q = mesh.point(v[f]);
-      const double side = n[0] * (q[0] - p0[0]) + n[1] * (q[1] - p0[1]) + n[2] * (q[2] - p0[2]);
-      for (double& x : n) x *= (side > 0 ? -1 : 1) / len;
-      const std::uint32_t face = 4 * static_cast<std::uint32_t>(t) + static_cast<std::uint32_t>(f);
-      normal[face] = n;
-      for (int k = 0; k < 3; ++k) {
-        const index_t a = std::min(c[k], c[(k + 1) % 3]), b = std::max(c[k], c[(k + 1) % 3]);
-        sides.push_back({a, b, face});
-      }
+      for (int k = 0; k < 3; ++k) c[k] = mesh.tet(t)[tet.face[f][k]];
+      const Vec3 p0 = Vec3::of(mesh.point(c[0]));
+      const Vec3 n = (Vec3::of(mesh.point(c[1])) - p0).cross(Vec3::of(mesh.point(c[2])) - p0);
+      if (n.norm() == 0) continue;
+      for (int k = 0; k < 3; ++k)
+        sides.push_back(
+            {std::min(c[k], c[(k + 1) % 3]), std::max(c[k], c[(k + 1) % 3]), normal.size()});
+      slot.push_back(4 * static_cast<std::size_t>(t) + static_cast<std::size_t>(f));
+      normal.push_back(n * (1 / n.norm()));
     }
-  std::sort(sides.begin(), sides.end());
+  std::sort(sides.begin(), sides.end(), [](const Side& x, const Side& y) {
+    return x.a != y.a ? x.a < y.a : x.b != y.b ? x.b < y.b : x.tri < y.tri;
+  });
+  std::vector<char> curved(4 * static_cast<std::size_t>(mesh.nb_tets()), 0);
   const double lo = std::cos(kCurvedMin * M_PI / 180), hi = std::cos(kCurvedMax * M_PI / 180);
-  for (std::size_t i = 0; i < sides.size();) {
-    std::size_t j = i;
+  for (std::size_t i = 0, j = 0; i < sides.size(); i = j) {
     while (j < sides.size() && sides[j].a == sides[i].a && sides[j].b == sides[i].b) ++j;
     for (std::size_t x = i; x < j; ++x)
       for (std::size_t y = x + 1; y < j; ++y) {
-        const auto& n1 = normal[sides[x].face];
-        const auto& n2 = normal[sides[y].face];
-        const double c = n1[0] * n2[0] + n1[1] * n2[1] + n1[2] * n2[2];
-        if (c < lo && c > hi) curved[sides[x].face] = curved[sides[y].face] = 1;
+        const double c = normal[sides[x].tri].dot(normal[sides[y].tri]);
+        if (c < lo && c > hi) curved[slot[sides[x].tri]] = curved[slot[sides[y].tri]] = 1;
       }
-    i = j;
   }
   return curved;
 }
