@@ -3,10 +3,14 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <functional>
 #include <iterator>
 #include <limits>
+#include <map>
 #include <optional>
 #include <sstream>
+#include <unordered_map>
+#include <unordered_set>
 #include <utility>
 #include <vector>
 
@@ -16,6 +20,7 @@
 #include "hexmerge/core/progress.h"
 #include "hexmerge/occ/brep_text.h"
 #include "hexmerge/occ/mesher/boundary_distance.h"
+#include "hexmerge/occ/mesher/common.h"
 #include "hexmerge/occ/mesher/facets.h"
 #include "hexmerge/occ/mesher/improve.h"
 #include "hexmerge/occ/mesher/lattice.h"
@@ -26,6 +31,7 @@
 #include "hexmerge/occ/mesher/sharp_features.h"
 #include "hexmerge/occ/mesher/size_estimate.h"
 #include "hexmerge/occ/mesher/solid_regions.h"
+#include "hexmerge/occ/mesher/spatial.h"
 #include "hexmerge/occ/mesher/surface.h"
 #include "hexmerge/occ/mesher/surface_check.h"
 #include "hexmerge/occ/mesher/surface_path.h"
@@ -57,6 +63,99 @@ constexpr double kGradedClearance = 0.5;
 constexpr double kFacetAngle = 20.0 * M_PI / 180;
 constexpr double kFacetRadius = 0.6;
 constexpr double kFacetClearance = 0.25;
+
+// The pulled cells and pyramids split as the lattice's: TetGen keeps their faces (constraints)
+// but may fill one with a sliver on a face that is no longer flat and the two tets beside it;
+// each such region (the tets joined across faces that are no constraint) whose corners are a
+// split's is replaced by the split's tets, when they fill the same volume. Returns how many.
+std::size_t resplit_pulled(TetrahedralizeOutput& tets,
+                           const std::vector<std::array<int, 3>>& constraints,
+                           const std::vector<InsertedPoints::Split>& splits, double h) {
+  const std::size_t nb_points = tets.points.size() / 3, nb_tets = tets.tets.size() / 4;
+  std::vector<Vec3> points(nb_points);
+  for (std::size_t i = 0; i < nb_points; ++i) points[i] = Vec3::of(&tets.points[3 * i]);
+  NodeHash at(points, 1e-3 * h);
+  for (std::size_t i = 0; i < nb_points; ++i) at.add(static_cast<int>(i));
+  std::unordered_set<FaceKey, FaceKeyHash> barrier;
+  for (const std::array<int, 3>& t : constraints) barrier.insert(face_key(t[0], t[1], t[2]));
+  // Regions: union-find over the tets across the faces that are no barrier.
+  std::vector<index_t> parent(nb_tets);
+  for (index_t t = 0; t < nb_tets; ++t) parent[t] = t;
+  const std::function<index_t(index_t)> find = [&](index_t t) {
+    while (parent[t] != t) t = parent[t] = parent[parent[t]];
+    return t;
+  };
+  std::unordered_map<FaceKey, index_t, FaceKeyHash> open_face;
+  for (index_t t = 0; t < nb_tets; ++t) {
+    const index_t* v = &tets.tets[4 * t];
+    for (int f = 0; f < 4; ++f) {
+      const FaceKey k = face_key(v[(f + 1) % 4], v[(f + 2) % 4], v[(f + 3) % 4]);
+      if (barrier.count(k)) continue;
+      const auto [it, fresh] = open_face.emplace(k, t);
+      if (!fresh) parent[find(t)] = find(it->second);
+    }
+  }
+  std::unordered_map<index_t, std::vector<index_t>> members;
+  std::vector<std::size_t> size(nb_tets, 0);
+  for (index_t t = 0; t < nb_tets; ++t) ++size[find(t)];
+  for (index_t t = 0; t < nb_tets; ++t)
+    if (size[find(t)] <= 12) members[find(t)].push_back(t);
+  std::map<std::vector<index_t>, index_t> region_of;  // sorted corners -> region root
+  for (const auto& [root, list] : members) {
+    std::vector<index_t> corners;
+    for (const index_t t : list)
+      corners.insert(corners.end(), &tets.tets[4 * t], &tets.tets[4 * t + 4]);
+    std::sort(corners.begin(), corners.end());
+    corners.erase(std::unique(corners.begin(), corners.end()), corners.end());
+    region_of[corners] = root;
+  }
+  const auto volume = [&](index_t a, index_t b, index_t c, index_t d) {
+    return det3(points[b] - points[a], points[c] - points[a], points[d] - points[a]) / 6;
+  };
+  std::vector<char> drop(nb_tets, 0);
+  std::vector<index_t> added;
+  std::size_t replaced = 0;
+  for (const InsertedPoints::Split& split : splits) {
+    std::vector<index_t> ids;
+    for (const Vec3& q : split.corners) {
+      const int i = at.find(q, 1e-6 * h);
+      if (i < 0) break;
+      ids.push_back(static_cast<index_t>(i));
+    }
+    if (ids.size() != split.corners.size()) continue;
+    std::vector<index_t> sorted = ids;
+    std::sort(sorted.begin(), sorted.end());
+    const auto it = region_of.find(sorted);
+    if (it == region_of.end()) continue;
+    const std::vector<index_t>& list = members[it->second];
+    double before = 0, after = 0;
+    for (const index_t t : list) {
+      const index_t* v = &tets.tets[4 * t];
+      before += std::abs(volume(v[0], v[1], v[2], v[3]));
+    }
+    std::vector<std::array<index_t, 4>> made;
+    bool positive = true;
+    for (const auto& q : split.tets) {
+      std::array<index_t, 4> t{ids[q[0]], ids[q[1]], ids[q[2]], ids[q[3]]};
+      double v = volume(t[0], t[1], t[2], t[3]);
+      if (v < 0) std::swap(t[1], t[2]), v = -v;
+      positive = positive && v > 1e-12 * h * h * h;
+      after += v;
+      made.push_back(t);
+    }
+    if (!positive || std::abs(after - before) > 1e-9 * after) continue;
+    for (const index_t t : list) drop[t] = 1;
+    for (const auto& t : made) added.insert(added.end(), t.begin(), t.end());
+    ++replaced;
+  }
+  std::vector<index_t> kept_tets;
+  kept_tets.reserve(tets.tets.size() + added.size());
+  for (index_t t = 0; t < nb_tets; ++t)
+    if (!drop[t]) kept_tets.insert(kept_tets.end(), &tets.tets[4 * t], &tets.tets[4 * t + 4]);
+  kept_tets.insert(kept_tets.end(), added.begin(), added.end());
+  tets.tets = std::move(kept_tets);
+  return replaced;
+}
 
 // The tet mesh from the tetrahedraliser's output (frame coordinates): tets oriented positive,
 // points in the world, the surface's nodes at their exact CAD positions, regions by solid.
@@ -106,17 +205,20 @@ struct Strategy {
   bool lattice_faces;   // planar faces on lattice planes carry lattice points (and sweeps)
   bool layers;          // boundary-layer points
   bool lattice_points;  // lattice points inside the shape (the hexahedral core)
+  bool pull;            // the core pulled towards the surface (MeshShapeParameters::pull_core)
 };
 // TetGen's failures on the lattice come and go with the size (FreeCAD's plate with a hole fails
 // at h 2.25, 2.375 and 2.5 and meshes at 2.75 and 3), so the lattice is tried at a slightly finer
 // and a slightly coarser size before it is simplified (which costs most of the hexahedra).
+// The core pulled towards the surface is tried first, then the lattice as it is.
 constexpr Strategy kStrategies[] = {
-    {"lattice", 1.0, true, true, true},
-    {"lattice at 0.95 of the size", 0.95, true, true, true},
-    {"lattice at 1.1 of the size", 1.1, true, true, true},
-    {"lattice without lattice faces", 1.0, false, true, true},
-    {"lattice without boundary layers", 1.0, false, false, true},
-    {"surface only", 1.0, false, false, false},
+    {"lattice", 1.0, true, true, true, true},
+    {"lattice, core not pulled", 1.0, true, true, true, false},
+    {"lattice at 0.95 of the size", 0.95, true, true, true, false},
+    {"lattice at 1.1 of the size", 1.1, true, true, true, false},
+    {"lattice without lattice faces", 1.0, false, true, true, false},
+    {"lattice without boundary layers", 1.0, false, false, true, false},
+    {"surface only", 1.0, false, false, false, false},
 };
 
 // The boundary layers a way places: none where the way places none, else the ones asked for;
@@ -327,12 +429,15 @@ TetMesh mesh_shape_impl(const std::string& brep, const MeshShapeParameters& para
   std::string failures;
   double failed_seconds = 0;
   int nb_tried = 0;
+  bool first_pulled = false;  // whether the first way (which failed) pulled the core
   for (const Strategy& strategy : kStrategies) {
     // The way without layers repeats the way before it (lattice points, no lattice faces, so no
     // sweep) when that one places no layers either.
     if (&strategy != kStrategies && !strategy.layers && !strategy.lattice_faces &&
         strategy.lattice_points && boundary_layers_placed(parameters, *(&strategy - 1), false) == 0)
       continue;
+    // The lattice without the core pulled repeats the first way when that one pulled nothing.
+    if (&strategy == kStrategies + 1 && !first_pulled) continue;
     ++nb_tried;
     MeshShapeReport attempt = report;
     const auto attempt_start = PhaseTimer::Clock::now();
@@ -346,6 +451,7 @@ TetMesh mesh_shape_impl(const std::string& brep, const MeshShapeParameters& para
       report = std::move(attempt);
       return mesh;
     } catch (const TetrahedralizeFailure& e) {
+      if (&strategy == kStrategies) first_pulled = attempt.nb_pulled_points > 0;
       report.failed_strategies.push_back(std::string(strategy.name) + ": " + e.what());
       failures += std::string(failures.empty() ? "" : "; ") + strategy.name + ": " + e.what();
       failed_seconds += seconds_since(attempt_start);
@@ -610,10 +716,15 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
 
   // 8. The hexahedral core and its closing pyramids' apexes.
   if (strategy.lattice_points) {
-    const CoreCounts core = add_core(lattice, around, parity, kept, sweep_axis, h, inserted);
+    // Not where boundary layers are asked for: they keep out of the core, which would take
+    // their room.
+    const bool pull =
+        strategy.pull && parameters.pull_core && nb_layers == 0 && layer_specs.empty();
+    const CoreCounts core = add_core(lattice, around, parity, kept, sweep_axis, h, inserted, pull);
     report.nb_core_cells = core.nb_core_cells;
     report.nb_lattice_points = core.nb_lattice_points;
     report.nb_apex_points = core.nb_apex_points;
+    report.nb_pulled_points = core.nb_pulled_points;
   }
   step("core", 0.25);
 
@@ -705,6 +816,32 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
                       inserted.points.end());
   input.first_isolated = nodes.size() + nb_on_faces;
   const std::size_t given = input.points.size();
+  // The core's faces TetGen must keep (add_core()), as inner facets of their own marker.
+  const int constraint_marker = shape.faces.Extent() + 1;
+  std::vector<std::array<int, 3>> constraints;
+  if (!inserted.constraints.empty()) {
+    NodeHash at(input.points, 1e-3 * h);
+    for (std::size_t i = 0; i < given; ++i) at.add(static_cast<int>(i));
+    for (const std::array<Vec3, 3>& t : inserted.constraints) {
+      const int a = at.find(t[0], 1e-6 * h), b = at.find(t[1], 1e-6 * h),
+                c = at.find(t[2], 1e-6 * h);
+      if (a < 0 || b < 0 || c < 0) continue;  // (every corner is a point given)
+      input.facets.push_back(Facet{{{a, b, c}}, {}, constraint_marker});
+      constraints.push_back({a, b, c});
+    }
+  }
+  // The core's points pulled off the lattice (add_core()), by their place among TetGen's points,
+  // with their lattice positions: improve_tets() tells the core's cells and pyramids by those.
+  std::vector<std::pair<std::size_t, Vec3>> pulled;
+  if (!inserted.pulled.empty()) {
+    std::map<std::array<double, 3>, Vec3> lattice_at;
+    for (const auto& [at, q] : inserted.pulled) lattice_at[{at.x, at.y, at.z}] = q;
+    for (std::size_t i = nodes.size(); i < given; ++i) {
+      const Vec3& p = input.points[i];
+      const auto it = lattice_at.find({p.x, p.y, p.z});
+      if (it != lattice_at.end()) pulled.emplace_back(i, it->second);
+    }
+  }
   input.to_world = [&](const Vec3& p) { return lattice.frame.to_world(p); };
   // Swept: TetGen on the first slab only, its first plane's triangles extruded (else on the
   // whole volume, the tets rebuilt as columns below).
@@ -714,6 +851,20 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
     swept_tets = tetrahedralize_swept(tetgen, input, swept, nodes.size(), sweep_axis,
                                       lattice.spacing[sweep_axis], extruded);
   TetrahedralizeOutput tets = swept_tets ? std::move(*swept_tets) : tetgen.run(std::move(input));
+  // 10a. The pulled cells and pyramids split as the lattice's.
+  if (!inserted.splits.empty())
+    report.nb_resplit_cells = resplit_pulled(tets, constraints, inserted.splits, h);
+  // The core's facets are no boundary.
+  if (!inserted.constraints.empty()) {
+    std::size_t kept_faces = 0;
+    for (std::size_t i = 0; i < tets.boundary.size(); ++i)
+      if (tets.boundary_marker[i] != constraint_marker) {
+        tets.boundary[kept_faces] = tets.boundary[i];
+        tets.boundary_marker[kept_faces++] = tets.boundary_marker[i];
+      }
+    tets.boundary.resize(kept_faces);
+    tets.boundary_marker.resize(kept_faces);
+  }
   report.tetgen_command = tets.command;
   report.nb_tetgen_restarts = tets.nb_restarts;
   report.nb_nudged_points = tets.nb_nudged;
@@ -778,7 +929,11 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
       sweep_axis < 0 ? boundary_path(shape, surface, kept_face, kept_edge, 1e-6 * h) : nullptr;
   improve.surface = along_faces.get();
   ImproveReport improved;
-  improve_tets(mesh, tets.points, tets.boundary, swappable, improve, improved);
+  std::vector<double> lattice_points = tets.points;
+  for (const auto& [i, q] : pulled) {
+    lattice_points[3 * i] = q.x, lattice_points[3 * i + 1] = q.y, lattice_points[3 * i + 2] = q.z;
+  }
+  improve_tets(mesh, lattice_points, tets.boundary, swappable, improve, improved);
   report.min_tet_quality_before = improved.min_quality_before;
   report.nb_face_flips = improved.face_flips;
   report.nb_edge_flips = improved.edge_flips;

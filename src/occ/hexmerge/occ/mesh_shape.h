@@ -93,6 +93,14 @@ struct MeshShapeParameters {
   /// side by side), make the tets swept too: the same cross-section on every lattice plane along
   /// the axis, so that they recombine into hexahedra and prisms only, with no pyramids.
   bool sweep = true;
+  /// Pull the hexahedral core towards the surface (not swept, not with boundary layers or face
+  /// layers, which keep out of the core): the lattice's steps leave the
+  /// core's closing pyramids' apexes up to a cell from the faces; the core's boundary nodes
+  /// move out along the pyramids' bases, the apexes with them, until the apexes come 0.05 h
+  /// from the faces, as far as the cells (scaled Jacobian 0.5) and pyramids (0.4) stay good;
+  /// the moved cells and pyramids are kept whole as TetGen constraints. When TetGen fails on
+  /// them, the next way of placing the points is the lattice without it.
+  bool pull_core = true;
   /// Time limit of one TetGen run, in seconds; 0: 30 s plus 1 ms per point (far above TetGen's
   /// own time, about 1 s per 20k points). A run past it (TetGen 1.5 can loop on a lattice face),
   /// or one that leaves no tet, is restarted with the lattice faces' loops started at other
@@ -208,8 +216,10 @@ struct MeshShapeReport {
   std::size_t nb_lattice_points = 0;     ///< lattice points inserted (inside and on lattice faces)
   std::size_t nb_core_cells = 0;         ///< lattice cells with all corners kept (hex core)
   std::size_t nb_apex_points = 0;        ///< closing-pyramid apexes inserted
-  std::size_t nb_layer_points = 0;       ///< boundary-layer points inserted
-  std::size_t nb_steiner_points = 0;     ///< points TetGen added
+  std::size_t nb_pulled_points = 0;      ///< core points moved off the lattice towards the surface
+  std::size_t nb_resplit_cells = 0;   ///< pulled cells and pyramids TetGen split otherwise, resplit
+  std::size_t nb_layer_points = 0;    ///< boundary-layer points inserted
+  std::size_t nb_steiner_points = 0;  ///< points TetGen added
   std::size_t nb_nudged_points = 0;  ///< lattice points TetGen left out, moved by 1e-7 h, run again
   std::size_t nb_tetgen_restarts = 0;   ///< TetGen runs that failed on a lattice face, restarted
   double min_tet_quality_before = 0.0;  ///< smallest scaled Jacobian of TetGen's tets

@@ -47,6 +47,12 @@ ParameterTable<MeshShapeParameters> make_table() {
            "planar caps (plates with holes, cylinders, profiles; one solid or several), sweep "
            "the tets too: the same cross-section on every lattice plane, so that they recombine "
            "into hexahedra and prisms only"),
+      flag(&P::pull_core, "pull_core", "Pull the core to the surface",
+           "Move the hexahedral core's boundary towards the surface (not on swept shapes, nor "
+           "with boundary layers or face layers): "
+           "the lattice's steps otherwise leave up to a cell of pyramids and tets between the "
+           "core and the faces; its moved cells and pyramids are kept whole (TetGen "
+           "constraints), and when TetGen fails on them the lattice is tried without"),
       number(&P::tetgen_time_limit, "tetgen_time_limit", "s", 0, 86400, "TetGen time limit",
              "Time limit of one TetGen run (0: 30 s plus 1 ms per point); a run past it, or one "
              "that leaves no tet, is restarted with the lattice faces' loops started elsewhere, "

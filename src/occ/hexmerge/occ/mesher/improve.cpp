@@ -127,6 +127,15 @@ void improve_tets(TetMesh& mesh, const std::vector<double>& frame_points,
     }
     return true;
   };
+  // Flat on the lattice: the four corners of a cell's face, moved off their plane (a core
+  // pulled towards the surface, add_core()), a sliver between the face's two splits.
+  auto flat_on_lattice = [&](index_t t) {
+    const auto at = [&](int k) {
+      const std::array<double, 3>& c = cell_of[mesh.tet(t)[k]];
+      return Vec3{c[0], c[1], c[2]};
+    };
+    return std::abs(det3(at(1) - at(0), at(2) - at(0), at(3) - at(0))) < 1e-6;
+  };
   // Swept: whether tet t lies between two consecutive lattice planes (its prism or hexahedron
   // stays as TetGen made it).
   auto in_one_slab = [&](index_t t) {
@@ -178,6 +187,24 @@ void improve_tets(TetMesh& mesh, const std::vector<double>& frame_points,
   for (int round = 0; round < kQualityRounds; ++round) {
     std::vector<char> fixed(mesh.nb_tets(), 0);
     for (index_t t = 0; t < mesh.nb_tets(); ++t) fixed[t] = in_one_cell(t) || in_one_slab(t);
+    // A flat one and the tets on its faces are free: flips take the sliver out.
+    {
+      std::unordered_map<FaceKey, index_t, FaceKeyHash> flat_faces;
+      for (index_t t = 0; t < mesh.nb_tets(); ++t)
+        if (fixed[t] && flat_on_lattice(t)) {
+          fixed[t] = 0;
+          const index_t* v = mesh.tet(t);
+          for (int f = 0; f < 4; ++f)
+            flat_faces[face_key(v[(f + 1) % 4], v[(f + 2) % 4], v[(f + 3) % 4])] = t;
+        }
+      if (!flat_faces.empty())
+        for (index_t t = 0; t < mesh.nb_tets(); ++t) {
+          const index_t* v = mesh.tet(t);
+          for (int f = 0; f < 4 && fixed[t]; ++f)
+            if (flat_faces.count(face_key(v[(f + 1) % 4], v[(f + 2) % 4], v[(f + 3) % 4])))
+              fixed[t] = 0;
+        }
+    }
     // Boundary faces swapped by an earlier round are not in face_marker: they stay (-1).
     std::vector<std::int32_t> boundary_patch(4 * static_cast<std::size_t>(mesh.nb_tets()), -1);
     for (index_t t = 0; t < mesh.nb_tets(); ++t)

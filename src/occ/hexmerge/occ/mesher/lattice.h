@@ -60,10 +60,26 @@ struct Lattice {
   std::size_t point_index(int i, int j, int k) const {
     return (static_cast<std::size_t>(k) * (cells[1] + 1) + j) * (cells[0] + 1) + i;
   }
+  /// The (i, j, k) of the lattice point at `index` (point_index()'s inverse).
+  std::array<int, 3> point_ijk(std::size_t index) const {
+    const std::size_t n0 = cells[0] + 1, n1 = cells[1] + 1;
+    return {static_cast<int>(index % n0), static_cast<int>(index / n0 % n1),
+            static_cast<int>(index / (n0 * n1))};
+  }
+  /// The (i, j, k) of cell `index` (i fastest, then j, then k).
+  std::array<int, 3> cell_ijk(std::size_t index) const {
+    const std::size_t c0 = cells[0], c1 = cells[1];
+    return {static_cast<int>(index % c0), static_cast<int>(index / c0 % c1),
+            static_cast<int>(index / (c0 * c1))};
+  }
   /// Lattice point (i, j, k) and the centre of cell (i, j, k), in frame coordinates.
   Vec3 point(int i, int j, int k) const { return Vec3{at(0, i), at(1, j), at(2, k)}; }
+  Vec3 point(const std::array<int, 3>& ijk) const { return point(ijk[0], ijk[1], ijk[2]); }
   Vec3 cell_centre(int i, int j, int k) const {
     return Vec3{at(0, i + 0.5), at(1, j + 0.5), at(2, k + 0.5)};
+  }
+  Vec3 cell_centre(const std::array<int, 3>& ijk) const {
+    return cell_centre(ijk[0], ijk[1], ijk[2]);
   }
 };
 
@@ -92,6 +108,20 @@ std::vector<Vec3> frame_nodes(const Shape& shape, const Surface& surface, const 
 struct InsertedPoints {
   std::vector<Vec3> points;
   std::vector<int> face;
+  /// Points of the core moved off the lattice (add_core()): where each is, and its lattice
+  /// position (a lattice point or a cell's centre).
+  std::vector<std::pair<Vec3, Vec3>> pulled;
+  /// Triangles TetGen must keep (the faces of the core's cells and pyramids that are no longer
+  /// cospherical), by their corners' positions (points inserted or the surface's nodes).
+  std::vector<std::array<Vec3, 3>> constraints;
+  /// The pulled cells and pyramids, each to be split as the lattice's (the six tets around a
+  /// cell's diagonal from its least corner; a pyramid's base on its diagonal from its least
+  /// corner): corners by position and the tets by corner.
+  struct Split {
+    std::vector<Vec3> corners;
+    std::vector<std::array<int, 4>> tets;
+  };
+  std::vector<Split> splits;
 };
 
 /// Balls (centre, radius), with "does one hold q" queries, over the box [lo, hi].
@@ -201,6 +231,7 @@ struct CoreCounts {
   std::size_t nb_core_cells = 0;      ///< cells with all corners kept (the hexahedral core)
   std::size_t nb_lattice_points = 0;  ///< kept lattice points inserted
   std::size_t nb_apex_points = 0;     ///< closing pyramids' apexes inserted
+  std::size_t nb_pulled_points = 0;   ///< of those, moved off the lattice towards the surface
 };
 
 /// The hexahedral core: cells with 8 kept corners whose circumsphere holds nothing else; every
@@ -209,8 +240,16 @@ struct CoreCounts {
 /// sweep_axis >= 0: only across the axis). Appends the kept lattice points that are no surface
 /// node, then the apexes, to `inserted`; the points inserted to around.core_points and the
 /// circumspheres of the core's cells and closing pyramids to around.core_balls.
+///
+/// With `pull` (not swept), the core is pulled towards the surface first: its nodes on closing
+/// pyramids' bases move out along the bases' normals, the apexes with them, until the apexes
+/// come near the faces (as far as the cells and pyramids stay good); the cells and pyramids so
+/// moved, and those whose circumspheres then hold a moved point, are no longer Delaunay: their
+/// faces go to `inserted.constraints`, their splits to `inserted.splits`, the moved points to
+/// `inserted.pulled`; the kept points that are no core cell's corner stay where the core is not.
 CoreCounts add_core(const Lattice& lattice, Surroundings& around, const Parity& parity,
-                    const KeptPoints& kept, int sweep_axis, double h, InsertedPoints& inserted);
+                    const KeptPoints& kept, int sweep_axis, double h, InsertedPoints& inserted,
+                    bool pull = false);
 
 /// Reorders `inserted` so that the points on lattice faces come first (stable); returns their
 /// number.
