@@ -96,8 +96,8 @@ struct MeshShapeParameters {
   /// Pull the hexahedral core towards the surface (not swept, not with boundary layers or face
   /// layers, which keep out of the core): the lattice's steps leave the
   /// core's closing pyramids' apexes up to a cell from the faces; the core's boundary nodes
-  /// move out along the pyramids' bases, the apexes with them, until the apexes come 0.05 h
-  /// from the faces, as far as the cells (scaled Jacobian 0.5) and pyramids (0.4) stay good;
+  /// move out along the pyramids' bases, the apexes with them, until the apexes come 0.15 h
+  /// from the faces, as far as the cells (scaled Jacobian 0.9) and pyramids (0.4) stay good;
   /// the moved cells and pyramids are kept whole as TetGen constraints. When TetGen fails on
   /// them, the next way of placing the points is the lattice without it.
   bool pull_core = true;
