@@ -364,12 +364,12 @@ def test_core_reaches_the_lattice_margin(shapes) -> None:
 
 @needs_tetgen
 @pytest.mark.parametrize(("name", "h", "options", "gain"), [
-    ("sphere", 5.0, {}, 0.03), ("cylinder", 5.0, {"sweep": False}, 0.05)], ids=["sphere", "cylinder-unswept"])
+    ("sphere", 5.0, {}, 0.025), ("cylinder", 5.0, {"sweep": False}, 0.035)], ids=["sphere", "cylinder-unswept"])
 def test_the_core_pulled_towards_the_surface(shapes, name: str, h: float, options: dict, gain: float) -> None:
     """pull_core (the default): the core's boundary nodes and its closing pyramids' apexes move
     towards the curved faces, the moved cells and pyramids kept whole by TetGen constraints and
-    split as the lattice's. Measured at h 5: sphere 53.6 -> 57.1 % hex volume, unswept cylinder
-    63.9 -> 69.1 %, the tets' minimum 0.2 in both; every core cell becomes a hexahedron."""
+    split as the lattice's. Measured at h 5: sphere 53.6 -> 57.0 % hex volume, unswept cylinder
+    63.9 -> 68.2 %, the tets' minimum 0.2 in both; every core cell becomes a hexahedron."""
     tets, tet_report = hexmerge.mesh_shape(shapes[name], h, recombine=False, **options)
     meshing = tet_report["meshing"]
     assert meshing["strategy"] == "lattice" and meshing["failed_strategies"] == []
@@ -755,9 +755,24 @@ def test_a_tetgen_crash_falls_back_to_the_next_strategy(shapes, tmp_path, capsys
                  "--tetgen", str(fake)]) == 0
     err = capsys.readouterr().err
     assert "note: TetGen failed with the points placed by lattice: TetGen " in err, err
-    # (The core pulled by default: the lattice without pulling is the next way.)
-    assert "the tets were made with the points placed by lattice, core not pulled" in err, err
+    # (The bracket's core is not pulled: the lattice without pulling would repeat the first way.)
+    assert "the tets were made with the points placed by lattice at 0.95 of the size" in err, err
     assert "terminate called" not in err and "Aborted" not in err, err
+
+
+@needs_tetgen
+def test_a_tetgen_failure_on_the_pulled_core_falls_back_to_the_lattice_as_laid(shapes, tmp_path) -> None:
+    """TetGen failing on the first way, which pulled the sphere's core: the next way is the same
+    lattice with the core as laid (not a smaller size), said in the report; the mesh is valid."""
+    fake = tetgen_failing_once(tmp_path / "crashed", "kill -SEGV $$")
+    tets, report = hexmerge.mesh_shape(shapes["sphere"], 5.0, recombine=False, tetgen=str(fake))
+    meshing = report["meshing"]
+    assert meshing["strategy"] == "lattice, core not pulled"
+    [failure] = meshing["failed_strategies"]
+    assert failure.startswith("lattice: TetGen crashed (segmentation fault)"), failure
+    assert meshing["nb_pulled_points"] == 0 and meshing["spacing"][0] > 0.97 * 5.0
+    mesh, rep = hexmerge.recombine(tets.points, tets.cell_vertices.reshape(-1, 4), tets.regions)
+    assert_checked(mesh, tets, rep, 5.0)
 
 
 @needs_tetgen
