@@ -3,14 +3,11 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <functional>
 #include <iterator>
 #include <limits>
 #include <map>
 #include <optional>
 #include <sstream>
-#include <unordered_map>
-#include <unordered_set>
 #include <utility>
 #include <vector>
 
@@ -20,7 +17,6 @@
 #include "hexmerge/core/progress.h"
 #include "hexmerge/occ/brep_text.h"
 #include "hexmerge/occ/mesher/boundary_distance.h"
-#include "hexmerge/occ/mesher/common.h"
 #include "hexmerge/occ/mesher/facets.h"
 #include "hexmerge/occ/mesher/improve.h"
 #include "hexmerge/occ/mesher/lattice.h"
@@ -63,99 +59,6 @@ constexpr double kGradedClearance = 0.5;
 constexpr double kFacetAngle = 20.0 * M_PI / 180;
 constexpr double kFacetRadius = 0.6;
 constexpr double kFacetClearance = 0.25;
-
-// The pulled cells and pyramids split as the lattice's: TetGen keeps their faces (constraints)
-// but may fill one with a sliver on a face that is no longer flat and the two tets beside it;
-// each such region (the tets joined across faces that are no constraint) whose corners are a
-// split's is replaced by the split's tets, when they fill the same volume. Returns how many.
-std::size_t resplit_pulled(TetrahedralizeOutput& tets,
-                           const std::vector<std::array<int, 3>>& constraints,
-                           const std::vector<InsertedPoints::Split>& splits, double h) {
-  const std::size_t nb_points = tets.points.size() / 3, nb_tets = tets.tets.size() / 4;
-  std::vector<Vec3> points(nb_points);
-  for (std::size_t i = 0; i < nb_points; ++i) points[i] = Vec3::of(&tets.points[3 * i]);
-  NodeHash at(points, 1e-3 * h);
-  for (std::size_t i = 0; i < nb_points; ++i) at.add(static_cast<int>(i));
-  std::unordered_set<FaceKey, FaceKeyHash> barrier;
-  for (const std::array<int, 3>& t : constraints) barrier.insert(face_key(t[0], t[1], t[2]));
-  // Regions: union-find over the tets across the faces that are no barrier.
-  std::vector<index_t> parent(nb_tets);
-  for (index_t t = 0; t < nb_tets; ++t) parent[t] = t;
-  const std::function<index_t(index_t)> find = [&](index_t t) {
-    while (parent[t] != t) t = parent[t] = parent[parent[t]];
-    return t;
-  };
-  std::unordered_map<FaceKey, index_t, FaceKeyHash> open_face;
-  for (index_t t = 0; t < nb_tets; ++t) {
-    const index_t* v = &tets.tets[4 * t];
-    for (int f = 0; f < 4; ++f) {
-      const FaceKey k = face_key(v[(f + 1) % 4], v[(f + 2) % 4], v[(f + 3) % 4]);
-      if (barrier.count(k)) continue;
-      const auto [it, fresh] = open_face.emplace(k, t);
-      if (!fresh) parent[find(t)] = find(it->second);
-    }
-  }
-  std::unordered_map<index_t, std::vector<index_t>> members;
-  std::vector<std::size_t> size(nb_tets, 0);
-  for (index_t t = 0; t < nb_tets; ++t) ++size[find(t)];
-  for (index_t t = 0; t < nb_tets; ++t)
-    if (size[find(t)] <= 12) members[find(t)].push_back(t);
-  std::map<std::vector<index_t>, index_t> region_of;  // sorted corners -> region root
-  for (const auto& [root, list] : members) {
-    std::vector<index_t> corners;
-    for (const index_t t : list)
-      corners.insert(corners.end(), &tets.tets[4 * t], &tets.tets[4 * t + 4]);
-    std::sort(corners.begin(), corners.end());
-    corners.erase(std::unique(corners.begin(), corners.end()), corners.end());
-    region_of[corners] = root;
-  }
-  const auto volume = [&](index_t a, index_t b, index_t c, index_t d) {
-    return det3(points[b] - points[a], points[c] - points[a], points[d] - points[a]) / 6;
-  };
-  std::vector<char> drop(nb_tets, 0);
-  std::vector<index_t> added;
-  std::size_t replaced = 0;
-  for (const InsertedPoints::Split& split : splits) {
-    std::vector<index_t> ids;
-    for (const Vec3& q : split.corners) {
-      const int i = at.find(q, 1e-6 * h);
-      if (i < 0) break;
-      ids.push_back(static_cast<index_t>(i));
-    }
-    if (ids.size() != split.corners.size()) continue;
-    std::vector<index_t> sorted = ids;
-    std::sort(sorted.begin(), sorted.end());
-    const auto it = region_of.find(sorted);
-    if (it == region_of.end()) continue;
-    const std::vector<index_t>& list = members[it->second];
-    double before = 0, after = 0;
-    for (const index_t t : list) {
-      const index_t* v = &tets.tets[4 * t];
-      before += std::abs(volume(v[0], v[1], v[2], v[3]));
-    }
-    std::vector<std::array<index_t, 4>> made;
-    bool positive = true;
-    for (const auto& q : split.tets) {
-      std::array<index_t, 4> t{ids[q[0]], ids[q[1]], ids[q[2]], ids[q[3]]};
-      double v = volume(t[0], t[1], t[2], t[3]);
-      if (v < 0) std::swap(t[1], t[2]), v = -v;
-      positive = positive && v > 1e-12 * h * h * h;
-      after += v;
-      made.push_back(t);
-    }
-    if (!positive || std::abs(after - before) > 1e-9 * after) continue;
-    for (const index_t t : list) drop[t] = 1;
-    for (const auto& t : made) added.insert(added.end(), t.begin(), t.end());
-    ++replaced;
-  }
-  std::vector<index_t> kept_tets;
-  kept_tets.reserve(tets.tets.size() + added.size());
-  for (index_t t = 0; t < nb_tets; ++t)
-    if (!drop[t]) kept_tets.insert(kept_tets.end(), &tets.tets[4 * t], &tets.tets[4 * t + 4]);
-  kept_tets.insert(kept_tets.end(), added.begin(), added.end());
-  tets.tets = std::move(kept_tets);
-  return replaced;
-}
 
 // The tet mesh from the tetrahedraliser's output (frame coordinates): tets oriented positive,
 // points in the world, the surface's nodes at their exact CAD positions, regions by solid.
@@ -853,7 +756,8 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
   TetrahedralizeOutput tets = swept_tets ? std::move(*swept_tets) : tetgen.run(std::move(input));
   // 10a. The pulled cells and pyramids split as the lattice's.
   if (!inserted.splits.empty())
-    report.nb_resplit_cells = resplit_pulled(tets, constraints, inserted.splits, h);
+    report.nb_resplit_cells =
+        resplit_core(tets.points, tets.tets, constraints, inserted.splits, 1e-6 * h);
   // The core's facets are no boundary.
   if (!inserted.constraints.empty()) {
     std::size_t kept_faces = 0;

@@ -309,5 +309,63 @@ TEST(add_core, box_is_all_core) {
   EXPECT_EQ(core.nb_lattice_points, points - placed.nodes.size());
 }
 
+// A pulled pyramid whose base no longer lies flat (corner 1 raised): its facets are kept, but the
+// region inside them holds a sliver of the base's four corners and two tets on the other
+// diagonal. resplit_core() gives it the lattice's split (the base on its diagonal from corner
+// 0) and leaves the tet beyond the base alone; a split whose corners are not a region's, or a
+// region holding another point, stays as it is.
+TEST(resplit_core, a_pyramid_with_a_sliver_gets_the_lattices_split) {
+  const std::vector<Vec3> at = {{0, 0, 0}, {1, 0, 0.1},     {1, 1, 0},
+                                {0, 1, 0}, {0.5, 0.5, 0.8}, {0.4, 0.6, -1}};
+  std::vector<double> coordinates;
+  for (const Vec3& p : at) coordinates.insert(coordinates.end(), {p.x, p.y, p.z});
+  const auto volume = [&](const index_t* t) {
+    return det3(at[t[1]] - at[t[0]], at[t[2]] - at[t[0]], at[t[3]] - at[t[0]]) / 6;
+  };
+  // Positive tets: the sliver, the two on diagonal 1-3, and one below the base.
+  std::vector<index_t> tets = {0, 1, 3, 2, 0, 1, 3, 4, 1, 2, 3, 4, 0, 3, 2, 5};
+  for (std::size_t t = 0; t < tets.size() / 4; ++t) {
+    if (volume(&tets[4 * t]) < 0) std::swap(tets[4 * t + 1], tets[4 * t + 2]);
+    ASSERT_GT(volume(&tets[4 * t]), 0);
+  }
+  double before = 0;
+  for (std::size_t t = 0; t < tets.size() / 4; ++t) before += volume(&tets[4 * t]);
+  const std::vector<std::array<int, 3>> constraints = {{0, 1, 2}, {0, 2, 3}, {0, 1, 4},
+                                                       {1, 2, 4}, {2, 3, 4}, {3, 0, 4}};
+  mesher::InsertedPoints::Split split;
+  split.corners = {at[0], at[1], at[2], at[3], at[4]};
+  split.tets = {{0, 1, 2, 4}, {0, 2, 3, 4}};
+
+  // Corners that are no region's (the apex elsewhere): nothing changes.
+  mesher::InsertedPoints::Split elsewhere = split;
+  elsewhere.corners[4] = Vec3{0.5, 0.5, 0.7};
+  std::vector<index_t> same = tets;
+  EXPECT_EQ(mesher::resplit_core(coordinates, same, constraints, {elsewhere}, 1e-9), 0u);
+  EXPECT_EQ(same, tets);
+
+  EXPECT_EQ(mesher::resplit_core(coordinates, tets, constraints, {split}, 1e-9), 1u);
+  ASSERT_EQ(tets.size(), 12u);
+  std::vector<std::array<index_t, 4>> sorted;
+  double after = 0;
+  for (std::size_t t = 0; t < 3; ++t) {
+    EXPECT_GT(volume(&tets[4 * t]), 0);
+    after += volume(&tets[4 * t]);
+    std::array<index_t, 4> k{tets[4 * t], tets[4 * t + 1], tets[4 * t + 2], tets[4 * t + 3]};
+    std::sort(k.begin(), k.end());
+    sorted.push_back(k);
+  }
+  std::sort(sorted.begin(), sorted.end());
+  const std::vector<std::array<index_t, 4>> expected = {{0, 1, 2, 4}, {0, 2, 3, 4}, {0, 2, 3, 5}};
+  EXPECT_EQ(sorted, expected);
+  EXPECT_NEAR(after, before, 1e-12);
+
+  // A region holding a point besides the split's corners (a Steiner point TetGen added) stays.
+  std::vector<double> more = coordinates;
+  more.insert(more.end(), {0.5, 0.45, 0.3});
+  std::vector<index_t> with_point = {0, 1, 2, 6, 0, 2, 3, 6, 0, 1, 6, 4,
+                                     1, 2, 6, 4, 2, 3, 6, 4, 3, 0, 6, 4};
+  EXPECT_EQ(mesher::resplit_core(more, with_point, constraints, {split}, 1e-9), 0u);
+}
+
 }  // namespace
 }  // namespace hexmerge::test

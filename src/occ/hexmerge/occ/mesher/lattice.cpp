@@ -4,7 +4,9 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <functional>
 #include <limits>
+#include <map>
 #include <set>
 #include <string>
 #include <unordered_map>
@@ -1033,6 +1035,94 @@ CoreCounts add_core(const Lattice& lattice, Surroundings& around, const Parity& 
         }
   counts.nb_pulled_points = pulled.node.size() + pulled.apex.size();
   return counts;
+}
+
+std::size_t resplit_core(const std::vector<double>& coordinates, std::vector<index_t>& tets,
+                         const std::vector<std::array<int, 3>>& constraints,
+                         const std::vector<InsertedPoints::Split>& splits, double tolerance) {
+  const std::size_t nb_points = coordinates.size() / 3, nb_tets = tets.size() / 4;
+  std::vector<Vec3> points(nb_points);
+  for (std::size_t i = 0; i < nb_points; ++i) points[i] = Vec3::of(&coordinates[3 * i]);
+  NodeHash at(points, 1e3 * tolerance);
+  for (std::size_t i = 0; i < nb_points; ++i) at.add(static_cast<int>(i));
+  std::unordered_set<FaceKey, FaceKeyHash> barrier;
+  for (const std::array<int, 3>& t : constraints) barrier.insert(face_key(t[0], t[1], t[2]));
+  // Regions: union-find over the tets across the faces that are no barrier.
+  std::vector<index_t> parent(nb_tets);
+  for (index_t t = 0; t < nb_tets; ++t) parent[t] = t;
+  const std::function<index_t(index_t)> find = [&](index_t t) {
+    while (parent[t] != t) t = parent[t] = parent[parent[t]];
+    return t;
+  };
+  std::unordered_map<FaceKey, index_t, FaceKeyHash> open_face;
+  for (index_t t = 0; t < nb_tets; ++t) {
+    const index_t* v = &tets[4 * t];
+    for (int f = 0; f < 4; ++f) {
+      const FaceKey k = face_key(v[(f + 1) % 4], v[(f + 2) % 4], v[(f + 3) % 4]);
+      if (barrier.count(k)) continue;
+      const auto [it, fresh] = open_face.emplace(k, t);
+      if (!fresh) parent[find(t)] = find(it->second);
+    }
+  }
+  std::unordered_map<index_t, std::vector<index_t>> members;
+  std::vector<std::size_t> size(nb_tets, 0);
+  for (index_t t = 0; t < nb_tets; ++t) ++size[find(t)];
+  for (index_t t = 0; t < nb_tets; ++t)
+    if (size[find(t)] <= 12) members[find(t)].push_back(t);
+  std::map<std::vector<index_t>, index_t> region_of;  // sorted corners -> region root
+  for (const auto& [root, list] : members) {
+    std::vector<index_t> corners;
+    for (const index_t t : list) corners.insert(corners.end(), &tets[4 * t], &tets[4 * t + 4]);
+    std::sort(corners.begin(), corners.end());
+    corners.erase(std::unique(corners.begin(), corners.end()), corners.end());
+    region_of[corners] = root;
+  }
+  const auto volume = [&](index_t a, index_t b, index_t c, index_t d) {
+    return det3(points[b] - points[a], points[c] - points[a], points[d] - points[a]) / 6;
+  };
+  std::vector<char> drop(nb_tets, 0);
+  std::vector<index_t> added;
+  std::size_t replaced = 0;
+  for (const InsertedPoints::Split& split : splits) {
+    std::vector<index_t> ids;
+    for (const Vec3& q : split.corners) {
+      const int i = at.find(q, tolerance);
+      if (i < 0) break;
+      ids.push_back(static_cast<index_t>(i));
+    }
+    if (ids.size() != split.corners.size()) continue;
+    std::vector<index_t> sorted = ids;
+    std::sort(sorted.begin(), sorted.end());
+    const auto it = region_of.find(sorted);
+    if (it == region_of.end()) continue;
+    const std::vector<index_t>& list = members[it->second];
+    double before = 0, after = 0;
+    for (const index_t t : list) {
+      const index_t* v = &tets[4 * t];
+      before += std::abs(volume(v[0], v[1], v[2], v[3]));
+    }
+    std::vector<std::array<index_t, 4>> made;
+    bool positive = true;
+    for (const auto& q : split.tets) {
+      std::array<index_t, 4> t{ids[q[0]], ids[q[1]], ids[q[2]], ids[q[3]]};
+      double v = volume(t[0], t[1], t[2], t[3]);
+      if (v < 0) std::swap(t[1], t[2]), v = -v;
+      positive = positive && v > 0;
+      after += v;
+      made.push_back(t);
+    }
+    if (!positive || std::abs(after - before) > 1e-9 * after) continue;
+    for (const index_t t : list) drop[t] = 1;
+    for (const auto& t : made) added.insert(added.end(), t.begin(), t.end());
+    ++replaced;
+  }
+  std::vector<index_t> kept_tets;
+  kept_tets.reserve(tets.size() + added.size());
+  for (index_t t = 0; t < nb_tets; ++t)
+    if (!drop[t]) kept_tets.insert(kept_tets.end(), &tets[4 * t], &tets[4 * t + 4]);
+  kept_tets.insert(kept_tets.end(), added.begin(), added.end());
+  tets = std::move(kept_tets);
+  return replaced;
 }
 
 std::size_t face_points_first(InsertedPoints& inserted) {

@@ -13,6 +13,7 @@
 #include <utility>
 #include <vector>
 
+#include "hexmerge/core/index.h"
 #include "hexmerge/geometry/vec3.h"
 #include "hexmerge/occ/mesher/frame.h"
 #include "hexmerge/occ/mesher/spatial.h"
@@ -250,6 +251,17 @@ struct CoreCounts {
 CoreCounts add_core(const Lattice& lattice, Surroundings& around, const Parity& parity,
                     const KeptPoints& kept, int sweep_axis, double h, InsertedPoints& inserted,
                     bool pull = false);
+
+/// The pulled cells and pyramids split as the lattice's after the tetrahedraliser: it keeps their
+/// faces (`constraints`, triangles by point index) but may fill one with a sliver on a face that
+/// is no longer flat and the two tets beside it. Each region of the tets (joined across faces
+/// that are no constraint) whose corners are a split's corners (`splits`, by position, found
+/// within `tolerance` among `coordinates`, #points by 3) is replaced by the split's tets, when
+/// these are positive and fill the same volume. Returns how many regions were replaced.
+/// @param[in,out] tets  #tets by 4
+std::size_t resplit_core(const std::vector<double>& coordinates, std::vector<index_t>& tets,
+                         const std::vector<std::array<int, 3>>& constraints,
+                         const std::vector<InsertedPoints::Split>& splits, double tolerance);
 
 /// Reorders `inserted` so that the points on lattice faces come first (stable); returns their
 /// number.
