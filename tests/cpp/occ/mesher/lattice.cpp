@@ -312,8 +312,8 @@ TEST(add_core, box_is_all_core) {
 // A pulled pyramid whose base no longer lies flat (corner 1 raised): its facets are kept, but the
 // region inside them holds a sliver of the base's four corners and two tets on the other
 // diagonal. resplit_core() gives it the lattice's split (the base on its diagonal from corner
-// 0) and leaves the tet beyond the base alone; a split whose corners are not a region's, or a
-// region holding another point, stays as it is.
+// 0) and leaves the tet beyond the base alone; a split whose corners are not a region's, a
+// region whose outer faces are not the split's, or a region holding another point, stays.
 TEST(resplit_core, a_pyramid_with_a_sliver_gets_the_lattices_split) {
   const std::vector<Vec3> at = {{0, 0, 0}, {1, 0, 0.1},     {1, 1, 0},
                                 {0, 1, 0}, {0.5, 0.5, 0.8}, {0.4, 0.6, -1}};
@@ -358,6 +358,16 @@ TEST(resplit_core, a_pyramid_with_a_sliver_gets_the_lattices_split) {
   const std::vector<std::array<index_t, 4>> expected = {{0, 1, 2, 4}, {0, 2, 3, 4}, {0, 2, 3, 5}};
   EXPECT_EQ(sorted, expected);
   EXPECT_NEAR(after, before, 1e-12);
+
+  // A region on the surface, its base split on the other diagonal (the surface's triangles,
+  // which the tets must keep): its outer faces are not the split's, and it stays.
+  std::vector<index_t> on_surface = {0, 1, 3, 4, 1, 2, 3, 4};
+  for (std::size_t t = 0; t < 2; ++t)
+    if (volume(&on_surface[4 * t]) < 0) std::swap(on_surface[4 * t + 1], on_surface[4 * t + 2]);
+  const std::vector<std::array<int, 3>> sides(constraints.begin() + 2, constraints.end());
+  std::vector<index_t> kept = on_surface;
+  EXPECT_EQ(mesher::resplit_core(coordinates, kept, sides, {split}, 1e-9), 0u);
+  EXPECT_EQ(kept, on_surface);
 
   // A region holding a point besides the split's corners (a Steiner point TetGen added) stays.
   std::vector<double> more = coordinates;

@@ -1111,7 +1111,24 @@ std::size_t resplit_core(const std::vector<double>& coordinates, std::vector<ind
       after += v;
       made.push_back(t);
     }
-    if (!positive || std::abs(after - before) > 1e-9 * after) continue;
+    // The same outer faces (the region's are constraints, or it touches the surface and its
+    // faces there are the surface's triangles, which the split need not have).
+    const auto outer_faces = [](const auto& tet_list, const auto& corners_of) {
+      std::map<FaceKey, int> count;
+      for (const auto& t : tet_list) {
+        const index_t* v = corners_of(t);
+        for (int f = 0; f < 4; ++f)
+          ++count[face_key(v[(f + 1) % 4], v[(f + 2) % 4], v[(f + 3) % 4])];
+      }
+      std::vector<FaceKey> once;
+      for (const auto& [k, n] : count)
+        if (n == 1) once.push_back(k);
+      return once;
+    };
+    if (!positive || std::abs(after - before) > 1e-9 * after ||
+        outer_faces(list, [&](index_t t) { return &tets[4 * t]; }) !=
+            outer_faces(made, [](const std::array<index_t, 4>& t) { return t.data(); }))
+      continue;
     for (const index_t t : list) drop[t] = 1;
     for (const auto& t : made) added.insert(added.end(), t.begin(), t.end());
     ++replaced;

@@ -257,7 +257,8 @@ CoreCounts add_core(const Lattice& lattice, Surroundings& around, const Parity& 
 /// is no longer flat and the two tets beside it. Each region of the tets (joined across faces
 /// that are no constraint) whose corners are a split's corners (`splits`, by position, found
 /// within `tolerance` among `coordinates`, #points by 3) is replaced by the split's tets, when
-/// these are positive and fill the same volume. Returns how many regions were replaced.
+/// these are positive, fill the same volume and have the region's outer faces (a region on the
+/// surface keeps the surface's triangles). Returns how many regions were replaced.
 /// @param[in,out] tets  #tets by 4
 std::size_t resplit_core(const std::vector<double>& coordinates, std::vector<index_t>& tets,
                          const std::vector<std::array<int, 3>>& constraints,
