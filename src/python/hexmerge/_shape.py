@@ -214,7 +214,7 @@ def mesh_shape(
         Returning False cancels (hexmerge.Cancelled), between the mesher's steps.
     **options
         The mesher's parameters (mesh_parameters(): boundary_layers, layer_thickness,
-        lattice_margin, surface_deflection, frame, sweep, tetgen_time_limit, memory_limit,
+        lattice_margin, surface_deflection, frame, sweep, pull_core, tetgen_time_limit, memory_limit,
         tetgen (the TetGen program, a name on PATH or a path), work_directory (keep TetGen's
         files there; default: a temporary folder, removed), local_sizes (finer sizes on faces
         and edges numbered from 1: "5,6:1.5; Edge3:0.5", or a list, see local_sizes_text();
