@@ -5,7 +5,6 @@
 #include <cmath>
 #include <iterator>
 #include <limits>
-#include <map>
 #include <optional>
 #include <sstream>
 #include <utility>
@@ -22,6 +21,7 @@
 #include "hexmerge/occ/mesher/lattice.h"
 #include "hexmerge/occ/mesher/layers.h"
 #include "hexmerge/occ/mesher/local_size.h"
+#include "hexmerge/occ/mesher/pull_core.h"
 #include "hexmerge/occ/mesher/second_order.h"
 #include "hexmerge/occ/mesher/shape.h"
 #include "hexmerge/occ/mesher/sharp_features.h"
@@ -722,27 +722,22 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
   // The core's faces TetGen must keep (add_core()), as inner facets of their own marker.
   const int constraint_marker = shape.faces.Extent() + 1;
   std::vector<std::array<int, 3>> constraints;
-  if (!inserted.constraints.empty()) {
+  // The core's points pulled off the lattice (add_core()), by their place among TetGen's points,
+  // with their lattice positions: improve_tets() tells the core's cells and pyramids by those.
+  std::vector<std::pair<std::size_t, Vec3>> pulled;
+  if (!inserted.pulled.empty()) {
     NodeHash at(input.points, 1e-3 * h);
     for (std::size_t i = 0; i < given; ++i) at.add(static_cast<int>(i));
+    for (const auto& [where, q] : inserted.pulled) {
+      const int i = at.find(where, 1e-6 * h);
+      if (i >= 0) pulled.emplace_back(static_cast<std::size_t>(i), q);
+    }
     for (const std::array<Vec3, 3>& t : inserted.constraints) {
       const int a = at.find(t[0], 1e-6 * h), b = at.find(t[1], 1e-6 * h),
                 c = at.find(t[2], 1e-6 * h);
       if (a < 0 || b < 0 || c < 0) continue;  // (every corner is a point given)
       input.facets.push_back(Facet{{{a, b, c}}, {}, constraint_marker});
       constraints.push_back({a, b, c});
-    }
-  }
-  // The core's points pulled off the lattice (add_core()), by their place among TetGen's points,
-  // with their lattice positions: improve_tets() tells the core's cells and pyramids by those.
-  std::vector<std::pair<std::size_t, Vec3>> pulled;
-  if (!inserted.pulled.empty()) {
-    std::map<std::array<double, 3>, Vec3> lattice_at;
-    for (const auto& [at, q] : inserted.pulled) lattice_at[{at.x, at.y, at.z}] = q;
-    for (std::size_t i = nodes.size(); i < given; ++i) {
-      const Vec3& p = input.points[i];
-      const auto it = lattice_at.find({p.x, p.y, p.z});
-      if (it != lattice_at.end()) pulled.emplace_back(i, it->second);
     }
   }
   input.to_world = [&](const Vec3& p) { return lattice.frame.to_world(p); };

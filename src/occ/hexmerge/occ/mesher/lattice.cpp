@@ -4,17 +4,14 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
-#include <functional>
 #include <limits>
-#include <map>
 #include <set>
 #include <string>
-#include <unordered_map>
 #include <unordered_set>
 
 #include "hexmerge/core/error.h"
-#include "hexmerge/geometry/quality.h"
 #include "hexmerge/occ/mesher/common.h"
+#include "hexmerge/occ/mesher/pull_core.h"
 #include "hexmerge/occ/mesher/shape.h"
 #include "hexmerge/occ/mesher/surface_repair.h"
 #include "hexmerge/occ/mesher/sweep.h"
@@ -22,14 +19,6 @@
 namespace hexmerge::mesher {
 
 namespace {
-// Closing pyramids' apexes keep at least these fractions of h from every face and from the
-// surface's nodes (improve_tets() then nudges an apex whose tets fall under 0.2). At 0.1 and 0.25
-// (until 2026-12-03) they took core cells away beside curved faces: over the real parts at their
-// 50k sizes, median hex volume 48.9 -> 50.4 % (gmsh_Zylkopf 37.6 -> 43.0 %), 1,109 -> 1,115
-// elements under scaled Jacobian 0.2; smaller still (a quarter of these or less), more hexahedra on
-// no part and more elements under 0.2 (gmsh_as1-tu-203: 25 -> 48).
-constexpr double kApexClearance = 0.02;
-constexpr double kApexNodeClearance = 0.05;
 // A closing pyramid's apex lies at least this fraction of the cell's circumradius outside the
 // circumsphere of the core cell beside it (lay_lattice()).
 constexpr double kCellSphereClearance = 1e-3;
@@ -110,271 +99,6 @@ std::vector<double> rectilinear_ticks(std::vector<double> offsets, double L, dou
   return ticks;
 }
 
-// The core pulled towards the surface (pull_core()): its closing pyramids' apexes come this
-// fraction of h from the faces at the nearest, each node moves at most kPullMost h, and the
-// cells and pyramids it moves keep these scaled Jacobians and their quad faces fold by no more
-// than kPullFold degrees across either diagonal. Chosen on the real parts at their 50k sizes
-// (docs/benchmarks-real-parts.md): cells under 0.9 stay out of the recombination's block of
-// near-perfect hexahedra, whose members beside them then leave it one after the other
-// (gmsh_part: 88.6 -> 67.9 % hex volume with a floor of 0.5); a fold of 25 degrees took
-// hexahedra from gmsh_Angled and gmsh_wrenchnut; apexes 0.05 h from the faces left flat tets
-// between them and the boundary triangles (gmsh_Kurbelwelle at its 250k size: 98 elements under
-// 0.2 against 23 at 0.15 h, for 63.9 against 63.0 % hex volume).
-constexpr double kPullTarget = 0.15;
-constexpr double kPullMost = 0.5;
-constexpr double kPullCellFloor = 0.9;
-constexpr double kPullPyramidFloor = 0.4;
-constexpr double kPullFold = 15.0;
-// Moved core nodes keep this fraction of h from the faces and the surface's nodes: at 0.1 h the
-// tets between them and the boundary triangles were flat (real parts at their 250k sizes: 1,413
-// elements under scaled Jacobian 0.2 against 1,095 unpulled; hex_bolt 194, thin_bracket 47; at
-// 0.25 h 101 and 0, the same hex volume).
-constexpr double kPullNodeClearance = 0.25;
-// Rounds of halving the moves of failing cells' and pyramids' nodes before they stay put.
-constexpr int kPullHalvings = 5;
-
-// Distance from q to the nearest item of `set` (a PointSet or TriangleSet), `far` when none is
-// nearer, to within `tolerance`.
-template <typename Set>
-double distance_to(const Set& set, const Vec3& q, double far, double tolerance) {
-  if (!set.any_within(q, far)) return far;
-  double lo = 0, hi = far;
-  while (hi - lo > tolerance) {
-    const double mid = 0.5 * (lo + hi);
-    (set.any_within(q, mid) ? hi : lo) = mid;
-  }
-  return lo;
-}
-
-// Whether the quad a-b-c-d folds by at most `fold` degrees across either diagonal.
-bool quad_flat(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d, double fold) {
-  const double cos_fold = std::cos(fold * M_PI / 180);
-  const auto folds_less = [&](const Vec3& p, const Vec3& q, const Vec3& r, const Vec3& t) {
-    // Triangles p-q-r and p-r-t on diagonal p-r.
-    const Vec3 n1 = (q - p).cross(r - p), n2 = (r - p).cross(t - p);
-    const double l = n1.norm() * n2.norm();
-    return l > 0 && n1.dot(n2) >= cos_fold * l;
-  };
-  return folds_less(a, b, c, d) && folds_less(b, c, d, a);
-}
-
-// A closing pyramid of the core: the core cell, its face's direction (0..5: -x, +x, -y, +y, -z,
-// +z) and the cell across, whose centre is the apex.
-struct PyramidFace {
-  int c[3], dir, n[3];
-};
-
-// How pull_core() moves the core's points: per lattice point (point_index) and per apex (the
-// index of its cell, i fastest).
-struct PulledCore {
-  std::unordered_map<std::size_t, Vec3> node, apex;
-};
-
-// The lattice point indices of the corners of face `f`'s base, around it.
-std::array<std::size_t, 4> base_corners(const Lattice& lattice, const PyramidFace& f) {
-  const int axis = f.dir / 2, u = (axis + 1) % 3, v = (axis + 2) % 3;
-  std::array<std::size_t, 4> out{};
-  static constexpr int kAround[4][2] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
-  for (int corner = 0; corner < 4; ++corner) {
-    int c[3] = {f.c[0], f.c[1], f.c[2]};
-    c[axis] += f.dir % 2;
-    c[u] += kAround[corner][0], c[v] += kAround[corner][1];
-    out[corner] = lattice.point_index(c[0], c[1], c[2]);
-  }
-  return out;
-}
-
-// The core's nodes on closing pyramids' bases moved out along the bases' normals (at an edge
-// or corner of the core, along each base's), each apex by the mean of its bases' corners' moves,
-// so that each apex comes kPullTarget h from the faces; the moves halved where a cell or
-// pyramid they change would fall below kPullCellFloor / kPullPyramidFloor, fold a quad face by
-// more than kPullFold, or an apex would come nearer than kApexClearance h to a face
-// (kApexNodeClearance h to a node) or leave the solid; dropped after kPullHalvings.
-PulledCore pull_core(const Lattice& lattice, const Surroundings& around, const Parity& parity,
-                     const KeptPoints& kept, const std::vector<char>& core,
-                     const std::vector<PyramidFace>& faces, double h) {
-  PulledCore out;
-  if (faces.empty()) return out;
-  const int c0 = lattice.cells[0], c1 = lattice.cells[1];
-  const auto cell_index = [&](const int(&c)[3]) {
-    return (static_cast<std::size_t>(c[2]) * c1 + c[1]) * c0 + c[0];
-  };
-  const auto point_of = [&](std::size_t p) { return lattice.point(lattice.point_ijk(p)); };
-  const double tolerance = 1e-3 * h;
-  // Per node: the least room of the apexes above it, per base direction, and which directions.
-  struct Room {
-    double s[6];
-    unsigned has = 0;
-    bool fixed = false;
-  };
-  std::unordered_map<std::size_t, Room> room;
-  // A node beside a kept point that is no core cell's corner, or that lies on a lattice face,
-  // stays: the lattice's squares through both would no longer be flat, and their cells'
-  // hexahedra go (gmsh_as1-tu-203 at its 50k size: 500 of 2,965 core cells lost beside the
-  // lattice faces between its solids).
-  std::vector<char> core_corner(kept.kept.size(), 0);
-  for (int k = 0; k < lattice.cells[2]; ++k)
-    for (int j = 0; j < c1; ++j)
-      for (int i = 0; i < c0; ++i) {
-        const int c[3] = {i, j, k};
-        if (!core[cell_index(c)]) continue;
-        for (int corner = 0; corner < 8; ++corner)
-          core_corner[lattice.point_index(i + (corner & 1), j + ((corner >> 1) & 1),
-                                          k + ((corner >> 2) & 1))] = 1;
-      }
-  const auto beside_other = [&](std::size_t p) {
-    const std::array<int, 3> ijk = lattice.point_ijk(p);
-    const int size[3] = {lattice.cells[0] + 1, lattice.cells[1] + 1, lattice.cells[2] + 1};
-    for (int a = 0; a < 3; ++a)
-      for (int side = -1; side <= 1; side += 2) {
-        int c[3] = {ijk[0], ijk[1], ijk[2]};
-        c[a] += side;
-        if (c[a] < 0 || c[a] >= size[a]) continue;
-        const std::size_t q = lattice.point_index(c[0], c[1], c[2]);
-        if (kept.kept[q] && (!core_corner[q] || kept.face[q] >= 0)) return true;
-      }
-    return false;
-  };
-  for (const PyramidFace& f : faces) {
-    const Vec3 apex = lattice.cell_centre(f.n[0], f.n[1], f.n[2]);
-    const double s =
-        std::clamp(distance_to(around.every_face, apex, 2 * h, tolerance) - kPullTarget * h, 0.0,
-                   kPullMost * h);
-    for (const std::size_t p : base_corners(lattice, f)) {
-      Room& r = room[p];
-      if (!(r.has >> f.dir & 1)) r.s[f.dir] = s;
-      r.s[f.dir] = std::min(r.s[f.dir], s);
-      r.has |= 1u << f.dir;
-      if (kept.face[p] >= 0 || around.surface_points.any_within(point_of(p), 1e-6 * h) ||
-          beside_other(p))
-        r.fixed = true;
-    }
-  }
-  std::unordered_map<std::size_t, Vec3> move;  // full move per node
-  for (const auto& [p, r] : room) {
-    if (r.fixed) continue;
-    Vec3 d{0, 0, 0};
-    for (int a = 0; a < 3; ++a) {
-      const bool minus = r.has >> (2 * a) & 1, plus = r.has >> (2 * a + 1) & 1;
-      if (plus != minus) set_coord(d, a, plus ? r.s[2 * a + 1] : -r.s[2 * a]);
-    }
-    if (d.norm() > tolerance) move[p] = d;
-  }
-  if (move.empty()) return out;
-  // Per apex: its pyramids and their bases' corners (once each).
-  std::unordered_map<std::size_t, std::vector<std::size_t>> apex_pyramids, apex_corners;
-  for (std::size_t i = 0; i < faces.size(); ++i) {
-    const std::size_t a = cell_index(faces[i].n);
-    apex_pyramids[a].push_back(i);
-    std::vector<std::size_t>& corners = apex_corners[a];
-    for (const std::size_t p : base_corners(lattice, faces[i]))
-      if (std::find(corners.begin(), corners.end(), p) == corners.end()) corners.push_back(p);
-  }
-  std::unordered_map<std::size_t, double> scale;
-  for (const auto& [p, d] : move) scale[p] = 1.0;
-  const auto node_shift = [&](std::size_t p) {
-    const auto it = move.find(p);
-    return it == move.end() ? Vec3{0, 0, 0} : it->second * scale[p];
-  };
-  const auto apex_shift = [&](std::size_t a) {
-    Vec3 sum{0, 0, 0};
-    const std::vector<std::size_t>& corners = apex_corners[a];
-    for (const std::size_t p : corners) sum = sum + node_shift(p);
-    return sum * (1.0 / static_cast<double>(corners.size()));
-  };
-  // The core cells with a corner that may move.
-  std::vector<std::array<int, 3>> cells;
-  {
-    std::unordered_set<std::size_t> seen;
-    for (const auto& [p, d] : move) {
-      const auto [i, j, k] = lattice.point_ijk(p);
-      for (int corner = 0; corner < 8; ++corner) {
-        const int c[3] = {i - (corner & 1), j - ((corner >> 1) & 1), k - ((corner >> 2) & 1)};
-        if (c[0] < 0 || c[1] < 0 || c[2] < 0 || c[0] >= c0 || c[1] >= c1 ||
-            c[2] >= lattice.cells[2])
-          continue;
-        if (core[cell_index(c)] && seen.insert(cell_index(c)).second)
-          cells.push_back({c[0], c[1], c[2]});
-      }
-    }
-  }
-  // Whether the way from a to b keeps `clearance` from every face (a moved point crosses none,
-  // into another solid or through a thin wall).
-  const auto clear_path = [&](const Vec3& a, const Vec3& b, double clearance) {
-    const int steps = 1 + static_cast<int>((b - a).norm() / clearance);
-    for (int i = 0; i <= steps; ++i)
-      if (around.every_face.any_within(a + (b - a) * (static_cast<double>(i) / steps), clearance))
-        return false;
-    return true;
-  };
-  static constexpr int kHexCorner[8] = {0, 1, 3, 2, 4, 5, 7, 6};  // cell_type.h's order by bits
-  static constexpr int kHexFaces[6][4] = {{0, 1, 2, 3}, {4, 5, 6, 7}, {0, 1, 5, 4},
-                                          {1, 2, 6, 5}, {2, 3, 7, 6}, {3, 0, 4, 7}};
-  static const index_t kOrder[8] = {0, 1, 2, 3, 4, 5, 6, 7};
-  for (int round = 0;; ++round) {
-    std::unordered_set<std::size_t> failing;
-    for (const auto& c : cells) {
-      double xyz[24];
-      Vec3 at[8];
-      std::size_t ids[8];
-      for (int m = 0; m < 8; ++m) {
-        const int bits = kHexCorner[m];
-        ids[m] = lattice.point_index(c[0] + (bits & 1), c[1] + ((bits >> 1) & 1),
-                                     c[2] + ((bits >> 2) & 1));
-        at[m] = point_of(ids[m]) + node_shift(ids[m]);
-        xyz[3 * m] = at[m].x, xyz[3 * m + 1] = at[m].y, xyz[3 * m + 2] = at[m].z;
-      }
-      bool ok = scaled_jacobian(CellType::Hex, xyz, kOrder) >= kPullCellFloor;
-      for (int q = 0; q < 6 && ok; ++q)
-        ok = quad_flat(at[kHexFaces[q][0]], at[kHexFaces[q][1]], at[kHexFaces[q][2]],
-                       at[kHexFaces[q][3]], kPullFold);
-      if (!ok)
-        for (const std::size_t p : ids)
-          if (move.count(p) && scale[p] > 0) failing.insert(p);
-    }
-    // Moved nodes stay clear of the faces and the surface's nodes (TetGen drops a point on a
-    // face) and inside.
-    for (const auto& [p, d] : move) {
-      if (scale[p] == 0) continue;
-      const Vec3 q = point_of(p) + node_shift(p);
-      if (!parity.inside(q) || !clear_path(point_of(p), q, kPullNodeClearance * h) ||
-          around.surface_points.any_within(q, kPullNodeClearance * h))
-        failing.insert(p);
-    }
-    for (const auto& [a, list] : apex_pyramids) {
-      const Vec3 centre = lattice.cell_centre(lattice.cell_ijk(a)), apex = centre + apex_shift(a);
-      bool ok = parity.inside(apex) && clear_path(centre, apex, kApexClearance * h) &&
-                !around.surface_points.any_within(apex, kApexNodeClearance * h);
-      for (std::size_t i = 0; i < list.size() && ok; ++i) {
-        const std::array<std::size_t, 4> base = base_corners(lattice, faces[list[i]]);
-        double xyz[15];
-        for (int m = 0; m < 4; ++m) {
-          const Vec3 q = point_of(base[m]) + node_shift(base[m]);
-          xyz[3 * m] = q.x, xyz[3 * m + 1] = q.y, xyz[3 * m + 2] = q.z;
-        }
-        xyz[12] = apex.x, xyz[13] = apex.y, xyz[14] = apex.z;
-        // Around the base as seen from the apex: the base's corners go around +u, +v, which
-        // is right-handed seen from +axis.
-        const bool up = faces[list[i]].dir % 2 == 1;
-        static const index_t kUp[5] = {0, 1, 2, 3, 4}, kDown[5] = {0, 3, 2, 1, 4};
-        ok = scaled_jacobian(CellType::Pyramid, xyz, up ? kUp : kDown) >= kPullPyramidFloor;
-      }
-      if (!ok)
-        for (const std::size_t p : apex_corners[a])
-          if (move.count(p) && scale[p] > 0) failing.insert(p);
-    }
-    // (A cell or pyramid that fails unmoved, on a rectilinear axis, holds nothing back.)
-    if (failing.empty()) break;
-    for (const std::size_t p : failing) scale[p] = round < kPullHalvings ? 0.5 * scale[p] : 0.0;
-  }
-  for (const auto& [p, d] : move)
-    if (scale[p] > 0) out.node[p] = node_shift(p);
-  for (const auto& [a, corners] : apex_corners) {
-    const Vec3 d = apex_shift(a);
-    if (d.norm() > 0) out.apex[a] = d;
-  }
-  return out;
-}
 }  // namespace
 
 double Lattice::widest(int a) const {
@@ -847,17 +571,25 @@ CoreCounts add_core(const Lattice& lattice, Surroundings& around, const Parity& 
   // closing pyramid's base moves out along the bases' normals, the apexes with their bases,
   // until the apexes come within kPullTarget h of the faces, as far as the cells and pyramids
   // stay good (pull_core()).
+  std::vector<char> core_corner(kept.size(), 0);
+  for (int k = 0; k < c2; ++k)
+    for (int j = 0; j < c1; ++j)
+      for (int i = 0; i < c0; ++i)
+        if (core[cell_index(i, j, k)])
+          for (int corner = 0; corner < 8; ++corner)
+            core_corner[lattice.point_index(i + (corner & 1), j + ((corner >> 1) & 1),
+                                            k + ((corner >> 2) & 1))] = 1;
   const PulledCore pulled = pull && sweep_axis < 0 ? pull_core(lattice, around, parity, kept_points,
-                                                               core, pyramid_faces, h)
+                                                               core, core_corner, pyramid_faces, h)
                                                    : PulledCore{};
-  // Positions: the lattice's, or pulled.
-  auto node_at = [&](std::size_t p, const Vec3& q) {
+  // Where lattice point p and the apex at the centre of cell c are now: the lattice's, or pulled.
+  auto point_at = [&](std::size_t p) {
+    const Vec3 q = lattice.point(lattice.point_ijk(p));
     const auto it = pulled.node.find(p);
     return it == pulled.node.end() ? q : q + it->second;
   };
-  // Lattice point p where it is now.
-  auto point_at = [&](std::size_t p) { return node_at(p, lattice.point(lattice.point_ijk(p))); };
-  auto apex_at = [&](std::size_t c, const Vec3& q) {
+  auto apex_at = [&](std::size_t c) {
+    const Vec3 q = lattice.cell_centre(lattice.cell_ijk(c));
     const auto it = pulled.apex.find(c);
     return it == pulled.apex.end() ? q : q + it->second;
   };
@@ -871,7 +603,6 @@ CoreCounts add_core(const Lattice& lattice, Surroundings& around, const Parity& 
     return std::pair<Vec3, double>{centre, r};
   };
   BallSet moved_balls(around.box_lo, around.box_hi, h);
-  std::vector<char> core_corner(kept.size(), 0);
   for (int k = 0; k < c2; ++k)
     for (int j = 0; j < c1; ++j)
       for (int i = 0; i < c0; ++i) {
@@ -879,10 +610,9 @@ CoreCounts add_core(const Lattice& lattice, Surroundings& around, const Parity& 
         Vec3 corners[8];
         bool moved = false;
         for (int corner = 0; corner < 8; ++corner) {
-          const int a = i + (corner & 1), b = j + ((corner >> 1) & 1), c = k + ((corner >> 2) & 1);
-          const std::size_t p = lattice.point_index(a, b, c);
-          core_corner[p] = 1;
-          corners[corner] = node_at(p, lattice.point(a, b, c));
+          const std::size_t p = lattice.point_index(i + (corner & 1), j + ((corner >> 1) & 1),
+                                                    k + ((corner >> 2) & 1));
+          corners[corner] = point_at(p);
           moved = moved || pulled.node.count(p);
         }
         if (!moved) {
@@ -897,21 +627,17 @@ CoreCounts add_core(const Lattice& lattice, Surroundings& around, const Parity& 
     const std::size_t apex = cell_index(f.n[0], f.n[1], f.n[2]);
     Vec3 points[5];
     bool moved = pulled.apex.count(apex) > 0;
-    const int axis = f.dir / 2, u = (axis + 1) % 3, v = (axis + 2) % 3;
+    const std::array<std::size_t, 4> base = base_corners(lattice, f);
     for (int corner = 0; corner < 4; ++corner) {
-      int c[3] = {f.c[0], f.c[1], f.c[2]};
-      c[axis] += f.dir % 2;
-      c[u] += corner & 1, c[v] += corner >> 1;
-      const std::size_t p = lattice.point_index(c[0], c[1], c[2]);
-      points[corner] = node_at(p, lattice.point(c[0], c[1], c[2]));
-      moved = moved || pulled.node.count(p);
+      points[corner] = point_at(base[corner]);
+      moved = moved || pulled.node.count(base[corner]);
     }
     if (!moved) {
       const auto [centre, r] = pyramid_sphere(f.c[0], f.c[1], f.c[2], f.dir, f.n);
       around.core_balls.add(centre, r);
       continue;
     }
-    points[4] = apex_at(apex, cell_centre(f.n[0], f.n[1], f.n[2]));
+    points[4] = apex_at(apex);
     const auto [centre, r] = ball_of(points, 5);
     around.core_balls.add(centre, r);
     moved_balls.add(centre, r);
@@ -942,7 +668,7 @@ CoreCounts add_core(const Lattice& lattice, Surroundings& around, const Parity& 
         int c[3];
         c[axis] = plane, c[u] = p + kAround[m][0], c[v] = q + kAround[m][1];
         id[m] = lattice.point_index(c[0], c[1], c[2]);
-        at[m] = node_at(id[m], lattice.point(c[0], c[1], c[2]));
+        at[m] = point_at(id[m]);
       }
       add_triangle(id[0], id[1], id[2], at[0], at[1], at[2]);
       add_triangle(id[0], id[2], id[3], at[0], at[2], at[3]);
@@ -989,7 +715,7 @@ CoreCounts add_core(const Lattice& lattice, Surroundings& around, const Parity& 
       if (!moved) continue;
       const int axis = f.dir / 2;
       add_quad(axis, f.c[axis] + f.dir % 2, f.c[(axis + 1) % 3], f.c[(axis + 2) % 3]);
-      const Vec3 apex = apex_at(a, cell_centre(f.n[0], f.n[1], f.n[2]));
+      const Vec3 apex = apex_at(a);
       InsertedPoints::Split split;  // two tets on the base's diagonal from its least corner
       for (const std::size_t p : base) split.corners.push_back(point_at(p));
       split.corners.push_back(apex);
@@ -1008,13 +734,9 @@ CoreCounts add_core(const Lattice& lattice, Surroundings& around, const Parity& 
         if (!kept[p]) continue;
         const Vec3 q = lattice.point(i, j, k);
         if (around.surface_points.any_within(q, 1e-6 * h)) continue;  // already a surface node
-        // A kept point that is no core cell's corner goes where the pulled core now is, and
-        // beside a pulled point (the lattice's squares through both, no longer flat, would
-        // leave slivers).
-        if (!core_corner[p] && !pulled.node.empty()) {
-          if (moved_balls.holds(q, 0)) continue;
-        }
-        const Vec3 at = node_at(p, q);
+        // A kept point that is no core cell's corner goes where the pulled core now is.
+        if (!core_corner[p] && moved_balls.holds(q, 0)) continue;
+        const Vec3 at = point_at(p);
         if (pulled.node.count(p)) inserted.pulled.emplace_back(at, q);
         inserted.points.push_back(at);
         inserted.face.push_back(kept_points.face[p]);
@@ -1026,7 +748,7 @@ CoreCounts add_core(const Lattice& lattice, Surroundings& around, const Parity& 
       for (int i = 0; i < c0; ++i)
         if (apex_cell[cell_index(i, j, k)]) {
           const Vec3 q = cell_centre(i, j, k);
-          const Vec3 at = apex_at(cell_index(i, j, k), q);
+          const Vec3 at = apex_at(cell_index(i, j, k));
           if (pulled.apex.count(cell_index(i, j, k))) inserted.pulled.emplace_back(at, q);
           inserted.points.push_back(at);
           inserted.face.push_back(-1);
@@ -1035,111 +757,6 @@ CoreCounts add_core(const Lattice& lattice, Surroundings& around, const Parity& 
         }
   counts.nb_pulled_points = pulled.node.size() + pulled.apex.size();
   return counts;
-}
-
-std::size_t resplit_core(const std::vector<double>& coordinates, std::vector<index_t>& tets,
-                         const std::vector<std::array<int, 3>>& constraints,
-                         const std::vector<InsertedPoints::Split>& splits, double tolerance) {
-  const std::size_t nb_points = coordinates.size() / 3, nb_tets = tets.size() / 4;
-  std::vector<Vec3> points(nb_points);
-  for (std::size_t i = 0; i < nb_points; ++i) points[i] = Vec3::of(&coordinates[3 * i]);
-  NodeHash at(points, 1e3 * tolerance);
-  for (std::size_t i = 0; i < nb_points; ++i) at.add(static_cast<int>(i));
-  std::unordered_set<FaceKey, FaceKeyHash> barrier;
-  for (const std::array<int, 3>& t : constraints) barrier.insert(face_key(t[0], t[1], t[2]));
-  // Regions: union-find over the tets across the faces that are no barrier.
-  std::vector<index_t> parent(nb_tets);
-  for (index_t t = 0; t < nb_tets; ++t) parent[t] = t;
-  const std::function<index_t(index_t)> find = [&](index_t t) {
-    while (parent[t] != t) t = parent[t] = parent[parent[t]];
-    return t;
-  };
-  std::unordered_map<FaceKey, index_t, FaceKeyHash> open_face;
-  for (index_t t = 0; t < nb_tets; ++t) {
-    const index_t* v = &tets[4 * t];
-    for (int f = 0; f < 4; ++f) {
-      const FaceKey k = face_key(v[(f + 1) % 4], v[(f + 2) % 4], v[(f + 3) % 4]);
-      if (barrier.count(k)) continue;
-      const auto [it, fresh] = open_face.emplace(k, t);
-      if (!fresh) parent[find(t)] = find(it->second);
-    }
-  }
-  std::unordered_map<index_t, std::vector<index_t>> members;
-  std::vector<std::size_t> size(nb_tets, 0);
-  for (index_t t = 0; t < nb_tets; ++t) ++size[find(t)];
-  for (index_t t = 0; t < nb_tets; ++t)
-    if (size[find(t)] <= 12) members[find(t)].push_back(t);
-  std::map<std::vector<index_t>, index_t> region_of;  // sorted corners -> region root
-  for (const auto& [root, list] : members) {
-    std::vector<index_t> corners;
-    for (const index_t t : list) corners.insert(corners.end(), &tets[4 * t], &tets[4 * t + 4]);
-    std::sort(corners.begin(), corners.end());
-    corners.erase(std::unique(corners.begin(), corners.end()), corners.end());
-    region_of[corners] = root;
-  }
-  const auto volume = [&](index_t a, index_t b, index_t c, index_t d) {
-    return det3(points[b] - points[a], points[c] - points[a], points[d] - points[a]) / 6;
-  };
-  std::vector<char> drop(nb_tets, 0);
-  std::vector<index_t> added;
-  std::size_t replaced = 0;
-  for (const InsertedPoints::Split& split : splits) {
-    std::vector<index_t> ids;
-    for (const Vec3& q : split.corners) {
-      const int i = at.find(q, tolerance);
-      if (i < 0) break;
-      ids.push_back(static_cast<index_t>(i));
-    }
-    if (ids.size() != split.corners.size()) continue;
-    std::vector<index_t> sorted = ids;
-    std::sort(sorted.begin(), sorted.end());
-    const auto it = region_of.find(sorted);
-    if (it == region_of.end()) continue;
-    const std::vector<index_t>& list = members[it->second];
-    double before = 0, after = 0;
-    for (const index_t t : list) {
-      const index_t* v = &tets[4 * t];
-      before += std::abs(volume(v[0], v[1], v[2], v[3]));
-    }
-    std::vector<std::array<index_t, 4>> made;
-    bool positive = true;
-    for (const auto& q : split.tets) {
-      std::array<index_t, 4> t{ids[q[0]], ids[q[1]], ids[q[2]], ids[q[3]]};
-      double v = volume(t[0], t[1], t[2], t[3]);
-      if (v < 0) std::swap(t[1], t[2]), v = -v;
-      positive = positive && v > 0;
-      after += v;
-      made.push_back(t);
-    }
-    // The same outer faces (the region's are constraints, or it touches the surface and its
-    // faces there are the surface's triangles, which the split need not have).
-    const auto outer_faces = [](const auto& tet_list, const auto& corners_of) {
-      std::map<FaceKey, int> count;
-      for (const auto& t : tet_list) {
-        const index_t* v = corners_of(t);
-        for (int f = 0; f < 4; ++f)
-          ++count[face_key(v[(f + 1) % 4], v[(f + 2) % 4], v[(f + 3) % 4])];
-      }
-      std::vector<FaceKey> once;
-      for (const auto& [k, n] : count)
-        if (n == 1) once.push_back(k);
-      return once;
-    };
-    if (!positive || std::abs(after - before) > 1e-9 * after ||
-        outer_faces(list, [&](index_t t) { return &tets[4 * t]; }) !=
-            outer_faces(made, [](const std::array<index_t, 4>& t) { return t.data(); }))
-      continue;
-    for (const index_t t : list) drop[t] = 1;
-    for (const auto& t : made) added.insert(added.end(), t.begin(), t.end());
-    ++replaced;
-  }
-  std::vector<index_t> kept_tets;
-  kept_tets.reserve(tets.size() + added.size());
-  for (index_t t = 0; t < nb_tets; ++t)
-    if (!drop[t]) kept_tets.insert(kept_tets.end(), &tets[4 * t], &tets[4 * t + 4]);
-  kept_tets.insert(kept_tets.end(), added.begin(), added.end());
-  tets = std::move(kept_tets);
-  return replaced;
 }
 
 std::size_t face_points_first(InsertedPoints& inserted) {

@@ -1,0 +1,62 @@
+#pragma once
+/// @file
+/// The hexahedral core pulled towards the surface (internal header of mesh_shape(); no
+/// OpenCASCADE): add_core() moves the core's boundary nodes and its closing pyramids' apexes
+/// off the lattice (pull_core()), and the cells and pyramids so moved, which TetGen keeps as
+/// constraints, get the lattice's split back after it (resplit_core()).
+
+#include <array>
+#include <cstddef>
+#include <unordered_map>
+#include <vector>
+
+#include "hexmerge/core/index.h"
+#include "hexmerge/geometry/vec3.h"
+#include "hexmerge/occ/mesher/lattice.h"
+
+namespace hexmerge::mesher {
+
+/// A closing pyramid of the core: the core cell, its face's direction (0..5: -x, +x, -y, +y, -z,
+/// +z) and the cell across, whose centre is the apex.
+struct PyramidFace {
+  int c[3], dir, n[3];
+};
+
+/// How pull_core() moves the core's points: per lattice point (Lattice::point_index) and per
+/// apex (the index of its cell, i fastest).
+struct PulledCore {
+  std::unordered_map<std::size_t, Vec3> node, apex;
+};
+
+/// The lattice point indices of the corners of face `f`'s base, around it ((0, 0), (1, 0),
+/// (1, 1), (0, 1) along the two other axes in cyclic order).
+std::array<std::size_t, 4> base_corners(const Lattice& lattice, const PyramidFace& f);
+
+/// The core's nodes on closing pyramids' bases moved out along the bases' normals (at an edge or
+/// corner of the core, along each base's), each apex by the mean of its bases' corners' moves,
+/// so that each apex comes 0.15 h from the faces; the moves halved where a moved cell would fall
+/// below scaled Jacobian 0.9 or fold a quad face by more than 15 degrees, a pyramid below 0.4, a
+/// moved node come within 0.25 h of a face or a surface node, an apex within kApexClearance h of
+/// a face (kApexNodeClearance h of a node), or either leave the solid; dropped after five
+/// halvings. Nodes on lattice faces, on the surface, or beside a kept point that is no core
+/// corner (`core_corner`, per lattice point) or lies on a lattice face stay.
+/// @param[in] core   per cell (i fastest): in the core
+/// @param[in] faces  the core's closing pyramids
+PulledCore pull_core(const Lattice& lattice, const Surroundings& around, const Parity& parity,
+                     const KeptPoints& kept, const std::vector<char>& core,
+                     const std::vector<char>& core_corner, const std::vector<PyramidFace>& faces,
+                     double h);
+
+/// The pulled cells and pyramids split as the lattice's after the tetrahedraliser: it keeps their
+/// faces (`constraints`, triangles by point index) but may fill one with a sliver on a face that
+/// is no longer flat and the two tets beside it. Each region of the tets (joined across faces
+/// that are no constraint) whose corners are a split's corners (`splits`, by position, found
+/// within `tolerance` among `coordinates`, #points by 3) is replaced by the split's tets, when
+/// these are positive, fill the same volume and have the region's outer faces (a region on the
+/// surface keeps the surface's triangles). Returns how many regions were replaced.
+/// @param[in,out] tets  #tets by 4
+std::size_t resplit_core(const std::vector<double>& coordinates, std::vector<index_t>& tets,
+                         const std::vector<std::array<int, 3>>& constraints,
+                         const std::vector<InsertedPoints::Split>& splits, double tolerance);
+
+}  // namespace hexmerge::mesher
