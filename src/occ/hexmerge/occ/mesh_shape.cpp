@@ -354,7 +354,8 @@ TetMesh mesh_shape_impl(const std::string& brep, const MeshShapeParameters& para
       report = std::move(attempt);
       return mesh;
     } catch (const TetrahedralizeFailure& e) {
-      if (&strategy == kStrategies) first_pulled = attempt.nb_pulled_points > 0;
+      if (&strategy == kStrategies)
+        first_pulled = attempt.nb_pulled_points + attempt.nb_narrow_pyramids > 0;
       report.failed_strategies.push_back(std::string(strategy.name) + ": " + e.what());
       failures += std::string(failures.empty() ? "" : "; ") + strategy.name + ": " + e.what();
       failed_seconds += seconds_since(attempt_start);
@@ -628,6 +629,7 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
     report.nb_lattice_points = core.nb_lattice_points;
     report.nb_apex_points = core.nb_apex_points;
     report.nb_pulled_points = core.nb_pulled_points;
+    report.nb_narrow_pyramids = core.nb_narrow_pyramids;
   }
   step("core", 0.25);
 

@@ -217,6 +217,9 @@ struct MeshShapeReport {
   std::size_t nb_core_cells = 0;         ///< lattice cells with all corners kept (hex core)
   std::size_t nb_apex_points = 0;        ///< closing-pyramid apexes inserted
   std::size_t nb_pulled_points = 0;      ///< core points moved off the lattice towards the surface
+  /// Closing pyramids whose apex lies in their cell's circumsphere (narrow cells on a rectilinear
+  /// axis), kept as constraints with the pulled core
+  std::size_t nb_narrow_pyramids = 0;
   std::size_t nb_resplit_cells = 0;   ///< pulled cells and pyramids TetGen split otherwise, resplit
   std::size_t nb_layer_points = 0;    ///< boundary-layer points inserted
   std::size_t nb_steiner_points = 0;  ///< points TetGen added

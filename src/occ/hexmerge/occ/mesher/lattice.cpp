@@ -10,6 +10,7 @@
 #include <unordered_set>
 
 #include "hexmerge/core/error.h"
+#include "hexmerge/geometry/quality.h"
 #include "hexmerge/occ/mesher/common.h"
 #include "hexmerge/occ/mesher/pull_core.h"
 #include "hexmerge/occ/mesher/shape.h"
@@ -491,6 +492,13 @@ CoreCounts add_core(const Lattice& lattice, Surroundings& around, const Parity& 
     const Vec3 face_centre = cell_centre(i, j, k) + to_face;
     return std::pair<Vec3, double>{face_centre + towards * (c / d), d - c};
   };
+  // Whether the centre of cell n across face dir of cell (i, j, k) lies in that cell's
+  // circumsphere.
+  auto narrow = [&](int i, int j, int k, int dir, const int(&n)[3]) {
+    const int axis = dir / 2, ijk[3] = {i, j, k};
+    return 0.5 * (lattice.width(axis, ijk[axis]) + lattice.width(axis, n[axis])) <=
+           (1 + kCellSphereClearance) * half_diagonal(i, j, k);
+  };
   // Per directed face (cell, direction 0..5): 0 unknown, 1 boundary (no pyramid needed),
   // 2 pyramid possible, 3 impossible.
   std::vector<std::uint8_t> face_state(core.size() * 6, 0);
@@ -518,11 +526,23 @@ CoreCounts add_core(const Lattice& lattice, Surroundings& around, const Parity& 
       return state = 1;
     }
     // The apex outside the cell's circumsphere, or Delaunay joins it to the cell's corners (a
-    // rectilinear axis's narrow cell beside a wide one; see lay_lattice()).
-    const int ijk[3] = {i, j, k};
-    if (0.5 * (lattice.width(axis, ijk[axis]) + lattice.width(axis, n[axis])) <=
-        (1 + kCellSphereClearance) * half_diagonal(i, j, k))
-      return state = 3;
+    // rectilinear axis's narrow cell beside a wide one; see lay_lattice()): then, with `pull`,
+    // the cell and its pyramid are constrained (gmsh_Angled at its 50k size: 254 of its 1,793
+    // cells went so, and 90 more with them), where the pyramid is good enough.
+    if (narrow(i, j, k, dir, n)) {
+      if (!pull || sweep_axis >= 0) return state = 3;
+      const PyramidFace f{{i, j, k}, dir, {n[0], n[1], n[2]}};
+      const std::array<std::size_t, 4> base = base_corners(lattice, f);
+      double xyz[15];
+      for (int m = 0; m < 4; ++m) {
+        const Vec3 q = lattice.point(lattice.point_ijk(base[m]));
+        xyz[3 * m] = q.x, xyz[3 * m + 1] = q.y, xyz[3 * m + 2] = q.z;
+      }
+      xyz[12] = apex.x, xyz[13] = apex.y, xyz[14] = apex.z;
+      static const index_t kUp[5] = {0, 1, 2, 3, 4}, kDown[5] = {0, 3, 2, 1, 4};
+      if (scaled_jacobian(CellType::Pyramid, xyz, side > 0 ? kUp : kDown) < kCorePyramidFloor)
+        return state = 3;
+    }
     const auto [centre, r] = pyramid_sphere(i, j, k, dir, n);
     // The apex off every face: on a face its sphere can touch the face's plane at the apex
     // only (a face across the pyramid's axis), and the apex makes flat tets with the face's
@@ -553,6 +573,9 @@ CoreCounts add_core(const Lattice& lattice, Surroundings& around, const Parity& 
   }
   std::vector<PyramidFace> pyramid_faces;
   std::vector<char> apex_cell(core.size(), 0);
+  // The apexes in the circumsphere of a cell they close (only with `pull`).
+  std::vector<char> narrow_apex(core.size(), 0);
+  std::vector<std::size_t> narrow_apexes;
   for (int k = 0; k < c2; ++k)
     for (int j = 0; j < c1; ++j)
       for (int i = 0; i < c0; ++i) {
@@ -564,6 +587,11 @@ CoreCounts add_core(const Lattice& lattice, Surroundings& around, const Parity& 
           if (face_kind(i, j, k, dir) != 2) continue;
           apex_cell[cell_index(n[0], n[1], n[2])] = 1;
           pyramid_faces.push_back({{i, j, k}, dir, {n[0], n[1], n[2]}});
+          if (narrow(i, j, k, dir, n) && !narrow_apex[cell_index(n[0], n[1], n[2])]) {
+            narrow_apex[cell_index(n[0], n[1], n[2])] = 1;
+            narrow_apexes.push_back(cell_index(n[0], n[1], n[2]));
+          }
+          counts.nb_narrow_pyramids += narrow(i, j, k, dir, n);
         }
       }
   // The core pulled towards the surface: the lattice steps, not the surface, set where the core
@@ -646,7 +674,7 @@ CoreCounts add_core(const Lattice& lattice, Surroundings& around, const Parity& 
   // constraints (each quad split on its diagonal from its least corner, as the cells' six tets
   // around their diagonal from the least corner split it), but those on lattice faces (the
   // surface's own).
-  if (!pulled.node.empty()) {
+  if (!pulled.node.empty() || !narrow_apexes.empty()) {
     std::set<std::array<std::size_t, 3>> seen;  // by lattice ids: points 0.., centres after
     const std::size_t centres = kept.size();
     auto add_triangle = [&](std::size_t a, std::size_t b, std::size_t c, const Vec3& pa,
@@ -680,6 +708,8 @@ CoreCounts add_core(const Lattice& lattice, Surroundings& around, const Parity& 
       moved_points.add(lattice.point(lattice.point_ijk(p)) + d);
     for (const auto& [a, d] : pulled.apex)
       moved_points.add(lattice.cell_centre(lattice.cell_ijk(a)) + d);
+    for (const std::size_t a : narrow_apexes)
+      if (!pulled.apex.count(a)) moved_points.add(apex_at(a));
     for (int k = 0; k < c2; ++k)
       for (int j = 0; j < c1; ++j)
         for (int i = 0; i < c0; ++i) {

@@ -29,6 +29,10 @@ namespace hexmerge::mesher {
 /// on no part and more elements under 0.2 (gmsh_as1-tu-203: 25 -> 48).
 inline constexpr double kApexClearance = 0.02;
 inline constexpr double kApexNodeClearance = 0.05;
+/// A closing pyramid that is no longer Delaunay (pulled, or its apex in its cell's circumsphere)
+/// keeps at least this scaled Jacobian, under which the recombination's default (0.3) and the
+/// tets around its apex suffer.
+inline constexpr double kCorePyramidFloor = 0.4;
 
 struct Shape;
 struct SweptSurface;
@@ -242,6 +246,9 @@ struct CoreCounts {
   std::size_t nb_lattice_points = 0;  ///< kept lattice points inserted
   std::size_t nb_apex_points = 0;     ///< closing pyramids' apexes inserted
   std::size_t nb_pulled_points = 0;   ///< of those, moved off the lattice towards the surface
+  /// Closing pyramids kept although their apex lies in their cell's circumsphere (a narrow cell
+  /// beside a wide one on a rectilinear axis): constrained, as the pulled ones.
+  std::size_t nb_narrow_pyramids = 0;
 };
 
 /// The hexahedral core: cells with 8 kept corners whose circumsphere holds nothing else; every
@@ -257,6 +264,10 @@ struct CoreCounts {
 /// moved, and those whose circumspheres then hold a moved point, are no longer Delaunay: their
 /// faces go to `inserted.constraints`, their splits to `inserted.splits`, the moved points to
 /// `inserted.pulled`; the kept points that are no core cell's corner stay where the core is not.
+/// With `pull` too, a core face whose closing pyramid's apex lies in its cell's circumsphere (a
+/// narrow cell beside a wide one on a rectilinear axis), which Delaunay would join to the cell's
+/// corners, keeps its cell (where the pyramid keeps kCorePyramidFloor): that cell, its pyramid
+/// and the cells and pyramids whose circumspheres hold the apex are constrained as the moved.
 CoreCounts add_core(const Lattice& lattice, Surroundings& around, const Parity& parity,
                     const KeptPoints& kept, int sweep_axis, double h, InsertedPoints& inserted,
                     bool pull = false);

@@ -25,7 +25,6 @@ namespace {
 constexpr double kPullTarget = 0.15;
 constexpr double kPullMost = 0.5;
 constexpr double kPullCellFloor = 0.9;
-constexpr double kPullPyramidFloor = 0.4;
 constexpr double kPullFold = 15.0;
 // Moved core nodes keep this fraction of h from the faces and the surface's nodes: at 0.1 h the
 // tets between them and the boundary triangles were flat (real parts at their 250k sizes: 1,413
@@ -79,7 +78,7 @@ std::array<std::size_t, 4> base_corners(const Lattice& lattice, const PyramidFac
 // The core's nodes on closing pyramids' bases moved out along the bases' normals (at an edge
 // or corner of the core, along each base's), each apex by the mean of its bases' corners' moves,
 // so that each apex comes kPullTarget h from the faces; the moves halved where a cell or
-// pyramid they change would fall below kPullCellFloor / kPullPyramidFloor, fold a quad face by
+// pyramid they change would fall below kPullCellFloor / kCorePyramidFloor, fold a quad face by
 // more than kPullFold, or an apex would come nearer than kApexClearance h to a face
 // (kApexNodeClearance h to a node) or leave the solid; dropped after kPullHalvings.
 PulledCore pull_core(const Lattice& lattice, const Surroundings& around, const Parity& parity,
@@ -240,7 +239,7 @@ PulledCore pull_core(const Lattice& lattice, const Surroundings& around, const P
         // is right-handed seen from +axis.
         const bool up = faces[list[i]].dir % 2 == 1;
         static const index_t kUp[5] = {0, 1, 2, 3, 4}, kDown[5] = {0, 3, 2, 1, 4};
-        ok = scaled_jacobian(CellType::Pyramid, xyz, up ? kUp : kDown) >= kPullPyramidFloor;
+        ok = scaled_jacobian(CellType::Pyramid, xyz, up ? kUp : kDown) >= kCorePyramidFloor;
       }
       if (!ok)
         for (const std::size_t p : apex_corners[a])
