@@ -355,7 +355,8 @@ TetMesh mesh_shape_impl(const std::string& brep, const MeshShapeParameters& para
       return mesh;
     } catch (const TetrahedralizeFailure& e) {
       if (&strategy == kStrategies)
-        first_pulled = attempt.nb_pulled_points + attempt.nb_narrow_pyramids > 0;
+        first_pulled =
+            attempt.nb_pulled_points + attempt.nb_narrow_pyramids + attempt.nb_inner_apexes > 0;
       report.failed_strategies.push_back(std::string(strategy.name) + ": " + e.what());
       failures += std::string(failures.empty() ? "" : "; ") + strategy.name + ": " + e.what();
       failed_seconds += seconds_since(attempt_start);
@@ -630,6 +631,7 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
     report.nb_apex_points = core.nb_apex_points;
     report.nb_pulled_points = core.nb_pulled_points;
     report.nb_narrow_pyramids = core.nb_narrow_pyramids;
+    report.nb_inner_apexes = core.nb_inner_apexes;
   }
   step("core", 0.25);
 

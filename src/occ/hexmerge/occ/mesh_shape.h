@@ -98,7 +98,11 @@ struct MeshShapeParameters {
   /// core's closing pyramids' apexes up to a cell from the faces; the core's boundary nodes
   /// move out along the pyramids' bases, the apexes with them, until the apexes come 0.15 h
   /// from the faces, as far as the cells (scaled Jacobian 0.9) and pyramids (0.4) stay good;
-  /// the moved cells and pyramids are kept whole as TetGen constraints. When TetGen fails on
+  /// the moved cells and pyramids are kept whole as TetGen constraints. So are the core cells
+  /// that would otherwise leave the core: those whose closing pyramid's apex lies in their
+  /// circumsphere (a narrow cell beside a wide one on a rectilinear axis), and those where the
+  /// centre of the cell across is outside the shape, closed by an apex nearer the face (0.15 h
+  /// from every face, 0.25 h from the surface's nodes, the pyramid at 0.4). When TetGen fails on
   /// them, the next way of placing the points is the lattice without it.
   bool pull_core = true;
   /// Time limit of one TetGen run, in seconds; 0: 30 s plus 1 ms per point (far above TetGen's
@@ -220,6 +224,9 @@ struct MeshShapeReport {
   /// Closing pyramids whose apex lies in their cell's circumsphere (narrow cells on a rectilinear
   /// axis), kept as constraints with the pulled core
   std::size_t nb_narrow_pyramids = 0;
+  /// Closing pyramids' apexes placed inside, nearer their face, where the centre of the cell across
+  /// is outside the shape (constrained, as the pulled core)
+  std::size_t nb_inner_apexes = 0;
   std::size_t nb_resplit_cells = 0;   ///< pulled cells and pyramids TetGen split otherwise, resplit
   std::size_t nb_layer_points = 0;    ///< boundary-layer points inserted
   std::size_t nb_steiner_points = 0;  ///< points TetGen added

@@ -52,7 +52,10 @@ ParameterTable<MeshShapeParameters> make_table() {
            "with boundary layers or face layers): "
            "the lattice's steps otherwise leave up to a cell of pyramids and tets between the "
            "core and the faces; its moved cells and pyramids are kept whole (TetGen "
-           "constraints), and when TetGen fails on them the lattice is tried without"),
+           "constraints), as are core cells whose closing pyramid's apex lies in their "
+           "circumsphere (narrow cells beside wide ones) or is placed nearer the face (the "
+           "centre of the cell across outside the shape), which would otherwise leave the core; "
+           "when TetGen fails on them the lattice is tried without"),
       number(&P::tetgen_time_limit, "tetgen_time_limit", "s", 0, 86400, "TetGen time limit",
              "Time limit of one TetGen run (0: 30 s plus 1 ms per point); a run past it, or one "
              "that leaves no tet, is restarted with the lattice faces' loops started elsewhere, "

@@ -249,6 +249,9 @@ struct CoreCounts {
   /// Closing pyramids kept although their apex lies in their cell's circumsphere (a narrow cell
   /// beside a wide one on a rectilinear axis): constrained, as the pulled ones.
   std::size_t nb_narrow_pyramids = 0;
+  /// Closing pyramids' apexes placed inside, nearer their face, where the centre of the cell
+  /// across is outside the shape (constrained, as the pulled ones).
+  std::size_t nb_inner_apexes = 0;
 };
 
 /// The hexahedral core: cells with 8 kept corners whose circumsphere holds nothing else; every

@@ -84,12 +84,17 @@ std::array<std::size_t, 4> base_corners(const Lattice& lattice, const PyramidFac
 PulledCore pull_core(const Lattice& lattice, const Surroundings& around, const Parity& parity,
                      const KeptPoints& kept, const std::vector<char>& core,
                      const std::vector<char>& core_corner, const std::vector<PyramidFace>& faces,
-                     double h) {
+                     const std::unordered_map<std::size_t, Vec3>& inner_apex, double h) {
   PulledCore out;
   if (faces.empty()) return out;
   const int c0 = lattice.cells[0], c1 = lattice.cells[1];
   const auto cell_index = [&](const int(&c)[3]) {
     return (static_cast<std::size_t>(c[2]) * c1 + c[1]) * c0 + c[0];
+  };
+  // Where the apex of cell a's pyramids is before the pull.
+  const auto home = [&](std::size_t a) {
+    const auto it = inner_apex.find(a);
+    return it == inner_apex.end() ? lattice.cell_centre(lattice.cell_ijk(a)) : it->second;
   };
   const auto point_of = [&](std::size_t p) { return lattice.point(lattice.point_ijk(p)); };
   const double tolerance = 1e-3 * h;
@@ -118,7 +123,7 @@ PulledCore pull_core(const Lattice& lattice, const Surroundings& around, const P
     return false;
   };
   for (const PyramidFace& f : faces) {
-    const Vec3 apex = lattice.cell_centre(f.n[0], f.n[1], f.n[2]);
+    const Vec3 apex = home(cell_index(f.n));
     const double s =
         std::clamp(distance_to(around.every_face, apex, 2 * h, tolerance) - kPullTarget * h, 0.0,
                    kPullMost * h);
@@ -224,7 +229,7 @@ PulledCore pull_core(const Lattice& lattice, const Surroundings& around, const P
         failing.insert(p);
     }
     for (const auto& [a, list] : apex_pyramids) {
-      const Vec3 centre = lattice.cell_centre(lattice.cell_ijk(a)), apex = centre + apex_shift(a);
+      const Vec3 centre = home(a), apex = centre + apex_shift(a);
       bool ok = parity.inside(apex) && clear_path(centre, apex, kApexClearance * h) &&
                 !around.surface_points.any_within(apex, kApexNodeClearance * h);
       for (std::size_t i = 0; i < list.size() && ok; ++i) {

@@ -40,12 +40,14 @@ std::array<std::size_t, 4> base_corners(const Lattice& lattice, const PyramidFac
 /// a face (kApexNodeClearance h of a node), or either leave the solid; dropped after five
 /// halvings. Nodes on lattice faces, on the surface, or beside a kept point that is no core
 /// corner (`core_corner`, per lattice point) or lies on a lattice face stay.
-/// @param[in] core   per cell (i fastest): in the core
-/// @param[in] faces  the core's closing pyramids
+/// @param[in] core        per cell (i fastest): in the core
+/// @param[in] faces       the core's closing pyramids
+/// @param[in] inner_apex  per cell across a face whose centre is outside: the apex inside that
+///                        closes the face instead (else the apex is the cell's centre)
 PulledCore pull_core(const Lattice& lattice, const Surroundings& around, const Parity& parity,
                      const KeptPoints& kept, const std::vector<char>& core,
                      const std::vector<char>& core_corner, const std::vector<PyramidFace>& faces,
-                     double h);
+                     const std::unordered_map<std::size_t, Vec3>& inner_apex, double h);
 
 /// The pulled cells and pyramids split as the lattice's after the tetrahedraliser: it keeps their
 /// faces (`constraints`, triangles by point index) but may fill one with a sliver on a face that
