@@ -44,6 +44,9 @@ constexpr double kBand = 1.25;
 // lattice face only its loops' triangles and the points refine_facet() adds (an impeller's
 // blades: 100 elements under 0.2 with its 2 uniform lattice faces, 347 with 38).
 constexpr double kWideFace = 1.0;
+// The lattice's box is taken to the outermost planar faces across an axis where the surface's
+// nodes pass them by no more than this fraction of h (lay_lattice()).
+constexpr double kBoxSnap = 1e-3;
 
 // The planes of a rectilinear lattice axis of length L: through 0, L and as many of the planar
 // faces' offsets as can be (the most faces; then cells nearest `width`), each gap between two of
@@ -131,14 +134,26 @@ Lattice lay_lattice(const Shape& shape, const Frame& frame, const std::vector<Ve
     const Vec3 q = frame.to_frame(p);
     lo = vmin(lo, q), hi = vmax(hi, q);
   }
-  lattice.extent = {hi.x - lo.x, hi.y - lo.y, hi.z - lo.z};
-  const auto& extent = lattice.extent;
-  lattice.largest = std::max({extent[0], extent[1], extent[2]});
-  const double largest = lattice.largest;
+  const double largest = std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z});
   if (h > largest)
     throw InputError("mesh_shape: size " + std::to_string(h) + " is larger than the shape (" +
                          std::to_string(largest) + " across)",
                      Entity::Parameter);
+  // The box's sides on the outermost planar faces across each axis where the surface's nodes
+  // pass them by at most kBoxSnap h (a tolerant file's curved faces beside them: gmsh_t20_data's
+  // top and bottom faces 1.1e-4 mm inside its nodes' box, h 1.637, so that no lattice plane
+  // held them and its core ended a cell short of them on both sides).
+  lattice.frame.origin = frame.to_world(lo);
+  for (const auto& plane : face_planes(shape, lattice.frame)) {
+    if (!plane) continue;
+    const int a = plane->axis;
+    const double o = plane->offset, top = coord(hi, a) - coord(lo, a);
+    if (o > 0 && o <= kBoxSnap * h) set_coord(lo, a, coord(lo, a) + o);
+    if (o < top && top - o <= kBoxSnap * h) set_coord(hi, a, coord(lo, a) + o);
+  }
+  lattice.extent = {hi.x - lo.x, hi.y - lo.y, hi.z - lo.z};
+  const auto& extent = lattice.extent;
+  lattice.largest = std::max({extent[0], extent[1], extent[2]});
   lattice.frame.origin = frame.to_world(lo);  // lattice planes through the box's lower corner
   lattice.face_plane = face_planes(shape, lattice.frame);
   const auto& face_plane = lattice.face_plane;
