@@ -47,6 +47,10 @@ constexpr double kWideFace = 1.0;
 // The lattice's box is taken to the outermost planar faces across an axis where the surface's
 // nodes pass them by no more than this fraction of h (lay_lattice()).
 constexpr double kBoxSnap = 1e-3;
+// ... but not where they are the box's sides to round-off (moving the lattice by 1e-15 changed
+// gmsh_as1-tu-203's hex volume at its 50k size by 2 points: its cells are cospherical, and
+// TetGen's and the recombination's choices among equals follow the last bits).
+constexpr double kBoxSame = 1e-9;
 
 // The planes of a rectilinear lattice axis of length L: through 0, L and as many of the planar
 // faces' offsets as can be (the most faces; then cells nearest `width`), each gap between two of
@@ -148,8 +152,8 @@ Lattice lay_lattice(const Shape& shape, const Frame& frame, const std::vector<Ve
     if (!plane) continue;
     const int a = plane->axis;
     const double o = plane->offset, top = coord(hi, a) - coord(lo, a);
-    if (o > 0 && o <= kBoxSnap * h) set_coord(lo, a, coord(lo, a) + o);
-    if (o < top && top - o <= kBoxSnap * h) set_coord(hi, a, coord(lo, a) + o);
+    if (o > kBoxSame * h && o <= kBoxSnap * h) set_coord(lo, a, coord(lo, a) + o);
+    if (top - o > kBoxSame * h && top - o <= kBoxSnap * h) set_coord(hi, a, coord(lo, a) + o);
   }
   lattice.extent = {hi.x - lo.x, hi.y - lo.y, hi.z - lo.z};
   const auto& extent = lattice.extent;
