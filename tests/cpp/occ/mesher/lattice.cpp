@@ -310,6 +310,21 @@ TEST(add_core, box_is_all_core) {
   EXPECT_EQ(core.nb_lattice_points, points - placed.nodes.size());
 }
 
+// A closing pyramid's scaled Jacobian (Verdict's): positive with the apex on the side `up`
+// names, the same for the pyramid mirrored, falling as the apex comes down to its base (0.82 at
+// half the base's side, kCorePyramidFloor 0.4 at about 0.21).
+TEST(closing_pyramid_quality, sign_and_height) {
+  const std::array<Vec3, 4> base{Vec3{0, 0, 0}, Vec3{1, 0, 0}, Vec3{1, 1, 0}, Vec3{0, 1, 0}};
+  const double half = mesher::closing_pyramid_quality(base, Vec3{0.5, 0.5, 0.5}, true);
+  EXPECT_NEAR(half, std::sqrt(2.0 / 3.0), 1e-9);
+  EXPECT_NEAR(mesher::closing_pyramid_quality(base, Vec3{0.5, 0.5, -0.5}, false), half, 1e-12);
+  EXPECT_LT(mesher::closing_pyramid_quality(base, Vec3{0.5, 0.5, -0.5}, true), 0);
+  EXPECT_GT(mesher::closing_pyramid_quality(base, Vec3{0.5, 0.5, 0.25}, true),
+            mesher::kCorePyramidFloor);
+  EXPECT_LT(mesher::closing_pyramid_quality(base, Vec3{0.5, 0.5, 0.18}, true),
+            mesher::kCorePyramidFloor);
+}
+
 // A pulled pyramid whose base no longer lies flat (corner 1 raised): its facets are kept, but the
 // region inside them holds a sliver of the base's four corners and two tets on the other
 // diagonal. resplit_core() gives it the lattice's split (the base on its diagonal from corner

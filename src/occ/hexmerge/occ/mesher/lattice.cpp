@@ -5,12 +5,12 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <optional>
 #include <set>
 #include <string>
 #include <unordered_set>
 
 #include "hexmerge/core/error.h"
-#include "hexmerge/geometry/quality.h"
 #include "hexmerge/occ/mesher/common.h"
 #include "hexmerge/occ/mesher/pull_core.h"
 #include "hexmerge/occ/mesher/shape.h"
@@ -23,13 +23,6 @@ namespace {
 // A closing pyramid's apex lies at least this fraction of the cell's circumradius outside the
 // circumsphere of the core cell beside it (lay_lattice()).
 constexpr double kCellSphereClearance = 1e-3;
-// A closing pyramid's apex placed inside, nearer its face, where the centre of the cell across
-// is outside the shape (add_core() with `pull`), keeps these fractions of h from every face (the
-// pulled apexes' target, pull_core()) and from the surface's nodes (the pulled nodes'): with
-// 0.15 h from the nodes too, gmsh_918_pump_carter_sup_21_03_2006 at its 50k size had 50 tets
-// under scaled Jacobian 0.2 against 23, for 46.0 against 45.4 % hex volume.
-constexpr double kInnerApexClearance = 0.15;
-constexpr double kInnerApexNodeClearance = 0.25;
 // The counts per axis lay_lattice() tries together when the best per axis break that.
 constexpr std::size_t kCountChoices = 6;
 // Uniform cells are this many times h wide at least and at most.
@@ -528,77 +521,16 @@ CoreCounts add_core(const Lattice& lattice, Surroundings& around, const Parity& 
   // Per cell across a core face whose centre is outside: the apex inside, nearer the face, that
   // closes it (and the other core faces towards that cell, where it closes them too).
   std::unordered_map<std::size_t, Vec3> inner_apex;
-  // Whether a pyramid on face dir of cell (i, j, k) with `apex` is good: scaled Jacobian
-  // kCorePyramidFloor, the apex inside, kInnerApexClearance h from the faces and surface nodes,
-  // the way from the base to it crossing no face, no surface node inside it.
-  // Whether the pyramid of `base` (lattice point indices) and `apex` is clear: the apex inside,
-  // the way from the base to it crossing no face, no surface node inside it.
-  auto pyramid_clear = [&](const std::array<std::size_t, 4>& base, const Vec3& apex) {
-    Vec3 corner[4];
-    for (int m = 0; m < 4; ++m) corner[m] = lattice.point(lattice.point_ijk(base[m]));
-    if (!parity.inside(apex)) return false;
-    const Vec3 centre = (corner[0] + corner[1] + corner[2] + corner[3]) * 0.25;
-    for (const Vec3& from : {centre, corner[0], corner[1], corner[2], corner[3]}) {
-      const int steps = 1 + static_cast<int>((apex - from).norm() / (kApexClearance * h));
-      for (int s = 1; s < steps; ++s)
-        if (around.every_face.any_within(from + (apex - from) * (static_cast<double>(s) / steps),
-                                         kApexClearance * h))
-          return false;
-    }
-    // Inside the pyramid (to a thousandth of h beyond its faces): on the inner side of its base
-    // and of its four sides.
-    const double slack = 1e-3 * h;
-    const Vec3 up = apex - centre;
-    const auto inside = [&](const Vec3& q) {
-      if ((q - centre).dot(up) < -slack * up.norm()) return false;
-      for (int m = 0; m < 4; ++m) {
-        const Vec3 a = corner[m], b = corner[(m + 1) % 4];
-        Vec3 normal = (b - a).cross(apex - a);
-        if (normal.dot(centre - a) > 0) normal = normal * -1.0;  // outward
-        if ((q - a).dot(normal) > slack * normal.norm()) return false;
-      }
-      return true;
-    };
-    double reach = (apex - centre).norm();
-    for (const Vec3& c : corner) reach = std::max(reach, (c - centre).norm());
-    return !around.surface_points.any_within(centre, reach * (1 + 1e-6), inside);
-  };
-  // The scaled Jacobian of the closing pyramid on `base` towards direction dir with `apex`.
-  auto pyramid_quality = [&](const std::array<std::size_t, 4>& base, int dir, const Vec3& apex) {
-    double xyz[15];
-    for (int m = 0; m < 4; ++m) {
-      const Vec3 q = lattice.point(lattice.point_ijk(base[m]));
-      xyz[3 * m] = q.x, xyz[3 * m + 1] = q.y, xyz[3 * m + 2] = q.z;
-    }
-    xyz[12] = apex.x, xyz[13] = apex.y, xyz[14] = apex.z;
-    static const index_t kUp[5] = {0, 1, 2, 3, 4}, kDown[5] = {0, 3, 2, 1, 4};
-    return scaled_jacobian(CellType::Pyramid, xyz, dir % 2 ? kUp : kDown);
-  };
-  // Whether an apex placed nearer the face makes a good pyramid: kCorePyramidFloor,
-  // kInnerApexClearance h from every face, kInnerApexNodeClearance h from the surface's nodes,
-  // clear.
-  auto inner_pyramid_good = [&](const std::array<std::size_t, 4>& base, int dir, const Vec3& apex) {
-    if (pyramid_quality(base, dir, apex) < kCorePyramidFloor) return false;
-    return !around.every_face.any_within(apex, kInnerApexClearance * h) &&
-           !around.surface_points.any_within(apex, kInnerApexNodeClearance * h) &&
-           !around.layer_points.any_within(apex, 0.25 * h) && pyramid_clear(base, apex);
-  };
+  // Whether an apex nearer face dir of cell (i, j, k) than the centre of cell n across (which
+  // is outside) closes it: the one cell n has already, or a new one (place_inner_apex()).
   auto inner_apex_closes = [&](int i, int j, int k, int dir, const int(&n)[3]) {
-    const std::array<std::size_t, 4> base =
-        base_corners(lattice, PyramidFace{{i, j, k}, dir, {n[0], n[1], n[2]}});
     const std::size_t a = cell_index(n[0], n[1], n[2]);
-    if (const auto it = inner_apex.find(a); it != inner_apex.end())
-      return inner_pyramid_good(base, dir, it->second);
-    Vec3 centre{0, 0, 0};
-    for (const std::size_t p : base) centre = centre + lattice.point(lattice.point_ijk(p)) * 0.25;
-    const Vec3 towards = cell_centre(n[0], n[1], n[2]) - centre;
-    for (int step = 9; step >= 5; --step) {
-      const Vec3 apex = centre + towards * (0.1 * step);
-      if (!inner_pyramid_good(base, dir, apex)) continue;
-      inner_apex[a] = apex;
-      return true;
-    }
-    return false;
+    const auto it = inner_apex.find(a);
+    const std::optional<Vec3> at = place_inner_apex(
+        lattice, around, parity, PyramidFace{{i, j, k}, dir, {n[0], n[1], n[2]}},
+        it == inner_apex.end() ? std::nullopt : std::optional<Vec3>(it->second), h);
+    if (at) inner_apex.emplace(a, *at);
+    return at.has_value();
   };
   // Per directed face (cell, direction 0..5): 0 unknown, 1 boundary (no pyramid needed),
   // 2 pyramid possible, 3 impossible.
@@ -634,8 +566,10 @@ CoreCounts add_core(const Lattice& lattice, Surroundings& around, const Parity& 
     // cells went so, and 90 more with them), where the pyramid is good enough.
     if (narrow(i, j, k, dir, n)) {
       if (!pull || sweep_axis >= 0) return state = 3;
-      if (pyramid_quality(base_corners(lattice, PyramidFace{{i, j, k}, dir, {n[0], n[1], n[2]}}),
-                          dir, apex) < kCorePyramidFloor)
+      if (closing_pyramid_quality(
+              lattice_points(
+                  lattice, base_corners(lattice, PyramidFace{{i, j, k}, dir, {n[0], n[1], n[2]}})),
+              apex, dir % 2 == 1) < kCorePyramidFloor)
         return state = 3;
     }
     const auto [centre, r] = pyramid_sphere(i, j, k, dir, n);

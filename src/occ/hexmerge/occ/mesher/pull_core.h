@@ -7,6 +7,7 @@
 
 #include <array>
 #include <cstddef>
+#include <optional>
 #include <unordered_map>
 #include <vector>
 
@@ -31,6 +32,24 @@ struct PulledCore {
 /// The lattice point indices of the corners of face `f`'s base, around it ((0, 0), (1, 0),
 /// (1, 1), (0, 1) along the two other axes in cyclic order).
 std::array<std::size_t, 4> base_corners(const Lattice& lattice, const PyramidFace& f);
+
+/// The lattice points `points` (indices) where the lattice has them.
+std::array<Vec3, 4> lattice_points(const Lattice& lattice,
+                                   const std::array<std::size_t, 4>& points);
+
+/// The scaled Jacobian of a closing pyramid: its base's corners in base_corners()' order, its
+/// apex towards +axis (`up`) or -axis.
+double closing_pyramid_quality(const std::array<Vec3, 4>& base, const Vec3& apex, bool up);
+
+/// An apex that closes face `f` where the centre of the cell across (f.n) is outside the shape:
+/// on the way from the face's centre to that centre, 0.9 down to 0.5 of it, the first that is
+/// inside, 0.15 h from every face and 0.25 h from every surface node (0.25 h from layer points),
+/// makes a pyramid of scaled Jacobian kCorePyramidFloor, whose way from its base crosses no face
+/// and which holds no surface node; `at` (an apex the cell across has already): that one, if it
+/// is so for f. None: no such apex.
+std::optional<Vec3> place_inner_apex(const Lattice& lattice, const Surroundings& around,
+                                     const Parity& parity, const PyramidFace& f,
+                                     const std::optional<Vec3>& at, double h);
 
 /// The core's nodes on closing pyramids' bases moved out along the bases' normals (at an edge or
 /// corner of the core, along each base's), each apex by the mean of its bases' corners' moves,
