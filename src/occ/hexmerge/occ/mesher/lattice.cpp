@@ -619,7 +619,6 @@ CoreCounts add_core(const Lattice& lattice, Surroundings& around, const Parity& 
           pyramid_faces.push_back({{i, j, k}, dir, {n[0], n[1], n[2]}});
           const std::size_t a = cell_index(n[0], n[1], n[2]);
           if (inner_apex.count(a)) {
-            counts.nb_inner_apexes += !used_inner.count(a);
             used_inner.insert(a);
           } else if (narrow(i, j, k, dir, n)) {
             if (!narrow_apex[a]) narrow_apexes.push_back(a);
@@ -630,6 +629,7 @@ CoreCounts add_core(const Lattice& lattice, Surroundings& around, const Parity& 
       }
   for (auto it = inner_apex.begin(); it != inner_apex.end();)
     it = used_inner.count(it->first) ? std::next(it) : inner_apex.erase(it);
+  counts.nb_inner_apexes = inner_apex.size();
   // The core pulled towards the surface: the lattice steps, not the surface, set where the core
   // ends (its closing pyramids' apexes lie up to a cell from the faces), so each core node on a
   // closing pyramid's base moves out along the bases' normals, the apexes with their bases,

@@ -14,12 +14,12 @@ namespace hexmerge::mesher {
 namespace {
 // The core pulled towards the surface (pull_core()): its closing pyramids' apexes come this
 // fraction of h from the faces at the nearest, each node moves at most kPullMost h, and the
-// cells and pyramids it moves keep these scaled Jacobians and their quad faces fold by no more
-// than kPullFold degrees across either diagonal. Chosen on the real parts at their 50k sizes
-// (docs/benchmarks-real-parts.md): cells under 0.9 stay out of the recombination's block of
-// near-perfect hexahedra, whose members beside them then leave it one after the other
-// (gmsh_part: 88.6 -> 67.9 % hex volume with a floor of 0.5); a fold of 25 degrees took
-// hexahedra from gmsh_Angled and gmsh_wrenchnut; apexes 0.05 h from the faces left flat tets
+// cells it moves keep scaled Jacobian kPullCellFloor (the pyramids kCorePyramidFloor) and their
+// quad faces fold by no more than kPullFold degrees across either diagonal. Chosen on the real
+// parts at their 50k sizes (docs/benchmarks-real-parts.md): cells under 0.9 stay out of the
+// recombination's block of near-perfect hexahedra, whose members beside them then leave it one
+// after the other (gmsh_part: 88.6 -> 67.9 % hex volume with a floor of 0.5); a fold of 25 degrees
+// took hexahedra from gmsh_Angled and gmsh_wrenchnut; apexes 0.05 h from the faces left flat tets
 // between them and the boundary triangles (gmsh_Kurbelwelle at its 250k size: 98 elements under
 // 0.2 against 23 at 0.15 h, for 63.9 against 63.0 % hex volume).
 constexpr double kPullTarget = 0.15;
