@@ -743,10 +743,8 @@ CoreCounts add_core(const Lattice& lattice, Surroundings& around, const Parity& 
     // The moved points: a cell or pyramid whose circumsphere holds one is no longer Delaunay
     // either, and is constrained too.
     PointSet moved_points(around.box_lo, around.box_hi, h);
-    for (const auto& [p, d] : pulled.node)
-      moved_points.add(lattice.point(lattice.point_ijk(p)) + d);
-    for (const auto& [a, d] : pulled.apex)
-      moved_points.add(lattice.cell_centre(lattice.cell_ijk(a)) + d);
+    for (const auto& [p, d] : pulled.node) moved_points.add(point_at(p));
+    for (const auto& [a, d] : pulled.apex) moved_points.add(apex_at(a));
     for (const std::size_t a : narrow_apexes)
       if (!pulled.apex.count(a)) moved_points.add(apex_at(a));
     for (const auto& [a, at] : inner_apex)
