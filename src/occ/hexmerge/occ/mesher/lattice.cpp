@@ -654,9 +654,7 @@ CoreCounts add_core(const Lattice& lattice, Surroundings& around, const Parity& 
     return it == pulled.node.end() ? q : q + it->second;
   };
   auto apex_at = [&](std::size_t c) {
-    const auto inner = inner_apex.find(c);
-    const Vec3 q =
-        inner == inner_apex.end() ? lattice.cell_centre(lattice.cell_ijk(c)) : inner->second;
+    const Vec3 q = apex_home(lattice, inner_apex, c);
     const auto it = pulled.apex.find(c);
     return it == pulled.apex.end() ? q : q + it->second;
   };

@@ -99,6 +99,12 @@ bool pyramid_clear(const Surroundings& around, const Parity& parity,
 
 }  // namespace
 
+Vec3 apex_home(const Lattice& lattice, const std::unordered_map<std::size_t, Vec3>& inner_apex,
+               std::size_t cell) {
+  const auto it = inner_apex.find(cell);
+  return it == inner_apex.end() ? lattice.cell_centre(lattice.cell_ijk(cell)) : it->second;
+}
+
 double closing_pyramid_quality(const std::array<Vec3, 4>& base, const Vec3& apex, bool up) {
   double xyz[15];
   for (int m = 0; m < 4; ++m)
@@ -169,10 +175,7 @@ PulledCore pull_core(const Lattice& lattice, const Surroundings& around, const P
     return (static_cast<std::size_t>(c[2]) * c1 + c[1]) * c0 + c[0];
   };
   // Where the apex of cell a's pyramids is before the pull.
-  const auto home = [&](std::size_t a) {
-    const auto it = inner_apex.find(a);
-    return it == inner_apex.end() ? lattice.cell_centre(lattice.cell_ijk(a)) : it->second;
-  };
+  const auto home = [&](std::size_t a) { return apex_home(lattice, inner_apex, a); };
   const auto point_of = [&](std::size_t p) { return lattice.point(lattice.point_ijk(p)); };
   const double tolerance = 1e-3 * h;
   // Per node: the least room of the apexes above it, per base direction, and which directions.

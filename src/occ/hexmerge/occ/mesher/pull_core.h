@@ -37,6 +37,11 @@ std::array<std::size_t, 4> base_corners(const Lattice& lattice, const PyramidFac
 std::array<Vec3, 4> lattice_points(const Lattice& lattice,
                                    const std::array<std::size_t, 4>& points);
 
+/// Where the apex of the closing pyramids towards cell `cell` (its index, i fastest) lies before
+/// the pull: the inner apex placed for it (place_inner_apex()), else the cell's centre.
+Vec3 apex_home(const Lattice& lattice, const std::unordered_map<std::size_t, Vec3>& inner_apex,
+               std::size_t cell);
+
 /// The scaled Jacobian of a closing pyramid: its base's corners in base_corners()' order, its
 /// apex towards +axis (`up`) or -axis.
 double closing_pyramid_quality(const std::array<Vec3, 4>& base, const Vec3& apex, bool up);
