@@ -38,6 +38,18 @@ def make_hexdominant_mesh(doc, source, name="HexDominantMesh", analysis=None, **
 def recombine_femmesh(femmesh, **options):
     """Recombines a tetrahedral FemMesh; returns (new FemMesh, report dict). The input is not
     modified. Options as for make_hexdominant_mesh, plus regions="auto"|"none" and shape=<Part
-    shape> (regions per solid when the mesh has no "Volume" groups)."""
+    shape> (regions per solid when the mesh has no "Volume" groups). Like the add-on's mesh
+    objects, it starts from the engine options that keep a CalculiX answer at least as accurate
+    as the tets' (engine.CALCULIX_DEFAULTS: no pyramid with a node on the boundary; options given
+    override them, pyramid_placement="anywhere" is the engine's own default); the report's
+    "options" lists the engine options used."""
+    from . import engine
     from .jobs import recombine_femmesh as recombine
-    return recombine(femmesh, **options)
+    engine_options = {k: v for k, v in options.items() if k not in ("regions", "shape",
+                                                                   "pyramids_as_hexahedra",
+                                                                   "progress")}
+    others = {k: v for k, v in options.items() if k not in engine_options}
+    used = engine.calculix_options(engine_options)
+    femmesh, report = recombine(femmesh, **others, **used)
+    report["options"] = used
+    return femmesh, report

@@ -92,3 +92,29 @@ def box_doc(order="1st", size=10.0, name="HexMergeBox"):
     doc.recompute()
     bench.gmsh(mesh, size, order)
     return doc, mesh
+
+
+def collapsed_pyramids(source, femmesh):
+    """The pyramids of a recombined FemMesh (stored as collapsed hexahedra: the apex on the last
+    four corners) and how many of them have a node on the boundary of the tetrahedral `source`
+    (a node of a triangle that one source tet alone has). Pyramid blocks proper are not
+    expected: an assertion error names one."""
+    import numpy as np
+    from freecad.hexmerge import femmesh_arrays as fa
+    source_arrays = fa.femmesh_to_arrays(source)
+    _, tets, _ = fa.tetrahedra(source_arrays)
+    faces = np.sort(np.concatenate([tets[:, f] for f in fa.FACES["tetra"]]), axis=1)
+    keys, counts = np.unique(faces, axis=0, return_counts=True)
+    boundary_ids = source_arrays.point_ids[keys[counts == 1]].ravel()
+    arrays = fa.femmesh_to_arrays(femmesh)
+    on_boundary = np.isin(arrays.point_ids, boundary_ids)
+    pyramids = touching = 0
+    for name, cells in arrays.blocks:
+        assert name not in ("pyramid", "pyramid13"), "a pyramid block: " + name
+        if name in ("hexahedron", "hexahedron20"):
+            collapsed = (cells[:, 4] == cells[:, 5]) & (cells[:, 5] == cells[:, 6]) \
+                & (cells[:, 6] == cells[:, 7])
+            pyramids += int(collapsed.sum())
+            touching += int(on_boundary[cells[collapsed][:, :5]].any(axis=1).sum())
+    return pyramids, touching
+

@@ -65,10 +65,21 @@ class Box(unittest.TestCase):
 
     def test_recombine_femmesh_macro(self):
         doc, mesh = box_doc()
+        before = (mesh.FemMesh.NodeCount, mesh.FemMesh.VolumeCount)
         femmesh, report = hm.recombine_femmesh(mesh.FemMesh, min_scaled_jacobian=0.5)
         self.assertEqual(femmesh.VolumeCount, report["output_cells"])
         self.assertEqual(report["freecad"]["pyramids_as_collapsed_hexahedra"], True)
         self.assertEqual(femmesh.PyramidCount, 0)
+        # The CalculiX defaults (issue 15), the user's options over them: no pyramid with a node
+        # on the boundary; with the engine's own placement, pyramids there.
+        self.assertEqual(report["options"], {"pyramid_placement": "no_boundary_node",
+                                             "min_scaled_jacobian": 0.5})
+        pyramids, touching = helpers.collapsed_pyramids(mesh.FemMesh, femmesh)
+        self.assertEqual(touching, 0)
+        anywhere, _ = hm.recombine_femmesh(mesh.FemMesh, pyramid_placement="anywhere")
+        _, touching = helpers.collapsed_pyramids(mesh.FemMesh, anywhere)
+        self.assertGreater(touching, 0)
+        self.assertEqual((mesh.FemMesh.NodeCount, mesh.FemMesh.VolumeCount), before)  # untouched
 
     def test_post_merge_node_moves_reach_the_femmesh(self):
         """same_nodes off (issue 19): the FemMesh has the engine's node positions (a moved node

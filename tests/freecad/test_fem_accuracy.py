@@ -62,21 +62,9 @@ class RecombinedNotWorse(unittest.TestCase):
 
     def assert_no_pyramid_on_the_boundary(self, source, femmesh):
         """What pyramid_placement = no_boundary_node promises: no pyramid (collapsed hexahedron)
-        has a node on the boundary (nodes of triangles that one source tet alone has)."""
-        _, tets, _ = fa.tetrahedra(fa.femmesh_to_arrays(source))
-        faces = np.sort(np.concatenate([tets[:, f] for f in fa.FACES["tetra"]]), axis=1)
-        keys, counts = np.unique(faces, axis=0, return_counts=True)
-        boundary_ids = set(fa.femmesh_to_arrays(source).point_ids[keys[counts == 1]].ravel().tolist())
-        arrays = fa.femmesh_to_arrays(femmesh)
-        on_boundary = np.isin(arrays.point_ids, list(boundary_ids))
-        pyramids = 0
-        for name, cells in arrays.blocks:
-            self.assertNotIn(name, ("pyramid", "pyramid13"))  # stored as collapsed hexahedra
-            if name in ("hexahedron", "hexahedron20"):
-                collapsed = (cells[:, 4] == cells[:, 5]) & (cells[:, 5] == cells[:, 6]) \
-                    & (cells[:, 6] == cells[:, 7])
-                pyramids += int(collapsed.sum())
-                self.assertFalse(on_boundary[cells[collapsed][:, :5]].any())
+        has a node on the boundary."""
+        pyramids, touching = helpers.collapsed_pyramids(source, femmesh)
+        self.assertEqual(touching, 0)
         return pyramids
 
     def test_cantilever_tip_tet4(self):
