@@ -10,7 +10,6 @@ FreeCAD's own writer and gives the accuracy measured in docs/fem-accuracy.md."""
 import os
 import unittest
 
-
 import FreeCAD
 
 import freecad.hexmerge as hm
