@@ -2,6 +2,18 @@
 """Where the non-hexahedral volume of a mesh_shape mesh lies: volume per element type by the
 distance of the element's centroid from the boundary, in units of h (issue 13, item 3).
 
+Two more measures of what the next hexahedra would need:
+- the non-hexahedral volume within h of the boundary, by the kind of boundary nearest to it: a
+  plane normal to an axis of the mesher's frame, another plane (a triangle whose neighbours
+  across its sides all lie within 1 degree of its plane), or a curved face;
+- a bound on a buffer layer (Schneiders' grid-based method: the core's boundary quads projected
+  onto the surface, each with its projection a hexahedron reaching the boundary): over the closing
+  pyramids' bases (hexahedron faces shared with a pyramid), those whose four corners' nearest
+  boundary points lie within 35 degrees of the base's outward normal and give a hexahedron of
+  scaled Jacobian 0.3 or more; the volume between base and projection as a share of the part.
+  It is a bound: it counts neither the surface that would have to be remeshed to hold the
+  projected quads, nor the quads at the edge of a projected patch, which need closing.
+
 For each part (real_parts.py's names; sizes from bench/results/real-parts-sizes.json) the tets
 are made with hexmerge.mesh_shape(..., recombine=False) and the given mesher options, recombined
 with the defaults (conforming), and the volume of each type is summed per distance band (0-0.5 h,
@@ -62,6 +74,86 @@ def boundary_samples(points, tets):
     return np.concatenate(samples)
 
 
+def boundary_triangles(tets):
+    faces = np.concatenate([tets[:, [1, 2, 3]], tets[:, [0, 2, 3]], tets[:, [0, 1, 3]], tets[:, [0, 1, 2]]])
+    key = np.sort(faces, axis=1)
+    _, inverse, counts = np.unique(key, axis=0, return_inverse=True, return_counts=True)
+    return key[counts[inverse.ravel()] == 1]
+
+
+def boundary_classes(points, triangles, frame):
+    """Per boundary triangle: 0 a plane normal to a frame axis, 1 another plane (every neighbour
+    across a side within 1 degree of its plane), 2 curved; and the unit normals."""
+    a, b, c = (points[triangles[:, k]] for k in range(3))
+    normal = np.cross(b - a, c - a)
+    normal /= np.maximum(np.linalg.norm(normal, axis=1), 1e-300)[:, None]
+    flat = np.ones(len(triangles), dtype=bool)
+    sides = np.concatenate([np.sort(triangles[:, [i, j]], axis=1) for i, j in ((0, 1), (1, 2), (2, 0))])
+    owner = np.tile(np.arange(len(triangles)), 3)
+    order = np.lexsort((sides[:, 1], sides[:, 0]))
+    sides, owner = sides[order], owner[order]
+    pair = np.flatnonzero((sides[1:] == sides[:-1]).all(axis=1))
+    t0, t1 = owner[pair], owner[pair + 1]
+    bent = np.abs(np.einsum("ij,ij->i", normal[t0], normal[t1])) < np.cos(np.radians(1.0))
+    flat[t0[bent]] = False
+    flat[t1[bent]] = False
+    axis_normal = np.abs(normal @ np.asarray(frame).T).max(axis=1) > 0.999
+    return np.where(flat & axis_normal, 0, np.where(flat, 1, 2)), normal
+
+
+CORNERS_HEX = [(0, 1, 3, 4), (1, 2, 0, 5), (2, 3, 1, 6), (3, 0, 2, 7), (4, 7, 5, 0), (5, 4, 6, 1), (6, 5, 7, 2),
+               (7, 6, 4, 3)]
+
+
+def hex_scaled_jacobian(p):
+    worst = 1.0
+    for i, j, k, m in CORNERS_HEX:
+        e1, e2, e3 = p[j] - p[i], p[k] - p[i], p[m] - p[i]
+        worst = min(worst, np.dot(np.cross(e1, e2), e3) /
+                    max(np.linalg.norm(e1) * np.linalg.norm(e2) * np.linalg.norm(e3), 1e-300))
+    return worst
+
+
+def buffer_bound(mesh, points, samples, h):
+    """The buffer layer's bound (module docstring): (bases, projectable bases, their volume)."""
+    from scipy.spatial import cKDTree
+
+    tree = cKDTree(samples)
+    offsets, vertices, pmap = mesh.offsets, mesh.cell_vertices, mesh.point_map
+    hex_faces = {}
+    for e in np.flatnonzero(mesh.types == 3):
+        v = pmap[vertices[offsets[e]:offsets[e + 1]]]
+        for f in ((0, 3, 2, 1), (4, 5, 6, 7), (0, 1, 5, 4), (1, 2, 6, 5), (2, 3, 7, 6), (3, 0, 4, 7)):
+            hex_faces.setdefault(tuple(sorted(v[list(f)])), []).append([v[i] for i in f])
+    bases = kept = 0
+    volume = 0.0
+    for e in np.flatnonzero(mesh.types == 1):
+        v = pmap[vertices[offsets[e]:offsets[e + 1]]]
+        quads = hex_faces.get(tuple(sorted(v[:4])), [])
+        if len(quads) != 1:
+            continue
+        bases += 1
+        q = points[quads[0]]
+        n = np.cross(q[2] - q[0], q[3] - q[1])
+        n /= np.linalg.norm(n)
+        if np.dot(points[v[4]] - q.mean(axis=0), n) < 0:
+            n = -n  # towards the pyramid's apex: out of the core
+        _, nearest = tree.query(q)
+        reach = samples[nearest] - q
+        length = np.linalg.norm(reach, axis=1)
+        if (length < 0.05 * h).any() or (reach @ n < np.cos(np.radians(35)) * length).any():
+            continue
+        p = np.concatenate([q, samples[nearest]])
+        sj = hex_scaled_jacobian(p)
+        if sj < 0:
+            sj = hex_scaled_jacobian(np.concatenate([q[::-1], samples[nearest][::-1]]))
+        if sj < 0.3:
+            continue
+        kept += 1
+        volume += 0.5 * np.linalg.norm(np.cross(q[2] - q[0], q[3] - q[1])) * float(np.mean(reach @ n))
+    return bases, kept, volume
+
+
 def analyse(path: str, h: float, options: dict) -> dict:
     import hexmerge
     from hexmerge import _core
@@ -85,12 +177,27 @@ def analyse(path: str, h: float, options: dict) -> dict:
     for lo, hi in zip(BANDS[:-1], BANDS[1:]):
         inband = (dist >= lo) & (dist < hi)
         table.append([float(vol[inband & (mesh.types == t)].sum() / total) for t in range(4)])
+    # The non-hexahedral volume within h of the boundary, by the kind of boundary nearest.
+    triangles = boundary_triangles(cells)
+    kind, _ = boundary_classes(points, triangles, np.asarray(meshing["frame"]).reshape(3, 3))
+    centroids = points[triangles].mean(axis=1)
+    near, nearest = cKDTree(centroids).query(cen)
+    area = 0.5 * np.linalg.norm(np.cross(points[triangles[:, 1]] - points[triangles[:, 0]],
+                                         points[triangles[:, 2]] - points[triangles[:, 0]]), axis=1)
+    by_kind = {}
+    for k, name in enumerate(("axis plane", "other plane", "curved")):
+        band = (near < h) & (kind[nearest] == k) & (mesh.types != 3)
+        by_kind[name] = {"area": float(area[kind == k].sum() / area.sum()),
+                         "non_hex_within_h": float(vol[band].sum() / total)}
+    bases, projectable, buffer_volume = buffer_bound(mesh, points, boundary_samples(points, cells), h)
     return {
         "seconds": seconds, "tets": len(cells), "valid": check["valid"],
         "nonconforming_quads": check["nonconforming_quads"], "cracks": check["cracks"],
         "min_sj": check["min_scaled_jacobian"], "below_0.2": int((sj < 0.2).sum()),
         "boundary_distance_h": meshing["max_boundary_distance"] / h, "strategy": meshing["strategy"],
-        "volume_fraction": report["volume_fraction"], "bands": table,
+        "volume_fraction": report["volume_fraction"], "bands": table, "by_boundary": by_kind,
+        "buffer": {"pyramid_bases": bases, "projectable": projectable,
+                   "volume": float(buffer_volume / total)},
         "counts": {k: meshing[k] for k in ("nb_core_cells", "nb_lattice_points", "nb_apex_points",
                                            "nb_layer_points", "nb_lattice_faces", "nb_faces", "sweep_axis",
                                            "nb_surface_nodes")},
@@ -138,6 +245,12 @@ def main() -> int:
             for (lo, hi), band in zip(zip(BANDS[:-1], BANDS[1:]), row["bands"]):
                 print(f"    d/h {lo:>3}-{hi if hi < 1e8 else 'inf':<4}: vol {100 * sum(band):5.1f} %  " +
                       "  ".join(f"{NAMES[t]} {100 * band[t]:5.1f}" for t in range(4)))
+            print("    within h of the boundary, not hexahedra: " + ", ".join(
+                f"{name} {100 * k['non_hex_within_h']:.1f} % (its area {100 * k['area']:.1f} %)"
+                for name, k in row["by_boundary"].items()))
+            b = row["buffer"]
+            print(f"    buffer layer bound: {b['projectable']} of {b['pyramid_bases']} closing pyramids' bases "
+                  f"project, +{100 * b['volume']:.1f} % of the volume")
     if args.json:
         with open(args.json, "w") as f:
             json.dump({"options": options, "size": args.size, "rows": rows}, f, indent=1)

@@ -322,10 +322,10 @@ class ShapeMode(unittest.TestCase):
             elif r["type"] == "choice" and r["name"] != "pyramid_placement":  # CalculiX's default
                 self.assertEqual(value, r["default"], r["name"])
             self.assertTrue(obj.getDocumentationOfProperty(r["freecad_property"]).startswith(r["doc"]))
-        # A mesh made from the shape starts from CALCULIX_SHAPE_DEFAULTS: pyramids off the curved
-        # parts of the boundary (the second-order ones written as two tied C3D10); one from tets
-        # from no_boundary_node.
-        self.assertEqual(obj.PyramidPlacement, "no_curved_boundary_face")
+        # A mesh made from the shape starts from CALCULIX_SHAPE_DEFAULTS: pyramids off the nodes
+        # of the curved parts of the boundary (the second-order ones written as two tied C3D10);
+        # one from tets from no_boundary_node.
+        self.assertEqual(obj.PyramidPlacement, "no_curved_boundary_node")
         self.assertEqual(obj.QuadraticPyramid, "two C3D10, tied")
 
     def test_save_reopen(self):

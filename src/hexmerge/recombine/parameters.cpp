@@ -10,7 +10,8 @@ const std::vector<std::string> kFinderChoices = {"programs", "exhaustive"};
 const std::vector<std::string> kBoundaryOrderChoices = {"quality", "fewest_matches"};
 const std::vector<std::string> kLocalSearchSeedsChoices = {"unmatched", "all"};
 const std::vector<std::string> kPyramidPlacementChoices = {
-    "anywhere", "no_boundary_face", "no_boundary_node", "no_curved_boundary_face"};
+    "anywhere", "no_boundary_face", "no_boundary_node", "no_curved_boundary_face",
+    "no_curved_boundary_node"};
 
 ParameterTable<RecombineParameters> make_table() {
   using P = RecombineParameters;
@@ -47,7 +48,8 @@ ParameterTable<RecombineParameters> make_table() {
              "Where pyramids may be made: anywhere, not with a face on the boundary "
              "(no_boundary_face), not with a node on it (no_boundary_node), or not with a face "
              "on a curved part of it (no_curved_boundary_face: a boundary triangle turning by 1 "
-             "to 30 degrees to one beside it); tets stay there "
+             "to 30 degrees to one beside it), or not with a node on a curved part of it "
+             "(no_curved_boundary_node); tets stay there "
              "instead. For CalculiX (no pyramid element: collapsed hexahedra) no_boundary_node "
              "keeps peak stresses as accurate as the tets' (docs/fem-accuracy.md)"),
       choice(&P::conformity, "conformity", kConformityChoices, "Conformity",

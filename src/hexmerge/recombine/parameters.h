@@ -62,6 +62,11 @@ enum class PyramidPlacement {
   /// turns by kCurvedMin to kCurvedMax degrees to one of the boundary triangles beside it (flat
   /// faces and sharp edges allowed). The post-merge stage takes it as NoBoundaryFace.
   NoCurvedBoundaryFace,
+  /// Not with a vertex on a curved part of the domain boundary (a vertex of a boundary triangle
+  /// NoCurvedBoundaryFace forbids): the tets at a curved face stay tets, as NoBoundaryNode keeps
+  /// them everywhere, and flat faces keep their pyramids. The post-merge stage takes it as
+  /// NoBoundaryNode.
+  NoCurvedBoundaryNode,
 };
 
 /// Parameters of hexmerge::recombine. Every field is listed in parameter_table() with its unit,

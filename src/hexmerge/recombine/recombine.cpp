@@ -132,20 +132,26 @@ std::vector<char> curved_boundary_faces(const TetMesh& mesh, const TetTopology& 
 }
 
 // Removes the pyramid candidates that parameters.pyramid_placement forbids: with a face on the
-// domain boundary (one of its two tets has a boundary face), with one on a curved part of it, or
-// with a vertex on it.
+// domain boundary (one of its two tets has a boundary face), with one on a curved part of it, with
+// a vertex on it, or with a vertex on a curved part of it.
 void drop_boundary_pyramids(const TetMesh& mesh, const TetTopology& topology,
                             PyramidPlacement placement, Candidates& candidates) {
   if (placement == PyramidPlacement::Anywhere) return;
   std::vector<char> curved;
-  if (placement == PyramidPlacement::NoCurvedBoundaryFace)
+  if (placement == PyramidPlacement::NoCurvedBoundaryFace ||
+      placement == PyramidPlacement::NoCurvedBoundaryNode)
     curved = curved_boundary_faces(mesh, topology);
+  // The vertices a pyramid may not have: on the boundary, or on its curved triangles.
   std::vector<char> boundary_vertex;
-  if (placement == PyramidPlacement::NoBoundaryNode) {
+  if (placement == PyramidPlacement::NoBoundaryNode ||
+      placement == PyramidPlacement::NoCurvedBoundaryNode) {
+    const bool curved_only = placement == PyramidPlacement::NoCurvedBoundaryNode;
     boundary_vertex.assign(mesh.nb_vertices(), 0);
     for (index_t t = 0; t < mesh.nb_tets(); ++t) {
       for (int f = 0; f < 4; ++f) {
         if (!topology.on_boundary(t, f)) continue;
+        if (curved_only && !curved[4 * static_cast<std::size_t>(t) + static_cast<std::size_t>(f)])
+          continue;
         for (int v = 0; v < 4; ++v) {
           if (v != f) boundary_vertex[mesh.tet(t)[v]] = 1;
         }

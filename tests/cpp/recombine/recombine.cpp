@@ -383,8 +383,8 @@ TEST(check_mesh, compares_every_regions_volume) {
 // A cylinder of 24-gon rings (the Delaunay tets of its points): its side turns by 15 degrees
 // from one strip of triangles to the next, its ends are flat. With pyramids off curved parts of
 // the boundary no output pyramid has a face on the side, though pyramids anywhere put some
-// there; on a box (a Kuhn grid: flat faces and sharp edges) the output is the one pyramids
-// anywhere give.
+// there, and with pyramids off the curved parts' nodes none has a vertex there either; on a box
+// (a Kuhn grid: flat faces and sharp edges) the output is the one pyramids anywhere give.
 TEST(recombine, pyramids_off_the_curved_boundary_keep_off_the_cylinders_side) {
   const double radius = 6.0, height = 8.0;
   const int sides = 24;
@@ -440,24 +440,53 @@ TEST(recombine, pyramids_off_the_curved_boundary_keep_off_the_cylinders_side) {
     }
     return n;
   };
-  RecombineParameters anywhere, off_curved;
+  // Pyramids with a vertex on the side: a node of a boundary triangle that is not on an end
+  // (a node on an end's rim is on both).
+  std::set<index_t> side_nodes;
+  for (const auto& [tri, count] : faces) {
+    if (count != 1) continue;
+    bool end = true;
+    for (index_t w : tri) {
+      const double z = mesh.point(w)[2];
+      end = end && (z == 0.0 || z == height);
+    }
+    if (!end) side_nodes.insert(tri.begin(), tri.end());
+  }
+  const auto side_vertices = [&](const MixedMesh& out) {
+    int n = 0;
+    for (index_t c = 0; c < out.nb_cells(); ++c) {
+      if (out.types[c] != CellType::Pyramid) continue;
+      const index_t* v = out.cell(c);
+      n += std::any_of(v, v + 5, [&](index_t w) { return side_nodes.count(w) > 0; });
+    }
+    return n;
+  };
+  RecombineParameters anywhere, off_curved, off_curved_nodes;
   off_curved.pyramid_placement = PyramidPlacement::NoCurvedBoundaryFace;
+  off_curved_nodes.pyramid_placement = PyramidPlacement::NoCurvedBoundaryNode;
   RecombineReport report;
   const MixedMesh before = recombine(mesh, anywhere, report);
   const MixedMesh after = recombine(mesh, off_curved, report);
-  for (const MixedMesh* out : {&before, &after}) {
+  const MixedMesh after_nodes = recombine(mesh, off_curved_nodes, report);
+  for (const MixedMesh* out : {&before, &after, &after_nodes}) {
     const CheckReport check = check_mesh(*out, mesh);
     EXPECT_TRUE(check.valid()) << (check.problems.empty() ? "" : check.problems[0]);
     EXPECT_EQ(check.nonconforming_quads, 0u);
   }
   EXPECT_GT(side_faces(before), 0);
   EXPECT_EQ(side_faces(after), 0);
+  EXPECT_GT(side_vertices(after), 0);  // a face off the side, a vertex on it
+  EXPECT_EQ(side_vertices(after_nodes), 0);
+  EXPECT_GT(after_nodes.nb_cells(), 0u);
 
+  // Flat faces keep their pyramids: a box's output is the same with either placement.
   const TetMesh box = kuhn_grid(4);
   RecombineReport box_report;
   const MixedMesh box_anywhere = recombine(box, anywhere, box_report);
   const MixedMesh box_off = recombine(box, off_curved, box_report);
+  const MixedMesh box_off_nodes = recombine(box, off_curved_nodes, box_report);
   EXPECT_EQ(box_anywhere.cell_vertices, box_off.cell_vertices);
+  EXPECT_EQ(box_anywhere.cell_vertices, box_off_nodes.cell_vertices);
 }
 
 }  // namespace

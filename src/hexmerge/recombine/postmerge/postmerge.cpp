@@ -42,7 +42,8 @@ class Stage {
         options_(options),
         min_dihedral_(options.min_dihedral_angle),
         max_corner_(options.max_face_angle) {
-    if (options.placement == PyramidPlacement::NoBoundaryNode) {
+    if (options.placement == PyramidPlacement::NoBoundaryNode ||
+        options.placement == PyramidPlacement::NoCurvedBoundaryNode) {
       boundary_vertex_.assign(mesh.nb_slots() == 0 ? 0 : max_vertex() + 1, 0);
       for (index_t t = 0; t < m_.nb_slots(); ++t) {
         for (int f = 0; f < 4; ++f) {
@@ -246,7 +247,8 @@ class Stage {
           if (face_on_boundary(t, f)) return false;
         }
       }
-    } else if (options_.placement == PyramidPlacement::NoBoundaryNode) {
+    } else if (options_.placement == PyramidPlacement::NoBoundaryNode ||
+               options_.placement == PyramidPlacement::NoCurvedBoundaryNode) {
       for (index_t v : {q.a, q.b, q.c, q.d, apex}) {
         if (boundary_vertex_[v]) return false;
       }
