@@ -70,6 +70,8 @@ VARIANTS = [
     ("no pyramid with a boundary face", {"pyramid_placement": "no_boundary_face"}, None),
     ("no pyramid with a boundary node (the add-on's CalculiX default)",
      {"pyramid_placement": "no_boundary_node"}, None),
+    ("no pyramid with a node on a curved face", {"pyramid_placement": "no_curved_boundary_node"},
+     None),
     ("no pyramids", {"make_pyramids": False}, None),
 ]
 LINEAR_ONLY_VARIANTS = [
@@ -78,6 +80,10 @@ LINEAR_ONLY_VARIANTS = [
 QUADRATIC_ONLY_VARIANTS = [
     ("pyramids anywhere, as two tied C3D10 (the add-on's QuadraticPyramid)",
      {"pyramid_placement": "anywhere"}, "split"),
+    ("no pyramid with a boundary node, as two tied C3D10 (the add-on's default in second order)",
+     {"pyramid_placement": "no_boundary_node"}, "split"),
+    ("no pyramid with a node on a curved face, as two tied C3D10",
+     {"pyramid_placement": "no_curved_boundary_node"}, "split"),
 ]
 
 
