@@ -485,8 +485,10 @@ def to_meshio(
     if fmt == "abaqus" and not collapse_pyramids and any(b.type.startswith("pyramid") for b in blocks):
         raise MeshFileError(
             "the Abaqus/CalculiX format (.inp) has no pyramid element: add --collapse-pyramids "
-            "(pyramids written as degenerate hexahedra), --no-make-pyramids, or write another "
-            "format (.vtu, .msh, .mesh)"
+            "(pyramids written as degenerate hexahedra; for CalculiX with --pyramid-placement "
+            "no_boundary_node for recombined tets or no_curved_boundary_node for meshes from "
+            "CAD: collapsed pyramids at the boundary overstate peak stresses), "
+            "--no-make-pyramids, or write another format (.vtu, .msh, .mesh)"
         )
     if collapse_pyramids:
         if mesh.order == 2 and any(b.type == "pyramid13" for b in blocks):

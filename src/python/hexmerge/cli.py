@@ -174,7 +174,9 @@ def add_output_options(parser: argparse.ArgumentParser) -> None:
         "--collapse-pyramids",
         action="store_true",
         help="write pyramids as degenerate hexahedra (apex repeated), for formats and solvers "
-        "without pyramids such as Abaqus/CalculiX .inp",
+        "without pyramids such as Abaqus/CalculiX .inp; for CalculiX add --pyramid-placement "
+        "no_boundary_node (recombined tets) or no_curved_boundary_node (meshes from CAD): "
+        "collapsed pyramids at the boundary overstate peak stresses (docs/fem-accuracy.md)",
     )
     parser.add_argument("--stats", metavar="JSON", help="write the run's report to this JSON file")
     parser.add_argument(
