@@ -11,6 +11,8 @@ Two more measures of what the next hexahedra would need:
   pyramids' bases (hexahedron faces shared with a pyramid), those whose four corners' nearest
   boundary points lie within 35 degrees of the base's outward normal and give a hexahedron of
   scaled Jacobian 0.3 or more; the volume between base and projection as a share of the part.
+  Bases with a corner on the boundary already (within 0.05 h: the core reaching a lattice face)
+  are not counted.
   It is a bound: it counts neither the surface that would have to be remeshed to hold the
   projected quads, nor the quads at the edge of a projected patch, which need closing.
 
