@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <BRepAlgoAPI_Cut.hxx>
+#include <array>
 #include <limits>
 #include <vector>
 
@@ -41,6 +42,28 @@ TEST(find_crossings, by_exact_predicates) {
   // One crossing per pair of faces: faces 0 and 1 cross twice, 0 and 2 once.
   EXPECT_EQ(find({triangle(0, 1, 2), triangle(3, 4, 5, 1), triangle(3, 5, 4, 1)}).size(), 1u);
   EXPECT_EQ(find({triangle(0, 1, 2), triangle(3, 4, 5, 1), triangle(3, 5, 4, 2)}).size(), 2u);
+}
+
+// crosses_any: per triangle of a list, whether it crosses one of another list (or of itself), by
+// the same test: through it, beyond a shared node; not beside it, not at the shared node only,
+// not along a shared side, not itself.
+TEST(crosses_any, each_triangle_against_a_list) {
+  const std::vector<Vec3> nodes = {
+      {0, 0, 0},      {2, 0, 0},     {0, 2, 0},  // 0-2: a triangle in z = 0
+      {0.5, 0.5, -1}, {0.5, 0.5, 1}, {3, 3, 0},  // 3-5: through it at (0.5, 0.5)
+      {5, 0, 0},      {6, 0, 0},     {5, 1, 0},  // 6-8: beside it
+      {1, 1, 1},      {1, 1, -1},                // 9, 10: with node 0, through (1, 1, 0)
+      {0, -1, 0},     {-1, 0, 0}};               // 11, 12: with node 0, outside it
+  const std::vector<std::array<int, 3>> surface = {{0, 1, 2}};
+  const std::vector<std::array<int, 3>> inner = {{3, 4, 5},   {6, 7, 8},  {0, 9, 10},
+                                                 {0, 11, 12}, {1, 0, 11}, {0, 1, 2}};
+  const std::vector<char> crosses = mesher::crosses_any(nodes, surface, inner);
+  EXPECT_EQ(crosses, (std::vector<char>{1, 0, 1, 0, 0, 0}));
+  // Against itself: 0-9-10 passes through 0-1-2 beyond their common node, so both cross; the
+  // others cross nothing.
+  const std::vector<std::array<int, 3>> all = {{0, 1, 2}, {6, 7, 8}, {0, 11, 12}, {0, 9, 10}};
+  EXPECT_EQ(mesher::crosses_any(nodes, all, all), (std::vector<char>{1, 0, 0, 1}));
+  EXPECT_EQ(mesher::crosses_any(nodes, {}, inner), std::vector<char>(inner.size(), 0));
 }
 
 // Four triangles on the side 0-1, of faces 0 to 3: one solid's boundary passing there twice (two

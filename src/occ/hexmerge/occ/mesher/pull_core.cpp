@@ -2,12 +2,15 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <map>
+#include <unordered_map>
 #include <unordered_set>
 
 #include "hexmerge/geometry/quality.h"
 #include "hexmerge/occ/mesher/common.h"
 #include "hexmerge/occ/mesher/spatial.h"
+#include "hexmerge/occ/mesher/surface_check.h"
 
 namespace hexmerge::mesher {
 
@@ -274,6 +277,109 @@ PulledCore pull_core(const Lattice& lattice, const Surroundings& around, const P
         return false;
     return true;
   };
+  // The faces of the cells with a corner that may move, of the core cells beside them and of
+  // every closing pyramid, each quad split on its diagonal from its least corner (as add_core()
+  // gives them to TetGen), where the moves put them; the moving corners of those that cross
+  // another go into `failing`.
+  std::vector<std::array<int, 3>> near_cells = cells;
+  {
+    std::unordered_set<std::size_t> seen;
+    for (const auto& c : cells) {
+      const int ijk[3] = {c[0], c[1], c[2]};
+      seen.insert(cell_index(ijk));
+    }
+    for (const auto& c : cells)
+      for (int a = 0; a < 3; ++a)
+        for (int side = -1; side <= 1; side += 2) {
+          int n[3] = {c[0], c[1], c[2]};
+          n[a] += side;
+          if (n[a] < 0 || n[a] >= lattice.cells[a] || !core[cell_index(n)]) continue;
+          if (seen.insert(cell_index(n)).second) near_cells.push_back({n[0], n[1], n[2]});
+        }
+  }
+  // Their corners (lattice points, and apexes tagged by kApexTag) and triangles, made once.
+  constexpr std::size_t kApexTag = std::size_t{1} << 62;
+  std::vector<std::size_t> corner_of;  // per corner: its lattice point, or apex cell | kApexTag
+  std::vector<std::array<int, 3>> face_triangles;
+  std::size_t first_side = 0;  // the pyramids' sides come last, from here
+  {
+    std::unordered_map<std::size_t, int> id;
+    const auto corner_id = [&](std::size_t key) {
+      const auto [it, fresh] = id.emplace(key, static_cast<int>(corner_of.size()));
+      if (fresh) corner_of.push_back(key);
+      return it->second;
+    };
+    std::unordered_set<std::uint64_t> seen;  // sides' keys of the triangles' sorted corners
+    const auto add = [&](int a, int b, int c) {
+      std::array<int, 3> key{a, b, c};
+      std::sort(key.begin(), key.end());
+      const std::uint64_t code =
+          (static_cast<std::uint64_t>(key[0]) * 2097152u + key[1]) * 2097152u +
+          static_cast<std::uint64_t>(key[2]);
+      // (The code is one only below 2^21 corners; past that, duplicates stay: a triangle and
+      // its copy do not cross.)
+      if (corner_of.size() >= (std::size_t{1} << 21) || seen.insert(code).second)
+        face_triangles.push_back({a, b, c});
+    };
+    // The quad across `axis` at plane `plane` from least corner (p, q), as add_core()'s add_quad.
+    const auto quad = [&](int axis, int plane, int p, int q) {
+      static constexpr int kAround[4][2] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
+      const int u = (axis + 1) % 3, v = (axis + 2) % 3;
+      int corner[4];
+      for (int m = 0; m < 4; ++m) {
+        int c[3];
+        c[axis] = plane, c[u] = p + kAround[m][0], c[v] = q + kAround[m][1];
+        corner[m] = corner_id(lattice.point_index(c[0], c[1], c[2]));
+      }
+      add(corner[0], corner[1], corner[2]);
+      add(corner[0], corner[2], corner[3]);
+    };
+    for (const auto& c : near_cells)
+      for (int axis = 0; axis < 3; ++axis)
+        for (int side = 0; side < 2; ++side)
+          quad(axis, c[axis] + side, c[(axis + 1) % 3], c[(axis + 2) % 3]);
+    for (const PyramidFace& f : faces) {
+      const int axis = f.dir / 2;
+      quad(axis, f.c[axis] + f.dir % 2, f.c[(axis + 1) % 3], f.c[(axis + 2) % 3]);
+    }
+    first_side = face_triangles.size();
+    for (const PyramidFace& f : faces) {
+      const std::array<std::size_t, 4> base = base_corners(lattice, f);
+      const int apex = corner_id(cell_index(f.n) | kApexTag);
+      for (int m = 0; m < 4; ++m) add(corner_id(base[m]), corner_id(base[(m + 1) % 4]), apex);
+    }
+  }
+  const auto crossing_faces = [&](std::unordered_set<std::size_t>& failing) {
+    std::vector<Vec3> at(corner_of.size());
+    std::vector<char> moved(corner_of.size(), 0);
+    for (std::size_t k = 0; k < corner_of.size(); ++k) {
+      const std::size_t n = corner_of[k];
+      const Vec3 d = n & kApexTag ? apex_shift(n & ~kApexTag) : node_shift(n);
+      at[k] = (n & kApexTag ? home(n & ~kApexTag) : point_of(n)) + d;
+      moved[k] = d.norm() > 0;
+    }
+    // The pyramids' sides that moved, against every face: a cell that keeps its shape (scaled
+    // Jacobian 0.9, flat quads) meets its neighbours on their common faces, but an apex moves
+    // with the mean of its bases' corners and its sides can pass through the next cell's face.
+    std::vector<std::array<int, 3>> moving;
+    for (std::size_t i = first_side; i < face_triangles.size(); ++i) {
+      const auto& t = face_triangles[i];
+      if (moved[t[0]] || moved[t[1]] || moved[t[2]]) moving.push_back(t);
+    }
+    const std::vector<char> crosses = crosses_any(at, face_triangles, moving);
+    for (std::size_t t = 0; t < moving.size(); ++t) {
+      if (!crosses[t]) continue;
+      for (const int k : moving[t]) {
+        const std::size_t n = corner_of[static_cast<std::size_t>(k)];
+        if (n & kApexTag) {
+          for (const std::size_t p : apex_corners[n & ~kApexTag])
+            if (move.count(p) && scale[p] > 0) failing.insert(p);
+        } else if (move.count(n) && scale[n] > 0) {
+          failing.insert(n);
+        }
+      }
+    }
+  };
   static constexpr int kHexCorner[8] = {0, 1, 3, 2, 4, 5, 7, 6};  // cell_type.h's order by bits
   static constexpr int kHexFaces[6][4] = {{0, 1, 2, 3}, {4, 5, 6, 7}, {0, 1, 5, 4},
                                           {1, 2, 6, 5}, {2, 3, 7, 6}, {3, 0, 4, 7}};
@@ -323,6 +429,11 @@ PulledCore pull_core(const Lattice& lattice, const Surroundings& around, const P
         for (const std::size_t p : apex_corners[a])
           if (move.count(p) && scale[p] > 0) failing.insert(p);
     }
+    // Once every cell, pyramid and node passes: no face of a moved cell or pyramid may cross
+    // another's (TetGen keeps them all as constraints and stops where two cross: "a segment and
+    // a subface intersect"; gmsh_U_Joint_2 at its 250k size then fell back to the core not
+    // pulled). The corners that move of the faces that cross are held back.
+    if (failing.empty()) crossing_faces(failing);
     // (A cell or pyramid that fails unmoved, on a rectilinear axis, holds nothing back.)
     if (failing.empty()) break;
     for (const std::size_t p : failing) scale[p] = round < kPullHalvings ? 0.5 * scale[p] : 0.0;

@@ -138,6 +138,55 @@ std::vector<Crossing> find_crossings(const std::vector<Vec3>& nodes,
   return found;
 }
 
+std::vector<char> crosses_any(const std::vector<Vec3>& nodes,
+                              const std::vector<std::array<int, 3>>& surface,
+                              const std::vector<std::array<int, 3>>& inner) {
+  std::vector<char> crosses(inner.size(), 0);
+  if (surface.empty() || inner.empty()) return crosses;
+  const auto box_of = [&](const std::array<int, 3>& v) {
+    return std::pair{vmin(nodes[v[0]], vmin(nodes[v[1]], nodes[v[2]])),
+                     vmax(nodes[v[0]], vmax(nodes[v[1]], nodes[v[2]]))};
+  };
+  std::vector<std::pair<Vec3, Vec3>> box(surface.size());
+  Vec3 lo = nodes[surface[0][0]], hi = lo;
+  std::vector<double> sides;
+  for (std::size_t t = 0; t < surface.size(); ++t) {
+    box[t] = box_of(surface[t]);
+    lo = vmin(lo, box[t].first);
+    hi = vmax(hi, box[t].second);
+    if (t % 16 == 0) sides.push_back((nodes[surface[t][0]] - nodes[surface[t][1]]).norm());
+  }
+  for (const auto& v : inner) {
+    const auto b = box_of(v);
+    lo = vmin(lo, b.first);
+    hi = vmax(hi, b.second);
+  }
+  std::nth_element(sides.begin(), sides.begin() + sides.size() / 2, sides.end());
+  const double extent = std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z});
+  const double cell = std::max({sides[sides.size() / 2], extent / 500, 1e-12});
+  BucketGrid grid(lo, hi, cell);
+  for (std::size_t t = 0; t < surface.size(); ++t)
+    grid.add(static_cast<int>(t), box[t].first, box[t].second);
+  std::vector<int> seen(surface.size(), -1);
+  for (std::size_t i = 0; i < inner.size(); ++i) {
+    const auto b = box_of(inner[i]);
+    grid.any_in(b.first, b.second, [&](int j) {
+      if (seen[j] == static_cast<int>(i)) return false;
+      seen[j] = static_cast<int>(i);
+      const auto& s = box[static_cast<std::size_t>(j)];
+      if (b.second.x < s.first.x || s.second.x < b.first.x || b.second.y < s.first.y ||
+          s.second.y < b.first.y || b.second.z < s.first.z || s.second.z < b.first.z)
+        return false;
+      if (cross(nodes, inner[i], surface[static_cast<std::size_t>(j)])) {
+        crosses[i] = 1;
+        return true;  // (stops the search for this one)
+      }
+      return false;
+    });
+  }
+  return crosses;
+}
+
 std::vector<OverusedSide> find_overused_sides(const Surface& surface,
                                               const std::vector<std::vector<int>>& face_solids,
                                               const std::vector<std::vector<int>>& edge_faces) {

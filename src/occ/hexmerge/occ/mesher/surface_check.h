@@ -4,6 +4,7 @@
 /// mesh_shape(); no OpenCASCADE): triangles that cross one another, and whether the CAD itself
 /// makes them (faces that meet where they share no edge).
 
+#include <array>
 #include <cstddef>
 #include <string>
 #include <vector>
@@ -26,6 +27,15 @@ struct Crossing {
 /// recovers its boundary for ever).
 std::vector<Crossing> find_crossings(const std::vector<Vec3>& nodes,
                                      const std::vector<SurfaceTriangle>& triangles);
+
+/// Per triangle of `inner` (corners by index into `nodes`), whether it crosses a triangle of
+/// `surface` (corners into the same `nodes`; `surface` may be `inner` itself) by the exact test
+/// of find_crossings(): triangles sharing a corner cross only where they meet beyond it, a common
+/// side or the same triangle is no crossing. Inner facets a tetrahedraliser is asked to keep must
+/// cut neither the surface nor each other (TetGen stops: "a segment and a subface intersect").
+std::vector<char> crosses_any(const std::vector<Vec3>& nodes,
+                              const std::vector<std::array<int, 3>>& surface,
+                              const std::vector<std::array<int, 3>>& inner);
 
 /// A side of the surface's triangles where a solid's boundary passes more than once: more than
 /// two of its triangles on the faces of one solid (the faces of touching solids glued together
