@@ -28,7 +28,7 @@ CALCULIX_DEFAULTS = {"pyramid_placement": "no_boundary_node"}
 # the hexahedra (plate 12 / 8 mm 88.3 / 96.1 %, cylinder 8 / 5 mm 69.7 / 80.1 %) and, in second
 # order (the default), put the peaks within 1 % at the finer sizes: plate +0.38 / -0.16 %,
 # cylinder's bore +1.33 / +0.32 %; with pyramids only off the curved faces (a node on them
-# allowed) +0.90 / -0.32 % and +1.73 / +2.90 %. On real parts at about 50k tets it keeps 0.1 to
+# allowed) +0.90 / -0.32 % and +1.73 / +2.90 %. On real parts at about 50k tets it keeps 0 to
 # 8.6 points less hexahedron volume than off the faces (docs/fem-accuracy.md).
 CALCULIX_SHAPE_DEFAULTS = {"pyramid_placement": "no_curved_boundary_node"}
 
