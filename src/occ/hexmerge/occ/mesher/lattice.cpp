@@ -725,16 +725,9 @@ CoreCounts add_core(const Lattice& lattice, Surroundings& around, const Parity& 
     };
     // The face across `axis` at plane index `plane`, its least corner (u, v) = (p, q).
     auto add_quad = [&](int axis, int plane, int p, int q) {
-      const int u = (axis + 1) % 3, v = (axis + 2) % 3;
-      std::size_t id[4];
+      const std::array<std::size_t, 4> id = face_corners(lattice, axis, plane, p, q);
       Vec3 at[4];
-      static constexpr int kAround[4][2] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
-      for (int m = 0; m < 4; ++m) {
-        int c[3];
-        c[axis] = plane, c[u] = p + kAround[m][0], c[v] = q + kAround[m][1];
-        id[m] = lattice.point_index(c[0], c[1], c[2]);
-        at[m] = point_at(id[m]);
-      }
+      for (int m = 0; m < 4; ++m) at[m] = point_at(id[m]);
       add_triangle(id[0], id[1], id[2], at[0], at[1], at[2]);
       add_triangle(id[0], id[2], id[3], at[0], at[2], at[3]);
     };

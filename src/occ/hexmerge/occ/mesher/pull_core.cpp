@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdint>
 #include <map>
 #include <unordered_map>
 #include <unordered_set>
@@ -148,17 +147,22 @@ std::optional<Vec3> place_inner_apex(const Lattice& lattice, const Surroundings&
 }
 
 // The lattice point indices of the corners of face `f`'s base, around it.
-std::array<std::size_t, 4> base_corners(const Lattice& lattice, const PyramidFace& f) {
-  const int axis = f.dir / 2, u = (axis + 1) % 3, v = (axis + 2) % 3;
+std::array<std::size_t, 4> face_corners(const Lattice& lattice, int axis, int plane, int p, int q) {
+  const int u = (axis + 1) % 3, v = (axis + 2) % 3;
   std::array<std::size_t, 4> out{};
   static constexpr int kAround[4][2] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
   for (int corner = 0; corner < 4; ++corner) {
-    int c[3] = {f.c[0], f.c[1], f.c[2]};
-    c[axis] += f.dir % 2;
-    c[u] += kAround[corner][0], c[v] += kAround[corner][1];
+    int c[3];
+    c[axis] = plane, c[u] = p + kAround[corner][0], c[v] = q + kAround[corner][1];
     out[corner] = lattice.point_index(c[0], c[1], c[2]);
   }
   return out;
+}
+
+std::array<std::size_t, 4> base_corners(const Lattice& lattice, const PyramidFace& f) {
+  const int axis = f.dir / 2;
+  return face_corners(lattice, axis, f.c[axis] + f.dir % 2, f.c[(axis + 1) % 3],
+                      f.c[(axis + 2) % 3]);
 }
 
 // The core's nodes on closing pyramids' bases moved out along the bases' normals (at an edge
@@ -297,7 +301,8 @@ PulledCore pull_core(const Lattice& lattice, const Surroundings& around, const P
           if (seen.insert(cell_index(n)).second) near_cells.push_back({n[0], n[1], n[2]});
         }
   }
-  // Their corners (lattice points, and apexes tagged by kApexTag) and triangles, made once.
+  // Their corners (lattice points, and apexes tagged by kApexTag) and triangles, made once (a
+  // face two cells share comes twice: a triangle and its copy do not cross).
   constexpr std::size_t kApexTag = std::size_t{1} << 62;
   std::vector<std::size_t> corner_of;  // per corner: its lattice point, or apex cell | kApexTag
   std::vector<std::array<int, 3>> face_triangles;
@@ -309,44 +314,24 @@ PulledCore pull_core(const Lattice& lattice, const Surroundings& around, const P
       if (fresh) corner_of.push_back(key);
       return it->second;
     };
-    std::unordered_set<std::uint64_t> seen;  // sides' keys of the triangles' sorted corners
-    const auto add = [&](int a, int b, int c) {
-      std::array<int, 3> key{a, b, c};
-      std::sort(key.begin(), key.end());
-      const std::uint64_t code =
-          (static_cast<std::uint64_t>(key[0]) * 2097152u + key[1]) * 2097152u +
-          static_cast<std::uint64_t>(key[2]);
-      // (The code is one only below 2^21 corners; past that, duplicates stay: a triangle and
-      // its copy do not cross.)
-      if (corner_of.size() >= (std::size_t{1} << 21) || seen.insert(code).second)
-        face_triangles.push_back({a, b, c});
-    };
-    // The quad across `axis` at plane `plane` from least corner (p, q), as add_core()'s add_quad.
-    const auto quad = [&](int axis, int plane, int p, int q) {
-      static constexpr int kAround[4][2] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
-      const int u = (axis + 1) % 3, v = (axis + 2) % 3;
-      int corner[4];
-      for (int m = 0; m < 4; ++m) {
-        int c[3];
-        c[axis] = plane, c[u] = p + kAround[m][0], c[v] = q + kAround[m][1];
-        corner[m] = corner_id(lattice.point_index(c[0], c[1], c[2]));
-      }
-      add(corner[0], corner[1], corner[2]);
-      add(corner[0], corner[2], corner[3]);
+    // A square split on its diagonal from its least corner, as add_core() gives it to TetGen.
+    const auto square = [&](const std::array<std::size_t, 4>& corners) {
+      int k[4];
+      for (int m = 0; m < 4; ++m) k[m] = corner_id(corners[m]);
+      face_triangles.push_back({k[0], k[1], k[2]});
+      face_triangles.push_back({k[0], k[2], k[3]});
     };
     for (const auto& c : near_cells)
       for (int axis = 0; axis < 3; ++axis)
         for (int side = 0; side < 2; ++side)
-          quad(axis, c[axis] + side, c[(axis + 1) % 3], c[(axis + 2) % 3]);
-    for (const PyramidFace& f : faces) {
-      const int axis = f.dir / 2;
-      quad(axis, f.c[axis] + f.dir % 2, f.c[(axis + 1) % 3], f.c[(axis + 2) % 3]);
-    }
+          square(face_corners(lattice, axis, c[axis] + side, c[(axis + 1) % 3], c[(axis + 2) % 3]));
+    for (const PyramidFace& f : faces) square(base_corners(lattice, f));
     first_side = face_triangles.size();
     for (const PyramidFace& f : faces) {
       const std::array<std::size_t, 4> base = base_corners(lattice, f);
       const int apex = corner_id(cell_index(f.n) | kApexTag);
-      for (int m = 0; m < 4; ++m) add(corner_id(base[m]), corner_id(base[(m + 1) % 4]), apex);
+      for (int m = 0; m < 4; ++m)
+        face_triangles.push_back({corner_id(base[m]), corner_id(base[(m + 1) % 4]), apex});
     }
   }
   const auto crossing_faces = [&](std::unordered_set<std::size_t>& failing) {

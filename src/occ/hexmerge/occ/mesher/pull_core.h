@@ -29,8 +29,13 @@ struct PulledCore {
   std::unordered_map<std::size_t, Vec3> node, apex;
 };
 
-/// The lattice point indices of the corners of face `f`'s base, around it ((0, 0), (1, 0),
-/// (1, 1), (0, 1) along the two other axes in cyclic order).
+/// The lattice point indices of the corners of the lattice square across frame axis `axis` at
+/// plane index `plane` whose least corner is (p, q) along the two other axes (u = axis + 1,
+/// v = axis + 2), around it: (p, q), (p + 1, q), (p + 1, q + 1), (p, q + 1). The core's faces go
+/// to TetGen split on the diagonal from the first.
+std::array<std::size_t, 4> face_corners(const Lattice& lattice, int axis, int plane, int p, int q);
+
+/// The lattice point indices of the corners of face `f`'s base, around it (face_corners()).
 std::array<std::size_t, 4> base_corners(const Lattice& lattice, const PyramidFace& f);
 
 /// The lattice points `points` (indices) where the lattice has them.

@@ -90,42 +90,64 @@ Vec3 centroid(const std::vector<Vec3>& nodes, const SurfaceTriangle& t) {
   return (nodes[t.node[0]] + nodes[t.node[1]] + nodes[t.node[2]]) * (1.0 / 3);
 }
 
-}  // namespace
+using Box = std::pair<Vec3, Vec3>;
 
-std::vector<Crossing> find_crossings(const std::vector<Vec3>& nodes,
-                                     const std::vector<SurfaceTriangle>& triangles) {
-  std::vector<Crossing> found;
-  if (triangles.empty()) return found;
-  // Buckets of about the median side: a triangle meets a few dozen others' boxes.
-  Vec3 lo = nodes[triangles[0].node[0]], hi = lo;
+bool boxes_overlap(const Box& a, const Box& b) {
+  return !(a.second.x < b.first.x || b.second.x < a.first.x || a.second.y < b.first.y ||
+           b.second.y < a.first.y || a.second.z < b.first.z || b.second.z < a.first.z);
+}
+
+Box box_of(const std::vector<Vec3>& nodes, const std::array<int, 3>& v) {
+  return {vmin(nodes[v[0]], vmin(nodes[v[1]], nodes[v[2]])),
+          vmax(nodes[v[0]], vmax(nodes[v[1]], nodes[v[2]]))};
+}
+
+// Triangles' boxes, in a grid of buckets about their median side wide (not finer than 1/500 of
+// their extent: the buckets stay under 1.25e8), so that a triangle meets a few dozen others'.
+struct BoxedTriangles {
+  std::vector<Box> box;
+  BucketGrid grid;
+};
+
+template <typename Corners>  // corners(t): triangle t's node indices
+BoxedTriangles boxed_triangles(const std::vector<Vec3>& nodes, std::size_t count,
+                               const Corners& corners) {
+  std::vector<Box> box(count);
+  Vec3 lo = nodes[corners(0)[0]], hi = lo;
   std::vector<double> sides;
-  std::vector<std::pair<Vec3, Vec3>> box(triangles.size());
-  for (std::size_t t = 0; t < triangles.size(); ++t) {
-    const auto& v = triangles[t].node;
-    box[t] = {vmin(nodes[v[0]], vmin(nodes[v[1]], nodes[v[2]])),
-              vmax(nodes[v[0]], vmax(nodes[v[1]], nodes[v[2]]))};
+  for (std::size_t t = 0; t < count; ++t) {
+    const std::array<int, 3>& v = corners(t);
+    box[t] = box_of(nodes, v);
     lo = vmin(lo, box[t].first);
     hi = vmax(hi, box[t].second);
     if (t % 16 == 0) sides.push_back((nodes[v[0]] - nodes[v[1]]).norm());
   }
   std::nth_element(sides.begin(), sides.begin() + sides.size() / 2, sides.end());
   const double extent = std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z});
-  // (Not finer than 1/500 of the extent: the grid's buckets stay under 1.25e8.)
   const double cell = std::max({sides[sides.size() / 2], extent / 500, 1e-12});
   BucketGrid grid(lo, hi, cell);
-  for (std::size_t t = 0; t < triangles.size(); ++t)
+  for (std::size_t t = 0; t < count; ++t)
     grid.add(static_cast<int>(t), box[t].first, box[t].second);
+  return {std::move(box), std::move(grid)};
+}
+
+}  // namespace
+
+std::vector<Crossing> find_crossings(const std::vector<Vec3>& nodes,
+                                     const std::vector<SurfaceTriangle>& triangles) {
+  std::vector<Crossing> found;
+  if (triangles.empty()) return found;
+  const BoxedTriangles boxed = boxed_triangles(
+      nodes, triangles.size(), [&](std::size_t t) -> const auto& { return triangles[t].node; });
+  const std::vector<Box>& box = boxed.box;
   std::vector<int> seen(triangles.size(), -1);
   std::set<std::pair<int, int>> faces_found;
   for (std::size_t t = 0; t < triangles.size(); ++t) {
     const int i = static_cast<int>(t);
-    grid.any_in(box[t].first, box[t].second, [&](int j) {
+    boxed.grid.any_in(box[t].first, box[t].second, [&](int j) {
       if (j <= i || seen[j] == i) return false;
       seen[j] = i;
-      const auto &a = box[t], &b = box[j];
-      if (a.second.x < b.first.x || b.second.x < a.first.x || a.second.y < b.first.y ||
-          b.second.y < a.first.y || a.second.z < b.first.z || b.second.z < a.first.z)
-        return false;
+      if (!boxes_overlap(box[t], box[j])) return false;
       const int fa = triangles[t].face, fb = triangles[j].face;
       const std::pair<int, int> faces{std::min(fa, fb), std::max(fa, fb)};
       if (!faces_found.count(faces) && cross(nodes, triangles[t].node, triangles[j].node)) {
@@ -143,40 +165,15 @@ std::vector<char> crosses_any(const std::vector<Vec3>& nodes,
                               const std::vector<std::array<int, 3>>& inner) {
   std::vector<char> crosses(inner.size(), 0);
   if (surface.empty() || inner.empty()) return crosses;
-  const auto box_of = [&](const std::array<int, 3>& v) {
-    return std::pair{vmin(nodes[v[0]], vmin(nodes[v[1]], nodes[v[2]])),
-                     vmax(nodes[v[0]], vmax(nodes[v[1]], nodes[v[2]]))};
-  };
-  std::vector<std::pair<Vec3, Vec3>> box(surface.size());
-  Vec3 lo = nodes[surface[0][0]], hi = lo;
-  std::vector<double> sides;
-  for (std::size_t t = 0; t < surface.size(); ++t) {
-    box[t] = box_of(surface[t]);
-    lo = vmin(lo, box[t].first);
-    hi = vmax(hi, box[t].second);
-    if (t % 16 == 0) sides.push_back((nodes[surface[t][0]] - nodes[surface[t][1]]).norm());
-  }
-  for (const auto& v : inner) {
-    const auto b = box_of(v);
-    lo = vmin(lo, b.first);
-    hi = vmax(hi, b.second);
-  }
-  std::nth_element(sides.begin(), sides.begin() + sides.size() / 2, sides.end());
-  const double extent = std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z});
-  const double cell = std::max({sides[sides.size() / 2], extent / 500, 1e-12});
-  BucketGrid grid(lo, hi, cell);
-  for (std::size_t t = 0; t < surface.size(); ++t)
-    grid.add(static_cast<int>(t), box[t].first, box[t].second);
+  const BoxedTriangles boxed = boxed_triangles(
+      nodes, surface.size(), [&](std::size_t t) -> const auto& { return surface[t]; });
   std::vector<int> seen(surface.size(), -1);
   for (std::size_t i = 0; i < inner.size(); ++i) {
-    const auto b = box_of(inner[i]);
-    grid.any_in(b.first, b.second, [&](int j) {
+    const Box b = box_of(nodes, inner[i]);
+    boxed.grid.any_in(b.first, b.second, [&](int j) {
       if (seen[j] == static_cast<int>(i)) return false;
       seen[j] = static_cast<int>(i);
-      const auto& s = box[static_cast<std::size_t>(j)];
-      if (b.second.x < s.first.x || s.second.x < b.first.x || b.second.y < s.first.y ||
-          s.second.y < b.first.y || b.second.z < s.first.z || s.second.z < b.first.z)
-        return false;
+      if (!boxes_overlap(b, boxed.box[static_cast<std::size_t>(j)])) return false;
       if (cross(nodes, inner[i], surface[static_cast<std::size_t>(j)])) {
         crosses[i] = 1;
         return true;  // (stops the search for this one)
