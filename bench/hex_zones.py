@@ -66,11 +66,7 @@ def cell_volumes_and_centroids(mesh):
 
 
 def boundary_samples(points, tets):
-    faces = np.concatenate([tets[:, [1, 2, 3]], tets[:, [0, 2, 3]], tets[:, [0, 1, 3]], tets[:, [0, 1, 2]]])
-    key = np.sort(faces, axis=1)
-    _, inverse, counts = np.unique(key, axis=0, return_inverse=True, return_counts=True)
-    boundary = key[counts[inverse.ravel()] == 1]
-    p = points[boundary]
+    p = points[boundary_triangles(tets)]
     samples = [p[:, 0], p[:, 1], p[:, 2], p.mean(axis=1), (p[:, 0] + p[:, 1]) / 2, (p[:, 1] + p[:, 2]) / 2,
                (p[:, 2] + p[:, 0]) / 2]
     return np.concatenate(samples)
@@ -103,17 +99,10 @@ def boundary_classes(points, triangles, frame):
     return np.where(flat & axis_normal, 0, np.where(flat, 1, 2)), normal
 
 
-CORNERS_HEX = [(0, 1, 3, 4), (1, 2, 0, 5), (2, 3, 1, 6), (3, 0, 2, 7), (4, 7, 5, 0), (5, 4, 6, 1), (6, 5, 7, 2),
-               (7, 6, 4, 3)]
-
-
 def hex_scaled_jacobian(p):
-    worst = 1.0
-    for i, j, k, m in CORNERS_HEX:
-        e1, e2, e3 = p[j] - p[i], p[k] - p[i], p[m] - p[i]
-        worst = min(worst, np.dot(np.cross(e1, e2), e3) /
-                    max(np.linalg.norm(e1) * np.linalg.norm(e2) * np.linalg.norm(e3), 1e-300))
-    return worst
+    """Verdict's scaled Jacobian of one hexahedron (8 x 3 coordinates, VTK order)."""
+    corners, scale = real_parts.CORNERS[3]
+    return float(real_parts.corner_scaled_jacobians(p[None], corners, scale)[0])
 
 
 def buffer_bound(mesh, points, samples, h):

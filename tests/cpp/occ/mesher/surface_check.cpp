@@ -17,15 +17,18 @@ using mesher::SurfaceTriangle;
 
 SurfaceTriangle triangle(int a, int b, int c, int face = 0) { return {{a, b, c}, {}, face}; }
 
+// A triangle in z = 0 and others through it, beside it, sharing a node with it.
+const std::vector<Vec3> kNodes = {
+    {0, 0, 0},      {2, 0, 0},     {0, 2, 0},  // 0-2: a triangle in z = 0
+    {0.5, 0.5, -1}, {0.5, 0.5, 1}, {3, 3, 0},  // 3-5: through it at (0.5, 0.5)
+    {5, 0, 0},      {6, 0, 0},     {5, 1, 0},  // 6-8: beside it
+    {1, 1, 1},      {1, 1, -1},                // 9, 10: with node 0, through (1, 1, 0)
+    {0, -1, 0},     {-1, 0, 0}};               // 11, 12: with node 0, outside it
+
 // Two triangles crossing through each other, side by side, sharing a node (meeting beyond it or
 // not), sharing a side.
 TEST(find_crossings, by_exact_predicates) {
-  const std::vector<Vec3> nodes = {
-      {0, 0, 0},      {2, 0, 0},     {0, 2, 0},  // 0-2: a triangle in z = 0
-      {0.5, 0.5, -1}, {0.5, 0.5, 1}, {3, 3, 0},  // 3-5: through it at (0.5, 0.5)
-      {5, 0, 0},      {6, 0, 0},     {5, 1, 0},  // 6-8: beside it
-      {1, 1, 1},      {1, 1, -1},                // 9, 10: with node 0, through (1, 1, 0)
-      {0, -1, 0},     {-1, 0, 0}};               // 11, 12: with node 0, outside it
+  const std::vector<Vec3>& nodes = kNodes;
   const auto find = [&](const std::vector<SurfaceTriangle>& triangles) {
     return mesher::find_crossings(nodes, triangles);
   };
@@ -48,12 +51,7 @@ TEST(find_crossings, by_exact_predicates) {
 // the same test: through it, beyond a shared node; not beside it, not at the shared node only,
 // not along a shared side, not itself.
 TEST(crosses_any, each_triangle_against_a_list) {
-  const std::vector<Vec3> nodes = {
-      {0, 0, 0},      {2, 0, 0},     {0, 2, 0},  // 0-2: a triangle in z = 0
-      {0.5, 0.5, -1}, {0.5, 0.5, 1}, {3, 3, 0},  // 3-5: through it at (0.5, 0.5)
-      {5, 0, 0},      {6, 0, 0},     {5, 1, 0},  // 6-8: beside it
-      {1, 1, 1},      {1, 1, -1},                // 9, 10: with node 0, through (1, 1, 0)
-      {0, -1, 0},     {-1, 0, 0}};               // 11, 12: with node 0, outside it
+  const std::vector<Vec3>& nodes = kNodes;
   const std::vector<std::array<int, 3>> surface = {{0, 1, 2}};
   const std::vector<std::array<int, 3>> inner = {{3, 4, 5},   {6, 7, 8},  {0, 9, 10},
                                                  {0, 11, 12}, {1, 0, 11}, {0, 1, 2}};
