@@ -33,20 +33,32 @@ std::vector<int> point_faces(std::vector<int> given_face, std::size_t nb_points,
 double max_boundary_distance(const Shape& shape, const TetMesh& mesh,
                              const std::vector<int>& vertex_face, double tolerance) {
   const std::size_t made = mesh.points.size() / 3;
-  // Face f of a tet is the one opposite its vertex f (TetTopology).
+  // The boundary nodes and, per node, the boundary nodes across a side of a boundary triangle
+  // (face f of a tet is the one opposite its vertex f, TetTopology).
   const TetTopology topology(mesh);
   std::vector<char> boundary(made, 0);
+  std::vector<std::vector<index_t>> beside(made);
   for (index_t t = 0; t < mesh.nb_tets(); ++t)
     for (int f = 0; f < 4; ++f)
       if (topology.on_boundary(t, f))
-        for (int k = 0; k < 4; ++k)
-          if (k != f) boundary[mesh.tet(t)[k]] = 1;
+        for (int k = 0; k < 4; ++k) {
+          if (k == f) continue;
+          const index_t v = mesh.tet(t)[k];
+          boundary[v] = 1;
+          for (int j = 0; j < 4; ++j)
+            if (j != f && j != k) beside[v].push_back(mesh.tet(t)[j]);
+        }
   std::vector<std::unique_ptr<ShapeAnalysis_Surface>> analysis(shape.faces.Extent());
-  std::vector<gp_Pnt2d> last(analysis.size());
-  std::vector<char> has_last(analysis.size(), 0);
+  std::vector<gp_Pnt2d> uv(made);
+  std::vector<char> projected(made, 0);
   double worst = 0;
-  for (std::size_t v = 0; v < made; ++v) {
-    if (!boundary[v]) continue;
+  // The nodes breadth first along the boundary triangles, so that each but the first of a patch
+  // has a projected neighbour on its face: Newton's method from that neighbour's parameters
+  // finds the node on the face when it is there (the neighbour lies within a side of it); else
+  // the global search (Extrema's grid: on a helical spring's B-spline face, whose cache is
+  // rebuilt at every evaluation, most of the run when started from the face's last node), the
+  // nearer of the two taken.
+  const auto measure = [&](std::size_t v) {
     const int face = v < vertex_face.size() ? vertex_face[v] : -1;
     const gp_Pnt p(mesh.points[3 * v], mesh.points[3 * v + 1], mesh.points[3 * v + 2]);
     if (face < 0) {
@@ -58,20 +70,19 @@ double max_boundary_distance(const Shape& shape, const TetMesh& mesh,
       const TopoDS_Face& f = TopoDS::Face(shape.faces(face + 1));
       analysis[face] = std::make_unique<ShapeAnalysis_Surface>(BRep_Tool::Surface(f));
     }
-    // BRep_Tool::Surface(face) is the face's surface with its location applied. Newton's
-    // method from the face's last node first: a point it finds within `tolerance` shows the
-    // node on the face; else the global search (Extrema's grid, which took most of the time:
-    // gmsh_917_fusee at its 50k size 1.39 -> 0.61 s), the nearer of the two taken.
+    // BRep_Tool::Surface(face) is the face's surface with its location applied.
     double gap = std::numeric_limits<double>::max();
-    if (has_last[face]) {
-      last[face] = analysis[face]->NextValueOfUV(last[face], p, tolerance, -1.0);
-      gap = analysis[face]->Gap();
-    }
+    for (const index_t w : beside[v])
+      if (projected[w] && w < vertex_face.size() && vertex_face[w] == face) {
+        uv[v] = analysis[face]->NextValueOfUV(uv[w], p, tolerance, -1.0);
+        gap = analysis[face]->Gap();
+        break;
+      }
     if (gap > tolerance) {
-      last[face] = analysis[face]->ValueOfUV(p, tolerance);
-      gap = std::min(gap, analysis[face]->Gap());
-      has_last[face] = 1;
+      const gp_Pnt2d found = analysis[face]->ValueOfUV(p, tolerance);
+      if (analysis[face]->Gap() < gap) gap = analysis[face]->Gap(), uv[v] = found;
     }
+    projected[v] = 1;
     // Off the face's surface by more than 100 times the tolerance and the worst so far:
     // measured to the face with its edges too (BRepExtrema), the nearer taken. A node on a CAD
     // edge lies on that edge's curve, which a tolerant file puts off the face's surface by up to
@@ -83,6 +94,18 @@ double max_boundary_distance(const Shape& shape, const TetMesh& mesh,
       if (to_face.IsDone() && to_face.NbSolution() > 0) gap = std::min(gap, to_face.Value());
     }
     worst = std::max(worst, gap);
+  };
+  std::vector<char> queued(made, 0);
+  std::vector<std::size_t> queue;
+  for (std::size_t seed = 0; seed < made; ++seed) {
+    if (!boundary[seed] || queued[seed]) continue;
+    queue.assign(1, seed);
+    queued[seed] = 1;
+    for (std::size_t i = 0; i < queue.size(); ++i) {
+      measure(queue[i]);
+      for (const index_t w : beside[queue[i]])
+        if (!queued[w]) queued[w] = 1, queue.push_back(w);
+    }
   }
   return worst;
 }

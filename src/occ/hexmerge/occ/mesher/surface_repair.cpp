@@ -546,11 +546,18 @@ void refine(const Shape& s, Surface& surface, double target, double deflection,
       // too close together). With only the whole way and h / 4, needles whose node sat within
       // h / 4 of the seam's nodes stayed (cylinder: tets of scaled Jacobian 0.006 on triangles
       // of 179.4 degrees at the seam).
+      // The node's parameters on its face (a seam node's differ by triangle: either is a start).
+      // Newton's method from them finds the surface's point nearest the goal, which lies within
+      // a side of the node; the global search only where it fails (NextValueOfUV falls back to
+      // it). The global search alone rebuilt a B-spline face's cache at every evaluation: a
+      // helical spring at h 0.7, 98,494 projections in 170 s of its 180.
+      const SurfaceTriangle& first = tris[around[n].front()];
+      const UV& start = first.uv[first.node[0] == n ? 0 : first.node[1] == n ? 1 : 2];
       bool keep = false;
       for (double fraction : {1.0, 0.5, 0.25}) {
         const Vec3 goal = old + (centroid - old) * fraction;
-        const gp_Pnt2d uv =
-            analysis[face]->ValueOfUV(gp_Pnt(goal.x, goal.y, goal.z), 1e-9 * target);
+        const gp_Pnt2d uv = analysis[face]->NextValueOfUV(
+            point2d(start), gp_Pnt(goal.x, goal.y, goal.z), 1e-9 * target);
         surface.nodes[n] = of(analysis[face]->Value(uv));
         keep = smallest_angle(n) > before &&
                shortest_side(n) >= std::min(shortest, kNeedleNearest * size_at(n)) &&
