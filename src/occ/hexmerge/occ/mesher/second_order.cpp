@@ -7,12 +7,15 @@
 #include <TopoDS.hxx>
 #include <TopoDS_Edge.hxx>
 #include <TopoDS_Face.hxx>
+#include <gp_Pnt2d.hxx>
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <map>
 #include <memory>
 #include <optional>
+#include <unordered_map>
 
 #include "hexmerge/mesh/tet_topology.h"
 #include "hexmerge/occ/mesher/shape.h"
@@ -160,8 +163,16 @@ Tet10Mesh second_order_mesh(const Shape& shape, const TetMesh& mesh,
     }
   }
 
-  // The boundary mid nodes on the CAD.
+  // The boundary mid nodes on the CAD. Each projected onto its face by Newton's method from the
+  // parameters found for a mid node of an edge at one of its ends (the edges come by their ends'
+  // numbers: most have one), the global search only for the others and where Newton's method
+  // fails (NextValueOfUV falls back to it). The global search alone, which rebuilds a B-spline
+  // face's cache at every evaluation: a helical spring at h 0.8, 72 s for 26,724 mid nodes.
   std::vector<std::unique_ptr<ShapeAnalysis_Surface>> surfaces(shape.faces.Extent());
+  std::unordered_map<std::uint64_t, gp_Pnt2d> near_node;  // node * faces + face -> parameters
+  const auto node_on_face = [&](std::uint64_t v, int face) {
+    return v * static_cast<std::uint64_t>(shape.faces.Extent()) + static_cast<std::uint64_t>(face);
+  };
   std::vector<std::size_t> moved;
   for (const auto& [e, faces] : edge_faces) {
     const Vec3 a = point(mesh.points, keys[e] >> 32), b = point(mesh.points, keys[e] & 0xffffffffu);
@@ -174,7 +185,15 @@ Tet10Mesh second_order_mesh(const Shape& shape, const TetMesh& mesh,
         const TopoDS_Face& f = TopoDS::Face(shape.faces(face + 1));
         surfaces[face] = std::make_unique<ShapeAnalysis_Surface>(BRep_Tool::Surface(f));
       }
-      on = of(surfaces[face]->Value(surfaces[face]->ValueOfUV(p, tolerance)));
+      const std::uint64_t ends[2] = {node_on_face(keys[e] >> 32, face),
+                                     node_on_face(keys[e] & 0xffffffffu, face)};
+      auto start = near_node.find(ends[0]);
+      if (start == near_node.end()) start = near_node.find(ends[1]);
+      const gp_Pnt2d uv = start != near_node.end()
+                              ? surfaces[face]->NextValueOfUV(start->second, p, tolerance, -1.0)
+                              : surfaces[face]->ValueOfUV(p, tolerance);
+      near_node[ends[0]] = near_node[ends[1]] = uv;
+      on = of(surfaces[face]->Value(uv));
     } else if (faces.size() == 2) {
       // On the CAD edge between the two faces, the nearest when they share several.
       double best = std::numeric_limits<double>::infinity();
