@@ -7,10 +7,10 @@
 #include <TopoDS.hxx>
 #include <TopoDS_Edge.hxx>
 #include <TopoDS_Face.hxx>
-#include <gp_Pnt2d.hxx>
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <gp_Pnt2d.hxx>
 #include <limits>
 #include <map>
 #include <memory>
