@@ -337,8 +337,9 @@ def test_every_core_cell_of_an_assembly_is_a_hexahedron(h: float) -> None:
     the latter counting hexahedra of cells that are not core cells, when this was changed).
     At h 6.709 (its 50k size now) a lattice cell (scaled Jacobian 1, four faces shared with the
     block) lost a conflict (their quads touched one tet) to a planar-quad hexahedron of 0.65
-    with five, and the cells beside it left after it: the block kept 2,360 of the 2,965 core cells (57.9 % hex volume); a
-    near-perfect hexahedron now stays before a planar-quad one (2,986, 62.0 %)."""
+    with five, and the cells beside it left after it: the block kept 2,360 of the 2,965 core
+    cells (57.9 % hex volume); a near-perfect hexahedron now stays before a planar-quad one
+    (2,986, 62.0 %)."""
     import numpy as np
 
     mesh, report = hexmerge.mesh_shape(CAD / "gmsh_as1-tu-203.stp", h)
