@@ -4,6 +4,10 @@
 #include <cmath>
 #include <limits>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 #include "hexmerge/geometry/vec3.h"
 
 namespace hexmerge {
@@ -77,14 +81,54 @@ double cell_volume(CellType type, const double* points, const index_t* vertices)
 namespace {
 
 // scaled_jacobian() of a tet, to the last bit: the same corners and arithmetic as the general
-// loop (cell_type.cpp's tet corners {0,1,2,3}, {1,2,0,3}, {2,0,1,3}, {3,0,2,1}), with each of the
-// six edge lengths computed once (|a - b| and |b - a| are the same double). The mesher's flips
-// and node moves evaluate tets by the million.
+// loop (cell_type.cpp's tet corners {0,1,2,3}, {1,2,0,3}, {2,0,1,3}, {3,0,2,1}). The mesher's flips
+// and node moves evaluate tets by the million: with SSE2 (every x86-64) two corners go in each
+// register, each lane doing exactly the scalar operations in the same order (IEEE addition,
+// subtraction, multiplication, division and square root round the same in a lane as alone; no
+// fused multiply-add), so the result is the same double.
+#if defined(__SSE2__)
+struct Lanes {  // a vector per lane: lane 0 and lane 1 are two corners
+  __m128d x, y, z;
+};
+inline Lanes lanes(const Vec3& low, const Vec3& high) {
+  return {_mm_set_pd(high.x, low.x), _mm_set_pd(high.y, low.y), _mm_set_pd(high.z, low.z)};
+}
+inline Lanes operator-(const Lanes& a, const Lanes& b) {
+  return {_mm_sub_pd(a.x, b.x), _mm_sub_pd(a.y, b.y), _mm_sub_pd(a.z, b.z)};
+}
+inline __m128d dot(const Lanes& a, const Lanes& b) {  // Vec3::dot's order
+  return _mm_add_pd(_mm_add_pd(_mm_mul_pd(a.x, b.x), _mm_mul_pd(a.y, b.y)), _mm_mul_pd(a.z, b.z));
+}
+inline Lanes cross(const Lanes& a, const Lanes& b) {  // Vec3::cross's order
+  return {_mm_sub_pd(_mm_mul_pd(a.y, b.z), _mm_mul_pd(a.z, b.y)),
+          _mm_sub_pd(_mm_mul_pd(a.z, b.x), _mm_mul_pd(a.x, b.z)),
+          _mm_sub_pd(_mm_mul_pd(a.x, b.y), _mm_mul_pd(a.y, b.x))};
+}
+// The corners' ratios det3(a, b, c) / (|a| |b| |c|) (0 where the product is not positive), for
+// the corners at q with edges a, b, c in each lane. |p - q| and |q - p| are the same double.
+inline __m128d corner_ratios(const Lanes& q, const Lanes& a_end, const Lanes& b_end,
+                             const Lanes& c_end) {
+  const Lanes a = a_end - q, b = b_end - q, c = c_end - q;
+  const __m128d la = _mm_sqrt_pd(dot(a, a)), lb = _mm_sqrt_pd(dot(b, b)),
+                lc = _mm_sqrt_pd(dot(c, c));
+  const __m128d l = _mm_mul_pd(_mm_mul_pd(la, lb), lc);
+  const __m128d ratio = _mm_div_pd(dot(cross(a, b), c), l);
+  return _mm_and_pd(_mm_cmpgt_pd(l, _mm_setzero_pd()), ratio);
+}
+#endif
+
 double tet_scaled_jacobian(const double* points, const index_t* vertices, double scale) {
   const Vec3 p0 = Vec3::of(points + 3 * static_cast<std::size_t>(vertices[0]));
   const Vec3 p1 = Vec3::of(points + 3 * static_cast<std::size_t>(vertices[1]));
   const Vec3 p2 = Vec3::of(points + 3 * static_cast<std::size_t>(vertices[2]));
   const Vec3 p3 = Vec3::of(points + 3 * static_cast<std::size_t>(vertices[3]));
+  double ratio[4];
+#if defined(__SSE2__)
+  // Corners 0 and 1, then 2 and 3.
+  _mm_storeu_pd(ratio, corner_ratios(lanes(p0, p1), lanes(p1, p2), lanes(p2, p0), lanes(p3, p3)));
+  _mm_storeu_pd(ratio + 2,
+                corner_ratios(lanes(p2, p3), lanes(p0, p0), lanes(p1, p2), lanes(p3, p1)));
+#else
   const Vec3 e01 = p1 - p0, e02 = p2 - p0, e03 = p3 - p0;
   const Vec3 e12 = p2 - p1, e10 = p0 - p1, e13 = p3 - p1;
   const Vec3 e20 = p0 - p2, e21 = p1 - p2, e23 = p3 - p2;
@@ -95,11 +139,13 @@ double tet_scaled_jacobian(const double* points, const index_t* vertices, double
     const double l = la * lb * lc;
     return l > 0.0 ? det3(a, b, c) / l : 0.0;
   };
+  ratio[0] = corner(e01, e02, e03, l01, l02, l03);
+  ratio[1] = corner(e12, e10, e13, l12, l01, l13);
+  ratio[2] = corner(e20, e21, e23, l02, l12, l23);
+  ratio[3] = corner(e30, e32, e31, l03, l23, l13);
+#endif
   double worst = 1e300;  // as the general loop starts (a NaN corner then leaves it)
-  worst = std::min(worst, corner(e01, e02, e03, l01, l02, l03));
-  worst = std::min(worst, corner(e12, e10, e13, l12, l01, l13));
-  worst = std::min(worst, corner(e20, e21, e23, l02, l12, l23));
-  worst = std::min(worst, corner(e30, e32, e31, l03, l23, l13));
+  for (const double r : ratio) worst = std::min(worst, r);
   return std::min(1.0, worst * scale);
 }
 

@@ -2,11 +2,14 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <random>
 #include <vector>
 
 #include "fixtures.h"
+#include "hexmerge/geometry/vec3.h"
 
 namespace hexmerge {
 namespace {
@@ -100,6 +103,50 @@ TEST(scaled_jacobian, known_cells) {
   // Flattened tet: zero.
   const std::vector<double> flat = {0, 0, 0, 1, 0, 0, 0, 1, 0, 1, 1, 0};
   EXPECT_NEAR(scaled_jacobian(CellType::Tet, flat.data(), ids), 0.0, 1e-15);
+}
+
+// The tet's scaled Jacobian is computed on its own path (two corners per SSE2 register); it must
+// be the general corner loop's double, bit for bit: the mesher's flips and moves compare them.
+TEST(scaled_jacobian, a_tet_is_the_general_loops_double_bit_for_bit) {
+  const CellDescriptor& d = descriptor(CellType::Tet);
+  auto general = [&](const std::vector<double>& p, const index_t* v) {
+    double worst = 1e300;
+    for (int k = 0; k < d.nb_corners; ++k) {
+      const auto& c = d.corner[k];
+      const Vec3 q = Vec3::of(&p[3 * v[c[0]]]);
+      const Vec3 e1 = Vec3::of(&p[3 * v[c[1]]]) - q, e2 = Vec3::of(&p[3 * v[c[2]]]) - q,
+                 e3 = Vec3::of(&p[3 * v[c[3]]]) - q;
+      const double l = e1.norm() * e2.norm() * e3.norm();
+      worst = std::min(worst, l > 0.0 ? det3(e1, e2, e3) / l : 0.0);
+    }
+    return std::min(1.0, worst * d.jacobian_scale);
+  };
+  std::mt19937_64 random(7);
+  std::uniform_real_distribution<double> coordinate(-1.0, 1.0);
+  std::vector<double> p(3 * 4);
+  const index_t ids[4] = {0, 1, 2, 3};
+  std::size_t tested = 0, negative = 0, flat = 0;
+  for (int i = 0; i < 200000; ++i) {
+    for (double& x : p) x = coordinate(random);
+    const int kind = i % 5;
+    if (kind == 1)  // vertex 3 on the line through 0 and 1: flat, with rounding
+      for (int a = 0; a < 3; ++a) p[9 + a] = p[a] + 0.37 * (p[3 + a] - p[a]);
+    if (kind == 2)  // two vertices at one place: an edge of length 0
+      for (int a = 0; a < 3; ++a) p[6 + a] = p[a];
+    if (kind == 3)  // a sliver: vertex 3 near the plane of the others
+      for (int a = 0; a < 3; ++a)
+        p[9 + a] = 0.3 * p[a] + 0.3 * p[3 + a] + 0.4 * p[6 + a] + 1e-9 * coordinate(random);
+    if (kind == 4)  // far from the origin, small: cancellation in the differences
+      for (double& x : p) x = 1e6 + 1e-3 * x;
+    const double fast = scaled_jacobian(CellType::Tet, p.data(), ids);
+    const double loop = general(p, ids);
+    ASSERT_EQ(std::memcmp(&fast, &loop, sizeof fast), 0)
+        << "tet " << i << ": " << fast << " against " << loop;
+    ++tested, negative += fast < 0, flat += fast == 0;
+  }
+  EXPECT_EQ(tested, 200000u);
+  EXPECT_GT(negative, 1000u);  // both orientations met
+  EXPECT_GT(flat, 1000u);      // the zero-length edges' corners
 }
 
 TEST(AngleBound, predicates_answer_as_the_angles_do) {
