@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <array>
+#include <functional>
 #include <set>
 #include <utility>
 
@@ -315,10 +316,12 @@ class Stage {
   /// between the prism's triangles: the pyramid's tets, one with p and one with n, and the ring
   /// tet on the face's diagonal are a second prism on q. The new edge is tried as long as those
   /// sides (then kSplitLengths shorter), centred on p; p's star is cut by the plane through p
-  /// across the edge, or by a cycle of three link edges through the diagonal. On success the
-  /// hexahedron, passing the acceptance, is appended to `list` and true is returned; otherwise
-  /// nothing is changed.
-  bool split_into_hex(Candidates& list, index_t ci, const QuadFace& q) {
+  /// across the edge, or by a cycle of three link edges through the diagonal. Each hexahedron
+  /// made that passes the acceptance is appended to `list` and given to `closes` (its index), which
+  /// closes its faces or changes nothing: true at the first it keeps; otherwise nothing is
+  /// changed.
+  bool split_into_hex(Candidates& list, index_t ci, const QuadFace& q,
+                      const std::function<bool(index_t)>& closes) {
     const Candidate prism = list[ci];  // a copy: the list grows
     std::vector<index_t> fan_vertices, fan_tets;
     if (!fan(q, prism, fan_vertices, fan_tets) || fan_tets.size() != 2) return false;
@@ -391,11 +394,17 @@ class Stage {
           std::sort(tets.begin(), tets.end());
           Candidate hex = prism;  // graph: not read by the stage
           hex.type = CellType::Hex;
-          hex.vertices = sj_up >= sj_down ? up : down;
-          hex.quality = static_cast<float>(std::max(sj_up, sj_down));
+          const double* points = m_.point(0);
+          const double made_up = scaled_jacobian(CellType::Hex, points, up.data());
+          const double made_down = scaled_jacobian(CellType::Hex, points, down.data());
+          hex.vertices = made_up >= made_down ? up : down;
+          hex.quality = static_cast<float>(std::max(made_up, made_down));
           list.push_back(hex, tets.data(), 6);
           const Candidate& made = list[list.size() - 1];
-          if (accepted(list, made, NO_VERTEX, options_.min_pyramid_quality)) return true;
+          if (accepted(list, made, NO_VERTEX, options_.min_pyramid_quality) &&
+              closes(static_cast<index_t>(list.size() - 1))) {
+            return true;
+          }
           list.pop_back();
         }
         m_.undo(start);
@@ -440,7 +449,6 @@ class Stage {
         link_edges.insert({std::min(e0, e1), std::max(e0, e1)});
       }
     }
-    add(ahead);
     const auto edge = [](index_t x, index_t y) {
       return std::make_pair(std::min(x, y), std::max(x, y));
     };
@@ -472,6 +480,7 @@ class Stage {
         if (std::find(reached.begin(), reached.end(), keep) == reached.end()) add(reached);
       }
     }
+    add(ahead);
     return sides;
   }
 
@@ -752,17 +761,20 @@ PostMergeResult close_open_quads(const TetMesh& mesh, const Candidates& found,
       if (!all_alive(m, cands.tets(i)) || !stage.quad_faces(cands[i], prism_faces)) continue;
       for (const QuadFace& q : prism_faces) {
         if (stage.on_boundary(q)) continue;
-        const std::size_t start = m.mark();
-        if (!stage.split_into_hex(candidates, i, q)) continue;
-        const index_t h = static_cast<index_t>(cands.size() - 1);
-        locked_here.clear();
-        if (stage.quad_faces(cands[h], faces) &&
-            close_faces(stage, m, cands[h], cands.tets(h), faces, 1, locked_here)) {
+        const auto closes = [&](index_t h) {
+          const std::size_t start = m.mark();
+          locked_here.clear();
+          if (stage.quad_faces(cands[h], faces) &&
+              close_faces(stage, m, cands[h], cands.tets(h), faces, 1, locked_here)) {
+            return true;
+          }
+          give_up(m, locked_here, start);
+          return false;
+        };
+        if (stage.split_into_hex(candidates, i, q, closes)) {
           ++result.split_hexes;
           break;
         }
-        give_up(m, locked_here, start);
-        candidates.pop_back();
       }
     }
   }
