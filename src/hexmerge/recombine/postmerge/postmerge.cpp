@@ -315,14 +315,14 @@ class Stage {
   /// one hexahedron when p is split into an edge p-n parallel to the face's sides that run
   /// between the prism's triangles: the pyramid's tets, one with p and one with n, and the ring
   /// tet on the face's diagonal are a second prism on q. The new edge is tried as long as those
-  /// sides (then kSplitLengths shorter), centred on p; p's star is cut by the plane through p
-  /// across the edge, or by a cycle of three link edges through the diagonal. Each hexahedron
-  /// made that passes the acceptance is appended to `list` and given to `closes` (its index), which
-  /// closes its faces or changes nothing: true at the first it keeps; otherwise nothing is
-  /// changed.
+  /// sides, then kSplitLengths of them, centred on p, where the hexahedron reaches the acceptance's
+  /// scaled Jacobian; p's star is cut as star_sides() gives. Each hexahedron made that passes the
+  /// acceptance is appended to `list` and given to `closes` (its index), which closes its faces
+  /// or changes nothing: true at the first it keeps; otherwise nothing is changed.
   bool split_into_hex(Candidates& list, index_t ci, const QuadFace& q,
                       const std::function<bool(index_t)>& closes) {
     const Candidate prism = list[ci];  // a copy: the list grows
+    if (prism.nb_tets != 3) return false;
     std::vector<index_t> fan_vertices, fan_tets;
     if (!fan(q, prism, fan_vertices, fan_tets) || fan_tets.size() != 2) return false;
     const index_t p = fan_vertices[1];
@@ -360,20 +360,17 @@ class Stage {
         at_n[i] = at[i] + 0.5 * share * dir[i];
       }
       // The hexahedron's shape at these places, before any split is tried.
-      std::array<double, 24> corners{};
-      const std::array<index_t, 8> local{{0, 1, 2, 3, 4, 5, 6, 7}};
-      for (int c = 0; c < 8; ++c) {
-        const double* x = up[c] == p ? at_p.data() : up[c] == next ? at_n.data() : m_.point(up[c]);
-        std::copy(x, x + 3, &corners[3 * c]);
-      }
-      const double sj_up = scaled_jacobian(CellType::Hex, corners.data(), local.data());
-      std::array<double, 24> flipped{};
-      for (int c = 0; c < 8; ++c) {
-        const int from = c % 4 == 1 ? c + 2 : c % 4 == 3 ? c - 2 : c;
-        std::copy(&corners[3 * from], &corners[3 * from] + 3, &flipped[3 * c]);
-      }
-      const double sj_down = scaled_jacobian(CellType::Hex, flipped.data(), local.data());
-      if (std::max(sj_up, sj_down) < options_.min_pyramid_quality) continue;
+      const auto shape = [&](const std::array<index_t, 8>& order) {
+        std::array<double, 24> corners{};
+        for (int c = 0; c < 8; ++c) {
+          const index_t w = order[c];
+          const double* x = w == p ? at_p.data() : w == next ? at_n.data() : m_.point(w);
+          std::copy(x, x + 3, &corners[3 * c]);
+        }
+        const std::array<index_t, 8> local{{0, 1, 2, 3, 4, 5, 6, 7}};
+        return scaled_jacobian(CellType::Hex, corners.data(), local.data());
+      };
+      if (std::max(shape(up), shape(down)) < options_.min_pyramid_quality) continue;
       for (const auto& side : sides) {
         const std::size_t start = m_.mark();
         const index_t n = m_.split(p, side, at_p, at_n, options_.min_tet_quality);
@@ -390,7 +387,7 @@ class Stage {
         for (index_t t : ring) {
           if (holds(m_.tet(t), q.a) && holds(m_.tet(t), q.c)) tets[5] = t;
         }
-        if (prism.nb_tets == 3 && tets[3] != NO_CELL && tets[4] != NO_CELL && tets[5] != NO_CELL) {
+        if (tets[3] != NO_CELL && tets[4] != NO_CELL && tets[5] != NO_CELL) {
           std::sort(tets.begin(), tets.end());
           Candidate hex = prism;  // graph: not read by the stage
           hex.type = CellType::Hex;
@@ -415,15 +412,24 @@ class Stage {
 
  private:
   /// Ways to cut node p's star in two for a split (split_into_hex): each the tets that take the
-  /// new node, holding `moving` and not `keep`. First the tets whose base triangle's centroid
-  /// lies ahead of p along `dir`, then, for each link vertex y joined to both ends of q's
-  /// diagonal a-c, the tets reached from `moving` without crossing the cycle a-c-y of link
-  /// edges. Distinct sets only.
+  /// new node, holding `moving` and not `keep`. First, for each link vertex y joined to both
+  /// ends of q's diagonal a-c, the tets reached from `moving` across faces at p without crossing
+  /// the cycle a-c-y of link edges (a ring of three tets); then the tets whose base triangle's
+  /// centroid lies ahead of p (at `at`) along `dir`. Distinct sets only.
   std::vector<std::vector<index_t>> star_sides(index_t p, const QuadFace& q, index_t keep,
                                                index_t moving, const std::array<double, 3>& at,
                                                const std::array<double, 3>& dir) const {
     std::vector<index_t> around;
     m_.tets_with_edge(p, p, around);
+    // The triangle of tet t opposite p (its side of p's link).
+    const auto base_of = [this, p](index_t t) {
+      std::array<index_t, 3> base{};
+      int n = 0;
+      for (int i = 0; i < 4; ++i) {
+        if (m_.tet(t)[i] != p) base[n++] = m_.tet(t)[i];
+      }
+      return base;
+    };
     std::vector<std::vector<index_t>> sides;
     const auto add = [&sides](std::vector<index_t> side) {
       std::sort(side.begin(), side.end());
@@ -432,11 +438,7 @@ class Stage {
     std::vector<index_t> ahead;
     std::set<std::pair<index_t, index_t>> link_edges;
     for (index_t t : around) {
-      std::array<index_t, 3> base{};
-      int n = 0;
-      for (int i = 0; i < 4; ++i) {
-        if (m_.tet(t)[i] != p) base[n++] = m_.tet(t)[i];
-      }
+      const std::array<index_t, 3> base = base_of(t);
       double along = 0.0;
       for (int i = 0; i < 3; ++i) {
         const double centroid =
@@ -462,11 +464,7 @@ class Stage {
         std::vector<index_t> reached = {moving};
         for (std::size_t r = 0; r < reached.size(); ++r) {
           const index_t t = reached[r];
-          std::array<index_t, 3> base{};
-          int n = 0;
-          for (int i = 0; i < 4; ++i) {
-            if (m_.tet(t)[i] != p) base[n++] = m_.tet(t)[i];
-          }
+          const std::array<index_t, 3> base = base_of(t);
           for (int i = 0; i < 3; ++i) {
             const index_t f0 = base[i], f1 = base[(i + 1) % 3];
             if (cycle.count(edge(f0, f1))) continue;
