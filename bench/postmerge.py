@@ -2,13 +2,14 @@
 """The post-merge stage (issue 19) against today's output: each mesh recombined with
 same_nodes=true (the input's tets) and same_nodes=false (flips, edge contractions and node moves
 close open quads, the selection runs again; with --flips-only also post_merge_contractions=false
-and post_merge_moves=false, with --without-moves also post_merge_moves=false), each
+and post_merge_moves=false, with --without-moves also post_merge_moves=false, with --with-splits
+also post_merge_splits=true), each
 checked by the independent checker (with the nodes the output declares changed: the boundary
 and every region's volume verified).
 
 Prints one Markdown row per mesh and run: cells, reduction, hexahedron volume, the census (hex
 candidates whose every quad face is closed by the tets: on the input, after the stage), the
-flips, contractions and node moves kept, the stage's time against the engine's, the checker's verdict, its volume differences
+flips, contractions, node moves and vertex splits kept, the stage's time against the engine's, the checker's verdict, its volume differences
 and the smallest scaled Jacobians (new elements; every element against the input's tets).
 Writes the results as JSON.
 
@@ -78,10 +79,12 @@ def row(name, r, base_cells):
     census = f"{rep['census_closable']} / {rep['census_hex_candidates']}"
     after = f"{rep['census_closable_after']} / {rep['census_hex_candidates_after']}"
     flips = (f"{rep['flips_23']} / {rep['flips_32']} / {rep['flips_44']} / {rep['contractions']}"
-             f" / {rep['node_moves']}")
+             f" / {rep['node_moves']} / {rep['vertex_splits']}")
     same = r["options"].get("same_nodes", True)
     if same:
         run = "true"
+    elif r["options"].get("post_merge_splits", False):
+        run = "false, splits"
     elif not r["options"].get("post_merge_contractions", True):
         run = "false, flips only"
     elif not r["options"].get("post_merge_moves", True):
@@ -112,6 +115,8 @@ def main():
                     "post_merge_moves=false)")
     ap.add_argument("--without-moves", action="store_true",
                     help="also run the stage without node moves (post_merge_moves=false)")
+    ap.add_argument("--with-splits", action="store_true",
+                    help="also run the stage with vertex splits (post_merge_splits=true)")
     ap.add_argument("--output", default=os.path.join(run_bench.RESULTS_DIR, "postmerge.json"))
     args = ap.parse_args()
 
@@ -125,7 +130,7 @@ def main():
     meshes = args.files or run_bench.find_meshes(args.shapes.split(","), args.kinds.split(","),
                                                  args.sizes.split(","), args.mesh_dir)
     print("| mesh | same_nodes | cells | fewer % | reduction % | hex vol. % | census before "
-          "| census after | flips 2-3 / 3-2 / 4-4 / contractions / moves | stage | engine s | stage s (flips) | valid "
+          "| census after | flips 2-3 / 3-2 / 4-4 / contractions / moves / splits | stage | engine s | stage s (flips) | valid "
           "| non-conf. | cracks | max region dV | min SJ new | min SJ all |")
     print("|" + "---|" * 18)
     results = {"commit": benchlib.git_commit(), "machine": benchlib.machine(), "meshes": {}}
@@ -138,14 +143,16 @@ def main():
         cells = base["report"]["output_cells"]
         print(row(name, base, cells), flush=True)
         entry = {"input_min_tet_sj": min_tet_scaled_jacobian(points, tets), "same_nodes": base}
-        for key, contract, moves, wanted in (("flips_only", False, False, args.flips_only),
-                                             ("no_moves", True, False, args.without_moves),
-                                             ("post_merge", True, True, True)):
+        for key, contract, moves, splits, wanted in (
+                ("flips_only", False, False, False, args.flips_only),
+                ("no_moves", True, False, False, args.without_moves),
+                ("post_merge", True, True, False, True),
+                ("splits", True, True, True, args.with_splits)):
             if not wanted:
                 continue
             r = run(hexmerge, points, tets,
                     dict(extra, same_nodes=False, post_merge_contractions=contract,
-                         post_merge_moves=moves))
+                         post_merge_moves=moves, post_merge_splits=splits))
             print(row(name, r, cells), flush=True)
             entry[key] = r
         results["meshes"][name] = entry

@@ -208,6 +208,7 @@ py::dict report_to_dict(const RecombineReport& r) {
   d["post_merge_closed"] = r.post_merge_closed;
   d["contractions"] = r.contractions;
   d["node_moves"] = r.node_moves;
+  d["vertex_splits"] = r.vertex_splits;
   d["post_merge_lifted"] = r.post_merge_lifted;
   d["flips_23"] = r.flips_23;
   d["flips_32"] = r.flips_32;

@@ -1,5 +1,6 @@
-"""The post-merge stage's options (same_nodes, post_merge_contractions, post_merge_moves) through
-the Python API and the CLI, and the checker's view of the nodes the stage declares changed."""
+"""The post-merge stage's options (same_nodes, post_merge_contractions, post_merge_moves,
+post_merge_splits) through the Python API and the CLI, and the checker's view of the nodes the
+stage declares changed."""
 
 from __future__ import annotations
 
@@ -17,21 +18,21 @@ from conftest import ROOT
 
 BOX_GEO = """
 SetFactory("OpenCASCADE");
-Box(1) = {0, 0, 0, 4, 4, 2};
-Mesh.CharacteristicLengthMax = 0.33;
+Box(1) = {{0, 0, 0, 4, 4, 2}};
+Mesh.CharacteristicLengthMax = {size};
 """
 
 
-@pytest.fixture(scope="module")
-def delaunay_box(tmp_path_factory: pytest.TempPathFactory) -> tuple[np.ndarray, np.ndarray, Path]:
-    """A Gmsh Delaunay tet mesh of a 4 x 4 x 2 box (a few thousand tets), as the benchmarks'."""
+def gmsh_box(tmp_path_factory: pytest.TempPathFactory,
+             size: float) -> tuple[np.ndarray, np.ndarray, Path]:
+    """A Gmsh Delaunay tet mesh of a 4 x 4 x 2 box with edges up to `size`, as the benchmarks'."""
     if shutil.which("gmsh") is None:
         pytest.skip("gmsh is not installed")
     import meshio
 
     folder = tmp_path_factory.mktemp("postmerge")
     geo = folder / "box.geo"
-    geo.write_text(BOX_GEO)
+    geo.write_text(BOX_GEO.format(size=size))
     out = folder / "box.msh"
     subprocess.run(["gmsh", "-3", "-format", "msh22", str(geo), "-o", str(out)], check=True,
                    capture_output=True)
@@ -41,6 +42,18 @@ def delaunay_box(tmp_path_factory: pytest.TempPathFactory) -> tuple[np.ndarray, 
     renumber = np.full(len(m.points), -1, dtype=np.int64)
     renumber[used] = np.arange(len(used))
     return np.asarray(m.points[used], dtype=float), renumber[tets], out
+
+
+@pytest.fixture(scope="module")
+def delaunay_box(tmp_path_factory: pytest.TempPathFactory) -> tuple[np.ndarray, np.ndarray, Path]:
+    """The box with a few thousand tets."""
+    return gmsh_box(tmp_path_factory, 0.33)
+
+
+@pytest.fixture(scope="module")
+def finer_box(tmp_path_factory: pytest.TempPathFactory) -> tuple[np.ndarray, np.ndarray, Path]:
+    """The box with about 10,000 tets: enough inner pyramid apexes for vertex splits."""
+    return gmsh_box(tmp_path_factory, 0.25)
 
 
 def test_contractions_are_declared_and_the_checker_verifies_them(delaunay_box) -> None:
@@ -141,3 +154,47 @@ def test_cli_takes_the_contraction_option(delaunay_box, tmp_path: Path) -> None:
                        env={"PYTHONPATH": env_path, "PATH": "/usr/bin:/bin"})
         report = json.loads(stats.read_text())["report"]
         assert (report["node_moves"] > 0) == expect_moves
+
+
+def test_vertex_splits_add_declared_inner_nodes_and_the_checker_verifies_them(finer_box) -> None:
+    points, tets, _ = finer_box
+    off, r0 = hexmerge.recombine(points, tets, same_nodes=False)
+    assert r0["vertex_splits"] == 0 and len(off.points) == len(points)  # off by default
+    mesh, report = hexmerge.recombine(points, tets, same_nodes=False, post_merge_splits=True)
+    assert report["post_merge"] == "kept"
+    splits = report["vertex_splits"]
+    assert splits > 0
+    # One node added per split, past the input's, declared, used by cells, inside the box.
+    added = np.arange(len(points), len(mesh.points))
+    assert len(added) == splits
+    assert np.isin(added, mesh.changed_nodes).all()
+    assert np.isin(added, mesh.cell_vertices).all()
+    inside = mesh.points[added]
+    assert ((inside > 0).all(axis=1) & (inside[:, :2] < 4).all(axis=1) & (inside[:, 2] < 2)).all()
+    assert np.array_equal(mesh.point_map, np.arange(len(mesh.points)))
+    # A node not declared is the input's, bit for bit.
+    undeclared = np.setdiff1d(np.arange(len(points)), mesh.changed_nodes)
+    assert np.array_equal(mesh.points[undeclared], points[undeclared])
+    check = hexmerge.check(mesh, points, tets)
+    assert check["valid"], check["problems"]
+    assert check["declared_changed_nodes"] == len(mesh.changed_nodes)
+    assert check["inverted_cells"] == 0
+    assert check["off_boundary_nodes"] == 0 and check["volume_not_kept"] == 0
+    assert check["nonconforming_quads"] == 0 and check["cracks"] == 0
+    assert abs(check["relative_volume_difference"]) < 1e-9
+    # Undeclared, the added nodes are not the input's: the check fails.
+    mesh.changed_nodes = None
+    assert not hexmerge.check(mesh, points, tets)["valid"]
+
+
+def test_cli_takes_the_split_option(finer_box, tmp_path: Path) -> None:
+    _, _, path = finer_box
+    out, stats = tmp_path / "out.vtu", tmp_path / "stats.json"
+    cmd = [sys.executable, "-m", "hexmerge", "recombine", str(path), "-o", str(out), "--quiet",
+           "--stats", str(stats), "--no-same-nodes"]
+    env = {"PYTHONPATH": str(ROOT / "src" / "python"), "PATH": "/usr/bin:/bin"}
+    for flag, expect_splits in (("--no-post-merge-splits", False), ("--post-merge-splits", True)):
+        subprocess.run(cmd + [flag], check=True, capture_output=True, env=env)
+        report = json.loads(stats.read_text())["report"]
+        assert report["post_merge"] == "kept"
+        assert (report["vertex_splits"] > 0) == expect_splits

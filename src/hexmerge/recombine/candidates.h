@@ -108,6 +108,13 @@ class Candidates {
     records_.push_back(c);
   }
 
+  /// Removes the last candidate and its tets.
+  void pop_back() {
+    HEXMERGE_ASSERT(!records_.empty(), "Candidates: pop_back on none");
+    tets_.resize(records_.back().first_tet);
+    records_.pop_back();
+  }
+
   /// Appends the candidates of `other`, in order.
   void append(const Candidates& other) {
     for (const Candidate& c : other) push_back(c, other.tets(c).data(), c.nb_tets);

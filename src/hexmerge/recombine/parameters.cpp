@@ -117,6 +117,11 @@ ParameterTable<RecombineParameters> make_table() {
            "above the acceptance; every tet at the node stays positive and at the quality floor "
            "(or not worse where it was below), boundary nodes never move, every region's volume "
            "is kept"),
+      flag(&P::post_merge_splits, "post_merge_splits", "Vertex splits",
+           "In the post-merge stage (same_nodes off), split the apex of a pyramid on a prism's "
+           "quad face into an edge (the paper's vertex split, one node added inside the domain) "
+           "where that makes the prism and the pyramid one hexahedron whose quad faces close; "
+           "every new tet is positive and at the quality floor, every region's volume is kept"),
   });
 }
 

@@ -116,6 +116,9 @@ struct RecombineParameters {
   bool post_merge_contractions = true;
   /// The post-merge stage may also move inner nodes (same_nodes off; FlipMesh::smooth)
   bool post_merge_moves = true;
+  /// The post-merge stage may also split inner nodes into edges, adding nodes (same_nodes off;
+  /// FlipMesh::split)
+  bool post_merge_splits = false;
 };
 
 /// The floor under min_scaled_jacobian: an element at or below 0 would be flat or inverted (the

@@ -326,6 +326,7 @@ MixedMesh recombine(const TetMesh& input, const RecombineParameters& parameters,
     options.placement = parameters.pyramid_placement;
     options.contract_edges = parameters.post_merge_contractions;
     options.move_nodes = parameters.post_merge_moves;
+    options.split_nodes = parameters.post_merge_splits;
     options.min_dihedral_angle = criteria.min_dihedral_angle;
     options.max_face_angle = criteria.max_face_angle;
     const QuadCensus before = quad_census(mesh, found, options);
@@ -355,7 +356,7 @@ MixedMesh recombine(const TetMesh& input, const RecombineParameters& parameters,
           close_open_quads(current, found, candidates, selection, options, liftable);
       report.post_merge_attempted += stage.attempted;
       timer.lap("post_merge_flips" + suffix);
-      if (stage.closed == 0) break;
+      if (stage.closed == 0 && stage.split_hexes == 0) break;
       const TetTopology new_topology(stage.tets);
       Candidates new_found = find(stage.tets, new_topology);
       std::size_t unclosable = 0;
@@ -376,6 +377,7 @@ MixedMesh recombine(const TetMesh& input, const RecombineParameters& parameters,
       report.flips_44 += stage.flips.flips_44;
       report.contractions += stage.flips.contractions;
       report.node_moves += stage.flips.moves;
+      report.vertex_splits += stage.flips.splits;
       report.post_merge_lifted += stage.lifted;
       report.candidates_unclosable = unclosable;
       flipped = std::move(stage.tets);
@@ -407,11 +409,11 @@ MixedMesh recombine(const TetMesh& input, const RecombineParameters& parameters,
   }
   if (kept) {
     // The cells are unions of the stage's tets, not of the input's: no source tets. The nodes
-    // contractions took out are used by no cell, and the nodes moves took elsewhere: both are
-    // declared changed.
+    // contractions took out are used by no cell, the nodes moves took elsewhere and the nodes
+    // splits added (ids past the input's): all are declared changed.
     out.source_offsets.clear();
     out.source_tets.clear();
-    std::vector<char> used(input.nb_vertices(), 0);
+    std::vector<char> used(tets.nb_vertices(), 0);
     for (index_t v : tets.tets) used[v] = 1;
     for (index_t v = 0; v < input.nb_vertices(); ++v) {
       if (used[v] && !std::equal(input.point(v), input.point(v) + 3, &out.points[3 * v])) {
@@ -423,6 +425,9 @@ MixedMesh recombine(const TetMesh& input, const RecombineParameters& parameters,
         used[v] = 1;
         out.changed_nodes.push_back(v);
       }
+    }
+    for (index_t v = input.nb_vertices(); v < tets.nb_vertices(); ++v) {
+      out.changed_nodes.push_back(v);
     }
     std::sort(out.changed_nodes.begin(), out.changed_nodes.end());
     // The output's tets are the stage's: the report counts the input's.

@@ -64,8 +64,9 @@ struct RecombineReport {
   std::size_t flips_23 = 0;              ///< flips the stage kept, by kind
   std::size_t flips_32 = 0;
   std::size_t flips_44 = 0;
-  std::size_t contractions = 0;  ///< edge contractions the stage kept (one inner node each)
-  std::size_t node_moves = 0;    ///< inner-node moves the stage kept (post_merge_moves)
+  std::size_t contractions = 0;   ///< edge contractions the stage kept (one inner node each)
+  std::size_t node_moves = 0;     ///< inner-node moves the stage kept (post_merge_moves)
+  std::size_t vertex_splits = 0;  ///< vertex splits the stage kept (one node added each)
   /// Hexahedron candidates closed by the stage that a node move made pass the acceptance
   std::size_t post_merge_lifted = 0;
   PhaseSeconds phase_seconds;  ///< wall time per phase, in order

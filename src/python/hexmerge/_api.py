@@ -27,7 +27,8 @@ class MixedMesh:
     ``cell_vertices[offsets[c]:offsets[c + 1]]`` in VTK's local order. A quadratic mesh also
     has ``quadratic_nodes[quadratic_offsets[c]:quadratic_offsets[c + 1]]``: the corners, then
     one mid-edge node per edge in VTK's quadratic order. Node ids index ``points``.
-    ``point_map[i]`` is the input's node id of node ``i`` (None when the mesh was not made
+    ``point_map[i]`` is the input's node id of node ``i`` (past the input's for a node it added; None
+    when the mesh was not made
     by recombine()); ``source_offsets``/``source_tets`` list the input tets each cell is the
     union of. ``changed_nodes`` (sorted ids, None or empty when none) are the nodes recombine()
     moved, removed (used by no cell) or added (ids past the input's): only the post-merge stage
@@ -225,7 +226,8 @@ def recombine(
         regions=raw["regions"],
         source_offsets=raw["source_offsets"],
         source_tets=raw["source_tets"],
-        point_map=np.arange(len(p)),
+        # Nodes past the input's (vertex splits, same_nodes=False) keep ids past it.
+        point_map=np.arange(len(raw["points"])),
         changed_nodes=raw["changed_nodes"] if len(raw["changed_nodes"]) else None,
     )
     if c.shape[1] == 10:
@@ -241,8 +243,9 @@ def _align_points(mesh: MixedMesh, source: np.ndarray) -> tuple[np.ndarray, np.n
     a node found nowhere in the source is appended (the core then counts it) and named."""
     if mesh.point_map is not None:
         pm = np.asarray(mesh.point_map, dtype=np.int64)
-        if pm.size and int(pm.max()) < len(source):
-            pts = source.copy()
+        if pm.size and len(pm) == len(mesh.points):
+            # Nodes the mesh added (ids past the source's) are appended after its nodes.
+            pts = np.vstack([source, np.zeros((max(0, int(pm.max()) + 1 - len(source)), 3))])
             pts[pm] = mesh.points
             return pts, pm[mesh.cell_vertices].astype(np.uint32), []
     if mesh.points.shape == source.shape and np.array_equal(mesh.points, source):

@@ -95,6 +95,7 @@ bool FlipMesh::replace(const std::vector<index_t>& old_tets,
   if (kind == 32) ++counts_.flips_32;
   if (kind == 44) ++counts_.flips_44;
   if (kind == kContraction) ++counts_.contractions;
+  if (kind == kSplit) ++counts_.splits;
   return true;
 }
 
@@ -211,6 +212,68 @@ bool FlipMesh::contract(index_t from, index_t onto, double min_quality) {
   return change(star, made, min_quality, kContraction);
 }
 
+index_t FlipMesh::split(index_t v, const std::vector<index_t>& to_new,
+                        const std::array<double, 3>& at_v, const std::array<double, 3>& at_new,
+                        double min_quality) {
+  // movable() finds whether v is inner (and its tets of one region and unlocked).
+  if (!movable(v) || kind_[v] != kInner) return NO_VERTEX;
+  std::vector<index_t> around;
+  star(v, around);
+  const auto moving = [&to_new](index_t t) {
+    return std::find(to_new.begin(), to_new.end(), t) != to_new.end();
+  };
+  const auto nb_moving =
+      static_cast<std::size_t>(std::count_if(around.begin(), around.end(), moving));
+  if (nb_moving == 0 || nb_moving != to_new.size() || nb_moving == around.size()) {
+    return NO_VERTEX;
+  }
+  const index_t n = nb_nodes();
+  std::vector<std::array<index_t, 4>> made;
+  for (index_t t : around) {
+    const std::array<index_t, 4> q{{tet(t)[0], tet(t)[1], tet(t)[2], tet(t)[3]}};
+    if (!moving(t)) {
+      made.push_back(q);
+      continue;
+    }
+    std::array<index_t, 4> moved = q;
+    std::replace(moved.begin(), moved.end(), v, n);
+    made.push_back(moved);
+    // A face at v shared with a tet that keeps v: the ring tet is t with its corner across the
+    // face replaced by n. It holds the face as t does, so it lies on t's side of it, between the
+    // tet keeping v and t with n; its other faces cancel along the ring.
+    for (int f = 0; f < 4; ++f) {
+      if (q[f] == v) continue;
+      std::array<index_t, 3> face{};
+      int k = 0;
+      for (int i = 0; i < 4; ++i) {
+        if (i != f) face[k++] = q[i];
+      }
+      const index_t other = tet_with_face(face[0], face[1], face[2], t);
+      if (other == NO_CELL || moving(other)) continue;
+      std::array<index_t, 4> ring = q;
+      ring[f] = n;
+      made.push_back(ring);
+    }
+  }
+  // The node added and v's move are journalled first, so that undo takes the tets back before
+  // the points.
+  const std::size_t start = mark();
+  double* p = &points_[3 * std::size_t{v}];
+  journal_.push_back({static_cast<index_t>(split_nodes_.size()), false, kSplitNode});
+  split_nodes_.push_back({v, {{p[0], p[1], p[2]}}});
+  std::copy(at_v.begin(), at_v.end(), p);
+  points_.insert(points_.end(), at_new.begin(), at_new.end());
+  incidence_.emplace_back();
+  kind_.push_back(kInner);
+  // The old tets' signed volumes, v moved, still add up to the star's (a cone over its surface):
+  // replace()'s volume guard holds.
+  if (!replace(around, made, min_quality, kSplit)) {
+    undo(start);
+    return NO_VERTEX;
+  }
+  return n;
+}
+
 bool FlipMesh::flat_boundary(const std::vector<std::array<index_t, 3>>& faces, index_t onto) const {
   const bool holds_onto = std::any_of(faces.begin(), faces.end(), [onto](const auto& f) {
     return f[0] == onto || f[1] == onto || f[2] == onto;
@@ -265,10 +328,21 @@ void FlipMesh::undo(std::size_t mark) {
       --counts_.moves;
       continue;
     }
+    if (e.kind == kSplitNode) {
+      HEXMERGE_ASSERT(e.tet + 1 == split_nodes_.size(), "journal out of order");
+      const Move& split = split_nodes_.back();
+      std::copy(split.from.begin(), split.from.end(), &points_[3 * std::size_t{split.node}]);
+      points_.resize(points_.size() - 3);
+      incidence_.pop_back();
+      kind_.pop_back();
+      split_nodes_.pop_back();
+      continue;
+    }
     if (e.kind == 23) --counts_.flips_23;
     if (e.kind == 32) --counts_.flips_32;
     if (e.kind == 44) --counts_.flips_44;
     if (e.kind == kContraction) --counts_.contractions;
+    if (e.kind == kSplit) --counts_.splits;
     if (e.created) {
       // Created last, so it is the last slot: drop it (its incidence entries go stale).
       HEXMERGE_ASSERT(e.tet + 1 == nb_slots(), "journal out of order");

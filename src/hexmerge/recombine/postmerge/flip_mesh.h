@@ -12,7 +12,8 @@
 /// set_smoothing) move a node whose tets are all of one region and unlocked and have no face on
 /// the domain boundary at it, or (set_slide_on_faces) whose boundary faces lie in one plane,
 /// within that plane; every tet at it stays positive, so the star's union (its boundary
-/// triangles re-tiling the same flat polygon) and every region's volume are kept.
+/// triangles re-tiling the same flat polygon) and every region's volume are kept. A vertex split
+/// (split()) adds one node past the existing ones and re-tiles an inner node's star.
 
 #include <array>
 #include <cstddef>
@@ -38,6 +39,8 @@ struct FlipCounts {
   /// Inner nodes moved (smooth(), or to make a flip or contraction valid); a node moved twice
   /// counts twice.
   std::size_t moves = 0;
+  /// Vertex splits: an inner node split into an edge, one node added (split()).
+  std::size_t splits = 0;
 };
 
 class FlipMesh {
@@ -91,6 +94,19 @@ class FlipMesh {
   /// the tets made tile the same union, so the boundary surface and every region's volume are
   /// kept and no other node moves. False (nothing changed) otherwise.
   bool contract(index_t from, index_t onto, double min_quality);
+  /// The paper's vertex split (section 4.3.2): node v becomes an edge v-n, n a new node (id
+  /// nb_nodes() before the call). The tets of v in `to_new` (some, not all) take n instead of v,
+  /// the others keep v, and each face at v between the two sets gets a tet holding both v and n
+  /// (the ring of tets around the new edge); v goes to `at_v` and n to `at_new`. Only when v is
+  /// an inner node (no face on the domain boundary at it) whose tets are all of one region and
+  /// unlocked, and every tet made (v's moved ones too) is positive with a scaled Jacobian of at
+  /// least `min_quality`: the star's surface is kept, so the tets made tile its union (the
+  /// winding number argument) and every region's volume is kept. Returns n, or NO_VERTEX
+  /// (nothing changed).
+  index_t split(index_t v, const std::vector<index_t>& to_new, const std::array<double, 3>& at_v,
+                const std::array<double, 3>& at_new, double min_quality);
+  /// Nodes, added ones included (ids 0 to nb_nodes() - 1).
+  index_t nb_nodes() const { return static_cast<index_t>(points_.size() / 3); }
 
   /// A measure of a cell at node v that a move must bring to at least `need` (e.g. the scaled
   /// Jacobian of a pyramid on v), evaluated with the node where it is being tried.
@@ -123,9 +139,12 @@ class FlipMesh {
   TetMesh compact() const;
 
  private:
-  /// The journal's kind of a contraction (flips are 23, 32, 44) and of a node move.
+  /// The journal's kind of a contraction (flips are 23, 32, 44), of a node move, of a split's
+  /// tets and of its added node (and its other node's place before).
   static constexpr std::uint8_t kContraction = 1;
   static constexpr std::uint8_t kMove = 2;
+  static constexpr std::uint8_t kSplit = 3;
+  static constexpr std::uint8_t kSplitNode = 4;
   /// Positions smooth() tries at most for one node, and its smallest step, a share of the mean
   /// edge length at the node (1/1000 on box-delaunay-100k: 59,008 cells against 59,001, for
   /// twice the time of the moves).
@@ -160,6 +179,8 @@ class FlipMesh {
     std::array<double, 3> from;
   };
   std::vector<Move> moves_;
+  /// Splits made, for undo: the node split and where it was (the added node is the last).
+  std::vector<Move> split_nodes_;
   bool with_regions_;
   std::vector<index_t> tets_;
   std::vector<std::int32_t> regions_;
@@ -170,8 +191,9 @@ class FlipMesh {
   struct Entry {
     index_t tet;
     bool created;  ///< created (undo kills it) or killed (undo revives it)
-    /// 0: none, else the change counted (23, 32, 44, kContraction) on its last entry; kMove: a
-    /// node move (`tet` is its index in moves_)
+    /// 0: none, else the change counted (23, 32, 44, kContraction, kSplit) on its last entry;
+    /// kMove: a node move (`tet` is its index in moves_); kSplitNode: a split's added node
+    /// (`tet` is its index in split_nodes_)
     std::uint8_t kind;
   };
   std::vector<Entry> journal_;

@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <array>
+#include <functional>
 #include <set>
+#include <utility>
 
 #include "hexmerge/geometry/quality.h"
 #include "hexmerge/mesh/cell_type.h"
@@ -32,6 +34,9 @@ constexpr double kAngleSpare = 1e-6;
 
 /// With move_nodes, apexes whose pyramid reaches this share of the acceptance are tried.
 constexpr double kMovableApexShare = 0.5;
+
+/// A vertex split's new edge, as a share of the prism's sides it runs along (longest first).
+constexpr std::array<double, 3> kSplitLengths = {1.0, 0.7, 0.4};
 
 class Stage {
  public:
@@ -250,7 +255,8 @@ class Stage {
     } else if (options_.placement == PyramidPlacement::NoBoundaryNode ||
                options_.placement == PyramidPlacement::NoCurvedBoundaryNode) {
       for (index_t v : {q.a, q.b, q.c, q.d, apex}) {
-        if (boundary_vertex_[v]) return false;
+        // Nodes a split added are past the array and inside the domain.
+        if (v < boundary_vertex_.size() && boundary_vertex_[v]) return false;
       }
     }
     return true;
@@ -302,6 +308,178 @@ class Stage {
       fan(q, cand, vertices, tets);
     }
     return false;
+  }
+
+  /// The paper's vertex split (4.3.2) making a hexahedron: prism `ci` of `list` (the stage's
+  /// candidates) and the pyramid closing its quad face q (the two tets behind it, apex p) become
+  /// one hexahedron when p is split into an edge p-n parallel to the face's sides that run
+  /// between the prism's triangles: the pyramid's tets, one with p and one with n, and the ring
+  /// tet on the face's diagonal are a second prism on q. The new edge is tried as long as those
+  /// sides, then kSplitLengths of them, centred on p, where the hexahedron reaches the acceptance's
+  /// scaled Jacobian; p's star is cut as star_sides() gives. Each hexahedron made that passes the
+  /// acceptance is appended to `list` and given to `closes` (its index), which closes its faces
+  /// or changes nothing: true at the first it keeps; otherwise nothing is changed.
+  bool split_into_hex(Candidates& list, index_t ci, const QuadFace& q,
+                      const std::function<bool(index_t)>& closes) {
+    const Candidate prism = list[ci];  // a copy: the list grows
+    if (prism.nb_tets != 3) return false;
+    std::vector<index_t> fan_vertices, fan_tets;
+    if (!fan(q, prism, fan_vertices, fan_tets) || fan_tets.size() != 2) return false;
+    const index_t p = fan_vertices[1];
+    if (!m_.movable(p)) return false;
+    // The prism's corner off the face on its bottom triangle (u) and its twin on the top (w);
+    // the bottom's other corners x1, y1 and their twins x2, y2: the face's sides x1-x2, y1-y2.
+    const auto& v = prism.vertices;
+    int k = 0;
+    while (k < 3 && (v[k] == q.a || v[k] == q.b || v[k] == q.c || v[k] == q.d)) ++k;
+    if (k == 3) return false;
+    const index_t x1 = v[(k + 1) % 3], y1 = v[(k + 2) % 3];
+    // The pyramid's tet whose base triangle holds x1-y1 keeps p; the other takes n.
+    const bool keep_abc =
+        (x1 == q.a || x1 == q.b || x1 == q.c) && (y1 == q.a || y1 == q.b || y1 == q.c);
+    const index_t keep = keep_abc ? fan_tets[0] : fan_tets[1];
+    const index_t moving = keep_abc ? fan_tets[1] : fan_tets[0];
+    std::array<double, 3> dir{}, at{};
+    for (int i = 0; i < 3; ++i) {
+      dir[i] = 0.5 * (m_.point(v[(k + 1) % 3 + 3])[i] + m_.point(v[(k + 2) % 3 + 3])[i] -
+                      m_.point(x1)[i] - m_.point(y1)[i]);
+      at[i] = m_.point(p)[i];
+    }
+    const std::vector<std::vector<index_t>> sides = star_sides(p, q, keep, moving, at, dir);
+    const index_t next = m_.nb_nodes();
+    // Hexahedron corners: the bottom u, x1, p, y1 (p across x1-y1 from u) and their twins on the
+    // top; index `next` stands for n until it exists. Either way round, the better.
+    const std::array<index_t, 8> up{
+        {v[k], x1, p, y1, v[k + 3], v[(k + 1) % 3 + 3], next, v[(k + 2) % 3 + 3]}};
+    const std::array<index_t, 8> down{
+        {v[k], y1, p, x1, v[k + 3], v[(k + 2) % 3 + 3], next, v[(k + 1) % 3 + 3]}};
+    for (double share : kSplitLengths) {
+      std::array<double, 3> at_p{}, at_n{};
+      for (int i = 0; i < 3; ++i) {
+        at_p[i] = at[i] - 0.5 * share * dir[i];
+        at_n[i] = at[i] + 0.5 * share * dir[i];
+      }
+      // The hexahedron's shape at these places, before any split is tried.
+      const auto shape = [&](const std::array<index_t, 8>& order) {
+        std::array<double, 24> corners{};
+        for (int c = 0; c < 8; ++c) {
+          const index_t w = order[c];
+          const double* x = w == p ? at_p.data() : w == next ? at_n.data() : m_.point(w);
+          std::copy(x, x + 3, &corners[3 * c]);
+        }
+        const std::array<index_t, 8> local{{0, 1, 2, 3, 4, 5, 6, 7}};
+        return scaled_jacobian(CellType::Hex, corners.data(), local.data());
+      };
+      if (std::max(shape(up), shape(down)) < options_.min_pyramid_quality) continue;
+      for (const auto& side : sides) {
+        const std::size_t start = m_.mark();
+        const index_t n = m_.split(p, side, at_p, at_n, options_.min_tet_quality);
+        if (n == NO_VERTEX) continue;
+        HEXMERGE_ASSERT(n == next, "a split adds the next node");
+        // The second prism's tets: the pyramid's two, remade, and the ring tet on the diagonal.
+        std::array<index_t, 6> tets{};
+        std::copy(list.tets(prism).begin(), list.tets(prism).end(), tets.begin());
+        tets[3] = m_.tet_with_face(q.a, q.b, q.c, q.inner_abc);
+        tets[4] = m_.tet_with_face(q.a, q.c, q.d, q.inner_acd);
+        std::vector<index_t> ring;
+        m_.tets_with_edge(p, n, ring);
+        tets[5] = NO_CELL;
+        for (index_t t : ring) {
+          if (holds(m_.tet(t), q.a) && holds(m_.tet(t), q.c)) tets[5] = t;
+        }
+        if (tets[3] != NO_CELL && tets[4] != NO_CELL && tets[5] != NO_CELL) {
+          std::sort(tets.begin(), tets.end());
+          Candidate hex = prism;  // graph: not read by the stage
+          hex.type = CellType::Hex;
+          const double* points = m_.point(0);
+          const double made_up = scaled_jacobian(CellType::Hex, points, up.data());
+          const double made_down = scaled_jacobian(CellType::Hex, points, down.data());
+          hex.vertices = made_up >= made_down ? up : down;
+          hex.quality = static_cast<float>(std::max(made_up, made_down));
+          list.push_back(hex, tets.data(), 6);
+          const Candidate& made = list[list.size() - 1];
+          if (accepted(list, made, NO_VERTEX, options_.min_pyramid_quality) &&
+              closes(static_cast<index_t>(list.size() - 1))) {
+            return true;
+          }
+          list.pop_back();
+        }
+        m_.undo(start);
+      }
+    }
+    return false;
+  }
+
+ private:
+  /// Ways to cut node p's star in two for a split (split_into_hex): each the tets that take the
+  /// new node, holding `moving` and not `keep`. First, for each link vertex y joined to both
+  /// ends of q's diagonal a-c, the tets reached from `moving` across faces at p without crossing
+  /// the cycle a-c-y of link edges (a ring of three tets); then the tets whose base triangle's
+  /// centroid lies ahead of p (at `at`) along `dir`. Distinct sets only.
+  std::vector<std::vector<index_t>> star_sides(index_t p, const QuadFace& q, index_t keep,
+                                               index_t moving, const std::array<double, 3>& at,
+                                               const std::array<double, 3>& dir) const {
+    std::vector<index_t> around;
+    m_.tets_with_edge(p, p, around);
+    // The triangle of tet t opposite p (its side of p's link).
+    const auto base_of = [this, p](index_t t) {
+      std::array<index_t, 3> base{};
+      int n = 0;
+      for (int i = 0; i < 4; ++i) {
+        if (m_.tet(t)[i] != p) base[n++] = m_.tet(t)[i];
+      }
+      return base;
+    };
+    std::vector<std::vector<index_t>> sides;
+    const auto add = [&sides](std::vector<index_t> side) {
+      std::sort(side.begin(), side.end());
+      if (std::find(sides.begin(), sides.end(), side) == sides.end()) sides.push_back(side);
+    };
+    std::vector<index_t> ahead;
+    std::set<std::pair<index_t, index_t>> link_edges;
+    for (index_t t : around) {
+      const std::array<index_t, 3> base = base_of(t);
+      double along = 0.0;
+      for (int i = 0; i < 3; ++i) {
+        const double centroid =
+            (m_.point(base[0])[i] + m_.point(base[1])[i] + m_.point(base[2])[i]) / 3.0;
+        along += (centroid - at[i]) * dir[i];
+      }
+      if (t == moving || (t != keep && along > 0.0)) ahead.push_back(t);
+      for (int i = 0; i < 3; ++i) {
+        const index_t e0 = base[i], e1 = base[(i + 1) % 3];
+        link_edges.insert({std::min(e0, e1), std::max(e0, e1)});
+      }
+    }
+    const auto edge = [](index_t x, index_t y) {
+      return std::make_pair(std::min(x, y), std::max(x, y));
+    };
+    std::set<index_t> tried;
+    for (const auto& [e0, e1] : link_edges) {
+      for (index_t y : {e0, e1}) {
+        if (y == q.a || y == q.c || !tried.insert(y).second) continue;
+        if (!link_edges.count(edge(q.a, y)) || !link_edges.count(edge(q.c, y))) continue;
+        const std::set<std::pair<index_t, index_t>> cycle = {edge(q.a, q.c), edge(q.a, y),
+                                                             edge(q.c, y)};
+        std::vector<index_t> reached = {moving};
+        for (std::size_t r = 0; r < reached.size(); ++r) {
+          const index_t t = reached[r];
+          const std::array<index_t, 3> base = base_of(t);
+          for (int i = 0; i < 3; ++i) {
+            const index_t f0 = base[i], f1 = base[(i + 1) % 3];
+            if (cycle.count(edge(f0, f1))) continue;
+            const index_t across = m_.tet_with_face(p, f0, f1, t);
+            if (across != NO_CELL &&
+                std::find(reached.begin(), reached.end(), across) == reached.end()) {
+              reached.push_back(across);
+            }
+          }
+        }
+        if (std::find(reached.begin(), reached.end(), keep) == reached.end()) add(reached);
+      }
+    }
+    add(ahead);
+    return sides;
   }
 
  private:
@@ -409,6 +587,37 @@ bool all_alive(const FlipMesh& m, TetSpan tets) {
   return true;
 }
 
+/// Locks the candidate's tets and closes its quad faces one by one (pass 0: only those closed as
+/// the tets are; else by flips), locking each closing pyramid; every tet locked is added to
+/// `locked`. False at the first face that does not close.
+bool close_faces(Stage& stage, FlipMesh& m, const Candidate& cand, TetSpan tets,
+                 const std::vector<QuadFace>& faces, int pass, std::vector<index_t>& locked) {
+  for (const index_t t : tets) {
+    m.set_locked(t, true);
+    locked.push_back(t);
+  }
+  for (const QuadFace& q : faces) {
+    if (stage.on_boundary(q)) continue;
+    std::array<index_t, 2> pyramid{};
+    if (!(pass == 0 ? stage.closed(q, cand, pyramid) : stage.close(q, cand, pyramid))) {
+      return false;
+    }
+    for (index_t t : pyramid) {
+      m.set_locked(t, true);
+      locked.push_back(t);
+    }
+  }
+  return true;
+}
+
+/// Unlocks the tets close_faces() locked and undoes every change since `start`.
+void give_up(FlipMesh& m, const std::vector<index_t>& locked, std::size_t start) {
+  for (index_t t : locked) {
+    if (t < m.nb_slots()) m.set_locked(t, false);
+  }
+  m.undo(start);
+}
+
 }  // namespace
 
 QuadCensus quad_census(const TetMesh& mesh, const Candidates& candidates,
@@ -440,10 +649,14 @@ PostMergeResult close_open_quads(const TetMesh& mesh, const Candidates& found,
   Candidates candidates;
   const Candidates* all = &found;
   const index_t nb_found = static_cast<index_t>(found.size());
-  if (options.move_nodes && !liftable.empty()) {
+  const bool lifts = options.move_nodes && !liftable.empty();
+  // Splits append the hexahedra they make to the stage's list.
+  if (lifts || options.split_nodes) {
     candidates = found;
-    for (const Candidate& c : liftable) {
-      if (c.type == CellType::Hex) candidates.push_back(c, liftable.tets(c).data(), c.nb_tets);
+    if (lifts) {
+      for (const Candidate& c : liftable) {
+        if (c.type == CellType::Hex) candidates.push_back(c, liftable.tets(c).data(), c.nb_tets);
+      }
     }
     all = &candidates;
   }
@@ -521,22 +734,7 @@ PostMergeResult close_open_quads(const TetMesh& mesh, const Candidates& found,
         }
       }
       locked_here.clear();
-      for (const index_t t : cands.tets(cand)) {
-        m.set_locked(t, true);
-        locked_here.push_back(t);
-      }
-      bool ok = true;
-      for (const QuadFace& q : faces) {
-        if (stage.on_boundary(q)) continue;
-        std::array<index_t, 2> pyramid{};
-        ok = pass == 0 ? stage.closed(q, cand, pyramid) : stage.close(q, cand, pyramid);
-        if (!ok) break;
-        for (index_t t : pyramid) {
-          m.set_locked(t, true);
-          locked_here.push_back(t);
-        }
-      }
-      if (ok) {
+      if (close_faces(stage, m, cand, cands.tets(cand), faces, pass, locked_here)) {
         if (lifting) ++result.lifted;
         if (pass == 0) {
           ++result.already_closed;
@@ -545,10 +743,37 @@ PostMergeResult close_open_quads(const TetMesh& mesh, const Candidates& found,
         }
         continue;
       }
-      for (index_t t : locked_here) {
-        if (t < m.nb_slots()) m.set_locked(t, false);
+      give_up(m, locked_here, start);
+    }
+  }
+  if (options.split_nodes) {
+    // Vertex splits: prisms found whose tets are all free, best scaled Jacobian first.
+    std::vector<index_t> prisms;
+    for (index_t i = 0; i < nb_found; ++i) {
+      if (cands[i].type == CellType::Prism) prisms.push_back(i);
+    }
+    std::stable_sort(prisms.begin(), prisms.end(),
+                     [&](index_t x, index_t y) { return cands[x].quality > cands[y].quality; });
+    std::vector<QuadFace> prism_faces;
+    for (index_t i : prisms) {
+      if (!all_alive(m, cands.tets(i)) || !stage.quad_faces(cands[i], prism_faces)) continue;
+      for (const QuadFace& q : prism_faces) {
+        if (stage.on_boundary(q)) continue;
+        const auto closes = [&](index_t h) {
+          const std::size_t start = m.mark();
+          locked_here.clear();
+          if (stage.quad_faces(cands[h], faces) &&
+              close_faces(stage, m, cands[h], cands.tets(h), faces, 1, locked_here)) {
+            return true;
+          }
+          give_up(m, locked_here, start);
+          return false;
+        };
+        if (stage.split_into_hex(candidates, i, q, closes)) {
+          ++result.split_hexes;
+          break;
+        }
       }
-      m.undo(start);
     }
   }
   result.flips = m.counts();

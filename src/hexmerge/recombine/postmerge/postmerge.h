@@ -59,6 +59,12 @@ struct PostMergeOptions {
   /// (degrees; the moved node is inside the domain, so its quads are inner ones).
   double min_dihedral_angle = 150.0;
   double max_face_angle = 150.0;
+  /// The paper's vertex split (FlipMesh::split; inner nodes only, one node added each): after
+  /// the hexahedra are closed, a prism candidate and the pyramid closing one of its quad faces
+  /// become a hexahedron when the pyramid's apex is split into an edge (the pyramid then a
+  /// second prism on that face), kept when the hexahedron passes the acceptance and its quad
+  /// faces close as any other's.
+  bool split_nodes = false;
 };
 
 /// Hexahedron candidates, and those whose every quad face the tets close as they are.
@@ -79,6 +85,9 @@ struct PostMergeResult {
   std::size_t already_closed = 0;  ///< of them: every quad face closed as the tets were
   /// Of the closed: liftable candidates that a node move made pass the acceptance.
   std::size_t lifted = 0;
+  /// Hexahedra made of a prism and a pyramid by a vertex split, their quad faces closed
+  /// (split_nodes; flips.splits of them).
+  std::size_t split_hexes = 0;
 };
 
 /// Works on the hexahedron candidates of `candidates` (found on `mesh`, any pruning), best
@@ -93,6 +102,10 @@ struct PostMergeResult {
 /// the acceptance is first made to pass it by moving one of its nodes (Stage::lift), then closed as
 /// the others. Every node move keeps the hexahedron candidates of `candidates` and the selection's
 /// elements that pass the acceptance passing it (PostMergeOptions::min_dihedral_angle).
+/// With split_nodes, then, the prism candidates of `candidates` whose tets are all still free,
+/// best scaled Jacobian first: each quad face closed by a pyramid whose apex is an inner node is
+/// tried for a vertex split that makes the prism and the pyramid one hexahedron (see
+/// PostMergeOptions::split_nodes); its faces are closed as above, or the split is undone.
 PostMergeResult close_open_quads(const TetMesh& mesh, const Candidates& candidates,
                                  const Candidates& selected_from, const Selection& selection,
                                  const PostMergeOptions& options,

@@ -437,5 +437,112 @@ TEST(flip_mesh, a_node_inside_a_flat_face_slides_in_its_plane_and_an_edge_node_s
   expect_same_union(m, boundary, vol);
 }
 
+// The octahedron on +-x, +-y, +-z (nodes 0 to 5) with node 6 at its centre: eight tets, one
+// per octant; node 6 is inner.
+TetMesh centred_octahedron() {
+  TetMesh mesh;
+  const std::vector<Point> points = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0},
+                                     {0, 0, 1}, {0, 0, -1}, {0, 0, 0}};
+  for (const Point& p : points) mesh.points.insert(mesh.points.end(), p.begin(), p.end());
+  for (index_t x : {0, 1}) {
+    for (index_t y : {2, 3}) {
+      for (index_t z : {4, 5}) add_tet(mesh, 6, x, y, z);
+    }
+  }
+  return mesh;
+}
+
+// The tets of node 6 on the +x side (holding node 0): they take the new node.
+std::vector<index_t> plus_x_tets(const FlipMesh& m) {
+  std::vector<index_t> out;
+  for (index_t t : alive_tets(m)) {
+    if (std::count(m.tet(t), m.tet(t) + 4, 6) && std::count(m.tet(t), m.tet(t) + 4, 0)) {
+      out.push_back(t);
+    }
+  }
+  return out;
+}
+
+TEST(flip_mesh, a_vertex_split_adds_a_node_and_a_ring_of_tets_and_keeps_the_union) {
+  const TetMesh mesh = centred_octahedron();
+  FlipMesh m(mesh);
+  const auto boundary = boundary_triangles(m);
+  bool positive = false;
+  const double vol = volume(m, positive);
+  ASSERT_TRUE(positive);
+  const std::size_t start = m.mark();
+  const index_t n = m.split(6, plus_x_tets(m), {-0.2, 0, 0}, {0.2, 0, 0}, 0.1);
+  ASSERT_EQ(n, 7u);  // past the existing nodes
+  EXPECT_EQ(m.nb_nodes(), 8u);
+  EXPECT_EQ(m.counts().splits, 1u);
+  // Eight tets, one at each node of the new edge per octant, and a ring of four around the
+  // edge (one per face between the two sides: (6, +-y, +-z)).
+  EXPECT_EQ(alive_tets(m).size(), 12u);
+  std::vector<index_t> ring;
+  m.tets_with_edge(6, 7, ring);
+  EXPECT_EQ(ring.size(), 4u);
+  expect_same_union(m, boundary, vol);
+  for (index_t t : alive_tets(m)) {
+    EXPECT_GE(scaled_jacobian(CellType::Tet, m.point(0), m.tet(t)), 0.1);
+  }
+  EXPECT_EQ(m.point(6)[0], -0.2);
+  EXPECT_EQ(m.point(7)[0], 0.2);
+  const TetMesh out = m.compact();
+  EXPECT_EQ(out.nb_vertices(), 8u);
+  EXPECT_NO_THROW(validate_tet_mesh(out));
+  // A split node can be split again, and undo takes both back exactly.
+  const std::vector<index_t> again = {ring[0]};
+  EXPECT_NE(m.split(7, again, {0.2, 0, 0}, {0.15, 0.02, 0.01}, 0.0), NO_VERTEX);
+  m.undo(start);
+  EXPECT_EQ(m.counts().splits, 0u);
+  EXPECT_EQ(m.nb_nodes(), 7u);
+  EXPECT_EQ(m.compact().tets, mesh.tets);
+  EXPECT_EQ(m.compact().points, mesh.points);
+}
+
+TEST(flip_mesh, a_vertex_split_refuses_boundary_nodes_locks_regions_the_floor_and_bad_sides) {
+  const TetMesh mesh = centred_octahedron();
+  const auto unchanged = [&mesh](const FlipMesh& m) {
+    EXPECT_EQ(m.counts().splits, 0u);
+    EXPECT_EQ(m.nb_nodes(), 7u);
+    EXPECT_EQ(m.compact().tets, mesh.tets);
+    EXPECT_EQ(m.compact().points, mesh.points);
+  };
+  {
+    FlipMesh m(mesh);
+    const std::vector<index_t> side = plus_x_tets(m);
+    // Node 0 is a corner of the domain.
+    std::vector<index_t> star;
+    m.tets_with_edge(0, 0, star);
+    EXPECT_EQ(m.split(0, {star[0]}, {1, 0, 0}, {0.9, 0, 0}, 0.0), NO_VERTEX);
+    // The floor: no tet of this split is near regular.
+    EXPECT_EQ(m.split(6, side, {-0.2, 0, 0}, {0.2, 0, 0}, 0.99), NO_VERTEX);
+    // The new node out of the star: tets inverted.
+    EXPECT_EQ(m.split(6, side, {0, 0, 0}, {1.5, 0, 0}, 0.0), NO_VERTEX);
+    // The new edge across the cut (the +x side's node on the -x side): ring tets inverted.
+    EXPECT_EQ(m.split(6, side, {0.2, 0, 0}, {-0.2, 0, 0}, 0.0), NO_VERTEX);
+    // No tet, every tet, or a tet not at the node.
+    EXPECT_EQ(m.split(6, {}, {-0.2, 0, 0}, {0.2, 0, 0}, 0.0), NO_VERTEX);
+    EXPECT_EQ(m.split(6, alive_tets(m), {-0.2, 0, 0}, {0.2, 0, 0}, 0.0), NO_VERTEX);
+    EXPECT_EQ(m.split(6, {m.nb_slots()}, {-0.2, 0, 0}, {0.2, 0, 0}, 0.0), NO_VERTEX);
+    unchanged(m);
+  }
+  {
+    FlipMesh m(mesh);
+    m.set_locked(alive_tets(m).back(), true);  // a tet of the star locked
+    EXPECT_EQ(m.split(6, plus_x_tets(m), {-0.2, 0, 0}, {0.2, 0, 0}, 0.0), NO_VERTEX);
+    unchanged(m);
+  }
+  // One tet in another region: node 6 is on an interface and stays.
+  TetMesh two = mesh;
+  two.regions.assign(two.nb_tets(), 1);
+  two.regions[0] = 2;
+  FlipMesh mixed(two);
+  EXPECT_EQ(mixed.split(6, plus_x_tets(mixed), {-0.2, 0, 0}, {0.2, 0, 0}, 0.0), NO_VERTEX);
+  two.regions.assign(two.nb_tets(), 1);
+  FlipMesh same(two);
+  EXPECT_EQ(same.split(6, plus_x_tets(same), {-0.2, 0, 0}, {0.2, 0, 0}, 0.0), 7u);
+}
+
 }  // namespace
 }  // namespace hexmerge

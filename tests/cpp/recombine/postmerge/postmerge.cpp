@@ -359,6 +359,37 @@ TEST(post_merge, with_node_moves_a_delaunay_mesh_stays_valid_and_the_moves_are_d
   EXPECT_GE(check.min_scaled_jacobian, test::min_quality(mesh) - 1e-12);
 }
 
+// Vertex splits: each adds one node past the input's, inside the domain, declared changed; the
+// output stays valid and every region's volume is kept. Off by default.
+TEST(post_merge, with_vertex_splits_a_delaunay_mesh_stays_valid_and_the_added_nodes_are_declared) {
+  const TetMesh mesh = test::tetgen_mesh(spaced_points(11, 12.0, 2500));
+  if (mesh.nb_tets() == 0) GTEST_SKIP() << "no tetgen";
+  RecombineParameters parameters;
+  parameters.same_nodes = false;
+  RecombineReport off;
+  EXPECT_EQ(recombine(mesh, parameters, off).points.size(), mesh.points.size());
+  EXPECT_EQ(off.vertex_splits, 0u);
+  parameters.post_merge_splits = true;
+  RecombineReport report;
+  const MixedMesh out = recombine(mesh, parameters, report);
+  ASSERT_EQ(report.post_merge, "kept");
+  ASSERT_GT(report.vertex_splits, 0u);
+  ASSERT_EQ(out.points.size(), mesh.points.size() + 3 * report.vertex_splits);
+  for (index_t v = mesh.nb_vertices(); v < out.points.size() / 3; ++v) {
+    EXPECT_TRUE(std::binary_search(out.changed_nodes.begin(), out.changed_nodes.end(), v));
+    EXPECT_TRUE(std::count(out.cell_vertices.begin(), out.cell_vertices.end(), v)) << v;
+  }
+  const CheckReport check = check_mesh(out, mesh);
+  EXPECT_TRUE(check.valid()) << (check.problems.empty() ? "" : check.problems[0]);
+  EXPECT_EQ(check.inverted_cells, 0u);
+  EXPECT_EQ(check.nonconforming_quads, 0u);
+  EXPECT_EQ(check.cracks, 0u);
+  EXPECT_EQ(check.off_boundary_nodes, 0u);
+  EXPECT_EQ(check.volume_not_kept, 0u);
+  EXPECT_LT(check.max_region_volume_difference, 1e-9);
+  EXPECT_GE(check.min_scaled_jacobian, test::min_quality(mesh) - 1e-12);
+}
+
 // Pyramids kept off boundary nodes (the FreeCAD add-on's placement): the stage with moves
 // closes no quad with a pyramid that has a node on the boundary, and the output is valid.
 TEST(post_merge, with_pyramids_off_boundary_nodes_the_stage_keeps_the_placement) {
