@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <array>
+#include <random>
 #include <vector>
 
 #include "fixtures.h"
@@ -45,6 +46,72 @@ TEST(smooth_nodes, moving_the_centre_raises_the_minimum_and_nothing_else_moves) 
   EXPECT_GE(report.moves, 1u);
   for (std::size_t i = 0; i < 18; ++i) EXPECT_EQ(m.points[i], before[i]);  // corners stay
   EXPECT_EQ(m.tets.size(), 32u);                                           // tets stay
+  validate_tet_mesh(m);
+}
+
+// Random stars (an octahedron's corners moved by up to 0.45, the centre anywhere near the
+// middle): the free centre's search raises its worst tet, but does not end with more of its tets
+// below the floor than where it started unless its worst tet was under half the floor. Raising
+// the worst tet alone pushed others below it.
+TEST(smooth_nodes, a_free_node_never_ends_with_more_tets_below_the_floor) {
+  std::mt19937_64 random(11);
+  std::uniform_real_distribution<double> jitter(-0.45, 0.45);
+  const SmoothNodesParameters parameters;
+  std::size_t moved = 0;
+  for (int trial = 0; trial < 400; ++trial) {
+    TetMesh m = star_with_an_offset_centre();
+    for (double& x : m.points) x += jitter(random);
+    std::vector<char> movable(m.nb_vertices(), kFixed);
+    movable[6] = kFree;
+    auto below = [&] {
+      std::size_t n = 0;
+      for (index_t t = 0; t < m.nb_tets(); ++t)
+        n += scaled_jacobian(CellType::Tet, m.points.data(), m.tet(t)) < parameters.floor;
+      return n;
+    };
+    const std::size_t below_before = below();
+    const double worst_before = min_quality(m);
+    SmoothNodesReport report;
+    smooth_nodes(m, movable, parameters, report);
+    // More only where lifting a tet under half the floor needed it (the last position without
+    // more had its worst tet there: the search starts from the node's own).
+    if (worst_before >= 0.5 * parameters.floor)
+      EXPECT_LE(below(), below_before) << "trial " << trial;
+    EXPECT_GE(min_quality(m), worst_before) << "trial " << trial;
+    moved += report.moves > 0;
+  }
+  EXPECT_GT(moved, 200u);  // most stars had a tet below the target to lift
+}
+
+// A star (found among random ones) whose worst tet, 0.175, the search lifts furthest by pushing
+// a third tet below the floor: the node stops where no more than two are, its worst tet still
+// raised.
+TEST(smooth_nodes, lifting_the_worst_tet_pushes_no_other_below_the_floor) {
+  TetMesh m = star_with_an_offset_centre();
+  m.points = {1.4295226223066553,   -0.013608800206461324, -0.14499095201668155,
+              -1.0845225936840048,  0.098046690294850247,  0.12219436462563327,
+              0.0058815198943410474, 1.3639127351463345,   -0.35258710137555405,
+              -0.044224041111324552, -0.62593737040199326, -0.42715511120845773,
+              -0.33007981813676324, -0.31824790098218114,  0.57178843128827961,
+              -0.3552451093861399,  -0.30002290336815729,  -0.88295754502919055,
+              0.57907075196079438,  0.12616090510311823,   -0.16919835122341628};
+  const SmoothNodesParameters parameters;
+  auto below = [&] {
+    std::size_t n = 0;
+    for (index_t t = 0; t < m.nb_tets(); ++t)
+      n += scaled_jacobian(CellType::Tet, m.points.data(), m.tet(t)) < parameters.floor;
+    return n;
+  };
+  const double worst_before = min_quality(m);
+  ASSERT_EQ(below(), 2u);
+  ASSERT_GT(worst_before, 0.5 * parameters.floor);
+  std::vector<char> movable(m.nb_vertices(), kFixed);
+  movable[6] = kFree;
+  SmoothNodesReport report;
+  smooth_nodes(m, movable, parameters, report);
+  EXPECT_EQ(report.moves, 1u);
+  EXPECT_LE(below(), 2u);  // lifting the worst tet furthest left three below 0.2
+  EXPECT_GT(min_quality(m), worst_before);
   validate_tet_mesh(m);
 }
 

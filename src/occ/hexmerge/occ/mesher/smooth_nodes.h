@@ -49,7 +49,8 @@ struct SmoothNodesParameters {
   double nudge_target = 0.2;
   /// Nodes on a surface take a position only where no more of their tets than before are below
   /// this (a node of the boundary moves its triangles too: the worst tet alone raised, others
-  /// fell below the floor).
+  /// fell below the floor); the others end their search at the last position that left no more
+  /// there than before.
   double floor = 0.2;
   /// Passes over the nodes, at least 1; a pass that moves nothing ends the run.
   int max_passes = 4;
