@@ -89,15 +89,17 @@ def test_a_local_size_makes_its_face_finer(plate_meshes) -> None:
     assert meshing["nb_graded_points"] > 0
     assert meshing["sweep_axis"] == -1  # local sizes: not swept
     assert meshing["parameters"]["local_sizes"] == f"{HOLE}:{H / 4}"
-    # The boundary on the CAD, the tets as good as the plate's unswept tets at h (floor: below
-    # what was measured when set).
+    # The boundary on the CAD, the tets as good as the plate's unswept tets at h (floors: below
+    # what was measured when set; since the node moves hold the count under 0.2, cff8ad9: 62 ->
+    # 47 tets under 0.2, the smallest 0.118 -> 0.090).
     assert SURFACES["plate"](boundary_nodes(fine)).max() <= 1e-3 * H
     assert meshing["max_boundary_distance"] <= 1e-3 * H
     quality = tet_scaled_jacobians(fine.points, fine.cell_vertices.reshape(-1, 4).astype(np.int64))
     print(f"plate h {H} hole {H / 4}: {fine.nb_cells} tets (plain {plain.nb_cells}), min tet SJ "
           f"{quality.min():.3f}, graded points {meshing['nb_graded_points']}, strategy "
           f"{meshing['strategy']}")
-    assert quality.min() >= 0.1
+    assert quality.min() >= 0.08
+    assert (quality < 0.2).sum() <= 55
 
 
 def test_the_graded_mesh_recombines_and_checks(plate_meshes) -> None:
