@@ -16,6 +16,16 @@ import pytest
 import hexmerge
 from conftest import ROOT
 
+
+def assert_sound(check: dict) -> None:
+    """The checker's verdict on an output of the post-merge stage (its changed nodes declared):
+    nothing inverted, off the input's boundary or cracked, no quad against two triangles, every
+    region's volume kept."""
+    assert check["inverted_cells"] == 0
+    assert check["off_boundary_nodes"] == 0 and check["volume_not_kept"] == 0
+    assert check["nonconforming_quads"] == 0 and check["cracks"] == 0
+    assert abs(check["relative_volume_difference"]) < 1e-9
+
 BOX_GEO = """
 SetFactory("OpenCASCADE");
 Box(1) = {{0, 0, 0, 4, 4, 2}};
@@ -69,9 +79,7 @@ def test_contractions_are_declared_and_the_checker_verifies_them(delaunay_box) -
     check = hexmerge.check(mesh, points, tets)
     assert check["valid"], check["problems"]
     assert check["declared_changed_nodes"] == report["contractions"]
-    assert check["off_boundary_nodes"] == 0 and check["volume_not_kept"] == 0
-    assert check["nonconforming_quads"] == 0 and check["cracks"] == 0
-    assert abs(check["relative_volume_difference"]) < 1e-9
+    assert_sound(check)
     # Undeclared, the same mesh fails: its contracted nodes are unused input nodes.
     mesh.changed_nodes = None
     bare = hexmerge.check(mesh, points, tets)
@@ -114,10 +122,7 @@ def test_moved_nodes_are_declared_inside_the_domain_and_the_checker_verifies_the
         assert np.array_equal(mesh.points[moved][sliding, axis], points[moved][sliding, axis])
     check = hexmerge.check(mesh, points, tets)
     assert check["valid"], check["problems"]
-    assert check["inverted_cells"] == 0
-    assert check["off_boundary_nodes"] == 0 and check["volume_not_kept"] == 0
-    assert check["nonconforming_quads"] == 0 and check["cracks"] == 0
-    assert abs(check["relative_volume_difference"]) < 1e-9
+    assert_sound(check)
     # Undeclared, the moved nodes fail the check.
     mesh.changed_nodes = None
     assert not hexmerge.check(mesh, points, tets)["valid"]
@@ -178,10 +183,7 @@ def test_vertex_splits_add_declared_inner_nodes_and_the_checker_verifies_them(fi
     check = hexmerge.check(mesh, points, tets)
     assert check["valid"], check["problems"]
     assert check["declared_changed_nodes"] == len(mesh.changed_nodes)
-    assert check["inverted_cells"] == 0
-    assert check["off_boundary_nodes"] == 0 and check["volume_not_kept"] == 0
-    assert check["nonconforming_quads"] == 0 and check["cracks"] == 0
-    assert abs(check["relative_volume_difference"]) < 1e-9
+    assert_sound(check)
     # Undeclared, the added nodes are not the input's: the check fails.
     mesh.changed_nodes = None
     assert not hexmerge.check(mesh, points, tets)["valid"]
