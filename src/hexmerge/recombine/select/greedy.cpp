@@ -35,8 +35,7 @@ void Selector::boundary_stage(const Stage& stage) {
   for (index_t t = 0; t < nt; ++t) {
     if (!is_boundary_[t] || !is_free(t)) continue;
     for (index_t k = offsets_[t]; k < offsets_[t + 1]; ++k) {
-      const index_t ci = ids_[k];
-      if (cands_[ci].type == stage.type && available(ci)) ++count[t];
+      if (types_[k] == stage.type && available(ids_[k])) ++count[t];
     }
     if (count[t] == 0) continue;
     if (buckets.size() <= count[t]) buckets.resize(count[t] + 1);
@@ -60,8 +59,8 @@ void Selector::boundary_stage(const Stage& stage) {
       const index_t s = cands_.tets(c)[i];
       for (index_t k = offsets_[s]; k < offsets_[s + 1]; ++k) {
         const index_t xi = ids_[k];
+        if (xi == ci || types_[k] != stage.type || counted[xi]) continue;
         const Candidate& x = cands_[xi];
-        if (xi == ci || x.type != stage.type || counted[xi]) continue;
         counted[xi] = 1;
         for (int j = 0; j < x.nb_tets; ++j) {
           const index_t u = cands_.tets(x)[j];
@@ -172,8 +171,43 @@ std::vector<index_t> Selector::breadth_first_order() const {
   return order;
 }
 
+// Asks the memory for what best_at will read at the free tets ahead of order[i], a step of the
+// chain at each distance (each step's address is read from the step before, fetched a few
+// tets earlier): the tet's entry of the index, its candidates and their types, the records of
+// those of `type`, then their tets and cell faces. At 1M tets in a mesh numbered in no
+// spatial order every one of these is a miss; asked for together they overlap. Only reads:
+// the selection is the same.
+void Selector::prefetch_ahead(const std::vector<index_t>& order, std::size_t i,
+                              CellType type) const {
+  constexpr std::size_t kOffsets = 16, kIds = 12, kRecords = 8, kTets = 4;
+  const std::size_t n = order.size();
+  if (i + kOffsets < n) __builtin_prefetch(&offsets_[order[i + kOffsets]]);
+  if (i + kIds < n && is_free(order[i + kIds])) {
+    const index_t k = offsets_[order[i + kIds]];
+    __builtin_prefetch(&ids_[k]);
+    __builtin_prefetch(&types_[k]);
+  }
+  if (i + kRecords < n && is_free(order[i + kRecords])) {
+    const index_t t = order[i + kRecords];
+    for (index_t k = offsets_[t]; k < offsets_[t + 1]; ++k) {
+      if (types_[k] == type) __builtin_prefetch(&cands_[ids_[k]]);
+    }
+  }
+  if (i + kTets < n && is_free(order[i + kTets])) {
+    const index_t t = order[i + kTets];
+    for (index_t k = offsets_[t]; k < offsets_[t + 1]; ++k) {
+      if (types_[k] != type) continue;
+      const Candidate& c = cands_[ids_[k]];
+      __builtin_prefetch(cands_.tets(c).data());
+      __builtin_prefetch(&index_.cell_face[4 * static_cast<std::size_t>(c.first_tet)]);
+    }
+  }
+}
+
 void Selector::interior_stage(const Stage& stage, const std::vector<index_t>& order) {
-  for (index_t t : order) {
+  for (std::size_t i = 0; i < order.size(); ++i) {
+    prefetch_ahead(order, i, stage.type);
+    const index_t t = order[i];
     if (!is_free(t)) continue;
     const index_t ci = best_at(t, stage);
     if (ci != NO_INDEX) choose(ci);

@@ -38,9 +38,10 @@ index_t Selector::group_partner(index_t n0, index_t n1, const QuadKey& key) cons
   index_t best = NO_INDEX;
   int best_open = 0;
   for (index_t k = offsets_[n0]; k < offsets_[n0 + 1]; ++k) {
+    if (types_[k] == CellType::Pyramid) continue;
     const index_t xi = ids_[k];
     const Candidate& x = cands_[xi];
-    if (x.type == CellType::Pyramid || !contains(x, n1) || !available(xi) || !has_quad(x, key)) {
+    if (!contains(x, n1) || !available(xi) || !has_quad(x, key)) {
       continue;
     }
     const Sides s = sides(xi);

@@ -1,22 +1,28 @@
 // Selection kernel: the candidate index, a candidate's conformity against what is chosen, the
 // closers of pending quad faces, the ranking at a tet, and the move journal.
 #include "hexmerge/core/error.h"
+#include "hexmerge/core/parallel.h"
 #include "hexmerge/recombine/select/selector.h"
 
 namespace hexmerge::select {
 namespace {
 const CellDescriptor& kTet = descriptor(CellType::Tet);
 
-// Face of the cell of `c` that contains the three vertices, or -1.
+// Face of the cell of `c` that contains the three vertices, or -1: the first face with three
+// of its corners among them. The corners of c that are one of the three, as bits, are tested
+// against each face's corners as bits (a tenth of the instructions of comparing every corner
+// of every face with each of the three).
 int cell_face_of(const Candidate& c, const std::array<index_t, 3>& tri) {
   const CellDescriptor& d = descriptor(c.type);
+  unsigned among = 0;
+  for (int i = 0; i < d.nb_vertices; ++i) {
+    const index_t v = c.vertices[i];
+    among |= static_cast<unsigned>((v == tri[0]) | (v == tri[1]) | (v == tri[2])) << i;
+  }
   for (int f = 0; f < d.nb_faces; ++f) {
-    int hits = 0;
-    for (int i = 0; i < d.face_size[f]; ++i) {
-      const index_t v = c.vertices[d.face[f][i]];
-      hits += (v == tri[0]) + (v == tri[1]) + (v == tri[2]);
-    }
-    if (hits == 3) return f;
+    unsigned corners = 0;
+    for (int i = 0; i < d.face_size[f]; ++i) corners |= 1u << d.face[f][i];
+    if (__builtin_popcount(among & corners) == 3) return f;
   }
   return -1;
 }
@@ -24,39 +30,49 @@ int cell_face_of(const Candidate& c, const std::array<index_t, 3>& tri) {
 }  // namespace
 
 CandidateIndex::CandidateIndex(const TetMesh& mesh, const TetTopology& topo,
-                               const Candidates& cands, bool respect_regions) {
+                               const Candidates& cands, bool respect_regions, int threads) {
   const index_t nt = mesh.nb_tets();
   offsets.assign(static_cast<std::size_t>(nt) + 1, 0);
-  first_face.assign(cands.size() + 1, 0);
-  for (index_t ci = 0; ci < cands.size(); ++ci) {
-    const Candidate& c = cands[ci];
-    for (const index_t t : cands.tets(c)) ++offsets[t + 1];
-    first_face[ci + 1] = first_face[ci] + 4 * static_cast<std::size_t>(c.nb_tets);
-  }
+  for (const index_t t : cands.all_tets()) ++offsets[t + 1];
   for (index_t t = 0; t < nt; ++t) offsets[t + 1] += offsets[t];
   ids.resize(offsets[nt]);
+  types.resize(offsets[nt]);
   std::vector<index_t> fill(offsets.begin(), offsets.end() - 1);
-  cell_face.assign(first_face.back(), -1);
   for (index_t ci = 0; ci < cands.size(); ++ci) {
     const Candidate& c = cands[ci];
-    const TetSpan ct = cands.tets(c);
-    for (int i = 0; i < c.nb_tets; ++i) {
-      const index_t t = ct[i];
+    for (const index_t t : cands.tets(c)) {
+      types[fill[t]] = c.type;
       ids[fill[t]++] = ci;
-      const index_t* q = mesh.tet(t);
-      for (int f = 0; f < 4; ++f) {
-        const index_t n = topo.neighbor(t, f);
-        if (n != NO_CELL && ct.contains(n)) {
-          continue;  // internal face of the candidate
-        }
-        const std::array<index_t, 3> tri{q[kTet.face[f][0]], q[kTet.face[f][1]],
-                                         q[kTet.face[f][2]]};
-        const int cf = cell_face_of(c, tri);
-        HEXMERGE_ASSERT(cf >= 0, "a candidate's boundary triangle is not on its cell");
-        cell_face[first_face[ci] + 4 * i + f] = static_cast<signed char>(cf);
-      }
     }
   }
+  // Each candidate writes only its own entries of cell_face: the candidates are shared out
+  // among the threads (at 1M tets this is a tenth of the selection on one thread).
+  cell_face.assign(4 * cands.all_tets().size(), -1);
+  parallel_chunks(static_cast<index_t>(cands.size()), 1u << 14, threads,
+                  [&](index_t, index_t begin, index_t end) {
+                    for (index_t ci = begin; ci < end; ++ci) {
+                      const Candidate& c = cands[ci];
+                      const TetSpan ct = cands.tets(c);
+                      for (int i = 0; i < c.nb_tets; ++i) {
+                        const index_t t = ct[i];
+                        const index_t* q = mesh.tet(t);
+                        for (int f = 0; f < 4; ++f) {
+                          const index_t n = topo.neighbor(t, f);
+                          if (n != NO_CELL && ct.contains(n)) {
+                            continue;  // internal face of the candidate
+                          }
+                          const std::array<index_t, 3> tri{q[kTet.face[f][0]], q[kTet.face[f][1]],
+                                                           q[kTet.face[f][2]]};
+                          const int cf = cell_face_of(c, tri);
+                          HEXMERGE_ASSERT(cf >= 0,
+                                          "a candidate's boundary triangle is not on its cell");
+                          const int nf = n == NO_CELL ? 0 : topo.neighbor_face(t, f);
+                          cell_face[4 * (static_cast<std::size_t>(c.first_tet) + i) + f] =
+                              static_cast<signed char>(cf | nf << 3);
+                        }
+                      }
+                    }
+                  });
   is_boundary.assign(nt, 0);
   for (index_t t = 0; t < nt; ++t) {
     for (int f = 0; f < 4; ++f) {
@@ -69,14 +85,15 @@ CandidateIndex::CandidateIndex(const TetMesh& mesh, const TetTopology& topo,
 }
 
 Sides Selector::sides(index_t ci) const {
-  const TetSpan ct = cands_.tets(ci);
+  const Candidate& c = cands_[ci];
+  const TetSpan ct = cands_.tets(c);
   Sides s;
   for (int i = 0; i < ct.size(); ++i) {
     for (int f = 0; f < 4; ++f) {
-      const int cf = index_.cell_face[index_.first_face[ci] + 4 * i + f];
-      if (cf < 0) continue;
+      const int packed = face_entry(c, i, f);
+      if (packed < 0) continue;
       const index_t n = topo_.neighbor(ct[i], f);
-      s.side[s.count++] = {n, n == NO_CELL ? -1 : topo_.neighbor_face(ct[i], f), cf};
+      s.side[s.count++] = {n, n == NO_CELL ? -1 : packed >> 3, packed & 7};
     }
   }
   return s;
@@ -144,9 +161,10 @@ index_t Selector::closing_pyramid(index_t n1, index_t n2, const QuadKey* key) co
 // An available pyramid of tets n1 and n2 with base `key`, or NO_INDEX.
 index_t Selector::pyramid_on(index_t n1, index_t n2, const QuadKey& key) const {
   for (index_t k = offsets_[n1]; k < offsets_[n1 + 1]; ++k) {
+    if (types_[k] != CellType::Pyramid) continue;
     const index_t xi = ids_[k];
     const Candidate& x = cands_[xi];
-    if (x.type == CellType::Pyramid && contains(x, n2) && available(xi) && face_key(x, 0) == key) {
+    if (contains(x, n2) && available(xi) && face_key(x, 0) == key) {
       return xi;
     }
   }
@@ -226,9 +244,10 @@ index_t Selector::best_at(index_t t, const Stage& stage) const {
   index_t best = NO_INDEX;
   std::size_t best_v = 0;
   for (index_t k = offsets_[t]; k < offsets_[t + 1]; ++k) {
+    if (types_[k] != stage.type) continue;
     const index_t ci = ids_[k];
     const Candidate& c = cands_[ci];
-    if (c.type != stage.type || !available(ci)) continue;
+    if (!available(ci)) continue;
     std::size_t v = violations(ci);
     if (v > 0 && !stage.allow_nonconforming) continue;
     if (v == 0 && params_.conformity == Conformity::Conforming && !strict_) v = risky_quads(ci);
@@ -247,7 +266,7 @@ void Selector::begin_move() {
 }
 
 void Selector::rollback() {
-  for (auto it = journal_.rbegin(); it != journal_.rend(); ++it) owner_[it->first] = it->second;
+  for (auto it = journal_.rbegin(); it != journal_.rend(); ++it) put_owner(it->first, it->second);
   for (auto it = chosen_journal_.rbegin(); it != chosen_journal_.rend(); ++it) {
     chosen_[it->first] = it->second;
   }

@@ -28,13 +28,13 @@ bool Selector::fits_outside(index_t ci) const {
   }
   for (int i = 0; i < c.nb_tets; ++i) {
     for (int f = 0; f < 4; ++f) {
-      const int cf = index_.cell_face[index_.first_face[ci] + 4 * i + f];
+      const int cf = face_in_cell(c, i, f);
       if (cf < 0) continue;
       const index_t n = topo_.neighbor(cands_.tets(c)[i], f);
       if (n == NO_CELL || local_[n] >= 0) continue;
       if (is_free(n)) {
         if (is_quad(c, cf)) return false;
-      } else if (!faces_match(ci, cf, owner_[n], n, topo_.neighbor_face(cands_.tets(c)[i], f))) {
+      } else if (!faces_match(ci, cf, owner_[n], n, face_across(c, i, f))) {
         return false;
       }
     }
@@ -47,7 +47,7 @@ bool Selector::fits_inside(const Hood& h, index_t ci) const {
   const Candidate& c = cands_[ci];
   for (int i = 0; i < c.nb_tets; ++i) {
     for (int f = 0; f < 4; ++f) {
-      const int cf = index_.cell_face[index_.first_face[ci] + 4 * i + f];
+      const int cf = face_in_cell(c, i, f);
       if (cf < 0) continue;
       const index_t n = topo_.neighbor(cands_.tets(c)[i], f);
       if (n == NO_CELL || local_[n] < 0) continue;
@@ -55,7 +55,7 @@ bool Selector::fits_inside(const Hood& h, index_t ci) const {
       if (st == UNDECIDED) continue;
       if (st == LEFT_FREE) {
         if (is_quad(c, cf)) return false;
-      } else if (!faces_match(ci, cf, owner_[n], n, topo_.neighbor_face(cands_.tets(c)[i], f))) {
+      } else if (!faces_match(ci, cf, owner_[n], n, face_across(c, i, f))) {
         return false;
       }
     }
@@ -251,7 +251,7 @@ void Selector::branch(Hood& h, std::size_t pos, int saved, long long rest) {
     }
     for (int i = 0; i < c.nb_tets; ++i) {
       h.state[ls[i]] = p;
-      owner_[cands_.tets(c)[i]] = ci;
+      put_owner(cands_.tets(c)[i], ci);
     }
     const long long drop = close_entries(h, ls, c.nb_tets, before);
     h.current.push_back(p);
@@ -260,7 +260,7 @@ void Selector::branch(Hood& h, std::size_t pos, int saved, long long rest) {
     reopen_entries(h, ls, c.nb_tets);
     for (int i = 0; i < c.nb_tets; ++i) {
       h.state[ls[i]] = UNDECIDED;
-      owner_[cands_.tets(c)[i]] = NO_INDEX;
+      put_owner(cands_.tets(c)[i], NO_INDEX);
     }
     if (h.stopped) return;
   }

@@ -75,11 +75,17 @@ struct Stage {
 // each tet face of a candidate lies in, the boundary tets.
 struct CandidateIndex {
   CandidateIndex(const TetMesh& mesh, const TetTopology& topo, const Candidates& cands,
-                 bool respect_regions);
+                 bool respect_regions, int threads);
 
-  std::vector<index_t> offsets, ids;    // tet -> candidates (CSR)
-  std::vector<std::size_t> first_face;  // candidate -> first entry of cell_face
-  std::vector<signed char> cell_face;   // per candidate, tet i, face f: its cell face, or -1
+  std::vector<index_t> offsets, ids;  // tet -> candidates (CSR)
+  // Per CSR entry, its candidate's type: the stages that want one type skip the others without
+  // reading their records (at 1M tets the records are far out of cache).
+  std::vector<CellType> types;
+  // Per candidate's tet i and face f, at 4 * (first_tet + i) + f (the candidates' tets are
+  // laid out one after the other, Candidates::all_tets): -1 inside the cell, else the cell face
+  // it lies in (bits 0-2) and the face of the tet across it (bits 3-4; 0 on the domain
+  // boundary), so that sides() reads no TetTopology::neighbor_face.
+  std::vector<signed char> cell_face;
   std::vector<char> is_boundary;
 };
 
@@ -93,9 +99,11 @@ class Selector {
         params_(parameters),
         strict_(strict),
         owner_(mesh.nb_tets(), NO_INDEX),
+        taken_((mesh.nb_tets() + 63) / 64, 0),
         chosen_(candidates.size(), 0),
         offsets_(index.offsets),
         ids_(index.ids),
+        types_(index.types),
         index_(index),
         is_boundary_(index.is_boundary) {}
 
@@ -103,7 +111,7 @@ class Selector {
   Selection run(const ProgressCallback& progress);
 
  private:
-  bool is_free(index_t t) const { return owner_[t] == NO_INDEX; }
+  bool is_free(index_t t) const { return !((taken_[t >> 6] >> (t & 63)) & 1); }
 
   bool available(index_t ci) const {
     for (const index_t t : cands_.tets(ci)) {
@@ -141,8 +149,23 @@ class Selector {
   int cell_face_at(index_t ei, index_t t, int f) const {
     const TetSpan e = cands_.tets(ei);
     const int i = static_cast<int>(std::find(e.begin(), e.end(), t) - e.begin());
-    return index_.cell_face[index_.first_face[ei] + 4 * i + f];
+    return face_in_cell(cands_[ei], i, f);
   }
+
+  // CandidateIndex::cell_face of face f of candidate c's i-th tet.
+  int face_entry(const Candidate& c, int i, int f) const {
+    return index_.cell_face[4 * (static_cast<std::size_t>(c.first_tet) + i) + f];
+  }
+
+  // The cell face of candidate c that face f of its i-th tet lies in (-1: inside the cell).
+  int face_in_cell(const Candidate& c, int i, int f) const {
+    const int packed = face_entry(c, i, f);
+    return packed < 0 ? -1 : packed & 7;
+  }
+
+  // The face, in the tet across it, of face f of candidate c's i-th tet (that face not inside
+  // the cell nor on the domain boundary): TetTopology::neighbor_face, from the same entry.
+  int face_across(const Candidate& c, int i, int f) const { return face_entry(c, i, f) >> 3; }
 
   // Ranking at one tet: element type, then fewer non-conformities (in conforming mode: fewer
   // pending quads without a safe closing pyramid), then quality.
@@ -152,9 +175,20 @@ class Selector {
     return a.quality > b.quality;
   }
 
+  // Every write of owner_ goes through here, so that the bits of is_free follow it.
+  void put_owner(index_t t, index_t ci) {
+    owner_[t] = ci;
+    const std::uint64_t bit = std::uint64_t{1} << (t & 63);
+    if (ci == NO_INDEX) {
+      taken_[t >> 6] &= ~bit;
+    } else {
+      taken_[t >> 6] |= bit;
+    }
+  }
+
   void set_owner(index_t t, index_t ci) {
     if (journaling_) journal_.push_back({t, owner_[t]});
-    owner_[t] = ci;
+    put_owner(t, ci);
   }
 
   void choose(index_t ci) {
@@ -191,6 +225,7 @@ class Selector {
   void release_cracks();
   std::vector<index_t> breadth_first_order() const;
   void interior_stage(const Stage& stage, const std::vector<index_t>& order);
+  void prefetch_ahead(const std::vector<index_t>& order, std::size_t i, CellType type) const;
   void close_quads();
   template <class Touch>
   void close_pending(index_t ci, Touch* touch);
@@ -256,10 +291,14 @@ class Selector {
   const Candidates& cands_;
   const RecombineParameters& params_;
   const bool strict_;  // pending quads only where a safe closing pyramid waits (closing_pyramid)
-  std::vector<index_t> owner_;           // per tet: the chosen candidate that holds it, or NO_INDEX
+  std::vector<index_t> owner_;  // per tet: the chosen candidate that holds it, or NO_INDEX
+  // Per tet, one bit: owner_ is not NO_INDEX. is_free reads these (128 KB at 1M tets, in the
+  // second-level cache) rather than owner_ (4 MB).
+  std::vector<std::uint64_t> taken_;
   std::vector<char> chosen_;             // per candidate
   const std::vector<index_t>& offsets_;  // tet -> candidates
   const std::vector<index_t>& ids_;
+  const std::vector<CellType>& types_;  // per entry of ids_
   const CandidateIndex& index_;
   const std::vector<char>& is_boundary_;
   std::vector<char> was_closer_ = std::vector<char>(cands_.size(), 0);
