@@ -18,7 +18,9 @@ void Selector::boundary_stage_by_quality(const Stage& stage) {
   }
   std::stable_sort(order.begin(), order.end(),
                    [&](index_t a, index_t b) { return cands_[a].quality > cands_[b].quality; });
-  for (index_t ci : order) {
+  for (std::size_t i = 0; i < order.size(); ++i) {
+    prefetch_candidates(order, i);
+    const index_t ci = order[i];
     if (!available(ci)) continue;
     if (!stage.allow_nonconforming && violations(ci) > 0) continue;
     choose(ci);
@@ -201,6 +203,18 @@ void Selector::prefetch_ahead(const std::vector<index_t>& order, std::size_t i,
       __builtin_prefetch(cands_.tets(c).data());
       __builtin_prefetch(&index_.cell_face[4 * static_cast<std::size_t>(c.first_tet)]);
     }
+  }
+}
+
+// The same for a list of candidates visited in order (by quality: in no order in memory):
+// the records ahead of list[i], then the tets and cell faces of those a little nearer.
+void Selector::prefetch_candidates(const std::vector<index_t>& list, std::size_t i) const {
+  constexpr std::size_t kRecords = 8, kTets = 4;
+  if (i + kRecords < list.size()) __builtin_prefetch(&cands_[list[i + kRecords]]);
+  if (i + kTets < list.size()) {
+    const Candidate& c = cands_[list[i + kTets]];
+    __builtin_prefetch(cands_.tets(c).data());
+    __builtin_prefetch(&index_.cell_face[4 * static_cast<std::size_t>(c.first_tet)]);
   }
 }
 

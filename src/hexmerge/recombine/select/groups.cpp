@@ -118,7 +118,9 @@ void Selector::select_groups() {
     return cands_[a].quality > cands_[b].quality;
   });
   std::vector<index_t> members;
-  for (index_t seed : seeds) {
+  for (std::size_t i = 0; i < seeds.size(); ++i) {
+    prefetch_candidates(seeds, i);
+    const index_t seed = seeds[i];
     if (!available(seed)) continue;
     ++result_.group_seeds;
     begin_move();
