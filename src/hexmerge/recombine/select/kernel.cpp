@@ -8,23 +8,50 @@ namespace hexmerge::select {
 namespace {
 const CellDescriptor& kTet = descriptor(CellType::Tet);
 
-// Face of the cell of `c` that contains the three vertices, or -1: the first face with three
-// of its corners among them. The corners of c that are one of the three, as bits, are tested
-// against each face's corners as bits (a tenth of the instructions of comparing every corner
-// of every face with each of the three).
-int cell_face_of(const Candidate& c, const std::array<index_t, 3>& tri) {
-  const CellDescriptor& d = descriptor(c.type);
-  unsigned among = 0;
-  for (int i = 0; i < d.nb_vertices; ++i) {
-    const index_t v = c.vertices[i];
-    among |= static_cast<unsigned>((v == tri[0]) | (v == tri[1]) | (v == tri[2])) << i;
+// Per cell type and set of its corners (as bits, at most 8): the first face of the cell with
+// three of its corners in the set, or -1. The face of a candidate's cell that a triangle of its
+// tets lies in is then one look-up.
+using FaceOfCorners = std::array<std::array<signed char, 256>, NB_CELL_TYPES>;
+
+FaceOfCorners face_of_corners() {
+  FaceOfCorners table;
+  for (int type = 0; type < NB_CELL_TYPES; ++type) {
+    const CellDescriptor& d = descriptor(static_cast<CellType>(type));
+    for (unsigned set = 0; set < 256; ++set) {
+      table[type][set] = -1;
+      for (int f = d.nb_faces - 1; f >= 0; --f) {
+        int hits = 0;
+        for (int i = 0; i < d.face_size[f]; ++i) hits += (set >> d.face[f][i]) & 1;
+        if (hits == 3) table[type][set] = static_cast<signed char>(f);
+      }
+    }
   }
-  for (int f = 0; f < d.nb_faces; ++f) {
-    unsigned corners = 0;
-    for (int i = 0; i < d.face_size[f]; ++i) corners |= 1u << d.face[f][i];
-    if (__builtin_popcount(among & corners) == 3) return f;
+  return table;
+}
+
+// CandidateIndex::cell_face of candidate c (its tets ct), from `out` on. The corners of c that
+// are each vertex of a tet, as bits, are found once per tet (unused corners are NO_VERTEX,
+// never a vertex), and each triangle's face is then a look-up, instead of comparing every
+// corner of every face with each vertex of each triangle.
+void index_faces(const TetMesh& mesh, const TetTopology& topo, const Candidate& c, TetSpan ct,
+                 const FaceOfCorners& face_of, signed char* out) {
+  const auto& face_of_type = face_of[static_cast<int>(c.type)];
+  for (int i = 0; i < ct.size(); ++i) {
+    const index_t t = ct[i];
+    const index_t* q = mesh.tet(t);
+    unsigned at[4] = {0, 0, 0, 0};
+    for (int v = 0; v < 4; ++v) {
+      for (int k = 0; k < 8; ++k) at[v] |= static_cast<unsigned>(c.vertices[k] == q[v]) << k;
+    }
+    for (int f = 0; f < 4; ++f) {
+      const index_t n = topo.neighbor(t, f);
+      if (n != NO_CELL && ct.contains(n)) continue;  // internal face of the candidate
+      const int cf = face_of_type[at[kTet.face[f][0]] | at[kTet.face[f][1]] | at[kTet.face[f][2]]];
+      HEXMERGE_ASSERT(cf >= 0, "a candidate's boundary triangle is not on its cell");
+      const int nf = n == NO_CELL ? 0 : topo.neighbor_face(t, f);
+      out[4 * i + f] = static_cast<signed char>(cf | nf << 3);
+    }
   }
-  return -1;
 }
 
 }  // namespace
@@ -48,29 +75,13 @@ CandidateIndex::CandidateIndex(const TetMesh& mesh, const TetTopology& topo,
   // Each candidate writes only its own entries of cell_face: the candidates are shared out
   // among the threads (at 1M tets this is a tenth of the selection on one thread).
   cell_face.assign(4 * cands.all_tets().size(), -1);
+  const FaceOfCorners face_of = face_of_corners();
   parallel_chunks(static_cast<index_t>(cands.size()), 1u << 14, threads,
                   [&](index_t, index_t begin, index_t end) {
                     for (index_t ci = begin; ci < end; ++ci) {
                       const Candidate& c = cands[ci];
-                      const TetSpan ct = cands.tets(c);
-                      for (int i = 0; i < c.nb_tets; ++i) {
-                        const index_t t = ct[i];
-                        const index_t* q = mesh.tet(t);
-                        for (int f = 0; f < 4; ++f) {
-                          const index_t n = topo.neighbor(t, f);
-                          if (n != NO_CELL && ct.contains(n)) {
-                            continue;  // internal face of the candidate
-                          }
-                          const std::array<index_t, 3> tri{q[kTet.face[f][0]], q[kTet.face[f][1]],
-                                                           q[kTet.face[f][2]]};
-                          const int cf = cell_face_of(c, tri);
-                          HEXMERGE_ASSERT(cf >= 0,
-                                          "a candidate's boundary triangle is not on its cell");
-                          const int nf = n == NO_CELL ? 0 : topo.neighbor_face(t, f);
-                          cell_face[4 * (static_cast<std::size_t>(c.first_tet) + i) + f] =
-                              static_cast<signed char>(cf | nf << 3);
-                        }
-                      }
+                      index_faces(mesh, topo, c, cands.tets(c), face_of,
+                                  &cell_face[4 * static_cast<std::size_t>(c.first_tet)]);
                     }
                   });
   is_boundary.assign(nt, 0);
