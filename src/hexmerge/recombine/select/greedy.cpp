@@ -116,8 +116,8 @@ void Selector::release_cracks() {
       quad_of[f] = {NO_INDEX, -1};
       const index_t n = topo_.neighbor(t, f);
       if (n == NO_CELL || is_free(n)) continue;
-      const int ef = cell_face_at(owner_[n], n, topo_.neighbor_face(t, f));
-      if (ef >= 0 && is_quad(cands_[owner_[n]], ef)) quad_of[f] = {owner_[n], ef};
+      const int nf = topo_.neighbor_face(t, f);
+      if (owner_quad(n, nf)) quad_of[f] = {owner_[n], owner_face(n, nf)};
     }
     for (const auto& p : kPairs) {
       for (int side = 0; side < 2; ++side) {

@@ -14,8 +14,7 @@ Selector::FaceState Selector::face_state(index_t ci, const Sides& s, int f,
       if (s.side[i].cell_face != f) continue;
       const index_t n = s.side[i].neighbor;
       if (n == NO_CELL || is_free(n) || owner_[n] == ci) return FaceState::Closed;
-      const int ef = cell_face_at(owner_[n], n, s.side[i].neighbor_face);
-      return is_quad(cands_[owner_[n]], ef) ? FaceState::Conflict : FaceState::Closed;
+      return owner_quad(n, s.side[i].neighbor_face) ? FaceState::Conflict : FaceState::Closed;
     }
     return FaceState::Closed;
   }

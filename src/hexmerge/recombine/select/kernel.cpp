@@ -49,7 +49,8 @@ void index_faces(const TetMesh& mesh, const TetTopology& topo, const Candidate& 
       const int cf = face_of_type[at[kTet.face[f][0]] | at[kTet.face[f][1]] | at[kTet.face[f][2]]];
       HEXMERGE_ASSERT(cf >= 0, "a candidate's boundary triangle is not on its cell");
       const int nf = n == NO_CELL ? 0 : topo.neighbor_face(t, f);
-      out[4 * i + f] = static_cast<signed char>(cf | nf << 3);
+      const int quad = descriptor(c.type).face_size[cf] == 4 ? 32 : 0;
+      out[4 * i + f] = static_cast<signed char>(cf | nf << 3 | quad);
     }
   }
 }
@@ -104,7 +105,7 @@ Sides Selector::sides(index_t ci) const {
       const int packed = face_entry(c, i, f);
       if (packed < 0) continue;
       const index_t n = topo_.neighbor(ct[i], f);
-      s.side[s.count++] = {n, n == NO_CELL ? -1 : packed >> 3, packed & 7};
+      s.side[s.count++] = {n, n == NO_CELL ? -1 : (packed >> 3) & 3, packed & 7};
     }
   }
   return s;
@@ -116,9 +117,8 @@ void Selector::required_quads(index_t t, QuadKeys& keys) const {
   for (int f = 0; f < 4; ++f) {
     const index_t n = topo_.neighbor(t, f);
     if (n == NO_CELL || is_free(n)) continue;
-    const Candidate& e = cands_[owner_[n]];
-    const int ef = cell_face_at(owner_[n], n, topo_.neighbor_face(t, f));
-    if (ef >= 0 && is_quad(e, ef)) keys.add(face_key(e, ef));
+    const int nf = topo_.neighbor_face(t, f);
+    if (owner_quad(n, nf)) keys.add(face_key(cands_[owner_[n]], owner_face(n, nf)));
   }
 }
 
@@ -201,10 +201,7 @@ std::size_t Selector::violations(index_t ci, bool pending_ok, bool count_triangl
       // quad's side, in the final count).
       const index_t n = half[0]->neighbor;
       if (!count_triangles) continue;
-      if (n != NO_CELL && !is_free(n)) {
-        const Candidate& e = cands_[owner_[n]];
-        if (is_quad(e, cell_face_at(owner_[n], n, half[0]->neighbor_face))) ++bad;
-      }
+      if (n != NO_CELL && !is_free(n) && owner_quad(n, half[0]->neighbor_face)) ++bad;
       continue;
     }
     HEXMERGE_ASSERT(nh == 2, "a quad face of a candidate is not two triangles");
@@ -219,9 +216,11 @@ std::size_t Selector::violations(index_t ci, bool pending_ok, bool count_triangl
         ++bad;
         continue;
       }
-      const Candidate& e = cands_[owner_[n1]];
-      const int ef = cell_face_at(owner_[n1], n1, half[0]->neighbor_face);
-      if (!is_quad(e, ef) || face_key(e, ef) != face_key(c, f)) ++bad;
+      const int nf = half[0]->neighbor_face;
+      if (!owner_quad(n1, nf) ||
+          face_key(cands_[owner_[n1]], owner_face(n1, nf)) != face_key(c, f)) {
+        ++bad;
+      }
       continue;
     }
     if (!pending_ok) {
@@ -277,7 +276,15 @@ void Selector::begin_move() {
 }
 
 void Selector::rollback() {
-  for (auto it = journal_.rbegin(); it != journal_.rend(); ++it) put_owner(it->first, it->second);
+  for (auto it = journal_.rbegin(); it != journal_.rend(); ++it) {
+    const index_t t = it->first, ci = it->second;
+    if (ci == NO_INDEX) {
+      put_owner(t, ci, 0);
+    } else {
+      const TetSpan ct = cands_.tets(ci);
+      put_owner(t, ci, static_cast<int>(std::find(ct.begin(), ct.end(), t) - ct.begin()));
+    }
+  }
   for (auto it = chosen_journal_.rbegin(); it != chosen_journal_.rend(); ++it) {
     chosen_[it->first] = it->second;
   }
