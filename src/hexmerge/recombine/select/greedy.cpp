@@ -7,17 +7,20 @@ namespace hexmerge::select {
 // Exhaustive-greedy over the boundary tets, best candidate first: every candidate of this
 // stage's type that holds a boundary tet, by decreasing scaled Jacobian.
 void Selector::boundary_stage_by_quality(const Stage& stage) {
-  std::vector<index_t> order;
+  // Sorted with the qualities beside them (select_groups says why).
+  std::vector<std::pair<float, index_t>> keyed;
   for (index_t ci = 0; ci < cands_.size(); ++ci) {
     const Candidate& c = cands_[ci];
     if (c.type != stage.type) continue;
     bool on_boundary = false;
     for (int i = 0; i < c.nb_tets; ++i)
       on_boundary = on_boundary || is_boundary_[cands_.tets(c)[i]];
-    if (on_boundary) order.push_back(ci);
+    if (on_boundary) keyed.push_back({c.quality, ci});
   }
-  std::stable_sort(order.begin(), order.end(),
-                   [&](index_t a, index_t b) { return cands_[a].quality > cands_[b].quality; });
+  std::stable_sort(keyed.begin(), keyed.end(),
+                   [](const auto& a, const auto& b) { return a.first > b.first; });
+  std::vector<index_t> order(keyed.size());
+  for (std::size_t i = 0; i < keyed.size(); ++i) order[i] = keyed[i].second;
   for (std::size_t i = 0; i < order.size(); ++i) {
     prefetch_candidates(order, i);
     const index_t ci = order[i];
