@@ -34,6 +34,14 @@ std::thread start_thread(int number, int asked, Fn&& fn) {
   }
 }
 
+/// The number of threads the parameter `threads` asks for: itself when positive, else (0) every
+/// hardware thread (1 when the system cannot tell).
+inline int thread_count(int requested) {
+  if (requested > 0) return requested;
+  const unsigned hw = std::thread::hardware_concurrency();
+  return hw == 0 ? 1 : static_cast<int>(hw);
+}
+
 /// Runs work(chunk, begin, end) for the chunks [begin, end) of [0, n) of `chunk_size` items, on
 /// `threads` threads (the calling thread included; at least 1).
 ///

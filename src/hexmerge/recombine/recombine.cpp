@@ -4,10 +4,10 @@
 #include <chrono>
 #include <cmath>
 #include <memory>
-#include <thread>
 
 #include "hexmerge/check/validate_tet_mesh.h"
 #include "hexmerge/core/error.h"
+#include "hexmerge/core/parallel.h"
 #include "hexmerge/core/phase_timer.h"
 #include "hexmerge/geometry/quality.h"
 #include "hexmerge/geometry/vec3.h"
@@ -37,12 +37,6 @@ void release_freed_memory() {
 #if defined(__GLIBC__)
   malloc_trim(0);
 #endif
-}
-
-int thread_count(int requested) {
-  if (requested > 0) return requested;
-  const unsigned hw = std::thread::hardware_concurrency();
-  return hw == 0 ? 1 : static_cast<int>(hw);
 }
 
 // The output cells: chosen elements by type (hex, prism, pyramid), then the tets left, in input

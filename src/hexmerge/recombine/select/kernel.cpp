@@ -1,62 +1,90 @@
 // Selection kernel: the candidate index, a candidate's conformity against what is chosen, the
 // closers of pending quad faces, the ranking at a tet, and the move journal.
 #include "hexmerge/core/error.h"
+#include "hexmerge/core/parallel.h"
 #include "hexmerge/recombine/select/selector.h"
 
 namespace hexmerge::select {
 namespace {
 const CellDescriptor& kTet = descriptor(CellType::Tet);
 
-// Face of the cell of `c` that contains the three vertices, or -1.
-int cell_face_of(const Candidate& c, const std::array<index_t, 3>& tri) {
-  const CellDescriptor& d = descriptor(c.type);
-  for (int f = 0; f < d.nb_faces; ++f) {
-    int hits = 0;
-    for (int i = 0; i < d.face_size[f]; ++i) {
-      const index_t v = c.vertices[d.face[f][i]];
-      hits += (v == tri[0]) + (v == tri[1]) + (v == tri[2]);
+// Per cell type and set of its corners (as bits, at most 8): the first face of the cell with
+// three of its corners in the set, or -1. The face of a candidate's cell that a triangle of its
+// tets lies in is then one look-up.
+using FaceOfCorners = std::array<std::array<signed char, 256>, NB_CELL_TYPES>;
+
+FaceOfCorners face_of_corners() {
+  FaceOfCorners table;
+  for (int type = 0; type < NB_CELL_TYPES; ++type) {
+    const CellDescriptor& d = descriptor(static_cast<CellType>(type));
+    for (unsigned set = 0; set < 256; ++set) {
+      table[type][set] = -1;
+      for (int f = d.nb_faces - 1; f >= 0; --f) {
+        int hits = 0;
+        for (int i = 0; i < d.face_size[f]; ++i) hits += (set >> d.face[f][i]) & 1;
+        if (hits == 3) table[type][set] = static_cast<signed char>(f);
+      }
     }
-    if (hits == 3) return f;
   }
-  return -1;
+  return table;
+}
+
+// CandidateIndex::cell_face of candidate c (its tets ct), from `out` on. The corners of c that
+// are each vertex of a tet, as bits, are found once per tet (unused corners are NO_VERTEX,
+// never a vertex), and each triangle's face is then a look-up, instead of comparing every
+// corner of every face with each vertex of each triangle.
+void index_faces(const TetMesh& mesh, const TetTopology& topo, const Candidate& c, TetSpan ct,
+                 const FaceOfCorners& face_of, signed char* out) {
+  const auto& face_of_type = face_of[static_cast<int>(c.type)];
+  for (int i = 0; i < ct.size(); ++i) {
+    const index_t t = ct[i];
+    const index_t* q = mesh.tet(t);
+    unsigned at[4] = {0, 0, 0, 0};
+    for (int v = 0; v < 4; ++v) {
+      for (int k = 0; k < 8; ++k) at[v] |= static_cast<unsigned>(c.vertices[k] == q[v]) << k;
+    }
+    for (int f = 0; f < 4; ++f) {
+      const index_t n = topo.neighbor(t, f);
+      if (n != NO_CELL && ct.contains(n)) continue;  // internal face of the candidate
+      const int cf = face_of_type[at[kTet.face[f][0]] | at[kTet.face[f][1]] | at[kTet.face[f][2]]];
+      HEXMERGE_ASSERT(cf >= 0, "a candidate's boundary triangle is not on its cell");
+      const int nf = n == NO_CELL ? 0 : topo.neighbor_face(t, f);
+      const int quad = descriptor(c.type).face_size[cf] == 4 ? 32 : 0;
+      out[4 * i + f] = static_cast<signed char>(cf | nf << 3 | quad);
+    }
+  }
 }
 
 }  // namespace
 
 CandidateIndex::CandidateIndex(const TetMesh& mesh, const TetTopology& topo,
-                               const Candidates& cands, bool respect_regions) {
+                               const Candidates& cands, bool respect_regions, int threads) {
   const index_t nt = mesh.nb_tets();
   offsets.assign(static_cast<std::size_t>(nt) + 1, 0);
-  first_face.assign(cands.size() + 1, 0);
-  for (index_t ci = 0; ci < cands.size(); ++ci) {
-    const Candidate& c = cands[ci];
-    for (const index_t t : cands.tets(c)) ++offsets[t + 1];
-    first_face[ci + 1] = first_face[ci] + 4 * static_cast<std::size_t>(c.nb_tets);
-  }
+  for (const index_t t : cands.all_tets()) ++offsets[t + 1];
   for (index_t t = 0; t < nt; ++t) offsets[t + 1] += offsets[t];
   ids.resize(offsets[nt]);
+  types.resize(offsets[nt]);
   std::vector<index_t> fill(offsets.begin(), offsets.end() - 1);
-  cell_face.assign(first_face.back(), -1);
   for (index_t ci = 0; ci < cands.size(); ++ci) {
     const Candidate& c = cands[ci];
-    const TetSpan ct = cands.tets(c);
-    for (int i = 0; i < c.nb_tets; ++i) {
-      const index_t t = ct[i];
+    for (const index_t t : cands.tets(c)) {
+      types[fill[t]] = c.type;
       ids[fill[t]++] = ci;
-      const index_t* q = mesh.tet(t);
-      for (int f = 0; f < 4; ++f) {
-        const index_t n = topo.neighbor(t, f);
-        if (n != NO_CELL && ct.contains(n)) {
-          continue;  // internal face of the candidate
-        }
-        const std::array<index_t, 3> tri{q[kTet.face[f][0]], q[kTet.face[f][1]],
-                                         q[kTet.face[f][2]]};
-        const int cf = cell_face_of(c, tri);
-        HEXMERGE_ASSERT(cf >= 0, "a candidate's boundary triangle is not on its cell");
-        cell_face[first_face[ci] + 4 * i + f] = static_cast<signed char>(cf);
-      }
     }
   }
+  // Each candidate writes only its own entries of cell_face: the candidates are shared out
+  // among the threads (at 1M tets this is a tenth of the selection on one thread).
+  cell_face.assign(4 * cands.all_tets().size(), -1);
+  const FaceOfCorners face_of = face_of_corners();
+  parallel_chunks(static_cast<index_t>(cands.size()), 1u << 14, threads,
+                  [&](index_t, index_t begin, index_t end) {
+                    for (index_t ci = begin; ci < end; ++ci) {
+                      const Candidate& c = cands[ci];
+                      index_faces(mesh, topo, c, cands.tets(c), face_of,
+                                  &cell_face[4 * static_cast<std::size_t>(c.first_tet)]);
+                    }
+                  });
   is_boundary.assign(nt, 0);
   for (index_t t = 0; t < nt; ++t) {
     for (int f = 0; f < 4; ++f) {
@@ -69,14 +97,15 @@ CandidateIndex::CandidateIndex(const TetMesh& mesh, const TetTopology& topo,
 }
 
 Sides Selector::sides(index_t ci) const {
-  const TetSpan ct = cands_.tets(ci);
+  const Candidate& c = cands_[ci];
+  const TetSpan ct = cands_.tets(c);
   Sides s;
   for (int i = 0; i < ct.size(); ++i) {
     for (int f = 0; f < 4; ++f) {
-      const int cf = index_.cell_face[index_.first_face[ci] + 4 * i + f];
-      if (cf < 0) continue;
+      const int packed = face_entry(c, i, f);
+      if (packed < 0) continue;
       const index_t n = topo_.neighbor(ct[i], f);
-      s.side[s.count++] = {n, n == NO_CELL ? -1 : topo_.neighbor_face(ct[i], f), cf};
+      s.side[s.count++] = {n, n == NO_CELL ? -1 : (packed >> 3) & 3, packed & 7};
     }
   }
   return s;
@@ -88,9 +117,8 @@ void Selector::required_quads(index_t t, QuadKeys& keys) const {
   for (int f = 0; f < 4; ++f) {
     const index_t n = topo_.neighbor(t, f);
     if (n == NO_CELL || is_free(n)) continue;
-    const Candidate& e = cands_[owner_[n]];
-    const int ef = cell_face_at(owner_[n], n, topo_.neighbor_face(t, f));
-    if (ef >= 0 && is_quad(e, ef)) keys.add(face_key(e, ef));
+    const int nf = topo_.neighbor_face(t, f);
+    if (owner_quad(n, nf)) keys.add(face_key(cands_[owner_[n]], owner_face(n, nf)));
   }
 }
 
@@ -144,9 +172,10 @@ index_t Selector::closing_pyramid(index_t n1, index_t n2, const QuadKey* key) co
 // An available pyramid of tets n1 and n2 with base `key`, or NO_INDEX.
 index_t Selector::pyramid_on(index_t n1, index_t n2, const QuadKey& key) const {
   for (index_t k = offsets_[n1]; k < offsets_[n1 + 1]; ++k) {
+    if (types_[k] != CellType::Pyramid) continue;
     const index_t xi = ids_[k];
     const Candidate& x = cands_[xi];
-    if (x.type == CellType::Pyramid && contains(x, n2) && available(xi) && face_key(x, 0) == key) {
+    if (contains(x, n2) && available(xi) && face_key(x, 0) == key) {
       return xi;
     }
   }
@@ -172,10 +201,7 @@ std::size_t Selector::violations(index_t ci, bool pending_ok, bool count_triangl
       // quad's side, in the final count).
       const index_t n = half[0]->neighbor;
       if (!count_triangles) continue;
-      if (n != NO_CELL && !is_free(n)) {
-        const Candidate& e = cands_[owner_[n]];
-        if (is_quad(e, cell_face_at(owner_[n], n, half[0]->neighbor_face))) ++bad;
-      }
+      if (n != NO_CELL && !is_free(n) && owner_quad(n, half[0]->neighbor_face)) ++bad;
       continue;
     }
     HEXMERGE_ASSERT(nh == 2, "a quad face of a candidate is not two triangles");
@@ -190,9 +216,11 @@ std::size_t Selector::violations(index_t ci, bool pending_ok, bool count_triangl
         ++bad;
         continue;
       }
-      const Candidate& e = cands_[owner_[n1]];
-      const int ef = cell_face_at(owner_[n1], n1, half[0]->neighbor_face);
-      if (!is_quad(e, ef) || face_key(e, ef) != face_key(c, f)) ++bad;
+      const int nf = half[0]->neighbor_face;
+      if (!owner_quad(n1, nf) ||
+          face_key(cands_[owner_[n1]], owner_face(n1, nf)) != face_key(c, f)) {
+        ++bad;
+      }
       continue;
     }
     if (!pending_ok) {
@@ -226,9 +254,10 @@ index_t Selector::best_at(index_t t, const Stage& stage) const {
   index_t best = NO_INDEX;
   std::size_t best_v = 0;
   for (index_t k = offsets_[t]; k < offsets_[t + 1]; ++k) {
+    if (types_[k] != stage.type) continue;
     const index_t ci = ids_[k];
     const Candidate& c = cands_[ci];
-    if (c.type != stage.type || !available(ci)) continue;
+    if (!available(ci)) continue;
     std::size_t v = violations(ci);
     if (v > 0 && !stage.allow_nonconforming) continue;
     if (v == 0 && params_.conformity == Conformity::Conforming && !strict_) v = risky_quads(ci);
@@ -247,7 +276,15 @@ void Selector::begin_move() {
 }
 
 void Selector::rollback() {
-  for (auto it = journal_.rbegin(); it != journal_.rend(); ++it) owner_[it->first] = it->second;
+  for (auto it = journal_.rbegin(); it != journal_.rend(); ++it) {
+    const index_t t = it->first, ci = it->second;
+    if (ci == NO_INDEX) {
+      put_owner(t, ci, 0);
+    } else {
+      const TetSpan ct = cands_.tets(ci);
+      put_owner(t, ci, static_cast<int>(std::find(ct.begin(), ct.end(), t) - ct.begin()));
+    }
+  }
   for (auto it = chosen_journal_.rbegin(); it != chosen_journal_.rend(); ++it) {
     chosen_[it->first] = it->second;
   }

@@ -10,9 +10,8 @@ void Selector::local_optimisation() {
   for (index_t t = 0; t < nt; ++t) {
     if (!is_boundary_[t] || !is_free(t)) continue;
     for (index_t k = offsets_[t]; k < offsets_[t + 1] && is_free(t); ++k) {
-      const index_t ci = ids_[k];
-      if (cands_[ci].type == CellType::Pyramid) continue;
-      try_move(ci);
+      if (types_[k] == CellType::Pyramid) continue;
+      try_move(ids_[k]);
     }
   }
 }

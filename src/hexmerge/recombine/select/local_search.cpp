@@ -5,13 +5,12 @@
 #include "hexmerge/recombine/select/selector.h"
 
 namespace hexmerge::select {
-// The cell faces of candidates x and y meeting across face f of x's tet t (y's tet n beyond):
-// they conform when both are triangles, or both the same quad.
-bool Selector::faces_match(index_t x, int xf, index_t y, index_t n, int nf) const {
-  const int yf = cell_face_at(y, n, nf);
-  const bool xq = is_quad(cands_[x], xf), yq = is_quad(cands_[y], yf);
+// Cell face xf of candidate x against face nf of the tet n across it, which is not free (its
+// owner's cell face there): they conform when both are triangles, or both the same quad.
+bool Selector::faces_match(index_t x, int xf, index_t n, int nf) const {
+  const bool xq = is_quad(cands_[x], xf), yq = owner_quad(n, nf);
   if (xq != yq) return false;
-  return !xq || face_key(cands_[x], xf) == face_key(cands_[y], yf);
+  return !xq || face_key(cands_[x], xf) == face_key(cands_[owner_[n]], owner_face(n, nf));
 }
 
 // Whether candidate ci (inside the neighbourhood) conforms with everything outside it, which
@@ -28,13 +27,13 @@ bool Selector::fits_outside(index_t ci) const {
   }
   for (int i = 0; i < c.nb_tets; ++i) {
     for (int f = 0; f < 4; ++f) {
-      const int cf = index_.cell_face[index_.first_face[ci] + 4 * i + f];
+      const int cf = face_in_cell(c, i, f);
       if (cf < 0) continue;
       const index_t n = topo_.neighbor(cands_.tets(c)[i], f);
       if (n == NO_CELL || local_[n] >= 0) continue;
       if (is_free(n)) {
         if (is_quad(c, cf)) return false;
-      } else if (!faces_match(ci, cf, owner_[n], n, topo_.neighbor_face(cands_.tets(c)[i], f))) {
+      } else if (!faces_match(ci, cf, n, face_across(c, i, f))) {
         return false;
       }
     }
@@ -47,7 +46,7 @@ bool Selector::fits_inside(const Hood& h, index_t ci) const {
   const Candidate& c = cands_[ci];
   for (int i = 0; i < c.nb_tets; ++i) {
     for (int f = 0; f < 4; ++f) {
-      const int cf = index_.cell_face[index_.first_face[ci] + 4 * i + f];
+      const int cf = face_in_cell(c, i, f);
       if (cf < 0) continue;
       const index_t n = topo_.neighbor(cands_.tets(c)[i], f);
       if (n == NO_CELL || local_[n] < 0) continue;
@@ -55,7 +54,7 @@ bool Selector::fits_inside(const Hood& h, index_t ci) const {
       if (st == UNDECIDED) continue;
       if (st == LEFT_FREE) {
         if (is_quad(c, cf)) return false;
-      } else if (!faces_match(ci, cf, owner_[n], n, topo_.neighbor_face(cands_.tets(c)[i], f))) {
+      } else if (!faces_match(ci, cf, n, face_across(c, i, f))) {
         return false;
       }
     }
@@ -68,8 +67,7 @@ bool Selector::may_stay_free(const Hood& h, index_t t) const {
   for (int f = 0; f < 4; ++f) {
     const index_t n = topo_.neighbor(t, f);
     if (n == NO_CELL || local_[n] < 0 || h.state[local_[n]] < 0) continue;
-    const index_t y = owner_[n];
-    if (is_quad(cands_[y], cell_face_at(y, n, topo_.neighbor_face(t, f)))) return false;
+    if (owner_quad(n, topo_.neighbor_face(t, f))) return false;
   }
   return true;
 }
@@ -138,8 +136,7 @@ bool Selector::reselect(Hood& h) {
       for (int f = 0; f < 4; ++f) {
         const index_t n = topo_.neighbor(t, f);
         if (n == NO_CELL || local_[n] >= 0 || is_free(n)) continue;
-        const index_t o = owner_[n];
-        if (is_quad(cands_[o], cell_face_at(o, n, topo_.neighbor_face(t, f)))) h.must_cover[l] = 1;
+        if (owner_quad(n, topo_.neighbor_face(t, f))) h.must_cover[l] = 1;
       }
     }
   }
@@ -251,7 +248,7 @@ void Selector::branch(Hood& h, std::size_t pos, int saved, long long rest) {
     }
     for (int i = 0; i < c.nb_tets; ++i) {
       h.state[ls[i]] = p;
-      owner_[cands_.tets(c)[i]] = ci;
+      put_owner(cands_.tets(c)[i], ci, i);
     }
     const long long drop = close_entries(h, ls, c.nb_tets, before);
     h.current.push_back(p);
@@ -260,7 +257,7 @@ void Selector::branch(Hood& h, std::size_t pos, int saved, long long rest) {
     reopen_entries(h, ls, c.nb_tets);
     for (int i = 0; i < c.nb_tets; ++i) {
       h.state[ls[i]] = UNDECIDED;
-      owner_[cands_.tets(c)[i]] = NO_INDEX;
+      put_owner(cands_.tets(c)[i], NO_INDEX, 0);
     }
     if (h.stopped) return;
   }

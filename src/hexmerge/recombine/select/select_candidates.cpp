@@ -1,6 +1,7 @@
 // The selection's entry: the strategy, and the order of the stages (Selector::run).
 #include "hexmerge/recombine/select/select_candidates.h"
 
+#include "hexmerge/core/parallel.h"
 #include "hexmerge/recombine/select/selector.h"
 
 namespace hexmerge {
@@ -54,7 +55,8 @@ Selection select_candidates(const TetMesh& mesh, const TetTopology& topology,
   // "closable" (a pending quad needs only some candidate that could close it; in conforming mode
   // the elements that end up unclosed are released). Until issue 18 both ran in conforming mode
   // and the better was kept: "closable" never won on a benchmark mesh (docs/benchmarks.md).
-  const select::CandidateIndex index(mesh, topology, candidates, parameters.respect_regions);
+  const select::CandidateIndex index(mesh, topology, candidates, parameters.respect_regions,
+                                     thread_count(parameters.threads));
   const bool conforming = parameters.conformity == Conformity::Conforming;
   const bool safe_pyramids = conforming && parameters.make_pyramids;
   Selection selection =

@@ -75,11 +75,18 @@ struct Stage {
 // each tet face of a candidate lies in, the boundary tets.
 struct CandidateIndex {
   CandidateIndex(const TetMesh& mesh, const TetTopology& topo, const Candidates& cands,
-                 bool respect_regions);
+                 bool respect_regions, int threads);
 
-  std::vector<index_t> offsets, ids;    // tet -> candidates (CSR)
-  std::vector<std::size_t> first_face;  // candidate -> first entry of cell_face
-  std::vector<signed char> cell_face;   // per candidate, tet i, face f: its cell face, or -1
+  std::vector<index_t> offsets, ids;  // tet -> candidates (CSR)
+  // Per CSR entry, its candidate's type: the stages that want one type skip the others without
+  // reading their records (at 1M tets the records are far out of cache).
+  std::vector<CellType> types;
+  // Per candidate's tet i and face f, at 4 * (first_tet + i) + f (the candidates' tets are
+  // laid out one after the other, Candidates::all_tets): -1 inside the cell, else the cell face
+  // it lies in (bits 0-2), the face of the tet across it (bits 3-4; 0 on the domain boundary),
+  // so that sides() reads no TetTopology::neighbor_face, and whether the cell face is a quad
+  // (bit 5).
+  std::vector<signed char> cell_face;
   std::vector<char> is_boundary;
 };
 
@@ -93,9 +100,12 @@ class Selector {
         params_(parameters),
         strict_(strict),
         owner_(mesh.nb_tets(), NO_INDEX),
+        taken_((mesh.nb_tets() + 63) / 64, 0),
+        owner_faces_(4 * static_cast<std::size_t>(mesh.nb_tets()), -1),
         chosen_(candidates.size(), 0),
         offsets_(index.offsets),
         ids_(index.ids),
+        types_(index.types),
         index_(index),
         is_boundary_(index.is_boundary) {}
 
@@ -103,7 +113,7 @@ class Selector {
   Selection run(const ProgressCallback& progress);
 
  private:
-  bool is_free(index_t t) const { return owner_[t] == NO_INDEX; }
+  bool is_free(index_t t) const { return !((taken_[t >> 6] >> (t & 63)) & 1); }
 
   bool available(index_t ci) const {
     for (const index_t t : cands_.tets(ci)) {
@@ -141,7 +151,32 @@ class Selector {
   int cell_face_at(index_t ei, index_t t, int f) const {
     const TetSpan e = cands_.tets(ei);
     const int i = static_cast<int>(std::find(e.begin(), e.end(), t) - e.begin());
-    return index_.cell_face[index_.first_face[ei] + 4 * i + f];
+    return face_in_cell(cands_[ei], i, f);
+  }
+
+  // CandidateIndex::cell_face of face f of candidate c's i-th tet.
+  int face_entry(const Candidate& c, int i, int f) const {
+    return index_.cell_face[4 * (static_cast<std::size_t>(c.first_tet) + i) + f];
+  }
+
+  // The cell face of candidate c that face f of its i-th tet lies in (-1: inside the cell).
+  int face_in_cell(const Candidate& c, int i, int f) const {
+    const int packed = face_entry(c, i, f);
+    return packed < 0 ? -1 : packed & 7;
+  }
+
+  // The face, in the tet across it, of face f of candidate c's i-th tet (that face not inside
+  // the cell nor on the domain boundary): TetTopology::neighbor_face, from the same entry.
+  int face_across(const Candidate& c, int i, int f) const { return (face_entry(c, i, f) >> 3) & 3; }
+
+  // Of a tet n that is not free, face f (not inside its owner's cell): the face of the owner's
+  // cell it lies in, and whether that is a quad. From owner_faces_, without the owner's record.
+  int owner_face(index_t n, int f) const {
+    return owner_faces_[4 * static_cast<std::size_t>(n) + f] & 7;
+  }
+  bool owner_quad(index_t n, int f) const {
+    const int entry = owner_faces_[4 * static_cast<std::size_t>(n) + f];
+    return entry >= 0 && (entry & 32) != 0;
   }
 
   // Ranking at one tet: element type, then fewer non-conformities (in conforming mode: fewer
@@ -152,19 +187,34 @@ class Selector {
     return a.quality > b.quality;
   }
 
-  void set_owner(index_t t, index_t ci) {
-    if (journaling_) journal_.push_back({t, owner_[t]});
+  // Every write of owner_ goes through here, so that the bits of is_free and owner_faces_
+  // follow it; t is the i-th tet of ci (any i when ci is NO_INDEX).
+  void put_owner(index_t t, index_t ci, int i) {
     owner_[t] = ci;
+    const std::uint64_t bit = std::uint64_t{1} << (t & 63);
+    if (ci == NO_INDEX) {
+      taken_[t >> 6] &= ~bit;
+    } else {
+      taken_[t >> 6] |= bit;
+      const std::size_t from = 4 * (static_cast<std::size_t>(cands_[ci].first_tet) + i);
+      std::copy_n(&index_.cell_face[from], 4, &owner_faces_[4 * static_cast<std::size_t>(t)]);
+    }
+  }
+
+  void set_owner(index_t t, index_t ci, int i) {
+    if (journaling_) journal_.push_back({t, owner_[t]});
+    put_owner(t, ci, i);
   }
 
   void choose(index_t ci) {
-    for (const index_t t : cands_.tets(ci)) set_owner(t, ci);
+    const TetSpan ct = cands_.tets(ci);
+    for (int i = 0; i < ct.size(); ++i) set_owner(ct[i], ci, i);
     if (journaling_) chosen_journal_.push_back({ci, chosen_[ci]});
     chosen_[ci] = 1;
   }
 
   void release(index_t ci) {
-    for (const index_t t : cands_.tets(ci)) set_owner(t, NO_INDEX);
+    for (const index_t t : cands_.tets(ci)) set_owner(t, NO_INDEX, 0);
     if (journaling_) chosen_journal_.push_back({ci, chosen_[ci]});
     chosen_[ci] = 0;
   }
@@ -191,6 +241,8 @@ class Selector {
   void release_cracks();
   std::vector<index_t> breadth_first_order() const;
   void interior_stage(const Stage& stage, const std::vector<index_t>& order);
+  void prefetch_ahead(const std::vector<index_t>& order, std::size_t i, CellType type) const;
+  void prefetch_candidates(const std::vector<index_t>& list, std::size_t i) const;
   void close_quads();
   template <class Touch>
   void close_pending(index_t ci, Touch* touch);
@@ -230,7 +282,7 @@ class Selector {
   bool checks_conformity() const { return params_.conformity != Conformity::Allow; }
 
   // ---- select/local_search.cpp
-  bool faces_match(index_t x, int xf, index_t y, index_t n, int nf) const;
+  bool faces_match(index_t x, int xf, index_t n, int nf) const;
   bool fits_outside(index_t ci) const;
   bool fits_inside(const Hood& h, index_t ci) const;
   bool may_stay_free(const Hood& h, index_t t) const;
@@ -256,10 +308,19 @@ class Selector {
   const Candidates& cands_;
   const RecombineParameters& params_;
   const bool strict_;  // pending quads only where a safe closing pyramid waits (closing_pyramid)
-  std::vector<index_t> owner_;           // per tet: the chosen candidate that holds it, or NO_INDEX
+  std::vector<index_t> owner_;  // per tet: the chosen candidate that holds it, or NO_INDEX
+  // Per tet, one bit: owner_ is not NO_INDEX. is_free reads these (128 KB at 1M tets, in the
+  // second-level cache) rather than owner_ (4 MB).
+  std::vector<std::uint64_t> taken_;
+  // Per tet not free, its owner's 4 entries of CandidateIndex::cell_face for it (in the tet's
+  // face order), copied when the owner is set: conformity against a chosen neighbour reads these
+  // (1 MB per 250k tets, next to nothing else) rather than the owner's record, tets and entries
+  // (three misses at 1M tets); the record only for a quad face's vertices.
+  std::vector<signed char> owner_faces_;
   std::vector<char> chosen_;             // per candidate
   const std::vector<index_t>& offsets_;  // tet -> candidates
   const std::vector<index_t>& ids_;
+  const std::vector<CellType>& types_;  // per entry of ids_
   const CandidateIndex& index_;
   const std::vector<char>& is_boundary_;
   std::vector<char> was_closer_ = std::vector<char>(cands_.size(), 0);
