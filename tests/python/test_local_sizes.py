@@ -90,8 +90,9 @@ def test_a_local_size_makes_its_face_finer(plate_meshes) -> None:
     assert meshing["sweep_axis"] == -1  # local sizes: not swept
     assert meshing["parameters"]["local_sizes"] == f"{HOLE}:{H / 4}"
     # The boundary on the CAD, the tets as good as the plate's unswept tets at h (floors: below
-    # what was measured when set; since the node moves hold the count under 0.2, cff8ad9: 62 ->
-    # 47 tets under 0.2, the smallest 0.118 -> 0.090).
+    # what was measured when set; the node moves that hold the count under 0.2, cff8ad9: 62 ->
+    # 47 tets under 0.2, the smallest 0.118 -> 0.090; with the shorter search, 3d67323: 33,
+    # 0.103).
     assert SURFACES["plate"](boundary_nodes(fine)).max() <= 1e-3 * H
     assert meshing["max_boundary_distance"] <= 1e-3 * H
     quality = tet_scaled_jacobians(fine.points, fine.cell_vertices.reshape(-1, 4).astype(np.int64))
