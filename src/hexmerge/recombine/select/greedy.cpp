@@ -188,9 +188,10 @@ void Selector::prefetch_ahead(const std::vector<index_t>& order, std::size_t i,
   const std::size_t n = order.size();
   if (i + kOffsets < n) __builtin_prefetch(&offsets_[order[i + kOffsets]]);
   if (i + kIds < n && is_free(order[i + kIds])) {
+    // (A tet of no candidate may start at the end of the lists: an address, never read.)
     const index_t k = offsets_[order[i + kIds]];
-    __builtin_prefetch(&ids_[k]);
-    __builtin_prefetch(&types_[k]);
+    __builtin_prefetch(ids_.data() + k);
+    __builtin_prefetch(types_.data() + k);
   }
   if (i + kRecords < n && is_free(order[i + kRecords])) {
     const index_t t = order[i + kRecords];
