@@ -12,6 +12,16 @@ namespace {
 
 bool holds(const index_t* q, index_t v) { return q[0] == v || q[1] == v || q[2] == v || q[3] == v; }
 
+// The face of tet q opposite its corner f.
+std::array<index_t, 3> face_opposite(const index_t* q, int f) {
+  std::array<index_t, 3> face{};
+  int n = 0;
+  for (int i = 0; i < 4; ++i) {
+    if (i != f) face[n++] = q[i];
+  }
+  return face;
+}
+
 }  // namespace
 
 FlipMesh::FlipMesh(const TetMesh& mesh)
@@ -186,11 +196,7 @@ bool FlipMesh::contract(index_t from, index_t onto, double min_quality) {
     joined = joined || holds(q, onto);
     for (int f = 0; f < 4; ++f) {
       if (q[f] == from) continue;
-      std::array<index_t, 3> face{};
-      int n = 0;
-      for (int i = 0; i < 4; ++i) {
-        if (i != f) face[n++] = q[i];
-      }
+      const std::array<index_t, 3> face = face_opposite(q, f);
       if (tet_with_face(face[0], face[1], face[2], t) == NO_CELL) boundary.push_back(face);
     }
   }
@@ -243,11 +249,7 @@ index_t FlipMesh::split(index_t v, const std::vector<index_t>& to_new,
     // tet keeping v and t with n; its other faces cancel along the ring.
     for (int f = 0; f < 4; ++f) {
       if (q[f] == v) continue;
-      std::array<index_t, 3> face{};
-      int k = 0;
-      for (int i = 0; i < 4; ++i) {
-        if (i != f) face[k++] = q[i];
-      }
+      const std::array<index_t, 3> face = face_opposite(q.data(), f);
       const index_t other = tet_with_face(face[0], face[1], face[2], t);
       if (other == NO_CELL || moving(other)) continue;
       std::array<index_t, 4> ring = q;

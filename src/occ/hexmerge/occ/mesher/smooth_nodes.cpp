@@ -100,15 +100,18 @@ void smooth_nodes(TetMesh& mesh, const std::vector<char>& movable,
     return q;
   };
   // The same, but only when it is above `bound`: else some value <= bound, found as soon as one
-  // tet is no better (the tet that was the worst last goes first: most tries fail on it).
+  // tet is no better (the tet that was the worst last goes first: most tries fail on it). When
+  // it is above, every tet was seen: `under` is then how many are under the floor.
   std::size_t last_worst = 0;
-  auto worst_above = [&](index_t v, double bound) {
+  auto worst_above = [&](index_t v, double bound, std::size_t& under) {
     double q = std::numeric_limits<double>::infinity();
     std::size_t worst = last_worst;
+    under = 0;
     // Whether tet i is no better than `bound`; q the least seen (as std::min: a NaN passed over).
     const auto no_better = [&](std::size_t i) {
       const double qi = quality(at[i]);
       if (qi < q) q = qi, worst = i;
+      under += qi < parameters.floor;
       return qi <= bound;
     };
     bool failed = no_better(last_worst);
@@ -180,10 +183,11 @@ void smooth_nodes(TetMesh& mesh, const std::vector<char>& movable,
       // Tries position p: kept (and the node left there) when strictly better.
       auto try_at = [&](const Vec3& p) {
         place(v, p);
-        const double q = worst_above(v, best + 1e-12);
+        std::size_t now = 0;
+        const double q = worst_above(v, best + 1e-12, now);
         if (q > best + 1e-12 && pyramids_kept(v)) {
           best = q, here = p;
-          if (!on_surface && below_floor() <= below) kept_here = p, kept_worst = q;
+          if (!on_surface && now <= below) kept_here = p, kept_worst = q;
           return true;
         }
         place(v, here);
