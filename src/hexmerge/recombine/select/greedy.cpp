@@ -203,22 +203,24 @@ void Selector::prefetch_ahead(const std::vector<index_t>& order, std::size_t i,
     const index_t t = order[i + kTets];
     for (index_t k = offsets_[t]; k < offsets_[t + 1]; ++k) {
       if (types_[k] != type) continue;
-      const Candidate& c = cands_[ids_[k]];
-      __builtin_prefetch(cands_.tets(c).data());
-      __builtin_prefetch(&index_.cell_face[4 * static_cast<std::size_t>(c.first_tet)]);
+      prefetch_cell(cands_[ids_[k]]);
     }
   }
 }
 
-// The same for a list of candidates visited in order (by quality: in no order in memory):
+// Asks for a candidate's tets and the cell faces of its tets.
+void Selector::prefetch_cell(const Candidate& c) const {
+  __builtin_prefetch(cands_.tets(c).data());
+  __builtin_prefetch(&index_.cell_face[4 * static_cast<std::size_t>(c.first_tet)]);
+}
+
+// As prefetch_ahead, for a list of candidates visited in order (by quality: in no order in memory):
 // the records ahead of list[i], then the tets and cell faces of those a little nearer.
 void Selector::prefetch_candidates(const std::vector<index_t>& list, std::size_t i) const {
   constexpr std::size_t kRecords = 8, kTets = 4;
   if (i + kRecords < list.size()) __builtin_prefetch(&cands_[list[i + kRecords]]);
   if (i + kTets < list.size()) {
-    const Candidate& c = cands_[list[i + kTets]];
-    __builtin_prefetch(cands_.tets(c).data());
-    __builtin_prefetch(&index_.cell_face[4 * static_cast<std::size_t>(c.first_tet)]);
+    prefetch_cell(cands_[list[i + kTets]]);
   }
 }
 

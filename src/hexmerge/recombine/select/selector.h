@@ -243,6 +243,7 @@ class Selector {
   void interior_stage(const Stage& stage, const std::vector<index_t>& order);
   void prefetch_ahead(const std::vector<index_t>& order, std::size_t i, CellType type) const;
   void prefetch_candidates(const std::vector<index_t>& list, std::size_t i) const;
+  void prefetch_cell(const Candidate& c) const;
   void close_quads();
   template <class Touch>
   void close_pending(index_t ci, Touch* touch);
