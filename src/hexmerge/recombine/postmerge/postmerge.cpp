@@ -435,6 +435,9 @@ class Stage {
       std::sort(side.begin(), side.end());
       if (std::find(sides.begin(), sides.end(), side) == sides.end()) sides.push_back(side);
     };
+    const auto edge = [](index_t x, index_t y) {
+      return std::make_pair(std::min(x, y), std::max(x, y));
+    };
     std::vector<index_t> ahead;
     std::set<std::pair<index_t, index_t>> link_edges;
     for (index_t t : around) {
@@ -447,13 +450,9 @@ class Stage {
       }
       if (t == moving || (t != keep && along > 0.0)) ahead.push_back(t);
       for (int i = 0; i < 3; ++i) {
-        const index_t e0 = base[i], e1 = base[(i + 1) % 3];
-        link_edges.insert({std::min(e0, e1), std::max(e0, e1)});
+        link_edges.insert(edge(base[i], base[(i + 1) % 3]));
       }
     }
-    const auto edge = [](index_t x, index_t y) {
-      return std::make_pair(std::min(x, y), std::max(x, y));
-    };
     std::set<index_t> tried;
     for (const auto& [e0, e1] : link_edges) {
       for (index_t y : {e0, e1}) {
