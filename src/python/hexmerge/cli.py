@@ -386,6 +386,10 @@ def _mesh_notes(meshing: dict[str, Any]) -> list[str]:
     notes += [f"TetGen failed with the points placed by {failure}" for failure in meshing["failed_strategies"]]
     if notes:
         notes.append(f"the tets were made with the points placed by {meshing['strategy']}")
+    if meshing["nb_revolution_faces"]:
+        notes.append("OpenCASCADE's surface mesher left a face of the shape without triangles: the "
+                     f"surface was made with its {meshing['nb_revolution_faces']} cylinders, cones, "
+                     "spheres and tori as surfaces of revolution (the same geometry)")
     if meshing["nb_unrefined_faces"]:
         notes.append(f"the surface of {meshing['nb_unrefined_faces']} face(s) did not refine to h "
                      "(a distorted parametrisation): sides longer than h remain there")

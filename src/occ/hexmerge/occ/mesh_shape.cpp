@@ -397,15 +397,17 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
   const double deflection = parameters.surface_deflection * h;
   // Nodes nearer than TetGen's own tolerance (1e-8 of the input's size) are one node: TetGen
   // would merge them itself and renumber the points after them.
-  Surface surface = triangulate(shape, deflection, 1e-9 * h + 2e-8 * shape.diagonal + 1e-12);
-  report.nb_flat_surface_triangles = surface.nb_flat_triangles;
-  Lattice lattice = lay_lattice(shape, frame, surface.nodes, h, strategy.lattice_faces);
   std::vector<std::string> face_names(static_cast<std::size_t>(shape.faces.Extent()));
   for (std::size_t f = 0; f < face_names.size(); ++f) {
     const int number = given_number(given_items.faces, static_cast<int>(f));
     face_names[f] = number > 0 ? "Face" + std::to_string(number)
                                : "face " + std::to_string(f + 1) + " of the glued solids";
   }
+  Surface surface =
+      triangulate(shape, deflection, 1e-9 * h + 2e-8 * shape.diagonal + 1e-12, face_names);
+  report.nb_flat_surface_triangles = surface.nb_flat_triangles;
+  report.nb_revolution_faces = surface.nb_revolution_faces;
+  Lattice lattice = lay_lattice(shape, frame, surface.nodes, h, strategy.lattice_faces);
   // Where a solid's boundary passes a side twice, two CAD edges lie at one place (their nodes
   // merged): the solid touches itself there, which TetGen cannot mesh either. Checked on
   // BRepMesh's triangles (before the repairs, which take minutes on such a shape's 825k

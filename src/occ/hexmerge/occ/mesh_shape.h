@@ -260,6 +260,9 @@ struct MeshShapeReport {
   /// BRepMesh's surface triangles whose three nodes lay on one line (a face whose outline runs
   /// along one line and back), taken out: the triangle across split at the third node
   std::size_t nb_flat_surface_triangles = 0;
+  /// Faces triangulated as surfaces of revolution, because BRepMesh left a face of the shape
+  /// as it is without triangles (the same geometry); 0 when it did not
+  std::size_t nb_revolution_faces = 0;
   /// whether the surface repairs ran again from BRepMesh's triangles, each kept within the chord
   /// deflection of its face, because the surface they made first crossed itself
   bool bounded_surface_repairs = false;

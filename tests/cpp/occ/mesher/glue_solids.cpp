@@ -88,7 +88,7 @@ TEST(glue_solids, overlapping_solids_are_refused_by_name) {
     FAIL() << "overlapping solids were glued";
   } catch (const InputError& e) {
     const std::string what = e.what();
-    EXPECT_NE(what.find("solids 0 and 2"), std::string::npos) << what;
+    EXPECT_NE(what.find("Solid1 and Solid3"), std::string::npos) << what;
     EXPECT_NE(what.find("overlap"), std::string::npos) << what;
     EXPECT_NE(what.find("125"), std::string::npos) << what;
   }

@@ -63,7 +63,10 @@ Prepared prepare(const TopoDS_Shape& solid, double h, const std::string& frame) 
   Prepared p;
   p.h = h;
   p.shape = load(solid);
-  p.surface = mesher::triangulate(p.shape, 0.02 * h, 1e-9 * h + 1e-12);
+  std::vector<std::string> face_names;
+  for (int f = 1; f <= p.shape.faces.Extent(); ++f)
+    face_names.push_back("Face" + std::to_string(f));
+  p.surface = mesher::triangulate(p.shape, 0.02 * h, 1e-9 * h + 1e-12, face_names);
   p.lattice =
       mesher::lay_lattice(p.shape, mesher::choose_frame(p.shape, frame), p.surface.nodes, h);
   return p;

@@ -65,7 +65,7 @@ TEST(load_shape, an_empty_solid_is_an_input_error_naming_it) {
     load(both);
     FAIL() << "an empty solid was loaded";
   } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("solid 1 of the shape is empty"), std::string::npos)
+    EXPECT_NE(std::string(e.what()).find("Solid2 of the shape is empty"), std::string::npos)
         << e.what();
   }
 }
@@ -93,7 +93,7 @@ TEST(load_shape, no_solid_and_open_shell_are_input_errors) {
     load(solid);
     FAIL() << "no error";
   } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("is not closed: edge"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("is not closed: Edge"), std::string::npos) << e.what();
   }
 }
 

@@ -99,7 +99,7 @@ TopoDS_Shape glue_solids(const TopoDS_Shape& shape, double tolerance, GlueSolids
     }
     if (found.IsEmpty() && !fuse.IsDeleted(solids(i))) found.Append(solids(i));
     if (found.IsEmpty())
-      throw InputError("solid " + std::to_string(i - 1) +
+      throw InputError("Solid" + std::to_string(i) +
                        " of the shape vanished when OpenCASCADE intersected the solids (a solid "
                        "of no volume?)");
     for (const TopoDS_Shape& piece : found) {
@@ -112,7 +112,7 @@ TopoDS_Shape glue_solids(const TopoDS_Shape& shape, double tolerance, GlueSolids
   for (std::size_t p = 0; p < owners.size(); ++p)
     if (owners[p].size() > 1) {
       std::ostringstream text;
-      text << "solids " << owners[p][0] << " and " << owners[p][1]
+      text << "Solid" << owners[p][0] + 1 << " and Solid" << owners[p][1] + 1
            << " of the shape overlap (common volume " << volume_of(pieces(static_cast<int>(p) + 1))
            << "): a mesh cannot give that volume to both; make them touch without overlapping "
               "(in FreeCAD: Part BooleanFragments, or Cut one by the other)";
@@ -121,7 +121,7 @@ TopoDS_Shape glue_solids(const TopoDS_Shape& shape, double tolerance, GlueSolids
 
   for (std::size_t i = 0; i < images.size(); ++i)
     if (images[i].size() != 1)
-      throw InputError("solid " + std::to_string(i) + " of the shape is cut into " +
+      throw InputError("Solid" + std::to_string(i + 1) + " of the shape is cut into " +
                        std::to_string(images[i].size()) +
                        " pieces by the faces of the other solids: give solids that touch only "
                        "on their boundaries");

@@ -91,7 +91,7 @@ Shape load_shape(const std::string& brep, double glue_tolerance, GlueSolidsRepor
   }
   for (int i = 1; i <= s.solids.Extent(); ++i)
     if (!TopExp_Explorer(s.solids(i), TopAbs_FACE).More())
-      throw InputError("solid " + std::to_string(i - 1) +
+      throw InputError("Solid" + std::to_string(i) +
                        " of the shape is empty (it has no faces): give closed solids");
   // Faces or edges beside the solids bound no volume: only the solids are meshed (points beside
   // them, as pyocc_face_recognition_sample_part's 30, change nothing and stay).
@@ -136,8 +136,8 @@ Shape load_shape(const std::string& brep, double glue_tolerance, GlueSolidsRepor
       const TopTools_ListOfShape& around = edge_faces.FindFromIndex(e);
       if (around.Extent() >= 2) continue;
       if (around.Extent() == 1 && BRep_Tool::IsClosed(edge, TopoDS::Face(around.First()))) continue;
-      throw InputError("solid " + std::to_string(i - 1) + " is not closed: edge " +
-                       std::to_string(s.edges.FindIndex(edge) - 1) +
+      throw InputError("Solid" + std::to_string(i) + " is not closed: Edge" +
+                       std::to_string(s.edges.FindIndex(edge)) +
                        " bounds a single face (an open shell); give a closed solid");
     }
   }

@@ -1,13 +1,19 @@
 #include "hexmerge/occ/mesher/surface.h"
 
 #include <BRepAdaptor_Curve.hxx>
+#include <BRepAdaptor_Surface.hxx>
 #include <BRepMesh_IncrementalMesh.hxx>
 #include <BRepTools.hxx>
 #include <BRep_Tool.hxx>
+#include <Geom_Surface.hxx>
 #include <Poly_PolygonOnTriangulation.hxx>
 #include <Poly_Triangulation.hxx>
+#include <ShapeAnalysis_Surface.hxx>
+#include <ShapeCustom.hxx>
 #include <Standard_Failure.hxx>
+#include <TopExp.hxx>
 #include <TopExp_Explorer.hxx>
+#include <TopTools_IndexedMapOfShape.hxx>
 #include <TopoDS.hxx>
 #include <TopoDS_Edge.hxx>
 #include <TopoDS_Face.hxx>
@@ -15,6 +21,7 @@
 #include <array>
 #include <cmath>
 #include <map>
+#include <optional>
 #include <string>
 #include <unordered_map>
 #include <utility>
@@ -338,28 +345,108 @@ void remove_folds(Surface& surface, double tolerance) {
   drop_unused_nodes(surface);
 }
 
-Surface triangulate(const Shape& s, double deflection, double tolerance) {
+namespace {
+
+// The faces of `shape` (numbered as in `faces`) BRepMesh left without triangles, after meshing
+// it afresh.
+std::vector<int> faces_not_triangulated(const TopoDS_Shape& shape,
+                                        const TopTools_IndexedMapOfShape& faces,
+                                        double deflection) {
   try {
     // A triangulation left in the shape by an earlier call (another attempt, another size) would
     // be kept where it meets the deflection: each call starts from none.
-    BRepTools::Clean(s.shape);
-    BRepMesh_IncrementalMesh mesher(s.shape, deflection, false, kSurfaceAngle, true);
+    BRepTools::Clean(shape);
+    BRepMesh_IncrementalMesh mesher(shape, deflection, false, kSurfaceAngle, true);
     if (!mesher.IsDone()) throw InputError("OpenCASCADE could not triangulate the shape's faces");
   } catch (const Standard_Failure& e) {
     throw InputError(std::string("OpenCASCADE could not triangulate the shape's faces: ") +
                      e.GetMessageString());
   }
+  std::vector<int> missing;
+  for (int fi = 1; fi <= faces.Extent(); ++fi) {
+    TopLoc_Location loc;
+    const Handle(Poly_Triangulation)& tri = BRep_Tool::Triangulation(TopoDS::Face(faces(fi)), loc);
+    if (tri.IsNull() || tri->NbTriangles() == 0) missing.push_back(fi - 1);
+  }
+  return missing;
+}
+
+// q's parameters, each shifted by whole periods of the surface (where it is periodic in it) to
+// lie within half a period of near's.
+UV periodic_near(const Geom_Surface& surface, UV q, const UV& near) {
+  const auto shift = [](double x, double target, double period) {
+    return x + period * std::round((target - x) / period);
+  };
+  if (surface.IsUPeriodic()) q.u = shift(q.u, near.u, surface.UPeriod());
+  if (surface.IsVPeriodic()) q.v = shift(q.v, near.v, surface.VPeriod());
+  return q;
+}
+
+// "Face61 (a cone), Face70 (a cylinder)".
+std::string faces_named(const std::vector<int>& faces, const TopTools_IndexedMapOfShape& shapes,
+                        const std::vector<std::string>& face_names) {
+  static const char* const kinds[] = {"plane",
+                                      "cylinder",
+                                      "cone",
+                                      "sphere",
+                                      "torus",
+                                      "Bezier surface",
+                                      "B-spline surface",
+                                      "surface of revolution",
+                                      "extrusion",
+                                      "offset surface",
+                                      "surface"};
+  std::string out;
+  for (const int f : faces) {
+    const int kind = BRepAdaptor_Surface(TopoDS::Face(shapes(f + 1))).GetType();
+    out += (out.empty() ? "" : ", ") + face_names[static_cast<std::size_t>(f)] + " (a " +
+           kinds[std::min(kind, 10)] + ")";
+  }
+  return out;
+}
+
+}  // namespace
+
+Surface triangulate(const Shape& s, double deflection, double tolerance,
+                    const std::vector<std::string>& face_names) {
+  // BRepMesh fails on some analytic faces that are valid CAD (a cone whose apex is a circle
+  // of radius 1e-15, in a KiCad connector model): the same shape with its cylinders, cones,
+  // spheres and tori as surfaces of revolution (the same geometry; planes stay) is meshed
+  // instead, the nodes' parameters taken back onto the faces' own surfaces.
+  TopoDS_Shape meshed = s.shape;
+  TopTools_IndexedMapOfShape faces = s.faces, edges = s.edges;
+  std::vector<int> missing = faces_not_triangulated(meshed, faces, deflection);
+  std::size_t nb_converted = 0;
+  if (!missing.empty()) {
+    const std::string failed = faces_named(missing, s.faces, face_names);
+    meshed = ShapeCustom::ConvertToRevolution(s.shape);
+    faces.Clear(), edges.Clear();
+    TopExp::MapShapes(meshed, TopAbs_FACE, faces);
+    TopExp::MapShapes(meshed, TopAbs_EDGE, edges);
+    if (faces.Extent() != s.faces.Extent() || edges.Extent() != s.edges.Extent())
+      throw InputError("OpenCASCADE could not triangulate " + failed + " of the shape");
+    missing = faces_not_triangulated(meshed, faces, deflection);
+    if (!missing.empty())
+      throw InputError("OpenCASCADE could not triangulate " + failed +
+                       " of the shape, nor the same faces as surfaces of revolution");
+    for (int fi = 1; fi <= faces.Extent(); ++fi)
+      nb_converted += BRepAdaptor_Surface(TopoDS::Face(faces(fi))).GetType() !=
+                      BRepAdaptor_Surface(TopoDS::Face(s.faces(fi))).GetType();
+  }
   Surface surface;
+  surface.nb_revolution_faces = nb_converted;
   NodeMerger merger(surface, tolerance);
-  for (int fi = 1; fi <= s.faces.Extent(); ++fi) {
+  for (int fi = 1; fi <= faces.Extent(); ++fi) {
     const int face_index = fi - 1;
-    const TopoDS_Face& face = TopoDS::Face(s.faces(fi));
+    const TopoDS_Face& face = TopoDS::Face(faces(fi));
     TopLoc_Location loc;
     const Handle(Poly_Triangulation)& tri = BRep_Tool::Triangulation(face, loc);
-    if (tri.IsNull() || tri->NbTriangles() == 0)
-      throw InputError(
-          "OpenCASCADE could not triangulate face " + std::to_string(face_index) + " of the shape",
-          Entity::None);
+    // The parameters on the face's own surface, where the face was meshed as another.
+    std::optional<ShapeAnalysis_Surface> own;
+    const TopoDS_Face& given = TopoDS::Face(s.faces(fi));
+    if (nb_converted > 0 &&
+        BRepAdaptor_Surface(face).GetType() != BRepAdaptor_Surface(given).GetType())
+      own.emplace(BRep_Tool::Surface(given));
     const gp_Trsf trsf = loc.Transformation();
     std::vector<int> global(static_cast<std::size_t>(tri->NbNodes()) + 1);
     for (int i = 1; i <= tri->NbNodes(); ++i)
@@ -373,7 +460,21 @@ Surface triangulate(const Shape& s, double deflection, double tolerance) {
       t.face = face_index;
       for (int c = 0; c < 3; ++c) {
         t.node[c] = global[n[c]];
-        if (tri->HasUVNodes()) t.uv[c] = UV{tri->UVNode(n[c]).X(), tri->UVNode(n[c]).Y()};
+        if (own) {
+          // Periodic parameters taken within half a period of where the meshed surface has
+          // them (the angle of a surface of revolution is its cone's or cylinder's).
+          // The first corner's within half a period of the meshed surface's (a surface of
+          // revolution's angle is its cone's or cylinder's), the others within half a period of
+          // the first's: the triangle does not straddle a seam.
+          const gp_Pnt p = tri->Node(n[c]).Transformed(trsf);
+          const gp_Pnt2d q = own->ValueOfUV(p, tolerance);
+          const UV near = c > 0               ? t.uv[0]
+                          : tri->HasUVNodes() ? UV{tri->UVNode(n[c]).X(), tri->UVNode(n[c]).Y()}
+                                              : UV{q.X(), q.Y()};
+          t.uv[c] = periodic_near(*own->Surface(), UV{q.X(), q.Y()}, near);
+        } else if (tri->HasUVNodes()) {
+          t.uv[c] = UV{tri->UVNode(n[c]).X(), tri->UVNode(n[c]).Y()};
+        }
       }
       if (t.node[0] == t.node[1] || t.node[1] == t.node[2] || t.node[0] == t.node[2]) continue;
       surface.triangles.push_back(t);
@@ -384,7 +485,7 @@ Surface triangulate(const Shape& s, double deflection, double tolerance) {
       const Handle(Poly_PolygonOnTriangulation)& poly =
           BRep_Tool::PolygonOnTriangulation(edge, tri, loc);
       if (poly.IsNull()) continue;
-      const int edge_index = s.edges.FindIndex(edge) - 1;
+      const int edge_index = edges.FindIndex(edge) - 1;
       BRepAdaptor_Curve curve(edge);
       for (int k = 1; k < poly->NbNodes(); ++k) {
         const int a = global[poly->Node(k)], b = global[poly->Node(k + 1)];

@@ -6,6 +6,7 @@
 
 #include <array>
 #include <cstdint>
+#include <string>
 #include <unordered_map>
 #include <vector>
 
@@ -61,6 +62,9 @@ struct Surface {
   /// BRepMesh's triangles whose three nodes lie on one line, taken out by triangulate() (the
   /// triangle across each one's longest side split at its third node).
   std::size_t nb_flat_triangles = 0;
+  /// Faces triangulated as surfaces of revolution (triangulate(): BRepMesh failed on a face of
+  /// the shape as it is); 0 when the shape meshed as it is.
+  std::size_t nb_revolution_faces = 0;
 };
 
 /// BRepMesh's angular deflection in triangulate() (radians). Its CAD edges' segments turn by at
@@ -72,9 +76,14 @@ struct Surface {
 constexpr double kSurfaceAngle = 1.57;
 
 /// The shape's faces triangulated by OpenCASCADE (BRepMesh, chord deflection `deflection`,
-/// angular deflection kSurfaceAngle), nodes closer than `tolerance` merged into one.
-/// @throws InputError when a face cannot be triangulated
-Surface triangulate(const Shape& s, double deflection, double tolerance);
+/// angular deflection kSurfaceAngle), nodes closer than `tolerance` merged into one. Where
+/// BRepMesh leaves a face without triangles, the whole shape is triangulated again with its
+/// cylinders, cones, spheres and tori as surfaces of revolution (ShapeCustom's; the same
+/// geometry), the nodes' parameters taken back onto each face's own surface.
+/// @param face_names  per face of `s`, its name for messages (as the user numbers it: "Face12")
+/// @throws InputError when a face cannot be triangulated either way (naming it and its kind)
+Surface triangulate(const Shape& s, double deflection, double tolerance,
+                    const std::vector<std::string>& face_names);
 
 /// Merges nodes within `tolerance` of an earlier node into it (the triangles that lose a side go),
 /// takes out pairs of triangles on the same three nodes facing opposite ways (a fold: it bounds
