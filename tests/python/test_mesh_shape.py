@@ -932,6 +932,39 @@ def test_voids_the_solids_enclose_stay_empty(tmp_path, name: str, h: float, volu
     assert result["min_scaled_jacobian"] >= 0.2
 
 
+# A pin in a hole, 0.01 to 0.05 mm apart (two solids), as KiCad's parts hold pads in their
+# bodies: at h 1.5 the triangles of the hole (chords on its void side) cross the pin's, whose
+# faces come closer than the chord deflection (0.03 mm) there.
+PIN_IN_HOLE_GEO = """SetFactory("OpenCASCADE");
+Box(1) = {0, 0, 0, 20, 20, 10};
+Cylinder(2) = {10, 10, 0, 0, 0, 10, 5};
+BooleanDifference(3) = { Volume{1}; Delete; }{ Volume{2}; Delete; };
+Cylinder(4) = {10.02, 10, 0, 0, 0, 10, 4.97};
+"""
+
+
+@needs_tetgen
+def test_faces_closer_than_the_chord_deflection_get_finer_triangles_there(tmp_path) -> None:
+    """Where the triangles of two faces cross (every way of placing the points failed on it, "a
+    smaller size keeps them apart"), the surface is made again with finer sizes at the crossing
+    triangles, round by round: the mesh is valid, each solid's region keeps its volume."""
+    shape = gmsh_brep(tmp_path, "pin_in_hole", PIN_IN_HOLE_GEO)
+    h = 1.5
+    tets, report = hexmerge.mesh_shape(shape, h, recombine=False)
+    meshing = report["meshing"]
+    assert meshing["nb_crossing_refinements"] >= 1  # measured 3
+    assert meshing["max_boundary_distance"] <= 1e-3 * h
+    t = tets.cell_vertices.reshape(-1, 4).astype(np.int64)
+    volumes = tet_volumes(tets.points, t)
+    assert volumes.min() > 0
+    expected = [20 * 20 * 10 - np.pi * 5**2 * 10, np.pi * 4.97**2 * 10]
+    for region, volume in enumerate(expected):
+        got = volumes[tets.regions == region].sum()
+        assert abs(got - volume) < 0.01 * volume, (region, got, volume)
+    mesh, merged = hexmerge.mesh_shape(shape, h)
+    assert_checked(mesh, tets, merged, h)
+
+
 def test_overlapping_solids_are_refused_by_name(tmp_path) -> None:
     shape = gmsh_brep(tmp_path, "overlapping", OVERLAPPING_GEO)
     with pytest.raises(hexmerge.InputError, match=r"Solid1 and Solid2 of the shape overlap \(common volume 240"):

@@ -390,6 +390,9 @@ def _mesh_notes(meshing: dict[str, Any]) -> list[str]:
         notes.append("OpenCASCADE's surface mesher left a face of the shape without triangles: the "
                      f"surface was made with its {meshing['nb_revolution_faces']} cylinders, cones, "
                      "spheres and tori as surfaces of revolution (the same geometry)")
+    if meshing["nb_crossing_refinements"]:
+        notes.append("faces come closer than the surface's chord deflection at places: the surface "
+                     f"was made finer there ({meshing['nb_crossing_refinements']} round(s) of halved sizes)")
     if meshing["nb_unrefined_faces"]:
         notes.append(f"the surface of {meshing['nb_unrefined_faces']} face(s) did not refine to h "
                      "(a distorted parametrisation): sides longer than h remain there")

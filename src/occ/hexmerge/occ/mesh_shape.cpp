@@ -59,6 +59,8 @@ constexpr double kGradedClearance = 0.5;
 constexpr double kFacetAngle = 20.0 * M_PI / 180;
 constexpr double kFacetRadius = 0.6;
 constexpr double kFacetClearance = 0.25;
+// Rounds of finer sizes where the triangles of two faces cross (each halves the sizes there).
+constexpr int kCrossingRounds = 6;
 
 // The tet mesh from the tetrahedraliser's output (frame coordinates): tets oriented positive,
 // points in the world, the surface's nodes at their exact CAD positions, regions by solid.
@@ -544,23 +546,65 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
     // again from BRepMesh's triangles with every repair kept within the chord deflection
     // (bounded everywhere, the repairs left more poor triangles elsewhere: 3,263 elements under
     // scaled Jacobian 0.2 against 2,947 on the real parts at 50k).
-    const auto repair = [&](double max_gap) {
+    const auto repair = [&](double max_gap, const SizeField* sizes) {
       // BRepMesh's caps go first: bisecting their sides makes flat triangles.
       collapse_sides(shape, surface, h, std::numeric_limits<double>::infinity(), max_gap,
-                     lattice.lattice_face, local);
-      refine(shape, surface, h, max_gap, lattice.lattice_face, lattice.lattice_edge, local);
+                     lattice.lattice_face, sizes);
+      refine(shape, surface, h, max_gap, lattice.lattice_face, lattice.lattice_edge, sizes);
       report.nb_unrefined_faces = surface.unrefined_faces.size();
-      collapse_sides(shape, surface, h, h, max_gap, lattice.lattice_face, local);
+      collapse_sides(shape, surface, h, h, max_gap, lattice.lattice_face, sizes);
       remove_folds(surface, 1e-8 * shape.diagonal);  // TetGen's own coincidence tolerance
     };
     const Surface triangulated = surface;
-    repair(std::numeric_limits<double>::infinity());
+    repair(std::numeric_limits<double>::infinity(), local);
     checked = facet_triangles(surface, lattice.frame, lattice.lattice_face, lattice.face_plane);
     crossings = find_crossings(surface.nodes, checked);
     if (!crossings.empty()) {
       surface = triangulated;
-      repair(deflection);
+      repair(deflection, local);
       report.bounded_surface_repairs = true;
+      checked = facet_triangles(surface, lattice.frame, lattice.lattice_face, lattice.face_plane);
+      crossings = find_crossings(surface.nodes, checked);
+    }
+    // Triangles of two faces that still cross, where the faces come closer than the triangles'
+    // chord deflection (on KiCad's component models, a pad's cylinder 0.025 mm from its body's,
+    // a terminal block's cylinders 0.1 mm apart): the surface is made again with the places of the
+    // crossing triangles given a size of half their longest side, then a quarter, ... (their
+    // sagitta a quarter each time), the sizes of the earlier rounds kept, while fewer triangles
+    // cross than the round before (faces that touch where they share no edge cross at every size);
+    // the rest of the surface and the points inside are as at h.
+    std::vector<std::pair<std::array<Vec3, 3>, double>> finer_places;
+    std::size_t crossing_before = std::numeric_limits<std::size_t>::max();
+    for (int round = 0; round < kCrossingRounds && !crossings.empty(); ++round) {
+      if (std::all_of(crossings.begin(), crossings.end(), [&](const Crossing& c) {
+            return checked[c.first].face == checked[c.second].face;
+          }))
+        break;  // folds of one face: no size of these places unfolds them
+      // find_crossings() gives a pair of triangles per pair of faces: every crossing one here.
+      std::vector<std::array<int, 3>> corners_of(checked.size());
+      for (std::size_t t = 0; t < checked.size(); ++t) corners_of[t] = checked[t].node;
+      const std::vector<char> crossing = crosses_any(surface.nodes, corners_of, corners_of);
+      const auto nb_crossing =
+          static_cast<std::size_t>(std::count(crossing.begin(), crossing.end(), 1));
+      if (nb_crossing >= crossing_before) break;  // finer sizes do not part the faces there
+      crossing_before = nb_crossing;
+      for (std::size_t t = 0; t < checked.size(); ++t)
+        if (crossing[t]) {
+          std::array<Vec3, 3> corners;
+          double longest = 0;
+          for (int k = 0; k < 3; ++k) corners[k] = surface.nodes[checked[t].node[k]];
+          for (int k = 0; k < 3; ++k)
+            longest = std::max(longest, (corners[(k + 1) % 3] - corners[k]).norm());
+          finer_places.emplace_back(corners, 0.5 * longest);
+        }
+      SizeField finer =
+          make_size_field(triangulated, items_at_h, h, kLocalGrading, deflection, shape.diagonal);
+      for (const auto& [corners, size] : finer_places)
+        finer.add(corners[0], corners[1], corners[2], std::max(size, 1e-3 * h));
+      surface = triangulated;
+      repair(deflection, &finer);
+      report.bounded_surface_repairs = true;
+      ++report.nb_crossing_refinements;
       checked = facet_triangles(surface, lattice.frame, lattice.lattice_face, lattice.face_plane);
       crossings = find_crossings(surface.nodes, checked);
     }

@@ -266,6 +266,9 @@ struct MeshShapeReport {
   /// whether the surface repairs ran again from BRepMesh's triangles, each kept within the chord
   /// deflection of its face, because the surface they made first crossed itself
   bool bounded_surface_repairs = false;
+  /// Times the surface was made again with finer sizes where the triangles of two faces crossed
+  /// (faces closer than the chord deflection there), each round halving the sizes there
+  std::size_t nb_crossing_refinements = 0;
   std::size_t nb_shared_faces = 0;  ///< faces between two solids (touching solids glued)
   /// Solids made of a shape that held faces or shells only (an IGES file, a STEP file of
   /// surfaces): its faces sewn, each closed shell a solid; 0 when it held solids
