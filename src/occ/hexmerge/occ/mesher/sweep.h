@@ -33,7 +33,8 @@ struct Sweep {
 /// The frame axis along which the shape is swept: every face is a cap on a lattice plane or a
 /// wall (a plane, cylinder or surface of extrusion parallel to the axis, bounded by lines along
 /// the axis and by curves in lattice planes), there are caps on the first and the last plane,
-/// and at least one wall is not a lattice face (a box is a lattice already). The frame's third
+/// and at least one wall is not a lattice face (a box is a lattice already), and no edge lies
+/// between caps only (a cap split into faces, its seams off the walls). The frame's third
 /// axis is tried first. Whether the cross-section is the same on every plane is
 /// sweep_surface()'s to see.
 /// @param[in] face_plane    per face, its plane when planar and normal to a frame axis
