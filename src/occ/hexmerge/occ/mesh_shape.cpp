@@ -266,6 +266,7 @@ TetMesh mesh_shape_impl(const std::string& brep, const MeshShapeParameters& para
   report.nb_solids = static_cast<std::size_t>(shape.solids.Extent());
   report.nb_faces = static_cast<std::size_t>(shape.faces.Extent());
   report.nb_shared_faces = glue.nb_shared_faces;
+  report.glue_fuzzy = glue.fuzzy;
   report.nb_sewn_solids = glue.nb_sewn_solids;
   // A shape of faces sewn into solids has faces of its own: FaceN of the shape given names none.
   if (glue.nb_sewn_solids > 0 &&

@@ -270,6 +270,9 @@ struct MeshShapeReport {
   /// (faces closer than the chord deflection there), each round halving the sizes there
   std::size_t nb_crossing_refinements = 0;
   std::size_t nb_shared_faces = 0;  ///< faces between two solids (touching solids glued)
+  /// The General Fuse's fuzzy value that glued the solids: 1e-7 h, or 1e-5 or 1e-4 of the
+  /// shape's diagonal where a smaller one left a solid open; 0 when not glued
+  double glue_fuzzy = 0.0;
   /// Solids made of a shape that held faces or shells only (an IGES file, a STEP file of
   /// surfaces): its faces sewn, each closed shell a solid; 0 when it held solids
   std::size_t nb_sewn_solids = 0;

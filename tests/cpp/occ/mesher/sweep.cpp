@@ -5,6 +5,7 @@
 #include <BRepBuilderAPI_MakeFace.hxx>
 #include <BRepBuilderAPI_MakePolygon.hxx>
 #include <BRepPrimAPI_MakePrism.hxx>
+#include <ShapeUpgrade_UnifySameDomain.hxx>
 #include <cmath>
 #include <string>
 
@@ -96,16 +97,26 @@ TEST(find_sweep, plate_with_a_hole_along_the_hole) {
   expect_swept(p, 60 * 40 * 10 - M_PI * 8 * 8 * 10, 0.02);
 }
 
+// The L as the fuse leaves it: its bottom is two faces, with an edge between them that no wall
+// has (nothing would split it): not swept.
+TEST(find_sweep, caps_split_into_faces_are_not_swept) {
+  const Prepared p = prepare(occ_bracket(), 2.5);
+  EXPECT_FALSE(find(p));
+}
+
 TEST(find_sweep, box_is_a_lattice_already) {
   const Prepared p = prepare(occ_box(0, 0, 0, 20, 10, 5), 2.0);
   EXPECT_FALSE(find(p));
 }
 
-// An L with a hole across its foot: along y and x the hole's wall is not parallel; along z the
-// caps are on lattice planes but the cross-section changes (the flange above the foot), which
-// sweep_surface() sees, leaving the surface as it was.
+// An L with a hole across its foot, its faces merged where the fuse left them split: along y and
+// x the hole's wall is not parallel; along z the caps are on lattice planes but the
+// cross-section changes (the flange above the foot), which sweep_surface() sees, leaving the
+// surface as it was.
 TEST(find_sweep, l_with_a_hole_across_is_not_swept) {
-  Prepared p = prepare(occ_bracket(), 2.5);
+  ShapeUpgrade_UnifySameDomain unify(occ_bracket());
+  unify.Build();
+  Prepared p = prepare(unify.Shape(), 2.5);
   const auto s = find(p);
   ASSERT_TRUE(s);  // caps on lattice planes, walls parallel to z (the hole's too)
   EXPECT_EQ(s->axis, 2);

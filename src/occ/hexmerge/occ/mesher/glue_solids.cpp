@@ -84,6 +84,7 @@ TopoDS_Shape glue_solids(const TopoDS_Shape& shape, double tolerance, GlueSolids
                      (text.empty() ? std::string() : ": " + text));
   }
   report.glued = true;
+  report.fuzzy = tolerance;
 
   // The pieces of each solid; a piece in two solids' images is volume they share.
   TopTools_IndexedMapOfShape pieces;

@@ -19,6 +19,7 @@ struct GlueSolidsReport {
   std::size_t nb_solids = 0;        ///< solids of the shape
   std::size_t nb_shared_faces = 0;  ///< faces bounding two solids after gluing
   bool glued = false;               ///< General Fuse ran (more than one solid)
+  double fuzzy = 0.0;               ///< its fuzzy value (the tolerance given)
   /// Solids load_shape() made of a shape that held faces or shells only (sewn, each closed shell a
   /// solid); 0 when the shape held solids.
   std::size_t nb_sewn_solids = 0;

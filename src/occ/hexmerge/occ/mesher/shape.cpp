@@ -23,6 +23,7 @@
 #include <algorithm>
 #include <cmath>
 #include <gp_Pln.hxx>
+#include <optional>
 #include <string>
 #include <utility>
 
@@ -78,6 +79,25 @@ TopoDS_Shape solids_of_faces(const TopoDS_Shape& shape, std::size_t& nb_solids) 
   return solids;
 }
 
+// The first edge of a solid (1-based: solid, then edge in `edges`) that bounds a single face of
+// it but as a seam: the solid's boundary is open there. None: every solid is closed.
+std::optional<std::pair<int, int>> open_edge(const TopTools_IndexedMapOfShape& solids,
+                                             const TopTools_IndexedMapOfShape& edges) {
+  for (int i = 1; i <= solids.Extent(); ++i) {
+    TopTools_IndexedDataMapOfShapeListOfShape edge_faces;
+    TopExp::MapShapesAndAncestors(solids(i), TopAbs_EDGE, TopAbs_FACE, edge_faces);
+    for (int e = 1; e <= edge_faces.Extent(); ++e) {
+      const TopoDS_Edge& edge = TopoDS::Edge(edge_faces.FindKey(e));
+      if (BRep_Tool::Degenerated(edge)) continue;
+      const TopTools_ListOfShape& around = edge_faces.FindFromIndex(e);
+      if (around.Extent() >= 2) continue;
+      if (around.Extent() == 1 && BRep_Tool::IsClosed(edge, TopoDS::Face(around.First()))) continue;
+      return std::make_pair(i, edges.FindIndex(edge));
+    }
+  }
+  return std::nullopt;
+}
+
 }  // namespace
 
 Shape load_shape(const std::string& brep, double glue_tolerance, GlueSolidsReport& glue) {
@@ -89,6 +109,7 @@ Shape load_shape(const std::string& brep, double glue_tolerance, GlueSolidsRepor
     s.shape = solids_of_faces(s.shape, nb_sewn);
     TopExp::MapShapes(s.shape, TopAbs_SOLID, s.solids);
   }
+  const TopoDS_Shape given = s.shape;  // its edges numbered as the user numbers them
   for (int i = 1; i <= s.solids.Extent(); ++i)
     if (!TopExp_Explorer(s.solids(i), TopAbs_FACE).More())
       throw InputError("Solid" + std::to_string(i) +
@@ -107,7 +128,43 @@ Shape load_shape(const std::string& brep, double glue_tolerance, GlueSolidsRepor
     TopExp::MapShapes(solids, TopAbs_EDGE, in_solids);
     if (in_shape.Extent() != in_solids.Extent()) s.shape = solids;
   }
-  s.shape = glue_solids(s.shape, glue_tolerance, glue);
+  {
+    // A closed shell: every edge of a solid bounds two of its faces, or one face twice (a seam).
+    TopTools_IndexedMapOfShape given_edges;
+    TopExp::MapShapes(given, TopAbs_EDGE, given_edges);
+    if (const auto open = open_edge(s.solids, given_edges))
+      throw InputError("Solid" + std::to_string(open->first) + " is not closed: Edge" +
+                       std::to_string(open->second) +
+                       " bounds a single face (an open shell); give a closed solid");
+  }
+  // OpenCASCADE's General Fuse can leave a glued solid open where others touch it, at a fuzzy
+  // value near round-off (KiCad's Ethernet transformer HALO TG111, its twelve pins on its body:
+  // twelve edges of the body bound one face each at 1.1e-7, none at 1e-5): glued again with a
+  // larger fuzzy value, 1e-5 and then 1e-4 of the shape's diagonal.
+  Bnd_Box given_box;
+  BRepBndLib::Add(s.shape, given_box);
+  const double given_diagonal = given_box.IsVoid() ? 0.0 : std::sqrt(given_box.SquareExtent());
+  std::optional<std::pair<int, int>> open;
+  for (const double fuzzy : {glue_tolerance, 1e-5 * given_diagonal, 1e-4 * given_diagonal}) {
+    if (fuzzy < glue_tolerance) continue;
+    const TopoDS_Shape glued = glue_solids(s.shape, fuzzy, glue);
+    TopTools_IndexedMapOfShape glued_solids, glued_edges;
+    TopExp::MapShapes(glued, TopAbs_SOLID, glued_solids);
+    TopExp::MapShapes(glued, TopAbs_EDGE, glued_edges);
+    open = open_edge(glued_solids, glued_edges);
+    if (!open) {
+      s.shape = glued;
+      break;
+    }
+  }
+  if (open)
+    throw InputError("OpenCASCADE's General Fuse, gluing the shape's " +
+                     std::to_string(s.solids.Extent()) + " solids where they touch, left Solid" +
+                     std::to_string(open->first) +
+                     " open (an edge of it bounds a single face) at every fuzzy value tried, up "
+                     "to " +
+                     std::to_string(1e-4 * given_diagonal) +
+                     ": glue the solids in FreeCAD (Part BooleanFragments) and mesh the result");
   glue.nb_sewn_solids = nb_sewn;
   s.solids.Clear();
   TopExp::MapShapes(s.shape, TopAbs_SOLID, s.solids);
@@ -126,19 +183,6 @@ Shape load_shape(const std::string& brep, double glue_tolerance, GlueSolidsRepor
       if (index <= 0) continue;
       s.face_solids[static_cast<std::size_t>(index - 1)].push_back(i - 1);
       ++s.face_solid_count[static_cast<std::size_t>(index - 1)];
-    }
-    // A closed shell: every edge of the solid bounds two faces, or one face twice (a seam).
-    TopTools_IndexedDataMapOfShapeListOfShape edge_faces;
-    TopExp::MapShapesAndAncestors(s.solids(i), TopAbs_EDGE, TopAbs_FACE, edge_faces);
-    for (int e = 1; e <= edge_faces.Extent(); ++e) {
-      const TopoDS_Edge& edge = TopoDS::Edge(edge_faces.FindKey(e));
-      if (BRep_Tool::Degenerated(edge)) continue;
-      const TopTools_ListOfShape& around = edge_faces.FindFromIndex(e);
-      if (around.Extent() >= 2) continue;
-      if (around.Extent() == 1 && BRep_Tool::IsClosed(edge, TopoDS::Face(around.First()))) continue;
-      throw InputError("Solid" + std::to_string(i) + " is not closed: Edge" +
-                       std::to_string(s.edges.FindIndex(edge)) +
-                       " bounds a single face (an open shell); give a closed solid");
     }
   }
   s.edge_faces.resize(static_cast<std::size_t>(s.edges.Extent()));
