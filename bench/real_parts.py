@@ -38,6 +38,7 @@ import argparse
 import concurrent.futures
 import datetime
 import json
+import math
 import os
 import signal
 import statistics
@@ -335,14 +336,20 @@ class Runner:
                 return self.keep(name, target, tries, facts, dict(
                     part=name, target=target, h=None, status="error",
                     error="no size: Gmsh reads no solid from the file (its volume is unknown)"))
+            # A part whose small features set the count (KiCad's 400-pin Samtec connector: about
+            # 70k tets at any coarse size) asks for sizes past its extent: at most half of it.
+            largest = max(hi - lo for lo, hi in zip(*facts["bbox"])) if facts.get("bbox") else math.inf
+            size = min(size, 0.5 * largest)
             row = self.run(name, path, size, facts, target)
             tries.append((size, row.get("tets"), row["status"]))
             for _ in range(RESCALES):
                 if not row.get("tets") or abs(row["tets"] / wanted - 1) <= TOLERANCE:
                     break
                 known = (previous["tries"] if previous else []) + tries
-                size = benchlib.rescaled_size(size, row["tets"], wanted,
-                                              benchlib.count_exponent([t[:2] for t in known]))
+                size = min(0.5 * largest, benchlib.rescaled_size(
+                    size, row["tets"], wanted, benchlib.count_exponent([t[:2] for t in known])))
+                if size == tries[-1][0]:
+                    break  # at half the extent already
                 row = self.run(name, path, size, facts, target)
                 tries.append((size, row.get("tets"), row["status"]))
         return self.keep(name, target, tries, facts, row)
