@@ -210,10 +210,11 @@ class ShapeJob:
             self.pyramids_as_hexahedra)
         self.seconds["write FemMesh"] = time.perf_counter() - t
         report = dict(self.result[1])
-        # The CAD's corners and edges too sharp for usable elements: named in the console.
-        sharp = engine.module().sharp_feature_note(report["meshing"])
-        if sharp and sharp not in self.warnings:
-            self.warnings.append(sharp)
+        # What the command line notes (the ways TetGen failed on, faces left coarse, the CAD's
+        # corners and edges too sharp for usable elements, ...): in the console and the report.
+        for note in engine.module().mesh_notes(report["meshing"]):
+            if note not in self.warnings:
+                self.warnings.append(note)
         report["freecad"] = addon_report(
             "shape", ("solids of the shape ({} solids, mesher)".format(self.nb_solids)
                       if block_regions is not None else "none"),

@@ -238,6 +238,22 @@ class ShapeMode(unittest.TestCase):
         self.assertEqual(obj.FemMesh.HexaCount, report["output_counts"]["hex"])
         self.assertGreaterEqual(min(report["min_scaled_jacobian"][k] for k, n in report["output_counts"].items() if n), 0.2)
 
+    def test_the_mesher_s_notes_are_the_add_on_s_warnings(self):
+        """What the command line notes about how the tets were made reaches the add-on's user:
+        a cone BRepMesh cannot triangulate (its apex a degenerated edge, as a KiCad connector
+        model has it) is triangulated as a surface of revolution, and the add-on says so."""
+        import Part
+        doc = FreeCAD.newDocument("HexMergeApexCone")
+        cone = doc.addObject("Part::Feature", "Cone")
+        cone.Shape = Part.read(os.path.join(ROOT, "tests", "data", "apex_cone.brep"))
+        doc.recompute()
+        obj = hm.make_hexdominant_mesh(doc, cone, target_size=0.25, second_order=False)
+        report = mesh_hexdominant.report_dict(obj)
+        self.assertEqual(report["meshing"]["nb_revolution_faces"], 1)
+        self.assertTrue(any("as surfaces of revolution" in w for w in report["freecad"]["warnings"]),
+                        report["freecad"]["warnings"])
+        self.assertGreater(obj.FemMesh.VolumeCount, 0)
+
     def test_the_voids_of_femexamples_two_balls_stay_empty(self):
         """FreeCAD's FEM example equation_electrostatics_capacitance_two_balls: a ball of radius
         5000 less two balls of 500 inside it. TetGen filled the two voids (it carves from the

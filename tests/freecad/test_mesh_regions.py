@@ -72,8 +72,10 @@ class MeshRegions(unittest.TestCase):
         self.assertEqual((applied["faces"], applied["size"]), ([5], H / 4))
         self.assertLessEqual(applied["max_side"], H / 4 * (1 + 1e-9))
         self.assertEqual(report["meshing"]["parameters"]["local_sizes"], "Face5:2.5")
-        self.assertEqual(report["freecad"]["warnings"], [])
-        # Local sizes turn the sweep off (one size along the axis); the cells are all there.
+        # Local sizes turn the sweep off (one size along the axis), which the mesher notes (as the
+        # command line does); the cells are all there.
+        (note,) = report["freecad"]["warnings"]
+        self.assertIn("not swept, though an extrusion: the local size 2.5 on Face5", note)
         self.assertEqual(report["meshing"]["sweep_axis"], -1)
         self.assertEqual(obj.FemMesh.VolumeCount, sum(report["output_counts"].values()))
         self.assertEqual(mesh_hexdominant.found_mesh_regions(obj), (["HoleRegion: Face5 2.5 mm"], []))
@@ -104,10 +106,12 @@ class MeshRegions(unittest.TestCase):
         self.assertEqual((applied["faces"], applied["size"]), ([5], 5.0))
         self.assertLessEqual(widest_gap(hole_nodes(obj.FemMesh), 0.0), 5.0 * (1 + 1e-6))
         warnings = report["freecad"]["warnings"]
-        self.assertEqual(len(warnings), 2, warnings)
+        self.assertEqual(len(warnings), 3, warnings)
         self.assertIn("Vertex1 of Plate is not supported in shape mode", warnings[0])
         # Its MinimumThickness is FreeCAD's default, 0: left out, said so.
         self.assertIn("boundary layer Layers: no MinimumThickness set: left out", warnings[1])
+        # And the mesher's note: the local size turned the sweep off.
+        self.assertIn("not swept, though an extrusion: the local size 5 on Face5", warnings[2])
         self.assertEqual(report["meshing"]["face_layers"], [])
 
     def test_a_boundary_layer_object_makes_layers_on_its_face(self):

@@ -974,117 +974,9 @@ def test_overlapping_solids_are_refused_by_name(tmp_path) -> None:
 # A cone (base radius 1.5 at z = 1.5, apex at z = 2.4013) closed by a disc, its apex a degenerated
 # edge and its face's parameters running from -pi to pi, as a cone of a KiCad connector model
 # (AMASS XT60, from Debian's kicad-packages3d) has them: valid CAD (OpenCASCADE's checker passes
-# it, Gmsh meshes it) on which BRepMesh makes no triangle at any deflection.
-APEX_CONE_BREP = """DBRep_DrawableShape
-
-CASCADE Topology V3, (c) Open Cascade
-Locations 0
-Curve2ds 7
-1 -3.1415926535897922 -1.1102230246251565e-16 1.0150899980749657e-15 -1 
-1 3.1415926535897931 -1.1102230246251565e-16 1.0150899980749657e-15 -1 
-1 -3.1415926535897913 -0.87497504791149805 1 0 
-1 0 3 1 0 
-1 6.2831853071795862 0.87497504791149772 -1 0 
-1 6.2831853071795862 3 1 0 
-1 0 0.87497504791149772 -1 0 
-Curves 3
-1 0.75 9.1848509936051497e-17 1.9506454642706701 -0.85716730070211222 -1.0497271911386204e-16 0.51503807491005427 
-2 -8.3810694399166604e-17 0 1.5 0 0 1 -1 0 0 0 -1 0 1.5
-2 -8.3810694399166604e-17 0 1.5 0 0 1 -1 0 0 0 -1 0 1.5
-Polygon3D 0
-PolygonOnTriangulations 0
-Surfaces 3
-3 -8.3810694399166604e-17 0 1.9506454642706701 0 0 -1 -1 0 0 0 1 0 0.75
-1.0297442586766501
-2 -8.3810694399166604e-17 0 -1.5 0 0 1 -1 0 0 0 -1 0 1.5
-1 0 0 1.5 0 0 -1 -1 0 -0 0 1 0 
-Triangulations 0
-
-TShapes 13
-Ve
-1e-07
-1.5 1.83697019872103e-16 1.5
-0 0
-
-0101101
-*
-Ve
-1e-07
--8.38106943991666e-17 0 2.40129092854134
-0 0
-
-0101101
-*
-Ed
- 1e-07 1 1 0
-1  1 0 -0.874975047911498 0.874975047911498
-3  1 2CN 1 0 -0.874975047911498 0.874975047911498
-0
-
-0101000
-+13 0 -12 0 *
-Ed
- 1e-07 1 1 1
-2  3 1 0 0 6.28318530717959
-0
-
-0101000
-+12 0 -12 0 *
-Ve
-1e-07
--1.5 0 1.5
-0 0
-
-0101101
-*
-Ed
- 1e-07 1 1 0
-1  2 0 3.14159265358979 6.28318530717959
-2  4 2 0 3.14159265358979 6.28318530717959
-2  5 1 0 3.14159265358979 6.28318530717959
-4 C0 2 0 1 0
-0
-
-0101000
-+13 0 -9 0 *
-Ed
- 1e-07 1 1 0
-1  3 0 0 3.14159265358979
-2  6 2 0 0 3.14159265358979
-2  7 1 0 0 3.14159265358979
-4 C0 2 0 1 0
-0
-
-0101000
-+9 0 -13 0 *
-Wi
-
-0101100
-+11 0 +10 0 -11 0 +8 0 +7 0 *
-Fa
-0  1e-07 1 0
-
-0111000
-+6 0 *
-Wi
-
-0101100
--8 0 -7 0 *
-Fa
-0  1e-07 3 0
-
-0101000
-+4 0 *
-Sh
-
-0101100
--5 0 -3 0 *
-So
-
-1100000
--2 0 *
-
-+1 0 """
+# it, Gmsh meshes it) on which BRepMesh makes no triangle at any deflection. Written by
+# OpenCASCADE from a cone face and a disc made of its base edges.
+APEX_CONE = ROOT / "tests" / "data" / "apex_cone.brep"
 APEX_CONE_VOLUME = np.pi * 1.5**2 * (2.40129092854134 - 1.5) / 3
 
 
@@ -1103,8 +995,7 @@ def test_a_face_brepmesh_cannot_triangulate_is_meshed_as_a_surface_of_revolution
     triangulate face 0"): the shape is triangulated again with the cone as a surface of
     revolution, the same geometry; the mesh is valid, its boundary on the cone and the disc, its
     volume the cone's, and the report and the command line say what was done."""
-    shape = tmp_path / "apex_cone.brep"
-    shape.write_text(APEX_CONE_BREP)
+    shape = APEX_CONE
     h = 0.25
     tets, report = hexmerge.mesh_shape(shape, h, recombine=False)
     assert report["meshing"]["nb_revolution_faces"] == 1

@@ -21,7 +21,7 @@ except ImportError as e:  # pragma: no cover - depends on the build
 
 from ._api import CellBlock, MixedMesh, cell_types, check, parameters, recombine, validate
 from ._regions import WITH_OPENCASCADE, regions_by_solid
-from ._shape import mesh_parameters, mesh_shape, sharp_feature_note
+from ._shape import mesh_notes, mesh_parameters, mesh_shape, sharp_feature_note
 
 InputError = _core.InputError
 Cancelled = _core.Cancelled
@@ -38,6 +38,7 @@ __all__ = [
     "WITH_OPENCASCADE",
     "cell_types",
     "check",
+    "mesh_notes",
     "mesh_parameters",
     "mesh_shape",
     "parameters",

@@ -304,6 +304,62 @@ def mesh_shape(
     return mesh, report
 
 
+def mesh_notes(meshing: dict[str, Any]) -> list[str]:
+    """What the user should know about how the tets were made: the ways of placing points that
+    TetGen failed on (the mesh comes from a simpler one, with fewer hexahedra), faces left
+    coarser than h, the CAD's corners and edges too sharp for usable elements."""
+    notes = []
+    if meshing.get("converted_to_millimetres"):
+        notes.append(f"the file declares its lengths in {meshing['file_length_unit']}: the shape is "
+                     "read in millimetres, and -h and the report's lengths are millimetres")
+    if meshing.get("nb_sewn_solids"):
+        notes.append(f"the shape held faces, not solids: sewn, they close {meshing['nb_sewn_solids']} "
+                     "solid(s), which were meshed")
+    notes += [f"TetGen failed with the points placed by {failure}" for failure in meshing["failed_strategies"]]
+    if notes:
+        notes.append(f"the tets were made with the points placed by {meshing['strategy']}")
+    if meshing["nb_revolution_faces"]:
+        notes.append("OpenCASCADE's surface mesher left a face of the shape without triangles: the "
+                     f"surface was made with its {meshing['nb_revolution_faces']} cylinders, cones, "
+                     "spheres and tori as surfaces of revolution (the same geometry)")
+    if meshing["nb_crossing_refinements"]:
+        notes.append("faces come closer than the surface's chord deflection at places: the surface "
+                     f"was made finer there ({meshing['nb_crossing_refinements']} round(s) of halved sizes)")
+    if meshing["nb_unrefined_faces"]:
+        notes.append(f"the surface of {meshing['nb_unrefined_faces']} face(s) did not refine to h "
+                     "(a distorted parametrisation): sides longer than h remain there")
+    for applied in meshing.get("local_sizes", []):
+        if applied["max_side"] > applied["size"] * (1 + 1e-6):
+            items = [f"Face{f}" for f in applied["faces"]] + [f"Edge{e}" for e in applied["edges"]]
+            notes.append(f"local size {applied['size']:g} on {','.join(items)}: sides up to "
+                         f"{applied['max_side']:.3g} remain there (a face that did not refine)")
+    notes += face_layer_notes(meshing)
+    sharp = sharp_feature_note(meshing)
+    if sharp:
+        notes.append(sharp)
+    if meshing.get("sweep_skipped"):
+        notes.append(meshing["sweep_skipped"])
+    return notes
+
+
+def face_layer_notes(meshing: dict[str, Any]) -> list[str]:
+    """One line per face-layer entry that did not get all its layers at all its nodes."""
+    notes = []
+    for applied in meshing.get("face_layers", []):
+        items = ",".join(f"Face{f}" for f in applied["faces"])
+        per_layer = applied["nb_per_layer"]
+        if applied["nb_nodes"] and all(n == applied["nb_nodes"] for n in per_layer):
+            continue
+        if not any(per_layer):
+            notes.append(f"boundary layers on {items}: none placed (the points were placed by "
+                         f"{meshing['strategy']}, which places no layers)")
+            continue
+        counts = ", ".join(f"{n}" for n in per_layer)
+        notes.append(f"boundary layers on {items}: nodes per layer {counts} of the face's "
+                     f"{applied['nb_nodes']} (no room deeper, or a point too near another)")
+    return notes
+
+
 def sharp_feature_note(meshing: dict[str, Any]) -> str | None:
     """A line naming the CAD's face corners and edges sharper than 8.13 degrees that
     mesh_shape() found (its report's ``meshing``; the five sharpest, faces and edges numbered as
