@@ -965,6 +965,33 @@ def test_faces_closer_than_the_chord_deflection_get_finer_triangles_there(tmp_pa
     assert_checked(mesh, tets, merged, h)
 
 
+# Two boxes fused with tops 1e-6 apart (the faces left split): a face 1e-6 tall and 10 long
+# between them, as KiCad's barrel jack PJ-063BH has one (1e-6 by 8.6 mm).
+MICRO_STEP_GEO = """SetFactory("OpenCASCADE");
+Geometry.OCCUnionUnify = 0;
+Box(1) = {0, 0, 0, 10, 10, 5};
+Box(2) = {10, 0, 0, 10, 10, 5.000001};
+BooleanUnion(3) = { Volume{1}; Delete; }{ Volume{2}; Delete; };
+"""
+
+
+@needs_tetgen
+def test_a_face_far_narrower_than_h_is_merged_away(tmp_path) -> None:
+    """Surface nodes within 1e-5 h are one node: the 1e-6 face's triangles were flat (boundary
+    angles of 9e-5 degrees, tets of scaled Jacobian 1.9e-6, 204 under 0.2 at h 1)."""
+    shape = gmsh_brep(tmp_path, "micro_step", MICRO_STEP_GEO)
+    h = 1.0
+    tets, report = hexmerge.mesh_shape(shape, h, recombine=False)
+    t = tets.cell_vertices.reshape(-1, 4).astype(np.int64)
+    assert tet_scaled_jacobians(tets.points, t).min() >= 0.2  # measured 0.215
+    assert boundary_smallest_angles(tets).min() >= 10.0  # measured 19.8
+    assert report["meshing"]["max_boundary_distance"] <= 1e-5 * h
+    volumes = tet_volumes(tets.points, t)
+    assert abs(volumes.sum() - (1000 + 100 * 1e-6)) < 1e-5  # the CAD's volume, to 1e-8
+    mesh, merged = hexmerge.mesh_shape(shape, h)
+    assert_checked(mesh, tets, merged, h)
+
+
 def test_overlapping_solids_are_refused_by_name(tmp_path) -> None:
     shape = gmsh_brep(tmp_path, "overlapping", OVERLAPPING_GEO)
     with pytest.raises(hexmerge.InputError, match=r"Solid1 and Solid2 of the shape overlap \(common volume 240"):

@@ -398,16 +398,20 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
   // 4. The surface triangulation (on the CAD), and the lattice through its bounding box in the
   // frame.
   const double deflection = parameters.surface_deflection * h;
-  // Nodes nearer than TetGen's own tolerance (1e-8 of the input's size) are one node: TetGen
-  // would merge them itself and renumber the points after them.
   std::vector<std::string> face_names(static_cast<std::size_t>(shape.faces.Extent()));
   for (std::size_t f = 0; f < face_names.size(); ++f) {
     const int number = given_number(given_items.faces, static_cast<int>(f));
     face_names[f] = number > 0 ? "Face" + std::to_string(number)
                                : "face " + std::to_string(f + 1) + " of the glued solids";
   }
+  // Nodes nearer than 1e-5 h, or than TetGen's own tolerance (1e-8 of the input's size), are
+  // one node: TetGen would merge the second itself and renumber the points after them, and a
+  // face narrower than the first is below any mesh of size h (KiCad's barrel jack has a step
+  // of 1e-6 mm along an 8.6 mm edge: at 1e-9 h its face's triangles were flat, 208 boundary
+  // triangles under 1 degree, tets down to scaled Jacobian 4.5e-7; merged, 0.150). The
+  // boundary then stays within 1e-5 h of the CAD there.
   Surface surface =
-      triangulate(shape, deflection, 1e-9 * h + 2e-8 * shape.diagonal + 1e-12, face_names);
+      triangulate(shape, deflection, 1e-5 * h + 2e-8 * shape.diagonal + 1e-12, face_names);
   report.nb_flat_surface_triangles = surface.nb_flat_triangles;
   report.nb_revolution_faces = surface.nb_revolution_faces;
   Lattice lattice = lay_lattice(shape, frame, surface.nodes, h, strategy.lattice_faces);
