@@ -992,6 +992,33 @@ def test_a_face_far_narrower_than_h_is_merged_away(tmp_path) -> None:
     assert_checked(mesh, tets, merged, h)
 
 
+# A wire of radius 0.4 bent into a U (two rods and a half torus), as KiCad's axial parts have
+# their leads.
+U_WIRE_GEO = """SetFactory("OpenCASCADE");
+Cylinder(1) = {0, 0, 0, 0, 0, 10, 0.4};
+Torus(2) = {1.5, 0, 10, 1.5, 0.4, Pi};
+Rotate {{1, 0, 0}, {1.5, 0, 10}, Pi/2} { Volume{2}; }
+Cylinder(3) = {3, 0, 0, 0, 0, 10, 0.4};
+BooleanUnion(4) = { Volume{1}; Delete; }{ Volume{2, 3}; Delete; };
+"""
+
+
+@needs_tetgen
+def test_points_on_the_axes_of_wires_thinner_than_h(tmp_path) -> None:
+    """Tubes thinner than 0.75 h get points on their axes; without them TetGen joined the
+    wire's own surface nodes across it (at h 0.6: min scaled Jacobian 0.091, 146 tets under
+    0.2)."""
+    shape = gmsh_brep(tmp_path, "u_wire", U_WIRE_GEO)
+    h = 0.6
+    tets, report = hexmerge.mesh_shape(shape, h, recombine=False)
+    assert report["meshing"]["nb_axis_points"] > 0  # measured 21
+    quality = tet_scaled_jacobians(tets.points, tets.cell_vertices.reshape(-1, 4).astype(np.int64))
+    assert quality.min() >= 0.2  # measured 0.2105
+    assert report["meshing"]["max_boundary_distance"] <= 1e-3 * h
+    mesh, merged = hexmerge.mesh_shape(shape, h)
+    assert_checked(mesh, tets, merged, h)
+
+
 def test_overlapping_solids_are_refused_by_name(tmp_path) -> None:
     shape = gmsh_brep(tmp_path, "overlapping", OVERLAPPING_GEO)
     with pytest.raises(hexmerge.InputError, match=r"Solid1 and Solid2 of the shape overlap \(common volume 240"):

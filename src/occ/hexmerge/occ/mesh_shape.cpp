@@ -15,6 +15,7 @@
 #include "hexmerge/core/phase_timer.h"
 #include "hexmerge/core/progress.h"
 #include "hexmerge/occ/brep_text.h"
+#include "hexmerge/occ/mesher/axis_points.h"
 #include "hexmerge/occ/mesher/boundary_distance.h"
 #include "hexmerge/occ/mesher/facets.h"
 #include "hexmerge/occ/mesher/improve.h"
@@ -707,6 +708,8 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
   if (local)
     report.nb_graded_points =
         place_graded_points(field, lattice, parity, around, kGradedClearance, inserted);
+  if (sweep_axis < 0)  // (swept, every point repeats on every plane)
+    report.nb_axis_points = place_axis_points(shape, lattice, around, parity, h, inserted);
   // The face layers' points (the last place_layers() added) stay at their depths: they go first
   // among the isolated points, and improve_tets() leaves every point before them in place (the
   // points on lattice faces too: finer lattices' points there keep their place then).

@@ -279,6 +279,8 @@ struct MeshShapeReport {
   /// The local sizes (MeshShapeParameters::local_sizes) as applied, in their order
   std::vector<LocalSizeApplied> local_sizes;
   std::size_t nb_graded_points = 0;  ///< points of the finer lattices around local sizes
+  /// Points on the axes of tubes thinner than about h (wires, leads, pins; place_axis_points())
+  std::size_t nb_axis_points = 0;
   std::size_t nb_facet_points = 0;   ///< points added inside lattice faces (refine_facet)
   std::size_t nb_feature_edges = 0;  ///< short CAD edges given a size by `feature_size`
   /// The face layers (MeshShapeParameters::face_layers) as applied, in their order
