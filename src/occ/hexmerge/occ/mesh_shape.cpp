@@ -708,7 +708,8 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
   if (local)
     report.nb_graded_points =
         place_graded_points(field, lattice, parity, around, kGradedClearance, inserted);
-  if (sweep_axis < 0)  // (swept, every point repeats on every plane)
+  // (Swept, every point repeats on every plane; the way without points inside has none.)
+  if (sweep_axis < 0 && strategy.lattice_points)
     report.nb_axis_points = place_axis_points(shape, lattice, around, parity, h, inserted);
   // The face layers' points (the last place_layers() added) stay at their depths: they go first
   // among the isolated points, and improve_tets() leaves every point before them in place (the
