@@ -1019,27 +1019,6 @@ def test_points_on_the_axes_of_wires_thinner_than_h(tmp_path) -> None:
     assert_checked(mesh, tets, merged, h)
 
 
-# A box less a ball that touches its top and bottom at a point each: faces that touch where they
-# share no edge (FreeCAD's BOP check flags such shapes), which no size parts.
-BALL_TOUCHING_GEO = """SetFactory("OpenCASCADE");
-Box(1) = {0, 0, 0, 10, 10, 5};
-Sphere(2) = {5, 5, 2.5, 2.5};
-BooleanDifference(3) = { Volume{1}; Delete; }{ Volume{2}; Delete; };
-"""
-
-
-@needs_tetgen
-def test_faces_that_touch_are_not_called_too_close_for_the_size(tmp_path) -> None:
-    """Finer triangles where two faces cross make more of them cross when the faces touch: the
-    error says so, instead of "a smaller size keeps them apart"."""
-    shape = gmsh_brep(tmp_path, "ball_touching", BALL_TOUCHING_GEO)
-    with pytest.raises(hexmerge.InputError) as error:
-        hexmerge.mesh_shape(shape, 1.0, recombine=False)
-    text = str(error.value)
-    assert "the faces there touch where they share no edge, which no size parts" in text, text
-    assert "a smaller size keeps them apart" not in text, text
-
-
 def test_overlapping_solids_are_refused_by_name(tmp_path) -> None:
     shape = gmsh_brep(tmp_path, "overlapping", OVERLAPPING_GEO)
     with pytest.raises(hexmerge.InputError, match=r"Solid1 and Solid2 of the shape overlap \(common volume 240"):

@@ -540,7 +540,6 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
         "not swept, though an extrusion: its sweep failed with the local sizes and face layers "
         "applied (walls split to a local size, or made no lattice faces for layers)";
   std::vector<Crossing> crossings;
-  bool unparted = false;  // finer sizes where triangles crossed made more of them cross
   // The triangles checked: a lattice face's as its loops will be triangulated (facet_triangles).
   std::vector<SurfaceTriangle> checked;
   if (sweep) {
@@ -593,10 +592,7 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
       const std::vector<char> crossing = crosses_any(surface.nodes, corners_of, corners_of);
       const auto nb_crossing =
           static_cast<std::size_t>(std::count(crossing.begin(), crossing.end(), 1));
-      if (nb_crossing >= crossing_before) {  // finer sizes do not part the faces there
-        unparted = true;
-        break;
-      }
+      if (nb_crossing >= crossing_before) break;  // finer sizes do not part the faces there
       crossing_before = nb_crossing;
       for (std::size_t t = 0; t < checked.size(); ++t)
         if (crossing[t]) {
@@ -642,13 +638,10 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
     });
     throw TetrahedralizeFailure(
         "the surface's triangles at this size cross (" + where +
-        (folds      ? "): the triangles of a face fold over each other at this size, which another "
-                      "size may not do"
-         : unparted ? "): finer triangles there crossed more, not fewer: the faces there touch "
-                      "where they share no edge, which no size parts (FreeCAD's Part > Check "
-                      "geometry, with its BOP check, shows such faces)"
-                    : "): the faces there come closer than their triangles' chord deflection, "
-                      "and a smaller size keeps them apart"));
+        (folds ? "): the triangles of a face fold over each other at this size, which another "
+                 "size may not do"
+               : "): the faces there come closer than their triangles' chord deflection, and a "
+                 "smaller size keeps them apart"));
   }
   step("surface", 0.15);
 
