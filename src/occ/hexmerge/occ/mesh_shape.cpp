@@ -542,6 +542,12 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
   std::vector<Crossing> crossings;
   // The triangles checked: a lattice face's as its loops will be triangulated (facet_triangles).
   std::vector<SurfaceTriangle> checked;
+  // Every crossing is of triangles of one face: the repairs folded it.
+  const auto only_folds = [&] {
+    return std::all_of(crossings.begin(), crossings.end(), [&](const Crossing& c) {
+      return checked[c.first].face == checked[c.second].face;
+    });
+  };
   if (sweep) {
     report.sweep_axis = sweep->axis;
     checked = surface.triangles;
@@ -579,13 +585,10 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
     // sagitta a quarter each time), the sizes of the earlier rounds kept, while fewer triangles
     // cross than the round before (faces that touch where they share no edge cross at every size);
     // the rest of the surface and the points inside are as at h.
-    std::vector<std::pair<std::array<Vec3, 3>, double>> finer_places;
+    SizeField finer = field;  // the local sizes, and the crossing places of every round
     std::size_t crossing_before = std::numeric_limits<std::size_t>::max();
     for (int round = 0; round < kCrossingRounds && !crossings.empty(); ++round) {
-      if (std::all_of(crossings.begin(), crossings.end(), [&](const Crossing& c) {
-            return checked[c.first].face == checked[c.second].face;
-          }))
-        break;  // folds of one face: no size of these places unfolds them
+      if (only_folds()) break;  // folds of one face: no size of these places unfolds them
       // find_crossings() gives a pair of triangles per pair of faces: every crossing one here.
       std::vector<std::array<int, 3>> corners_of(checked.size());
       for (std::size_t t = 0; t < checked.size(); ++t) corners_of[t] = checked[t].node;
@@ -601,12 +604,8 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
           for (int k = 0; k < 3; ++k) corners[k] = surface.nodes[checked[t].node[k]];
           for (int k = 0; k < 3; ++k)
             longest = std::max(longest, (corners[(k + 1) % 3] - corners[k]).norm());
-          finer_places.emplace_back(corners, 0.5 * longest);
+          finer.add(corners[0], corners[1], corners[2], std::max(0.5 * longest, 1e-3 * h));
         }
-      SizeField finer =
-          make_size_field(triangulated, items_at_h, h, kLocalGrading, deflection, shape.diagonal);
-      for (const auto& [corners, size] : finer_places)
-        finer.add(corners[0], corners[1], corners[2], std::max(size, 1e-3 * h));
       surface = triangulated;
       repair(deflection, &finer);
       report.bounded_surface_repairs = true;
@@ -633,9 +632,7 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
     // Triangles of one face crossing each other: the repairs folded it (a cone's apex, needles
     // along a half cone's seam), which another size may not; of two faces: they come closer
     // than the chord deflection.
-    const bool folds = std::all_of(crossings.begin(), crossings.end(), [&](const Crossing& c) {
-      return checked[c.first].face == checked[c.second].face;
-    });
+    const bool folds = only_folds();
     throw TetrahedralizeFailure(
         "the surface's triangles at this size cross (" + where +
         (folds ? "): the triangles of a face fold over each other at this size, which another "

@@ -451,6 +451,15 @@ Surface triangulate(const Shape& s, double deflection, double tolerance,
     std::vector<int> global(static_cast<std::size_t>(tri->NbNodes()) + 1);
     for (int i = 1; i <= tri->NbNodes(); ++i)
       global[i] = merger.id(of(tri->Node(i).Transformed(trsf)), face_index);
+    // Each node's parameters on the face's own surface, projected once.
+    std::vector<UV> own_uv;
+    if (own) {
+      own_uv.resize(global.size());
+      for (int i = 1; i <= tri->NbNodes(); ++i) {
+        const gp_Pnt2d q = own->ValueOfUV(tri->Node(i).Transformed(trsf), tolerance);
+        own_uv[i] = UV{q.X(), q.Y()};
+      }
+    }
     const bool reversed = face.Orientation() == TopAbs_REVERSED;
     for (int k = 1; k <= tri->NbTriangles(); ++k) {
       int n[3];
@@ -461,17 +470,14 @@ Surface triangulate(const Shape& s, double deflection, double tolerance,
       for (int c = 0; c < 3; ++c) {
         t.node[c] = global[n[c]];
         if (own) {
-          // Periodic parameters taken within half a period of where the meshed surface has
-          // them (the angle of a surface of revolution is its cone's or cylinder's).
           // The first corner's within half a period of the meshed surface's (a surface of
           // revolution's angle is its cone's or cylinder's), the others within half a period of
           // the first's: the triangle does not straddle a seam.
-          const gp_Pnt p = tri->Node(n[c]).Transformed(trsf);
-          const gp_Pnt2d q = own->ValueOfUV(p, tolerance);
+          const UV q = own_uv[static_cast<std::size_t>(n[c])];
           const UV near = c > 0               ? t.uv[0]
                           : tri->HasUVNodes() ? UV{tri->UVNode(n[c]).X(), tri->UVNode(n[c]).Y()}
-                                              : UV{q.X(), q.Y()};
-          t.uv[c] = periodic_near(*own->Surface(), UV{q.X(), q.Y()}, near);
+                                              : q;
+          t.uv[c] = periodic_near(*own->Surface(), q, near);
         } else if (tri->HasUVNodes()) {
           t.uv[c] = UV{tri->UVNode(n[c]).X(), tri->UVNode(n[c]).Y()};
         }
