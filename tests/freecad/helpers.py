@@ -25,6 +25,14 @@ def load_bench():
 bench = load_bench()
 
 
+def shape_from_file(doc, name, path):
+    """A Part::Feature `name` in `doc` holding the shape of a BREP or STEP file."""
+    import Part
+    obj = doc.addObject("Part::Feature", name)
+    obj.Shape = Part.read(path)
+    return obj
+
+
 def cantilever(order="1st", size=200.0):
     """FreeCAD's ccx_cantilever_faceload with its mesh remade by Gmsh; returns the document."""
     from femexamples.ccx_cantilever_faceload import setup

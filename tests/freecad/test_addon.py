@@ -222,10 +222,9 @@ class ShapeMode(unittest.TestCase):
         1.5 failed on its own triangulation of the lattice faces at 2.25 to 2.5 mm (the mesher
         then took the lattice at 1.1 of the size); given them as triangles, it meshes at the size
         asked, in the first way: a swept, almost all-hexahedral mesh (99.7 % of the volume)."""
-        import Part
         doc = FreeCAD.newDocument("HexMergePlate")
-        plate = doc.addObject("Part::Feature", "Plate")
-        plate.Shape = Part.read(os.path.join(ROOT, "resources", "examples", "material_nl_platewithhole.brep"))
+        plate = helpers.shape_from_file(
+            doc, "Plate", os.path.join(ROOT, "resources", "examples", "material_nl_platewithhole.brep"))
         doc.recompute()
         obj = hm.make_hexdominant_mesh(doc, plate, target_size=2.5, second_order=False)
         report = mesh_hexdominant.report_dict(obj)
@@ -242,10 +241,8 @@ class ShapeMode(unittest.TestCase):
         """What the command line notes about how the tets were made reaches the add-on's user:
         a cone BRepMesh cannot triangulate (its apex a degenerated edge, as a KiCad connector
         model has it) is triangulated as a surface of revolution, and the add-on says so."""
-        import Part
         doc = FreeCAD.newDocument("HexMergeApexCone")
-        cone = doc.addObject("Part::Feature", "Cone")
-        cone.Shape = Part.read(os.path.join(ROOT, "tests", "data", "apex_cone.brep"))
+        cone = helpers.shape_from_file(doc, "Cone", os.path.join(ROOT, "tests", "data", "apex_cone.brep"))
         doc.recompute()
         obj = hm.make_hexdominant_mesh(doc, cone, target_size=0.25, second_order=False)
         report = mesh_hexdominant.report_dict(obj)

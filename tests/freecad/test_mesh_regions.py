@@ -12,7 +12,7 @@ import unittest
 
 import FreeCAD
 import ObjectsFem
-import Part
+import helpers
 
 import freecad.hexmerge as hm
 from freecad.hexmerge import mesh_hexdominant
@@ -44,8 +44,7 @@ class MeshRegions(unittest.TestCase):
 
     def setUp(self):
         self.doc = FreeCAD.newDocument("HexMergeRegions")
-        self.plate = self.doc.addObject("Part::Feature", "Plate")
-        self.plate.Shape = Part.read(PLATE)
+        self.plate = helpers.shape_from_file(self.doc, "Plate", PLATE)
         self.analysis = ObjectsFem.makeAnalysis(self.doc, "Analysis")
         self.doc.recompute()
 
