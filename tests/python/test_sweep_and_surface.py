@@ -278,6 +278,42 @@ def test_the_repairs_are_bounded_only_where_the_surface_crosses(tmp_path) -> Non
     assert abs(tet_volume(tets) - volume) < 0.01 * volume
 
 
+# A 60 x 60 x 10 plate with a D-shaped hole: a chord 3 long and a B-spline bulging 0.1 from it
+# (a random part of bench/random_parts.py had a hole between a line and a hyperbola 0.19 apart).
+LENS_HOLE_GEO = """SetFactory("OpenCASCADE");
+Box(1) = {-30, -30, 0, 60, 60, 10};
+Point(101) = {-1.5, 0, -1}; Point(102) = {0, 0.2, -1}; Point(103) = {1.5, 0, -1};
+BSpline(201) = {101, 102, 103};
+Line(202) = {103, 101};
+Curve Loop(301) = {201, 202};
+Plane Surface(302) = {301};
+e[] = Extrude {0, 0, 12} { Surface{302}; };
+BooleanDifference(5) = { Volume{1}; Delete; }{ Volume{e[1]}; Delete; };
+"""
+
+
+def test_two_edges_between_two_vertices_far_under_the_size(tmp_path) -> None:
+    """At h 20 BRepMesh gives the hole's chord and B-spline one segment each, the same one: four
+    triangles shared its side, and the plate was refused as a surface touching itself. The
+    B-spline now gets a node at its middle, its triangles split there: the plate meshes at
+    h 20 as at 12, every node on the CAD, the volume kept."""
+    shape = gmsh_brep(tmp_path, "lens_hole", LENS_HOLE_GEO)
+    volume = occ_volume(shape)
+    for h in (20.0, 12.0):
+        tets, report = hexmerge.mesh_shape(shape, h, recombine=False)
+        meshing = report["meshing"]
+        assert meshing["failed_strategies"] == [], meshing["failed_strategies"]
+        assert meshing["max_boundary_distance"] <= 1e-3 * h
+        # The chord's segment and the B-spline's two: a node at the B-spline's middle, each cap.
+        nodes = boundary_nodes(tets)
+        for z in (0.0, 10.0):
+            assert np.linalg.norm(nodes - [0.0, 0.1, z], axis=1).min() < 1e-6
+        assert abs(tet_volume(tets) - volume) < 1e-4 * volume
+        cells = tets.cell_vertices.reshape(-1, 4)
+        mesh, recombined = hexmerge.recombine(tets.points, cells, tets.regions)
+        assert_checked(mesh, tets, recombined, h)
+
+
 # An extrusion along y whose caps are split into two faces each (a seam at x 0.965, as the
 # terminations of KiCad's SMD resistor R_0402 split its end faces), with a hole along y (a wall
 # that is no lattice face). Swept, nothing split the seams and the caps' lattice points came

@@ -626,7 +626,8 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
     if (cad_at_fault)
       throw InputError(
           "mesh_shape: the shape is broken: faces meet where they share no edge (an edge of "
-          "one lies on the other without being one of its edges), so no mesh can follow them. "
+          "one lies on the other without being one of its edges, or they touch), so no mesh "
+          "can follow them. "
           "The surface's triangles cross at " +
           where + kRepairTheShape);
     // Triangles of one face crossing each other: the repairs folded it (a cone's apex, needles

@@ -4,20 +4,31 @@
 
 #include <BRepAlgoAPI_BuilderAlgo.hxx>
 #include <BRepBuilderAPI_Copy.hxx>
+#include <BRepBuilderAPI_MakeEdge.hxx>
 #include <BRepBuilderAPI_MakeFace.hxx>
+#include <BRepBuilderAPI_MakeWire.hxx>
 #include <BRepBuilderAPI_Transform.hxx>
 #include <BRepGProp.hxx>
+#include <BRepLib.hxx>
+#include <BRepPrimAPI_MakeSphere.hxx>
 #include <BRep_Builder.hxx>
 #include <GProp_GProps.hxx>
+#include <Geom2d_Line.hxx>
+#include <Geom_CylindricalSurface.hxx>
 #include <TopExp.hxx>
 #include <TopoDS.hxx>
 #include <TopoDS_Compound.hxx>
+#include <TopoDS_Face.hxx>
 #include <TopoDS_Shell.hxx>
 #include <TopoDS_Solid.hxx>
 #include <cmath>
 #include <gp_Ax1.hxx>
+#include <gp_Ax3.hxx>
+#include <gp_Dir2d.hxx>
 #include <gp_Pln.hxx>
+#include <gp_Pnt2d.hxx>
 #include <gp_Trsf.hxx>
+#include <initializer_list>
 #include <string>
 
 #include "hexmerge/core/error.h"
@@ -140,6 +151,42 @@ void expect_orthonormal_right_handed(const mesher::Frame& f) {
 
 // A 100 x 40 x 30 box turned 30 degrees about z: "auto" takes the normal of the largest faces
 // (z) as the third axis and that of the next largest (the turned y) as the first.
+// A face on a cylinder bounded by a wire of parameter lines from u = 0 to u = `sweep`
+// (OpenCASCADE's MakeFace from a parameter range would bring the range within one period; a STEP
+// file's pcurves need not).
+TopoDS_Face cylinder_face(double sweep) {
+  const Handle(Geom_CylindricalSurface) cylinder = new Geom_CylindricalSurface(gp_Ax3(), 2.0);
+  const gp_Pnt2d corners[4] = {{0, 0}, {sweep, 0}, {sweep, 1}, {0, 1}};
+  BRepBuilderAPI_MakeWire wire;
+  for (int i = 0; i < 4; ++i) {
+    const gp_Pnt2d a = corners[i], b = corners[(i + 1) % 4];
+    const Handle(Geom2d_Line) line = new Geom2d_Line(a, gp_Dir2d(b.X() - a.X(), b.Y() - a.Y()));
+    wire.Add(BRepBuilderAPI_MakeEdge(line, cylinder, 0, a.Distance(b)).Edge());
+  }
+  TopoDS_Face face = BRepBuilderAPI_MakeFace(cylinder, wire.Wire()).Face();
+  BRepLib::BuildCurves3d(face);
+  return face;
+}
+
+// A face whose parameters go 450 degrees round a cylinder covers a quarter of it twice (KiCad's
+// NXP MPL115A1 has such a surface of revolution); 360 or 300 degrees, a plane, a sphere do not.
+TEST(face_over_itself, a_face_round_its_surface_more_than_once) {
+  const auto faces_of = [](std::initializer_list<TopoDS_Shape> shapes) {
+    TopTools_IndexedMapOfShape faces;
+    for (const TopoDS_Shape& s : shapes) faces.Add(s);
+    return faces;
+  };
+  const TopoDS_Face over = cylinder_face(2.5 * M_PI), round = cylinder_face(2 * M_PI),
+                    part = cylinder_face(5.0);
+  const TopoDS_Face plane = BRepBuilderAPI_MakeFace(gp_Pln(), 0, 1, 0, 1).Face();
+  const TopoDS_Face sphere = BRepPrimAPI_MakeSphere(3.0).Face();
+  EXPECT_FALSE(mesher::face_over_itself(faces_of({round, part, plane, sphere})));
+  const auto found = mesher::face_over_itself(faces_of({plane, round, over, part}));
+  ASSERT_TRUE(found);
+  EXPECT_EQ(found->first, 3);
+  EXPECT_NEAR(found->second, 450.0, 1e-6);
+}
+
 TEST(choose_frame, auto_follows_the_largest_planar_faces) {
   gp_Trsf turn;
   turn.SetRotation(gp_Ax1(gp_Pnt(0, 0, 0), gp_Dir(0, 0, 1)), M_PI / 6);

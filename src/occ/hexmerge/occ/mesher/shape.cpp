@@ -4,12 +4,15 @@
 #include <BRepBndLib.hxx>
 #include <BRepBuilderAPI_Sewing.hxx>
 #include <BRepGProp.hxx>
+#include <BRepTools.hxx>
+#include <BRepTopAdaptor_FClass2d.hxx>
 #include <BRep_Builder.hxx>
 #include <BRep_Tool.hxx>
 #include <Bnd_Box.hxx>
 #include <GProp_GProps.hxx>
 #include <GProp_PrincipalProps.hxx>
 #include <GeomLib_IsPlanarSurface.hxx>
+#include <Precision.hxx>
 #include <ShapeFix_Solid.hxx>
 #include <TopExp.hxx>
 #include <TopExp_Explorer.hxx>
@@ -23,7 +26,9 @@
 #include <algorithm>
 #include <cmath>
 #include <gp_Pln.hxx>
+#include <gp_Pnt2d.hxx>
 #include <optional>
+#include <sstream>
 #include <string>
 #include <utility>
 
@@ -137,6 +142,20 @@ Shape load_shape(const std::string& brep, double glue_tolerance, GlueSolidsRepor
                        std::to_string(open->second) +
                        " bounds a single face (an open shell); give a closed solid");
   }
+  {
+    TopTools_IndexedMapOfShape given_faces;
+    TopExp::MapShapes(given, TopAbs_FACE, given_faces);
+    if (const auto over = face_over_itself(given_faces)) {
+      std::ostringstream degrees;
+      degrees.precision(4);
+      degrees << over->second;
+      throw InputError("the shape is broken: Face" + std::to_string(over->first) +
+                       " covers part of its surface twice (its parameters go " + degrees.str() +
+                       " degrees round a surface that closes after 360), so no mesh can follow "
+                       "it. Repair the shape (FreeCAD's Part > Check geometry, with its BOP "
+                       "check, lists such faces)");
+    }
+  }
   // OpenCASCADE's General Fuse can leave a glued solid open where others touch it, at a fuzzy
   // value near round-off (KiCad's Ethernet transformer HALO TG111, its twelve pins on its body:
   // twelve edges of the body bound one face each at 1.1e-7, none at 1e-5): glued again with a
@@ -205,6 +224,34 @@ Shape load_shape(const std::string& brep, double glue_tolerance, GlueSolidsRepor
     }
   }
   return s;
+}
+
+// (KiCad's NXP MPL115A1: a pad's corner, a surface of revolution trimmed to 450 degrees where
+// its edges turn 90.)
+std::optional<std::pair<int, double>> face_over_itself(const TopTools_IndexedMapOfShape& faces) {
+  constexpr int kSamples = 32;  // per parameter, inside the face's parameter box
+  for (int i = 1; i <= faces.Extent(); ++i) {
+    const TopoDS_Face& face = TopoDS::Face(faces(i));
+    const BRepAdaptor_Surface surface(face, false);
+    double u0 = 0, u1 = 0, v0 = 0, v1 = 0;
+    BRepTools::UVBounds(face, u0, u1, v0, v1);
+    for (const bool along_u : {true, false}) {
+      if (along_u ? !surface.IsUPeriodic() : !surface.IsVPeriodic()) continue;
+      const double period = along_u ? surface.UPeriod() : surface.VPeriod();
+      const double span = along_u ? u1 - u0 : v1 - v0;
+      if (span <= period * (1 + 1e-9)) continue;
+      const BRepTopAdaptor_FClass2d inside(face, Precision::PConfusion());
+      for (int a = 1; a < kSamples; ++a)
+        for (int b = 1; b < kSamples; ++b) {
+          const double u = u0 + (u1 - u0) * a / kSamples, v = v0 + (v1 - v0) * b / kSamples;
+          const gp_Pnt2d p(u, v), q(along_u ? u + period : u, along_u ? v : v + period);
+          if ((along_u ? q.X() < u1 : q.Y() < v1) && inside.Perform(p) == TopAbs_IN &&
+              inside.Perform(q) == TopAbs_IN)
+            return std::make_pair(i, span * 360 / period);
+        }
+    }
+  }
+  return std::nullopt;
 }
 
 namespace {

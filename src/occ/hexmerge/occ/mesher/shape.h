@@ -10,6 +10,7 @@
 #include <gp_Pnt.hxx>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "hexmerge/geometry/vec3.h"
@@ -33,8 +34,14 @@ struct Shape {
 /// The shape in BREP text, its solids glued where they touch (glue_solids(), within
 /// `glue_tolerance`), its maps filled.
 /// @throws InputError when the text cannot be read, holds no solid, a solid is not closed
-///         (naming the edge that bounds a single face), or two solids overlap
+///         (naming the edge that bounds a single face), a face covers part of its surface
+///         twice (face_over_itself()), or two solids overlap
 Shape load_shape(const std::string& brep, double glue_tolerance, GlueSolidsReport& glue);
+
+/// The first face (1-based, in `faces`) that covers part of its surface twice: a face on a
+/// periodic surface with points (u, v) and (u + period, v) (or (u, v + period)) both inside it,
+/// and how many degrees its parameters sweep round the surface; none when no face does.
+std::optional<std::pair<int, double>> face_over_itself(const TopTools_IndexedMapOfShape& faces);
 
 /// The lattice frame (origin at 0): "global" (x, y, z), "principal" (principal axes of
 /// inertia), "auto" (the normals of the largest planar faces by area, else "principal").

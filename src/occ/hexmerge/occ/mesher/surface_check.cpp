@@ -9,6 +9,7 @@
 #include <BRepExtrema_DistShapeShape.hxx>
 #include <BRep_Tool.hxx>
 #include <TopExp_Explorer.hxx>
+#include <TopTools_MapOfShape.hxx>
 #include <TopoDS.hxx>
 #include <TopoDS_Edge.hxx>
 #include <TopoDS_Face.hxx>
@@ -271,6 +272,19 @@ std::string describe_crossings(const Shape& s, const std::vector<Vec3>& nodes,
     }
     return false;
   };
+  // Whether faces a and b, which share no vertex, touch: come within `tolerance` of each other
+  // (a solid's surface touching itself at a point or along a curve that is no edge of it).
+  auto touch = [&](int a, int b) {
+    const TopoDS_Face& fa = TopoDS::Face(s.faces(a + 1));
+    const TopoDS_Face& fb = TopoDS::Face(s.faces(b + 1));
+    TopTools_MapOfShape vertices_of_b;  // by TopoDS_Shape::IsSame
+    for (TopExp_Explorer ex(fb, TopAbs_VERTEX); ex.More(); ex.Next())
+      vertices_of_b.Add(ex.Current());
+    for (TopExp_Explorer ex(fa, TopAbs_VERTEX); ex.More(); ex.Next())
+      if (vertices_of_b.Contains(ex.Current())) return false;
+    BRepExtrema_DistShapeShape distance(fa, fb);
+    return distance.IsDone() && distance.Value() <= tolerance;
+  };
   // The pairs of faces (one crossing each, the smaller face first) whose CAD faces meet first,
   // then the others, in the faces' order.
   struct Pair {
@@ -282,7 +296,7 @@ std::string describe_crossings(const Shape& s, const std::vector<Vec3>& nodes,
   for (const Crossing& c : crossings) {
     const int a = std::min(triangles[c.first].face, triangles[c.second].face);
     const int b = std::max(triangles[c.first].face, triangles[c.second].face);
-    const bool meet = a != b && (edge_on(a, b) || edge_on(b, a));
+    const bool meet = a != b && (edge_on(a, b) || edge_on(b, a) || touch(a, b));
     cad_at_fault = cad_at_fault || meet;
     order.push_back({!meet, {a, b}, c});
   }
