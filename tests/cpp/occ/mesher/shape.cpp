@@ -21,6 +21,7 @@
 #include <TopoDS_Face.hxx>
 #include <TopoDS_Shell.hxx>
 #include <TopoDS_Solid.hxx>
+#include <array>
 #include <cmath>
 #include <gp_Ax1.hxx>
 #include <gp_Ax3.hxx>
@@ -151,12 +152,11 @@ void expect_orthonormal_right_handed(const mesher::Frame& f) {
 
 // A 100 x 40 x 30 box turned 30 degrees about z: "auto" takes the normal of the largest faces
 // (z) as the third axis and that of the next largest (the turned y) as the first.
-// A face on a cylinder bounded by a wire of parameter lines from u = 0 to u = `sweep`
-// (OpenCASCADE's MakeFace from a parameter range would bring the range within one period; a STEP
-// file's pcurves need not).
-TopoDS_Face cylinder_face(double sweep) {
+// A face on a cylinder bounded by the straight lines in its parameters (u, v) between four
+// corners (OpenCASCADE's MakeFace from a parameter range would bring the range within one
+// period; a STEP file's curves on the face need not).
+TopoDS_Face cylinder_face(const std::array<gp_Pnt2d, 4>& corners) {
   const Handle(Geom_CylindricalSurface) cylinder = new Geom_CylindricalSurface(gp_Ax3(), 2.0);
-  const gp_Pnt2d corners[4] = {{0, 0}, {sweep, 0}, {sweep, 1}, {0, 1}};
   BRepBuilderAPI_MakeWire wire;
   for (int i = 0; i < 4; ++i) {
     const gp_Pnt2d a = corners[i], b = corners[(i + 1) % 4];
@@ -168,8 +168,14 @@ TopoDS_Face cylinder_face(double sweep) {
   return face;
 }
 
+TopoDS_Face cylinder_face(double sweep) {
+  return cylinder_face({gp_Pnt2d(0, 0), gp_Pnt2d(sweep, 0), gp_Pnt2d(sweep, 1), gp_Pnt2d(0, 1)});
+}
+
 // A face whose parameters go 450 degrees round a cylinder covers a quarter of it twice (KiCad's
-// NXP MPL115A1 has such a surface of revolution); 360 or 300 degrees, a plane, a sphere do not.
+// NXP MPL115A1 has such a surface of revolution); 360 or 286 degrees, a helical strip whose
+// parameters span 450 degrees but 270 at each height (as a random part's boss cylinder cut by a
+// cone), a plane, a sphere do not.
 TEST(face_over_itself, a_face_round_its_surface_more_than_once) {
   const auto faces_of = [](std::initializer_list<TopoDS_Shape> shapes) {
     TopTools_IndexedMapOfShape faces;
@@ -178,12 +184,14 @@ TEST(face_over_itself, a_face_round_its_surface_more_than_once) {
   };
   const TopoDS_Face over = cylinder_face(2.5 * M_PI), round = cylinder_face(2 * M_PI),
                     part = cylinder_face(5.0);
+  const TopoDS_Face helical = cylinder_face(
+      {gp_Pnt2d(0, 0), gp_Pnt2d(1.5 * M_PI, 0), gp_Pnt2d(2.5 * M_PI, 1), gp_Pnt2d(M_PI, 1)});
   const TopoDS_Face plane = BRepBuilderAPI_MakeFace(gp_Pln(), 0, 1, 0, 1).Face();
   const TopoDS_Face sphere = BRepPrimAPI_MakeSphere(3.0).Face();
-  EXPECT_FALSE(mesher::face_over_itself(faces_of({round, part, plane, sphere})));
-  const auto found = mesher::face_over_itself(faces_of({plane, round, over, part}));
+  EXPECT_FALSE(mesher::face_over_itself(faces_of({round, part, helical, plane, sphere})));
+  const auto found = mesher::face_over_itself(faces_of({plane, round, helical, over, part}));
   ASSERT_TRUE(found);
-  EXPECT_EQ(found->first, 3);
+  EXPECT_EQ(found->first, 4);
   EXPECT_NEAR(found->second, 450.0, 1e-6);
 }
 

@@ -5,14 +5,13 @@
 #include <BRepBuilderAPI_Sewing.hxx>
 #include <BRepGProp.hxx>
 #include <BRepTools.hxx>
-#include <BRepTopAdaptor_FClass2d.hxx>
 #include <BRep_Builder.hxx>
 #include <BRep_Tool.hxx>
 #include <Bnd_Box.hxx>
 #include <GProp_GProps.hxx>
 #include <GProp_PrincipalProps.hxx>
+#include <Geom2d_Curve.hxx>
 #include <GeomLib_IsPlanarSurface.hxx>
-#include <Precision.hxx>
 #include <ShapeFix_Solid.hxx>
 #include <TopExp.hxx>
 #include <TopExp_Explorer.hxx>
@@ -24,6 +23,7 @@
 #include <TopoDS_Face.hxx>
 #include <TopoDS_Shell.hxx>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <gp_Pln.hxx>
 #include <gp_Pnt2d.hxx>
@@ -229,24 +229,51 @@ Shape load_shape(const std::string& brep, double glue_tolerance, GlueSolidsRepor
 // (KiCad's NXP MPL115A1: a pad's corner, a surface of revolution trimmed to 450 degrees where
 // its edges turn 90.)
 std::optional<std::pair<int, double>> face_over_itself(const TopTools_IndexedMapOfShape& faces) {
-  constexpr int kSamples = 32;  // per parameter, inside the face's parameter box
+  constexpr int kSamples = 32;      // per parameter, inside the face's parameter box
+  constexpr int kEdgeSamples = 64;  // points per edge's curve in the face's parameters
   for (int i = 1; i <= faces.Extent(); ++i) {
     const TopoDS_Face& face = TopoDS::Face(faces(i));
     const BRepAdaptor_Surface surface(face, false);
     double u0 = 0, u1 = 0, v0 = 0, v1 = 0;
     BRepTools::UVBounds(face, u0, u1, v0, v1);
+    // The face's boundary in its parameters as they are (OpenCASCADE's classifiers take them
+    // modulo the periods): each edge's curve on it, as a polyline.
+    std::vector<std::array<gp_Pnt2d, 2>> sides;
+    const auto boundary = [&]() {
+      if (!sides.empty()) return;
+      for (TopExp_Explorer ex(face, TopAbs_EDGE); ex.More(); ex.Next()) {
+        double first = 0, last = 0;
+        const Handle(Geom2d_Curve) curve =
+            BRep_Tool::CurveOnSurface(TopoDS::Edge(ex.Current()), face, first, last);
+        if (curve.IsNull()) continue;
+        gp_Pnt2d previous = curve->Value(first);
+        for (int k = 1; k <= kEdgeSamples; ++k) {
+          const gp_Pnt2d next = curve->Value(first + (last - first) * k / kEdgeSamples);
+          sides.push_back({previous, next});
+          previous = next;
+        }
+      }
+    };
+    // Even-odd: whether a ray from p along +u crosses the boundary an odd number of times.
+    const auto inside = [&](double u, double v) {
+      bool in = false;
+      for (const auto& [a, b] : sides)
+        if ((a.Y() > v) != (b.Y() > v) &&
+            u < a.X() + (v - a.Y()) * (b.X() - a.X()) / (b.Y() - a.Y()))
+          in = !in;
+      return in;
+    };
     for (const bool along_u : {true, false}) {
       if (along_u ? !surface.IsUPeriodic() : !surface.IsVPeriodic()) continue;
       const double period = along_u ? surface.UPeriod() : surface.VPeriod();
       const double span = along_u ? u1 - u0 : v1 - v0;
       if (span <= period * (1 + 1e-9)) continue;
-      const BRepTopAdaptor_FClass2d inside(face, Precision::PConfusion());
+      boundary();
       for (int a = 1; a < kSamples; ++a)
         for (int b = 1; b < kSamples; ++b) {
           const double u = u0 + (u1 - u0) * a / kSamples, v = v0 + (v1 - v0) * b / kSamples;
-          const gp_Pnt2d p(u, v), q(along_u ? u + period : u, along_u ? v : v + period);
-          if ((along_u ? q.X() < u1 : q.Y() < v1) && inside.Perform(p) == TopAbs_IN &&
-              inside.Perform(q) == TopAbs_IN)
+          const double qu = along_u ? u + period : u, qv = along_u ? v : v + period;
+          if ((along_u ? qu < u1 : qv < v1) && inside(u, v) && inside(qu, qv))
             return std::make_pair(i, span * 360 / period);
         }
     }
