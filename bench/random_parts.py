@@ -27,7 +27,6 @@ import random
 import sys
 import time
 
-import FreeCAD  # noqa: F401  (freecadcmd's interpreter)
 import Part
 from FreeCAD import Vector as V
 
