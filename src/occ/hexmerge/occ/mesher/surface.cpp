@@ -387,11 +387,12 @@ UV periodic_near(const Geom_Surface& surface, UV q, const UV& near) {
 // Two CAD edges between the same two nodes, each one segment there: a lens-shaped face or hole
 // far smaller than the size (a random part's hole in a plane between a line and a hyperbola
 // 0.19 mm apart, 3 mm long, at h 23.7), whose side four triangles then share as if the solid
-// touched itself. Of each two, the edge whose middle lies further from the segment (when
-// further than 10 times the tolerance; else the edges coincide, and the shape is refused as
-// touching itself) gets a node at its middle: its triangles on that side are split there (on a
-// face bounded by both edges, those whose third node lies on the middle's side), and its
-// segment becomes two.
+// touched itself. Of each two whose middles lie more than 10 times the tolerance apart (else
+// they are one curve, and the shape is refused as touching itself: pyocc_11752's plane's circle
+// on a cylinder that has its own arcs there), the edge whose middle lies further from the
+// segment gets a node at its middle: its triangles on that side are split there (on a face
+// bounded by both edges, those whose third node lies on the middle's side), and its segment
+// becomes two.
 void split_doubled_segments(const Shape& s, const TopTools_IndexedMapOfShape& faces,
                             const TopTools_IndexedMapOfShape& edges,
                             const std::vector<EdgeSegment>& doubled,
@@ -412,7 +413,7 @@ void split_doubled_segments(const Shape& s, const TopTools_IndexedMapOfShape& fa
     const EdgeSegment& split = split_first ? first : second;
     const Vec3 m = split_first ? m_first : m_second;
     const Vec3 bulge = m - chord_middle;
-    if (bulge.norm() <= 10 * tolerance) continue;
+    if ((m_first - m_second).norm() <= 10 * tolerance) continue;  // one curve: they coincide
     const TopoDS_Edge& edge = TopoDS::Edge(edges(split.edge + 1));
     const double t_m = 0.5 * (split.t_lo + split.t_hi);
     const std::vector<int>& split_faces = s.edge_faces[static_cast<std::size_t>(split.edge)];
