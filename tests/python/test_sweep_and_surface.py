@@ -300,7 +300,7 @@ def test_two_edges_between_two_vertices_far_under_the_size(tmp_path) -> None:
     shape = gmsh_brep(tmp_path, "lens_hole", LENS_HOLE_GEO)
     volume = occ_volume(shape)
     for h in (20.0, 12.0):
-        tets, report = hexmerge.mesh_shape(shape, h, recombine=False)
+        tets, report = hexmerge.mesh_shape(SLIVER_LENS, h, recombine=False)
         meshing = report["meshing"]
         assert meshing["failed_strategies"] == [], meshing["failed_strategies"]
         assert meshing["max_boundary_distance"] <= 1e-3 * h
@@ -312,6 +312,31 @@ def test_two_edges_between_two_vertices_far_under_the_size(tmp_path) -> None:
         cells = tets.cell_vertices.reshape(-1, 4)
         mesh, recombined = hexmerge.recombine(tets.points, cells, tets.regions)
         assert_checked(mesh, tets, recombined, h)
+
+
+# bench/random_parts.py's part 031 of seed 20261204 (a hollow revolved profile with a boss and a
+# torus fused): a sliver of a cylinder, 1.26 mm long and 0.007 mm wide, between a plane and the
+# boss's cylinder tangent to it, bounded by a circle and a B-spline with the same ends.
+SLIVER_LENS = ROOT / "tests" / "data" / "sliver_lens.brep"
+
+
+def test_a_sliver_between_two_edges_with_the_same_ends_is_zipped() -> None:
+    """BRepMesh leaves the sliver without triangles at every size tried (h 3.7 to 10.6), as a
+    surface of revolution too: the part failed ('could not triangulate Face6'). The faces across
+    its two edges are joined along one chain of the two edges' nodes now: a valid mesh at both
+    ends of that range, every node on the CAD, the volume within the chord error, and a note."""
+    volume = 79916.969  # OpenCASCADE's (FreeCAD's Shape.Volume; Gmsh cannot write it back)
+    for h, error in ((10.62, 0.03), (3.694, 0.005)):
+        tets, report = hexmerge.mesh_shape(SLIVER_LENS, h, recombine=False)
+        meshing = report["meshing"]
+        assert meshing["nb_zipped_faces"] == 1
+        assert meshing["failed_strategies"] == [], meshing["failed_strategies"]
+        assert meshing["max_boundary_distance"] <= 1e-3 * h
+        assert abs(tet_volume(tets) - volume) < error * volume
+        cells = tets.cell_vertices.reshape(-1, 4)
+        mesh, recombined = hexmerge.recombine(tets.points, cells, tets.regions)
+        assert_checked(mesh, tets, recombined, h)
+        assert any("1 sliver face(s)" in note for note in hexmerge.mesh_notes(meshing))
 
 
 # An extrusion along y whose caps are split into two faces each (a seam at x 0.965, as the

@@ -322,6 +322,10 @@ def mesh_notes(meshing: dict[str, Any]) -> list[str]:
         notes.append("OpenCASCADE's surface mesher left a face of the shape without triangles: the "
                      f"surface was made with its {meshing['nb_revolution_faces']} cylinders, cones, "
                      "spheres and tori as surfaces of revolution (the same geometry)")
+    if meshing["nb_zipped_faces"]:
+        notes.append(f"{meshing['nb_zipped_faces']} sliver face(s) between two edges with the same ends, "
+                     "narrower than the surface's chord deflection, got no triangles: the faces across "
+                     "them were joined")
     if meshing["nb_crossing_refinements"]:
         notes.append("faces come closer than the surface's chord deflection at places: the surface "
                      f"was made finer there ({meshing['nb_crossing_refinements']} round(s) of halved sizes)")

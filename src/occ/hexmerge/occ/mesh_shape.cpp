@@ -415,6 +415,7 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
       triangulate(shape, deflection, 1e-5 * h + 2e-8 * shape.diagonal + 1e-12, face_names);
   report.nb_flat_surface_triangles = surface.nb_flat_triangles;
   report.nb_revolution_faces = surface.nb_revolution_faces;
+  report.nb_zipped_faces = surface.nb_zipped_faces;
   Lattice lattice = lay_lattice(shape, frame, surface.nodes, h, strategy.lattice_faces);
   // Where a solid's boundary passes a side twice, two CAD edges lie at one place (their nodes
   // merged): the solid touches itself there, which TetGen cannot mesh either. Checked on

@@ -263,6 +263,10 @@ struct MeshShapeReport {
   /// Faces triangulated as surfaces of revolution, because BRepMesh left a face of the shape
   /// as it is without triangles (the same geometry); 0 when it did not
   std::size_t nb_revolution_faces = 0;
+  /// Faces OpenCASCADE's surface mesher left without triangles that lie between two edges with
+  /// the same ends, narrower than the chord deflection (slivers): no triangle on them, the
+  /// faces across joined along one chain of segments
+  std::size_t nb_zipped_faces = 0;
   /// whether the surface repairs ran again from BRepMesh's triangles, each kept within the chord
   /// deflection of its face, because the surface they made first crossed itself
   bool bounded_surface_repairs = false;

@@ -18,11 +18,14 @@
 #include <TopoDS.hxx>
 #include <TopoDS_Edge.hxx>
 #include <TopoDS_Face.hxx>
+#include <TopoDS_Vertex.hxx>
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <optional>
+#include <set>
 #include <sstream>
 #include <string>
 #include <unordered_map>
@@ -384,6 +387,154 @@ UV periodic_near(const Geom_Surface& surface, UV q, const UV& near) {
   return q;
 }
 
+// Moves from `missing` to `lens_faces` (and their two edges, 0-based, to `lenses`) the faces
+// BRepMesh left
+// without triangles that are bounded by two edges between the same two vertices: a random
+// part's sliver of a cylinder 1.26 mm long and 0.007 wide between a plane and a cylinder
+// tangent to it, where a torus was fused (bench/random_parts.py, seed 20261204, part 031).
+void take_lens_faces(const TopTools_IndexedMapOfShape& faces,
+                     const TopTools_IndexedMapOfShape& edges, std::vector<int>& missing,
+                     std::vector<std::array<int, 2>>& lenses, std::vector<int>& lens_faces) {
+  std::vector<int> rest;
+  for (const int f : missing) {
+    TopTools_IndexedMapOfShape face_edges;
+    TopExp::MapShapes(faces(f + 1), TopAbs_EDGE, face_edges);
+    bool lens = face_edges.Extent() == 2;
+    std::vector<TopoDS_Vertex> ends;
+    for (int e = 1; lens && e <= face_edges.Extent(); ++e) {
+      const TopoDS_Edge& edge = TopoDS::Edge(face_edges(e));
+      TopoDS_Vertex v0, v1;
+      TopExp::Vertices(edge, v0, v1);
+      lens = !BRep_Tool::Degenerated(edge) && !v0.IsNull() && !v1.IsNull() && !v0.IsSame(v1);
+      if (lens && ends.empty())
+        ends = {v0, v1};
+      else if (lens)
+        lens = (v0.IsSame(ends[0]) && v1.IsSame(ends[1])) ||
+               (v0.IsSame(ends[1]) && v1.IsSame(ends[0]));
+    }
+    if (lens) {
+      lenses.push_back({edges.FindIndex(face_edges(1)) - 1, edges.FindIndex(face_edges(2)) - 1});
+      lens_faces.push_back(f);
+    } else
+      rest.push_back(f);
+  }
+  missing = rest;
+}
+
+// The lens faces (take_lens_faces()) zipped shut: the nodes of their two edges' segments (the
+// faces across them made them), in their order along the line between the edges' ends, become
+// one chain of segments, on the second edge (the parameters interpolated along it), and the
+// faces' triangles along either edge are split into fans over the chain's nodes between their
+// side's ends. The lens gets no triangle: the faces across meet along the chain, within the
+// lens's width of both edges (BRepMesh made no triangle there).
+// A lens wider than `width` (a node of one chain further from the other chain) is left as it is.
+// Returns the faces zipped.
+std::size_t zip_lens_faces(const std::vector<std::array<int, 2>>& lenses, double width,
+                           Surface& surface) {
+  std::size_t zipped = 0;
+  for (const auto& [e1, e2] : lenses) {
+    std::vector<std::uint64_t> keys;
+    std::map<int, double> along;  // node -> its place along the line between the ends
+    std::map<int, int> uses;
+    for (const auto& [key, segment] : surface.segments)
+      if (segment.edge == e1 || segment.edge == e2) {
+        keys.push_back(key);
+        ++uses[static_cast<int>(key >> 32)], ++uses[static_cast<int>(key & 0xffffffffu)];
+      }
+    std::vector<int> ends;
+    for (const auto& [n, count] : uses)
+      if (count == 2 && ends.size() < 2) {
+        // an end is on both edges' chains: two segments (or one of each edge)
+        int with_e1 = 0, with_e2 = 0;
+        for (const std::uint64_t key : keys)
+          if (static_cast<int>(key >> 32) == n || static_cast<int>(key & 0xffffffffu) == n)
+            (surface.segments.at(key).edge == e1 ? with_e1 : with_e2) = 1;
+        if (with_e1 && with_e2) ends.push_back(n);
+      }
+    if (ends.size() != 2) continue;  // the chains do not run between two common ends
+    const Vec3 a = surface.nodes[ends[0]], b = surface.nodes[ends[1]];
+    const Vec3 ab = b - a;
+    for (const auto& [n, count] : uses) along[n] = (surface.nodes[n] - a).dot(ab) / ab.dot(ab);
+    std::vector<int> chain;
+    for (const auto& [n, t] : along) chain.push_back(n);
+    std::sort(chain.begin(), chain.end(), [&](int x, int y) { return along[x] < along[y]; });
+    // The second edge's parameters at the ends, interpolated along the chain.
+    // The lens's width: its nodes' distances to the other edge's chain.
+    double widest = 0;
+    for (const auto& [n, count] : uses)
+      for (const int other : {e1, e2}) {
+        bool on = false;
+        double nearest = std::numeric_limits<double>::infinity();
+        for (const std::uint64_t key : keys) {
+          const int x = static_cast<int>(key >> 32), y = static_cast<int>(key & 0xffffffffu);
+          if (surface.segments.at(key).edge != other) continue;
+          on = on || x == n || y == n;
+          const Vec3 xy = surface.nodes[y] - surface.nodes[x];
+          const double f =
+              std::clamp((surface.nodes[n] - surface.nodes[x]).dot(xy) / xy.dot(xy), 0.0, 1.0);
+          nearest = std::min(nearest, (surface.nodes[x] + xy * f - surface.nodes[n]).norm());
+        }
+        if (!on) widest = std::max(widest, nearest);
+      }
+    if (widest > width) continue;
+    double t_a = 0, t_b = 0;
+    bool found_a = false, found_b = false;
+    for (const std::uint64_t key : keys) {
+      const EdgeSegment& segment = surface.segments.at(key);
+      if (segment.edge != e2) continue;
+      const int lo = static_cast<int>(key >> 32), hi = static_cast<int>(key & 0xffffffffu);
+      for (const auto& [n, t] : {std::pair<int, double>{lo, segment.t_lo}, {hi, segment.t_hi}}) {
+        if (n == ends[0]) t_a = t, found_a = true;
+        if (n == ends[1]) t_b = t, found_b = true;
+      }
+    }
+    if (!found_a || !found_b) continue;
+    std::map<int, std::size_t> place;
+    for (std::size_t i = 0; i < chain.size(); ++i) place[chain[i]] = i;
+    // Each triangle with a side on either chain: a fan over the chain's nodes within that side.
+    std::set<std::uint64_t> on_chain(keys.begin(), keys.end());
+    const std::size_t count = surface.triangles.size();
+    for (std::size_t i = 0; i < count; ++i) {
+      for (int c = 0; c < 3; ++c) {
+        SurfaceTriangle& t = surface.triangles[i];
+        if (!on_chain.count(side_key(t, c))) continue;
+        const int p = t.node[c], q = t.node[(c + 1) % 3];
+        const std::size_t from = place[p], to = place[q];
+        if (from + 1 == to || to + 1 == from) break;  // no chain node within
+        const UV uv_p = t.uv[c], uv_q = t.uv[(c + 1) % 3];
+        const int r = t.node[(c + 2) % 3];
+        const UV uv_r = t.uv[(c + 2) % 3];
+        const int step = from < to ? 1 : -1;
+        const double span = along[q] - along[p];
+        int previous = p;
+        UV uv_previous = uv_p;
+        SurfaceTriangle base = t;
+        for (std::size_t k = from + step; k != to; k += step) {
+          const int n = chain[k];
+          const double w = (along[n] - along[p]) / span;
+          const UV uv_n{uv_p.u + w * (uv_q.u - uv_p.u), uv_p.v + w * (uv_q.v - uv_p.v)};
+          SurfaceTriangle piece = base;
+          piece.node = {previous, n, r};
+          piece.uv = {uv_previous, uv_n, uv_r};
+          surface.triangles.push_back(piece);
+          previous = n, uv_previous = uv_n;
+        }
+        t.node = {previous, q, r};
+        t.uv = {uv_previous, uv_q, uv_r};
+        break;
+      }
+    }
+    for (const std::uint64_t key : keys) surface.segments.erase(key);
+    for (std::size_t i = 0; i + 1 < chain.size(); ++i) {
+      const int x = chain[i], y = chain[i + 1];
+      const double tx = t_a + along[x] * (t_b - t_a), ty = t_a + along[y] * (t_b - t_a);
+      surface.segments[pair_key(x, y)] = x < y ? EdgeSegment{e2, tx, ty} : EdgeSegment{e2, ty, tx};
+    }
+    ++zipped;
+  }
+  return zipped;
+}
+
 // Two CAD edges between the same two nodes, each one segment there: a lens-shaped face or hole
 // far smaller than the size (a random part's hole in a plane between a line and a hyperbola
 // 0.19 mm apart, 3 mm long, at h 23.7), whose side four triangles then share as if the solid
@@ -492,8 +643,12 @@ Surface triangulate(const Shape& s, double deflection, double tolerance,
   TopoDS_Shape meshed = s.shape;
   TopTools_IndexedMapOfShape faces = s.faces, edges = s.edges;
   std::vector<int> missing = faces_not_triangulated(meshed, faces, deflection);
+  std::vector<std::array<int, 2>> lenses;  // left without triangles: zip_lens_faces()
+  std::vector<int> lens_faces;
+  take_lens_faces(faces, edges, missing, lenses, lens_faces);
   std::size_t nb_converted = 0;
   if (!missing.empty()) {
+    lenses.clear(), lens_faces.clear();
     const std::string failed = faces_named(missing, s.faces, face_names);
     meshed = ShapeCustom::ConvertToRevolution(s.shape);
     faces.Clear(), edges.Clear();
@@ -502,6 +657,7 @@ Surface triangulate(const Shape& s, double deflection, double tolerance,
     if (faces.Extent() != s.faces.Extent() || edges.Extent() != s.edges.Extent())
       throw InputError("OpenCASCADE could not triangulate " + failed + " of the shape");
     missing = faces_not_triangulated(meshed, faces, deflection);
+    take_lens_faces(faces, edges, missing, lenses, lens_faces);
     if (!missing.empty())
       throw InputError("OpenCASCADE could not triangulate " + failed +
                        " of the shape, nor the same faces as surfaces of revolution");
@@ -520,6 +676,7 @@ Surface triangulate(const Shape& s, double deflection, double tolerance,
     const TopoDS_Face& face = TopoDS::Face(faces(fi));
     TopLoc_Location loc;
     const Handle(Poly_Triangulation)& tri = BRep_Tool::Triangulation(face, loc);
+    if (tri.IsNull() || tri->NbTriangles() == 0) continue;  // a lens face: zip_lens_faces()
     // The parameters on the face's own surface, where the face was meshed as another.
     std::optional<ShapeAnalysis_Surface> own;
     const TopoDS_Face& given = TopoDS::Face(s.faces(fi));
@@ -594,6 +751,12 @@ Surface triangulate(const Shape& s, double deflection, double tolerance,
       }
     }
   }
+  surface.nb_zipped_faces = zip_lens_faces(lenses, deflection, surface);
+  if (surface.nb_zipped_faces < lenses.size())
+    throw InputError("OpenCASCADE could not triangulate " +
+                     faces_named(lens_faces, s.faces, face_names) +
+                     " of the shape (between two edges with the same ends, wider than the chord "
+                     "deflection)");
   split_doubled_segments(s, faces, edges, doubled, doubled_key, merger, surface, tolerance);
   remove_coincident_triangles(surface);
   remove_faces_without_area(surface);

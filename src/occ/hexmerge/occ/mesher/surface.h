@@ -65,6 +65,9 @@ struct Surface {
   /// Faces triangulated as surfaces of revolution (triangulate(): BRepMesh failed on a face of
   /// the shape as it is); 0 when the shape meshed as it is.
   std::size_t nb_revolution_faces = 0;
+  /// Faces BRepMesh left without triangles between two edges with the same ends, narrower than
+  /// the chord deflection, closed by joining the faces across them (triangulate()).
+  std::size_t nb_zipped_faces = 0;
 };
 
 /// BRepMesh's angular deflection in triangulate() (radians). Its CAD edges' segments turn by at
