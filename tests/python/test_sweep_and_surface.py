@@ -232,9 +232,12 @@ BooleanDifference(3) = { Volume{1}; Delete; }{ Volume{2}; Delete; };
 
 def test_a_size_at_which_the_surface_crosses_itself_fails_fast_and_says_so(tmp_path) -> None:
     """A thin tube meshes at h 13 (the surface repairs run again with their triangles kept
-    within the chord deflection of their faces, not across the tube); at h 40 the deflection (0.8) exceeds the wall (0.508) and the
-    walls' triangles cross: every way fails at once, before TetGen (whose boundary recovery
-    would run to its time limit), saying which faces cross and that a smaller size helps."""
+    within the chord deflection of their faces, not across the tube); at h 40 the deflection
+    (0.8) exceeds the wall (0.508) and the walls' triangles cross: the way is tried again on a
+    surface of a quarter of the deflection (0.2), which meshes. A tube with walls 0.05 apart
+    crosses at h 40 at a quarter of the deflection too: every way fails at once, before TetGen
+    (whose boundary recovery would run to its time limit), saying which faces cross and that a
+    smaller size helps."""
     tube = gmsh_brep(tmp_path, "tube", TUBE_GEO)
     tets, report = hexmerge.mesh_shape(tube, 13.0, recombine=False)
     assert report["meshing"]["failed_strategies"] == []
@@ -245,11 +248,19 @@ def test_a_size_at_which_the_surface_crosses_itself_fails_fast_and_says_so(tmp_p
     # volume (383.2) where every node lies on a strip's edge; the bisection's nodes in between
     # bring it nearer (389.2; 416.9 before it followed Rivara's longest-edge paths).
     assert 0.895 * volume < tet_volume(tets) < volume
+    tets, report = hexmerge.mesh_shape(tube, 40.0, recombine=False)
+    meshing = report["meshing"]
+    assert meshing["strategy"] == "lattice on a surface of a quarter of the chord deflection"
+    assert len(meshing["failed_strategies"]) == 1
+    assert "the surface's triangles at this size cross (Face" in meshing["failed_strategies"][0]
+    assert 0.85 * volume < tet_volume(tets) < volume
+    thin = gmsh_brep(tmp_path, "thin_tube", TUBE_GEO.replace("1.0795", "1.5375"))
     with pytest.raises(ValueError, match="could not tetrahedralise") as failed:
-        hexmerge.mesh_shape(tube, 40.0, recombine=False)
+        hexmerge.mesh_shape(thin, 40.0, recombine=False)
     message = str(failed.value)
-    # Five ways: the one without layers is not tried, there being none asked for (unswept).
-    assert message.count("the surface's triangles at this size cross (Face") == 5, message
+    # Six ways: the one without layers is not tried, there being none asked for (unswept).
+    assert message.count("the surface's triangles at this size cross (Face") == 6, message
+    assert "lattice on a surface of a quarter of the chord deflection: the surface's" in message
     assert "a smaller size keeps them apart" in message
 
 
@@ -260,13 +271,14 @@ Cone(1) = {0, 0, 0, 0, 0, 20, 8, 0};
 
 def test_the_repairs_are_bounded_only_where_the_surface_crosses(tmp_path) -> None:
     """A cone of radius 8 and height 20 at h 1.5: the repaired triangles fold at its apex at
-    that size (the first way fails before TetGen, saying so) and the cone meshes at 0.95 of the
-    size, where the unbounded repairs unfold the apex. Bounded everywhere (kept within the chord
-    deflection of their faces), they folded it at 1.425 and 1.65 too, and every way failed."""
+    that size (the first way fails before TetGen, saying so) and the cone meshes on a surface of
+    a quarter of the chord deflection, where the unbounded repairs unfold the apex (before that
+    way, at 0.95 of the size). Bounded everywhere (kept within the chord deflection of their
+    faces), they folded it at 1.425 and 1.65 too, and every way failed."""
     cone = gmsh_brep(tmp_path, "cone", CONE_GEO)
     tets, report = hexmerge.mesh_shape(cone, 1.5, recombine=False)
     meshing = report["meshing"]
-    assert meshing["strategy"] == "lattice at 0.95 of the size"
+    assert meshing["strategy"] == "lattice on a surface of a quarter of the chord deflection"
     assert len(meshing["failed_strategies"]) == 1
     reason = meshing["failed_strategies"][0]
     assert "the surface's triangles at this size cross (Face1 near" in reason
@@ -300,7 +312,7 @@ def test_two_edges_between_two_vertices_far_under_the_size(tmp_path) -> None:
     shape = gmsh_brep(tmp_path, "lens_hole", LENS_HOLE_GEO)
     volume = occ_volume(shape)
     for h in (20.0, 12.0):
-        tets, report = hexmerge.mesh_shape(SLIVER_LENS, h, recombine=False)
+        tets, report = hexmerge.mesh_shape(shape, h, recombine=False)
         meshing = report["meshing"]
         assert meshing["failed_strategies"] == [], meshing["failed_strategies"]
         assert meshing["max_boundary_distance"] <= 1e-3 * h

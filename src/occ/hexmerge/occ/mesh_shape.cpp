@@ -105,6 +105,12 @@ TetMesh world_mesh(const std::string& brep, const Shape& shape, const Surface& s
 // tetrahedralises the input; the later ones hand TetGen simpler input (no planar facets holding
 // lattice points, on which TetGen 1.5 fails for some shapes and sizes; no boundary layers; no
 // points inside at all, TetGen adding its own) and give fewer hexahedra.
+// A way's surface whose triangles cross (faces closer than the chord deflection, or folds).
+class SurfaceCrossing : public TetrahedralizeFailure {
+ public:
+  using TetrahedralizeFailure::TetrahedralizeFailure;
+};
+
 struct Strategy {
   const char* name;
   double size_factor;   // the lattice spacing and surface size: this times the size asked for
@@ -112,6 +118,9 @@ struct Strategy {
   bool layers;          // boundary-layer points
   bool lattice_points;  // lattice points inside the shape (the hexahedral core)
   bool pull;            // the core pulled towards the surface (MeshShapeParameters::pull_core)
+  // The surface's chord deflection: this times MeshShapeParameters::surface_deflection. A way
+  // with a finer one is tried only when a way before failed on a surface that crossed itself.
+  double deflection_factor = 1.0;
 };
 // TetGen's failures on the lattice come and go with the size (FreeCAD's plate with a hole fails
 // at h 2.25, 2.375 and 2.5 and meshes at 2.75 and 3), so the lattice is tried at a slightly finer
@@ -120,6 +129,12 @@ struct Strategy {
 constexpr Strategy kStrategies[] = {
     {"lattice", 1.0, true, true, true, true},
     {"lattice, core not pulled", 1.0, true, true, true, false},
+    // Where a way's surface crossed itself (faces closer than the chord deflection that the
+    // crossing rounds do not part), the surface at a quarter of the deflection before the sizes
+    // change: a random part's 2.8 mm rib with a sphere of radius 2.6 cut into it crossed in
+    // every way at h 35 to 60 and meshes so.
+    {"lattice on a surface of a quarter of the chord deflection", 1.0, true, true, true, false,
+     0.25},
     {"lattice at 0.95 of the size", 0.95, true, true, true, false},
     {"lattice at 1.1 of the size", 1.1, true, true, true, false},
     {"lattice without lattice faces", 1.0, false, true, true, false},
@@ -337,6 +352,7 @@ TetMesh mesh_shape_impl(const std::string& brep, const MeshShapeParameters& para
   double failed_seconds = 0;
   int nb_tried = 0;
   bool first_pulled = false;  // whether the first way (which failed) pulled the core
+  bool crossed = false;       // whether a way failed on a surface that crossed itself
   for (const Strategy& strategy : kStrategies) {
     // The way without layers repeats the way before it (lattice points, no lattice faces, so no
     // sweep) when that one places no layers either.
@@ -345,6 +361,8 @@ TetMesh mesh_shape_impl(const std::string& brep, const MeshShapeParameters& para
       continue;
     // The lattice without the core pulled repeats the first way when that one pulled nothing.
     if (&strategy == kStrategies + 1 && !first_pulled) continue;
+    // A finer surface only where a surface crossed itself.
+    if (strategy.deflection_factor != 1.0 && !crossed) continue;
     ++nb_tried;
     MeshShapeReport attempt = report;
     const auto attempt_start = PhaseTimer::Clock::now();
@@ -358,6 +376,7 @@ TetMesh mesh_shape_impl(const std::string& brep, const MeshShapeParameters& para
       report = std::move(attempt);
       return mesh;
     } catch (const TetrahedralizeFailure& e) {
+      crossed = crossed || dynamic_cast<const SurfaceCrossing*>(&e) != nullptr;
       if (&strategy == kStrategies)
         first_pulled =
             attempt.nb_pulled_points + attempt.nb_narrow_pyramids + attempt.nb_inner_apexes > 0;
@@ -398,7 +417,7 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
 
   // 4. The surface triangulation (on the CAD), and the lattice through its bounding box in the
   // frame.
-  const double deflection = parameters.surface_deflection * h;
+  const double deflection = parameters.surface_deflection * strategy.deflection_factor * h;
   std::vector<std::string> face_names(static_cast<std::size_t>(shape.faces.Extent()));
   for (std::size_t f = 0; f < face_names.size(); ++f) {
     const int number = given_number(given_items.faces, static_cast<int>(f));
@@ -635,7 +654,7 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
     // along a half cone's seam), which another size may not; of two faces: they come closer
     // than the chord deflection.
     const bool folds = only_folds();
-    throw TetrahedralizeFailure(
+    throw SurfaceCrossing(
         "the surface's triangles at this size cross (" + where +
         (folds ? "): the triangles of a face fold over each other at this size, which another "
                  "size may not do"
