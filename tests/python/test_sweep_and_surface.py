@@ -351,6 +351,30 @@ def test_a_sliver_between_two_edges_with_the_same_ends_is_zipped() -> None:
         assert any("1 sliver face(s)" in note for note in hexmerge.mesh_notes(meshing))
 
 
+# bench/random_parts.py's part 028 of seed 20261204: BRepMesh's cap on a CAD edge at a node where
+# three edges meet, at the surface of a quarter of the chord deflection.
+THREE_EDGE_VERTEX = ROOT / "tests" / "data" / "three_edge_vertex.brep"
+
+
+def test_a_cap_at_a_node_where_three_edges_meet_keeps_the_node() -> None:
+    """At h 4.525 the part's surface crosses in the first way and the way on a surface of a
+    quarter of the chord deflection was a segmentation fault: the surface repairs collapsed a
+    cap whose middle node lay on two segments of one edge, and on a third edge's, onto its
+    neighbour, leaving the third edge's segment on a removed node (a surface_deflection of
+    0.005 asked for did the same). Such a node now stays; the part meshes without lattice faces,
+    as before that way was added."""
+    for options in ({}, {"surface_deflection": 0.005}):
+        tets, report = hexmerge.mesh_shape(THREE_EDGE_VERTEX, 4.525, recombine=False, **options)
+        meshing = report["meshing"]
+        assert meshing["max_boundary_distance"] <= 1e-3 * 4.525
+        cells = tets.cell_vertices.reshape(-1, 4)
+        mesh, recombined = hexmerge.recombine(tets.points, cells, tets.regions)
+        assert_checked(mesh, tets, recombined, 4.525)
+        if not options:  # the way that crashed ran (its surface crosses too)
+            assert any(f.startswith("lattice on a surface of a quarter of the chord deflection: ")
+                       for f in meshing["failed_strategies"]), meshing["failed_strategies"]
+
+
 # An extrusion along y whose caps are split into two faces each (a seam at x 0.965, as the
 # terminations of KiCad's SMD resistor R_0402 split its end faces), with a hole along y (a wall
 # that is no lattice face). Swept, nothing split the seams and the caps' lattice points came

@@ -601,6 +601,11 @@ void collapse_sides(const Shape& s, Surface& surface, double target, double max_
   if (field)
     for (int n = 0; n < nb_nodes; ++n) scale[n] = field->at(nodes[n]) / target;
   const std::vector<char> on_edge = nodes_on_edges(surface);
+  std::vector<int> nb_segments(nb_nodes, 0);  // per node, the CAD edges' segments at it
+  for (const auto& [key, segment] : surface.segments) {
+    (void)segment;
+    ++nb_segments[key >> 32], ++nb_segments[key & 0xffffffffu];
+  }
   std::vector<std::vector<int>> around(nb_nodes);
   for (int ti = 0; ti < static_cast<int>(tris.size()); ++ti)
     for (int n : tris[ti].node) around[n].push_back(ti);
@@ -832,8 +837,11 @@ void collapse_sides(const Shape& s, Surface& surface, double target, double max_
       const int r = cap.node[c], a = cap.node[(c + 1) % 3], b = cap.node[(c + 2) % 3];
       const auto ra = surface.segments.find(pair_key(r, a)),
                  rb = surface.segments.find(pair_key(r, b));
+      // (r on those two segments only: a node where edges meet, as a random part's vertex of
+      // three edges, keeps its place; removed, the third edge's segment lost its node.)
       if (ra == surface.segments.end() || rb == surface.segments.end() ||
-          ra->second.edge != rb->second.edge || surface.segments.count(pair_key(a, b)))
+          ra->second.edge != rb->second.edge || nb_segments[r] != 2 ||
+          surface.segments.count(pair_key(a, b)))
         continue;
       const Vec3 chord = nodes[b] - nodes[a];
       if (chord.cross(nodes[r] - nodes[a]).norm() > kEdgeSagitta * target * chord.norm()) continue;
@@ -871,6 +879,7 @@ void collapse_sides(const Shape& s, Surface& surface, double target, double max_
       surface.segments.erase(pair_key(r, b));
       surface.segments[pair_key(a, b)] =
           a < b ? EdgeSegment{edge, ta, tb} : EdgeSegment{edge, tb, ta};
+      nb_segments[r] = 0;
       collapse(r, onto);
       return true;
     }
