@@ -367,22 +367,24 @@ class ShapeMode(unittest.TestCase):
         self.assertEqual(mesh_hexdominant.report_dict(obj)["freecad"]["warnings"], [])
 
     def test_a_size_at_which_the_surface_crosses_itself_names_the_faces(self):
-        # A tube 0.508 thick (walls of radius 1.0795 and 1.5875): at 40 mm its walls' triangles
-        # cross (the chord deflection, 0.8 mm, is wider than the wall), which the mesher finds
-        # before TetGen and reports, naming the faces, in every way of placing the points.
+        # A tube 0.05 thick (walls of radius 1.5375 and 1.5875): at 40 mm its walls' triangles
+        # cross (the chord deflection, 0.8 mm, and a quarter of it, the finer surface tried
+        # next, are wider than the wall), which the mesher finds before TetGen and reports,
+        # naming the faces, in every way of placing the points.
         import Part
 
         doc = FreeCAD.newDocument("HexMergeTube")
         tube = doc.addObject("Part::Feature", "Tube")
         outer = Part.makeCylinder(1.5875, 100, FreeCAD.Vector(0, 0, 0), FreeCAD.Vector(1, 0, 0))
-        inner = Part.makeCylinder(1.0795, 102, FreeCAD.Vector(-1, 0, 0), FreeCAD.Vector(1, 0, 0))
+        inner = Part.makeCylinder(1.5375, 102, FreeCAD.Vector(-1, 0, 0), FreeCAD.Vector(1, 0, 0))
         tube.Shape = outer.cut(inner)
         doc.recompute()
         with self.assertRaisesRegex(RuntimeError,
                                     r"the surface's triangles at this size cross \(Face\d+ and "
                                     r"Face\d+ near .*a smaller size keeps them apart"):
             hm.make_hexdominant_mesh(doc, tube, target_size=40, second_order=False)
-        obj = hm.make_hexdominant_mesh(doc, tube, target_size=13, second_order=False)
+        # At 5 mm the first surface crosses and the finer one (0.025 mm) keeps the walls apart.
+        obj = hm.make_hexdominant_mesh(doc, tube, target_size=5, second_order=False)
         self.assertGreater(obj.FemMesh.VolumeCount, 0)
 
     def test_bad_shapes(self):
