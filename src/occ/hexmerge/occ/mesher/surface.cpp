@@ -26,7 +26,6 @@
 #include <map>
 #include <optional>
 #include <set>
-#include <sstream>
 #include <string>
 #include <unordered_map>
 #include <utility>
@@ -388,10 +387,10 @@ UV periodic_near(const Geom_Surface& surface, UV q, const UV& near) {
 }
 
 // Moves from `missing` to `lens_faces` (and their two edges, 0-based, to `lenses`) the faces
-// BRepMesh left
-// without triangles that are bounded by two edges between the same two vertices: a random
-// part's sliver of a cylinder 1.26 mm long and 0.007 wide between a plane and a cylinder
-// tangent to it, where a torus was fused (bench/random_parts.py, seed 20261204, part 031).
+// BRepMesh left without triangles that are bounded by two edges between the same two vertices:
+// a random part's sliver of a cylinder 1.26 mm long and 0.007 wide between a plane and a
+// cylinder tangent to it, where a torus was fused (bench/random_parts.py, seed 20261204, part
+// 031).
 void take_lens_faces(const TopTools_IndexedMapOfShape& faces,
                      const TopTools_IndexedMapOfShape& edges, std::vector<int>& missing,
                      std::vector<std::array<int, 2>>& lenses, std::vector<int>& lens_faces) {
@@ -426,9 +425,8 @@ void take_lens_faces(const TopTools_IndexedMapOfShape& faces,
 // one chain of segments, on the second edge (the parameters interpolated along it), and the
 // faces' triangles along either edge are split into fans over the chain's nodes between their
 // side's ends. The lens gets no triangle: the faces across meet along the chain, within the
-// lens's width of both edges (BRepMesh made no triangle there).
-// A lens wider than `width` (a node of one chain further from the other chain) is left as it is.
-// Returns the faces zipped.
+// lens's width of both edges (BRepMesh made no triangle there). A lens wider than `width` (a
+// node of one chain further from the other chain) is left as it is. Returns the faces zipped.
 std::size_t zip_lens_faces(const std::vector<std::array<int, 2>>& lenses, double width,
                            Surface& surface) {
   std::size_t zipped = 0;
@@ -458,7 +456,6 @@ std::size_t zip_lens_faces(const std::vector<std::array<int, 2>>& lenses, double
     std::vector<int> chain;
     for (const auto& [n, t] : along) chain.push_back(n);
     std::sort(chain.begin(), chain.end(), [&](int x, int y) { return along[x] < along[y]; });
-    // The second edge's parameters at the ends, interpolated along the chain.
     // The lens's width: its nodes' distances to the other edge's chain.
     double widest = 0;
     for (const auto& [n, count] : uses)
@@ -477,6 +474,7 @@ std::size_t zip_lens_faces(const std::vector<std::array<int, 2>>& lenses, double
         if (!on) widest = std::max(widest, nearest);
       }
     if (widest > width) continue;
+    // The second edge's parameters at the ends, interpolated along the chain.
     double t_a = 0, t_b = 0;
     bool found_a = false, found_b = false;
     for (const std::uint64_t key : keys) {
