@@ -101,16 +101,16 @@ TetMesh world_mesh(const std::string& brep, const Shape& shape, const Surface& s
   return mesh;
 }
 
-// How one attempt places its points. mesh_shape() tries them in this order until TetGen
-// tetrahedralises the input; the later ones hand TetGen simpler input (no planar facets holding
-// lattice points, on which TetGen 1.5 fails for some shapes and sizes; no boundary layers; no
-// points inside at all, TetGen adding its own) and give fewer hexahedra.
 // A way's surface whose triangles cross (faces closer than the chord deflection, or folds).
 class SurfaceCrossing : public TetrahedralizeFailure {
  public:
   using TetrahedralizeFailure::TetrahedralizeFailure;
 };
 
+// How one attempt places its points. mesh_shape() tries them in this order until TetGen
+// tetrahedralises the input; the later ones hand TetGen simpler input (no planar facets holding
+// lattice points, on which TetGen 1.5 fails for some shapes and sizes; no boundary layers; no
+// points inside at all, TetGen adding its own) and give fewer hexahedra.
 struct Strategy {
   const char* name;
   double size_factor;   // the lattice spacing and surface size: this times the size asked for

@@ -1,10 +1,13 @@
 #include "hexmerge/occ/mesher/lattice.h"
 
+#include <BRepAdaptor_Curve.hxx>
+#include <TopoDS.hxx>
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <map>
 #include <optional>
 #include <set>
 #include <string>
@@ -14,7 +17,6 @@
 #include "hexmerge/occ/mesher/common.h"
 #include "hexmerge/occ/mesher/pull_core.h"
 #include "hexmerge/occ/mesher/shape.h"
-#include "hexmerge/occ/mesher/surface_repair.h"
 #include "hexmerge/occ/mesher/sweep.h"
 
 namespace hexmerge::mesher {
@@ -105,6 +107,56 @@ std::vector<double> rectilinear_ticks(std::vector<double> offsets, double L, dou
     ticks.push_back(hi);
   }
   return ticks;
+}
+
+// Puts the nodes of each straight CAD edge that bounds a lattice face and runs across two frame
+// axes exactly on one line (nodes in frame coordinates). TetGen 1.5 never ended, or lost the
+// face, on lattice faces whose loop had a nearly collinear run (a hexagonal prism's caps, a
+// trapezoid's). The edge's ends go to a grid of 2^-40 of the shape's size along those two axes,
+// and every node between to their exact binary interpolation at its parameter, rounded to 2^-20
+// of the edge (bisection and the sweep's power-of-two pieces give such parameters).
+void align_straight_edges(const Shape& s, const Surface& surface,
+                          const std::vector<bool>& lattice_face, double largest,
+                          std::vector<Vec3>& nodes) {
+  std::map<int, std::vector<std::pair<double, int>>> on_edge;  // edge -> (parameter, node)
+  for (const auto& [key, segment] : surface.segments) {
+    const auto& faces = s.edge_faces[segment.edge];
+    if (std::none_of(faces.begin(), faces.end(), [&](int f) { return lattice_face[f]; })) continue;
+    auto& list = on_edge[segment.edge];
+    list.emplace_back(segment.t_lo, static_cast<int>(key >> 32));  // the smaller id
+    list.emplace_back(segment.t_hi, static_cast<int>(key & 0xffffffffu));
+  }
+  const int exponent = std::ilogb(largest) - 40;
+  // x rounded to a multiple of 2^e.
+  auto round_to = [](double x, int e) { return std::ldexp(std::round(std::ldexp(x, -e)), e); };
+  for (auto& [edge, list] : on_edge) {
+    if (BRepAdaptor_Curve(TopoDS::Edge(s.edges(edge + 1))).GetType() != GeomAbs_Line) continue;
+    std::sort(list.begin(), list.end());
+    list.erase(std::unique(list.begin(), list.end()), list.end());
+    const double t0 = list.front().first, t1 = list.back().first;
+    Vec3& a = nodes[list.front().second];
+    Vec3& b = nodes[list.back().second];
+    // The axes the edge runs across; along the others its ends differ by round-off at most
+    // (1e-9 of its length), and every node of the edge takes the first end's value there:
+    // gmsh_part at h 4.196 had an edge along z whose nodes' y differed in the last bits, and
+    // TetGen never ended meshing that lattice face (a run of three nodes collinear to 3e-15).
+    const double length = (b - a).norm();
+    std::vector<int> across, along;
+    for (int c = 0; c < 3; ++c)
+      (std::abs(coord(a, c) - coord(b, c)) > 1e-9 * length ? across : along).push_back(c);
+    if (across.empty() || t1 <= t0) continue;
+    for (int c : along)
+      for (const auto& [t, node] : list) set_coord(nodes[node], c, coord(a, c));
+    if (across.size() < 2) continue;
+    for (int c : across)
+      set_coord(a, c, round_to(coord(a, c), exponent)),
+          set_coord(b, c, round_to(coord(b, c), exponent));
+    for (std::size_t k = 1; k + 1 < list.size(); ++k) {
+      const double f = round_to((list[k].first - t0) / (t1 - t0), -20);
+      for (int c : across)
+        set_coord(nodes[list[k].second], c, coord(a, c) + (coord(b, c) - coord(a, c)) * f);
+    }
+  }
 }
 
 }  // namespace

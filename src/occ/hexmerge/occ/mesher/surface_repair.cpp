@@ -600,8 +600,9 @@ void collapse_sides(const Shape& s, Surface& surface, double target, double max_
   std::vector<double> scale(nb_nodes, 1.0);
   if (field)
     for (int n = 0; n < nb_nodes; ++n) scale[n] = field->at(nodes[n]) / target;
-  const std::vector<char> on_edge = nodes_on_edges(surface);
-  std::vector<int> nb_segments(nb_nodes, 0);  // per node, the CAD edges' segments at it
+  // Per node, the CAD edges' segments at it (> 0: the node lies on a CAD edge; a collapse of
+  // an edge's cap keeps every other node's count).
+  std::vector<int> nb_segments(nb_nodes, 0);
   for (const auto& [key, segment] : surface.segments) {
     (void)segment;
     ++nb_segments[key >> 32], ++nb_segments[key & 0xffffffffu];
@@ -670,7 +671,7 @@ void collapse_sides(const Shape& s, Surface& surface, double target, double max_
   };
   // The smallest angle after moving node r onto node k, or -1 when that is not allowed.
   auto try_collapse = [&](int r, int k, double limit) {
-    if (on_edge[r] || around[r].empty()) return -1.0;
+    if (nb_segments[r] > 0 || around[r].empty()) return -1.0;
     const int face = tris[around[r].front()].face;
     if (lattice_face[face]) return -1.0;
     std::vector<int> shared;
@@ -734,7 +735,7 @@ void collapse_sides(const Shape& s, Surface& surface, double target, double max_
   // collapse (one face, no triangle turned over, no side longer than `limit`, no side that
   // already exists, the smallest angle better).
   auto remove_node = [&](int r, double limit) {
-    if (on_edge[r] || around[r].size() < 3) return false;
+    if (nb_segments[r] > 0 || around[r].size() < 3) return false;
     const int face = tris[around[r].front()].face;
     if (lattice_face[face]) return false;
     // The ring in the triangles' order: the triangle (r, v[i], v[i + 1]) is outward.
@@ -879,7 +880,6 @@ void collapse_sides(const Shape& s, Surface& surface, double target, double max_
       surface.segments.erase(pair_key(r, b));
       surface.segments[pair_key(a, b)] =
           a < b ? EdgeSegment{edge, ta, tb} : EdgeSegment{edge, tb, ta};
-      nb_segments[r] = 0;
       collapse(r, onto);
       return true;
     }
@@ -954,56 +954,6 @@ void collapse_sides(const Shape& s, Surface& surface, double target, double max_
   for (const auto& [key, segment] : surface.segments)
     out.segments[pair_key(renumber[key >> 32], renumber[key & 0xffffffffu])] = segment;
   surface = std::move(out);
-}
-
-// Puts the nodes of each straight CAD edge that bounds a lattice face and runs across two frame
-// axes exactly on one line (nodes in frame coordinates). TetGen 1.5 never ended, or lost the
-// face, on lattice faces whose loop had a nearly collinear run (a hexagonal prism's caps, a
-// trapezoid's). The edge's ends go to a grid of 2^-40 of the shape's size along those two axes,
-// and every node between to their exact binary interpolation at its parameter, rounded to 2^-20
-// of the edge (bisection and the sweep's power-of-two pieces give such parameters).
-void align_straight_edges(const Shape& s, const Surface& surface,
-                          const std::vector<bool>& lattice_face, double largest,
-                          std::vector<Vec3>& nodes) {
-  std::map<int, std::vector<std::pair<double, int>>> on_edge;  // edge -> (parameter, node)
-  for (const auto& [key, segment] : surface.segments) {
-    const auto& faces = s.edge_faces[segment.edge];
-    if (std::none_of(faces.begin(), faces.end(), [&](int f) { return lattice_face[f]; })) continue;
-    auto& list = on_edge[segment.edge];
-    list.emplace_back(segment.t_lo, static_cast<int>(key >> 32));  // the smaller id
-    list.emplace_back(segment.t_hi, static_cast<int>(key & 0xffffffffu));
-  }
-  const int exponent = std::ilogb(largest) - 40;
-  // x rounded to a multiple of 2^e.
-  auto round_to = [](double x, int e) { return std::ldexp(std::round(std::ldexp(x, -e)), e); };
-  for (auto& [edge, list] : on_edge) {
-    if (BRepAdaptor_Curve(TopoDS::Edge(s.edges(edge + 1))).GetType() != GeomAbs_Line) continue;
-    std::sort(list.begin(), list.end());
-    list.erase(std::unique(list.begin(), list.end()), list.end());
-    const double t0 = list.front().first, t1 = list.back().first;
-    Vec3& a = nodes[list.front().second];
-    Vec3& b = nodes[list.back().second];
-    // The axes the edge runs across; along the others its ends differ by round-off at most
-    // (1e-9 of its length), and every node of the edge takes the first end's value there:
-    // gmsh_part at h 4.196 had an edge along z whose nodes' y differed in the last bits, and
-    // TetGen never ended meshing that lattice face (a run of three nodes collinear to 3e-15).
-    const double length = (b - a).norm();
-    std::vector<int> across, along;
-    for (int c = 0; c < 3; ++c)
-      (std::abs(coord(a, c) - coord(b, c)) > 1e-9 * length ? across : along).push_back(c);
-    if (across.empty() || t1 <= t0) continue;
-    for (int c : along)
-      for (const auto& [t, node] : list) set_coord(nodes[node], c, coord(a, c));
-    if (across.size() < 2) continue;
-    for (int c : across)
-      set_coord(a, c, round_to(coord(a, c), exponent)),
-          set_coord(b, c, round_to(coord(b, c), exponent));
-    for (std::size_t k = 1; k + 1 < list.size(); ++k) {
-      const double f = round_to((list[k].first - t0) / (t1 - t0), -20);
-      for (int c : across)
-        set_coord(nodes[list[k].second], c, coord(a, c) + (coord(b, c) - coord(a, c)) * f);
-    }
-  }
 }
 
 }  // namespace hexmerge::mesher

@@ -2,8 +2,7 @@
 /// @file
 /// The surface triangulation brought to the target size and cleaned (internal header of
 /// mesh_shape(); no OpenCASCADE): refinement by longest-side bisection with Delaunay flips and
-/// needle smoothing, collapse of short sides, straight edges across the lattice put exactly on one
-/// line.
+/// needle smoothing, collapse of short sides.
 
 #include <vector>
 
@@ -46,12 +45,5 @@ void refine(const Shape& s, Surface& surface, double target, double deflection,
 void collapse_sides(const Shape& s, Surface& surface, double target, double max_side,
                     double deflection, const std::vector<bool>& lattice_face,
                     const SizeField* field = nullptr);
-
-/// Puts the nodes (frame coordinates, `nodes`, numbered as `surface`'s) of each straight CAD
-/// edge that bounds a lattice face and runs across two frame axes exactly on one line.
-/// @param[in] largest  the shape's largest extent (sets the grid the edges' ends go to)
-void align_straight_edges(const Shape& s, const Surface& surface,
-                          const std::vector<bool>& lattice_face, double largest,
-                          std::vector<Vec3>& nodes);
 
 }  // namespace hexmerge::mesher
