@@ -351,6 +351,32 @@ def test_a_sliver_between_two_edges_with_the_same_ends_is_zipped() -> None:
         assert any("1 sliver face(s)" in note for note in hexmerge.mesh_notes(meshing))
 
 
+# bench/random_parts.py's part 035 of seed 20261204: a plate whose bottom a tilted cone's end
+# pierces by 0.45 mm, a sliver of the cone (Face23, between an ellipse and a circle) and a cap
+# (Face24, between that circle and a line) standing on the plate's bottom, whose lens-shaped
+# opening the line and the ellipse (12.5 mm long, 0.68 apart) bound.
+LENS_ON_THREE_EDGES = ROOT / "tests" / "data" / "lens_on_three_edges.brep"
+
+
+def test_a_lens_whose_segment_a_third_edge_holds_is_zipped_apart_from_it() -> None:
+    """At h 68 to 120 (about 1k tets) the line, the circle and the ellipse are each one segment
+    between the same two nodes. The cone's sliver was zipped shut and every triangle on that
+    segment fanned over the circle's nodes, those along the line too: the part was refused as
+    'broken: its surface touches itself' (it meshed at h 65 and below). The line's triangles now
+    keep their segment: a valid mesh at each size, the boundary on the CAD."""
+    volume = 483085.814  # OpenCASCADE's (FreeCAD's Shape.Volume)
+    for h in (68.35, 90.0, 120.0):
+        tets, report = hexmerge.mesh_shape(LENS_ON_THREE_EDGES, h, recombine=False)
+        meshing = report["meshing"]
+        assert meshing["nb_zipped_faces"] == 1
+        assert meshing["failed_strategies"] == [], meshing["failed_strategies"]
+        assert meshing["max_boundary_distance"] <= 1e-3 * h
+        assert abs(tet_volume(tets) - volume) < 0.05 * volume  # measured -3.4 to -4.3 %
+        cells = tets.cell_vertices.reshape(-1, 4)
+        mesh, recombined = hexmerge.recombine(tets.points, cells, tets.regions)
+        assert_checked(mesh, tets, recombined, h)
+
+
 # bench/random_parts.py's part 028 of seed 20261204: BRepMesh's cap on a CAD edge at a node where
 # three edges meet, at the surface of a quarter of the chord deflection.
 THREE_EDGE_VERTEX = ROOT / "tests" / "data" / "three_edge_vertex.brep"

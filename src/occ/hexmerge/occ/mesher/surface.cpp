@@ -427,18 +427,46 @@ void take_lens_faces(const TopTools_IndexedMapOfShape& faces,
 // side's ends. The lens gets no triangle: the faces across meet along the chain, within the
 // lens's width of both edges (BRepMesh made no triangle there). A lens wider than `width` (a
 // node of one chain further from the other chain) is left as it is. Returns the faces zipped.
-std::size_t zip_lens_faces(const std::vector<std::array<int, 2>>& lenses, double width,
-                           Surface& surface) {
+// A segment of the lens's edges that a third edge also holds (`doubled`: a random part's
+// protrusion 0.45 mm deep under a plate, its cap's chord, arc and the plate's ellipse all one
+// segment at h 68) keeps that edge: the triangles along it stay (those of a face bounded by both
+// lie on the third edge's side of the segment), the rest are fanned; the lens's own entries in
+// `doubled` are taken out.
+std::size_t zip_lens_faces(const Shape& s, const TopTools_IndexedMapOfShape& edges,
+                           const std::vector<std::array<int, 2>>& lenses, double width,
+                           std::vector<EdgeSegment>& doubled,
+                           std::vector<std::uint64_t>& doubled_key, Surface& surface) {
   std::size_t zipped = 0;
+  const auto middle_of = [&](const EdgeSegment& segment) {
+    const BRepAdaptor_Curve curve(TopoDS::Edge(edges(segment.edge + 1)));
+    return of(curve.Value(0.5 * (segment.t_lo + segment.t_hi)));
+  };
   for (const auto& [e1, e2] : lenses) {
+    const auto on_lens = [&](int edge) { return edge == e1 || edge == e2; };
     std::vector<std::uint64_t> keys;
     std::map<int, double> along;  // node -> its place along the line between the ends
     std::map<int, int> uses;
+    // Per key, the lens's edge's segment on it, and the third edge's where one shares it.
+    std::unordered_map<std::uint64_t, EdgeSegment> lens_segment, third;
     for (const auto& [key, segment] : surface.segments)
-      if (segment.edge == e1 || segment.edge == e2) {
+      if (on_lens(segment.edge)) {
         keys.push_back(key);
+        lens_segment.emplace(key, segment);
         ++uses[static_cast<int>(key >> 32)], ++uses[static_cast<int>(key & 0xffffffffu)];
       }
+    for (std::size_t d = 0; d < doubled.size(); ++d) {
+      const std::uint64_t key = doubled_key[d];
+      const auto held = surface.segments.find(key);
+      if (held == surface.segments.end()) continue;
+      if (on_lens(doubled[d].edge) && !on_lens(held->second.edge)) {
+        keys.push_back(key);
+        lens_segment.emplace(key, doubled[d]);
+        third.emplace(key, held->second);
+        ++uses[static_cast<int>(key >> 32)], ++uses[static_cast<int>(key & 0xffffffffu)];
+      } else if (!on_lens(doubled[d].edge) && on_lens(held->second.edge)) {
+        third.emplace(key, doubled[d]);
+      }
+    }
     std::vector<int> ends;
     for (const auto& [n, count] : uses)
       if (count == 2 && ends.size() < 2) {
@@ -446,7 +474,7 @@ std::size_t zip_lens_faces(const std::vector<std::array<int, 2>>& lenses, double
         int with_e1 = 0, with_e2 = 0;
         for (const std::uint64_t key : keys)
           if (static_cast<int>(key >> 32) == n || static_cast<int>(key & 0xffffffffu) == n)
-            (surface.segments.at(key).edge == e1 ? with_e1 : with_e2) = 1;
+            (lens_segment.at(key).edge == e1 ? with_e1 : with_e2) = 1;
         if (with_e1 && with_e2) ends.push_back(n);
       }
     if (ends.size() != 2) continue;  // the chains do not run between two common ends
@@ -464,7 +492,7 @@ std::size_t zip_lens_faces(const std::vector<std::array<int, 2>>& lenses, double
         double nearest = std::numeric_limits<double>::infinity();
         for (const std::uint64_t key : keys) {
           const int x = static_cast<int>(key >> 32), y = static_cast<int>(key & 0xffffffffu);
-          if (surface.segments.at(key).edge != other) continue;
+          if (lens_segment.at(key).edge != other) continue;
           on = on || x == n || y == n;
           const Vec3 xy = surface.nodes[y] - surface.nodes[x];
           const double f =
@@ -478,7 +506,7 @@ std::size_t zip_lens_faces(const std::vector<std::array<int, 2>>& lenses, double
     double t_a = 0, t_b = 0;
     bool found_a = false, found_b = false;
     for (const std::uint64_t key : keys) {
-      const EdgeSegment& segment = surface.segments.at(key);
+      const EdgeSegment& segment = lens_segment.at(key);
       if (segment.edge != e2) continue;
       const int lo = static_cast<int>(key >> 32), hi = static_cast<int>(key & 0xffffffffu);
       for (const auto& [n, t] : {std::pair<int, double>{lo, segment.t_lo}, {hi, segment.t_hi}}) {
@@ -495,7 +523,24 @@ std::size_t zip_lens_faces(const std::vector<std::array<int, 2>>& lenses, double
     for (std::size_t i = 0; i < count; ++i) {
       for (int c = 0; c < 3; ++c) {
         SurfaceTriangle& t = surface.triangles[i];
-        if (!on_chain.count(side_key(t, c))) continue;
+        const std::uint64_t key = side_key(t, c);
+        if (!on_chain.count(key)) continue;
+        const auto shared = third.find(key);
+        if (shared != third.end()) {  // along the lens's edge, or the third edge's?
+          const EdgeSegment& mine = lens_segment.at(key);
+          const auto bounds = [&](const EdgeSegment& segment) {
+            const std::vector<int>& faces = s.edge_faces[static_cast<std::size_t>(segment.edge)];
+            return std::find(faces.begin(), faces.end(), t.face) != faces.end();
+          };
+          if (!bounds(mine)) continue;
+          if (bounds(shared->second)) {
+            const Vec3 chord_middle =
+                (surface.nodes[t.node[c]] + surface.nodes[t.node[(c + 1) % 3]]) * 0.5;
+            if ((surface.nodes[t.node[(c + 2) % 3]] - chord_middle)
+                    .dot(middle_of(mine) - middle_of(shared->second)) <= 0)
+              continue;
+          }
+        }
         const int p = t.node[c], q = t.node[(c + 1) % 3];
         const std::size_t from = place[p], to = place[q];
         if (from + 1 == to || to + 1 == from) break;  // no chain node within
@@ -528,6 +573,21 @@ std::size_t zip_lens_faces(const std::vector<std::array<int, 2>>& lenses, double
       const double tx = t_a + along[x] * (t_b - t_a), ty = t_a + along[y] * (t_b - t_a);
       surface.segments[pair_key(x, y)] = x < y ? EdgeSegment{e2, tx, ty} : EdgeSegment{e2, ty, tx};
     }
+    // The third edges keep their segments: alone where the chain does not hold them, else
+    // doubled with the chain's (split_doubled_segments() parts them).
+    std::vector<EdgeSegment> kept;
+    std::vector<std::uint64_t> kept_key;
+    for (std::size_t d = 0; d < doubled.size(); ++d) {
+      const auto shared = third.find(doubled_key[d]);
+      if (!on_lens(doubled[d].edge) &&
+          (shared == third.end() || shared->second.edge != doubled[d].edge))
+        kept.push_back(doubled[d]), kept_key.push_back(doubled_key[d]);
+    }
+    for (const auto& [key, segment] : third) {
+      const auto [it, added] = surface.segments.try_emplace(key, segment);
+      if (!added) kept.push_back(segment), kept_key.push_back(key);
+    }
+    doubled.swap(kept), doubled_key.swap(kept_key);
     ++zipped;
   }
   return zipped;
@@ -749,7 +809,8 @@ Surface triangulate(const Shape& s, double deflection, double tolerance,
       }
     }
   }
-  surface.nb_zipped_faces = zip_lens_faces(lenses, deflection, surface);
+  surface.nb_zipped_faces =
+      zip_lens_faces(s, edges, lenses, deflection, doubled, doubled_key, surface);
   if (surface.nb_zipped_faces < lenses.size())
     throw InputError("OpenCASCADE could not triangulate " +
                      faces_named(lens_faces, s.faces, face_names) +
