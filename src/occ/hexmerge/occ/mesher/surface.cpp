@@ -386,14 +386,32 @@ UV periodic_near(const Geom_Surface& surface, UV q, const UV& near) {
   return q;
 }
 
-// Moves from `missing` to `lens_faces` (and their two edges, 0-based, to `lenses`) the faces
+// The point of a segment's CAD edge at the middle of its parameters.
+Vec3 middle(const TopTools_IndexedMapOfShape& edges, const EdgeSegment& segment) {
+  const BRepAdaptor_Curve curve(TopoDS::Edge(edges(segment.edge + 1)));
+  return of(curve.Value(0.5 * (segment.t_lo + segment.t_hi)));
+}
+
+// A face BRepMesh left without triangles between two edges with the same ends (0-based).
+struct LensFace {
+  int face;
+  int e1, e2;
+};
+
+// A segment of a CAD edge between two nodes that already hold another edge's segment.
+struct DoubledSegment {
+  std::uint64_t key;  // pair_key of the nodes
+  EdgeSegment segment;
+};
+
+// Moves from `missing` to `lenses` the faces
 // BRepMesh left without triangles that are bounded by two edges between the same two vertices:
 // a random part's sliver of a cylinder 1.26 mm long and 0.007 wide between a plane and a
 // cylinder tangent to it, where a torus was fused (bench/random_parts.py, seed 20261204, part
 // 031).
 void take_lens_faces(const TopTools_IndexedMapOfShape& faces,
                      const TopTools_IndexedMapOfShape& edges, std::vector<int>& missing,
-                     std::vector<std::array<int, 2>>& lenses, std::vector<int>& lens_faces) {
+                     std::vector<LensFace>& lenses) {
   std::vector<int> rest;
   for (const int f : missing) {
     TopTools_IndexedMapOfShape face_edges;
@@ -412,8 +430,7 @@ void take_lens_faces(const TopTools_IndexedMapOfShape& faces,
                (v0.IsSame(ends[1]) && v1.IsSame(ends[0]));
     }
     if (lens) {
-      lenses.push_back({edges.FindIndex(face_edges(1)) - 1, edges.FindIndex(face_edges(2)) - 1});
-      lens_faces.push_back(f);
+      lenses.push_back({f, edges.FindIndex(face_edges(1)) - 1, edges.FindIndex(face_edges(2)) - 1});
     } else
       rest.push_back(f);
   }
@@ -426,22 +443,17 @@ void take_lens_faces(const TopTools_IndexedMapOfShape& faces,
 // faces' triangles along either edge are split into fans over the chain's nodes between their
 // side's ends. The lens gets no triangle: the faces across meet along the chain, within the
 // lens's width of both edges (BRepMesh made no triangle there). A lens wider than `width` (a
-// node of one chain further from the other chain) is left as it is. Returns the faces zipped.
+// node of one chain further from the other chain) is left as it is. Returns the faces not zipped.
 // A segment of the lens's edges that a third edge also holds (`doubled`: a random part's
 // protrusion 0.45 mm deep under a plate, its cap's chord, arc and the plate's ellipse all one
 // segment at h 68) keeps that edge: the triangles along it stay (those of a face bounded by both
 // lie on the third edge's side of the segment), the rest are fanned; the lens's own entries in
 // `doubled` are taken out.
-std::size_t zip_lens_faces(const Shape& s, const TopTools_IndexedMapOfShape& edges,
-                           const std::vector<std::array<int, 2>>& lenses, double width,
-                           std::vector<EdgeSegment>& doubled,
-                           std::vector<std::uint64_t>& doubled_key, Surface& surface) {
-  std::size_t zipped = 0;
-  const auto middle_of = [&](const EdgeSegment& segment) {
-    const BRepAdaptor_Curve curve(TopoDS::Edge(edges(segment.edge + 1)));
-    return of(curve.Value(0.5 * (segment.t_lo + segment.t_hi)));
-  };
-  for (const auto& [e1, e2] : lenses) {
+std::vector<int> zip_lens_faces(const Shape& s, const TopTools_IndexedMapOfShape& edges,
+                                const std::vector<LensFace>& lenses, double width,
+                                std::vector<DoubledSegment>& doubled, Surface& surface) {
+  std::vector<int> left;
+  for (const auto& [lens_face, e1, e2] : lenses) {
     const auto on_lens = [&](int edge) { return edge == e1 || edge == e2; };
     std::vector<std::uint64_t> keys;
     std::map<int, double> along;  // node -> its place along the line between the ends
@@ -454,17 +466,16 @@ std::size_t zip_lens_faces(const Shape& s, const TopTools_IndexedMapOfShape& edg
         lens_segment.emplace(key, segment);
         ++uses[static_cast<int>(key >> 32)], ++uses[static_cast<int>(key & 0xffffffffu)];
       }
-    for (std::size_t d = 0; d < doubled.size(); ++d) {
-      const std::uint64_t key = doubled_key[d];
+    for (const auto& [key, segment] : doubled) {
       const auto held = surface.segments.find(key);
       if (held == surface.segments.end()) continue;
-      if (on_lens(doubled[d].edge) && !on_lens(held->second.edge)) {
+      if (on_lens(segment.edge) && !on_lens(held->second.edge)) {
         keys.push_back(key);
-        lens_segment.emplace(key, doubled[d]);
+        lens_segment.emplace(key, segment);
         third.emplace(key, held->second);
         ++uses[static_cast<int>(key >> 32)], ++uses[static_cast<int>(key & 0xffffffffu)];
-      } else if (!on_lens(doubled[d].edge) && on_lens(held->second.edge)) {
-        third.emplace(key, doubled[d]);
+      } else if (!on_lens(segment.edge) && on_lens(held->second.edge)) {
+        third.emplace(key, segment);
       }
     }
     std::vector<int> ends;
@@ -477,7 +488,10 @@ std::size_t zip_lens_faces(const Shape& s, const TopTools_IndexedMapOfShape& edg
             (lens_segment.at(key).edge == e1 ? with_e1 : with_e2) = 1;
         if (with_e1 && with_e2) ends.push_back(n);
       }
-    if (ends.size() != 2) continue;  // the chains do not run between two common ends
+    if (ends.size() != 2) {  // the chains do not run between two common ends
+      left.push_back(lens_face);
+      continue;
+    }
     const Vec3 a = surface.nodes[ends[0]], b = surface.nodes[ends[1]];
     const Vec3 ab = b - a;
     for (const auto& [n, count] : uses) along[n] = (surface.nodes[n] - a).dot(ab) / ab.dot(ab);
@@ -501,7 +515,10 @@ std::size_t zip_lens_faces(const Shape& s, const TopTools_IndexedMapOfShape& edg
         }
         if (!on) widest = std::max(widest, nearest);
       }
-    if (widest > width) continue;
+    if (widest > width) {
+      left.push_back(lens_face);
+      continue;
+    }
     // The second edge's parameters at the ends, interpolated along the chain.
     double t_a = 0, t_b = 0;
     bool found_a = false, found_b = false;
@@ -514,7 +531,10 @@ std::size_t zip_lens_faces(const Shape& s, const TopTools_IndexedMapOfShape& edg
         if (n == ends[1]) t_b = t, found_b = true;
       }
     }
-    if (!found_a || !found_b) continue;
+    if (!found_a || !found_b) {
+      left.push_back(lens_face);
+      continue;
+    }
     std::map<int, std::size_t> place;
     for (std::size_t i = 0; i < chain.size(); ++i) place[chain[i]] = i;
     // Each triangle with a side on either chain: a fan over the chain's nodes within that side.
@@ -537,7 +557,7 @@ std::size_t zip_lens_faces(const Shape& s, const TopTools_IndexedMapOfShape& edg
             const Vec3 chord_middle =
                 (surface.nodes[t.node[c]] + surface.nodes[t.node[(c + 1) % 3]]) * 0.5;
             if ((surface.nodes[t.node[(c + 2) % 3]] - chord_middle)
-                    .dot(middle_of(mine) - middle_of(shared->second)) <= 0)
+                    .dot(middle(edges, mine) - middle(edges, shared->second)) <= 0)
               continue;
           }
         }
@@ -575,22 +595,20 @@ std::size_t zip_lens_faces(const Shape& s, const TopTools_IndexedMapOfShape& edg
     }
     // The third edges keep their segments: alone where the chain does not hold them, else
     // doubled with the chain's (split_doubled_segments() parts them).
-    std::vector<EdgeSegment> kept;
-    std::vector<std::uint64_t> kept_key;
-    for (std::size_t d = 0; d < doubled.size(); ++d) {
-      const auto shared = third.find(doubled_key[d]);
-      if (!on_lens(doubled[d].edge) &&
-          (shared == third.end() || shared->second.edge != doubled[d].edge))
-        kept.push_back(doubled[d]), kept_key.push_back(doubled_key[d]);
+    std::vector<DoubledSegment> kept;
+    for (const DoubledSegment& d : doubled) {
+      const auto shared = third.find(d.key);
+      if (!on_lens(d.segment.edge) &&
+          (shared == third.end() || shared->second.edge != d.segment.edge))
+        kept.push_back(d);
     }
     for (const auto& [key, segment] : third) {
       const auto [it, added] = surface.segments.try_emplace(key, segment);
-      if (!added) kept.push_back(segment), kept_key.push_back(key);
+      if (!added) kept.push_back({key, segment});
     }
-    doubled.swap(kept), doubled_key.swap(kept_key);
-    ++zipped;
+    doubled.swap(kept);
   }
-  return zipped;
+  return left;
 }
 
 // Two CAD edges between the same two nodes, each one segment there: a lens-shaped face or hole
@@ -604,20 +622,15 @@ std::size_t zip_lens_faces(const Shape& s, const TopTools_IndexedMapOfShape& edg
 // becomes two.
 void split_doubled_segments(const Shape& s, const TopTools_IndexedMapOfShape& faces,
                             const TopTools_IndexedMapOfShape& edges,
-                            const std::vector<EdgeSegment>& doubled,
-                            const std::vector<std::uint64_t>& keys, NodeMerger& merger,
+                            const std::vector<DoubledSegment>& doubled, NodeMerger& merger,
                             Surface& surface, double tolerance) {
-  for (std::size_t d = 0; d < doubled.size(); ++d) {
-    const auto it = surface.segments.find(keys[d]);
+  for (const auto& [key, other] : doubled) {
+    const auto it = surface.segments.find(key);
     if (it == surface.segments.end()) continue;
-    const int a = static_cast<int>(keys[d] >> 32), b = static_cast<int>(keys[d] & 0xffffffffu);
+    const int a = static_cast<int>(key >> 32), b = static_cast<int>(key & 0xffffffffu);
     const Vec3 chord_middle = (surface.nodes[a] + surface.nodes[b]) * 0.5;
-    const auto middle_of = [&](const EdgeSegment& segment) {
-      const BRepAdaptor_Curve curve(TopoDS::Edge(edges(segment.edge + 1)));
-      return of(curve.Value(0.5 * (segment.t_lo + segment.t_hi)));
-    };
-    const EdgeSegment first = it->second, second = doubled[d];
-    const Vec3 m_first = middle_of(first), m_second = middle_of(second);
+    const EdgeSegment first = it->second, second = other;
+    const Vec3 m_first = middle(edges, first), m_second = middle(edges, second);
     const bool split_first = (m_first - chord_middle).norm() > (m_second - chord_middle).norm();
     const EdgeSegment& split = split_first ? first : second;
     const Vec3 m = split_first ? m_first : m_second;
@@ -635,7 +648,7 @@ void split_doubled_segments(const Shape& s, const TopTools_IndexedMapOfShape& fa
       if (std::find(split_faces.begin(), split_faces.end(), tri.face) == split_faces.end())
         continue;
       int c = 0;
-      while (c < 3 && side_key(tri, c) != keys[d]) ++c;
+      while (c < 3 && side_key(tri, c) != key) ++c;
       if (c == 3) continue;
       const int third = tri.node[(c + 2) % 3];
       if (std::find(other_faces.begin(), other_faces.end(), tri.face) != other_faces.end() &&
@@ -701,12 +714,11 @@ Surface triangulate(const Shape& s, double deflection, double tolerance,
   TopoDS_Shape meshed = s.shape;
   TopTools_IndexedMapOfShape faces = s.faces, edges = s.edges;
   std::vector<int> missing = faces_not_triangulated(meshed, faces, deflection);
-  std::vector<std::array<int, 2>> lenses;  // left without triangles: zip_lens_faces()
-  std::vector<int> lens_faces;
-  take_lens_faces(faces, edges, missing, lenses, lens_faces);
+  std::vector<LensFace> lenses;  // left without triangles: zip_lens_faces()
+  take_lens_faces(faces, edges, missing, lenses);
   std::size_t nb_converted = 0;
   if (!missing.empty()) {
-    lenses.clear(), lens_faces.clear();
+    lenses.clear();
     const std::string failed = faces_named(missing, s.faces, face_names);
     meshed = ShapeCustom::ConvertToRevolution(s.shape);
     faces.Clear(), edges.Clear();
@@ -715,7 +727,7 @@ Surface triangulate(const Shape& s, double deflection, double tolerance,
     if (faces.Extent() != s.faces.Extent() || edges.Extent() != s.edges.Extent())
       throw InputError("OpenCASCADE could not triangulate " + failed + " of the shape");
     missing = faces_not_triangulated(meshed, faces, deflection);
-    take_lens_faces(faces, edges, missing, lenses, lens_faces);
+    take_lens_faces(faces, edges, missing, lenses);
     if (!missing.empty())
       throw InputError("OpenCASCADE could not triangulate " + failed +
                        " of the shape, nor the same faces as surfaces of revolution");
@@ -727,8 +739,7 @@ Surface triangulate(const Shape& s, double deflection, double tolerance,
   surface.nb_revolution_faces = nb_converted;
   NodeMerger merger(surface, tolerance);
   // Segments of a second CAD edge between two nodes that already hold one (and their keys).
-  std::vector<EdgeSegment> doubled;
-  std::vector<std::uint64_t> doubled_key;
+  std::vector<DoubledSegment> doubled;
   for (int fi = 1; fi <= faces.Extent(); ++fi) {
     const int face_index = fi - 1;
     const TopoDS_Face& face = TopoDS::Face(faces(fi));
@@ -802,21 +813,22 @@ Surface triangulate(const Shape& s, double deflection, double tolerance,
             a < b ? EdgeSegment{edge_index, ta, tb} : EdgeSegment{edge_index, tb, ta};
         const auto [it, added] = surface.segments.try_emplace(pair_key(a, b), segment);
         if (!added && it->second.edge != edge_index &&
-            std::none_of(doubled.begin(), doubled.end(), [&](const EdgeSegment& d) {
-              return d.edge == edge_index && d.t_lo == segment.t_lo;
+            std::none_of(doubled.begin(), doubled.end(), [&](const DoubledSegment& d) {
+              return d.segment.edge == edge_index && d.segment.t_lo == segment.t_lo;
             }))
-          doubled.push_back(segment), doubled_key.push_back(pair_key(a, b));
+          doubled.push_back({pair_key(a, b), segment});
       }
     }
   }
-  surface.nb_zipped_faces =
-      zip_lens_faces(s, edges, lenses, deflection, doubled, doubled_key, surface);
-  if (surface.nb_zipped_faces < lenses.size())
+  const std::vector<int> not_zipped =
+      zip_lens_faces(s, edges, lenses, deflection, doubled, surface);
+  surface.nb_zipped_faces = lenses.size() - not_zipped.size();
+  if (!not_zipped.empty())
     throw InputError("OpenCASCADE could not triangulate " +
-                     faces_named(lens_faces, s.faces, face_names) +
+                     faces_named(not_zipped, s.faces, face_names) +
                      " of the shape (between two edges with the same ends, wider than the chord "
                      "deflection)");
-  split_doubled_segments(s, faces, edges, doubled, doubled_key, merger, surface, tolerance);
+  split_doubled_segments(s, faces, edges, doubled, merger, surface, tolerance);
   remove_coincident_triangles(surface);
   remove_faces_without_area(surface);
   surface.nb_flat_triangles = remove_flat_triangles(surface, tolerance);
