@@ -15,6 +15,8 @@
 #include <GProp_GProps.hxx>
 #include <Geom2d_Line.hxx>
 #include <Geom_CylindricalSurface.hxx>
+#include <Poly_Triangle.hxx>
+#include <Poly_Triangulation.hxx>
 #include <TopExp.hxx>
 #include <TopoDS.hxx>
 #include <TopoDS_Compound.hxx>
@@ -193,6 +195,35 @@ TEST(face_over_itself, a_face_round_its_surface_more_than_once) {
   ASSERT_TRUE(found);
   EXPECT_EQ(found->first, 4);
   EXPECT_NEAR(found->second, 450.0, 1e-6);
+}
+
+// BRepMesh's triangles of a face, each with two corners within the tolerance, collapse when
+// triangulate() merges those corners: a failure on a face 1 wide (a KiCad pin's cone got such
+// triangles at its apex), not on a face narrower than the tolerance, which is meant to collapse;
+// one triangle with its corners apart is a triangulation.
+TEST(triangulation_collapsed, every_triangle_with_two_corners_at_one_place) {
+  const auto triangulation = [](std::initializer_list<gp_Pnt> nodes,
+                                std::initializer_list<Poly_Triangle> triangles) {
+    Poly_Triangulation made(static_cast<int>(nodes.size()), static_cast<int>(triangles.size()),
+                            false);
+    int i = 1;
+    for (const gp_Pnt& p : nodes) made.SetNode(i++, p);
+    i = 1;
+    for (const Poly_Triangle& t : triangles) made.SetTriangle(i++, t);
+    return made;
+  };
+  const TopoDS_Face wide = BRepBuilderAPI_MakeFace(gp_Pln(), 0, 1, 0, 1).Face();
+  const TopoDS_Face narrow = BRepBuilderAPI_MakeFace(gp_Pln(), 0, 1, 0, 1e-7).Face();
+  const double tolerance = 1e-5;
+  const Poly_Triangulation collapsed = triangulation(
+      {gp_Pnt(0, 0, 0), gp_Pnt(1, 0, 0), gp_Pnt(1, 0, 1e-6), gp_Pnt(0, 1, 0), gp_Pnt(0, 1, 1e-7)},
+      {Poly_Triangle(1, 2, 3), Poly_Triangle(1, 4, 5)});
+  EXPECT_TRUE(mesher::triangulation_collapsed(wide, collapsed, tolerance));
+  EXPECT_FALSE(mesher::triangulation_collapsed(narrow, collapsed, tolerance));
+  const Poly_Triangulation sound =
+      triangulation({gp_Pnt(0, 0, 0), gp_Pnt(1, 0, 0), gp_Pnt(1, 0, 1e-6), gp_Pnt(0, 1, 0)},
+                    {Poly_Triangle(1, 2, 3), Poly_Triangle(1, 2, 4)});
+  EXPECT_FALSE(mesher::triangulation_collapsed(wide, sound, tolerance));
 }
 
 TEST(choose_frame, auto_follows_the_largest_planar_faces) {

@@ -354,4 +354,21 @@ std::vector<std::optional<AxisPlane>> face_planes(const Shape& shape, const Fram
   return face_plane;
 }
 
+bool triangulation_collapsed(const TopoDS_Face& face, const Poly_Triangulation& triangulation,
+                             double tolerance) {
+  for (int k = 1; k <= triangulation.NbTriangles(); ++k) {
+    int n[3];
+    triangulation.Triangle(k).Get(n[0], n[1], n[2]);
+    bool collapses = false;
+    for (int c = 0; c < 3; ++c)
+      collapses = collapses || triangulation.Node(n[c]).Distance(
+                                   triangulation.Node(n[(c + 1) % 3])) <= tolerance;
+    if (!collapses) return false;
+  }
+  GProp_GProps area, perimeter;
+  BRepGProp::SurfaceProperties(face, area);
+  BRepGProp::LinearProperties(face, perimeter);
+  return 2 * area.Mass() > 10 * tolerance * perimeter.Mass();
+}
+
 }  // namespace hexmerge::mesher

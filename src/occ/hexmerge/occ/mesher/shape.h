@@ -4,7 +4,9 @@
 /// it; its planar faces normal to a frame axis. Internal header of mesh_shape(), and the one
 /// mesher header that includes OpenCASCADE: the other stages take `const Shape&` declared only.
 
+#include <Poly_Triangulation.hxx>
 #include <TopTools_IndexedMapOfShape.hxx>
+#include <TopoDS_Face.hxx>
 #include <TopoDS_Shape.hxx>
 #include <gp_Dir.hxx>
 #include <gp_Pnt.hxx>
@@ -54,5 +56,14 @@ std::vector<std::optional<AxisPlane>> face_planes(const Shape& s, const Frame& f
 /// OpenCASCADE's directions and points as Vec3.
 inline Vec3 of(const gp_Dir& d) { return {d.X(), d.Y(), d.Z()}; }
 inline Vec3 of(const gp_Pnt& p) { return {p.X(), p.Y(), p.Z()}; }
+
+/// Whether every triangle of a face's triangulation has two corners within `tolerance`
+/// (triangulate() merges them: the face would get no triangle) though the face is wider than 10
+/// `tolerance` (2 area / perimeter): BRepMesh failed on it. A KiCad connector's cone 0.45 mm long,
+/// its base circle cut into nine arcs, got five triangles each with two corners at its apex, at
+/// h 4 to 9; its pin then had a hole, and TetGen carved the pin away. (A face narrower than that
+/// collapses as triangulate() means it to.)
+bool triangulation_collapsed(const TopoDS_Face& face, const Poly_Triangulation& triangulation,
+                             double tolerance);
 
 }  // namespace hexmerge::mesher

@@ -352,10 +352,10 @@ void remove_folds(Surface& surface, double tolerance) {
 namespace {
 
 // The faces of `shape` (numbered as in `faces`) BRepMesh left without triangles, after meshing
-// it afresh.
+// it afresh, or whose triangles all collapse (triangulation_collapsed()).
 std::vector<int> faces_not_triangulated(const TopoDS_Shape& shape,
-                                        const TopTools_IndexedMapOfShape& faces,
-                                        double deflection) {
+                                        const TopTools_IndexedMapOfShape& faces, double deflection,
+                                        double tolerance) {
   try {
     // A triangulation left in the shape by an earlier call (another attempt, another size) would
     // be kept where it meets the deflection: each call starts from none.
@@ -370,7 +370,12 @@ std::vector<int> faces_not_triangulated(const TopoDS_Shape& shape,
   for (int fi = 1; fi <= faces.Extent(); ++fi) {
     TopLoc_Location loc;
     const Handle(Poly_Triangulation)& tri = BRep_Tool::Triangulation(TopoDS::Face(faces(fi)), loc);
-    if (tri.IsNull() || tri->NbTriangles() == 0) missing.push_back(fi - 1);
+    if (tri.IsNull() || tri->NbTriangles() == 0) {
+      missing.push_back(fi - 1);
+      continue;
+    }
+    if (triangulation_collapsed(TopoDS::Face(faces(fi)), *tri, tolerance))
+      missing.push_back(fi - 1);
   }
   return missing;
 }
@@ -713,7 +718,7 @@ Surface triangulate(const Shape& s, double deflection, double tolerance,
   // instead, the nodes' parameters taken back onto the faces' own surfaces.
   TopoDS_Shape meshed = s.shape;
   TopTools_IndexedMapOfShape faces = s.faces, edges = s.edges;
-  std::vector<int> missing = faces_not_triangulated(meshed, faces, deflection);
+  std::vector<int> missing = faces_not_triangulated(meshed, faces, deflection, tolerance);
   std::vector<LensFace> lenses;  // left without triangles: zip_lens_faces()
   take_lens_faces(faces, edges, missing, lenses);
   std::size_t nb_converted = 0;
@@ -726,7 +731,7 @@ Surface triangulate(const Shape& s, double deflection, double tolerance,
     TopExp::MapShapes(meshed, TopAbs_EDGE, edges);
     if (faces.Extent() != s.faces.Extent() || edges.Extent() != s.edges.Extent())
       throw InputError("OpenCASCADE could not triangulate " + failed + " of the shape");
-    missing = faces_not_triangulated(meshed, faces, deflection);
+    missing = faces_not_triangulated(meshed, faces, deflection, tolerance);
     take_lens_faces(faces, edges, missing, lenses);
     if (!missing.empty())
       throw InputError("OpenCASCADE could not triangulate " + failed +
