@@ -377,6 +377,42 @@ def test_a_lens_whose_segment_a_third_edge_holds_is_zipped_apart_from_it() -> No
         assert_checked(mesh, tets, recombined, h)
 
 
+# A channel through a box whose section is the lens between a quarter circle of radius 0.1 and
+# its chord (0.029 deep), as KiCad's Molex PicoBlade connector has between a fillet and a
+# chamfer on one edge.
+LENS_CHANNEL_GEO = """SetFactory("OpenCASCADE");
+Box(1) = {0, 0, 0, 10, 3, 4};
+Point(101) = {5, -1, 2};
+Point(102) = {5.1, -1, 2.1};
+Point(103) = {5.1, -1, 2};
+Circle(201) = {101, 103, 102};
+Line(202) = {102, 101};
+Curve Loop(301) = {201, 202};
+Plane Surface(302) = {301};
+out[] = Extrude {0, 5, 0} { Surface{302}; };
+BooleanDifference(3) = { Volume{1}; Delete; }{ Volume{out[1]}; Delete; };
+"""
+
+
+def test_a_channel_narrower_than_the_deflection_meshes_in_the_first_way(tmp_path) -> None:
+    """At h 1.5 to 2.5 (chord deflection 0.03 to 0.05) the repairs put the fillet's triangles on
+    the chamfer's plane, and the rounds that refine the places where triangles cross did not part
+    them: the first way failed (PicoBlade: every way at h 5 to 10.7). The repairs' deflection now
+    shrinks with those places' sizes: the first way meshes, the boundary on the CAD."""
+    shape = gmsh_brep(tmp_path, "lens_channel", LENS_CHANNEL_GEO)
+    volume = 119.991438  # OpenCASCADE's (FreeCAD's Shape.Volume)
+    for h in (1.5, 2.0, 2.5):
+        tets, report = hexmerge.mesh_shape(shape, h, recombine=False)
+        meshing = report["meshing"]
+        assert meshing["failed_strategies"] == [], meshing["failed_strategies"]
+        assert meshing["nb_crossing_refinements"] >= 1
+        assert meshing["max_boundary_distance"] <= 1e-3 * h
+        assert abs(tet_volume(tets) - volume) < 1e-3 * volume
+        cells = tets.cell_vertices.reshape(-1, 4)
+        mesh, recombined = hexmerge.recombine(tets.points, cells, tets.regions)
+        assert_checked(mesh, tets, recombined, h)
+
+
 # bench/random_parts.py's part 028 of seed 20261204: BRepMesh's cap on a CAD edge at a node where
 # three edges meet, at the surface of a quarter of the chord deflection.
 THREE_EDGE_VERTEX = ROOT / "tests" / "data" / "three_edge_vertex.brep"
