@@ -3,6 +3,9 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <iomanip>
 #include <iterator>
 #include <limits>
 #include <optional>
@@ -14,6 +17,7 @@
 #include "hexmerge/core/error.h"
 #include "hexmerge/core/phase_timer.h"
 #include "hexmerge/core/progress.h"
+#include "hexmerge/geometry/quality.h"
 #include "hexmerge/occ/brep_text.h"
 #include "hexmerge/occ/mesher/axis_points.h"
 #include "hexmerge/occ/mesher/boundary_distance.h"
@@ -62,6 +66,32 @@ constexpr double kFacetRadius = 0.6;
 constexpr double kFacetClearance = 0.25;
 // Rounds of finer sizes where the triangles of two faces cross (each halves the sizes there).
 constexpr int kCrossingRounds = 6;
+// The tets' volume against the surface's: their difference at most this fraction of it (the
+// nudged points move it by about 1e-7 h times the area).
+constexpr double kVolumeTolerance = 1e-5;
+// The most the flips and node moves against slivers may change the tets' volume, as a fraction.
+constexpr double kVolumeDrift = 0.01;
+
+// The volume the triangles of faces of one solid enclose (the union's boundary; outward).
+double enclosed_volume(const std::vector<Vec3>& nodes,
+                       const std::vector<SurfaceTriangle>& triangles,
+                       const std::vector<int>& face_solid_count) {
+  double volume = 0;
+  for (const SurfaceTriangle& t : triangles)
+    if (face_solid_count[static_cast<std::size_t>(t.face)] == 1)
+      volume += nodes[t.node[0]].dot(nodes[t.node[1]].cross(nodes[t.node[2]])) / 6;
+  return volume;
+}
+
+// The tets' volume (each counted positive).
+double volume_of(const std::vector<double>& points, const std::vector<index_t>& tets) {
+  double volume = 0;
+  for (std::size_t k = 0; k < tets.size(); k += 4)
+    volume += std::abs(
+        tet_volume(&points[3 * std::size_t{tets[k]}], &points[3 * std::size_t{tets[k + 1]}],
+                   &points[3 * std::size_t{tets[k + 2]}], &points[3 * std::size_t{tets[k + 3]}]));
+  return volume;
+}
 
 // The tet mesh from the tetrahedraliser's output (frame coordinates): tets oriented positive,
 // points in the world, the surface's nodes at their exact CAD positions, regions by solid.
@@ -101,8 +131,10 @@ TetMesh world_mesh(const std::string& brep, const Shape& shape, const Surface& s
   return mesh;
 }
 
-// A way's surface whose triangles cross (faces closer than the chord deflection, or folds).
-class SurfaceCrossing : public TetrahedralizeFailure {
+// A way's surface too coarse for the shape's thin parts: its triangles cross (faces closer than
+// the chord deflection, or folds), or the boundary swaps against slivers, each within the chord
+// deflection, moved a wall past its thickness.
+class SurfaceTooCoarse : public TetrahedralizeFailure {
  public:
   using TetrahedralizeFailure::TetrahedralizeFailure;
 };
@@ -119,7 +151,7 @@ struct Strategy {
   bool lattice_points;  // lattice points inside the shape (the hexahedral core)
   bool pull;            // the core pulled towards the surface (MeshShapeParameters::pull_core)
   // The surface's chord deflection: this times MeshShapeParameters::surface_deflection. A way
-  // with a finer one is tried only when a way before failed on a surface that crossed itself.
+  // with a finer one is tried only when a way before failed on a surface too coarse for it.
   double deflection_factor = 1.0;
 };
 // TetGen's failures on the lattice come and go with the size (FreeCAD's plate with a hole fails
@@ -129,10 +161,10 @@ struct Strategy {
 constexpr Strategy kStrategies[] = {
     {"lattice", 1.0, true, true, true, true},
     {"lattice, core not pulled", 1.0, true, true, true, false},
-    // Where a way's surface crossed itself (faces closer than the chord deflection that the
-    // crossing rounds do not part), the surface at a quarter of the deflection before the sizes
-    // change: a random part's 2.8 mm rib with a sphere of radius 2.6 cut into it crossed in
-    // every way at h 35 to 60 and meshes so.
+    // Where a way's surface was too coarse (faces closer than the chord deflection that the
+    // crossing rounds do not part, walls the swaps moved past their thickness), the surface at a
+    // quarter of the deflection before the sizes change: a random part's 2.8 mm rib with a sphere
+    // of radius 2.6 cut into it crossed in every way at h 35 to 60 and meshes so.
     {"lattice on a surface of a quarter of the chord deflection", 1.0, true, true, true, false,
      0.25},
     {"lattice at 0.95 of the size", 0.95, true, true, true, false},
@@ -352,7 +384,7 @@ TetMesh mesh_shape_impl(const std::string& brep, const MeshShapeParameters& para
   double failed_seconds = 0;
   int nb_tried = 0;
   bool first_pulled = false;  // whether the first way (which failed) pulled the core
-  bool crossed = false;       // whether a way failed on a surface that crossed itself
+  bool too_coarse = false;    // whether a way failed on a surface too coarse (SurfaceTooCoarse)
   for (const Strategy& strategy : kStrategies) {
     // The way without layers repeats the way before it (lattice points, no lattice faces, so no
     // sweep) when that one places no layers either.
@@ -361,8 +393,8 @@ TetMesh mesh_shape_impl(const std::string& brep, const MeshShapeParameters& para
       continue;
     // The lattice without the core pulled repeats the first way when that one pulled nothing.
     if (&strategy == kStrategies + 1 && !first_pulled) continue;
-    // A finer surface only where a surface crossed itself.
-    if (strategy.deflection_factor != 1.0 && !crossed) continue;
+    // A finer surface only where a surface was too coarse.
+    if (strategy.deflection_factor != 1.0 && !too_coarse) continue;
     ++nb_tried;
     MeshShapeReport attempt = report;
     const auto attempt_start = PhaseTimer::Clock::now();
@@ -376,7 +408,7 @@ TetMesh mesh_shape_impl(const std::string& brep, const MeshShapeParameters& para
       report = std::move(attempt);
       return mesh;
     } catch (const TetrahedralizeFailure& e) {
-      crossed = crossed || dynamic_cast<const SurfaceCrossing*>(&e) != nullptr;
+      too_coarse = too_coarse || dynamic_cast<const SurfaceTooCoarse*>(&e) != nullptr;
       if (&strategy == kStrategies)
         first_pulled =
             attempt.nb_pulled_points + attempt.nb_narrow_pyramids + attempt.nb_inner_apexes > 0;
@@ -432,6 +464,9 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
   // boundary then stays within 1e-5 h of the CAD there.
   Surface surface =
       triangulate(shape, deflection, 1e-5 * h + 2e-8 * shape.diagonal + 1e-12, face_names);
+  // The volume BRepMesh's triangles enclose: the CAD's within the chord deflection.
+  const double triangulated_volume =
+      enclosed_volume(surface.nodes, surface.triangles, shape.face_solid_count);
   report.nb_flat_surface_triangles = surface.nb_flat_triangles;
   report.nb_revolution_faces = surface.nb_revolution_faces;
   report.nb_zipped_faces = surface.nb_zipped_faces;
@@ -578,13 +613,15 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
     // again from BRepMesh's triangles with every repair kept within the chord deflection
     // (bounded everywhere, the repairs left more poor triangles elsewhere: 3,263 elements under
     // scaled Jacobian 0.2 against 2,947 on the real parts at 50k).
-    const auto repair = [&](double max_gap, const SizeField* sizes) {
+    const auto repair = [&](double max_gap, const SizeField* sizes,
+                            const SizeField* gap_sizes = nullptr) {
       // BRepMesh's caps go first: bisecting their sides makes flat triangles.
       collapse_sides(shape, surface, h, std::numeric_limits<double>::infinity(), max_gap,
-                     lattice.lattice_face, sizes);
-      refine(shape, surface, h, max_gap, lattice.lattice_face, lattice.lattice_edge, sizes);
+                     lattice.lattice_face, sizes, gap_sizes);
+      refine(shape, surface, h, max_gap, lattice.lattice_face, lattice.lattice_edge, sizes,
+             gap_sizes);
       report.nb_unrefined_faces = surface.unrefined_faces.size();
-      collapse_sides(shape, surface, h, h, max_gap, lattice.lattice_face, sizes);
+      collapse_sides(shape, surface, h, h, max_gap, lattice.lattice_face, sizes, gap_sizes);
       remove_folds(surface, 1e-8 * shape.diagonal);  // TetGen's own coincidence tolerance
     };
     const Surface triangulated = surface;
@@ -604,8 +641,17 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
     // crossing triangles given a size of half their longest side, then a quarter, ... (their
     // sagitta a quarter each time), the sizes of the earlier rounds kept, while fewer triangles
     // cross than the round before (faces that touch where they share no edge cross at every size);
-    // the rest of the surface and the points inside are as at h.
+    // the rest of the surface and the points inside are as at h. The repairs' deflection there
+    // shrinks with those sizes (a channel 0.03 mm deep between a fillet and a chamfer, KiCad's
+    // Molex PicoBlade at h 5 to 10.7: the fillet's arc was collapsed onto the chamfer at each
+    // size of the places).
     SizeField finer = field;  // the local sizes, and the crossing places of every round
+    // The crossing places alone.
+    SizeField places =
+        make_size_field(surface,
+                        LocalSizeItems{std::vector<double>(items_at_h.face_size.size(), h),
+                                       std::vector<double>(items_at_h.edge_size.size(), h)},
+                        h, kLocalGrading, deflection, shape.diagonal);
     std::size_t crossing_before = std::numeric_limits<std::size_t>::max();
     for (int round = 0; round < kCrossingRounds && !crossings.empty(); ++round) {
       if (only_folds()) break;  // folds of one face: no size of these places unfolds them
@@ -624,10 +670,12 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
           for (int k = 0; k < 3; ++k) corners[k] = surface.nodes[checked[t].node[k]];
           for (int k = 0; k < 3; ++k)
             longest = std::max(longest, (corners[(k + 1) % 3] - corners[k]).norm());
-          finer.add(corners[0], corners[1], corners[2], std::max(0.5 * longest, 1e-3 * h));
+          const double size = std::max(0.5 * longest, 1e-3 * h);
+          finer.add(corners[0], corners[1], corners[2], size);
+          places.add(corners[0], corners[1], corners[2], size);
         }
       surface = triangulated;
-      repair(deflection, &finer);
+      repair(deflection, &finer, &places);
       report.bounded_surface_repairs = true;
       ++report.nb_crossing_refinements;
       checked = facet_triangles(surface, lattice.frame, lattice.lattice_face, lattice.face_plane);
@@ -654,7 +702,7 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
     // along a half cone's seam), which another size may not; of two faces: they come closer
     // than the chord deflection.
     const bool folds = only_folds();
-    throw SurfaceCrossing(
+    throw SurfaceTooCoarse(
         "the surface's triangles at this size cross (" + where +
         (folds ? "): the triangles of a face fold over each other at this size, which another "
                  "size may not do"
@@ -863,6 +911,19 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
     tets.points = std::move(in_frame.points);
     tets.tets = std::move(in_frame.tets);
   }
+  // 10d. The tets fill the surface given, no more and no less: a tube 0.05 thick at h 40 got
+  // 89 % more volume than its surface (tets in its bore) once the crossing rounds parted its walls.
+  {
+    const double enclosed = enclosed_volume(nodes, surface.triangles, shape.face_solid_count);
+    const double filled = volume_of(tets.points, tets.tets);
+    if (std::abs(filled - enclosed) > kVolumeTolerance * std::abs(enclosed)) {
+      std::ostringstream text;
+      text << "TetGen's tets hold a volume of " << filled << " where the surface given encloses "
+           << enclosed << " (" << std::showpos << std::setprecision(3)
+           << 100 * (filled - enclosed) / enclosed << " %)";
+      throw TetrahedralizeFailure(text.str());
+    }
+  }
 
   // 11. The tets in the world, regions by solid.
   TetMesh mesh = world_mesh(regions_brep, shape, surface, lattice.frame, tets);
@@ -909,7 +970,22 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
   for (const auto& [i, q] : pulled) {
     lattice_points[3 * i] = q.x, lattice_points[3 * i + 1] = q.y, lattice_points[3 * i + 2] = q.z;
   }
+  const double volume_before = volume_of(mesh.points, mesh.tets);
   improve_tets(mesh, lattice_points, tets.boundary, swappable, improve, improved);
+  // The boundary swaps move the surface by up to the chord deflection each: on a wall thinner
+  // than that (a tube 0.05 thick at h 40, 0.2 of deflection) they took its bore's side into the
+  // bore, 92 % more volume. The volume may not move away from BRepMesh's by more than
+  // kVolumeDrift of it. (On the real and random parts the flips and moves change the volume by
+  // at most 0.17 %.)
+  const double volume_after = volume_of(mesh.points, mesh.tets);
+  if (std::abs(volume_after - triangulated_volume) >
+      std::abs(volume_before - triangulated_volume) + kVolumeDrift * triangulated_volume) {
+    std::ostringstream text;
+    text << "the flips and node moves against slivers changed the volume by " << std::showpos
+         << std::setprecision(3) << 100 * (volume_after / volume_before - 1)
+         << " % (walls thinner than the chord deflection, " << std::noshowpos << deflection << "?)";
+    throw SurfaceTooCoarse(text.str());
+  }
   report.min_tet_quality_before = improved.min_quality_before;
   report.nb_face_flips = improved.face_flips;
   report.nb_edge_flips = improved.edge_flips;

@@ -409,11 +409,10 @@ struct DoubledSegment {
   EdgeSegment segment;
 };
 
-// Moves from `missing` to `lenses` the faces
-// BRepMesh left without triangles that are bounded by two edges between the same two vertices:
-// a random part's sliver of a cylinder 1.26 mm long and 0.007 wide between a plane and a
-// cylinder tangent to it, where a torus was fused (bench/random_parts.py, seed 20261204, part
-// 031).
+// Moves from `missing` to `lenses` the faces BRepMesh left without triangles that are bounded by
+// two edges between the same two vertices: a random part's sliver of a cylinder 1.26 mm long and
+// 0.007 wide between a plane and a cylinder tangent to it, where a torus was fused
+// (bench/random_parts.py, seed 20261204, part 031).
 void take_lens_faces(const TopTools_IndexedMapOfShape& faces,
                      const TopTools_IndexedMapOfShape& edges, std::vector<int>& missing,
                      std::vector<LensFace>& lenses) {

@@ -72,11 +72,11 @@ gp_Pnt2d point2d(const UV& uv) { return gp_Pnt2d(uv.u, uv.v); }
 // deflection, unless none of the triangles it replaces was nearer: on a face far narrower than
 // the target, a flip or a collapse otherwise joins nodes across the face, and the triangle cuts
 // through the solid (pyocc_11752 at h 13: tubes of radius 1.1 and 1.6, triangles of each wall
-// through the other, 1.8 million intersecting pairs, TetGen never ending). With local sizes the
-// deflection shrinks with the size where the size is under the target, as BRepMesh's would: the
-// crossing rounds' finer places keep the nodes that part two faces closer than the deflection (a
-// KiCad connector's channel 0.03 mm wide between a fillet and a chamfer on one edge: collapsed
-// onto the chamfer, the fillet's triangles crossed it at every size of those places).
+// through the other, 1.8 million intersecting pairs, TetGen never ending). Where a deflection
+// field is finer than the target, the deflection shrinks with it, as BRepMesh's would: the
+// crossing rounds' places keep the nodes that part two faces closer than the deflection (a KiCad
+// connector's channel 0.03 mm wide between a fillet and a chamfer on one edge: collapsed onto
+// the chamfer, the fillet's triangles crossed it at every size of those places).
 class FaceGaps {
  public:
   FaceGaps(const Shape& s, double deflection, double target, const SizeField* field)
@@ -129,8 +129,8 @@ class FaceGaps {
 // nodes lie on the CAD edge (sides on an edge) or on the face's surface.
 void refine(const Shape& s, Surface& surface, double target, double deflection,
             const std::vector<bool>& lattice_face, const std::vector<bool>& lattice_edge,
-            const SizeField* field) {
-  FaceGaps gaps(s, deflection, target, field);
+            const SizeField* field, const SizeField* deflection_field) {
+  FaceGaps gaps(s, deflection, target, deflection_field);
   std::vector<std::unique_ptr<BRepAdaptor_Surface>> surfaces(s.faces.Extent());
   std::vector<std::unique_ptr<BRepAdaptor_Curve>> curves(s.edges.Extent());
   // Per face, the pcurves of its edges (a seam has two: one per orientation).
@@ -603,8 +603,8 @@ void refine(const Shape& s, Surface& surface, double target, double deflection,
 // removed nodes are dropped and the rest renumbered.
 void collapse_sides(const Shape& s, Surface& surface, double target, double max_side,
                     double deflection, const std::vector<bool>& lattice_face,
-                    const SizeField* field) {
-  FaceGaps gaps(s, deflection, target, field);
+                    const SizeField* field, const SizeField* deflection_field) {
+  FaceGaps gaps(s, deflection, target, deflection_field);
   std::vector<SurfaceTriangle>& tris = surface.triangles;
   const std::vector<Vec3>& nodes = surface.nodes;
   const int nb_nodes = static_cast<int>(nodes.size());

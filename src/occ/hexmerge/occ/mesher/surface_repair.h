@@ -31,9 +31,11 @@ class SizeField;
 /// @param[in] deflection  no flip or node move takes a triangle's centroid further than this
 ///                        from its face (or further than the triangles it replaces were);
 ///                        infinity: no bound
+/// @param[in] deflection_field  where it is finer than `target`, the deflection shrinks with it
+///                              (null: the deflection everywhere)
 void refine(const Shape& s, Surface& surface, double target, double deflection,
             const std::vector<bool>& lattice_face, const std::vector<bool>& lattice_edge,
-            const SizeField* field = nullptr);
+            const SizeField* field = nullptr, const SizeField* deflection_field = nullptr);
 
 /// Collapses the sides of needles and caps (an angle under 5 degrees) and the short sides (under
 /// target / 4) inside a face (not on a CAD edge, not on a lattice face) where no triangle gets
@@ -41,9 +43,10 @@ void refine(const Shape& s, Surface& surface, double target, double deflection,
 /// renumbered, and Surface::seed gives each node's index before. With local sizes (`field`),
 /// `target` and `max_side` shrink with the size the field gives at the side's nodes. No
 /// collapse takes a triangle's centroid further than `deflection` from its face of `s` (or
-/// further than the triangles it replaces were; infinity: no bound).
+/// further than the triangles it replaces were; infinity: no bound), less where
+/// `deflection_field` is finer than `target` (as in refine()).
 void collapse_sides(const Shape& s, Surface& surface, double target, double max_side,
                     double deflection, const std::vector<bool>& lattice_face,
-                    const SizeField* field = nullptr);
+                    const SizeField* field = nullptr, const SizeField* deflection_field = nullptr);
 
 }  // namespace hexmerge::mesher
