@@ -416,6 +416,33 @@ def test_a_channel_narrower_than_the_deflection_meshes_in_the_first_way(tmp_path
         assert_checked(mesh, tets, recombined, h)
 
 
+# bench/random_parts.py's part 000 of seed 11: a cylinder with a tilted boss cylinder and a cone
+# cut into it, a box on top (two solids).
+GAP_IN_FACE = ROOT / "tests" / "data" / "gap_in_face.brep"
+
+
+def test_a_face_brepmesh_leaves_a_gap_in_takes_the_finer_surface() -> None:
+    """At h 58.8 BRepMesh covers the boss's cylinder (Face12) only in part: the surface had a
+    hole between it and its two neighbours, and TetGen carved the whole solid away ('left out
+    568 of the points given') in every way. The gap is found before TetGen now: the first way
+    fails as too coarse, naming the faces, and the surface at a quarter of the chord deflection
+    meshes."""
+    h = 58.807
+    volume = 288351.878  # OpenCASCADE's (FreeCAD's Shape.Volume), both solids
+    tets, report = hexmerge.mesh_shape(GAP_IN_FACE, h, recombine=False)
+    meshing = report["meshing"]
+    assert meshing["strategy"] == "lattice on a surface of a quarter of the chord deflection"
+    assert len(meshing["failed_strategies"]) == 1
+    assert "triangles of the faces leave a gap at this size, at Face11, Face12 and Face14" in (
+        meshing["failed_strategies"][0])
+    assert meshing["max_boundary_distance"] <= 1e-3 * h
+    assert abs(tet_volume(tets) - volume) < 0.03 * volume
+    assert sorted(set(tets.regions.tolist())) == [0, 1]
+    cells = tets.cell_vertices.reshape(-1, 4)
+    mesh, recombined = hexmerge.recombine(tets.points, cells, tets.regions)
+    assert_checked(mesh, tets, recombined, h)
+
+
 # bench/random_parts.py's part 028 of seed 20261204: BRepMesh's cap on a CAD edge at a node where
 # three edges meet, at the surface of a quarter of the chord deflection.
 THREE_EDGE_VERTEX = ROOT / "tests" / "data" / "three_edge_vertex.brep"
