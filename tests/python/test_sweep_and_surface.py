@@ -443,6 +443,29 @@ def test_a_face_brepmesh_leaves_a_gap_in_takes_the_finer_surface() -> None:
     assert_checked(mesh, tets, recombined, h)
 
 
+# bench/random_parts.py's part 038 of seed 13: two solids, one with a sphere cut into it whose
+# face holds a circle arc as an INTERNAL edge (inside the face, bounding nothing).
+INTERNAL_EDGE = ROOT / "tests" / "data" / "internal_edge.brep"
+
+
+def test_an_edge_inside_a_face_is_no_open_shell() -> None:
+    """The part is valid by FreeCAD's BOP check, and was refused at every size: 'Solid2 is not
+    closed: Edge31 bounds a single face (an open shell)'. An edge that lies inside its face
+    (orientation INTERNAL) bounds nothing now: the part meshes, both solids, the boundary on
+    the CAD, the volume within the chord error."""
+    volume = 84162.106 + 523772.447  # OpenCASCADE's (FreeCAD's Shape.Volume), per solid
+    h = 8.604
+    tets, report = hexmerge.mesh_shape(INTERNAL_EDGE, h, recombine=False)
+    meshing = report["meshing"]
+    assert meshing["failed_strategies"] == [], meshing["failed_strategies"]
+    assert meshing["max_boundary_distance"] <= 1e-3 * h
+    assert abs(tet_volume(tets) - volume) < 2e-3 * volume  # measured -0.07 %
+    assert sorted(set(tets.regions.tolist())) == [0, 1]
+    cells = tets.cell_vertices.reshape(-1, 4)
+    mesh, recombined = hexmerge.recombine(tets.points, cells, tets.regions)
+    assert_checked(mesh, tets, recombined, h)
+
+
 # bench/random_parts.py's part 028 of seed 20261204: BRepMesh's cap on a CAD edge at a node where
 # three edges meet, at the surface of a quarter of the chord deflection.
 THREE_EDGE_VERTEX = ROOT / "tests" / "data" / "three_edge_vertex.brep"

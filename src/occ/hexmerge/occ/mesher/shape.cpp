@@ -97,6 +97,14 @@ std::optional<std::pair<int, int>> open_edge(const TopTools_IndexedMapOfShape& s
       const TopTools_ListOfShape& around = edge_faces.FindFromIndex(e);
       if (around.Extent() >= 2) continue;
       if (around.Extent() == 1 && BRep_Tool::IsClosed(edge, TopoDS::Face(around.First()))) continue;
+      // An edge inside a face (INTERNAL: a random part's circle on a sphere where a boolean cut
+      // it, valid by FreeCAD's BOP check) bounds nothing.
+      bool bounds = false;
+      for (const TopoDS_Shape& face : around)
+        for (TopExp_Explorer ex(face, TopAbs_EDGE); ex.More() && !bounds; ex.Next())
+          bounds = ex.Current().IsSame(edge) && (ex.Current().Orientation() == TopAbs_FORWARD ||
+                                                 ex.Current().Orientation() == TopAbs_REVERSED);
+      if (!bounds) continue;
       return std::make_pair(i, edges.FindIndex(edge));
     }
   }
