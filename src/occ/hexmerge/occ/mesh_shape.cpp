@@ -8,7 +8,6 @@
 #include <limits>
 #include <optional>
 #include <sstream>
-#include <unordered_map>
 #include <utility>
 #include <vector>
 
@@ -70,17 +69,6 @@ constexpr int kCrossingRounds = 6;
 constexpr double kVolumeTolerance = 1e-5;
 // The most the flips and node moves against slivers may change the tets' volume, as a fraction.
 constexpr double kVolumeDrift = 0.01;
-
-// The volume the triangles of faces of one solid enclose (the union's boundary; outward).
-double enclosed_volume(const std::vector<Vec3>& nodes,
-                       const std::vector<SurfaceTriangle>& triangles,
-                       const std::vector<int>& face_solid_count) {
-  double volume = 0;
-  for (const SurfaceTriangle& t : triangles)
-    if (face_solid_count[static_cast<std::size_t>(t.face)] == 1)
-      volume += nodes[t.node[0]].dot(nodes[t.node[1]].cross(nodes[t.node[2]])) / 6;
-  return volume;
-}
 
 // The tets' volume (each counted positive).
 double volume_of(const std::vector<double>& points, const std::vector<index_t>& tets) {
@@ -489,27 +477,9 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
   // hole, and TetGen carved the whole solid away, "left out 568 of the points given", in every
   // way): this way fails as too coarse, and the surface at a quarter of the chord deflection is
   // tried.
-  {
-    std::unordered_map<std::uint64_t, int> uses;
-    for (const SurfaceTriangle& t : surface.triangles)
-      for (int c = 0; c < 3; ++c) ++uses[side_key(t, c)];
-    std::vector<int> open_faces;
-    for (const SurfaceTriangle& t : surface.triangles)
-      for (int c = 0; c < 3; ++c)
-        if (uses[side_key(t, c)] == 1) open_faces.push_back(t.face);
-    std::sort(open_faces.begin(), open_faces.end());
-    open_faces.erase(std::unique(open_faces.begin(), open_faces.end()), open_faces.end());
-    if (!open_faces.empty()) {
-      std::string named;
-      for (std::size_t i = 0; i < open_faces.size(); ++i)
-        named += (i == 0                       ? ""
-                  : i + 1 == open_faces.size() ? " and "
-                                               : ", ") +
-                 face_names[static_cast<std::size_t>(open_faces[i])];
-      throw SurfaceTooCoarse("OpenCASCADE's triangles of the faces leave a gap at this size, at " +
-                             named);
-    }
-  }
+  if (const std::vector<int> open = faces_with_open_sides(surface); !open.empty())
+    throw SurfaceTooCoarse("OpenCASCADE's triangles of the faces leave a gap at this size, at " +
+                           face_list(open, face_names));
 
   // Local sizes (the attempts at other sizes keep them, up to their h): their faces are no
   // lattice faces (refined like curved ones), their edges and those faces' edges no lattice
@@ -936,8 +906,8 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
     tets.points = std::move(in_frame.points);
     tets.tets = std::move(in_frame.tets);
   }
-  // 10d. The tets fill the surface given, no more and no less: a tube 0.05 thick at h 40 got
-  // 89 % more volume than its surface (tets in its bore) once the crossing rounds parted its walls.
+  // 10d. The tets fill the surface given, no more and no less (a guard: TetGen carving too little
+  // or too much, never seen on the corpora).
   {
     const double enclosed = enclosed_volume(nodes, surface.triangles, shape.face_solid_count);
     const double filled = volume_of(tets.points, tets.tets);

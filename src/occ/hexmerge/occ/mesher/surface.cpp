@@ -75,6 +75,16 @@ double angle_at(const std::vector<Vec3>& nodes, int v, int a, int b) {
 Vec3 normal_of(const std::vector<Vec3>& nodes, int a, int b, int c) {
   return (nodes[b] - nodes[a]).cross(nodes[c] - nodes[a]);
 }
+double enclosed_volume(const std::vector<Vec3>& nodes,
+                       const std::vector<SurfaceTriangle>& triangles,
+                       const std::vector<int>& face_solid_count) {
+  double volume = 0;
+  for (const SurfaceTriangle& t : triangles)
+    if (face_solid_count[static_cast<std::size_t>(t.face)] == 1)
+      volume += nodes[t.node[0]].dot(nodes[t.node[1]].cross(nodes[t.node[2]])) / 6;
+  return volume;
+}
+
 double smallest_angle(const Vec3& a, const Vec3& b, const Vec3& c) {
   return std::min({angle_at(a, b, c), angle_at(b, c, a), angle_at(c, a, b)});
 }

@@ -105,6 +105,12 @@ double smallest_angle(const std::vector<Vec3>& nodes, const std::array<int, 3>& 
 /// The smallest angle of triangle abc.
 double smallest_angle(const Vec3& a, const Vec3& b, const Vec3& c);
 
+/// The volume the triangles of faces that bound one solid enclose (`face_solid_count`: per face,
+/// how many solids it bounds): the union of the solids', the triangles oriented outward.
+double enclosed_volume(const std::vector<Vec3>& nodes,
+                       const std::vector<SurfaceTriangle>& triangles,
+                       const std::vector<int>& face_solid_count);
+
 /// Surface smoothing and collapses keep every triangle within 20 degrees of the surface's normal
 /// at the node they move or remove: true when `now` turned further from `reference`.
 bool turned_over(const Vec3& now, const Vec3& reference);

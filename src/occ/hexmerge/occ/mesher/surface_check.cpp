@@ -222,18 +222,36 @@ std::vector<OverusedSide> find_overused_sides(const Surface& surface,
   return found;
 }
 
+std::vector<int> faces_with_open_sides(const Surface& surface) {
+  std::unordered_map<std::uint64_t, int> uses;
+  for (const SurfaceTriangle& t : surface.triangles)
+    for (int c = 0; c < 3; ++c) ++uses[side_key(t, c)];
+  std::vector<int> faces;
+  for (const SurfaceTriangle& t : surface.triangles)
+    for (int c = 0; c < 3; ++c)
+      if (uses[side_key(t, c)] == 1) faces.push_back(t.face);
+  std::sort(faces.begin(), faces.end());
+  faces.erase(std::unique(faces.begin(), faces.end()), faces.end());
+  return faces;
+}
+
+std::string face_list(const std::vector<int>& faces, const std::vector<std::string>& face_names) {
+  std::string text;
+  for (std::size_t k = 0; k < faces.size(); ++k)
+    text += (k == 0                  ? ""
+             : k + 1 == faces.size() ? " and "
+                                     : ", ") +
+            face_names[static_cast<std::size_t>(faces[k])];
+  return text;
+}
+
 std::string describe_overused_sides(const std::vector<Vec3>& nodes,
                                     const std::vector<OverusedSide>& overused,
                                     const std::vector<std::string>& face_names) {
   std::ostringstream text;
   text.precision(6);
   for (std::size_t i = 0; i < overused.size() && i < kListed; ++i) {
-    const std::vector<int>& faces = overused[i].faces;
-    for (std::size_t k = 0; k < faces.size(); ++k)
-      text << (k == 0                  ? (i == 0 ? "" : "; ")
-               : k + 1 == faces.size() ? " and "
-                                       : ", ")
-           << face_names[static_cast<std::size_t>(faces[k])];
+    text << (i == 0 ? "" : "; ") << face_list(overused[i].faces, face_names);
     const Vec3 at = (nodes[overused[i].a] + nodes[overused[i].b]) * 0.5;
     text << " meet near (" << at.x << ", " << at.y << ", " << at.z << ")";
   }

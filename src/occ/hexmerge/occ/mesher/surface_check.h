@@ -54,6 +54,14 @@ std::vector<OverusedSide> find_overused_sides(const Surface& surface,
                                               const std::vector<std::vector<int>>& face_solids,
                                               const std::vector<std::vector<int>>& edge_faces);
 
+/// The faces (0-based, sorted) with a side that only one triangle of the surface has: a gap
+/// (BRepMesh covered a random part's boss cylinder only in part at h 58.8, and TetGen carved the
+/// whole solid away).
+std::vector<int> faces_with_open_sides(const Surface& surface);
+
+/// The faces by `face_names`, for the user: "Face11, Face12 and Face14".
+std::string face_list(const std::vector<int>& faces, const std::vector<std::string>& face_names);
+
 /// The places find_overused_sides() found, for the user: up to three, each its faces (by
 /// `face_names`) and a point ("Face810, Face876, Face1013 and Face1014 meet near (x, y, z)"),
 /// and how many more there are.
