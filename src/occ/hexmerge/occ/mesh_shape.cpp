@@ -36,7 +36,6 @@
 #include "hexmerge/occ/mesher/surface_path.h"
 #include "hexmerge/occ/mesher/surface_repair.h"
 #include "hexmerge/occ/mesher/sweep.h"
-#include "hexmerge/occ/regions_by_solid.h"
 #include "hexmerge/recombine/parameters.h"
 #include "hexmerge/tetgen/tetrahedralize.h"
 #include "hexmerge/tetgen/triangulate_facets.h"
@@ -78,44 +77,6 @@ double volume_of(const std::vector<double>& points, const std::vector<index_t>& 
         tet_volume(&points[3 * std::size_t{tets[k]}], &points[3 * std::size_t{tets[k + 1]}],
                    &points[3 * std::size_t{tets[k + 2]}], &points[3 * std::size_t{tets[k + 3]}]));
   return volume;
-}
-
-// The tet mesh from the tetrahedraliser's output (frame coordinates): tets oriented positive,
-// points in the world, the surface's nodes at their exact CAD positions, regions by solid.
-TetMesh world_mesh(const std::string& brep, const Shape& shape, const Surface& surface,
-                   const Frame& frame, const TetrahedralizeOutput& tets) {
-  const std::vector<double>& frame_points = tets.points;
-  const std::size_t made = frame_points.size() / 3;
-  TetMesh mesh;
-  mesh.tets = tets.tets;
-  // Orientation: positive volume in frame coordinates is positive in the world (proper frame).
-  for (std::size_t t = 0; t < mesh.tets.size() / 4; ++t) {
-    index_t* v = &mesh.tets[4 * t];
-    const Vec3 p0 = Vec3::of(&frame_points[3 * v[0]]);
-    const double d =
-        det3(Vec3::of(&frame_points[3 * v[1]]) - p0, Vec3::of(&frame_points[3 * v[2]]) - p0,
-             Vec3::of(&frame_points[3 * v[3]]) - p0);
-    if (d < 0) std::swap(v[1], v[2]);
-  }
-  mesh.points.resize(frame_points.size());
-  for (std::size_t i = 0; i < made; ++i) {
-    const Vec3 p = frame.to_world(Vec3::of(&frame_points[3 * i]));
-    mesh.points[3 * i] = p.x, mesh.points[3 * i + 1] = p.y, mesh.points[3 * i + 2] = p.z;
-  }
-  // The surface nodes keep their exact CAD positions.
-  for (std::size_t i = 0; i < surface.nodes.size() && i < made; ++i) {
-    mesh.points[3 * i] = surface.nodes[i].x, mesh.points[3 * i + 1] = surface.nodes[i].y,
-                    mesh.points[3 * i + 2] = surface.nodes[i].z;
-  }
-  if (shape.solids.Extent() > 1) {
-    // From the triangles TetGen kept on the faces; by geometry where they do not separate the
-    // solids (they always do when TetGen recovered every face).
-    std::optional<std::vector<std::int32_t>> regions =
-        solid_regions(shape, mesh, tets.boundary, tets.boundary_marker);
-    mesh.regions = regions ? std::move(*regions) : regions_by_solid(brep, mesh);
-  } else
-    mesh.regions.assign(mesh.tets.size() / 4, 0);
-  return mesh;
 }
 
 // A way's surface too coarse for the shape's thin parts: its triangles cross (faces closer than

@@ -10,6 +10,8 @@
 
 #include "hexmerge/mesh/tet_topology.h"
 #include "hexmerge/occ/mesher/common.h"
+#include "hexmerge/occ/mesher/surface.h"
+#include "hexmerge/occ/regions_by_solid.h"
 
 namespace hexmerge::mesher {
 namespace {
@@ -130,6 +132,42 @@ std::size_t remove_outside_components(TetMesh& mesh,
   mesh.tets.resize(4 * kept);
   if (!mesh.regions.empty()) mesh.regions.resize(kept);
   return nb_tets - kept;
+}
+
+TetMesh world_mesh(const std::string& brep, const Shape& shape, const Surface& surface,
+                   const Frame& frame, const tetgen::TetrahedralizeOutput& tets) {
+  const std::vector<double>& frame_points = tets.points;
+  const std::size_t made = frame_points.size() / 3;
+  TetMesh mesh;
+  mesh.tets = tets.tets;
+  // Orientation: positive volume in frame coordinates is positive in the world (proper frame).
+  for (std::size_t t = 0; t < mesh.tets.size() / 4; ++t) {
+    index_t* v = &mesh.tets[4 * t];
+    const Vec3 p0 = Vec3::of(&frame_points[3 * v[0]]);
+    const double d =
+        det3(Vec3::of(&frame_points[3 * v[1]]) - p0, Vec3::of(&frame_points[3 * v[2]]) - p0,
+             Vec3::of(&frame_points[3 * v[3]]) - p0);
+    if (d < 0) std::swap(v[1], v[2]);
+  }
+  mesh.points.resize(frame_points.size());
+  for (std::size_t i = 0; i < made; ++i) {
+    const Vec3 p = frame.to_world(Vec3::of(&frame_points[3 * i]));
+    mesh.points[3 * i] = p.x, mesh.points[3 * i + 1] = p.y, mesh.points[3 * i + 2] = p.z;
+  }
+  // The surface nodes keep their exact CAD positions.
+  for (std::size_t i = 0; i < surface.nodes.size() && i < made; ++i) {
+    mesh.points[3 * i] = surface.nodes[i].x, mesh.points[3 * i + 1] = surface.nodes[i].y,
+                    mesh.points[3 * i + 2] = surface.nodes[i].z;
+  }
+  if (shape.solids.Extent() > 1) {
+    // From the triangles TetGen kept on the faces; by geometry where they do not separate the
+    // solids (they always do when TetGen recovered every face).
+    std::optional<std::vector<std::int32_t>> regions =
+        solid_regions(shape, mesh, tets.boundary, tets.boundary_marker);
+    mesh.regions = regions ? std::move(*regions) : regions_by_solid(brep, mesh);
+  } else
+    mesh.regions.assign(mesh.tets.size() / 4, 0);
+  return mesh;
 }
 
 }  // namespace hexmerge::mesher

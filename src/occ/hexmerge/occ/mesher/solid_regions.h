@@ -7,14 +7,18 @@
 #include <cstdint>
 #include <functional>
 #include <optional>
+#include <string>
 #include <vector>
 
 #include "hexmerge/core/index.h"
 #include "hexmerge/geometry/vec3.h"
 #include "hexmerge/mesh/tet_mesh.h"
 #include "hexmerge/occ/mesher/shape.h"
+#include "hexmerge/tetgen/tetrahedralize.h"
 
 namespace hexmerge::mesher {
+
+struct Surface;
 
 /// Per tet, the index of its solid in shape.solids, from the triangles the tetrahedraliser kept
 /// on the shape's faces: the tets connected through faces that are no such triangle are one
@@ -38,5 +42,12 @@ std::optional<std::vector<std::int32_t>> solid_regions(
 std::size_t remove_outside_components(TetMesh& mesh,
                                       const std::vector<std::array<index_t, 3>>& triangles,
                                       const std::function<bool(const Vec3&)>& inside);
+
+/// The tet mesh from the tetrahedraliser's output (frame coordinates): tets oriented positive,
+/// points in the world, the surface's nodes at their exact CAD positions, regions by solid
+/// (solid_regions(), by geometry where the triangles do not separate the solids: `brep`, the
+/// shape as given to regions_by_solid()).
+TetMesh world_mesh(const std::string& brep, const Shape& shape, const Surface& surface,
+                   const Frame& frame, const tetgen::TetrahedralizeOutput& tets);
 
 }  // namespace hexmerge::mesher
