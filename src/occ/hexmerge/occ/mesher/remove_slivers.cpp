@@ -101,6 +101,14 @@ class FlipMesh {
     changed_.pop_back();
   }
 
+  // One set of tets at a time (an insertion's cavity): emptied, a tet put in, asked for.
+  void clear_set() {
+    ++set_clock_;
+    set_.resize(tets_.size(), 0);
+  }
+  void put_in_set(index_t t) { set_[t] = set_clock_; }
+  bool in_set(index_t t) const { return set_[t] == set_clock_; }
+
   void remove(index_t t) {
     alive_[t] = 0;
     for (index_t v : tets_[t]) {
@@ -227,6 +235,9 @@ class FlipMesh {
   std::vector<std::uint64_t> examined_, tried_, changed_;
   std::uint64_t clock_ = 1;
   std::unordered_map<FaceKey, std::int32_t, FaceKeyHash> patch_;
+  // The set's stamps: a tet is in it when its stamp is the set's clock.
+  std::vector<std::uint64_t> set_;
+  std::uint64_t set_clock_ = 0;
 };
 
 // A flip: the tets it replaces, the tets it makes and the smallest quality among these.
@@ -341,7 +352,8 @@ struct Insertion {
   double deficit = kInfinity;  // the sum of floor - quality over the new tets below the floor
 };
 
-// The tets joining the boundary faces of `cavity` (tets of a valid mesh) to vertex p, each the
+// The tets joining the boundary faces of `cavity` (tets of a valid mesh, the mesh's set) to
+// vertex p, each the
 // cavity's tet with the vertex opposite the face replaced by p (so positive where p lies inside
 // the face's half-space). False when the cavity is no ball with every vertex on its boundary:
 // its boundary must be a closed surface of two faces at every side and Euler characteristic 2
@@ -356,7 +368,7 @@ bool star_of_cavity(const FlipMesh& m, const std::vector<index_t>& cavity, index
     for (int k = 0; k < 4; ++k) {
       vertices.push_back(m.tet(u)[k]);
       const index_t w = m.across(u, k);
-      if (w != NO_CELL && std::find(cavity.begin(), cavity.end(), w) != cavity.end()) continue;
+      if (w != NO_CELL && m.in_set(w)) continue;
       Tet n = m.tet(u);
       n[k] = p;
       made.push_back(n);
@@ -430,29 +442,29 @@ void best_insertion(FlipMesh& m, index_t t, double floor, Insertion& best) {
   std::vector<index_t> cavity;
   std::vector<Tet> made;
   for (int kind = 0; kind < 3; ++kind) {
+    if (kind < 2) {  // the cavity anew (kind 2 grows kind 1's)
+      m.clear_set();
+      cavity = {t};
+      m.put_in_set(t);
+    }
     if (kind == 0) {
       if (!(radius2 < kInfinity)) continue;
-      cavity = {t};
       for (std::size_t i = 0; i < cavity.size(); ++i)
         for (int k = 0; k < 4; ++k) {
           const index_t w = m.across(cavity[i], k);
-          if (w == NO_CELL || !m.movable(w, region) ||
-              std::find(cavity.begin(), cavity.end(), w) != cavity.end())
-            continue;
+          if (w == NO_CELL || !m.movable(w, region) || m.in_set(w)) continue;
           Vec3 c;
           double r2 = 0;
           circumsphere(m, m.tet(w), c, r2);
-          if ((centre - c).dot(centre - c) < r2) cavity.push_back(w);
+          if ((centre - c).dot(centre - c) < r2) cavity.push_back(w), m.put_in_set(w);
         }
     } else {
-      if (kind == 1) cavity = {t};
       const std::size_t grown = cavity.size();
       for (std::size_t i = 0; i < grown; ++i)
         for (int k = 0; k < 4; ++k) {
           const index_t w = m.across(cavity[i], k);
-          if (w != NO_CELL && m.movable(w, region) &&
-              std::find(cavity.begin(), cavity.end(), w) == cavity.end())
-            cavity.push_back(w);
+          if (w != NO_CELL && m.movable(w, region) && !m.in_set(w))
+            cavity.push_back(w), m.put_in_set(w);
         }
       if (cavity.size() == grown) continue;
     }
@@ -462,22 +474,33 @@ void best_insertion(FlipMesh& m, index_t t, double floor, Insertion& best) {
     for (index_t u : cavity)
       before = std::min(before, m.quality(u)),
       deficit_before += std::max(0.0, floor - m.quality(u));
+    // The search's tries mostly fail, most on the new tet that failed the try before: that tet
+    // is asked first (`failed`). The values returned do not depend on it.
+    std::size_t failed = 0;
     // The worst new tet with the vertex at q, or some value <= bound as soon as one is.
     const auto worst_at = [&](const Vec3& q, double bound) {
       m.place(p, q);
+      if (const double first = m.quality(made[failed]); first <= bound) return first;
       double worst = kInfinity;
-      for (const Tet& n : made)
-        if ((worst = std::min(worst, m.quality(n))) <= bound) break;
+      for (std::size_t i = 0; i < made.size(); ++i)
+        if ((worst = std::min(worst, m.quality(made[i]))) <= bound) {
+          failed = i;
+          break;
+        }
       return worst;
     };
     // The new tets' deficit with the vertex at q, infinite where one is not above `before`
-    // (or some value >= bound as soon as the sum reaches it).
+    // (or some value >= bound as soon as the sum reaches it; summed in the new tets' order).
     const auto deficit_at = [&](const Vec3& q, double bound) {
       m.place(p, q);
+      if (!(m.quality(made[failed]) > before + 1e-12)) return kInfinity;
       double deficit = 0;
-      for (const Tet& n : made) {
-        const double value = m.quality(n);
-        if (!(value > before + 1e-12)) return kInfinity;
+      for (std::size_t i = 0; i < made.size(); ++i) {
+        const double value = m.quality(made[i]);
+        if (!(value > before + 1e-12)) {
+          failed = i;
+          return kInfinity;
+        }
         if ((deficit += std::max(0.0, floor - value)) >= bound) break;
       }
       return deficit;
