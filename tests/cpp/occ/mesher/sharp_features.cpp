@@ -5,6 +5,7 @@
 #include <BRepAlgoAPI_Cut.hxx>
 #include <BRepBuilderAPI_MakeFace.hxx>
 #include <BRepBuilderAPI_MakePolygon.hxx>
+#include <BRepPrimAPI_MakeCone.hxx>
 #include <BRepPrimAPI_MakeCylinder.hxx>
 #include <BRepPrimAPI_MakePrism.hxx>
 #include <BRepPrimAPI_MakeTorus.hxx>
@@ -20,6 +21,14 @@
 namespace hexmerge::test {
 namespace {
 
+// A sector of `degrees` of a cone of base radius 10 and height 30 (its apex a degenerated
+// edge of the curved face, between the two lines from the base).
+TopoDS_Shape cone_sector(double degrees) {
+  return BRepPrimAPI_MakeCone(gp_Ax2(gp_Pnt(0, 0, 0), gp_Dir(0, 0, 1)), 10, 0, 30,
+                              degrees * M_PI / 180)
+      .Shape();
+}
+
 // A prism of height 10 over a polygon in z = 0.
 TopoDS_Shape prism(const std::vector<gp_Pnt>& corners) {
   BRepBuilderAPI_MakePolygon polygon;
@@ -34,6 +43,27 @@ TopoDS_Shape prism(const std::vector<gp_Pnt>& corners) {
 TopoDS_Shape wedge(double degrees) {
   const double a = degrees * M_PI / 180;
   return prism({gp_Pnt(0, 0, 0), gp_Pnt(50, 0, 0), gp_Pnt(50 * std::cos(a), 50 * std::sin(a), 0)});
+}
+
+// The curved face of a 20-degree sector of a cone meets itself at the apex through a
+// degenerated edge: the two lines from the base part there by 2 asin(sin(10 degrees) sin(half
+// angle)), 6.29 degrees (half angle atan(1/3)), a corner of the face; the whole cone has none.
+TEST(sharp_features, a_corner_through_a_degenerated_edge) {
+  const mesher::Shape shape = load(cone_sector(20));
+  const mesher::SharpFeatures sharp = mesher::sharp_features(shape, mesher::kSharpAngle);
+  const double expected = 2 * std::asin(std::sin(10 * M_PI / 180) * std::sin(std::atan(1.0 / 3))) *
+                          180 / M_PI;
+  std::size_t at_apex = 0;
+  for (const mesher::SharpCorner& c : sharp.corners)
+    if (std::abs(c.point.z - 30) < 1e-9) {
+      ++at_apex;
+      EXPECT_NEAR(c.angle, expected, 1e-3);
+      EXPECT_NE(c.edges[0], c.edges[1]);
+    }
+  EXPECT_EQ(at_apex, 1u);
+  for (const mesher::SharpCorner& c :
+       mesher::sharp_features(load(cone_sector(360)), mesher::kSharpAngle).corners)
+    EXPECT_GT(std::abs(c.point.z - 30), 1e-9);
 }
 
 // A 5-degree wedge: its two triangles' corners at the origin's edge, and that edge, are 5

@@ -102,15 +102,29 @@ void face_corners(const Shape& shape, int face_index, double limit, std::vector<
   };
   TopTools_IndexedMapOfShape vertices;
   std::vector<std::vector<Direction>> at;  // per vertex of `vertices`
+  // The vertices at a degenerated edge, where the surface's parameters collapse: the normal is
+  // taken beside them.
+  TopTools_IndexedMapOfShape at_pole;
+  // Per vertex at a degenerated edge, points of the face's parameters a thousandth of the
+  // range of the edges before and after it from it.
+  std::vector<std::vector<gp_Pnt2d>> beside;
   for (TopExp_Explorer wires(face, TopAbs_WIRE); wires.More(); wires.Next()) {
     // The wire's edges in order, each with the vertex it leaves from.
     std::vector<std::pair<TopoDS_Edge, TopoDS_Vertex>> loop;
     for (BRepTools_WireExplorer e(TopoDS::Wire(wires.Current()), face); e.More(); e.Next())
       loop.emplace_back(e.Current(), e.CurrentVertex());
     for (std::size_t i = 0; i < loop.size(); ++i) {
-      const TopoDS_Edge& arriving = loop[(i + loop.size() - 1) % loop.size()].first;
       const auto& [leaving, vertex] = loop[i];
-      if (BRep_Tool::Degenerated(arriving) || BRep_Tool::Degenerated(leaving)) continue;
+      if (BRep_Tool::Degenerated(leaving)) continue;
+      // The edge arriving at the vertex: the one before, or before the degenerated edges there
+      // (a point: a B-spline face's collapsed side, where two edges meet at a cusp).
+      std::size_t before = (i + loop.size() - 1) % loop.size();
+      for (std::size_t k = 0; k < loop.size() && BRep_Tool::Degenerated(loop[before].first); ++k)
+        before = (before + loop.size() - 1) % loop.size();
+      const TopoDS_Edge& arriving = loop[before].first;
+      if (BRep_Tool::Degenerated(arriving) || arriving.IsSame(leaving)) continue;
+      const bool pole = before != (i + loop.size() - 1) % loop.size();
+      if (pole) at_pole.Add(vertex);
       // The arriving edge ends at the vertex, the leaving one starts there (in the wire's
       // direction, against or along the edges' own).
       const std::optional<EndDirection> u_in =
@@ -119,7 +133,20 @@ void face_corners(const Shape& shape, int face_index, double limit, std::vector<
           direction_from_end(leaving, leaving.Orientation() != TopAbs_REVERSED);
       if (!u_in || !u_out) continue;
       const int v = vertices.Add(vertex);
-      if (v > static_cast<int>(at.size())) at.resize(static_cast<std::size_t>(v));
+      if (v > static_cast<int>(at.size()))
+        at.resize(static_cast<std::size_t>(v)), beside.resize(static_cast<std::size_t>(v));
+      if (pole)
+        for (const bool from_start : {true, false}) {
+          const TopoDS_Edge& edge = from_start ? leaving : arriving;
+          double first = 0, last = 0;
+          const Handle(Geom2d_Curve) pcurve = BRep_Tool::CurveOnSurface(edge, face, first, last);
+          // Where the edge leaves the vertex (the leaving edge's start in the wire's direction,
+          // the arriving edge's end).
+          const bool at_first = (edge.Orientation() != TopAbs_REVERSED) == from_start;
+          if (!pcurve.IsNull())
+            beside[v - 1].push_back(pcurve->Value(at_first ? first + 1e-3 * (last - first)
+                                                           : last - 1e-3 * (last - first)));
+        }
       // A seam is no boundary of the face in space: its two passes go.
       if (!BRep_Tool::IsClosed(leaving, face))
         at[v - 1].push_back({*u_out, true, shape.edges.FindIndex(leaving) - 1});
@@ -129,9 +156,18 @@ void face_corners(const Shape& shape, int face_index, double limit, std::vector<
   }
   for (int v = 1; v <= vertices.Extent(); ++v) {
     const TopoDS_Vertex& vertex = TopoDS::Vertex(vertices(v));
-    const gp_Pnt2d uv = BRep_Tool::Parameters(vertex, face);
-    const std::optional<Vec3> n =
-        normal_at(surface, face.Orientation() == TopAbs_REVERSED, uv.X(), uv.Y());
+    const bool reversed = face.Orientation() == TopAbs_REVERSED;
+    std::optional<Vec3> n;
+    if (at_pole.Contains(vertex)) {  // the mean of the normals beside it
+      Vec3 sum{0, 0, 0};
+      for (const gp_Pnt2d& uv : beside[v - 1])
+        if (const std::optional<Vec3> there = normal_at(surface, reversed, uv.X(), uv.Y()))
+          sum = sum + *there;
+      if (sum.norm() > 0) n = sum * (1 / sum.norm());
+    } else {
+      const gp_Pnt2d uv = BRep_Tool::Parameters(vertex, face);
+      n = normal_at(surface, reversed, uv.X(), uv.Y());
+    }
     if (!n) continue;
     std::vector<Direction>& directions = at[v - 1];
     if (directions.empty()) continue;  // only seams there (a torus's one vertex)

@@ -33,8 +33,10 @@ struct SharpEdge {
 /// The face corners and edges of the shape's solids with an angle, inside the solid, below
 /// `limit` degrees. Face corners: at each vertex of each wire, the angle from the leaving
 /// edge's tangent to the arriving edge's, turning about the face's outward normal (the face
-/// lies on the left of its oriented edges); corners at degenerate edges (a sphere's pole) or
-/// where the face has no normal (a cone's apex) are skipped. Edges: the solid's dihedral angle
+/// lies on the left of its oriented edges); a degenerated edge between two edges is a point
+/// (a cone sector's apex, a B-spline face's collapsed side where two edges meet at a cusp), the
+/// normal there taken beside it; seams are no boundary (a whole cone's apex, a sphere's pole
+/// have no corner). Edges: the solid's dihedral angle
 /// at nine points along each edge between two distinct faces of the solid (seams are smooth).
 struct SharpFeatures {
   std::vector<SharpCorner> corners;
