@@ -51,8 +51,8 @@ TopoDS_Shape wedge(double degrees) {
 TEST(sharp_features, a_corner_through_a_degenerated_edge) {
   const mesher::Shape shape = load(cone_sector(20));
   const mesher::SharpFeatures sharp = mesher::sharp_features(shape, mesher::kSharpAngle);
-  const double expected = 2 * std::asin(std::sin(10 * M_PI / 180) * std::sin(std::atan(1.0 / 3))) *
-                          180 / M_PI;
+  const double expected =
+      2 * std::asin(std::sin(10 * M_PI / 180) * std::sin(std::atan(1.0 / 3))) * 180 / M_PI;
   std::size_t at_apex = 0;
   for (const mesher::SharpCorner& c : sharp.corners)
     if (std::abs(c.point.z - 30) < 1e-9) {
