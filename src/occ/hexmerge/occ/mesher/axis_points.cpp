@@ -27,18 +27,19 @@ std::size_t place_axis_points(const Shape& s, const Lattice& lattice, const Surr
     const BRepAdaptor_Surface surface(face, false);
     double u0, u1, v0, v1;
     BRepTools::UVBounds(face, u0, u1, v0, v1);
-    if (u1 - u0 < M_PI - 1e-9) continue;  // under half a turn: a fillet, not a tube
     // The axis (a torus: its centre circle) as a curve of the face's other parameter.
     double radius = 0, lo = 0, hi = 0, run = 0;  // run: the axis's length over [lo, hi]
     std::function<Vec3(double)> axis;
+    // Under half a turn round the axis (a cylinder's u, a torus's v): a fillet, not a tube.
     if (surface.GetType() == GeomAbs_Cylinder) {
+      if (u1 - u0 < M_PI - 1e-9) continue;
       const gp_Cylinder cylinder = surface.Cylinder();
       radius = cylinder.Radius();
       const Vec3 origin = of(cylinder.Location()), along = of(cylinder.Axis().Direction());
       axis = [origin, along](double v) { return origin + along * v; };
       lo = v0, hi = v1, run = v1 - v0;
     } else if (surface.GetType() == GeomAbs_Torus) {
-      if (v1 - v0 < M_PI - 1e-9) continue;  // a fillet's part of a tube
+      if (v1 - v0 < M_PI - 1e-9) continue;
       const gp_Torus torus = surface.Torus();
       radius = torus.MinorRadius();
       const gp_Ax3 position = torus.Position();
@@ -53,14 +54,14 @@ std::size_t place_axis_points(const Shape& s, const Lattice& lattice, const Surr
       continue;
     }
     if (!(radius < kThinTube * h)) continue;
-    const int pieces = std::max(1, static_cast<int>(std::round(run / h)));
+    const int pieces = std::max(1, static_cast<int>(std::round(run / (kAxisSpacing * h))));
     for (int k = 0; k < pieces; ++k) {
       const double t = lo + (hi - lo) * (k + 0.5) / pieces;
       const Vec3 q = frame.to_frame(axis(t));
       if (around.curved.any_within(q, 0.5 * radius) ||
           around.surface_points.any_within(q, 0.5 * radius) ||
           around.core_points.any_within(q, 0.5 * h) || around.layer_points.any_within(q, 0.5 * h) ||
-          placed.any_within(q, h) || !parity.inside(q))
+          placed.any_within(q, 0.5 * kAxisSpacing * h) || !parity.inside(q))
         continue;
       placed.add(q);
       inserted.points.push_back(q);
