@@ -1054,6 +1054,41 @@ def test_points_on_the_centre_circle_of_a_bent_wire(tmp_path) -> None:
     assert_checked(mesh, tets, merged, h)
 
 
+# A box with a step 0.002 high along a diagonal of its top face (a triangular plate fused on
+# it): faces far narrower than any mesh of size h, as KiCad's models have them.
+TINY_STEP_GEO = """SetFactory("OpenCASCADE");
+Box(1) = {0, 0, 0, 10, 10, 10};
+Point(101) = {0, 0, 10}; Point(102) = {10, 0, 10}; Point(103) = {0, 10, 10};
+Line(101) = {101, 102}; Line(102) = {102, 103}; Line(103) = {103, 101};
+Curve Loop(101) = {101, 102, 103}; Plane Surface(101) = {101};
+Extrude {0, 0, 0.002} { Surface{101}; }
+BooleanUnion(3) = { Volume{1}; Delete; }{ Volume{2}; Delete; };
+"""
+
+
+@needs_tetgen
+def test_faces_far_narrower_than_h_are_merged_away(tmp_path) -> None:
+    """The step's diagonal wall, 0.002 high (6.7e-4 h at h 3, under 9e-4 h), is merged away: its
+    nodes and those near them become one (the box's sides, which the step's other walls joined,
+    lose their notch), and the boundary stays within that of the CAD. Kept, its triangles had
+    angles of 0.07 degrees and 85 tets were under scaled Jacobian 0.2 (min 0.0015)."""
+    shape = gmsh_brep(tmp_path, "tiny_step", TINY_STEP_GEO)
+    h = 3.0
+    tets, report = hexmerge.mesh_shape(shape, h, recombine=False)
+    meshing = report["meshing"]
+    assert meshing["nb_narrow_faces"] == 1
+    t = tets.cell_vertices.reshape(-1, 4).astype(np.int64)
+    assert tet_scaled_jacobians(tets.points, t).min() >= 0.2  # measured 0.308
+    assert boundary_smallest_angles(tets).min() >= 20.0  # measured 31.0
+    assert meshing["max_boundary_distance"] <= 9e-4 * h  # measured 6.7e-4 h
+    # The step's volume (0.1) is within the merge: the box's, or the box's and the step's.
+    assert 1000 - 1e-9 <= tet_volumes(tets.points, t).sum() <= 1000.1 + 1e-9
+    mesh, merged = hexmerge.mesh_shape(shape, h)
+    assert_checked(mesh, tets, merged, h)
+    # At h 2 the wall is 1e-3 h high: kept as a face.
+    assert hexmerge.mesh_shape(shape, 2.0, recombine=False)[1]["meshing"]["nb_narrow_faces"] == 0
+
+
 def test_overlapping_solids_are_refused_by_name(tmp_path) -> None:
     shape = gmsh_brep(tmp_path, "overlapping", OVERLAPPING_GEO)
     with pytest.raises(hexmerge.InputError, match=r"Solid1 and Solid2 of the shape overlap \(common volume 240"):

@@ -8,6 +8,7 @@
 #include <limits>
 #include <optional>
 #include <sstream>
+#include <stdexcept>
 #include <utility>
 #include <vector>
 
@@ -68,6 +69,9 @@ constexpr int kCrossingRounds = 6;
 constexpr double kVolumeTolerance = 1e-5;
 // The most the flips and node moves against slivers may change the tets' volume, as a fraction.
 constexpr double kVolumeDrift = 0.01;
+// Faces narrower than this times h are merged away (merge_narrow_faces): under the boundary's
+// tolerance to the CAD, 1e-3 h.
+constexpr double kNarrowFace = 9e-4;
 
 // The tets' volume (each counted positive).
 double volume_of(const std::vector<double>& points, const std::vector<index_t>& tets) {
@@ -219,7 +223,7 @@ std::vector<SharpFeatureReport> sharp_feature_reports(const SharpFeatures& sharp
 // nodes the attempt reports.
 TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Frame& frame,
                      const SharpFeatures& sharp, const std::string& regions_brep,
-                     const MeshShapeParameters& parameters, const Strategy& strategy,
+                     const MeshShapeParameters& parameters, const Strategy& strategy, bool narrow,
                      MeshShapeReport& report, Tet10Mesh* tet10, const ProgressCallback& progress);
 
 // mesh_shape() and, with `tet10`, mesh_shape_tet10().
@@ -327,52 +331,70 @@ TetMesh mesh_shape_impl(const std::string& brep, const MeshShapeParameters& para
   }
   const double shape_seconds = seconds_since(start);
 
-  // 3. The attempts, simplest input last; what failed is reported.
-  std::string failures;
-  double failed_seconds = 0;
-  int nb_tried = 0;
-  bool first_pulled = false;  // whether the first way (which failed) pulled the core
-  bool too_coarse = false;    // whether a way failed on a surface too coarse (SurfaceTooCoarse)
-  for (const Strategy& strategy : kStrategies) {
-    // The way without layers repeats the way before it (lattice points, no lattice faces, so no
-    // sweep) when that one places no layers either.
-    if (&strategy != kStrategies && !strategy.layers && !strategy.lattice_faces &&
-        strategy.lattice_points && boundary_layers_placed(parameters, *(&strategy - 1), false) == 0)
-      continue;
-    // The lattice without the core pulled repeats the first way when that one pulled nothing.
-    if (&strategy == kStrategies + 1 && !first_pulled) continue;
-    // A finer surface only where a surface was too coarse.
-    if (strategy.deflection_factor != 1.0 && !too_coarse) continue;
-    ++nb_tried;
-    MeshShapeReport attempt = report;
-    const auto attempt_start = PhaseTimer::Clock::now();
+  // 3. The attempts, simplest input last; what failed is reported. Faces narrower than
+  // kNarrowFace h are merged away first (merge_narrow_faces); where every way fails so, or the
+  // shape is refused as broken (a merge can bring two faces' triangles across each other), all
+  // the ways run again without (and what they say is what the user gets).
+  const MeshShapeReport before_attempts = report;
+  // (The ways' sizes are at most 1.1 times the size asked for.)
+  const std::vector<char> narrow_at_most = narrow_faces(shape, kNarrowFace * 1.1 * parameters.size);
+  const bool any_narrow =
+      std::find(narrow_at_most.begin(), narrow_at_most.end(), 1) != narrow_at_most.end();
+  for (const bool narrow : {true, false}) {
+    if (narrow && !any_narrow) continue;
+    report = before_attempts;
     try {
-      TetMesh mesh = mesh_attempt(shape, given_items, frame, sharp, regions_brep, parameters,
-                                  strategy, attempt, tet10, progress);
-      attempt.strategy = strategy.name;
-      add_phase_seconds(attempt.phase_seconds, "shape", shape_seconds);
-      if (failed_seconds > 0)
-        add_phase_seconds(attempt.phase_seconds, "failed attempts", failed_seconds);
-      report = std::move(attempt);
-      return mesh;
-    } catch (const TetrahedralizeFailure& e) {
-      too_coarse = too_coarse || dynamic_cast<const SurfaceTooCoarse*>(&e) != nullptr;
-      if (&strategy == kStrategies)
-        first_pulled =
-            attempt.nb_pulled_points + attempt.nb_narrow_pyramids + attempt.nb_inner_apexes > 0;
-      report.failed_strategies.push_back(std::string(strategy.name) + ": " + e.what());
-      failures += std::string(failures.empty() ? "" : "; ") + strategy.name + ": " + e.what();
-      failed_seconds += seconds_since(attempt_start);
+      std::string failures;
+      double failed_seconds = 0;
+      int nb_tried = 0;
+      bool first_pulled = false;  // whether the first way (which failed) pulled the core
+      bool too_coarse = false;    // whether a way failed on a surface too coarse (SurfaceTooCoarse)
+      for (const Strategy& strategy : kStrategies) {
+        // The way without layers repeats the way before it (lattice points, no lattice faces, so
+        // no sweep) when that one places no layers either.
+        if (&strategy != kStrategies && !strategy.layers && !strategy.lattice_faces &&
+            strategy.lattice_points &&
+            boundary_layers_placed(parameters, *(&strategy - 1), false) == 0)
+          continue;
+        // The lattice without the core pulled repeats the first way when that one pulled nothing.
+        if (&strategy == kStrategies + 1 && !first_pulled) continue;
+        // A finer surface only where a surface was too coarse.
+        if (strategy.deflection_factor != 1.0 && !too_coarse) continue;
+        ++nb_tried;
+        MeshShapeReport attempt = report;
+        const auto attempt_start = PhaseTimer::Clock::now();
+        try {
+          TetMesh mesh = mesh_attempt(shape, given_items, frame, sharp, regions_brep, parameters,
+                                      strategy, narrow, attempt, tet10, progress);
+          attempt.strategy = strategy.name;
+          add_phase_seconds(attempt.phase_seconds, "shape", shape_seconds);
+          if (failed_seconds > 0)
+            add_phase_seconds(attempt.phase_seconds, "failed attempts", failed_seconds);
+          report = std::move(attempt);
+          return mesh;
+        } catch (const TetrahedralizeFailure& e) {
+          too_coarse = too_coarse || dynamic_cast<const SurfaceTooCoarse*>(&e) != nullptr;
+          if (&strategy == kStrategies)
+            first_pulled =
+                attempt.nb_pulled_points + attempt.nb_narrow_pyramids + attempt.nb_inner_apexes > 0;
+          report.failed_strategies.push_back(std::string(strategy.name) + ": " + e.what());
+          failures += std::string(failures.empty() ? "" : "; ") + strategy.name + ": " + e.what();
+          failed_seconds += seconds_since(attempt_start);
+        }
+      }
+      throw InputError("mesh_shape: could not tetrahedralise the shape at size " +
+                       std::to_string(parameters.size) + " in any of " + std::to_string(nb_tried) +
+                       " ways of placing the points (" + failures + ")");
+    } catch (const InputError&) {
+      if (!narrow) throw;
     }
   }
-  throw InputError("mesh_shape: could not tetrahedralise the shape at size " +
-                   std::to_string(parameters.size) + " in any of " + std::to_string(nb_tried) +
-                   " ways of placing the points (" + failures + ")");
+  throw std::logic_error("mesh_shape: unreachable");
 }
 
 TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Frame& frame,
                      const SharpFeatures& sharp, const std::string& regions_brep,
-                     const MeshShapeParameters& parameters, const Strategy& strategy,
+                     const MeshShapeParameters& parameters, const Strategy& strategy, bool narrow,
                      MeshShapeReport& report, Tet10Mesh* tet10, const ProgressCallback& progress) {
   PhaseTimer clock(report.phase_seconds);
   // Each step's end: its time, and the progress of this way of placing the points ("mesh shape:
@@ -412,6 +434,11 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
   // boundary then stays within 1e-5 h of the CAD there.
   Surface surface =
       triangulate(shape, deflection, 1e-5 * h + 2e-8 * shape.diagonal + 1e-12, face_names);
+  // Faces narrower than kNarrowFace h (a step 0.001 mm high along a KiCad pin socket's holes,
+  // 2.2e-4 h at its 20k size: triangles of 0.2 degrees) are no faces at this size: merged away
+  // (the boundary stays within that of the CAD). Where that makes the surface touch itself or
+  // leave a gap, not.
+  if (narrow) report.nb_narrow_faces = merge_narrow_faces(surface, shape, kNarrowFace * h);
   // The volume BRepMesh's triangles enclose: the CAD's within the chord deflection.
   const double triangulated_volume =
       enclosed_volume(surface.nodes, surface.triangles, shape.face_solid_count);

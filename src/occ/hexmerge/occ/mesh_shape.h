@@ -267,6 +267,10 @@ struct MeshShapeReport {
   /// the same ends, narrower than the chord deflection (slivers): no triangle on them, the
   /// faces across joined along one chain of segments
   std::size_t nb_zipped_faces = 0;
+  /// faces narrower than 9e-4 h (twice their area over their perimeter) merged away, their nodes
+  /// and those within that of them one node (none where that made the surface touch itself or
+  /// leave a gap, or where every way failed or the shape was refused so: then the ways ran again)
+  std::size_t nb_narrow_faces = 0;
   /// whether the surface repairs ran again from BRepMesh's triangles, each kept within the chord
   /// deflection of its face, because the surface they made first crossed itself
   bool bounded_surface_repairs = false;

@@ -29,6 +29,19 @@ class NodeHash {
   }
   /// The first node found within `tolerance` (at most the cell's side) of p, or -1.
   int find(const Vec3& p, double tolerance) const {
+    return find_if(p, tolerance, [](int) { return true; });
+  }
+  /// Calls f(n) for every node n within `tolerance` (at most the cell's side) of p.
+  template <class F>
+  void for_each_within(const Vec3& p, double tolerance, const F& f) const {
+    find_if(p, tolerance, [&](int n) {
+      f(n);
+      return false;
+    });
+  }
+  /// The same, among the nodes n for which `wanted(n)` holds.
+  template <class Wanted>
+  int find_if(const Vec3& p, double tolerance, const Wanted& wanted) const {
     const std::array<long long, 3> c = cell_of(p);
     for (long long i = c[0] - 1; i <= c[0] + 1; ++i)
       for (long long j = c[1] - 1; j <= c[1] + 1; ++j)
@@ -36,7 +49,7 @@ class NodeHash {
           const auto it = cells_.find(hash(i, j, k));
           if (it == cells_.end()) continue;
           for (int n : it->second)
-            if ((nodes_[n] - p).norm() <= tolerance) return n;
+            if ((nodes_[n] - p).norm() <= tolerance && wanted(n)) return n;
         }
     return -1;
   }

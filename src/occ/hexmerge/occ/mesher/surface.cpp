@@ -2,9 +2,11 @@
 
 #include <BRepAdaptor_Curve.hxx>
 #include <BRepAdaptor_Surface.hxx>
+#include <BRepGProp.hxx>
 #include <BRepMesh_IncrementalMesh.hxx>
 #include <BRepTools.hxx>
 #include <BRep_Tool.hxx>
+#include <GProp_GProps.hxx>
 #include <Geom2d_Curve.hxx>
 #include <Geom_Surface.hxx>
 #include <Poly_PolygonOnTriangulation.hxx>
@@ -34,6 +36,7 @@
 #include "hexmerge/core/error.h"
 #include "hexmerge/occ/mesher/shape.h"
 #include "hexmerge/occ/mesher/spatial.h"
+#include "hexmerge/occ/mesher/surface_check.h"
 
 namespace hexmerge::mesher {
 namespace {
@@ -357,6 +360,58 @@ void remove_folds(Surface& surface, double tolerance) {
   }
   remove_coincident_triangles(surface);
   drop_unused_nodes(surface);
+}
+
+std::vector<char> narrow_faces(const Shape& s, double width) {
+  std::vector<char> narrow(static_cast<std::size_t>(s.faces.Extent()), 0);
+  for (int f = 1; f <= s.faces.Extent() && width > 0; ++f) {
+    GProp_GProps area;
+    BRepGProp::SurfaceProperties(s.faces(f), area);
+    double perimeter = 0;
+    for (TopExp_Explorer e(s.faces(f), TopAbs_EDGE); e.More(); e.Next())
+      perimeter += s.edge_length[static_cast<std::size_t>(s.edges.FindIndex(e.Current()) - 1)];
+    narrow[static_cast<std::size_t>(f - 1)] = perimeter > 0 && 2 * area.Mass() < width * perimeter;
+  }
+  return narrow;
+}
+
+std::size_t merge_narrow_faces(Surface& surface, const Shape& s, double width) {
+  if (!(width > 0) || surface.nodes.empty()) return 0;
+  const std::vector<char> narrow = narrow_faces(s, width);
+  if (std::find(narrow.begin(), narrow.end(), 1) == narrow.end()) return 0;
+  std::vector<char> on_narrow(surface.nodes.size(), 0);
+  std::size_t faces = 0;
+  std::vector<char> counted(narrow.size(), 0);
+  for (const SurfaceTriangle& t : surface.triangles)
+    if (narrow[static_cast<std::size_t>(t.face)]) {
+      for (const int n : t.node) on_narrow[static_cast<std::size_t>(n)] = 1;
+      faces += !counted[static_cast<std::size_t>(t.face)];
+      counted[static_cast<std::size_t>(t.face)] = 1;
+    }
+  NodeHash hash(surface.nodes, width);
+  for (int n = 0; n < static_cast<int>(surface.nodes.size()); ++n) hash.add(n);
+  std::vector<int> root(surface.nodes.size());
+  for (std::size_t v = 0; v < root.size(); ++v) root[v] = static_cast<int>(v);
+  const auto find = [&](int v) {
+    while (root[v] != v) v = root[v] = root[root[v]];
+    return v;
+  };
+  for (int n = 0; n < static_cast<int>(surface.nodes.size()); ++n) {
+    if (!on_narrow[static_cast<std::size_t>(n)]) continue;
+    hash.for_each_within(surface.nodes[n], width, [&](int m) {
+      const int a = find(n), b = find(m);
+      if (a != b) root[std::max(a, b)] = std::min(a, b);
+    });
+  }
+  Surface merged = surface;
+  for (std::size_t v = 0; v < root.size(); ++v)
+    merged.nodes[v] = surface.nodes[static_cast<std::size_t>(find(static_cast<int>(v)))];
+  remove_folds(merged, 1e-9 * width);
+  if (!find_overused_sides(merged, s.face_solids, s.edge_faces).empty() ||
+      !faces_with_open_sides(merged).empty())
+    return 0;
+  surface = std::move(merged);
+  return faces;
 }
 
 namespace {
