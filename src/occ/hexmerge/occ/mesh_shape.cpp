@@ -8,7 +8,6 @@
 #include <limits>
 #include <optional>
 #include <sstream>
-#include <stdexcept>
 #include <utility>
 #include <vector>
 
@@ -140,55 +139,6 @@ struct GivenItems {
   ItemNumbering faces, edges;
 };
 
-// "Face3,Face5": faces numbered from 1.
-std::string faces_text(const std::vector<int>& faces) {
-  std::string out;
-  for (const int f : faces) out += (out.empty() ? "Face" : ",Face") + std::to_string(f);
-  return out;
-}
-
-// The face layers on the shape's faces, checked: faces that exist, a first layer not thicker
-// than h.
-std::vector<FaceLayerSpec> face_layer_specs(const std::vector<FaceLayers>& entries,
-                                            const ItemNumbering& faces, double h) {
-  std::vector<FaceLayerSpec> out;
-  for (const FaceLayers& entry : entries) {
-    const std::string what = "boundary layers on " + faces_text(entry.faces);
-    if (entry.thickness > h)
-      throw InputError("parameter 'face_layers': " + what + ": the first layer's thickness " +
-                           parameter_number_text(entry.thickness) + " is larger than the size " +
-                           parameter_number_text(h) +
-                           ": boundary layers are finer than the mesh, give a thickness of at "
-                           "most the size",
-                       Entity::Parameter);
-    FaceLayerSpec spec{{}, entry.layers, entry.thickness, entry.growth};
-    for (const int f : entry.faces)
-      for (const int i : faces.items(f, "face_layers", what)) spec.faces.push_back(i);
-    out.push_back(spec);
-  }
-  return out;
-}
-
-// Fails naming the first face-layer entry whose faces got no point in the first layer: no node
-// of theirs off their edges, or no room anywhere.
-void check_face_layers_placed(const std::vector<FaceLayers>& entries,
-                              const std::vector<FaceLayersApplied>& applied, double h) {
-  for (std::size_t e = 0; e < entries.size() && e < applied.size(); ++e) {
-    if (applied[e].nb_per_layer.empty() || applied[e].nb_per_layer[0] > 0) continue;
-    throw InputError(
-        "parameter 'face_layers': boundary layers on " + faces_text(entries[e].faces) +
-            (applied[e].nb_nodes == 0
-                 ? ": at size " + parameter_number_text(h) +
-                       " the face has no surface node off its edges to grow layers from (give "
-                       "a smaller size, or a local size on the face)"
-                 : ": no room for a first layer " + parameter_number_text(entries[e].thickness) +
-                       " deep at any of its " + std::to_string(applied[e].nb_nodes) +
-                       " nodes (the shape is thinner there, or the face is shared by two "
-                       "solids)"),
-        Entity::Parameter);
-  }
-}
-
 // The number (1-based) the shape as given has for item `item` of the shape meshed (gluing
 // touching solids splits and merges items: the first given item naming it); 0 for none.
 int given_number(const ItemNumbering& numbering, int item) {
@@ -220,11 +170,13 @@ std::vector<SharpFeatureReport> sharp_feature_reports(const SharpFeatures& sharp
 
 // One attempt: steps 3 to 14 of mesh_shape() with one strategy; the Tet10 mesh too when
 // `tet10` is given. `sharp`: the shape's sharp features (the report has them), whose surface
-// nodes the attempt reports.
+// nodes the attempt reports. `narrow`: the faces' widths (face_widths()), where faces narrower
+// than kNarrowFace h are merged away; null: none.
 TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Frame& frame,
                      const SharpFeatures& sharp, const std::string& regions_brep,
-                     const MeshShapeParameters& parameters, const Strategy& strategy, bool narrow,
-                     MeshShapeReport& report, Tet10Mesh* tet10, const ProgressCallback& progress);
+                     const MeshShapeParameters& parameters, const Strategy& strategy,
+                     const std::vector<double>* narrow, MeshShapeReport& report, Tet10Mesh* tet10,
+                     const ProgressCallback& progress);
 
 // mesh_shape() and, with `tet10`, mesh_shape_tet10().
 TetMesh mesh_shape_impl(const std::string& brep, const MeshShapeParameters& parameters,
@@ -336,66 +288,68 @@ TetMesh mesh_shape_impl(const std::string& brep, const MeshShapeParameters& para
   // shape is refused as broken (a merge can bring two faces' triangles across each other), all
   // the ways run again without (and what they say is what the user gets).
   const MeshShapeReport before_attempts = report;
-  // (The ways' sizes are at most 1.1 times the size asked for.)
-  const std::vector<char> narrow_at_most = narrow_faces(shape, kNarrowFace * 1.1 * parameters.size);
-  const bool any_narrow =
-      std::find(narrow_at_most.begin(), narrow_at_most.end(), 1) != narrow_at_most.end();
-  for (const bool narrow : {true, false}) {
-    if (narrow && !any_narrow) continue;
+  // `narrow`: the faces' widths, where faces narrower than kNarrowFace h are merged away.
+  const auto run_ways = [&](const std::vector<double>* narrow) {
     report = before_attempts;
-    try {
-      std::string failures;
-      double failed_seconds = 0;
-      int nb_tried = 0;
-      bool first_pulled = false;  // whether the first way (which failed) pulled the core
-      bool too_coarse = false;    // whether a way failed on a surface too coarse (SurfaceTooCoarse)
-      for (const Strategy& strategy : kStrategies) {
-        // The way without layers repeats the way before it (lattice points, no lattice faces, so
-        // no sweep) when that one places no layers either.
-        if (&strategy != kStrategies && !strategy.layers && !strategy.lattice_faces &&
-            strategy.lattice_points &&
-            boundary_layers_placed(parameters, *(&strategy - 1), false) == 0)
-          continue;
-        // The lattice without the core pulled repeats the first way when that one pulled nothing.
-        if (&strategy == kStrategies + 1 && !first_pulled) continue;
-        // A finer surface only where a surface was too coarse.
-        if (strategy.deflection_factor != 1.0 && !too_coarse) continue;
-        ++nb_tried;
-        MeshShapeReport attempt = report;
-        const auto attempt_start = PhaseTimer::Clock::now();
-        try {
-          TetMesh mesh = mesh_attempt(shape, given_items, frame, sharp, regions_brep, parameters,
-                                      strategy, narrow, attempt, tet10, progress);
-          attempt.strategy = strategy.name;
-          add_phase_seconds(attempt.phase_seconds, "shape", shape_seconds);
-          if (failed_seconds > 0)
-            add_phase_seconds(attempt.phase_seconds, "failed attempts", failed_seconds);
-          report = std::move(attempt);
-          return mesh;
-        } catch (const TetrahedralizeFailure& e) {
-          too_coarse = too_coarse || dynamic_cast<const SurfaceTooCoarse*>(&e) != nullptr;
-          if (&strategy == kStrategies)
-            first_pulled =
-                attempt.nb_pulled_points + attempt.nb_narrow_pyramids + attempt.nb_inner_apexes > 0;
-          report.failed_strategies.push_back(std::string(strategy.name) + ": " + e.what());
-          failures += std::string(failures.empty() ? "" : "; ") + strategy.name + ": " + e.what();
-          failed_seconds += seconds_since(attempt_start);
-        }
+    std::string failures;
+    double failed_seconds = 0;
+    int nb_tried = 0;
+    bool first_pulled = false;  // whether the first way (which failed) pulled the core
+    bool too_coarse = false;    // whether a way failed on a surface too coarse (SurfaceTooCoarse)
+    for (const Strategy& strategy : kStrategies) {
+      // The way without layers repeats the way before it (lattice points, no lattice faces, so
+      // no sweep) when that one places no layers either.
+      if (&strategy != kStrategies && !strategy.layers && !strategy.lattice_faces &&
+          strategy.lattice_points &&
+          boundary_layers_placed(parameters, *(&strategy - 1), false) == 0)
+        continue;
+      // The lattice without the core pulled repeats the first way when that one pulled nothing.
+      if (&strategy == kStrategies + 1 && !first_pulled) continue;
+      // A finer surface only where a surface was too coarse.
+      if (strategy.deflection_factor != 1.0 && !too_coarse) continue;
+      ++nb_tried;
+      MeshShapeReport attempt = report;
+      const auto attempt_start = PhaseTimer::Clock::now();
+      try {
+        TetMesh mesh = mesh_attempt(shape, given_items, frame, sharp, regions_brep, parameters,
+                                    strategy, narrow, attempt, tet10, progress);
+        attempt.strategy = strategy.name;
+        add_phase_seconds(attempt.phase_seconds, "shape", shape_seconds);
+        if (failed_seconds > 0)
+          add_phase_seconds(attempt.phase_seconds, "failed attempts", failed_seconds);
+        report = std::move(attempt);
+        return mesh;
+      } catch (const TetrahedralizeFailure& e) {
+        too_coarse = too_coarse || dynamic_cast<const SurfaceTooCoarse*>(&e) != nullptr;
+        if (&strategy == kStrategies)
+          first_pulled =
+              attempt.nb_pulled_points + attempt.nb_narrow_pyramids + attempt.nb_inner_apexes > 0;
+        report.failed_strategies.push_back(std::string(strategy.name) + ": " + e.what());
+        failures += std::string(failures.empty() ? "" : "; ") + strategy.name + ": " + e.what();
+        failed_seconds += seconds_since(attempt_start);
       }
-      throw InputError("mesh_shape: could not tetrahedralise the shape at size " +
-                       std::to_string(parameters.size) + " in any of " + std::to_string(nb_tried) +
-                       " ways of placing the points (" + failures + ")");
+    }
+    throw InputError("mesh_shape: could not tetrahedralise the shape at size " +
+                     std::to_string(parameters.size) + " in any of " + std::to_string(nb_tried) +
+                     " ways of placing the points (" + failures + ")");
+  };
+  // (The ways' sizes are at most 1.1 times the size asked for.)
+  const std::vector<double> widths = face_widths(shape);
+  if (std::any_of(widths.begin(), widths.end(),
+                  [&](double w) { return w < kNarrowFace * 1.1 * parameters.size; })) {
+    try {
+      return run_ways(&widths);
     } catch (const InputError&) {
-      if (!narrow) throw;
     }
   }
-  throw std::logic_error("mesh_shape: unreachable");
+  return run_ways(nullptr);
 }
 
 TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Frame& frame,
                      const SharpFeatures& sharp, const std::string& regions_brep,
-                     const MeshShapeParameters& parameters, const Strategy& strategy, bool narrow,
-                     MeshShapeReport& report, Tet10Mesh* tet10, const ProgressCallback& progress) {
+                     const MeshShapeParameters& parameters, const Strategy& strategy,
+                     const std::vector<double>* narrow, MeshShapeReport& report, Tet10Mesh* tet10,
+                     const ProgressCallback& progress) {
   PhaseTimer clock(report.phase_seconds);
   // Each step's end: its time, and the progress of this way of placing the points ("mesh shape:
   // <step>", the way's name after the first); a callback asking to stop cancels here.
@@ -438,7 +392,7 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
   // 2.2e-4 h at its 20k size: triangles of 0.2 degrees) are no faces at this size: merged away
   // (the boundary stays within that of the CAD). Where that makes the surface touch itself or
   // leave a gap, not.
-  if (narrow) report.nb_narrow_faces = merge_narrow_faces(surface, shape, kNarrowFace * h);
+  if (narrow) report.nb_narrow_faces = merge_narrow_faces(surface, shape, *narrow, kNarrowFace * h);
   // The volume BRepMesh's triangles enclose: the CAD's within the chord deflection.
   const double triangulated_volume =
       enclosed_volume(surface.nodes, surface.triangles, shape.face_solid_count);

@@ -2,8 +2,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <string>
 #include <utility>
 
+#include "hexmerge/core/error.h"
+#include "hexmerge/core/parameter_table.h"
 #include "hexmerge/occ/mesher/common.h"
 
 namespace hexmerge::mesher {
@@ -22,6 +25,50 @@ constexpr double kCoreSlack = 0.05;
 constexpr double kOntoPlaneAngle = 70.0;
 
 }  // namespace
+
+std::string faces_text(const std::vector<int>& faces) {
+  std::string out;
+  for (const int f : faces) out += (out.empty() ? "Face" : ",Face") + std::to_string(f);
+  return out;
+}
+
+std::vector<FaceLayerSpec> face_layer_specs(const std::vector<FaceLayers>& entries,
+                                            const ItemNumbering& faces, double h) {
+  std::vector<FaceLayerSpec> out;
+  for (const FaceLayers& entry : entries) {
+    const std::string what = "boundary layers on " + faces_text(entry.faces);
+    if (entry.thickness > h)
+      throw InputError("parameter 'face_layers': " + what + ": the first layer's thickness " +
+                           parameter_number_text(entry.thickness) + " is larger than the size " +
+                           parameter_number_text(h) +
+                           ": boundary layers are finer than the mesh, give a thickness of at "
+                           "most the size",
+                       Entity::Parameter);
+    FaceLayerSpec spec{{}, entry.layers, entry.thickness, entry.growth};
+    for (const int f : entry.faces)
+      for (const int i : faces.items(f, "face_layers", what)) spec.faces.push_back(i);
+    out.push_back(spec);
+  }
+  return out;
+}
+
+void check_face_layers_placed(const std::vector<FaceLayers>& entries,
+                              const std::vector<FaceLayersApplied>& applied, double h) {
+  for (std::size_t e = 0; e < entries.size() && e < applied.size(); ++e) {
+    if (applied[e].nb_per_layer.empty() || applied[e].nb_per_layer[0] > 0) continue;
+    throw InputError(
+        "parameter 'face_layers': boundary layers on " + faces_text(entries[e].faces) +
+            (applied[e].nb_nodes == 0
+                 ? ": at size " + parameter_number_text(h) +
+                       " the face has no surface node off its edges to grow layers from (give "
+                       "a smaller size, or a local size on the face)"
+                 : ": no room for a first layer " + parameter_number_text(entries[e].thickness) +
+                       " deep at any of its " + std::to_string(applied[e].nb_nodes) +
+                       " nodes (the shape is thinner there, or the face is shared by two "
+                       "solids)"),
+        Entity::Parameter);
+  }
+}
 
 double FaceLayerSpec::depth(int k) const {
   double sum = 0, step = thickness;

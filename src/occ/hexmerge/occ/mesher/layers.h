@@ -5,11 +5,13 @@
 /// where there is room, so that TetGen's tets there recombine into prisms.
 
 #include <cstddef>
+#include <string>
 #include <vector>
 
 #include "hexmerge/geometry/vec3.h"
 #include "hexmerge/occ/mesh_shape.h"
 #include "hexmerge/occ/mesher/lattice.h"
+#include "hexmerge/occ/mesher/local_size.h"
 #include "hexmerge/occ/mesher/surface.h"
 #include "hexmerge/occ/mesher/sweep.h"
 
@@ -25,6 +27,21 @@ struct FaceLayerSpec {
   /// The depth of layer k (1-based) from the face: thickness (1 + growth + ... + growth^(k-1)).
   double depth(int k) const;
 };
+
+/// "Face3,Face5": faces numbered from 1.
+std::string faces_text(const std::vector<int>& faces);
+
+/// The face layers on the shape's faces, checked: faces that exist, a first layer not thicker
+/// than h.
+/// @throws InputError (Entity::Parameter) naming the entry otherwise
+std::vector<FaceLayerSpec> face_layer_specs(const std::vector<FaceLayers>& entries,
+                                            const ItemNumbering& faces, double h);
+
+/// Fails naming the first face-layer entry whose faces got no point in the first layer: no node
+/// of theirs off their edges, or no room anywhere.
+/// @throws InputError (Entity::Parameter)
+void check_face_layers_placed(const std::vector<FaceLayers>& entries,
+                              const std::vector<FaceLayersApplied>& applied, double h);
 
 /// Drops the kept lattice points nearer to a face of `specs` than its layers' depth (grown by
 /// the depths' variation) plus `margin` plus half a lattice cell, so that the core, its closing

@@ -362,22 +362,25 @@ void remove_folds(Surface& surface, double tolerance) {
   drop_unused_nodes(surface);
 }
 
-std::vector<char> narrow_faces(const Shape& s, double width) {
-  std::vector<char> narrow(static_cast<std::size_t>(s.faces.Extent()), 0);
-  for (int f = 1; f <= s.faces.Extent() && width > 0; ++f) {
+std::vector<double> face_widths(const Shape& s) {
+  std::vector<double> width(static_cast<std::size_t>(s.faces.Extent()),
+                            std::numeric_limits<double>::infinity());
+  for (int f = 1; f <= s.faces.Extent(); ++f) {
     GProp_GProps area;
     BRepGProp::SurfaceProperties(s.faces(f), area);
     double perimeter = 0;
     for (TopExp_Explorer e(s.faces(f), TopAbs_EDGE); e.More(); e.Next())
       perimeter += s.edge_length[static_cast<std::size_t>(s.edges.FindIndex(e.Current()) - 1)];
-    narrow[static_cast<std::size_t>(f - 1)] = perimeter > 0 && 2 * area.Mass() < width * perimeter;
+    if (perimeter > 0) width[static_cast<std::size_t>(f - 1)] = 2 * area.Mass() / perimeter;
   }
-  return narrow;
+  return width;
 }
 
-std::size_t merge_narrow_faces(Surface& surface, const Shape& s, double width) {
+std::size_t merge_narrow_faces(Surface& surface, const Shape& s,
+                               const std::vector<double>& face_width, double width) {
   if (!(width > 0) || surface.nodes.empty()) return 0;
-  const std::vector<char> narrow = narrow_faces(s, width);
+  std::vector<char> narrow(face_width.size(), 0);
+  for (std::size_t f = 0; f < face_width.size(); ++f) narrow[f] = face_width[f] < width;
   if (std::find(narrow.begin(), narrow.end(), 1) == narrow.end()) return 0;
   std::vector<char> on_narrow(surface.nodes.size(), 0);
   std::size_t faces = 0;

@@ -96,14 +96,15 @@ Surface triangulate(const Shape& s, double deflection, double tolerance,
 /// point of face 5, in folds), and TetGen stops on coincident nodes.
 void remove_folds(Surface& surface, double tolerance);
 
-/// Per face of `s`, whether it is narrower than `width` (twice its area over its perimeter).
-std::vector<char> narrow_faces(const Shape& s, double width);
+/// Per face of `s`, its width: twice its area over its perimeter (infinite without a perimeter).
+std::vector<double> face_widths(const Shape& s);
 
-/// Faces narrower than `width` (twice their area over their perimeter) are no faces: every node
-/// of theirs and every node within `width` of one become one node (remove_folds() then takes
-/// out their triangles), unless the surface would then touch itself or have a gap (it is left as
-/// it was). Returns how many such faces had triangles and went (0: none went).
-std::size_t merge_narrow_faces(Surface& surface, const Shape& s, double width);
+/// Faces narrower than `width` (`face_width`, face_widths()) are no faces: every node of theirs
+/// and every node within `width` of one become one node (remove_folds() then takes out their
+/// triangles), unless the surface would then touch itself or have a gap (it is left as it
+/// was). Returns how many such faces had triangles and went (0: none went).
+std::size_t merge_narrow_faces(Surface& surface, const Shape& s,
+                               const std::vector<double>& face_width, double width);
 
 /// The angle at node v between the sides to a and b.
 double angle_at(const std::vector<Vec3>& nodes, int v, int a, int b);
