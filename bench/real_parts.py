@@ -49,6 +49,7 @@ import threading
 import time
 
 import benchlib
+import run_bench  # (parse_value)
 
 ROOT = benchlib.ROOT
 # The shared real parts: ../shared/cad beside the repository, or $HEXMERGE_CAD_DIR.
@@ -141,8 +142,9 @@ def first_line(e: BaseException) -> str:
     return f"{type(e).__name__}: {lines[0] if lines else ''}".strip()
 
 
-def worker(path: str, size: float) -> dict:
-    """Mesh, recombine and check one part at one size (in this process); the result row."""
+def worker(path: str, size: float, options: dict | None = None) -> dict:
+    """Mesh (with the mesher's `options`, hexmerge.mesh_parameters()), recombine and check one part
+    at one size (in this process); the result row."""
     import numpy as np
     import hexmerge
     from hexmerge import _core
@@ -153,7 +155,7 @@ def worker(path: str, size: float) -> dict:
         brep = _core.read_shape_file(path)
         out["read_s"] = time.perf_counter() - start
         out["phase"] = "mesh"
-        tets, rep = hexmerge.mesh_shape(brep, size, recombine=False)
+        tets, rep = hexmerge.mesh_shape(brep, size, recombine=False, **(options or {}))
         meshing = rep["meshing"]
         points = tets.points
         cells = tets.cell_vertices.reshape(-1, 4).astype(np.int64)
@@ -287,6 +289,8 @@ class Runner:
 
     def run(self, name: str, path: str, size: float, facts: dict, target: str) -> dict:
         cmd = [sys.executable, os.path.abspath(__file__), "--worker", path, "--size", repr(size)]
+        for option in self.args.option:
+            cmd += ["--option", option]
         env = dict(os.environ)
         env["PYTHONPATH"] = os.pathsep.join(
             [p for p in env.get("PYTHONPATH", "").split(os.pathsep) if p] + [os.path.join(ROOT, "src", "python")])
@@ -525,12 +529,19 @@ def main() -> int:
     ap.add_argument("--gmsh-reference", metavar="JSON",
                     help="Gmsh's own tet mesh at the same sizes (bench/gmsh_reference.py) for the tables' Gmsh "
                     f"columns (default: {os.path.relpath(GMSH_REFERENCE, ROOT)} when it exists; '' for none)")
+    ap.add_argument("--option", action="append", default=[], metavar="NAME=VALUE",
+                    help="a mesher option (hexmerge.mesh_parameters()), repeatable: buffer_layer=true")
     ap.add_argument("--worker", help=argparse.SUPPRESS)
     ap.add_argument("--size", type=float, help=argparse.SUPPRESS)
     args = ap.parse_args()
 
     if args.worker:
-        print(benchlib.RESULT_MARKER + json.dumps(benchlib.jsonable(worker(args.worker, args.size))), flush=True)
+        options = {}
+        for option in args.option:
+            name, _, value = option.partition("=")
+            options[name] = run_bench.parse_value(value)
+        print(benchlib.RESULT_MARKER + json.dumps(benchlib.jsonable(worker(args.worker, args.size, options))),
+              flush=True)
         return 0
     if args.table:
         with open(args.table) as f:
@@ -546,7 +557,7 @@ def main() -> int:
     header = {"commit": benchlib.git_commit(), "machine": benchlib.machine(),
               "date": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC"),
               "options": {"timeout": args.timeout, "memory": args.memory, "jobs": args.jobs,
-                          "sizes": targets, "sizes_from": args.sizes_from}}
+                          "sizes": targets, "sizes_from": args.sizes_from, "mesher": args.option}}
     with tempfile.TemporaryDirectory() as work:
         parts = find_parts(args, work)
         if not parts:

@@ -254,11 +254,12 @@ def test_bound_on_a_gmsh_mesh_is_below_our_count(gmsh_tet4) -> None:
 
 
 def test_conforming_groups_take_hexahedra_no_pyramid_can_close() -> None:
-    """Eight cubes of five tets, the inner node moved (no block): no quad face can be closed by
-    a pyramid, so one at a time (group_size=0) no hexahedron conforms; as one group all eight
-    do, and the report counts it."""
+    """Eight cubes of five tets, the inner node moved and the grid sheared (no cube near-perfect:
+    no block): no quad face can be closed by a pyramid, so one at a time (group_size=0) no
+    hexahedron conforms; as one group all eight do, and the report counts it."""
     points, tets, _ = grid(2, "five")
     points[13] += [0.1, 0.075, 0.05]  # the inner node, at (0.5, 0.5, 0.5)
+    points[:, 0] += 0.5 * points[:, 2]  # no corner square (scaled Jacobian at most 0.894)
     tets = orient(points, tets)
     alone, before = hexmerge.recombine(points, tets, group_size=0)
     assert alone.counts()["hexahedron"] == 0

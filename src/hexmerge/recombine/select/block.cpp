@@ -10,6 +10,9 @@ namespace {
 // Scaled Jacobian from which a hexahedron may join the block (Selector::select_block). The
 // share of hexahedra on lattice-seeded meshes is the same from 0.7 to 0.95.
 constexpr float kBlockQuality = 0.9f;
+// Per face of a hexahedron (cell_type.h's order: bottom, top, then the sides around), the face
+// opposite it.
+constexpr int kOppositeHexFace[6] = {1, 0, 4, 5, 2, 3};
 
 }  // namespace
 
@@ -91,6 +94,42 @@ void Selector::select_block() {
     if (near_perfect(ci)) order.push_back(ci);
   rank(order);
   take_disjoint(order);
+  // Then the hexahedra on the tets left that share a quad face with a near-perfect member, where
+  // no pyramid of their tets would close that face, and have the opposite face on the domain
+  // boundary (a core's buffer layer reaching the surface: taken one at a time, or lost to the
+  // planar-quad prisms on their tets, the member leaves the block, and the cells beside it
+  // after it).
+  std::vector<index_t> fringe;
+  for (index_t ci = 0; ci < cands_.size(); ++ci) {
+    const Candidate& c = cands_[ci];
+    if (c.type != CellType::Hex || in_block[ci] || !unclaimed(c)) continue;
+    const Sides s = sides(ci);
+    bool beside = false;
+    for (int f = 0; f < descriptor(c.type).nb_faces && !beside; ++f) {
+      const auto n = tets_behind(s, f);
+      const auto across = tets_behind(s, kOppositeHexFace[f]);
+      if (n[0] == NO_CELL || n[1] == NO_CELL || across[0] != NO_CELL || across[1] != NO_CELL)
+        continue;
+      const index_t b = block_of[n[0]];
+      beside = b != NO_INDEX && b == block_of[n[1]] && near_perfect(b) &&
+               has_quad(cands_[b], face_key(c, f));
+      // (Where a pyramid on its two tets there closes the member's face, the member stays
+      // without it.)
+      if (beside) {
+        const Sides sb = sides(b);
+        for (int g = 0; g < descriptor(cands_[b].type).nb_faces; ++g)
+          if (is_quad(cands_[b], g) && face_key(cands_[b], g) == face_key(c, f)) {
+            const auto m = tets_behind(sb, g);
+            beside = m[0] == NO_CELL || m[1] == NO_CELL ||
+                     pyramid_on(m[0], m[1], face_key(c, f)) == NO_INDEX;
+          }
+      }
+    }
+    if (beside) fringe.push_back(ci);
+  }
+  rank(fringe);
+  take_disjoint(fringe);
+  order.insert(order.end(), fringe.begin(), fringe.end());
   for (index_t ci = 0; ci < cands_.size(); ++ci) {
     const Candidate& c = cands_[ci];
     if ((c.type == CellType::Prism || (c.type == CellType::Hex && !near_perfect(ci))) &&
@@ -100,6 +139,7 @@ void Selector::select_block() {
   rank(planar);
   take_disjoint(planar);
   order.insert(order.end(), planar.begin(), planar.end());
+
   // The block hexahedron other than `except` whose quad face meets tet t (not in the block),
   // or NO_INDEX.
   auto other_quad_at = [&](index_t t, index_t except) {

@@ -6,6 +6,7 @@
 #include <iomanip>
 #include <iterator>
 #include <limits>
+#include <memory>
 #include <optional>
 #include <sstream>
 #include <utility>
@@ -19,6 +20,7 @@
 #include "hexmerge/occ/brep_text.h"
 #include "hexmerge/occ/mesher/axis_points.h"
 #include "hexmerge/occ/mesher/boundary_distance.h"
+#include "hexmerge/occ/mesher/buffer_layer.h"
 #include "hexmerge/occ/mesher/facets.h"
 #include "hexmerge/occ/mesher/improve.h"
 #include "hexmerge/occ/mesher/lattice.h"
@@ -104,13 +106,16 @@ struct Strategy {
   // The surface's chord deflection: this times MeshShapeParameters::surface_deflection. A way
   // with a finer one is tried only when a way before failed on a surface too coarse for it.
   double deflection_factor = 1.0;
+  bool buffer = false;  // the buffer layer (MeshShapeParameters::buffer_layer)
 };
 // TetGen's failures on the lattice come and go with the size (FreeCAD's plate with a hole fails
 // at h 2.25, 2.375 and 2.5 and meshes at 2.75 and 3), so the lattice is tried at a slightly finer
 // and a slightly coarser size before it is simplified (which costs most of the hexahedra).
-// The core pulled towards the surface is tried first, then the lattice as it is.
+// The core pulled towards the surface with a buffer layer is tried first, then without the
+// layer, then the lattice as it is.
 constexpr Strategy kStrategies[] = {
-    {"lattice", 1.0, true, true, true, true},
+    {"lattice", 1.0, true, true, true, true, 1.0, true},
+    {"lattice without the buffer layer", 1.0, true, true, true, true},
     {"lattice, core not pulled", 1.0, true, true, true, false},
     // Where a way's surface was too coarse (faces closer than the chord deflection that the
     // crossing rounds do not part, walls the swaps moved past their thickness), the surface at a
@@ -294,8 +299,9 @@ TetMesh mesh_shape_impl(const std::string& brep, const MeshShapeParameters& para
     std::string failures;
     double failed_seconds = 0;
     int nb_tried = 0;
-    bool first_pulled = false;  // whether the first way (which failed) pulled the core
-    bool too_coarse = false;    // whether a way failed on a surface too coarse (SurfaceTooCoarse)
+    bool first_pulled = false;    // whether the first way (which failed) pulled the core
+    bool first_buffered = false;  // whether it made a buffer layer
+    bool too_coarse = false;      // whether a way failed on a surface too coarse (SurfaceTooCoarse)
     for (const Strategy& strategy : kStrategies) {
       // The way without layers repeats the way before it (lattice points, no lattice faces, so
       // no sweep) when that one places no layers either.
@@ -303,8 +309,10 @@ TetMesh mesh_shape_impl(const std::string& brep, const MeshShapeParameters& para
           strategy.lattice_points &&
           boundary_layers_placed(parameters, *(&strategy - 1), false) == 0)
         continue;
-      // The lattice without the core pulled repeats the first way when that one pulled nothing.
-      if (&strategy == kStrategies + 1 && !first_pulled) continue;
+      // The lattice without the buffer layer repeats the first way when that one made none; the
+      // lattice without the core pulled when that one pulled nothing.
+      if (&strategy == kStrategies + 1 && !first_buffered) continue;
+      if (&strategy == kStrategies + 2 && !first_pulled) continue;
       // A finer surface only where a surface was too coarse.
       if (strategy.deflection_factor != 1.0 && !too_coarse) continue;
       ++nb_tried;
@@ -321,9 +329,11 @@ TetMesh mesh_shape_impl(const std::string& brep, const MeshShapeParameters& para
         return mesh;
       } catch (const TetrahedralizeFailure& e) {
         too_coarse = too_coarse || dynamic_cast<const SurfaceTooCoarse*>(&e) != nullptr;
-        if (&strategy == kStrategies)
+        if (&strategy == kStrategies) {
           first_pulled =
               attempt.nb_pulled_points + attempt.nb_narrow_pyramids + attempt.nb_inner_apexes > 0;
+          first_buffered = attempt.nb_buffer_faces > 0;
+        }
         report.failed_strategies.push_back(std::string(strategy.name) + ": " + e.what());
         failures += std::string(failures.empty() ? "" : "; ") + strategy.name + ": " + e.what();
         failed_seconds += seconds_since(attempt_start);
@@ -649,28 +659,23 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
   step("surface", 0.15);
 
   // 6. Everything below in frame coordinates, the nodes of lattice faces exactly on their planes.
-  const std::vector<Vec3> nodes = frame_nodes(shape, surface, lattice, sweep_axis, swept);
-  report.nb_surface_nodes = nodes.size();
-  report.nb_surface_triangles = surface.triangles.size();
-  // The surface's nodes at the CAD's sharp corners and edges (the tets' first nodes).
-  for (const int n : nodes_at(sharp, surface))
-    report.sharp_nodes.push_back(static_cast<index_t>(n));
-  Surroundings around(nodes, surface, lattice, h);
+  std::vector<Vec3> nodes = frame_nodes(shape, surface, lattice, sweep_axis, swept);
+  auto around = std::make_unique<Surroundings>(nodes, surface, lattice, h);
 
   // 7. The lattice points kept: inside, lattice_margin from the faces that are not lattice faces
   // (the layers keep out of the core after it, and improve_tets() nudges the closing pyramids'
   // apexes off the faces where that leaves a tet under 0.2). Swept, lattice_margin beyond the
   // layers: the columns recombine into hexahedra up to the layers anyway, and the layers stay
   // whole at their depth (the walls' stress in first order follows that depth, issue 15).
-  const Parity parity(nodes, surface, shape.face_solid_count, around, h);
+  auto parity = std::make_unique<Parity>(nodes, surface, shape.face_solid_count, *around, h);
   InsertedPoints inserted;
   const int nb_layers = boundary_layers_placed(parameters, strategy, sweep_axis >= 0);
   const double keep_distance =
       (parameters.lattice_margin + (sweep_axis >= 0 ? nb_layers * parameters.layer_thickness : 0)) *
       h;
-  KeptPoints kept = keep_lattice_points(lattice, around, parity, keep_distance,
+  KeptPoints kept = keep_lattice_points(lattice, *around, *parity, keep_distance,
                                         parameters.lattice_margin * h, sweep_axis);
-  clear_face_layers(layer_specs, nodes, surface, lattice, around, parameters.lattice_margin * h,
+  clear_face_layers(layer_specs, nodes, surface, lattice, *around, parameters.lattice_margin * h,
                     kept);
   step("lattice", 0.2);
 
@@ -680,7 +685,29 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
     // their room.
     const bool pull =
         strategy.pull && parameters.pull_core && nb_layers == 0 && layer_specs.empty();
-    const CoreCounts core = add_core(lattice, around, parity, kept, sweep_axis, h, inserted, pull);
+    const CoreLayout layout = lay_core(lattice, *around, *parity, kept, sweep_axis, h, pull);
+    // 8a. The buffer layer: hexahedra from the core's closing pyramids' bases to the surface,
+    // their tops put into the faces' triangles (not on lattice faces, faces with a local size
+    // or face layers, faces between two solids); the surface's nodes and what lies near them
+    // then anew.
+    BufferCells buffer;
+    if (pull && strategy.buffer && parameters.buffer_layer) {
+      std::vector<char> eligible(static_cast<std::size_t>(shape.faces.Extent()), 1);
+      for (std::size_t f = 0; f < eligible.size(); ++f)
+        eligible[f] = !lattice.lattice_face[f] && shape.face_solid_count[f] == 1 &&
+                      !(items_at_h.face_size[f] < h);
+      BufferReport made;
+      buffer = buffer_layer(shape, lattice, layout, nodes, *around, eligible, h, surface, made);
+      report.nb_buffer_hexes = made.nb_hexes;
+      report.nb_buffer_pyramids = made.nb_pyramids;
+      report.nb_buffer_faces = made.nb_faces;
+      if (made.nb_faces > 0) {
+        nodes = frame_nodes(shape, surface, lattice, sweep_axis, swept);
+        around = std::make_unique<Surroundings>(nodes, surface, lattice, h);
+        parity = std::make_unique<Parity>(nodes, surface, shape.face_solid_count, *around, h);
+      }
+    }
+    const CoreCounts core = emit_core(lattice, layout, buffer, kept, h, *around, inserted);
     report.nb_core_cells = core.nb_core_cells;
     report.nb_lattice_points = core.nb_lattice_points;
     report.nb_apex_points = core.nb_apex_points;
@@ -689,6 +716,11 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
     report.nb_inner_apexes = core.nb_inner_apexes;
   }
   step("core", 0.25);
+  report.nb_surface_nodes = nodes.size();
+  report.nb_surface_triangles = surface.triangles.size();
+  // The surface's nodes at the CAD's sharp corners and edges (the tets' first nodes).
+  for (const int n : nodes_at(sharp, surface))
+    report.sharp_nodes.push_back(static_cast<index_t>(n));
 
   // 9. Boundary layers, inside the shape (by ray parity), clear of the faces and of the core.
   // None where a local size wants finer than h: finer lattices' points fill that zone.
@@ -698,7 +730,7 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
   const std::size_t before_layers = inserted.points.size();
   report.nb_layer_points =
       place_layers(nodes, surface, shape.face_solid_count, lattice, sweep_axis, swept, nb_layers,
-                   parameters.layer_thickness * h, parameters.lattice_margin * h, parity, around,
+                   parameters.layer_thickness * h, parameters.lattice_margin * h, *parity, *around,
                    inserted, local ? &no_layers : nullptr, layer_specs, &report.face_layers);
   for (std::size_t e = 0; e < report.face_layers.size(); ++e) {
     FaceLayersApplied& applied = report.face_layers[e];
@@ -710,10 +742,10 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
   check_face_layers_placed(layer_entries, report.face_layers, h);
   if (local)
     report.nb_graded_points =
-        place_graded_points(field, lattice, parity, around, kGradedClearance, inserted);
+        place_graded_points(field, lattice, *parity, *around, kGradedClearance, inserted);
   // (Swept, every point repeats on every plane; the way without points inside has none.)
   if (sweep_axis < 0 && strategy.lattice_points)
-    report.nb_axis_points = place_axis_points(shape, lattice, around, parity, h, inserted);
+    report.nb_axis_points = place_axis_points(shape, lattice, *around, *parity, h, inserted);
   // The face layers' points (the last place_layers() added) stay at their depths: they go first
   // among the isolated points, and improve_tets() leaves every point before them in place (the
   // points on lattice faces too: finer lattices' points there keep their place then).
@@ -757,9 +789,10 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
       const std::vector<Vec3> points = tetgen::refine_facet(
           facet, input.points, kFacetAngle, kFacetRadius * h,
           [&](const Vec3& q) {
-            return !in_kept_square(lattice, kept, q, axis) && !around.core_balls.holds(q, 0) &&
-                   !around.core_points.any_within(q, kFacetClearance * h) &&
-                   !around.layer_points.any_within(q, kFacetClearance * h);
+            return !in_kept_square(lattice, kept, q, axis) && !around->core_balls.holds(q, 0) &&
+                   !around->buffer_cells.holds(q) &&
+                   !around->core_points.any_within(q, kFacetClearance * h) &&
+                   !around->layer_points.any_within(q, kFacetClearance * h);
           },
           input.points.size());
       for (const Vec3& q : points) {
@@ -787,7 +820,9 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
   // The core's points pulled off the lattice (add_core()), by their place among TetGen's points,
   // with their lattice positions: improve_tets() tells the core's cells and pyramids by those.
   std::vector<std::pair<std::size_t, Vec3>> pulled;
-  if (!inserted.pulled.empty()) {
+  // The buffer's cells, by their vertices among TetGen's points: improve_tets() keeps them.
+  std::vector<std::vector<index_t>> kept_cells;
+  if (!inserted.pulled.empty() || !inserted.kept_cells.empty()) {
     NodeHash at(input.points, 1e-3 * h);
     for (std::size_t i = 0; i < given; ++i) at.add(static_cast<int>(i));
     for (const auto& [where, q] : inserted.pulled) {
@@ -800,6 +835,14 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
       if (a < 0 || b < 0 || c < 0) continue;  // (every corner is a point given)
       input.facets.push_back(Facet{{{a, b, c}}, {}, constraint_marker});
       constraints.push_back({a, b, c});
+    }
+    for (const std::vector<Vec3>& cell : inserted.kept_cells) {
+      std::vector<index_t> vertices;
+      for (const Vec3& q : cell) {
+        const int i = at.find(q, 1e-6 * h);
+        if (i >= 0) vertices.push_back(static_cast<index_t>(i));
+      }
+      if (vertices.size() == cell.size()) kept_cells.push_back(std::move(vertices));
     }
   }
   input.to_world = [&](const Vec3& p) { return lattice.frame.to_world(p); };
@@ -844,7 +887,7 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
     in_frame.points = std::move(tets.points);
     in_frame.tets = std::move(tets.tets);
     report.nb_void_tets = remove_outside_components(
-        in_frame, tets.boundary, [&](const Vec3& q) { return parity.inside(q); });
+        in_frame, tets.boundary, [&](const Vec3& q) { return parity->inside(q); });
     tets.points = std::move(in_frame.points);
     tets.tets = std::move(in_frame.tets);
   }
@@ -882,6 +925,7 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
   // that took them to 0.2-0.3 lost gmsh_part's core block at its 250k size: 78.5 % hex volume
   // against 90.8 % kept).
   improve.pyramid_floor = RecombineParameters{}.min_scaled_jacobian;
+  improve.kept_cells = std::move(kept_cells);
   std::vector<std::int32_t> boundary_face(tets.boundary_marker.size());
   for (std::size_t i = 0; i < boundary_face.size(); ++i)
     boundary_face[i] = static_cast<std::int32_t>(tets.boundary_marker[i]) - 1;

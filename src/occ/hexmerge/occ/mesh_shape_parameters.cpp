@@ -56,6 +56,13 @@ ParameterTable<MeshShapeParameters> make_table() {
            "circumsphere (narrow cells beside wide ones) or is placed nearer the face (the "
            "centre of the cell across outside the shape), which would otherwise leave the core; "
            "when TetGen fails on them the lattice is tried without"),
+      flag(&P::buffer_layer, "buffer_layer", "Buffer layer",
+           "With the core pulled: hexahedra between the core's closing pyramids' bases and the "
+           "surface (off by default: more hexahedra, but a lower smallest scaled Jacobian on some "
+           "parts), the bases' corners projected onto one CAD face (not a lattice face, a face "
+           "with a local size or one between two solids) and the face triangulated again with "
+           "their tops in it; their open side faces closed by pyramids; when TetGen fails on "
+           "them the pulled core is tried without"),
       number(&P::tetgen_time_limit, "tetgen_time_limit", "s", 0, 86400, "TetGen time limit",
              "Time limit of one TetGen run (0: 30 s plus 1 ms per point); a run past it, or one "
              "that leaves no tet, is restarted with the lattice faces' loops started elsewhere, "

@@ -131,7 +131,7 @@ TEST(lay_lattice, planes_placed_on_faces_no_spacing_fits) {
       mesher::keep_lattice_points(l, *placed.around, *placed.parity, 0.3 * h, 0.3 * h, true);
   mesher::InsertedPoints inserted;
   const mesher::CoreCounts core =
-      mesher::add_core(l, *placed.around, *placed.parity, kept, -1, h, inserted);
+      add_core(l, *placed.around, *placed.parity, kept, -1, h, inserted);
   // Every cell of the shape is a core cell: the step's cells fill it exactly.
   std::size_t inside = 0;
   for (int k = 0; k < l.cells[2]; ++k)
@@ -269,7 +269,7 @@ TEST(keep_lattice_points, inside_and_clear_of_the_curved_faces) {
 
   mesher::InsertedPoints inserted;
   const mesher::CoreCounts core =
-      mesher::add_core(l, *placed.around, *placed.parity, kept, -1, h, inserted);
+      add_core(l, *placed.around, *placed.parity, kept, -1, h, inserted);
   EXPECT_GT(core.nb_core_cells, 0u);
   EXPECT_EQ(inserted.points.size(), core.nb_lattice_points + core.nb_apex_points);
   EXPECT_LE(core.nb_lattice_points, nb_kept);
@@ -301,7 +301,7 @@ TEST(add_core, box_is_all_core) {
   for (char k : kept.kept) EXPECT_TRUE(k);
   mesher::InsertedPoints inserted;
   const mesher::CoreCounts core =
-      mesher::add_core(l, *placed.around, *placed.parity, kept, -1, h, inserted);
+      add_core(l, *placed.around, *placed.parity, kept, -1, h, inserted);
   const std::size_t cells = static_cast<std::size_t>(l.cells[0]) * l.cells[1] * l.cells[2];
   const std::size_t points =
       static_cast<std::size_t>(l.cells[0] + 1) * (l.cells[1] + 1) * (l.cells[2] + 1);

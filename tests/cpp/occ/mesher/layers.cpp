@@ -75,12 +75,11 @@ TEST(place_layers, keep_out_of_the_core_laid_first) {
     std::size_t placed = core_first ? 0 : lay();
     const mesher::KeptPoints kept =
         mesher::keep_lattice_points(p.lattice, around, parity, margin, margin, true);
-    core = mesher::add_core(p.lattice, around, parity, kept, -1, h, inserted);
+    core = add_core(p.lattice, around, parity, kept, -1, h, inserted);
     if (core_first) placed = lay();
     // The core laid again over the layers.
     mesher::InsertedPoints again;
-    const mesher::CoreCounts second =
-        mesher::add_core(p.lattice, around, parity, kept, -1, h, again);
+    const mesher::CoreCounts second = add_core(p.lattice, around, parity, kept, -1, h, again);
     return std::make_pair(placed, second);
   };
   mesher::CoreCounts core, former_core;

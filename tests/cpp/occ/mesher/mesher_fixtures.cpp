@@ -114,4 +114,12 @@ bool occ_inside(const mesher::Shape& shape, const Vec3& p, bool& on) {
   return false;
 }
 
+mesher::CoreCounts add_core(const mesher::Lattice& lattice, mesher::Surroundings& around,
+                            const mesher::Parity& parity, const mesher::KeptPoints& kept,
+                            int sweep_axis, double h, mesher::InsertedPoints& inserted, bool pull) {
+  const mesher::CoreLayout layout =
+      mesher::lay_core(lattice, around, parity, kept, sweep_axis, h, pull);
+  return mesher::emit_core(lattice, layout, mesher::BufferCells{}, kept, h, around, inserted);
+}
+
 }  // namespace hexmerge::test

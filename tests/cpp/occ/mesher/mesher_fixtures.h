@@ -45,6 +45,13 @@ struct Prepared {
 };
 Prepared prepare(const TopoDS_Shape& solid, double h, const std::string& frame = "global");
 
+/// The hexahedral core laid and its points given to `inserted` (mesher::lay_core(), then
+/// mesher::emit_core() with no buffer layer).
+mesher::CoreCounts add_core(const mesher::Lattice& lattice, mesher::Surroundings& around,
+                            const mesher::Parity& parity, const mesher::KeptPoints& kept,
+                            int sweep_axis, double h, mesher::InsertedPoints& inserted,
+                            bool pull = false);
+
 /// Whether every directed side of the triangles is used once and its reverse once (a closed,
 /// consistently oriented surface); `problem` says where not.
 bool closed_and_oriented(const std::vector<mesher::SurfaceTriangle>& triangles,

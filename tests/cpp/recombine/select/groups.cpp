@@ -20,14 +20,19 @@ namespace {
 
 // Two by two by two cubes of five tets each (five_tet_grid): the two tets behind a face of a
 // cube are corner tets with different fourth vertices, so no pyramid closes any quad face; the
-// inner node moved off the lattice, so that no cube is near-perfect or has planar quads (the
-// block takes none). Every cube's three inner faces can only be shared with its neighbours.
+// inner node moved off the lattice and the grid sheared, so that no cube is near-perfect
+// (scaled Jacobian 0.9; the block takes a hexahedron beside a near-perfect one whose face no
+// pyramid closes) or has planar quads (the block takes none). Every cube's three inner faces can
+// only be shared with its neighbours.
 TetMesh skewed_five_tet_grid() {
   TetMesh mesh = five_tet_grid(2);
   double* inner = &mesh.points[3 * std::size_t(grid_node(2, 1, 1, 1))];
   inner[0] += 0.2;
   inner[1] += 0.15;
   inner[2] += 0.1;
+  // Sheared (x += z / 2): no corner of a cube is then square (scaled Jacobian at most 0.894).
+  for (std::size_t p = 0; p < mesh.points.size(); p += 3)
+    mesh.points[p] += 0.5 * mesh.points[p + 2];
   return mesh;
 }
 

@@ -184,6 +184,32 @@ void improve_tets(TetMesh& mesh, const std::vector<double>& frame_points,
     for (std::size_t v = 0; v < made; ++v)
       if (on_boundary[v] && surface->dimension(static_cast<index_t>(v)) > 0 && !lattice_point[v])
         movable[v] = kOnSurface;
+  // The buffer's cells: their tets stay, their vertices do not move.
+  std::unordered_map<index_t, std::vector<std::size_t>> kept_cells_at;
+  // (A pyramid's apex, a core pyramid's too, is nudged as the closing pyramids' are, the pyramid
+  // kept at pyramid_floor.)
+  std::vector<std::array<index_t, 5>> kept_pyramids = pyramids;
+  for (std::size_t c = 0; c < parameters.kept_cells.size(); ++c) {
+    const std::vector<index_t>& cell = parameters.kept_cells[c];
+    for (std::size_t k = 0; k < cell.size(); ++k) {
+      kept_cells_at[cell[k]].push_back(c);
+      if (cell.size() != 5 || k != 4) movable[cell[k]] = kFixed;
+    }
+    if (cell.size() == 5) kept_pyramids.push_back({cell[0], cell[1], cell[2], cell[3], cell[4]});
+  }
+  const auto in_kept_cell = [&](index_t t) {
+    const index_t* v = mesh.tet(t);
+    const auto it = kept_cells_at.find(v[0]);
+    if (it == kept_cells_at.end()) return false;
+    for (const std::size_t c : it->second) {
+      const std::vector<index_t>& cell = parameters.kept_cells[c];
+      bool all = true;
+      for (int k = 1; k < 4 && all; ++k)
+        all = std::find(cell.begin(), cell.end(), v[k]) != cell.end();
+      if (all) return true;
+    }
+    return false;
+  };
   for (int round = 0; round < kQualityRounds; ++round) {
     std::vector<char> fixed(mesh.nb_tets(), 0);
     for (index_t t = 0; t < mesh.nb_tets(); ++t) fixed[t] = in_one_cell(t) || in_one_slab(t);
@@ -205,6 +231,9 @@ void improve_tets(TetMesh& mesh, const std::vector<double>& frame_points,
               fixed[t] = 0;
         }
     }
+    if (!kept_cells_at.empty())
+      for (index_t t = 0; t < mesh.nb_tets(); ++t)
+        if (in_kept_cell(t)) fixed[t] = 1;
     // Boundary faces swapped by an earlier round are not in face_marker: they stay (-1).
     std::vector<std::int32_t> boundary_patch(4 * static_cast<std::size_t>(mesh.nb_tets()), -1);
     for (index_t t = 0; t < mesh.nb_tets(); ++t)
@@ -237,7 +266,7 @@ void improve_tets(TetMesh& mesh, const std::vector<double>& frame_points,
     SmoothNodesReport moves;
     SmoothNodesParameters move_parameters;
     move_parameters.pyramid_floor = parameters.pyramid_floor;
-    smooth_nodes(mesh, movable, move_parameters, moves, surface, pyramids);
+    smooth_nodes(mesh, movable, move_parameters, moves, surface, kept_pyramids);
     report.node_moves += moves.moves;
     report.boundary_node_moves += moves.surface_moves;
     if (moves.moves == 0) break;

@@ -47,6 +47,9 @@ struct ImproveParameters {
   /// recombination's min_scaled_jacobian, so that they and the core cells' hexahedra they close
   /// stay. In (0, 1].
   double pyramid_floor = 0.3;
+  /// Cells whose tets stay as they are and whose vertices do not move, by their vertices (the
+  /// buffer layer's hexahedra and pyramids: buffer_layer()).
+  std::vector<std::vector<index_t>> kept_cells;
 };
 
 /// The closing pyramids at some cell centres: at each vertex v with `apex_of[v]` (a lattice cell's

@@ -350,6 +350,7 @@ Surroundings::Surroundings(const std::vector<Vec3>& nodes, const Surface& surfac
       layer_points(box_lo, box_hi, h),
       core_points(box_lo, box_hi, h),
       core_balls(box_lo, box_hi, h),
+      buffer_cells(box_lo, box_hi, h),
       nodes_(nodes) {
   for (const SurfaceTriangle& t : surface.triangles) {
     if (!lattice.lattice_face[t.face]) curved.add(t.node);
@@ -507,19 +508,61 @@ bool in_kept_square(const Lattice& lattice, const KeptPoints& kept, const Vec3& 
   return true;
 }
 
-CoreCounts add_core(const Lattice& lattice, Surroundings& around, const Parity& parity,
-                    const KeptPoints& kept_points, int sweep_axis, double h,
-                    InsertedPoints& inserted, bool pull) {
+namespace {
+// The index of cell (i, j, k) (i fastest).
+std::size_t cell_index_of(const Lattice& lattice, int i, int j, int k) {
+  return (static_cast<std::size_t>(k) * lattice.cells[1] + j) * lattice.cells[0] + i;
+}
+// Half the diagonal of cell (i, j, k): its circumradius.
+double half_diagonal_of(const Lattice& lattice, int i, int j, int k) {
+  const double s[3] = {lattice.width(0, i), lattice.width(1, j), lattice.width(2, k)};
+  return 0.5 * std::sqrt(s[0] * s[0] + s[1] * s[1] + s[2] * s[2]);
+}
+// The sphere through the corners of face dir of cell (i, j, k) and the apex of its closing
+// pyramid (the centre of the cell n across).
+std::pair<Vec3, double> pyramid_sphere_of(const Lattice& lattice, int i, int j, int k, int dir,
+                                          const int (&n)[3]) {
+  const int axis = dir / 2, side = dir % 2 ? 1 : -1;
+  const int ijk[3] = {i, j, k};
+  const double a = 0.5 * lattice.width(axis, ijk[axis]);  // the cell's centre to the face
+  const double d = 0.5 * lattice.width(axis, n[axis]);    // the face to the apex
+  double rho2 = 0;
+  for (int b = 0; b < 3; ++b)
+    if (b != axis) rho2 += 0.25 * lattice.width(b, ijk[b]) * lattice.width(b, ijk[b]);
+  const double c = (d * d - rho2) / (2 * d);
+  Vec3 to_face{0, 0, 0}, towards{0, 0, 0};
+  set_coord(to_face, axis, side * a);
+  set_coord(towards, axis, side * d);  // from the face's centre to the apex
+  const Vec3 face_centre = lattice.cell_centre(i, j, k) + to_face;
+  return {face_centre + towards * (c / d), d - c};
+}
+// The six tets of a cell around its diagonal from corner 0 to corner 7 (corner bits x, y, z):
+// {0, q[0], q[1], 7} for each q.
+constexpr int kKuhnPaths[6][2] = {{1, 3}, {1, 5}, {2, 3}, {2, 6}, {4, 5}, {4, 6}};
+}  // namespace
+
+Vec3 CoreLayout::point_at(const Lattice& lattice, std::size_t p) const {
+  const Vec3 q = lattice.point(lattice.point_ijk(p));
+  const auto it = pulled.node.find(p);
+  return it == pulled.node.end() ? q : q + it->second;
+}
+
+Vec3 CoreLayout::apex_at(const Lattice& lattice, std::size_t c) const {
+  const Vec3 q = apex_home(lattice, inner_apex, c);
+  const auto it = pulled.apex.find(c);
+  return it == pulled.apex.end() ? q : q + it->second;
+}
+
+CoreLayout lay_core(const Lattice& lattice, const Surroundings& around, const Parity& parity,
+                    const KeptPoints& kept_points, int sweep_axis, double h, bool pull) {
   // The hexahedral core: cells with 8 kept corners whose circumsphere holds nothing else; then
   // every quad face between the core and another cell inside needs a closing pyramid whose apex
   // is that cell's centre and whose circumsphere holds nothing else, or the core cell goes.
   const int c0 = lattice.cells[0], c1 = lattice.cells[1], c2 = lattice.cells[2];
-  const int n0 = lattice.cells[0] + 1, n1 = lattice.cells[1] + 1, n2 = lattice.cells[2] + 1;
   const std::vector<char>& kept = kept_points.kept;
-  CoreCounts counts;
-  auto cell_index = [&](int i, int j, int k) {
-    return (static_cast<std::size_t>(k) * c1 + j) * c0 + i;
-  };
+  CoreLayout out;
+  CoreCounts& counts = out.counts;
+  auto cell_index = [&](int i, int j, int k) { return cell_index_of(lattice, i, j, k); };
   // The cell across face dir (0..5: -x, +x, -y, +y, -z, +z) of cell (i, j, k), in n; whether it
   // is in the lattice.
   auto across = [&](int i, int j, int k, int dir, int(&n)[3]) {
@@ -528,10 +571,7 @@ CoreCounts add_core(const Lattice& lattice, Surroundings& around, const Parity& 
     return n[0] >= 0 && n[0] < c0 && n[1] >= 0 && n[1] < c1 && n[2] >= 0 && n[2] < c2;
   };
   auto cell_centre = [&](int i, int j, int k) { return lattice.cell_centre(i, j, k); };
-  auto half_diagonal = [&](int i, int j, int k) {
-    const double s[3] = {lattice.width(0, i), lattice.width(1, j), lattice.width(2, k)};
-    return 0.5 * std::sqrt(s[0] * s[0] + s[1] * s[1] + s[2] * s[2]);
-  };
+  auto half_diagonal = [&](int i, int j, int k) { return half_diagonal_of(lattice, i, j, k); };
   std::vector<char> core(static_cast<std::size_t>(c0) * c1 * c2, 0);
   for (int k = 0; k < c2; ++k)
     for (int j = 0; j < c1; ++j)
@@ -546,22 +586,8 @@ CoreCounts add_core(const Lattice& lattice, Surroundings& around, const Parity& 
           continue;
         core[cell_index(i, j, k)] = 1;
       }
-  // The sphere through the corners of face dir of cell (i, j, k) and the apex of its closing
-  // pyramid (the centre of the cell n across).
   auto pyramid_sphere = [&](int i, int j, int k, int dir, const int(&n)[3]) {
-    const int axis = dir / 2, side = dir % 2 ? 1 : -1;
-    const int ijk[3] = {i, j, k};
-    const double a = 0.5 * lattice.width(axis, ijk[axis]);  // the cell's centre to the face
-    const double d = 0.5 * lattice.width(axis, n[axis]);    // the face to the apex
-    double rho2 = 0;
-    for (int b = 0; b < 3; ++b)
-      if (b != axis) rho2 += 0.25 * lattice.width(b, ijk[b]) * lattice.width(b, ijk[b]);
-    const double c = (d * d - rho2) / (2 * d);
-    Vec3 to_face{0, 0, 0}, towards{0, 0, 0};
-    set_coord(to_face, axis, side * a);
-    set_coord(towards, axis, side * d);  // from the face's centre to the apex
-    const Vec3 face_centre = cell_centre(i, j, k) + to_face;
-    return std::pair<Vec3, double>{face_centre + towards * (c / d), d - c};
+    return pyramid_sphere_of(lattice, i, j, k, dir, n);
   };
   // Whether the centre of cell n across face dir of cell (i, j, k) lies in that cell's
   // circumsphere.
@@ -695,21 +721,54 @@ CoreCounts add_core(const Lattice& lattice, Surroundings& around, const Parity& 
           for (int corner = 0; corner < 8; ++corner)
             core_corner[lattice.point_index(i + (corner & 1), j + ((corner >> 1) & 1),
                                             k + ((corner >> 2) & 1))] = 1;
-  const PulledCore pulled = pull && sweep_axis < 0
-                                ? pull_core(lattice, around, parity, kept_points, core, core_corner,
-                                            pyramid_faces, inner_apex, h)
-                                : PulledCore{};
-  // Where lattice point p and the apex at the centre of cell c are now: the lattice's, or pulled.
-  auto point_at = [&](std::size_t p) {
-    const Vec3 q = lattice.point(lattice.point_ijk(p));
-    const auto it = pulled.node.find(p);
-    return it == pulled.node.end() ? q : q + it->second;
+  if (pull && sweep_axis < 0)
+    out.pulled = pull_core(lattice, around, parity, kept_points, core, core_corner, pyramid_faces,
+                           inner_apex, h);
+  out.core = std::move(core);
+  out.core_corner = std::move(core_corner);
+  out.pyramid_faces = std::move(pyramid_faces);
+  out.apex_cell = std::move(apex_cell);
+  out.narrow_apexes = std::move(narrow_apexes);
+  out.inner_apex = std::move(inner_apex);
+  return out;
+}
+
+CoreCounts emit_core(const Lattice& lattice, const CoreLayout& layout, const BufferCells& buffer,
+                     const KeptPoints& kept_points, double h, Surroundings& around,
+                     InsertedPoints& inserted) {
+  const int c0 = lattice.cells[0], c1 = lattice.cells[1], c2 = lattice.cells[2];
+  const int n0 = lattice.cells[0] + 1, n1 = lattice.cells[1] + 1, n2 = lattice.cells[2] + 1;
+  const std::vector<char>& kept = kept_points.kept;
+  const std::vector<char>& core = layout.core;
+  const PulledCore& pulled = layout.pulled;
+  const std::unordered_map<std::size_t, Vec3>& inner_apex = layout.inner_apex;
+  const std::vector<PyramidFace>& pyramid_faces = layout.pyramid_faces;
+  CoreCounts counts = layout.counts;
+  auto cell_index = [&](int i, int j, int k) { return cell_index_of(lattice, i, j, k); };
+  auto cell_centre = [&](int i, int j, int k) { return lattice.cell_centre(i, j, k); };
+  auto half_diagonal = [&](int i, int j, int k) { return half_diagonal_of(lattice, i, j, k); };
+  auto pyramid_sphere = [&](int i, int j, int k, int dir, const int(&n)[3]) {
+    return pyramid_sphere_of(lattice, i, j, k, dir, n);
   };
-  auto apex_at = [&](std::size_t c) {
-    const Vec3 q = apex_home(lattice, inner_apex, c);
-    const auto it = pulled.apex.find(c);
-    return it == pulled.apex.end() ? q : q + it->second;
-  };
+  auto point_at = [&](std::size_t p) { return layout.point_at(lattice, p); };
+  auto apex_at = [&](std::size_t c) { return layout.apex_at(lattice, c); };
+  // The buffer: the pyramids its hexahedra replace, the apexes no pyramid is left at, the core
+  // cells under its hexahedra and the apexes its pyramids share with the core's.
+  std::vector<char> buffered(pyramid_faces.size(), 0);
+  std::unordered_set<std::size_t> under_hex, shared_apex;
+  for (const BufferCells::Hex& hex : buffer.hexes) {
+    buffered[hex.face] = 1;
+    const PyramidFace& f = pyramid_faces[hex.face];
+    under_hex.insert(cell_index(f.c[0], f.c[1], f.c[2]));
+  }
+  for (const BufferCells::SidePyramid& p : buffer.pyramids) shared_apex.insert(p.apex_cell);
+  std::vector<char> apex_left(core.size(), 0);  // a pyramid of the core is left at the apex
+  for (std::size_t f = 0; f < pyramid_faces.size(); ++f)
+    if (!buffered[f]) {
+      const PyramidFace& face = pyramid_faces[f];
+      apex_left[cell_index(face.n[0], face.n[1], face.n[2])] = 1;
+    }
+  auto top_at = [&](std::size_t p) { return buffer.top_of.at(p); };
   // A ball holding points a, ..., (their centroid, the farthest from it).
   auto ball_of = [](const Vec3* points, int count) {
     Vec3 centre{0, 0, 0};
@@ -740,7 +799,9 @@ CoreCounts add_core(const Lattice& lattice, Surroundings& around, const Parity& 
         around.core_balls.add(centre, r);
         moved_balls.add(centre, r);
       }
-  for (const PyramidFace& f : pyramid_faces) {
+  for (std::size_t index = 0; index < pyramid_faces.size(); ++index) {
+    if (buffered[index]) continue;
+    const PyramidFace& f = pyramid_faces[index];
     const std::size_t apex = cell_index(f.n[0], f.n[1], f.n[2]);
     Vec3 points[5];
     bool moved = pulled.apex.count(apex) > 0 || inner_apex.count(apex) > 0;
@@ -759,13 +820,27 @@ CoreCounts add_core(const Lattice& lattice, Surroundings& around, const Parity& 
     around.core_balls.add(centre, r);
     moved_balls.add(centre, r);
   }
+  // The buffer's cells' corners: a hexahedron's base (base_corners() order) and tops, a side
+  // pyramid's base (around, from lo's corner) and apex.
+  auto hex_corners = [&](const BufferCells::Hex& hex) {
+    const std::array<std::size_t, 4> base = base_corners(lattice, pyramid_faces[hex.face]);
+    std::array<Vec3, 8> at;
+    for (int m = 0; m < 4; ++m) at[m] = point_at(base[m]), at[4 + m] = hex.top[m];
+    return at;
+  };
+  auto side_corners = [&](const BufferCells::SidePyramid& p) {
+    return std::array<Vec3, 5>{point_at(p.lo), point_at(p.hi), top_at(p.hi), top_at(p.lo),
+                               apex_at(p.apex_cell)};
+  };
   // The pulled cells and pyramids are no longer cospherical: their faces go to TetGen as
   // constraints (each quad split on its diagonal from its least corner, as the cells' six tets
   // around their diagonal from the least corner split it), but those on lattice faces (the
-  // surface's own).
-  if (!pulled.node.empty() || !narrow_apexes.empty() || !inner_apex.empty()) {
-    std::set<std::array<std::size_t, 3>> seen;  // by lattice ids: points 0.., centres after
-    const std::size_t centres = kept.size();
+  // surface's own). So do the buffer's cells, but their faces on the surface.
+  if (!pulled.node.empty() || !layout.narrow_apexes.empty() || !inner_apex.empty() ||
+      !buffer.hexes.empty()) {
+    // By lattice ids: points 0.., centres after, then the tops of the points.
+    std::set<std::array<std::size_t, 3>> seen;
+    const std::size_t centres = kept.size(), tops = centres + core.size();
     auto add_triangle = [&](std::size_t a, std::size_t b, std::size_t c, const Vec3& pa,
                             const Vec3& pb, const Vec3& pc) {
       if (a < centres && b < centres && c < centres && kept_points.face[a] >= 0 &&
@@ -788,15 +863,17 @@ CoreCounts add_core(const Lattice& lattice, Surroundings& around, const Parity& 
     PointSet moved_points(around.box_lo, around.box_hi, h);
     for (const auto& [p, d] : pulled.node) moved_points.add(point_at(p));
     for (const auto& [a, d] : pulled.apex) moved_points.add(apex_at(a));
-    for (const std::size_t a : narrow_apexes)
+    for (const std::size_t a : layout.narrow_apexes)
       if (!pulled.apex.count(a)) moved_points.add(apex_at(a));
     for (const auto& [a, at] : inner_apex)
       if (!pulled.apex.count(a)) moved_points.add(apex_at(a));
+    for (const auto& [p, at] : buffer.top_of) moved_points.add(at);
     for (int k = 0; k < c2; ++k)
       for (int j = 0; j < c1; ++j)
         for (int i = 0; i < c0; ++i) {
           if (!core[cell_index(i, j, k)]) continue;
           bool moved =
+              under_hex.count(cell_index(i, j, k)) > 0 ||
               moved_points.any_within(cell_centre(i, j, k), half_diagonal(i, j, k) * (1 + 1e-6));
           for (int corner = 0; corner < 8 && !moved; ++corner)
             moved = pulled.node.count(lattice.point_index(i + (corner & 1), j + ((corner >> 1) & 1),
@@ -807,18 +884,19 @@ CoreCounts add_core(const Lattice& lattice, Surroundings& around, const Parity& 
           for (int b = 0; b < 8; ++b)
             split.corners.push_back(
                 point_at(lattice.point_index(i + (b & 1), j + ((b >> 1) & 1), k + ((b >> 2) & 1))));
-          static constexpr int kPaths[6][2] = {{1, 3}, {1, 5}, {2, 3}, {2, 6}, {4, 5}, {4, 6}};
-          for (const auto& q : kPaths) split.tets.push_back({0, q[0], q[1], 7});
+          for (const auto& q : kKuhnPaths) split.tets.push_back({0, q[0], q[1], 7});
           inserted.splits.push_back(std::move(split));
           const int ijk[3] = {i, j, k};
           for (int axis = 0; axis < 3; ++axis)
             for (int side = 0; side < 2; ++side)
               add_quad(axis, ijk[axis] + side, ijk[(axis + 1) % 3], ijk[(axis + 2) % 3]);
         }
-    for (const PyramidFace& f : pyramid_faces) {
+    for (std::size_t index = 0; index < pyramid_faces.size(); ++index) {
+      if (buffered[index]) continue;
+      const PyramidFace& f = pyramid_faces[index];
       const std::size_t a = cell_index(f.n[0], f.n[1], f.n[2]);
       const std::array<std::size_t, 4> base = base_corners(lattice, f);
-      bool moved = pulled.apex.count(a) > 0 || inner_apex.count(a) > 0;
+      bool moved = pulled.apex.count(a) > 0 || inner_apex.count(a) > 0 || shared_apex.count(a) > 0;
       for (const std::size_t p : base) moved = moved || pulled.node.count(p);
       if (!moved) {
         const auto [centre, r] = pyramid_sphere(f.c[0], f.c[1], f.c[2], f.dir, f.n);
@@ -838,6 +916,63 @@ CoreCounts add_core(const Lattice& lattice, Surroundings& around, const Parity& 
         add_triangle(p, q, centres + a, point_at(p), point_at(q), apex);
       }
     }
+    // A buffer cell: its tets go to around.buffer_cells, its corners to inserted.kept_cells.
+    auto keep_cell = [&](const InsertedPoints::Split& split) {
+      for (const std::array<int, 4>& t : split.tets)
+        around.buffer_cells.add(
+            {split.corners[t[0]], split.corners[t[1]], split.corners[t[2]], split.corners[t[3]]});
+      inserted.kept_cells.push_back(split.corners);
+    };
+    // A buffer hexahedron: the six tets around the diagonal from its base's least corner to the
+    // top of the opposite one (corner bits u, v across the base, w out of it; u and v swapped
+    // on a base facing down its axis, so that the bits are right-handed), its base the core's
+    // (constrained above) and its side faces split on the diagonal from their lesser lattice
+    // point's corner to the greater one's top, as the split has them; its top is the surface's.
+    for (const BufferCells::Hex& hex : buffer.hexes) {
+      const PyramidFace& f = pyramid_faces[hex.face];
+      const int axis = f.dir / 2;
+      const std::array<std::size_t, 4> base = base_corners(lattice, f);
+      const std::array<Vec3, 8> at = hex_corners(hex);
+      static constexpr int kBits[4][2] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
+      InsertedPoints::Split split;
+      split.corners.resize(8);
+      for (int m = 0; m < 4; ++m) {
+        const int u = kBits[m][0], v = kBits[m][1];
+        const int bits = f.dir % 2 ? u + 2 * v : v + 2 * u;
+        split.corners[static_cast<std::size_t>(bits)] = at[m];
+        split.corners[static_cast<std::size_t>(bits + 4)] = at[4 + m];
+      }
+      for (const auto& q : kKuhnPaths) split.tets.push_back({0, q[0], q[1], 7});
+      keep_cell(split);
+      inserted.splits.push_back(std::move(split));
+      add_quad(axis, f.c[axis] + f.dir % 2, f.c[(axis + 1) % 3], f.c[(axis + 2) % 3]);
+      for (int m = 0; m < 4; ++m) {
+        int lo = m, hi = (m + 1) % 4;
+        if (base[lo] > base[hi]) std::swap(lo, hi);
+        add_triangle(base[lo], base[hi], tops + base[hi], at[lo], at[hi], at[4 + hi]);
+        add_triangle(base[lo], tops + base[hi], tops + base[lo], at[lo], at[4 + hi], at[4 + lo]);
+      }
+    }
+    // A side pyramid: two tets on its base's diagonal (the hexahedron's), its sides constrained
+    // (the one on the core's side face is its neighbour pyramid's too).
+    for (const BufferCells::SidePyramid& p : buffer.pyramids) {
+      std::array<Vec3, 5> at = side_corners(p);
+      std::array<std::size_t, 5> id{p.lo, p.hi, tops + p.hi, tops + p.lo, centres + p.apex_cell};
+      // Around, so that the apex lies on the base's inner side (its diagonal kept).
+      if (det3(at[1] - at[0], at[2] - at[0], at[4] - at[0]) < 0) {
+        std::swap(at[1], at[3]);
+        std::swap(id[1], id[3]);
+      }
+      InsertedPoints::Split split;
+      split.corners.assign(at.begin(), at.end());
+      split.tets = {{0, 1, 2, 4}, {0, 2, 3, 4}};
+      keep_cell(split);
+      inserted.splits.push_back(std::move(split));
+      for (int m = 0; m < 4; ++m) {
+        const int n = (m + 1) % 4;
+        add_triangle(id[m], id[n], id[4], at[m], at[n], at[4]);
+      }
+    }
   }
   for (int k = 0; k < n2; ++k)
     for (int j = 0; j < n1; ++j)
@@ -847,7 +982,8 @@ CoreCounts add_core(const Lattice& lattice, Surroundings& around, const Parity& 
         const Vec3 q = lattice.point(i, j, k);
         if (around.surface_points.any_within(q, 1e-6 * h)) continue;  // already a surface node
         // A kept point that is no core cell's corner goes where the pulled core now is.
-        if (!core_corner[p] && moved_balls.holds(q, 0)) continue;
+        if (!layout.core_corner[p] && (moved_balls.holds(q, 0) || around.buffer_cells.holds(q)))
+          continue;
         const Vec3 at = point_at(p);
         if (pulled.node.count(p)) inserted.pulled.emplace_back(at, q);
         inserted.points.push_back(at);
@@ -857,17 +993,17 @@ CoreCounts add_core(const Lattice& lattice, Surroundings& around, const Parity& 
       }
   for (int k = 0; k < c2; ++k)
     for (int j = 0; j < c1; ++j)
-      for (int i = 0; i < c0; ++i)
-        if (apex_cell[cell_index(i, j, k)]) {
-          const Vec3 q = cell_centre(i, j, k);
-          const Vec3 at = apex_at(cell_index(i, j, k));
-          if (pulled.apex.count(cell_index(i, j, k)) || inner_apex.count(cell_index(i, j, k)))
-            inserted.pulled.emplace_back(at, q);
-          inserted.points.push_back(at);
-          inserted.face.push_back(-1);
-          around.core_points.add(at);
-          ++counts.nb_apex_points;
-        }
+      for (int i = 0; i < c0; ++i) {
+        const std::size_t c = cell_index(i, j, k);
+        if (!layout.apex_cell[c] || !apex_left[c]) continue;
+        const Vec3 q = cell_centre(i, j, k);
+        const Vec3 at = apex_at(c);
+        if (pulled.apex.count(c) || inner_apex.count(c)) inserted.pulled.emplace_back(at, q);
+        inserted.points.push_back(at);
+        inserted.face.push_back(-1);
+        around.core_points.add(at);
+        ++counts.nb_apex_points;
+      }
   counts.nb_pulled_points = pulled.node.size() + pulled.apex.size();
   return counts;
 }

@@ -10,6 +10,7 @@
 #include <cstddef>
 #include <map>
 #include <optional>
+#include <unordered_map>
 #include <utility>
 #include <vector>
 
@@ -136,6 +137,9 @@ struct InsertedPoints {
     std::vector<std::array<int, 4>> tets;
   };
   std::vector<Split> splits;
+  /// The buffer's cells (emit_core()), by their corners' positions: the tets inside each stay as
+  /// they are after TetGen (improve_tets()).
+  std::vector<std::vector<Vec3>> kept_cells;
 };
 
 /// Balls (centre, radius), with "does one hold q" queries, over the box [lo, hi].
@@ -186,6 +190,9 @@ class Surroundings {
   /// keep out of them, so that TetGen's Delaunay tets keep the core's cells and pyramids.
   PointSet core_points;
   BallSet core_balls;
+  /// The buffer layer's hexahedra and pyramids, as their tets (emit_core() adds them): no point
+  /// goes inside them.
+  TetSet buffer_cells;
 
  private:
   // The lattice face holding q on the lattice plane index[axis] across `axis`, or -1.
@@ -254,26 +261,83 @@ struct CoreCounts {
   std::size_t nb_inner_apexes = 0;
 };
 
+/// A closing pyramid of the core: the core cell, its face's direction (0..5: -x, +x, -y, +y, -z,
+/// +z) and the cell across, whose centre is the apex.
+struct PyramidFace {
+  int c[3], dir, n[3];
+};
+
+/// How pull_core() moves the core's points: per lattice point (Lattice::point_index) and per
+/// apex (the index of its cell, i fastest).
+struct PulledCore {
+  std::unordered_map<std::size_t, Vec3> node, apex;
+};
+
+/// The hexahedral core as lay_core() lays it, before emit_core() gives its points to TetGen.
+struct CoreLayout {
+  std::vector<char> core;                  ///< per cell (i fastest): in the core
+  std::vector<char> core_corner;           ///< per lattice point: a corner of a core cell
+  std::vector<PyramidFace> pyramid_faces;  ///< the closing pyramids
+  std::vector<char> apex_cell;             ///< per cell: its centre (or apex) closes a pyramid
+  /// The cells whose apex lies in the circumsphere of a cell it closes (only with `pull`).
+  std::vector<std::size_t> narrow_apexes;
+  /// Per cell across a core face whose centre is outside: the apex inside that closes it.
+  std::unordered_map<std::size_t, Vec3> inner_apex;
+  PulledCore pulled;
+  CoreCounts counts;  ///< the cells, narrow pyramids and inner apexes (the points: emit_core())
+  /// Where lattice point p and the apex of the pyramids towards cell c are now.
+  Vec3 point_at(const Lattice& lattice, std::size_t p) const;
+  Vec3 apex_at(const Lattice& lattice, std::size_t c) const;
+};
+
+/// Hexahedra between closing pyramids' bases and the surface (buffer_layer()), each taking its
+/// base's pyramid's place, and the pyramids that close their side faces where no other such
+/// hexahedron does. Frame coordinates.
+struct BufferCells {
+  struct Hex {
+    std::size_t face;         ///< its base: CoreLayout::pyramid_faces[face]
+    std::array<Vec3, 4> top;  ///< the base's corners (base_corners() order) on the surface
+  };
+  /// A pyramid on a hexahedron's side face, the one over the base's side from lattice point lo
+  /// to lattice point hi (lo < hi), whose apex (that of the pyramids towards cell apex_cell)
+  /// closes a pyramid of the core too. The face splits on its diagonal from lo's corner to hi's
+  /// top, as the hexahedron's split has it.
+  struct SidePyramid {
+    std::size_t lo, hi, apex_cell;
+  };
+  std::vector<Hex> hexes;
+  std::vector<SidePyramid> pyramids;
+  /// Per lattice point (by index), its projection onto the surface where a hexahedron uses it.
+  std::unordered_map<std::size_t, Vec3> top_of;
+};
+
 /// The hexahedral core: cells with 8 kept corners whose circumsphere holds nothing else; every
 /// quad face between the core and another cell inside needs a closing pyramid whose apex is
 /// that cell's centre and whose circumsphere holds nothing else, or the core cell goes (swept,
-/// sweep_axis >= 0: only across the axis). Appends the kept lattice points that are no surface
-/// node, then the apexes, to `inserted`; the points inserted to around.core_points and the
-/// circumspheres of the core's cells and closing pyramids to around.core_balls.
+/// sweep_axis >= 0: only across the axis).
 ///
-/// With `pull` (not swept), the core is pulled towards the surface first: its nodes on closing
+/// With `pull` (not swept), the core is pulled towards the surface: its nodes on closing
 /// pyramids' bases move out along the bases' normals, the apexes with them, until the apexes
-/// come near the faces (as far as the cells and pyramids stay good); the cells and pyramids so
-/// moved, and those whose circumspheres then hold a moved point, are no longer Delaunay: their
-/// faces go to `inserted.constraints`, their splits to `inserted.splits`, the moved points to
-/// `inserted.pulled`; the kept points that are no core cell's corner stay where the core is not.
-/// With `pull` too, a core face whose closing pyramid's apex lies in its cell's circumsphere (a
+/// come near the faces (as far as the cells and pyramids stay good); see pull_core(). With
+/// `pull` too, a core face whose closing pyramid's apex lies in its cell's circumsphere (a
 /// narrow cell beside a wide one on a rectilinear axis), which Delaunay would join to the cell's
 /// corners, keeps its cell (where the pyramid keeps kCorePyramidFloor): that cell, its pyramid
 /// and the cells and pyramids whose circumspheres hold the apex are constrained as the moved.
-CoreCounts add_core(const Lattice& lattice, Surroundings& around, const Parity& parity,
-                    const KeptPoints& kept, int sweep_axis, double h, InsertedPoints& inserted,
-                    bool pull = false);
+CoreLayout lay_core(const Lattice& lattice, const Surroundings& around, const Parity& parity,
+                    const KeptPoints& kept, int sweep_axis, double h, bool pull = false);
+
+/// The core's points for TetGen: appends the kept lattice points that are no surface node, then
+/// the apexes (but those of pyramids a buffer hexahedron replaces), to `inserted`; the points to
+/// around.core_points, the circumspheres of the core's cells and closing pyramids to
+/// around.core_balls, and the buffer's cells to around.buffer_cells. The cells and pyramids moved
+/// (pulled, a narrow or inner apex, a moved point or a buffer cell's corner in their circumsphere,
+/// a buffer hexahedron on them, an apex a buffer's pyramid shares) are no longer Delaunay: their
+/// faces go to `inserted.constraints`, their splits to `inserted.splits`, the moved points to
+/// `inserted.pulled`; so do the buffer's cells, whose splits also go to `inserted.kept_cells`.
+/// Returns the layout's counts with the points'.
+CoreCounts emit_core(const Lattice& lattice, const CoreLayout& layout, const BufferCells& buffer,
+                     const KeptPoints& kept, double h, Surroundings& around,
+                     InsertedPoints& inserted);
 
 /// Reorders `inserted` so that the points on lattice faces come first (stable); returns their
 /// number.

@@ -17,18 +17,6 @@
 
 namespace hexmerge::mesher {
 
-/// A closing pyramid of the core: the core cell, its face's direction (0..5: -x, +x, -y, +y, -z,
-/// +z) and the cell across, whose centre is the apex.
-struct PyramidFace {
-  int c[3], dir, n[3];
-};
-
-/// How pull_core() moves the core's points: per lattice point (Lattice::point_index) and per
-/// apex (the index of its cell, i fastest).
-struct PulledCore {
-  std::unordered_map<std::size_t, Vec3> node, apex;
-};
-
 /// The lattice point indices of the corners of the lattice square across frame axis `axis` at
 /// plane index `plane` whose least corner is (p, q) along the two other axes (u = axis + 1,
 /// v = axis + 2), around it: (p, q), (p + 1, q), (p + 1, q + 1), (p, q + 1). The core's faces go

@@ -145,6 +145,39 @@ class PointSet {
   std::vector<Vec3> points_;
 };
 
+/// Tets (by their corners), with "does one hold q" queries.
+class TetSet {
+ public:
+  TetSet(const Vec3& lo, const Vec3& hi, double cell) : grid_(lo, hi, cell) {}
+  void add(const std::array<Vec3, 4>& t) {
+    grid_.add(static_cast<int>(tets_.size()), vmin(vmin(t[0], t[1]), vmin(t[2], t[3])),
+              vmax(vmax(t[0], t[1]), vmax(t[2], t[3])));
+    tets_.push_back(t);
+  }
+  /// Whether q lies in one, on its faces too (to 1e-9 of its barycentric coordinates), but not
+  /// at one of its corners (to 1e-9 of its size).
+  bool holds(const Vec3& q) const {
+    return grid_.any_in(q, q, [&](int i) {
+      const std::array<Vec3, 4>& t = tets_[static_cast<std::size_t>(i)];
+      const double whole = det3(t[1] - t[0], t[2] - t[0], t[3] - t[0]);
+      if (whole == 0) return false;
+      const double l[4] = {det3(t[1] - q, t[2] - q, t[3] - q) / whole,
+                           det3(q - t[0], t[2] - t[0], t[3] - t[0]) / whole,
+                           det3(t[1] - t[0], q - t[0], t[3] - t[0]) / whole,
+                           det3(t[1] - t[0], t[2] - t[0], q - t[0]) / whole};
+      if (l[0] < -1e-9 || l[1] < -1e-9 || l[2] < -1e-9 || l[3] < -1e-9) return false;
+      const double size = (t[1] - t[0]).norm();
+      for (const Vec3& c : t)
+        if ((c - q).norm() <= 1e-9 * size) return false;
+      return true;
+    });
+  }
+
+ private:
+  BucketGrid grid_;
+  std::vector<std::array<Vec3, 4>> tets_;
+};
+
 /// Triangles (of nodes the caller keeps alive), with "is one nearer than r to q" queries.
 class TriangleSet {
  public:

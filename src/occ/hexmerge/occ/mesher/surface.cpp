@@ -290,9 +290,8 @@ std::size_t remove_flat_triangles(Surface& surface, double tolerance) {
   return removed;
 }
 
-// Nodes no triangle uses (all theirs were coincident or on a face without area:
-// gmsh_U_Joint_2's 0.35 mm faces) are dropped and the rest renumbered, with the segments on
-// them: TetGen leaves such a node out, which failed every way of placing the points.
+}  // namespace
+
 void drop_unused_nodes(Surface& surface) {
   std::vector<int> renumber(surface.nodes.size(), -1);
   for (const SurfaceTriangle& t : surface.triangles)
@@ -322,8 +321,6 @@ void drop_unused_nodes(Surface& surface) {
   }
   surface.segments = std::move(segments);
 }
-
-}  // namespace
 
 void remove_folds(Surface& surface, double tolerance) {
   // Nodes within the tolerance of another become one (NodeMerger, as in triangulate()); a
