@@ -9,8 +9,6 @@
 
 #include "hexmerge/geometry/quality.h"
 #include "hexmerge/occ/mesher/pull_core.h"
-#include "hexmerge/occ/mesher/surface_repair.h"
-#include "hexmerge/occ/mesher/sweep.h"
 #include "mesher_fixtures.h"
 
 namespace hexmerge::test {
@@ -29,12 +27,11 @@ double scaled_jacobian_of(CellType type, const std::vector<Vec3>& corners, const
 TEST(buffer_layer, a_cylinders_core_reaches_its_curved_face) {
   const double h = 2.5;
   Prepared p = prepare(occ_cylinder(10, 20), h);
-  mesher::refine(p.shape, p.surface, h, 0.02 * h, p.lattice.lattice_face, p.lattice.lattice_edge);
-  mesher::collapse_sides(p.shape, p.surface, h, h, 0.02 * h, p.lattice.lattice_face);
-  const std::vector<Vec3> nodes =
-      mesher::frame_nodes(p.shape, p.surface, p.lattice, -1, mesher::SweptSurface{});
-  mesher::Surroundings around(nodes, p.surface, p.lattice, h);
-  const mesher::Parity parity(nodes, p.surface, p.shape.face_solid_count, around, h);
+  repair_surface(p);
+  const Placed at = place(p);
+  const std::vector<Vec3>& nodes = at.nodes;
+  const mesher::Surroundings& around = *at.around;
+  const mesher::Parity& parity = *at.parity;
   const mesher::KeptPoints kept =
       mesher::keep_lattice_points(p.lattice, around, parity, 0.3 * h, 0.3 * h, -1);
   const mesher::CoreLayout layout =

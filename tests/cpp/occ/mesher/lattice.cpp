@@ -18,21 +18,6 @@
 namespace hexmerge::test {
 namespace {
 
-// The surface in frame coordinates (not swept), with its queries.
-struct Placed {
-  std::vector<Vec3> nodes;
-  std::unique_ptr<mesher::Surroundings> around;
-  std::unique_ptr<mesher::Parity> parity;
-};
-Placed place(const Prepared& p) {
-  Placed out;
-  out.nodes = mesher::frame_nodes(p.shape, p.surface, p.lattice, -1, mesher::SweptSurface{});
-  out.around = std::make_unique<mesher::Surroundings>(out.nodes, p.surface, p.lattice, p.h);
-  out.parity = std::make_unique<mesher::Parity>(out.nodes, p.surface, p.shape.face_solid_count,
-                                                *out.around, p.h);
-  return out;
-}
-
 TEST(lay_lattice, box_faces_are_lattice_faces) {
   const double h = 7;
   const Prepared p = prepare(occ_box(0, 0, 0, 100, 40, 30), h);

@@ -5,7 +5,6 @@
 #include <cmath>
 #include <utility>
 
-#include "hexmerge/occ/mesher/surface_repair.h"
 #include "mesher_fixtures.h"
 
 namespace hexmerge::test {
@@ -18,12 +17,11 @@ TEST(place_layers, around_the_curved_faces_at_their_depths) {
   for (int layers : {1, 2}) {
     SCOPED_TRACE(layers);
     Prepared p = prepare(occ_plate_with_hole(), h);
-    mesher::refine(p.shape, p.surface, h, 0.02 * h, p.lattice.lattice_face, p.lattice.lattice_edge);
-    mesher::collapse_sides(p.shape, p.surface, h, h, 0.02 * h, p.lattice.lattice_face);
-    const std::vector<Vec3> nodes =
-        mesher::frame_nodes(p.shape, p.surface, p.lattice, -1, mesher::SweptSurface{});
-    mesher::Surroundings around(nodes, p.surface, p.lattice, h);
-    const mesher::Parity parity(nodes, p.surface, p.shape.face_solid_count, around, h);
+    repair_surface(p);
+    const Placed at = place(p);
+    const std::vector<Vec3>& nodes = at.nodes;
+    mesher::Surroundings& around = *at.around;
+    const mesher::Parity& parity = *at.parity;
     mesher::InsertedPoints inserted;
     const std::size_t placed = mesher::place_layers(nodes, p.surface, p.shape.face_solid_count,
                                                     p.lattice, -1, mesher::SweptSurface{}, layers,
@@ -59,8 +57,7 @@ TEST(place_layers, keep_out_of_the_core_laid_first) {
   const double h = 2.0, thickness = 0.3 * h, margin = 0.3 * h;
   const int layers = 2;
   Prepared p = prepare(occ_plate_with_hole(), h);
-  mesher::refine(p.shape, p.surface, h, 0.02 * h, p.lattice.lattice_face, p.lattice.lattice_edge);
-  mesher::collapse_sides(p.shape, p.surface, h, h, 0.02 * h, p.lattice.lattice_face);
+  repair_surface(p);
   const std::vector<Vec3> nodes =
       mesher::frame_nodes(p.shape, p.surface, p.lattice, -1, mesher::SweptSurface{});
   const auto core_then_layers = [&](bool core_first, mesher::CoreCounts& core,

@@ -15,6 +15,8 @@
 #include <utility>
 
 #include "hexmerge/occ/brep_text.h"
+#include "hexmerge/occ/mesher/surface_repair.h"
+#include "hexmerge/occ/mesher/sweep.h"
 
 namespace hexmerge::test {
 
@@ -112,6 +114,21 @@ bool occ_inside(const mesher::Shape& shape, const Vec3& p, bool& on) {
     if (classifier.State() == TopAbs_IN) return true;
   }
   return false;
+}
+
+void repair_surface(Prepared& p) {
+  mesher::refine(p.shape, p.surface, p.h, 0.02 * p.h, p.lattice.lattice_face,
+                 p.lattice.lattice_edge);
+  mesher::collapse_sides(p.shape, p.surface, p.h, p.h, 0.02 * p.h, p.lattice.lattice_face);
+}
+
+Placed place(const Prepared& p) {
+  Placed out;
+  out.nodes = mesher::frame_nodes(p.shape, p.surface, p.lattice, -1, mesher::SweptSurface{});
+  out.around = std::make_unique<mesher::Surroundings>(out.nodes, p.surface, p.lattice, p.h);
+  out.parity = std::make_unique<mesher::Parity>(out.nodes, p.surface, p.shape.face_solid_count,
+                                                *out.around, p.h);
+  return out;
 }
 
 mesher::CoreCounts add_core(const mesher::Lattice& lattice, mesher::Surroundings& around,

@@ -4,6 +4,7 @@
 /// the mesher's first steps (frame, triangulation, lattice) run on them.
 
 #include <TopoDS_Shape.hxx>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -44,6 +45,18 @@ struct Prepared {
   double h = 0;
 };
 Prepared prepare(const TopoDS_Shape& solid, double h, const std::string& frame = "global");
+
+/// The surface repaired at p.h as mesh_shape() repairs a shape it does not sweep: refined, then
+/// its short sides collapsed (chord deflection 0.02 h).
+void repair_surface(Prepared& p);
+
+/// The surface in frame coordinates (not swept), with its queries.
+struct Placed {
+  std::vector<Vec3> nodes;
+  std::unique_ptr<mesher::Surroundings> around;
+  std::unique_ptr<mesher::Parity> parity;
+};
+Placed place(const Prepared& p);
 
 /// The hexahedral core laid and its points given to `inserted` (mesher::lay_core(), then
 /// mesher::emit_core() with no buffer layer).

@@ -27,28 +27,24 @@
 #include "hexmerge/occ/mesher/shape.h"
 #include "hexmerge/occ/mesher/spatial.h"
 #include "hexmerge/occ/mesher/surface_check.h"
+#include "hexmerge/recombine/parameters.h"
 
 namespace hexmerge::mesher {
 
 namespace {
 
 // A top lies at least kLowest h and at most kHighest h from its base's corner, within kTilt
-// degrees of the base's normal; the hexahedron keeps kHexFloor (the recombination's default
-// min_scaled_jacobian), a side pyramid kCorePyramidFloor.
+// degrees of the base's normal. The hexahedron meets the recombination's defaults
+// (RecombineParameters: min_scaled_jacobian, its quad faces' folds inside the shape and on its
+// surface, max_face_angle), or it is not found (a chord quad of a curved face folds by about its
+// width over the radius; a cylinder's quads between two of its lines do not); a side pyramid
+// keeps kCorePyramidFloor.
 constexpr double kLowest = 0.15;
 constexpr double kHighest = 1.5;
 constexpr double kTilt = 35.0;
-constexpr double kHexFloor = 0.3;
 // Their tets (the lattice's split) keep kTetFloor, the mesher's floor for the tets it makes:
 // where the recombination does not take a hexahedron or pyramid, its tets stay.
 constexpr double kTetFloor = 0.2;
-// The recombination's defaults (RecombineParameters), which the hexahedra must meet to be found:
-// quad faces folded by at most kFold degrees inside the shape and kBoundaryFold on its surface
-// (a chord quad of a curved face folds by about its width over the radius: a cylinder's quads
-// between two of its lines do not), no quad corner wider than kFaceAngle degrees.
-constexpr double kFold = 30.0;
-constexpr double kBoundaryFold = 1.0;
-constexpr double kFaceAngle = 150.0;
 // Tops lie at least kEdgeClearance h inside their face's edges, and the face's inner nodes
 // nearer than kNodeClearance h to a top's quad go (the triangles between are no needles).
 constexpr double kEdgeClearance = 0.3;
@@ -437,28 +433,23 @@ double tet_quality(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
 // first corner to its top's third (base corners b in base_corners() order, the base facing +axis
 // when `up`; the bits u, v swapped when not, as emit_core() splits it), each taken positive.
 double worst_split_tet(const std::array<Vec3, 4>& b, const std::array<Vec3, 4>& t, bool up) {
-  static constexpr int kBits[4][2] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
-  static constexpr int kPaths[6][2] = {{1, 3}, {1, 5}, {2, 3}, {2, 6}, {4, 5}, {4, 6}};
-  Vec3 corner[8];
-  for (int m = 0; m < 4; ++m) {
-    const int bits = up ? kBits[m][0] + 2 * kBits[m][1] : kBits[m][1] + 2 * kBits[m][0];
-    corner[bits] = b[m], corner[bits + 4] = t[m];
-  }
+  const std::array<Vec3, 8> corner = buffer_hex_corners(b, t, up);
   double worst = 1;
-  for (const auto& q : kPaths)
+  for (const auto& q : kKuhnPaths)
     worst =
         std::min(worst, std::abs(tet_quality(corner[0], corner[q[0]], corner[q[1]], corner[7])));
   return worst;
 }
 
-// Whether quad abcd (around) folds by at most `fold` degrees across either diagonal and has no
-// corner wider than kFaceAngle degrees.
-bool flat_enough(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d, double fold) {
+// Whether quad abcd (around) has a dihedral angle of at least `dihedral` degrees across either
+// diagonal and no corner wider than `widest` degrees.
+bool flat_enough(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d, double dihedral,
+                 double widest) {
   const double pa[3] = {a.x, a.y, a.z}, pb[3] = {b.x, b.y, b.z}, pc[3] = {c.x, c.y, c.z},
                pd[3] = {d.x, d.y, d.z};
-  return quad_dihedral_angle(pa, pb, pc, pd) >= 180 - fold &&
-         quad_dihedral_angle(pb, pc, pd, pa) >= 180 - fold &&
-         quad_max_corner_angle(pa, pb, pc, pd) <= kFaceAngle;
+  return quad_dihedral_angle(pa, pb, pc, pd) >= dihedral &&
+         quad_dihedral_angle(pb, pc, pd, pa) >= dihedral &&
+         quad_max_corner_angle(pa, pb, pc, pd) <= widest;
 }
 
 // The pyramid of base corners q (around) and apex: its scaled Jacobian, the base taken round
@@ -470,18 +461,6 @@ double pyramid_quality(const std::array<Vec3, 4>& q, const Vec3& apex) {
   static const index_t kOne[5] = {0, 1, 2, 3, 4}, kOther[5] = {0, 3, 2, 1, 4};
   const bool one = det3(q[1] - q[0], q[2] - q[0], apex - q[0]) > 0;
   return scaled_jacobian(CellType::Pyramid, xyz, one ? kOne : kOther);
-}
-
-// Whether q lies inside tet abcd (strictly, by `slack` of its size).
-bool in_tet(const Vec3& q, const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d,
-            double slack) {
-  const double whole = det3(b - a, c - a, d - a);
-  if (whole == 0) return false;
-  const double l[4] = {det3(b - q, c - q, d - q) / whole, det3(q - a, c - a, d - a) / whole,
-                       det3(b - a, q - a, d - a) / whole, det3(b - a, c - a, q - a) / whole};
-  for (const double x : l)
-    if (x < slack) return false;
-  return true;
 }
 
 std::uint64_t edge_key(std::size_t a, std::size_t b) {
@@ -551,6 +530,7 @@ BufferCells buffer_layer(const Shape& shape, const Lattice& lattice, const CoreL
     return top;
   };
   // 3. The hexahedra each base could have.
+  const RecombineParameters recombine;
   const double tilt = std::cos(kTilt * M_PI / 180);
   std::vector<char> chosen(faces.size(), 0);
   std::vector<std::array<std::size_t, 4>> base_of(faces.size());
@@ -587,11 +567,13 @@ BufferCells buffer_layer(const Shape& shape, const Lattice& lattice, const CoreL
       const double length = d.norm();
       ok = length >= kLowest * h && length <= kHighest * h && d.dot(normal) >= tilt * length;
     }
-    ok = ok && hex_quality(b, t, f.dir % 2 == 1) >= kHexFloor &&
+    ok = ok && hex_quality(b, t, f.dir % 2 == 1) >= recombine.min_scaled_jacobian &&
          worst_split_tet(b, t, f.dir % 2 == 1) >= kTetFloor &&
-         flat_enough(t[0], t[1], t[2], t[3], kBoundaryFold);
+         flat_enough(t[0], t[1], t[2], t[3], recombine.min_boundary_dihedral_angle,
+                     recombine.max_face_angle);
     for (int m = 0; m < 4 && ok; ++m)
-      ok = flat_enough(b[m], b[(m + 1) % 4], t[(m + 1) % 4], t[m], kFold);
+      ok = flat_enough(b[m], b[(m + 1) % 4], t[(m + 1) % 4], t[m], recombine.min_dihedral_angle,
+                       recombine.max_face_angle);
     if (ok) chosen[i] = 1;
   }
   // 4. Per face, its chart; the tops placed in it, clear of its edges.
@@ -870,7 +852,6 @@ BufferCells buffer_layer(const Shape& shape, const Lattice& lattice, const CoreL
     for (int n = 0; n < static_cast<int>(frame_points.size()); ++n) node_at.add(n);
     std::vector<std::array<int, 3>> surface_triangles;
     for (const SurfaceTriangle& t : surface.triangles) surface_triangles.push_back(t.node);
-    static constexpr int kPaths[6][2] = {{1, 3}, {1, 5}, {2, 3}, {2, 6}, {4, 5}, {4, 6}};
     {
       bool dropped = false;
       // The core's points: its cells' corners and the apexes of the pyramids left.
@@ -912,14 +893,13 @@ BufferCells buffer_layer(const Shape& shape, const Lattice& lattice, const CoreL
           owner.push_back(i), owner.push_back(i);
         }
         // A point inside the hexahedron (its six tets) goes with it.
-        Vec3 corner[8];
-        const bool up = faces[i].dir % 2 == 1;
-        static constexpr int kBits[4][2] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
+        std::array<Vec3, 4> base_at, top_at;
         for (int m = 0; m < 4; ++m) {
-          const int bits = up ? kBits[m][0] + 2 * kBits[m][1] : kBits[m][1] + 2 * kBits[m][0];
-          corner[bits] = layout.point_at(lattice, b[m]);
-          corner[bits + 4] = frame_points[static_cast<std::size_t>(top_node.at(b[m]))];
+          base_at[m] = layout.point_at(lattice, b[m]);
+          top_at[m] = frame_points[static_cast<std::size_t>(top_node.at(b[m]))];
         }
+        const std::array<Vec3, 8> corner =
+            buffer_hex_corners(base_at, top_at, faces[i].dir % 2 == 1);
         Vec3 lo_box = corner[0], hi_box = corner[0];
         for (const Vec3& c : corner) lo_box = vmin(lo_box, c), hi_box = vmax(hi_box, c);
         const Vec3 centre = (lo_box + hi_box) * 0.5;
@@ -928,7 +908,7 @@ BufferCells buffer_layer(const Shape& shape, const Lattice& lattice, const CoreL
         const auto holds = [&](const Vec3& q) {
           for (const Vec3& c : corner)
             if ((c - q).norm() <= 1e-6 * h) return false;
-          for (const auto& path : kPaths)
+          for (const auto& path : kKuhnPaths)
             if (in_tet(q, corner[0], corner[path[0]], corner[path[1]], corner[7], -1e-6))
               return true;
           return false;

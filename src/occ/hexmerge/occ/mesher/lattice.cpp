@@ -536,10 +536,20 @@ std::pair<Vec3, double> pyramid_sphere_of(const Lattice& lattice, int i, int j, 
   const Vec3 face_centre = lattice.cell_centre(i, j, k) + to_face;
   return {face_centre + towards * (c / d), d - c};
 }
-// The six tets of a cell around its diagonal from corner 0 to corner 7 (corner bits x, y, z):
-// {0, q[0], q[1], 7} for each q.
-constexpr int kKuhnPaths[6][2] = {{1, 3}, {1, 5}, {2, 3}, {2, 6}, {4, 5}, {4, 6}};
 }  // namespace
+
+std::array<Vec3, 8> buffer_hex_corners(const std::array<Vec3, 4>& base,
+                                       const std::array<Vec3, 4>& top, bool up) {
+  static constexpr int kBits[4][2] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
+  std::array<Vec3, 8> corner;
+  for (int m = 0; m < 4; ++m) {
+    const int u = kBits[m][0], v = kBits[m][1];
+    const int bits = up ? u + 2 * v : v + 2 * u;
+    corner[static_cast<std::size_t>(bits)] = base[m];
+    corner[static_cast<std::size_t>(bits + 4)] = top[m];
+  }
+  return corner;
+}
 
 Vec3 CoreLayout::point_at(const Lattice& lattice, std::size_t p) const {
   const Vec3 q = lattice.point(lattice.point_ijk(p));
@@ -933,15 +943,10 @@ CoreCounts emit_core(const Lattice& lattice, const CoreLayout& layout, const Buf
       const int axis = f.dir / 2;
       const std::array<std::size_t, 4> base = base_corners(lattice, f);
       const std::array<Vec3, 8> at = hex_corners(hex);
-      static constexpr int kBits[4][2] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
       InsertedPoints::Split split;
-      split.corners.resize(8);
-      for (int m = 0; m < 4; ++m) {
-        const int u = kBits[m][0], v = kBits[m][1];
-        const int bits = f.dir % 2 ? u + 2 * v : v + 2 * u;
-        split.corners[static_cast<std::size_t>(bits)] = at[m];
-        split.corners[static_cast<std::size_t>(bits + 4)] = at[4 + m];
-      }
+      const std::array<Vec3, 8> corners =
+          buffer_hex_corners({at[0], at[1], at[2], at[3]}, hex.top, f.dir % 2 == 1);
+      split.corners.assign(corners.begin(), corners.end());
       for (const auto& q : kKuhnPaths) split.tets.push_back({0, q[0], q[1], 7});
       keep_cell(split);
       inserted.splits.push_back(std::move(split));

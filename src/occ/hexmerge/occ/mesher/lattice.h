@@ -311,6 +311,16 @@ struct BufferCells {
   std::unordered_map<std::size_t, Vec3> top_of;
 };
 
+/// The six tets of a cell around its diagonal from corner 0 to corner 7 (corner bits x, y, z, or
+/// any right-handed bits): {0, q[0], q[1], 7} for each q.
+inline constexpr int kKuhnPaths[6][2] = {{1, 3}, {1, 5}, {2, 3}, {2, 6}, {4, 5}, {4, 6}};
+
+/// A buffer hexahedron's corners in kKuhnPaths' order: bits u, v across its base (corners in
+/// base_corners() order, the base facing +axis when `up`), w to its tops; u and v swapped on a
+/// base facing down its axis, so that the bits are right-handed.
+std::array<Vec3, 8> buffer_hex_corners(const std::array<Vec3, 4>& base,
+                                       const std::array<Vec3, 4>& top, bool up);
+
 /// The hexahedral core: cells with 8 kept corners whose circumsphere holds nothing else; every
 /// quad face between the core and another cell inside needs a closing pyramid whose apex is
 /// that cell's centre and whose circumsphere holds nothing else, or the core cell goes (swept,

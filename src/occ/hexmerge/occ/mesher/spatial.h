@@ -145,6 +145,17 @@ class PointSet {
   std::vector<Vec3> points_;
 };
 
+/// Whether q lies in tet abcd: each of its barycentric coordinates at least `least` (negative:
+/// on and a little beyond its faces too); never in a flat tet.
+inline bool in_tet(const Vec3& q, const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d,
+                   double least) {
+  const double whole = det3(b - a, c - a, d - a);
+  if (whole == 0) return false;
+  const double l[4] = {det3(b - q, c - q, d - q) / whole, det3(q - a, c - a, d - a) / whole,
+                       det3(b - a, q - a, d - a) / whole, det3(b - a, c - a, q - a) / whole};
+  return l[0] >= least && l[1] >= least && l[2] >= least && l[3] >= least;
+}
+
 /// Tets (by their corners), with "does one hold q" queries.
 class TetSet {
  public:
@@ -159,13 +170,7 @@ class TetSet {
   bool holds(const Vec3& q) const {
     return grid_.any_in(q, q, [&](int i) {
       const std::array<Vec3, 4>& t = tets_[static_cast<std::size_t>(i)];
-      const double whole = det3(t[1] - t[0], t[2] - t[0], t[3] - t[0]);
-      if (whole == 0) return false;
-      const double l[4] = {det3(t[1] - q, t[2] - q, t[3] - q) / whole,
-                           det3(q - t[0], t[2] - t[0], t[3] - t[0]) / whole,
-                           det3(t[1] - t[0], q - t[0], t[3] - t[0]) / whole,
-                           det3(t[1] - t[0], t[2] - t[0], q - t[0]) / whole};
-      if (l[0] < -1e-9 || l[1] < -1e-9 || l[2] < -1e-9 || l[3] < -1e-9) return false;
+      if (!in_tet(q, t[0], t[1], t[2], t[3], -1e-9)) return false;
       const double size = (t[1] - t[0]).norm();
       for (const Vec3& c : t)
         if ((c - q).norm() <= 1e-9 * size) return false;
