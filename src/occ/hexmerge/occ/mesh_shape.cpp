@@ -790,7 +790,7 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
           facet, input.points, kFacetAngle, kFacetRadius * h,
           [&](const Vec3& q) {
             return !in_kept_square(lattice, kept, q, axis) && !around->core_balls.holds(q, 0) &&
-                   !around->buffer_cells.holds(q) &&
+                   !around->buffer_cells.near(q, kFacetClearance * h) &&
                    !around->core_points.any_within(q, kFacetClearance * h) &&
                    !around->layer_points.any_within(q, kFacetClearance * h);
           },

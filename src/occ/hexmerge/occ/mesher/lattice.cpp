@@ -986,8 +986,10 @@ CoreCounts emit_core(const Lattice& lattice, const CoreLayout& layout, const Buf
         if (!kept[p]) continue;
         const Vec3 q = lattice.point(i, j, k);
         if (around.surface_points.any_within(q, 1e-6 * h)) continue;  // already a surface node
-        // A kept point that is no core cell's corner goes where the pulled core now is.
-        if (!layout.core_corner[p] && (moved_balls.holds(q, 0) || around.buffer_cells.holds(q)))
+        // A kept point that is no core cell's corner goes where the pulled core now is, and
+        // near the buffer's cells.
+        if (!layout.core_corner[p] &&
+            (moved_balls.holds(q, 0) || around.buffer_cells.near(q, kBufferClearance * h)))
           continue;
         const Vec3 at = point_at(p);
         if (pulled.node.count(p)) inserted.pulled.emplace_back(at, q);

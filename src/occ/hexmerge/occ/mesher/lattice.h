@@ -191,7 +191,7 @@ class Surroundings {
   PointSet core_points;
   BallSet core_balls;
   /// The buffer layer's hexahedra and pyramids, as their tets (emit_core() adds them): no point
-  /// goes inside them.
+  /// goes inside them or near them (kBufferClearance h for the lattice points).
   TetSet buffer_cells;
 
  private:
@@ -313,6 +313,11 @@ struct BufferCells {
 
 /// The six tets of a cell around its diagonal from corner 0 to corner 7 (corner bits x, y, z, or
 /// any right-handed bits): {0, q[0], q[1], 7} for each q.
+/// No point of the core but a buffer cell's own corners lies nearer to the cell than this
+/// fraction of h: the tets in the gap between would be flat (gmsh_Angled at its 50k size: a
+/// lattice point 0.09 h beside a hexahedron's side face made 36 tets under 0.2).
+inline constexpr double kBufferClearance = 0.25;
+
 inline constexpr int kKuhnPaths[6][2] = {{1, 3}, {1, 5}, {2, 3}, {2, 6}, {4, 5}, {4, 6}};
 
 /// A buffer hexahedron's corners in kKuhnPaths' order: bits u, v across its base (corners in

@@ -343,7 +343,7 @@ std::size_t place_graded_points(const SizeField& field, const Lattice& lattice,
       if (face < 0 && around.every_face.any_within(q, room)) return;
       if (around.curved.any_within(q, room) || around.surface_points.any_within(q, room) ||
           around.layer_points.any_within(q, room) || around.core_points.any_within(q, room) ||
-          around.core_balls.holds(q, 0.05 * size) || around.buffer_cells.holds(q) ||
+          around.core_balls.holds(q, 0.05 * size) || around.buffer_cells.near(q, room) ||
           graded.any_within(q, 0.5 * room))
         return;
       if (face < 0 && !inside(q, j, k)) return;  // the costliest test last

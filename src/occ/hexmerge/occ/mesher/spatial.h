@@ -156,7 +156,7 @@ inline bool in_tet(const Vec3& q, const Vec3& a, const Vec3& b, const Vec3& c, c
   return l[0] >= least && l[1] >= least && l[2] >= least && l[3] >= least;
 }
 
-/// Tets (by their corners), with "does one hold q" queries.
+/// Tets (by their corners), with "does one hold q or lie near it" queries.
 class TetSet {
  public:
   TetSet(const Vec3& lo, const Vec3& hi, double cell) : grid_(lo, hi, cell) {}
@@ -165,16 +165,16 @@ class TetSet {
               vmax(vmax(t[0], t[1]), vmax(t[2], t[3])));
     tets_.push_back(t);
   }
-  /// Whether q lies in one, on its faces too (to 1e-9 of its barycentric coordinates), but not
-  /// at one of its corners (to 1e-9 of its size).
-  bool holds(const Vec3& q) const {
-    return grid_.any_in(q, q, [&](int i) {
+  /// Whether q lies in one or nearer than r to one.
+  bool near(const Vec3& q, double r) const {
+    const Vec3 d{r, r, r};
+    return grid_.any_in(q - d, q + d, [&](int i) {
       const std::array<Vec3, 4>& t = tets_[static_cast<std::size_t>(i)];
-      if (!in_tet(q, t[0], t[1], t[2], t[3], -1e-9)) return false;
-      const double size = (t[1] - t[0]).norm();
-      for (const Vec3& c : t)
-        if ((c - q).norm() <= 1e-9 * size) return false;
-      return true;
+      if (in_tet(q, t[0], t[1], t[2], t[3], 0)) return true;
+      for (int k = 0; k < 4; ++k)
+        if (squared_distance_to_triangle(q, t[(k + 1) % 4], t[(k + 2) % 4], t[(k + 3) % 4]) < r * r)
+          return true;
+      return false;
     });
   }
 
