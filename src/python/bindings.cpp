@@ -481,6 +481,7 @@ py::tuple run_mesh_shape(const std::string& brep, const std::map<std::string, st
   d["nb_buffer_hexes"] = report.nb_buffer_hexes;
   d["nb_buffer_pyramids"] = report.nb_buffer_pyramids;
   d["nb_buffer_faces"] = report.nb_buffer_faces;
+  d["nb_buffer_cells_released"] = report.nb_buffer_cells_released;
   d["nb_resplit_cells"] = report.nb_resplit_cells;
   d["nb_layer_points"] = report.nb_layer_points;
   d["nb_steiner_points"] = report.nb_steiner_points;

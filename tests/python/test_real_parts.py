@@ -17,7 +17,7 @@ import pytest
 
 import hexmerge
 from conftest import MESHES_SHAPES, ROOT
-from real_parts import boundary_triangle_angles, tet_scaled_jacobians
+from real_parts import boundary_triangle_angles, scaled_jacobians, tet_scaled_jacobians
 
 CAD = Path(os.environ.get("HEXMERGE_CAD_DIR") or ROOT.parent / "shared" / "cad")
 
@@ -325,6 +325,55 @@ def test_pulled_pyramids_do_not_cut_the_cells_beside_them() -> None:
     check = hexmerge.check(mesh, points, cells, tets.regions)
     assert check["valid"] and check["cracks"] == 0 and check["nonconforming_quads"] == 0
     assert rec["volume_fraction"]["hex"] > 0.44
+
+
+def test_the_buffer_layer_leaves_no_poor_element_beside_it() -> None:
+    """gmsh_Angled at its 50k size (h 4.3066) with the buffer layer: a lattice point 0.09 h
+    beside a buffer hexahedron's side face made 36 elements under 0.2, the smallest 0.081
+    (against 2 and 0.180 without the layer); the lattice points keep 0.25 h off the buffer's
+    cells now, and a cell a poor tet touches after the flips is released to them (measured when
+    this was fixed: 2 under 0.2, 0.180)."""
+    import numpy as np
+
+    h = 4.306615107940826
+    outcome = {}
+    for buffer in (False, True):
+        tets, report = hexmerge.mesh_shape(CAD / "gmsh_Angled.step", h, recombine=False,
+                                           buffer_layer=buffer)
+        points, cells = tets.points, tets.cell_vertices.reshape(-1, 4).astype(np.int64)
+        mesh, rec = hexmerge.recombine(points, cells, tets.regions)
+        check = hexmerge.check(mesh, points, cells, tets.regions)
+        assert check["valid"] and check["cracks"] == 0 and check["nonconforming_quads"] == 0
+        outcome[buffer] = (report["meshing"], rec["volume_fraction"]["hex"], check["min_scaled_jacobian"],
+                           int((scaled_jacobians(mesh) < SJ_FLOOR).sum()))
+    meshing, hexes, least, poor = outcome[True]
+    assert meshing["strategy"] == "lattice" and meshing["nb_buffer_hexes"] >= 40
+    assert hexes > outcome[False][1]
+    assert least >= outcome[False][2] - 1e-9 and poor <= outcome[False][3], outcome
+
+
+def test_buffer_cells_beside_a_poor_tet_are_released() -> None:
+    """pyocc_face_recognition_sample_part at h 11 with the buffer layer: 5 elements under 0.2
+    (smallest 0.155) beside buffer cells whose tops the tet improvement could not move; the cells
+    a tet under 0.2 touches after the last flips are now released for one more round (measured
+    when this was done: 16 released, none under 0.2, hex volume 85.8 %, 82.2 % without the
+    layer)."""
+    import numpy as np
+
+    h = 11.0
+    shares = []
+    for buffer in (False, True):
+        tets, report = hexmerge.mesh_shape(CAD / "pyocc_face_recognition_sample_part.stp", h,
+                                           recombine=False, buffer_layer=buffer)
+        points, cells = tets.points, tets.cell_vertices.reshape(-1, 4).astype(np.int64)
+        mesh, rec = hexmerge.recombine(points, cells, tets.regions)
+        check = hexmerge.check(mesh, points, cells, tets.regions)
+        assert check["valid"] and check["cracks"] == 0 and check["nonconforming_quads"] == 0
+        shares.append(rec["volume_fraction"]["hex"])
+    meshing = report["meshing"]
+    assert meshing["nb_buffer_hexes"] > 200 and meshing["nb_buffer_cells_released"] > 0
+    assert check["min_scaled_jacobian"] >= SJ_FLOOR
+    assert shares[1] > shares[0], shares
 
 
 @pytest.mark.parametrize("h", [5.98665337686162, 6.709462096760412])

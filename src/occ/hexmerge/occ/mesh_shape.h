@@ -245,6 +245,9 @@ struct MeshShapeReport {
   std::size_t nb_buffer_hexes = 0;
   std::size_t nb_buffer_pyramids = 0;
   std::size_t nb_buffer_faces = 0;
+  /// Buffer hexahedra and pyramids given up after TetGen: a tet under 0.2 beside them that the
+  /// flips left (their tets and corners then improved as the others)
+  std::size_t nb_buffer_cells_released = 0;
   std::size_t nb_resplit_cells = 0;   ///< pulled cells and pyramids TetGen split otherwise, resplit
   std::size_t nb_layer_points = 0;    ///< boundary-layer points inserted
   std::size_t nb_steiner_points = 0;  ///< points TetGen added

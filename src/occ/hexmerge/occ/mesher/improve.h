@@ -23,6 +23,7 @@ struct ImproveReport {
   std::size_t node_moves = 0;           ///< moves of free nodes
   std::size_t boundary_node_moves = 0;  ///< of those, of boundary nodes along a CAD face or edge
   std::size_t inserted_vertices = 0;    ///< vertices inserted into tets no flip improved
+  std::size_t released_cells = 0;       ///< kept cells released (ImproveParameters::kept_cells)
 };
 
 /// How improve_tets() works.
@@ -48,7 +49,8 @@ struct ImproveParameters {
   /// stay. In (0, 1].
   double pyramid_floor = 0.3;
   /// Cells whose tets stay as they are and whose vertices do not move, by their vertices (the
-  /// buffer layer's hexahedra and pyramids: buffer_layer()).
+  /// buffer layer's hexahedra and pyramids: buffer_layer()), until a tet under insert_below
+  /// outside them touches one after a round's flips: then it is released.
   std::vector<std::vector<index_t>> kept_cells;
 };
 
@@ -66,9 +68,10 @@ std::vector<std::array<index_t, 5>> closing_pyramids(
 
 /// Flips take out slivers, then the free nodes (not on the surface, not on the half lattice,
 /// not in a swept mesh; the boundary nodes along their CAD face or edge, `surface`) move to raise
-/// the worst tet around them, then flips again, for 4 rounds
-/// of flips. Tets within one lattice cell or closing pyramid (all corners on the half lattice,
-/// within one cell's width), or swept within one slab, stay as they are.
+/// the worst tet around them, then flips again, for 4 rounds of flips (a fifth where kept cells
+/// were released: ImproveParameters::kept_cells). Tets within one lattice cell or closing pyramid
+/// (all corners on the half lattice, within one cell's width), or swept within one slab, stay as
+/// they are.
 /// @param[in,out] mesh           the tets (coordinates in the world)
 /// @param[in]     frame_points   #vertices by 3: the vertices in frame coordinates (lattice at
 ///                               multiples of the spacing)
