@@ -389,13 +389,13 @@ def test_the_core_pulled_towards_the_surface(shapes, name: str, h: float, option
 
 @needs_tetgen
 def test_the_buffer_layer_reaches_the_curved_face(shapes) -> None:
-    """buffer_layer (with the core pulled, the default): hexahedra from the core's closing
-    pyramids' bases to the surface, their tops put into the face's triangles, their open side
-    faces closed by pyramids. The unswept cylinder at h 5: 110 of them, every one a hexahedron of
-    the output, 68.2 -> 78.0 % hex volume, the tets' minimum 0.2, the boundary on the CAD."""
+    """buffer_layer (on by default, with the core pulled, the default too): hexahedra from the
+    core's closing pyramids' bases to the surface, their tops put into the face's triangles,
+    their open side faces closed by pyramids. The unswept cylinder at h 5: 106 of them, every one
+    a hexahedron of the output, 68.2 % hex volume without them and 78.0 % with them, the tets'
+    minimum 0.2, the boundary on the CAD."""
     h = 5.0
-    tets, tet_report = hexmerge.mesh_shape(shapes["cylinder"], h, recombine=False, sweep=False,
-                                           buffer_layer=True)
+    tets, tet_report = hexmerge.mesh_shape(shapes["cylinder"], h, recombine=False, sweep=False)
     meshing = tet_report["meshing"]
     assert meshing["strategy"] == "lattice" and meshing["failed_strategies"] == []
     assert meshing["nb_buffer_hexes"] >= 80 and meshing["nb_buffer_faces"] == 1
@@ -407,7 +407,7 @@ def test_the_buffer_layer_reaches_the_curved_face(shapes) -> None:
     assert report["output_counts"]["hex"] >= meshing["nb_core_cells"] + meshing["nb_buffer_hexes"]
     assert meshing["max_boundary_distance"] <= 1e-3 * h
 
-    _, without = hexmerge.mesh_shape(shapes["cylinder"], h, sweep=False)  # (off by default)
+    _, without = hexmerge.mesh_shape(shapes["cylinder"], h, sweep=False, buffer_layer=False)
     assert without["meshing"]["nb_buffer_hexes"] == 0 and without["meshing"]["strategy"] == "lattice"
     assert report["volume_fraction"]["hex"] >= without["volume_fraction"]["hex"] + 0.06
 
@@ -793,10 +793,10 @@ def test_a_tetgen_crash_falls_back_to_the_next_strategy(shapes, tmp_path, capsys
     (tmp_path / "crashed").unlink()
     capsys.readouterr()
     assert main(["mesh", str(shapes["bracket"]), "-h", "3", "-o", str(tmp_path / "b.vtu"),
-                 "--tetgen", str(fake)]) == 0
+                 "--tetgen", str(fake), "--no-pull-core"]) == 0
     err = capsys.readouterr().err
     assert "note: TetGen failed with the points placed by lattice: TetGen " in err, err
-    # (The bracket's core is not pulled: the lattice without pulling would repeat the first way.)
+    # (The core not pulled, as above: the lattice without pulling would repeat the first way.)
     assert "the tets were made with the points placed by lattice at 0.95 of the size" in err, err
     assert "terminate called" not in err and "Aborted" not in err, err
 

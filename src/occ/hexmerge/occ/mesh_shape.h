@@ -105,18 +105,17 @@ struct MeshShapeParameters {
   /// from every face, 0.25 h from the surface's nodes, the pyramid at 0.4). When TetGen fails on
   /// them, the next way of placing the points is the lattice without it.
   bool pull_core = true;
-  /// With the core pulled, a buffer layer of hexahedra between it and the surface (off by default:
-  /// on the real parts it raises hex volume, median 78.4 -> 81.6 % at about 250k tets, but the
-  /// tets at its hexahedra's edges lower the smallest scaled Jacobian on some; see
-  /// docs/benchmarks-real-parts.md): each closing
-  /// pyramid's base whose apex closes no other base, its corners projected onto one CAD face (not
-  /// a lattice face, a face with a local size or one between two solids) within 35 degrees of its
-  /// normal, 0.15 h to 1.5 h away and 0.3 h inside the face's edges, becomes a hexahedron
-  /// (scaled Jacobian at least 0.3) whose top is two of the face's triangles: the face is
-  /// triangulated again with the tops in it. Side faces no other such hexahedron shares are
-  /// closed by pyramids to the apexes of the core's pyramids beside them. When TetGen fails on
-  /// them, the next way of placing the points is the pulled core without the layer.
-  bool buffer_layer = false;
+  /// With the core pulled, a buffer layer of hexahedra between it and the surface (on the real
+  /// parts the median hex volume at about 250k tets 78.4 -> 81.6 %, with fewer elements under 0.2;
+  /// see docs/benchmarks-real-parts.md): each closing pyramid's base whose apex closes no other
+  /// base, its corners projected onto one CAD face (not a lattice face, a face with a local size or
+  /// one between two solids) within 35 degrees of its normal, 0.15 h to 1.5 h away and 0.3 h inside
+  /// the face's edges, becomes a hexahedron (scaled Jacobian at least 0.3) whose top is two of the
+  /// face's triangles: the face is triangulated again with the tops in it. Side faces no other such
+  /// hexahedron shares are closed by pyramids to the apexes of the core's pyramids beside them.
+  /// When TetGen fails on them, the next way of placing the points is the pulled core without the
+  /// layer.
+  bool buffer_layer = true;
   /// Time limit of one TetGen run, in seconds; 0: 30 s plus 1 ms per point (far above TetGen's
   /// own time, about 1 s per 20k points). A run past it (TetGen 1.5 can loop on a lattice face),
   /// or one that leaves no tet, is restarted with the lattice faces' loops started at other

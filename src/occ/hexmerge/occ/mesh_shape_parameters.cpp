@@ -58,8 +58,7 @@ ParameterTable<MeshShapeParameters> make_table() {
            "when TetGen fails on them the lattice is tried without"),
       flag(&P::buffer_layer, "buffer_layer", "Buffer layer",
            "With the core pulled: hexahedra between the core's closing pyramids' bases and the "
-           "surface (off by default: more hexahedra, but a lower smallest scaled Jacobian on some "
-           "parts), the bases' corners projected onto one CAD face (not a lattice face, a face "
+           "surface, the bases' corners projected onto one CAD face (not a lattice face, a face "
            "with a local size or one between two solids) and the face triangulated again with "
            "their tops in it; their open side faces closed by pyramids; when TetGen fails on "
            "them the pulled core is tried without"),
