@@ -21,6 +21,7 @@
 #include "hexmerge/occ/mesher/axis_points.h"
 #include "hexmerge/occ/mesher/boundary_distance.h"
 #include "hexmerge/occ/mesher/buffer_layer.h"
+#include "hexmerge/occ/mesher/core.h"
 #include "hexmerge/occ/mesher/facets.h"
 #include "hexmerge/occ/mesher/improve.h"
 #include "hexmerge/occ/mesher/lattice.h"
@@ -814,10 +815,10 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
                       inserted.points.end());
   input.first_isolated = nodes.size() + nb_on_faces;
   const std::size_t given = input.points.size();
-  // The core's faces TetGen must keep (add_core()), as inner facets of their own marker.
+  // The core's faces TetGen must keep (emit_core()), as inner facets of their own marker.
   const int constraint_marker = shape.faces.Extent() + 1;
   std::vector<std::array<int, 3>> constraints;
-  // The core's points pulled off the lattice (add_core()), by their place among TetGen's points,
+  // The core's points pulled off the lattice (emit_core()), by their place among TetGen's points,
   // with their lattice positions: improve_tets() tells the core's cells and pyramids by those.
   std::vector<std::pair<std::size_t, Vec3>> pulled;
   // The buffer's cells, by their vertices among TetGen's points: improve_tets() keeps them.

@@ -10,6 +10,7 @@
 #include <random>
 
 #include "hexmerge/core/error.h"
+#include "hexmerge/occ/mesher/core.h"
 #include "hexmerge/occ/mesher/pull_core.h"
 #include "hexmerge/occ/mesher/surface_repair.h"
 #include "hexmerge/occ/mesher/sweep.h"

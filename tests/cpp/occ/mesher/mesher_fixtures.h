@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "hexmerge/geometry/vec3.h"
+#include "hexmerge/occ/mesher/core.h"
 #include "hexmerge/occ/mesher/lattice.h"
 #include "hexmerge/occ/mesher/shape.h"
 #include "hexmerge/occ/mesher/surface.h"

@@ -11,7 +11,7 @@
 #include <vector>
 
 #include "hexmerge/geometry/vec3.h"
-#include "hexmerge/occ/mesher/lattice.h"
+#include "hexmerge/occ/mesher/core.h"
 #include "hexmerge/occ/mesher/surface.h"
 
 namespace hexmerge::mesher {

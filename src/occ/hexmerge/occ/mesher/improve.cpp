@@ -128,7 +128,7 @@ void improve_tets(TetMesh& mesh, const std::vector<double>& frame_points,
     return true;
   };
   // Flat on the lattice: the four corners of a cell's face, moved off their plane (a core
-  // pulled towards the surface, add_core()), a sliver between the face's two splits.
+  // pulled towards the surface, pull_core()), a sliver between the face's two splits.
   auto flat_on_lattice = [&](index_t t) {
     const auto at = [&](int k) {
       const std::array<double, 3>& c = cell_of[mesh.tet(t)[k]];

@@ -58,7 +58,7 @@ std::size_t clear_face_layers(const std::vector<FaceLayerSpec>& specs,
 /// two solids get layers on both sides); depths vary by up to 10 % per node (from
 /// Surface::seed) so that the layers' sides are not cocircular quads. A point is placed only
 /// inside the shape (`parity`) and clear of every face by half its depth; when the core is laid
-/// first (add_core()), out of its cells' and closing pyramids' circumspheres and at least
+/// first (emit_core()), out of its cells' and closing pyramids' circumspheres and at least
 /// `core_margin` from its points.
 /// @param[in] nodes             the surface's nodes in frame coordinates
 /// @param[in] face_solid_count  per face, the solids it bounds

@@ -282,7 +282,7 @@ PulledCore pull_core(const Lattice& lattice, const Surroundings& around, const P
     return true;
   };
   // The faces of the cells with a corner that may move, of the core cells beside them and of
-  // every closing pyramid, each quad split on its diagonal from its least corner (as add_core()
+  // every closing pyramid, each quad split on its diagonal from its least corner (as emit_core()
   // gives them to TetGen), where the moves put them; the moving corners of those that cross
   // another go into `failing`.
   std::vector<std::array<int, 3>> near_cells = cells;
@@ -314,7 +314,7 @@ PulledCore pull_core(const Lattice& lattice, const Surroundings& around, const P
       if (fresh) corner_of.push_back(key);
       return it->second;
     };
-    // A square split on its diagonal from its least corner, as add_core() gives it to TetGen.
+    // A square split on its diagonal from its least corner, as emit_core() gives it to TetGen.
     const auto square = [&](const std::array<std::size_t, 4>& corners) {
       int k[4];
       for (int m = 0; m < 4; ++m) k[m] = corner_id(corners[m]);

@@ -1,7 +1,7 @@
 #pragma once
 /// @file
 /// The hexahedral core pulled towards the surface (internal header of mesh_shape(); no
-/// OpenCASCADE): add_core() moves the core's boundary nodes and its closing pyramids' apexes
+/// OpenCASCADE): lay_core() moves the core's boundary nodes and its closing pyramids' apexes
 /// off the lattice (pull_core()), and the cells and pyramids so moved, which TetGen keeps as
 /// constraints, get the lattice's split back after it (resplit_core()).
 
@@ -13,7 +13,7 @@
 
 #include "hexmerge/core/index.h"
 #include "hexmerge/geometry/vec3.h"
-#include "hexmerge/occ/mesher/lattice.h"
+#include "hexmerge/occ/mesher/core.h"
 
 namespace hexmerge::mesher {
 
