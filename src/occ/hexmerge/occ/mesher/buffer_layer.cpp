@@ -89,40 +89,6 @@ bool segments_meet(const P2& a, const P2& b, const P2& c, const P2& d) {
          std::min(c[1], d[1]) <= std::max(a[1], b[1]);
 }
 
-// The point of triangle abc nearest to p, as a + s (b - a) + t (c - a) (Ericson, Real-Time
-// Collision Detection, 5.1.5).
-Vec3 nearest_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c, double& s,
-                         double& t) {
-  const Vec3 ab = b - a, ac = c - a, ap = p - a;
-  const double d1 = ab.dot(ap), d2 = ac.dot(ap);
-  if (d1 <= 0 && d2 <= 0) return s = 0, t = 0, a;
-  const Vec3 bp = p - b;
-  const double d3 = ab.dot(bp), d4 = ac.dot(bp);
-  if (d3 >= 0 && d4 <= d3) return s = 1, t = 0, b;
-  const double vc = d1 * d4 - d3 * d2;
-  if (vc <= 0 && d1 >= 0 && d3 <= 0) {
-    s = d1 / (d1 - d3), t = 0;
-    return a + ab * s;
-  }
-  const Vec3 cp = p - c;
-  const double d5 = ab.dot(cp), d6 = ac.dot(cp);
-  if (d6 >= 0 && d5 <= d6) return s = 0, t = 1, c;
-  const double vb = d5 * d2 - d1 * d6;
-  if (vb <= 0 && d2 >= 0 && d6 <= 0) {
-    s = 0, t = d2 / (d2 - d6);
-    return a + ac * t;
-  }
-  const double va = d3 * d6 - d5 * d4;
-  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0) {
-    const double w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
-    s = 1 - w, t = w;
-    return b + (c - b) * w;
-  }
-  const double denom = 1 / (va + vb + vc);
-  s = vb * denom, t = vc * denom;
-  return a + ab * s + ac * t;
-}
-
 // A base corner's projection onto the surface: its face, parameters and place (frame).
 struct Top {
   int face = -1;
@@ -455,12 +421,7 @@ bool flat_enough(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d, dou
 // The pyramid of base corners q (around) and apex: its scaled Jacobian, the base taken round
 // whichever way puts the apex on its inner side.
 double pyramid_quality(const std::array<Vec3, 4>& q, const Vec3& apex) {
-  double xyz[15];
-  for (int m = 0; m < 4; ++m) xyz[3 * m] = q[m].x, xyz[3 * m + 1] = q[m].y, xyz[3 * m + 2] = q[m].z;
-  xyz[12] = apex.x, xyz[13] = apex.y, xyz[14] = apex.z;
-  static const index_t kOne[5] = {0, 1, 2, 3, 4}, kOther[5] = {0, 3, 2, 1, 4};
-  const bool one = det3(q[1] - q[0], q[2] - q[0], apex - q[0]) > 0;
-  return scaled_jacobian(CellType::Pyramid, xyz, one ? kOne : kOther);
+  return closing_pyramid_quality(q, apex, det3(q[1] - q[0], q[2] - q[0], apex - q[0]) > 0);
 }
 
 std::uint64_t edge_key(std::size_t a, std::size_t b) {
