@@ -145,35 +145,6 @@ struct GivenItems {
   ItemNumbering faces, edges;
 };
 
-// The number (1-based) the shape as given has for item `item` of the shape meshed (gluing
-// touching solids splits and merges items: the first given item naming it); 0 for none.
-int given_number(const ItemNumbering& numbering, int item) {
-  for (std::size_t g = 0; g < numbering.to_shape.size(); ++g) {
-    const std::vector<int>& to = numbering.to_shape[g];
-    if (std::find(to.begin(), to.end(), item) != to.end()) return static_cast<int>(g) + 1;
-  }
-  return 0;
-}
-
-// The sharp features for the report, faces and edges named as in the shape given.
-std::vector<SharpFeatureReport> sharp_feature_reports(const SharpFeatures& sharp,
-                                                      const GivenItems& given) {
-  std::vector<SharpFeatureReport> out;
-  for (const SharpCorner& c : sharp.corners)
-    out.push_back({"corner",
-                   {given_number(given.faces, c.face)},
-                   {given_number(given.edges, c.edges[0]), given_number(given.edges, c.edges[1])},
-                   c.angle,
-                   {c.point.x, c.point.y, c.point.z}});
-  for (const SharpEdge& e : sharp.edges)
-    out.push_back({"edge",
-                   {given_number(given.faces, e.faces[0]), given_number(given.faces, e.faces[1])},
-                   {given_number(given.edges, e.edge)},
-                   e.angle,
-                   {e.point.x, e.point.y, e.point.z}});
-  return out;
-}
-
 // One attempt: steps 3 to 14 of mesh_shape() with one strategy; the Tet10 mesh too when
 // `tet10` is given. `sharp`: the shape's sharp features (the report has them), whose surface
 // nodes the attempt reports. `narrow`: the faces' widths (face_widths()), where faces narrower
@@ -254,7 +225,7 @@ TetMesh mesh_shape_impl(const std::string& brep, const MeshShapeParameters& para
   const std::string regions_brep = glue.glued ? write_brep(shape.shape) : brep;
   // The CAD's sharp corners and edges, named as in the shape given.
   const SharpFeatures sharp = sharp_features(shape, kSharpAngle);
-  report.sharp_features = sharp_feature_reports(sharp, given_items);
+  report.sharp_features = sharp_feature_reports(sharp, given_items.faces, given_items.edges);
 
   // 2. A size whose mesh would not fit in memory is refused before any work.
   SizeEstimate estimate =
@@ -387,7 +358,7 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
   const double deflection = parameters.surface_deflection * strategy.deflection_factor * h;
   std::vector<std::string> face_names(static_cast<std::size_t>(shape.faces.Extent()));
   for (std::size_t f = 0; f < face_names.size(); ++f) {
-    const int number = given_number(given_items.faces, static_cast<int>(f));
+    const int number = given_items.faces.number_of(static_cast<int>(f));
     face_names[f] = number > 0 ? "Face" + std::to_string(number)
                                : "face " + std::to_string(f + 1) + " of the glued solids";
   }

@@ -60,6 +60,14 @@ ItemNumbering ItemNumbering::identity(const char* kind, std::size_t count) {
   return out;
 }
 
+int ItemNumbering::number_of(int item) const {
+  for (std::size_t g = 0; g < to_shape.size(); ++g) {
+    const std::vector<int>& to = to_shape[g];
+    if (std::find(to.begin(), to.end(), item) != to.end()) return static_cast<int>(g) + 1;
+  }
+  return 0;
+}
+
 const std::vector<int>& ItemNumbering::items(int number, const std::string& parameter,
                                              const std::string& what) const {
   if (number < 1 || static_cast<std::size_t>(number) > to_shape.size()) {

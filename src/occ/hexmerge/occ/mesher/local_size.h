@@ -79,6 +79,9 @@ struct ItemNumbering {
   ///         Face9 does not exist (the shape has 6 faces, Face1 to Face6)")
   const std::vector<int>& items(int number, const std::string& parameter,
                                 const std::string& what) const;
+  /// The number (1-based) the shape as given has for the shape's item `item` (gluing touching
+  /// solids splits and merges items: the first given item naming it); 0 for none.
+  int number_of(int item) const;
 };
 
 /// The faces and edges given local sizes (0-based, sizes above h lowered to h: none), checked.

@@ -318,4 +318,23 @@ std::vector<int> nodes_at(const SharpFeatures& features, const Surface& surface)
   return out;
 }
 
+std::vector<SharpFeatureReport> sharp_feature_reports(const SharpFeatures& features,
+                                                      const ItemNumbering& faces,
+                                                      const ItemNumbering& edges) {
+  std::vector<SharpFeatureReport> out;
+  for (const SharpCorner& c : features.corners)
+    out.push_back({"corner",
+                   {faces.number_of(c.face)},
+                   {edges.number_of(c.edges[0]), edges.number_of(c.edges[1])},
+                   c.angle,
+                   {c.point.x, c.point.y, c.point.z}});
+  for (const SharpEdge& e : features.edges)
+    out.push_back({"edge",
+                   {faces.number_of(e.faces[0]), faces.number_of(e.faces[1])},
+                   {edges.number_of(e.edge)},
+                   e.angle,
+                   {e.point.x, e.point.y, e.point.z}});
+  return out;
+}
+
 }  // namespace hexmerge::mesher

@@ -8,6 +8,8 @@
 #include <vector>
 
 #include "hexmerge/geometry/vec3.h"
+#include "hexmerge/occ/mesh_shape.h"
+#include "hexmerge/occ/mesher/local_size.h"
 
 namespace hexmerge::mesher {
 
@@ -47,6 +49,12 @@ SharpFeatures sharp_features(const Shape& shape, double limit);
 /// The surface's nodes at the features, sorted: both ends of every segment on a sharp edge,
 /// and per corner the node at its vertex (of its edges' segments' ends, the nearest to it).
 std::vector<int> nodes_at(const SharpFeatures& features, const Surface& surface);
+
+/// The features for the report (MeshShapeReport::sharp_features), faces and edges numbered as in
+/// the shape as given (`faces`, `edges`).
+std::vector<SharpFeatureReport> sharp_feature_reports(const SharpFeatures& features,
+                                                      const ItemNumbering& faces,
+                                                      const ItemNumbering& edges);
 
 /// The angle, in degrees, under which a face corner or a dihedral edge keeps every tet at it
 /// below a scaled Jacobian of 0.2: asin(0.2 / sqrt(2)).
