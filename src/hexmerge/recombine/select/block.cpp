@@ -111,17 +111,16 @@ void Selector::select_block() {
       if (n[0] == NO_CELL || n[1] == NO_CELL || across[0] != NO_CELL || across[1] != NO_CELL)
         continue;
       const index_t b = block_of[n[0]];
-      beside = b != NO_INDEX && b == block_of[n[1]] && near_perfect(b) &&
-               has_quad(cands_[b], face_key(c, f));
+      const QuadKey key = face_key(c, f);
+      beside = b != NO_INDEX && b == block_of[n[1]] && near_perfect(b) && has_quad(cands_[b], key);
       // (Where a pyramid on its two tets there closes the member's face, the member stays
       // without it.)
       if (beside) {
         const Sides sb = sides(b);
         for (int g = 0; g < descriptor(cands_[b].type).nb_faces; ++g)
-          if (is_quad(cands_[b], g) && face_key(cands_[b], g) == face_key(c, f)) {
+          if (is_quad(cands_[b], g) && face_key(cands_[b], g) == key) {
             const auto m = tets_behind(sb, g);
-            beside = m[0] == NO_CELL || m[1] == NO_CELL ||
-                     pyramid_on(m[0], m[1], face_key(c, f)) == NO_INDEX;
+            beside = m[0] == NO_CELL || m[1] == NO_CELL || pyramid_on(m[0], m[1], key) == NO_INDEX;
           }
       }
     }
@@ -139,7 +138,6 @@ void Selector::select_block() {
   rank(planar);
   take_disjoint(planar);
   order.insert(order.end(), planar.begin(), planar.end());
-
   // The block hexahedron other than `except` whose quad face meets tet t (not in the block),
   // or NO_INDEX.
   auto other_quad_at = [&](index_t t, index_t except) {
