@@ -451,8 +451,7 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
   for (std::size_t e = 0; e < lattice.lattice_edge.size(); ++e)
     for (const int f : shape.edge_faces[e])
       if (!lattice.lattice_face[f] || items_at_h.edge_size[e] < h) lattice.lattice_edge[e] = false;
-  const SizeField field =
-      make_size_field(surface, items_at_h, h, kLocalGrading, deflection, shape.diagonal);
+  const SizeField field = make_size_field(surface, items_at_h, h, kLocalGrading, deflection);
   const SizeField* local = field.empty() ? nullptr : &field;
   for (int a = 0; a < 3; ++a) {
     report.spacing[a] = lattice.spacing[a];
@@ -566,11 +565,7 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
     // size of the places).
     SizeField finer = field;  // the local sizes, and the crossing places of every round
     // The crossing places alone.
-    SizeField places =
-        make_size_field(surface,
-                        LocalSizeItems{std::vector<double>(items_at_h.face_size.size(), h),
-                                       std::vector<double>(items_at_h.edge_size.size(), h)},
-                        h, kLocalGrading, deflection, shape.diagonal);
+    SizeField places(h, kLocalGrading, deflection);
     std::size_t crossing_before = std::numeric_limits<std::size_t>::max();
     for (int round = 0; round < kCrossingRounds && !crossings.empty(); ++round) {
       if (only_folds()) break;  // folds of one face: no size of these places unfolds them

@@ -18,7 +18,7 @@ namespace {
 // distance beyond the slack, never above h; a segment is an item too; no item, h everywhere.
 TEST(SizeField, grows_from_its_items_up_to_h) {
   const double h = 4, grading = 0.5, slack = 0.01;
-  mesher::SizeField field(h, grading, slack, Vec3{-10, -10, -10}, Vec3{10, 10, 10});
+  mesher::SizeField field(h, grading, slack);
   EXPECT_TRUE(field.empty());
   EXPECT_EQ(field.at(Vec3{0, 0, 0}), h);
   field.add(Vec3{0, 0, 0}, Vec3{2, 0, 0}, Vec3{0, 2, 0}, 1.0);  // a triangle in z = 0
@@ -94,8 +94,7 @@ TEST(refine, to_the_local_sizes) {
   items.face_size.assign(static_cast<std::size_t>(p.shape.faces.Extent()), h);
   items.edge_size.assign(static_cast<std::size_t>(p.shape.edges.Extent()), h);
   items.face_size[hole] = fine;
-  const mesher::SizeField field =
-      mesher::make_size_field(p.surface, items, h, 0.5, 0.02 * h, p.shape.diagonal);
+  const mesher::SizeField field = mesher::make_size_field(p.surface, items, h, 0.5, 0.02 * h);
   mesher::refine(p.shape, p.surface, h, 0.02 * h, p.lattice.lattice_face, p.lattice.lattice_edge,
                  &field);
   mesher::collapse_sides(p.shape, p.surface, h, h, 0.02 * h, p.lattice.lattice_face, &field);
@@ -132,8 +131,7 @@ TEST(place_graded_points, fill_the_graded_zone_inside) {
   items.edge_size.assign(static_cast<std::size_t>(p.shape.edges.Extent()), h);
   for (const mesher::SurfaceTriangle& t : p.surface.triangles)
     if (!p.lattice.lattice_face[t.face]) items.face_size[t.face] = fine;  // the hole's wall
-  const mesher::SizeField field =
-      mesher::make_size_field(p.surface, items, h, 0.5, 0.02 * h, p.shape.diagonal);
+  const mesher::SizeField field = mesher::make_size_field(p.surface, items, h, 0.5, 0.02 * h);
   mesher::refine(p.shape, p.surface, h, 0.02 * h, p.lattice.lattice_face, p.lattice.lattice_edge,
                  &field);
   mesher::collapse_sides(p.shape, p.surface, h, h, 0.02 * h, p.lattice.lattice_face, &field);

@@ -22,6 +22,8 @@ double squared_distance_to_segment(const Vec3& p, const Vec3& a, const Vec3& b) 
   return d.dot(d);
 }
 
+// Items per leaf of the size field's hierarchy.
+constexpr int kLeaf = 8;
 // Levels of finer lattices at most (spacing h / 2^10): a local size below h / 1024 is refused
 // before (mesh_shape's validation), so this is never reached for a valid one.
 constexpr int kMaxLevels = 10;
@@ -156,35 +158,100 @@ std::vector<LocalSizeApplied> local_sizes_applied(const std::vector<LocalSize>& 
   return out;
 }
 
-SizeField::SizeField(double h, double grading, double slack, const Vec3& lo, const Vec3& hi)
-    : h_(h), grading_(grading), slack_(slack), smallest_(h), grid_(lo, hi, h) {}
+SizeField::SizeField(double h, double grading, double slack)
+    : h_(h), grading_(grading), slack_(slack), smallest_(h) {}
 
 void SizeField::add(const Vec3& a, const Vec3& b, const Vec3& c, double size) {
   const Vec3 lo = vmin(a, vmin(b, c)), hi = vmax(a, vmax(b, c));
-  grid_.add(static_cast<int>(items_.size()), lo, hi);
   const Vec3 centre = (lo + hi) * 0.5;
-  items_.push_back({a, b, c, size, centre, (hi - centre).norm()});
+  items_.push_back({a, b, c, size, centre, (hi - centre).norm(), lo, hi});
   smallest_ = std::min(smallest_, size);
+  tree_.clear();
+}
+
+// The hierarchy: the items split at the median of their centres along the longest side of the
+// centres' box, down to kLeaf items per leaf.
+void SizeField::build() const {
+  order_.resize(items_.size());
+  for (std::size_t i = 0; i < order_.size(); ++i) order_[i] = static_cast<int>(i);
+  tree_.reserve(2 * items_.size() / kLeaf + 1);
+  build(0, static_cast<int>(items_.size()));
+}
+
+int SizeField::build(int begin, int end) const {
+  const int at = static_cast<int>(tree_.size());
+  tree_.push_back({});
+  Node node{items_[static_cast<std::size_t>(order_[static_cast<std::size_t>(begin)])].lo,
+            items_[static_cast<std::size_t>(order_[static_cast<std::size_t>(begin)])].hi,
+            h_,
+            begin,
+            end - begin,
+            -1};
+  Vec3 centre_lo = items_[static_cast<std::size_t>(order_[static_cast<std::size_t>(begin)])].centre;
+  Vec3 centre_hi = centre_lo;
+  for (int k = begin; k < end; ++k) {
+    const Item& it = items_[static_cast<std::size_t>(order_[static_cast<std::size_t>(k)])];
+    node.lo = vmin(node.lo, it.lo), node.hi = vmax(node.hi, it.hi);
+    node.least = std::min(node.least, it.size);
+    centre_lo = vmin(centre_lo, it.centre), centre_hi = vmax(centre_hi, it.centre);
+  }
+  if (end - begin > kLeaf) {
+    const Vec3 extent = centre_hi - centre_lo;
+    const int axis = extent.x >= extent.y && extent.x >= extent.z ? 0
+                     : extent.y >= extent.z                       ? 1
+                                                                  : 2;
+    const int middle = begin + (end - begin) / 2;
+    std::nth_element(order_.begin() + begin, order_.begin() + middle, order_.begin() + end,
+                     [&](int a, int b) {
+                       return coord(items_[static_cast<std::size_t>(a)].centre, axis) <
+                              coord(items_[static_cast<std::size_t>(b)].centre, axis);
+                     });
+    node.count = 0;
+    node.first = build(begin, middle);
+    node.right = build(middle, end);
+  }
+  tree_[static_cast<std::size_t>(at)] = node;
+  return at;
 }
 
 double SizeField::at(const Vec3& p, double cap) const {
   double best = std::min(h_, cap);
   if (items_.empty() || best <= smallest_) return best;
-  // Only items nearer than (best - smallest) / grading can give less than best.
-  const double reach = (best - smallest_) / grading_ + slack_;
-  const Vec3 r{reach, reach, reach};
-  grid_.any_in(p - r, p + r, [&](int i) {
-    const Item& it = items_[i];
-    // No nearer than its ball: an item that cannot go under the best so far is not measured (a
-    // margin of 1e-9 of h against rounding in the bound).
-    const double least = std::max(0.0, (p - it.centre).norm() - it.radius - slack_);
-    if (it.size + grading_ * least > best + 1e-9 * h_) return false;
-    const double d2 = it.b.x == it.c.x && it.b.y == it.c.y && it.b.z == it.c.z
-                          ? squared_distance_to_segment(p, it.a, it.b)
-                          : squared_distance_to_triangle(p, it.a, it.b, it.c);
-    best = std::min(best, it.size + grading_ * std::max(0.0, std::sqrt(d2) - slack_));
-    return false;
-  });
+  if (tree_.empty()) build();
+  // No item below a node can give less than its smallest size plus the grading times the
+  // distance to its box (less the slack), nor an item less than its size plus the grading times
+  // the distance to its ball: such nodes and items are not measured (a margin of 1e-9 of h
+  // against rounding in the bound). The nearer child first.
+  const auto bound = [&](const Node& n) {
+    const Vec3 d = vmax(vmax(n.lo - p, p - n.hi), Vec3{0, 0, 0});
+    return n.least + grading_ * std::max(0.0, d.norm() - slack_);
+  };
+  int stack[64];
+  int top = 0;
+  stack[top++] = 0;
+  while (top > 0) {
+    const Node& n = tree_[static_cast<std::size_t>(stack[--top])];
+    if (bound(n) > best + 1e-9 * h_) continue;
+    if (n.count == 0) {
+      const double left = bound(tree_[static_cast<std::size_t>(n.first)]);
+      const double right = bound(tree_[static_cast<std::size_t>(n.right)]);
+      if (left <= right) {
+        stack[top++] = n.right, stack[top++] = n.first;
+      } else {
+        stack[top++] = n.first, stack[top++] = n.right;
+      }
+      continue;
+    }
+    for (int k = n.first; k < n.first + n.count; ++k) {
+      const Item& it = items_[static_cast<std::size_t>(order_[static_cast<std::size_t>(k)])];
+      const double least = std::max(0.0, (p - it.centre).norm() - it.radius - slack_);
+      if (it.size + grading_ * least > best + 1e-9 * h_) continue;
+      const double d2 = it.b.x == it.c.x && it.b.y == it.c.y && it.b.z == it.c.z
+                            ? squared_distance_to_segment(p, it.a, it.b)
+                            : squared_distance_to_triangle(p, it.a, it.b, it.c);
+      best = std::min(best, it.size + grading_ * std::max(0.0, std::sqrt(d2) - slack_));
+    }
+  }
   return best;
 }
 
@@ -258,13 +325,8 @@ void add_swept_segments(std::vector<LocalSizeApplied>& applied, const std::vecto
 }
 
 SizeField make_size_field(const Surface& surface, const LocalSizeItems& items, double h,
-                          double grading, double deflection, double diagonal) {
-  Vec3 lo{std::numeric_limits<double>::max(), std::numeric_limits<double>::max(),
-          std::numeric_limits<double>::max()};
-  Vec3 hi = lo * -1.0;
-  for (const Vec3& p : surface.nodes) lo = vmin(lo, p), hi = vmax(hi, p);
-  const Vec3 grow{0.01 * diagonal, 0.01 * diagonal, 0.01 * diagonal};
-  SizeField field(h, grading, deflection, lo - grow, hi + grow);
+                          double grading, double deflection) {
+  SizeField field(h, grading, deflection);
   for (const SurfaceTriangle& t : surface.triangles) {
     const double size = items.face_size[t.face];
     if (size < h)

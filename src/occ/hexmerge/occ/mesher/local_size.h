@@ -13,7 +13,6 @@
 #include "hexmerge/geometry/vec3.h"
 #include "hexmerge/occ/mesh_shape.h"
 #include "hexmerge/occ/mesher/lattice.h"
-#include "hexmerge/occ/mesher/spatial.h"
 #include "hexmerge/occ/mesher/surface.h"
 #include "hexmerge/occ/mesher/sweep.h"
 
@@ -27,17 +26,17 @@ class SizeField {
  public:
   /// @param[in] h        the target size (the field's largest value)
   /// @param[in] grading  how fast the size grows with the distance (0.5: by half the distance)
-  /// @param[in] lo, hi   a box holding every item and query (queries outside are clamped by the
-  ///                     grid, not by the field)
   /// @param[in] slack    distances count from this much off the items
-  SizeField(double h, double grading, double slack, const Vec3& lo, const Vec3& hi);
+  SizeField(double h, double grading, double slack);
   /// A triangle (or a segment: c == b) of size `size` < h.
   void add(const Vec3& a, const Vec3& b, const Vec3& c, double size);
   /// The size wanted at p, in (0, h]; at most `cap` (a caller asking only whether the size is
-  /// under `cap` gets the same answer, and the same size where it is, from fewer items).
+  /// under `cap` gets the same answer, and the same size where it is, from fewer items). The
+  /// first query after add() builds the items' hierarchy (not safe from two threads at once).
   double at(const Vec3& p, double cap = std::numeric_limits<double>::infinity()) const;
   /// No item: the field is h everywhere.
   bool empty() const { return items_.empty(); }
+  std::size_t nb_items() const { return items_.size(); }
   double h() const { return h_; }
   /// The smallest size of an item (h when none).
   double smallest() const { return smallest_; }
@@ -51,10 +50,22 @@ class SizeField {
     double size;
     Vec3 centre;    ///< of a ball holding the item (its box's centre)
     double radius;  ///< of that ball
+    Vec3 lo, hi;    ///< its box
   };
+  /// A node of the items' bounding-volume hierarchy: the box of its items and their smallest
+  /// size, then two children (`first` the left one's index; the right one follows the left's
+  /// subtree), or a leaf of `count` items from `first` in order_.
+  struct Node {
+    Vec3 lo, hi;
+    double least;
+    int first, count, right;
+  };
+  void build() const;
+  int build(int begin, int end) const;
   double h_, grading_, slack_, smallest_;
-  BucketGrid grid_;
   std::vector<Item> items_;
+  mutable std::vector<Node> tree_;  // empty: to be built
+  mutable std::vector<int> order_;
 };
 
 /// The faces and edges given local sizes (0-based), as mesh_shape() applies them.
@@ -132,7 +143,7 @@ void add_swept_segments(std::vector<LocalSizeApplied>& applied, const std::vecto
 /// edges, with a local size below h.
 /// @param[in] deflection  the chord deflection of `surface` (the field's slack)
 SizeField make_size_field(const Surface& surface, const LocalSizeItems& items, double h,
-                          double grading, double deflection, double diagonal);
+                          double grading, double deflection);
 
 /// Points of the lattices of spacing lattice.spacing / 2^l (l = 1, 2, ...) filling the graded
 /// zone inside the shape (frame coordinates): a point first on level l is placed where the size
