@@ -29,7 +29,7 @@ HEXMERGE_FREECAD_PACKAGES=(freecad calculix-ccx)
 
 # scripts/test.sh: pytest, the lint step (pyflakes, clang-format), and what tests/freecad/run.sh
 # needs (Xvfb and ImageMagick for the GUI test, Netgen for a test mesh).
-HEXMERGE_TEST_PACKAGES=(python3-pytest pyflakes3 clang-format xvfb xauth imagemagick python3-netgen)
+HEXMERGE_TEST_PACKAGES=(python3-pytest python3-pytest-xdist pyflakes3 clang-format xvfb xauth imagemagick python3-netgen)
 
 # Installs the Debian packages given that are not installed yet (apt-get update first, once).
 ensure_packages() {

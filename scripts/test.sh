@@ -16,8 +16,9 @@ echo "== lint: pyflakes and clang-format (scripts/lint.sh)"
 bash "$HEXMERGE_ROOT/scripts/lint.sh" || status=1
 echo "== C++ tests (ctest)"
 ctest --test-dir "$HEXMERGE_BUILD" --output-on-failure -j"$(nproc)" || status=1
-echo "== Python tests (pytest)"
-(cd "$HEXMERGE_ROOT" && "$HEXMERGE_PYTHON" -m pytest -q -W error --strict-markers tests/python) \
+echo "== Python tests (pytest, one worker per core; a file's tests on one worker)"
+(cd "$HEXMERGE_ROOT" && "$HEXMERGE_PYTHON" -m pytest -q -W error --strict-markers \
+  -n "$(nproc)" --dist loadfile tests/python) \
   || status=1
 echo "== fuzzing, sanitized build (scripts/fuzz.sh)"
 bash "$HEXMERGE_ROOT/scripts/fuzz.sh" || status=1
