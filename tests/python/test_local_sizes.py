@@ -327,3 +327,47 @@ def test_no_lattice_point_beside_a_node_of_a_split_lattice_edge() -> None:
     assert sides.min() > 0.25 * 2
     cells = tets.cell_vertices.reshape(-1, 4)
     assert tet_scaled_jacobians(points, cells).min() > 0.1
+
+
+# Narrow faces: a box (40 x 30 x 20) with a step 0.2 high on half its top (20 x 15): the step's
+# two sides are faces 0.2 wide (0.05 h at h 4) along edges 15 and 20 long.
+STEPPED_BOX_GEO = """SetFactory("OpenCASCADE");
+Box(1) = {0, 0, 0, 40, 30, 20};
+Box(2) = {0, 0, 20, 20, 15, 0.2};
+BooleanUnion{ Volume{1}; Delete; }{ Volume{2}; Delete; }
+"""
+
+
+def test_narrow_faces_get_sizes_of_their_own(tmp_path) -> None:
+    """At h 4 the step's two sides (0.05 h wide, narrower than 0.1 h) get a local size of three
+    times their width (0.6), its three 0.2 mm edges their feature sizes. Without (feature_size 0)
+    the sides' triangles run 4 mm along them: tets down to 0.062, 59 under 0.2; with them 0.178,
+    2 (measured when the narrow faces' sizes were added). The shape's sweep (found, then failing:
+    the step changes the cross-section) gave it no feature sizes before; now it gets them then."""
+    shape = gmsh_brep(tmp_path, "stepped_box", STEPPED_BOX_GEO)
+    h = 4.0
+
+    def meshed(feature_size: float):
+        tets, report = hexmerge.mesh_shape(shape, h, recombine=False, feature_size=feature_size)
+        points = tets.points
+        cells = tets.cell_vertices.reshape(-1, 4).astype(np.int64)
+        sj = tet_scaled_jacobians(points, cells)
+        triangles = boundary_triangles(tets)
+        x, y, z = (points[triangles][:, :, k] for k in range(3))
+        on_side_x = (np.abs(x - 20) < 1e-6) & (y <= 15 + 1e-6)  # the step's side across x
+        on_side_y = (np.abs(y - 15) < 1e-6) & (x <= 20 + 1e-6)  # and across y
+        on_step = ((on_side_x.all(axis=1) | on_side_y.all(axis=1)) & (z >= 20 - 1e-6).all(axis=1))
+        assert on_step.sum() > 0
+        return tets, report["meshing"], sj, longest_sides(points, triangles[on_step]).max()
+
+    tets, meshing, sj, longest = meshed(0.1)
+    assert meshing["sweep_axis"] == -1
+    assert meshing["nb_feature_faces"] == 2 and meshing["nb_feature_edges"] == 3
+    assert longest <= 3 * 0.2 * (1 + 1e-6)
+    off_tets, off, sj_off, longest_off = meshed(0.0)
+    assert off["nb_feature_faces"] == 0 and off["nb_feature_edges"] == 0
+    assert longest_off > 0.75 * h
+    assert sj.min() > 2 * sj_off.min()
+    assert (sj < 0.2).sum() * 10 <= (sj_off < 0.2).sum()
+    mesh, report = hexmerge.mesh_shape(shape, h)
+    assert_checked(mesh, tets, report, h)

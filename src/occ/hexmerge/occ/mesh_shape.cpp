@@ -147,13 +147,13 @@ struct GivenItems {
 
 // One attempt: steps 3 to 14 of mesh_shape() with one strategy; the Tet10 mesh too when
 // `tet10` is given. `sharp`: the shape's sharp features (the report has them), whose surface
-// nodes the attempt reports. `narrow`: the faces' widths (face_widths()), where faces narrower
-// than kNarrowFace h are merged away; null: none.
+// nodes the attempt reports. `widths`: the faces' widths (face_widths()); with `merge_narrow`,
+// faces narrower than kNarrowFace h are merged away.
 TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Frame& frame,
                      const SharpFeatures& sharp, const std::string& regions_brep,
                      const MeshShapeParameters& parameters, const Strategy& strategy,
-                     const std::vector<double>* narrow, MeshShapeReport& report, Tet10Mesh* tet10,
-                     const ProgressCallback& progress);
+                     const std::vector<double>& widths, bool merge_narrow, MeshShapeReport& report,
+                     Tet10Mesh* tet10, const ProgressCallback& progress);
 
 // mesh_shape() and, with `tet10`, mesh_shape_tet10().
 TetMesh mesh_shape_impl(const std::string& brep, const MeshShapeParameters& parameters,
@@ -227,15 +227,24 @@ TetMesh mesh_shape_impl(const std::string& brep, const MeshShapeParameters& para
   const SharpFeatures sharp = sharp_features(shape, kSharpAngle);
   report.sharp_features = sharp_feature_reports(sharp, given_items.faces, given_items.edges);
 
+  // The faces' widths (twice their area over their perimeter).
+  const std::vector<double> widths = face_widths(shape);
+
   // 2. A size whose mesh would not fit in memory is refused before any work.
   SizeEstimate estimate =
       estimate_size(shape.shape, parameters.size, parameters.surface_deflection * parameters.size);
-  // The sizes at short edges counted too (swept shapes, which go without them, overestimated).
+  // The sizes at short edges and narrow faces counted too (swept shapes, which go without them,
+  // overestimated).
   std::vector<double> estimated_edge_size = local_items.edge_size;
-  if (!local_sizes.empty() ||
+  std::vector<double> estimated_face_size = local_items.face_size;
+  const std::size_t features =
       add_short_edge_sizes(shape.edge_length, parameters.size, parameters.feature_size,
-                           estimated_edge_size) > 0) {
-    const double extra = estimate_local_tets(shape.faces, shape.edges, local_items.face_size,
+                           estimated_edge_size) +
+      (parameters.feature_size > 0
+           ? add_narrow_face_sizes(widths, parameters.size, estimated_face_size)
+           : 0);
+  if (!local_sizes.empty() || features > 0) {
+    const double extra = estimate_local_tets(shape.faces, shape.edges, estimated_face_size,
                                              estimated_edge_size, parameters.size, kLocalGrading);
     estimate.tets += extra;
     estimate.bytes += extra * kBytesPerTet;
@@ -265,8 +274,8 @@ TetMesh mesh_shape_impl(const std::string& brep, const MeshShapeParameters& para
   // shape is refused as broken (a merge can bring two faces' triangles across each other), all
   // the ways run again without (and what they say is what the user gets).
   const MeshShapeReport before_attempts = report;
-  // `narrow`: the faces' widths, where faces narrower than kNarrowFace h are merged away.
-  const auto run_ways = [&](const std::vector<double>* narrow) {
+  // `merge_narrow`: whether faces narrower than kNarrowFace h are merged away.
+  const auto run_ways = [&](bool merge_narrow) {
     report = before_attempts;
     std::string failures;
     double failed_seconds = 0;
@@ -292,7 +301,7 @@ TetMesh mesh_shape_impl(const std::string& brep, const MeshShapeParameters& para
       const auto attempt_start = PhaseTimer::Clock::now();
       try {
         TetMesh mesh = mesh_attempt(shape, given_items, frame, sharp, regions_brep, parameters,
-                                    strategy, narrow, attempt, tet10, progress);
+                                    strategy, widths, merge_narrow, attempt, tet10, progress);
         attempt.strategy = strategy.name;
         add_phase_seconds(attempt.phase_seconds, "shape", shape_seconds);
         if (failed_seconds > 0)
@@ -316,22 +325,21 @@ TetMesh mesh_shape_impl(const std::string& brep, const MeshShapeParameters& para
                      " ways of placing the points (" + failures + ")");
   };
   // (The ways' sizes are at most 1.1 times the size asked for.)
-  const std::vector<double> widths = face_widths(shape);
   if (std::any_of(widths.begin(), widths.end(),
                   [&](double w) { return w < kNarrowFace * 1.1 * parameters.size; })) {
     try {
-      return run_ways(&widths);
+      return run_ways(true);
     } catch (const InputError&) {
     }
   }
-  return run_ways(nullptr);
+  return run_ways(false);
 }
 
 TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Frame& frame,
                      const SharpFeatures& sharp, const std::string& regions_brep,
                      const MeshShapeParameters& parameters, const Strategy& strategy,
-                     const std::vector<double>* narrow, MeshShapeReport& report, Tet10Mesh* tet10,
-                     const ProgressCallback& progress) {
+                     const std::vector<double>& widths, bool merge_narrow, MeshShapeReport& report,
+                     Tet10Mesh* tet10, const ProgressCallback& progress) {
   PhaseTimer clock(report.phase_seconds);
   // Each step's end: its time, and the progress of this way of placing the points ("mesh shape:
   // <step>", the way's name after the first); a callback asking to stop cancels here.
@@ -374,7 +382,8 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
   // 2.2e-4 h at its 20k size: triangles of 0.2 degrees) are no faces at this size: merged away
   // (the boundary stays within that of the CAD). Where that makes the surface touch itself or
   // leave a gap, not.
-  if (narrow) report.nb_narrow_faces = merge_narrow_faces(surface, shape, *narrow, kNarrowFace * h);
+  if (merge_narrow)
+    report.nb_narrow_faces = merge_narrow_faces(surface, shape, widths, kNarrowFace * h);
   // The volume BRepMesh's triangles enclose: the CAD's within the chord deflection.
   const double triangulated_volume =
       enclosed_volume(surface.nodes, surface.triangles, shape.face_solid_count);
@@ -416,8 +425,9 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
   for (double& size : items_at_h.face_size) size = std::min(size, h);
   for (double& size : items_at_h.edge_size) size = std::min(size, h);
   // The sweep of the shape as found (its lattice faces before local sizes and face layers take
-  // some away). The CAD's short edges get sizes of their own (feature_size), but for an
-  // extrusion that will be swept: its cross-section is repeated as it is.
+  // some away). The CAD's short edges and narrow faces get sizes of their own (feature_size),
+  // but for an extrusion that will be swept: its cross-section is repeated as it is (where its
+  // sweep fails below, they get them then).
   // (Slabs are the lattice's cells along the axis: a sweep along a rectilinear axis, whose cells
   // differ, is not taken; an extrusion has no planar face across its axis between its caps, so
   // its axis is uniform.)
@@ -430,9 +440,13 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
   };
   const std::optional<Sweep> sweep_as_found =
       parameters.sweep && strategy.lattice_faces ? find_uniform_sweep() : std::nullopt;
-  if (!sweep_as_found)
+  const auto add_feature_sizes = [&] {
     report.nb_feature_edges =
         add_short_edge_sizes(shape.edge_length, h, parameters.feature_size, items_at_h.edge_size);
+    if (parameters.feature_size > 0)
+      report.nb_feature_faces = add_narrow_face_sizes(widths, h, items_at_h.face_size);
+  };
+  if (!sweep_as_found) add_feature_sizes();
   // Face layers (none when this way places no layers): their faces are no lattice faces either.
   const std::vector<FaceLayers> layer_entries = parse_face_layers(parameters.face_layers);
   const std::vector<FaceLayerSpec> layer_specs =
@@ -443,21 +457,28 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
   for (const FaceLayerSpec& spec : layer_specs)
     for (const int f : spec.faces) layered[static_cast<std::size_t>(f)] = 1;
   const std::vector<bool> lattice_faces_as_found = lattice.lattice_face;
-  for (std::size_t f = 0; f < items_at_h.face_size.size(); ++f)
-    if ((items_at_h.face_size[f] < h || layered[f]) && lattice.lattice_face[f]) {
-      lattice.lattice_face[f] = false;
-      --lattice.nb_lattice_faces;
-    }
-  for (std::size_t e = 0; e < lattice.lattice_edge.size(); ++e)
-    for (const int f : shape.edge_faces[e])
-      if (!lattice.lattice_face[f] || items_at_h.edge_size[e] < h) lattice.lattice_edge[e] = false;
-  const SizeField field = make_size_field(surface, items_at_h, h, kLocalGrading, deflection);
-  const SizeField* local = field.empty() ? nullptr : &field;
+  SizeField field(h, kLocalGrading, deflection);
+  const SizeField* local = nullptr;
+  // The faces and edges with sizes or layers taken out of the lattice's, and the size field.
+  const auto apply_sizes = [&] {
+    for (std::size_t f = 0; f < items_at_h.face_size.size(); ++f)
+      if ((items_at_h.face_size[f] < h || layered[f]) && lattice.lattice_face[f]) {
+        lattice.lattice_face[f] = false;
+        --lattice.nb_lattice_faces;
+      }
+    for (std::size_t e = 0; e < lattice.lattice_edge.size(); ++e)
+      for (const int f : shape.edge_faces[e])
+        if (!lattice.lattice_face[f] || items_at_h.edge_size[e] < h)
+          lattice.lattice_edge[e] = false;
+    field = make_size_field(surface, items_at_h, h, kLocalGrading, deflection);
+    local = field.empty() ? nullptr : &field;
+    report.nb_lattice_faces = lattice.nb_lattice_faces;
+  };
+  apply_sizes();
   for (int a = 0; a < 3; ++a) {
     report.spacing[a] = lattice.spacing[a];
     report.frame[a] = {lattice.frame.axis[a].x, lattice.frame.axis[a].y, lattice.frame.axis[a].z};
   }
-  report.nb_lattice_faces = lattice.nb_lattice_faces;
 
   // 5. The surface at size h: swept when the shape is an extrusion along a lattice axis, else
   // refined and cleaned.
@@ -505,7 +526,11 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
       swept = *made;
       local = nullptr;  // carried by the split walls: no graded points off the planes
     } else {
-      sweep.reset();  // the cross-section changes along the axis
+      sweep.reset();         // the cross-section changes along the axis
+      if (sweep_as_found) {  // not swept after all: the features get their sizes
+        add_feature_sizes();
+        apply_sizes();
+      }
     }
   }
   if (carried && !sweep)

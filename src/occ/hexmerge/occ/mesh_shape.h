@@ -82,8 +82,9 @@ struct MeshShapeParameters {
   /// Sizes at the CAD's short edges, as a fraction of h: an edge shorter than twice this gets a
   /// local size of its length, at least this (as `local_sizes` on it: the surface and the inside
   /// graded out to h), so that its short segments do not meet nodes h away in needle
-  /// triangles and flat tets; 0: none. Not applied to swept shapes (their cross-section is
-  /// repeated as it is). In [0, 0.5].
+  /// triangles and flat tets; with it on, a face from 0.01 h to 0.1 h wide (twice its area over
+  /// its perimeter) gets three times its width; 0: none. Not applied to swept shapes (their
+  /// cross-section is repeated as it is). In [0, 0.5].
   double feature_size = 0.1;
   /// Lattice orientation: "auto" (normals of the largest planar faces, else principal axes of
   /// inertia), "principal" (principal axes of inertia), "global" (x, y, z).
@@ -311,6 +312,7 @@ struct MeshShapeReport {
   std::size_t nb_axis_points = 0;
   std::size_t nb_facet_points = 0;   ///< points added inside lattice faces (refine_facet)
   std::size_t nb_feature_edges = 0;  ///< short CAD edges given a size by `feature_size`
+  std::size_t nb_feature_faces = 0;  ///< narrow CAD faces given a size (with `feature_size` on)
   /// The face layers (MeshShapeParameters::face_layers) as applied, in their order
   std::vector<FaceLayersApplied> face_layers;
   /// Why the shape was not swept where sweep is on (empty: swept, or not an extrusion)

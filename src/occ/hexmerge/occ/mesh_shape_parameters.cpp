@@ -36,8 +36,9 @@ ParameterTable<MeshShapeParameters> make_table() {
              "Chord deflection of the surface triangulation on curved faces, as a fraction of h"),
       number(&P::feature_size, "feature_size", "h", 0, 0.5, "Feature size",
              "CAD edges shorter than twice this fraction of h get a local size of their length, "
-             "at least this: the surface and the inside graded out to h around them, so that "
-             "short edges make no needle triangles (0: none; swept shapes are meshed without)"),
+             "at least this, and faces 0.01 h to 0.1 h wide three times their width: the surface "
+             "and the inside graded out to h around them, so that short edges and narrow faces "
+             "make no needle triangles (0: none; swept shapes are meshed without)"),
       choice(&P::frame, "frame", {"auto", "principal", "global"}, "Lattice frame",
              "Orientation of the lattice: auto (normals of the largest planar faces, else the "
              "principal axes of inertia), principal (principal axes of inertia), global (x, y, z)",

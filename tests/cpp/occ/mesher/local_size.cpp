@@ -5,8 +5,10 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <vector>
 
+#include "hexmerge/occ/mesher/surface.h"
 #include "hexmerge/occ/mesher/surface_repair.h"
 #include "hexmerge/occ/mesher/sweep.h"
 #include "mesher_fixtures.h"
@@ -72,6 +74,33 @@ TEST(add_short_edge_sizes, sizes_the_short_edges_only) {
   EXPECT_EQ(mesher::add_short_edge_sizes(p.shape.edge_length, 5.0, fraction, plate), 0u);
   // Its lengths: the box's 12 edges (4 x 60, 4 x 40, 4 x 10), the hole's two circles and seam.
   EXPECT_NEAR(total, 450 + 32 * M_PI, 1e-6);
+}
+
+// feature_size: a face from kNarrowestSizedFace h to kNarrowFaceWidth h wide (twice its area over
+// its perimeter) gets kNarrowFaceSizeFactor times its width, unless it has a finer size already;
+// wider and narrower faces and faces without a width (no perimeter: infinite) get none.
+TEST(add_narrow_face_sizes, sizes_the_narrow_faces_only) {
+  const double h = 10, inf = std::numeric_limits<double>::infinity();
+  ASSERT_EQ(mesher::kNarrowFaceWidth, 0.1);
+  ASSERT_EQ(mesher::kNarrowestSizedFace, 0.01);
+  ASSERT_EQ(mesher::kNarrowFaceSizeFactor, 3.0);
+  const std::vector<double> width = {inf, 0.5, 0.99, 1.0, 0.02, 30.0, 0.2, 0.1, 0.0};
+  std::vector<double> size = {h, h, h, h, h, h, 0.3, h, h};
+  EXPECT_EQ(mesher::add_narrow_face_sizes(width, h, size), 3u);
+  EXPECT_EQ(size[0], h);
+  EXPECT_DOUBLE_EQ(size[1], 1.5);
+  EXPECT_DOUBLE_EQ(size[2], 2.97);
+  EXPECT_EQ(size[3], h);  // not narrower than 0.1 h
+  EXPECT_EQ(size[4], h);  // narrower than 0.01 h
+  EXPECT_EQ(size[5], h);
+  EXPECT_EQ(size[6], 0.3);  // finer already
+  EXPECT_DOUBLE_EQ(size[7], 0.3);
+  EXPECT_EQ(size[8], h);
+  // The plate with a hole (60 x 40 x 10, a hole of radius 8) at h 5: every face is wider than
+  // 0.1 h.
+  const Prepared p = prepare(occ_plate_with_hole(), 5.0);
+  std::vector<double> plate(static_cast<std::size_t>(p.shape.faces.Extent()), 5.0);
+  EXPECT_EQ(mesher::add_narrow_face_sizes(mesher::face_widths(p.shape), 5.0, plate), 0u);
 }
 
 // The hole's wall (face of radius 8 about (30, 20)) at a local size: refine() brings its sides to

@@ -136,6 +136,21 @@ std::size_t add_short_edge_sizes(const std::vector<double>& edge_length, double 
   return added;
 }
 
+std::size_t add_narrow_face_sizes(const std::vector<double>& face_width, double h,
+                                  std::vector<double>& face_size) {
+  std::size_t added = 0;
+  for (std::size_t f = 0; f < face_width.size(); ++f) {
+    const double width = face_width[f];
+    if (!(width >= kNarrowestSizedFace * h) || width >= kNarrowFaceWidth * h) continue;
+    const double size = kNarrowFaceSizeFactor * width;
+    if (size < face_size[f]) {
+      face_size[f] = size;
+      ++added;
+    }
+  }
+  return added;
+}
+
 std::vector<LocalSizeApplied> local_sizes_applied(const std::vector<LocalSize>& sizes,
                                                   const ItemNumbering& faces,
                                                   const ItemNumbering& edges,

@@ -111,6 +111,22 @@ LocalSizeItems local_size_items(const std::vector<LocalSize>& sizes, const ItemN
 std::size_t add_short_edge_sizes(const std::vector<double>& edge_length, double h, double fraction,
                                  std::vector<double>& edge_size);
 
+/// Sizes at the CAD's narrow faces (with MeshShapeParameters::feature_size on): every face of
+/// width w (twice its area over its perimeter) from kNarrowestSizedFace h to kNarrowFaceWidth h
+/// gets a local size of kNarrowFaceSizeFactor w, where `face_size` has none finer: its triangles
+/// then cross it at about 18 degrees, not as needles of w over h, and the tets on it have no
+/// edge of w beside edges of h. Narrower faces lie within half the chord deflection of their
+/// neighbours: sized, the boundary left the CAD (a random part's cone sliver 0.003 h wide at
+/// h 68: nodes 0.44 mm off it).
+/// @param[in]     face_width  per face, its width (face_widths())
+/// @param[in,out] face_size   per face, its local size (h: none)
+/// @return the faces given a size
+inline constexpr double kNarrowFaceWidth = 0.1;
+inline constexpr double kNarrowestSizedFace = 0.01;
+inline constexpr double kNarrowFaceSizeFactor = 3;
+std::size_t add_narrow_face_sizes(const std::vector<double>& face_width, double h,
+                                  std::vector<double>& face_size);
+
 /// What the local sizes gave: per entry, the surface's triangles on its faces and segments on its
 /// edges, and their longest side (the entries' numbers as given).
 std::vector<LocalSizeApplied> local_sizes_applied(const std::vector<LocalSize>& sizes,
