@@ -278,6 +278,14 @@ BooleanDifference{ Volume{1}; Delete; }{ Volume{2,3}; Delete; }
 """
 
 
+def meshed_with_feature_size(shape: str, h: float, feature_size: float):
+    """mesh_shape()'s tets at `feature_size`: the tets, the mesher's report, the points, the tets'
+    corners and the boundary triangles."""
+    tets, report = hexmerge.mesh_shape(shape, h, recombine=False, feature_size=feature_size)
+    cells = tets.cell_vertices.reshape(-1, 4).astype(np.int64)
+    return tets, report["meshing"], tets.points, cells, boundary_triangles(tets)
+
+
 def test_short_cad_edges_get_sizes_of_their_own(tmp_path) -> None:
     """At h 4 the notch's nine 0.4 mm edges (0.1 h) get a local size of 0.4 (feature_size 0.1:
     edges under 0.2 h): the surface and the inside grade out from them. Without (feature_size 0)
@@ -288,14 +296,11 @@ def test_short_cad_edges_get_sizes_of_their_own(tmp_path) -> None:
     h = 4.0
 
     def at_notch(feature_size: float):
-        tets, report = hexmerge.mesh_shape(shape, h, recombine=False, feature_size=feature_size)
-        points = tets.points
-        cells = tets.cell_vertices.reshape(-1, 4).astype(np.int64)
+        _, meshing, points, cells, triangles = meshed_with_feature_size(shape, h, feature_size)
         near = (points[:, 0] > 39.5) & (points[:, 1] > 29.5) & (points[:, 2] > 19.5)
-        triangles = boundary_triangles(tets)
         longest = longest_sides(points, triangles[near[triangles].any(axis=1)]).max()
         quality = tet_scaled_jacobians(points, cells)[near[cells].any(axis=1)].min()
-        return report["meshing"], longest, quality
+        return meshing, longest, quality
 
     meshing, longest, quality = at_notch(0.1)
     assert meshing["nb_feature_edges"] == 9
@@ -348,17 +353,14 @@ def test_narrow_faces_get_sizes_of_their_own(tmp_path) -> None:
     h = 4.0
 
     def meshed(feature_size: float):
-        tets, report = hexmerge.mesh_shape(shape, h, recombine=False, feature_size=feature_size)
-        points = tets.points
-        cells = tets.cell_vertices.reshape(-1, 4).astype(np.int64)
+        tets, meshing, points, cells, triangles = meshed_with_feature_size(shape, h, feature_size)
         sj = tet_scaled_jacobians(points, cells)
-        triangles = boundary_triangles(tets)
         x, y, z = (points[triangles][:, :, k] for k in range(3))
         on_side_x = (np.abs(x - 20) < 1e-6) & (y <= 15 + 1e-6)  # the step's side across x
         on_side_y = (np.abs(y - 15) < 1e-6) & (x <= 20 + 1e-6)  # and across y
         on_step = ((on_side_x.all(axis=1) | on_side_y.all(axis=1)) & (z >= 20 - 1e-6).all(axis=1))
         assert on_step.sum() > 0
-        return tets, report["meshing"], sj, longest_sides(points, triangles[on_step]).max()
+        return tets, meshing, sj, longest_sides(points, triangles[on_step]).max()
 
     tets, meshing, sj, longest = meshed(0.1)
     assert meshing["sweep_axis"] == -1

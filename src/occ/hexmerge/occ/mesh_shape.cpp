@@ -9,6 +9,7 @@
 #include <memory>
 #include <optional>
 #include <sstream>
+#include <tuple>
 #include <utility>
 #include <vector>
 
@@ -235,17 +236,12 @@ TetMesh mesh_shape_impl(const std::string& brep, const MeshShapeParameters& para
       estimate_size(shape.shape, parameters.size, parameters.surface_deflection * parameters.size);
   // The sizes at short edges and narrow faces counted too (swept shapes, which go without them,
   // overestimated).
-  std::vector<double> estimated_edge_size = local_items.edge_size;
-  std::vector<double> estimated_face_size = local_items.face_size;
-  const std::size_t features =
-      add_short_edge_sizes(shape.edge_length, parameters.size, parameters.feature_size,
-                           estimated_edge_size) +
-      (parameters.feature_size > 0
-           ? add_narrow_face_sizes(widths, parameters.size, estimated_face_size)
-           : 0);
-  if (!local_sizes.empty() || features > 0) {
-    const double extra = estimate_local_tets(shape.faces, shape.edges, estimated_face_size,
-                                             estimated_edge_size, parameters.size, kLocalGrading);
+  LocalSizeItems estimated = local_items;
+  const auto [feature_edges, feature_faces] = add_feature_sizes(
+      shape.edge_length, widths, parameters.size, parameters.feature_size, estimated);
+  if (!local_sizes.empty() || feature_edges + feature_faces > 0) {
+    const double extra = estimate_local_tets(shape.faces, shape.edges, estimated.face_size,
+                                             estimated.edge_size, parameters.size, kLocalGrading);
     estimate.tets += extra;
     estimate.bytes += extra * kBytesPerTet;
   }
@@ -440,13 +436,11 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
   };
   const std::optional<Sweep> sweep_as_found =
       parameters.sweep && strategy.lattice_faces ? find_uniform_sweep() : std::nullopt;
-  const auto add_feature_sizes = [&] {
-    report.nb_feature_edges =
-        add_short_edge_sizes(shape.edge_length, h, parameters.feature_size, items_at_h.edge_size);
-    if (parameters.feature_size > 0)
-      report.nb_feature_faces = add_narrow_face_sizes(widths, h, items_at_h.face_size);
+  const auto feature_sizes = [&] {
+    std::tie(report.nb_feature_edges, report.nb_feature_faces) =
+        add_feature_sizes(shape.edge_length, widths, h, parameters.feature_size, items_at_h);
   };
-  if (!sweep_as_found) add_feature_sizes();
+  if (!sweep_as_found) feature_sizes();
   // Face layers (none when this way places no layers): their faces are no lattice faces either.
   const std::vector<FaceLayers> layer_entries = parse_face_layers(parameters.face_layers);
   const std::vector<FaceLayerSpec> layer_specs =
@@ -528,7 +522,7 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
     } else {
       sweep.reset();         // the cross-section changes along the axis
       if (sweep_as_found) {  // not swept after all: the features get their sizes
-        add_feature_sizes();
+        feature_sizes();
         apply_sizes();
       }
     }
@@ -549,10 +543,8 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
   // Whether two faces whose triangles cross meet on the CAD itself where they share no edge: they
   // cross at every size, and the shape is refused below (pyocc_11752: 8 of its 97 pairs of
   // crossing faces; the crossing rounds refined its 89 others to 564k triangles, 3 minutes).
-  const auto cad_at_fault = [&] {
-    bool at_fault = false;
-    describe_crossings(shape, surface.nodes, checked, crossings, 1e-4 * h, face_names, at_fault);
-    return at_fault;
+  const auto faces_meet_on_cad = [&] {
+    return any_faces_meet(shape, checked, crossings, 1e-4 * h);
   };
   if (sweep) {
     report.sweep_axis = sweep->axis;
@@ -601,8 +593,8 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
     SizeField places(h, kLocalGrading, deflection);
     std::size_t crossing_before = std::numeric_limits<std::size_t>::max();
     for (int round = 0; round < kCrossingRounds && !crossings.empty(); ++round) {
-      if (only_folds()) break;    // folds of one face: no size of these places unfolds them
-      if (cad_at_fault()) break;  // refused below
+      if (only_folds()) break;         // folds of one face: no size of these places unfolds them
+      if (faces_meet_on_cad()) break;  // refused below
       // find_crossings() gives a pair of triangles per pair of faces: every crossing one here.
       std::vector<std::array<int, 3>> corners_of(checked.size());
       for (std::size_t t = 0; t < checked.size(); ++t) corners_of[t] = checked[t].node;

@@ -151,6 +151,14 @@ std::size_t add_narrow_face_sizes(const std::vector<double>& face_width, double 
   return added;
 }
 
+std::pair<std::size_t, std::size_t> add_feature_sizes(const std::vector<double>& edge_length,
+                                                      const std::vector<double>& face_width,
+                                                      double h, double fraction,
+                                                      LocalSizeItems& items) {
+  const std::size_t edges = add_short_edge_sizes(edge_length, h, fraction, items.edge_size);
+  return {edges, fraction > 0 ? add_narrow_face_sizes(face_width, h, items.face_size) : 0};
+}
+
 std::vector<LocalSizeApplied> local_sizes_applied(const std::vector<LocalSize>& sizes,
                                                   const ItemNumbering& faces,
                                                   const ItemNumbering& edges,
@@ -196,14 +204,9 @@ void SizeField::build() const {
 int SizeField::build(int begin, int end) const {
   const int at = static_cast<int>(tree_.size());
   tree_.push_back({});
-  Node node{items_[static_cast<std::size_t>(order_[static_cast<std::size_t>(begin)])].lo,
-            items_[static_cast<std::size_t>(order_[static_cast<std::size_t>(begin)])].hi,
-            h_,
-            begin,
-            end - begin,
-            -1};
-  Vec3 centre_lo = items_[static_cast<std::size_t>(order_[static_cast<std::size_t>(begin)])].centre;
-  Vec3 centre_hi = centre_lo;
+  const Item& first = items_[static_cast<std::size_t>(order_[static_cast<std::size_t>(begin)])];
+  Node node{first.lo, first.hi, h_, begin, end - begin, -1};
+  Vec3 centre_lo = first.centre, centre_hi = first.centre;
   for (int k = begin; k < end; ++k) {
     const Item& it = items_[static_cast<std::size_t>(order_[static_cast<std::size_t>(k)])];
     node.lo = vmin(node.lo, it.lo), node.hi = vmax(node.hi, it.hi);

@@ -8,6 +8,7 @@
 #include <cstddef>
 #include <limits>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "hexmerge/geometry/vec3.h"
@@ -36,7 +37,6 @@ class SizeField {
   double at(const Vec3& p, double cap = std::numeric_limits<double>::infinity()) const;
   /// No item: the field is h everywhere.
   bool empty() const { return items_.empty(); }
-  std::size_t nb_items() const { return items_.size(); }
   double h() const { return h_; }
   /// The smallest size of an item (h when none).
   double smallest() const { return smallest_; }
@@ -126,6 +126,14 @@ inline constexpr double kNarrowestSizedFace = 0.01;
 inline constexpr double kNarrowFaceSizeFactor = 3;
 std::size_t add_narrow_face_sizes(const std::vector<double>& face_width, double h,
                                   std::vector<double>& face_size);
+
+/// The feature sizes (MeshShapeParameters::feature_size, `fraction`; 0: none):
+/// add_short_edge_sizes() and add_narrow_face_sizes() on `items`.
+/// @return the edges and the faces given a size
+std::pair<std::size_t, std::size_t> add_feature_sizes(const std::vector<double>& edge_length,
+                                                      const std::vector<double>& face_width,
+                                                      double h, double fraction,
+                                                      LocalSizeItems& items);
 
 /// What the local sizes gave: per entry, the surface's triangles on its faces and segments on its
 /// edges, and their longest side (the entries' numbers as given).

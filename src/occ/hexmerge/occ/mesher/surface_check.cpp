@@ -260,16 +260,15 @@ std::string describe_overused_sides(const std::vector<Vec3>& nodes,
   return text.str();
 }
 
-std::string describe_crossings(const Shape& s, const std::vector<Vec3>& nodes,
-                               const std::vector<SurfaceTriangle>& triangles,
-                               const std::vector<Crossing>& crossings, double tolerance,
-                               const std::vector<std::string>& face_names, bool& cad_at_fault) {
-  cad_at_fault = false;
-  // Whether an edge of face a that is not one of face b's runs on face b: its points at 1/4,
+namespace {
+
+// Whether the CAD's faces a and b meet where they share no edge, within `tolerance`.
+bool faces_meet(const Shape& s, int a, int b, double tolerance) {
+  // Whether an edge of face x that is not one of face y's runs on face y: its points at 1/4,
   // 1/2 and 3/4 within `tolerance` of it.
-  auto edge_on = [&](int a, int b) {
-    const TopoDS_Face& fa = TopoDS::Face(s.faces(a + 1));
-    const TopoDS_Face& fb = TopoDS::Face(s.faces(b + 1));
+  auto edge_on = [&](int x, int y) {
+    const TopoDS_Face& fa = TopoDS::Face(s.faces(x + 1));
+    const TopoDS_Face& fb = TopoDS::Face(s.faces(y + 1));
     std::set<int> edges_of_b;
     for (TopExp_Explorer ex(fb, TopAbs_EDGE); ex.More(); ex.Next())
       edges_of_b.insert(s.edges.FindIndex(ex.Current()));
@@ -290,11 +289,11 @@ std::string describe_crossings(const Shape& s, const std::vector<Vec3>& nodes,
     }
     return false;
   };
-  // Whether faces a and b, which share no vertex, touch: come within `tolerance` of each other
+  // Whether faces x and y, which share no vertex, touch: come within `tolerance` of each other
   // (a solid's surface touching itself at a point or along a curve that is no edge of it).
-  auto touch = [&](int a, int b) {
-    const TopoDS_Face& fa = TopoDS::Face(s.faces(a + 1));
-    const TopoDS_Face& fb = TopoDS::Face(s.faces(b + 1));
+  auto touch = [&](int x, int y) {
+    const TopoDS_Face& fa = TopoDS::Face(s.faces(x + 1));
+    const TopoDS_Face& fb = TopoDS::Face(s.faces(y + 1));
     TopTools_MapOfShape vertices_of_b;  // by TopoDS_Shape::IsSame
     for (TopExp_Explorer ex(fb, TopAbs_VERTEX); ex.More(); ex.Next())
       vertices_of_b.Add(ex.Current());
@@ -303,6 +302,29 @@ std::string describe_crossings(const Shape& s, const std::vector<Vec3>& nodes,
     BRepExtrema_DistShapeShape distance(fa, fb);
     return distance.IsDone() && distance.Value() <= tolerance;
   };
+  return a != b && (edge_on(a, b) || edge_on(b, a) || touch(a, b));
+}
+
+// The faces of crossing c, the smaller first.
+std::pair<int, int> faces_of(const std::vector<SurfaceTriangle>& triangles, const Crossing& c) {
+  return std::minmax(triangles[c.first].face, triangles[c.second].face);
+}
+
+}  // namespace
+
+bool any_faces_meet(const Shape& s, const std::vector<SurfaceTriangle>& triangles,
+                    const std::vector<Crossing>& crossings, double tolerance) {
+  return std::any_of(crossings.begin(), crossings.end(), [&](const Crossing& c) {
+    const auto [a, b] = faces_of(triangles, c);
+    return faces_meet(s, a, b, tolerance);
+  });
+}
+
+std::string describe_crossings(const Shape& s, const std::vector<Vec3>& nodes,
+                               const std::vector<SurfaceTriangle>& triangles,
+                               const std::vector<Crossing>& crossings, double tolerance,
+                               const std::vector<std::string>& face_names, bool& cad_at_fault) {
+  cad_at_fault = false;
   // The pairs of faces (one crossing each, the smaller face first) whose CAD faces meet first,
   // then the others, in the faces' order.
   struct Pair {
@@ -312,9 +334,8 @@ std::string describe_crossings(const Shape& s, const std::vector<Vec3>& nodes,
   };
   std::vector<Pair> order;
   for (const Crossing& c : crossings) {
-    const int a = std::min(triangles[c.first].face, triangles[c.second].face);
-    const int b = std::max(triangles[c.first].face, triangles[c.second].face);
-    const bool meet = a != b && (edge_on(a, b) || edge_on(b, a) || touch(a, b));
+    const auto [a, b] = faces_of(triangles, c);
+    const bool meet = faces_meet(s, a, b, tolerance);
     cad_at_fault = cad_at_fault || meet;
     order.push_back({!meet, {a, b}, c});
   }

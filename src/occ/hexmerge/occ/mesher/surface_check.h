@@ -73,6 +73,11 @@ std::string describe_overused_sides(const std::vector<Vec3>& nodes,
 inline constexpr const char* kRepairTheShape =
     ". Repair the shape (FreeCAD's Part > Check geometry, with its BOP check, lists such faces)";
 
+/// Whether the CAD's faces of any crossing meet where they share no edge (as describe_crossings()
+/// tells them), stopping at the first that does.
+bool any_faces_meet(const Shape& s, const std::vector<SurfaceTriangle>& triangles,
+                    const std::vector<Crossing>& crossings, double tolerance);
+
 /// What the crossings say, for the user: per pair of faces whose triangles cross (up to three,
 /// those whose CAD faces meet first), the faces (by `face_names`) and a point, and whether the
 /// CAD's own faces meet: an
