@@ -548,6 +548,7 @@ py::tuple run_mesh_shape(const std::string& brep, const std::map<std::string, st
   d["nb_facet_points"] = report.nb_facet_points;
   d["nb_feature_edges"] = report.nb_feature_edges;
   d["nb_feature_faces"] = report.nb_feature_faces;
+  d["nb_thin_wall_patches"] = report.nb_thin_wall_patches;
   if (second_order) {
     d["nb_projected_mid_nodes"] = report.nb_projected_mid_nodes;
     d["nb_straight_mid_nodes"] = report.nb_straight_mid_nodes;

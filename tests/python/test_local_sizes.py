@@ -373,3 +373,48 @@ def test_narrow_faces_get_sizes_of_their_own(tmp_path) -> None:
     assert (sj < 0.2).sum() * 10 <= (sj_off < 0.2).sum()
     mesh, report = hexmerge.mesh_shape(shape, h)
     assert_checked(mesh, tets, report, h)
+
+
+# A plate 40 x 30 x 1.2 with a block standing on its end (x < 6) and a countersunk hole (no
+# sweep): at h 8 the plate is 0.15 h thick.
+THIN_PLATE_GEO = """SetFactory("OpenCASCADE");
+Box(1) = {0, 0, 0, 40, 30, 1.2};
+Cone(2) = {20, 15, -0.1, 0, 0, 1.5, 3, 6};
+Box(3) = {0, 0, 1.2, 6, 30, 12};
+v() = BooleanUnion{ Volume{1}; Delete; }{ Volume{3}; Delete; };
+BooleanDifference{ Volume{v(0)}; Delete; }{ Volume{2}; Delete; }
+"""
+
+
+def test_thin_walls_get_sizes_of_their_own_and_count_in_the_estimate(tmp_path) -> None:
+    """Across a wall thinner than 0.2 h the surface gets three times the wall's thickness: at h 8
+    the plate's top and bottom (1.2 apart, lattice faces) get points inside until their
+    triangles' circumradius is at most 0.6 x 3.6 away from the block and the hole; without
+    (feature_size 0) their triangles run to 8 and 40 tets are under scaled Jacobian 0.2 (with:
+    none; measured when thin walls were sized). The estimate of step 2 counts the thin walls'
+    sizes once they are found (3,760 tets, 603 without), and a memory limit between the two
+    refuses the size then, saying why."""
+    shape = gmsh_brep(tmp_path, "thin_plate", THIN_PLATE_GEO)
+    h = 8.0
+
+    def on_plate(feature_size: float):
+        _, meshing, points, cells, triangles = meshed_with_feature_size(shape, h, feature_size)
+        x, y, z = (points[triangles][:, :, k] for k in range(3))
+        flat = ((np.abs(z) < 1e-9).all(axis=1) | (np.abs(z - 1.2) < 1e-9).all(axis=1))
+        far = ((x > 10) & (x < 38) & (y > 2) & (y < 28)  # not on the plate's sides' edges
+               & (np.hypot(x - 20, y - 15) > 8)).all(axis=1)
+        sj = tet_scaled_jacobians(points, cells)
+        return meshing, longest_sides(points, triangles[flat & far]).max(), sj
+
+    meshing, longest, sj = on_plate(0.1)
+    assert meshing["nb_thin_wall_patches"] > 0
+    assert longest <= 2 * 0.6 * 3 * 1.2 * (1 + 1e-6)  # twice the circumradius
+    assert sj.min() >= 0.2
+    off, longest_off, _ = on_plate(0.0)
+    assert off["nb_thin_wall_patches"] == 0
+    assert longest_off > 0.75 * h
+    assert meshing["estimated_tets"] > 3 * off["estimated_tets"]
+    limit = 2 * off["estimated_tets"] * 3000 / 1e9  # GB: the shape's own estimate fits
+    with pytest.raises(hexmerge.InputError, match=r"million tets \(with the sizes of its thin "
+                       r"walls\), which need about .* GB .*: give a size of at least"):
+        hexmerge.mesh_shape(shape, h, recombine=False, memory_limit=limit)

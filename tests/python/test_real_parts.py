@@ -277,6 +277,21 @@ def test_short_cad_edges_graded_on_a_crankshaft() -> None:
     assert smallest > smallest_off
 
 
+def test_thin_blades_get_sizes_of_their_own() -> None:
+    """gmsh_1385_Laufrad_1000 at its 50k size (h 45.75): its blades are 8 mm thick, 0.175 h.
+    Between triangles of side h they held 112 elements under scaled Jacobian 0.2 (56k tets, the
+    smallest 0.057) before thin walls got sizes of their own (three times their thickness); then
+    4 tets (96k tets, the smallest 0.189)."""
+    import numpy as np
+
+    tets, report = hexmerge.mesh_shape(CAD / "gmsh_1385_Laufrad_1000.stp", 45.75339311624011,
+                                       recombine=False)
+    sj = tet_scaled_jacobians(tets.points, tets.cell_vertices.reshape(-1, 4).astype(np.int64))
+    assert report["meshing"]["nb_thin_wall_patches"] > 0
+    assert int((sj < SJ_FLOOR).sum()) <= 10
+    assert sj.min() > 0.15
+
+
 def test_nodes_on_tolerant_cad_edges_are_on_the_cad() -> None:
     """gmsh_SampleCrankshaft4A's STEP edges carry tolerances up to 0.218 mm: Edge321 and Edge322
     lie that far off the B-spline surface of Face113. The boundary distance was measured to the

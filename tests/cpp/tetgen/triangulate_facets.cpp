@@ -173,8 +173,8 @@ TEST(RefineFacet, PointsInsideRaiseTheSmallestAngle) {
 
   const Vec3 refused{8, 2, 2};
   const std::vector<Vec3> added = tetgen::refine_facet(
-      facet, points, 20 * M_PI / 180, 2.0, [&](const Vec3& q) { return (q - refused).norm() > 1; },
-      1000);
+      facet, points, 20 * M_PI / 180, [](const Vec3&) { return 2.0; },
+      [&](const Vec3& q) { return (q - refused).norm() > 1; }, 1000);
   ASSERT_FALSE(added.empty());
   Facet refined = facet;
   std::vector<Vec3> all = points;
@@ -196,7 +196,8 @@ TEST(RefineFacet, PointsInsideRaiseTheSmallestAngle) {
   EXPECT_LT(skinny_after, skinny_before);
   // Nothing more than asked for.
   EXPECT_LE(tetgen::refine_facet(
-                facet, points, 20 * M_PI / 180, 2.0, [](const Vec3&) { return true; }, 3)
+                facet, points, 20 * M_PI / 180, [](const Vec3&) { return 2.0; },
+                [](const Vec3&) { return true; }, 3)
                 .size(),
             3u);
 }

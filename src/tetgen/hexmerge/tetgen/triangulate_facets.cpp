@@ -161,7 +161,8 @@ std::optional<std::vector<std::array<int, 3>>> triangulate(
 }  // namespace
 
 std::vector<Vec3> refine_facet(const Facet& facet, const std::vector<Vec3>& points,
-                               double min_angle, double max_radius,
+                               double min_angle,
+                               const std::function<double(const Vec3&)>& max_radius,
                                const std::function<bool(const Vec3&)>& accept,
                                std::size_t max_points) {
   std::vector<Vec3> added;
@@ -171,6 +172,13 @@ std::vector<Vec3> refine_facet(const Facet& facet, const std::vector<Vec3>& poin
   const double level =
       coord(points[static_cast<std::size_t>(facet.polygons.front().front())], planar->axis);
   const double cos_limit = std::cos(min_angle);
+  const auto in_space = [&](const Kernel::Point_2& p) {
+    Vec3 q{0, 0, 0};
+    set_coord(q, planar->axis, level);
+    set_coord(q, planar->u, p.x());
+    set_coord(q, planar->v, p.y());
+    return q;
+  };
   const auto smallest_angle_cos = [](const Cdt::Face_handle f) {
     double most = -1;  // the cosine of the smallest angle: the largest cosine
     for (int k = 0; k < 3; ++k) {
@@ -197,10 +205,13 @@ std::vector<Vec3> refine_facet(const Facet& facet, const std::vector<Vec3>& poin
       const double c = smallest_angle_cos(f);
       const double r2 =
           CGAL::squared_radius(f->vertex(0)->point(), f->vertex(1)->point(), f->vertex(2)->point());
-      if (c > cos_limit)
+      if (c > cos_limit) {
         skinny.emplace_back(-c, f);
-      else if (r2 > max_radius * max_radius)
-        skinny.emplace_back(1 - std::sqrt(r2) / max_radius, f);
+        continue;
+      }
+      const double radius = max_radius(in_space(
+          CGAL::circumcenter(f->vertex(0)->point(), f->vertex(1)->point(), f->vertex(2)->point())));
+      if (r2 > radius * radius) skinny.emplace_back(1 - std::sqrt(r2) / radius, f);
     }
     std::sort(skinny.begin(), skinny.end(),
               [](const auto& x, const auto& y) { return x.first < y.first; });
@@ -229,10 +240,7 @@ std::vector<Vec3> refine_facet(const Facet& facet, const std::vector<Vec3>& poin
       for (const Kernel::Point_2& other : round)
         if (clear && CGAL::squared_distance(centre, other) < 0.25 * r2) clear = false;
       if (!clear) continue;
-      Vec3 q{0, 0, 0};
-      set_coord(q, planar->axis, level);
-      set_coord(q, planar->u, centre.x());
-      set_coord(q, planar->v, centre.y());
+      const Vec3 q = in_space(centre);
       if (!accept(q)) continue;
       round.push_back(centre);
       added.push_back(q);

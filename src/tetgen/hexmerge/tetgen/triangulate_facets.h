@@ -41,15 +41,16 @@ std::size_t triangulate_facets(std::vector<Facet>& facets, const std::vector<Vec
 /// Points inside an axis-normal facet that raise the smallest angle of its constrained Delaunay
 /// triangulation (its polygons' points and sides, its single points): in rounds, the
 /// circumcentres of the triangles with an angle under `min_angle` (radians), worst first, then of
-/// those whose circumradius exceeds `max_radius`, largest first, where
-/// the centre lies inside the facet, outside the diametral circle of every side near it (the
-/// sides are not split) and at least half the triangle's circumradius from every point and
+/// those whose circumradius exceeds `max_radius` at their circumcentre, largest over it first,
+/// where the centre lies inside the facet, outside the diametral circle of every side near it
+/// (the sides are not split) and at least half the triangle's circumradius from every point and
 /// every other centre of the round, and where `accept` takes it; until no triangle gets one or
 /// `max_points` are added. The facet is not changed. Nothing for a facet triangulate_facets()
 /// would leave to TetGen.
 /// @return the points, in the facet's plane, in the points' coordinates
 std::vector<Vec3> refine_facet(const Facet& facet, const std::vector<Vec3>& points,
-                               double min_angle, double max_radius,
+                               double min_angle,
+                               const std::function<double(const Vec3&)>& max_radius,
                                const std::function<bool(const Vec3&)>& accept,
                                std::size_t max_points);
 

@@ -14,6 +14,7 @@
 #include <sstream>
 #include <string>
 
+#include "hexmerge/core/error.h"
 #include "hexmerge/occ/mesher/surface.h"
 
 namespace hexmerge::mesher {
@@ -98,6 +99,35 @@ double estimate_local_tets(const TopTools_IndexedMapOfShape& faces,
     tets += 11 * M_PI * length.Mass() / (grading * grading * s);
   }
   return tets;
+}
+
+double estimate_patch_tets(const std::vector<SizedTriangle>& patches, double h, double grading) {
+  double tets = 0;
+  for (const SizedTriangle& p : patches) {
+    const double s = p.size;
+    if (s >= h) continue;
+    const double area = 0.5 * (p.b - p.a).cross(p.c - p.a).norm();
+    tets += area * (10 / (s * s) + 11 / (2 * grading) * (1 / (s * s) - 1 / (h * h)) - 10 / (h * h));
+  }
+  return tets;
+}
+
+void refuse_if_too_large(const SizeEstimate& estimate, const TopoDS_Shape& shape, double size,
+                         double deflection_ratio, double memory_limit, const std::string& why) {
+  const double limit =
+      memory_limit > 0 ? memory_limit * 1e9 : static_cast<double>(available_memory());
+  if (!(limit > 0) || estimate.bytes <= limit) return;
+  std::ostringstream text;
+  text.precision(3);
+  text << "mesh_shape: size " << size << " would make about " << estimate.tets / 1e6
+       << " million tets" << (why.empty() ? "" : " (" + why + ")") << ", which need about "
+       << estimate.bytes / 1e9 << " GB to mesh and recombine; "
+       << (memory_limit > 0 ? "memory_limit is " : "the system has ") << limit / 1e9 << " GB"
+       << (memory_limit > 0 ? "" : " available") << ": give a size of at least "
+       << std::max(size * std::cbrt(estimate.bytes / limit),
+                   size_that_fits(shape, size, deflection_ratio, limit))
+       << " (or raise memory_limit)";
+  throw InputError(text.str(), Entity::Parameter);
 }
 
 namespace {

@@ -6,7 +6,10 @@
 #include <TopTools_IndexedMapOfShape.hxx>
 #include <TopoDS_Shape.hxx>
 #include <cstdint>
+#include <string>
 #include <vector>
+
+#include "hexmerge/occ/mesher/thin_walls.h"
 
 namespace hexmerge::mesher {
 
@@ -41,6 +44,18 @@ double estimate_local_tets(const TopTools_IndexedMapOfShape& faces,
                            const TopTools_IndexedMapOfShape& edges,
                            const std::vector<double>& face_size,
                            const std::vector<double>& edge_size, double h, double grading);
+
+/// Tets that patches with sizes of their own (thin_wall_sizes()) add to estimate_size()'s: per
+/// patch of size s < h, as a face of that size (estimate_local_tets()).
+double estimate_patch_tets(const std::vector<SizedTriangle>& patches, double h, double grading);
+
+/// Refuses a mesh that would not fit in memory: `memory_limit` GB, or the memory available
+/// (available_memory()) when 0.
+/// @throws InputError (Entity::Parameter) when `estimate` needs more, giving the tets, the
+///         memory and the smallest size (from `size` up, size_that_fits()) whose estimate fits;
+///         `why` (may be empty) says what the estimate counts beyond the shape's volume and area
+void refuse_if_too_large(const SizeEstimate& estimate, const TopoDS_Shape& shape, double size,
+                         double deflection_ratio, double memory_limit, const std::string& why);
 
 /// Peak bytes per tet of meshing a shape and recombining the tets (TetGen's process, the
 /// engine's candidates and selection on lattice tets, the arrays handed to Python).

@@ -8,6 +8,7 @@
 #include <unordered_map>
 #include <utility>
 
+#include "hexmerge/geometry/quality.h"
 #include "hexmerge/mesh/tet_topology.h"
 #include "hexmerge/occ/mesher/common.h"
 #include "hexmerge/occ/mesher/surface.h"
@@ -168,6 +169,15 @@ TetMesh world_mesh(const std::string& brep, const Shape& shape, const Surface& s
   } else
     mesh.regions.assign(mesh.tets.size() / 4, 0);
   return mesh;
+}
+
+double tets_volume(const std::vector<double>& points, const std::vector<index_t>& tets) {
+  double volume = 0;
+  for (std::size_t k = 0; k < tets.size(); k += 4)
+    volume += std::abs(
+        tet_volume(&points[3 * std::size_t{tets[k]}], &points[3 * std::size_t{tets[k + 1]}],
+                   &points[3 * std::size_t{tets[k + 2]}], &points[3 * std::size_t{tets[k + 3]}]));
+  return volume;
 }
 
 }  // namespace hexmerge::mesher

@@ -20,6 +20,9 @@ namespace hexmerge::mesher {
 
 struct Surface;
 
+/// The tets' volume (each counted positive; `tets` 4 indices per tet into `points`, x, y, z).
+double tets_volume(const std::vector<double>& points, const std::vector<index_t>& tets);
+
 /// Per tet, the index of its solid in shape.solids, from the triangles the tetrahedraliser kept
 /// on the shape's faces: the tets connected through faces that are no such triangle are one
 /// solid's, and that solid is the one every face they touch bounds (a shared face bounds two).

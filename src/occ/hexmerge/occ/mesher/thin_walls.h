@@ -1,0 +1,47 @@
+#pragma once
+/// @file
+/// Thin walls (internal header of mesh_shape(); no OpenCASCADE): where the solid is thinner
+/// across than 0.2 h, its surface gets a size of its own, so that the tets across the wall are
+/// not flat (a wall 0.175 h thick between triangles of side h holds no tet much better than
+/// scaled Jacobian 0.2: gmsh_1385_Laufrad_1000's blades at its 50k size, 112 elements under 0.2;
+/// at 0.2 h, a third of the side, about 0.25).
+
+#include <vector>
+
+#include "hexmerge/geometry/vec3.h"
+#include "hexmerge/occ/mesher/surface.h"
+
+namespace hexmerge::mesher {
+
+/// A patch of the surface (world coordinates) with a size of its own.
+struct SizedTriangle {
+  Vec3 a, b, c;
+  double size;
+};
+
+/// Across a wall thinner than kThinWall h, the surface gets kThinWallSizeFactor times the
+/// wall's thickness, at least kThinnestWallSize h: a tet of three nodes on one side and one on
+/// the other then has a height of at least a third of its base's sides. (Walls up to h / 3
+/// sized too: gmsh_Zylkopf's tets under 0.2 at its 50k size the same, 13.)
+inline constexpr double kThinWall = 0.2;
+/// Walls thinner than kThinnestWall h get none: at the size's floor their tets stay under 0.2
+/// anyway, and a tube's wall 0.039 h thick at h 13 (test_sweep_and_surface's), sized, had its
+/// bore's side swapped across it (+4.97 % of the volume; the way failed).
+inline constexpr double kThinnestWall = 0.05;
+inline constexpr double kThinWallSizeFactor = 3;
+inline constexpr double kThinnestWallSize = 0.25;
+/// The far side of a wall faces back: its normal within this angle (degrees) of the opposite of
+/// the near side's (a ray from a face into a concave corner meets a face across the corner,
+/// which is no wall).
+inline constexpr double kWallFacing = 45;
+
+/// The patches of the surface across thin walls: each triangle cut into patches of sides at
+/// most h along and across bands (a quad's diagonal up to 2 h); from each patch's centroid along
+/// the inward normal to the first triangle hit (the triangles oriented outward); where that one
+/// faces back and lies from kThinnestWall h to kThinWall h away, the patch with the size (a face
+/// between two solids: into the solid its triangles leave; the faces of the other solid that face
+/// back across it are probed from there).
+/// @param[in] surface  the surface (world coordinates), triangles oriented outward
+std::vector<SizedTriangle> thin_wall_sizes(const Surface& surface, double h);
+
+}  // namespace hexmerge::mesher

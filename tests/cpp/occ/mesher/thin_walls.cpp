@@ -1,0 +1,94 @@
+#include "hexmerge/occ/mesher/thin_walls.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+#include "mesher_fixtures.h"
+
+namespace hexmerge::test {
+namespace {
+
+double area(const mesher::SizedTriangle& p) { return 0.5 * (p.b - p.a).cross(p.c - p.a).norm(); }
+
+// A slab 30 x 20 x t at h 6: across its thickness t (0.05 h to 0.2 h) both large faces are covered
+// by patches of 3 t (at least h / 4), each side at most 2 h; across its 20 and 30 (over 0.2 h) no
+// patch.
+TEST(thin_wall_sizes, covers_both_faces_of_a_thin_slab) {
+  ASSERT_EQ(mesher::kThinWall, 0.2);
+  ASSERT_EQ(mesher::kThinWallSizeFactor, 3.0);
+  ASSERT_EQ(mesher::kThinnestWallSize, 0.25);
+  const double h = 6;
+  ASSERT_EQ(mesher::kThinnestWall, 0.05);
+  for (const double t : {1.0, 0.4}) {
+    const Prepared p = prepare(occ_box(0, 0, 0, 30, 20, t), h);
+    const std::vector<mesher::SizedTriangle> patches = mesher::thin_wall_sizes(p.surface, h);
+    ASSERT_FALSE(patches.empty());
+    double covered = 0;
+    for (const mesher::SizedTriangle& q : patches) {
+      for (const Vec3* c : {&q.a, &q.b, &q.c})  // on the top or the bottom
+        EXPECT_TRUE(std::abs(c->z) < 1e-9 || std::abs(c->z - t) < 1e-9) << c->z;
+      EXPECT_DOUBLE_EQ(q.size, std::max(3 * t, 0.25 * h));
+      EXPECT_LE(std::max({(q.b - q.a).norm(), (q.c - q.b).norm(), (q.a - q.c).norm()}),
+                2 * h + 1e-9);
+      covered += area(q);
+    }
+    EXPECT_NEAR(covered, 2 * 30 * 20, 1e-6);
+  }
+  // Thinner than 0.05 h (0.2 at h 6): none.
+  EXPECT_TRUE(
+      mesher::thin_wall_sizes(prepare(occ_box(0, 0, 0, 30, 20, 0.2), h).surface, h).empty());
+}
+
+// A box 30 x 20 x 10 (triangulated at h 6): at h 6 thicker than 0.2 h everywhere, no patch; at
+// h 60 its faces 10 apart (under 12) are a wall, those 20 and 30 apart are not.
+TEST(thin_wall_sizes, leaves_walls_thicker_than_a_fifth_of_h) {
+  const Prepared p = prepare(occ_box(0, 0, 0, 30, 20, 10), 6);
+  EXPECT_TRUE(mesher::thin_wall_sizes(p.surface, 6).empty());
+  const std::vector<mesher::SizedTriangle> patches = mesher::thin_wall_sizes(p.surface, 60);
+  double covered = 0;
+  for (const mesher::SizedTriangle& q : patches) {
+    EXPECT_NEAR(std::abs(q.b.z - q.a.z) + std::abs(q.c.z - q.a.z), 0, 1e-9);  // top or bottom
+    EXPECT_DOUBLE_EQ(q.size, std::max(3 * 10.0, 0.25 * 60));
+    covered += area(q);
+  }
+  EXPECT_NEAR(covered, 2 * 30 * 20, 1e-6);
+}
+
+// A triangle facing down (z = 0) under one 1 above it: facing back, a wall 1 thick; tilted 50
+// degrees (its normal more than kWallFacing from the opposite of the first's), a face across a
+// corner, no wall. Triangles as given (outward), nodes as given.
+TEST(thin_wall_sizes, a_face_across_a_corner_is_no_wall) {
+  ASSERT_EQ(mesher::kWallFacing, 45.0);
+  const double h = 6;
+  const auto patches_under = [&](const std::vector<Vec3>& above) {
+    mesher::Surface surface;
+    surface.nodes = {{0, 0, 0}, {0, 10, 0}, {10, 0, 0}, above[0], above[1], above[2]};
+    mesher::SurfaceTriangle down, up;
+    down.node = {0, 1, 2}, down.face = 0;
+    up.node = {3, 4, 5}, up.face = 1;
+    surface.triangles = {down, up};
+    return mesher::thin_wall_sizes(surface, h);
+  };
+  const std::vector<mesher::SizedTriangle> wall =
+      patches_under({{-5, -5, 1}, {20, -5, 1}, {-5, 20, 1}});
+  double lower = 0, upper = 0;  // the patches' area on each
+  for (const mesher::SizedTriangle& q : wall) {
+    EXPECT_DOUBLE_EQ(q.size, 3.0);
+    (q.a.z == 0 ? lower : upper) += area(q);
+  }
+  EXPECT_NEAR(lower, 50, 1e-9);  // all of it
+  EXPECT_GT(upper, 0);           // where it lies over the lower one
+  EXPECT_LT(upper, 2 * 50);      // (its patches, up to h across, straddle the lower one's outline)
+  // Tilted about the line x = 0 at z = 1 by 50 degrees: z = 1 - tan(50) x, its normal
+  // (sin 50, 0, cos 50).
+  const double slope = std::tan(50 * M_PI / 180);
+  EXPECT_TRUE(
+      patches_under({{-5, -5, 1 + 5 * slope}, {5, -5, 1 - 5 * slope}, {-5, 20, 1 + 5 * slope}})
+          .empty());
+}
+
+}  // namespace
+}  // namespace hexmerge::test
