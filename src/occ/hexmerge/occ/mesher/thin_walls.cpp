@@ -91,8 +91,7 @@ std::vector<SizedTriangle> thin_wall_sizes(const Surface& surface, double h) {
     const double thickness = std::sqrt(CGAL::squared_distance(centre, *at));
     if (thickness >= kThinWall * h || thickness < kThinnestWall * h) continue;
     const auto vec = [](const Point& p) { return Vec3{p.x(), p.y(), p.z()}; };
-    out.push_back({vec(q[0]), vec(q[1]), vec(q[2]),
-                   std::max(kThinWallSizeFactor * thickness, kThinnestWallSize * h)});
+    out.push_back({vec(q[0]), vec(q[1]), vec(q[2]), kThinWallSizeFactor * thickness});
   }
   return out;
 }

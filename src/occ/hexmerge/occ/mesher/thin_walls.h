@@ -19,17 +19,16 @@ struct SizedTriangle {
   double size;
 };
 
-/// Across a wall thinner than kThinWall h, the surface gets kThinWallSizeFactor times the
-/// wall's thickness, at least kThinnestWallSize h: a tet of three nodes on one side and one on
-/// the other then has a height of at least a third of its base's sides. (Walls up to h / 3
-/// sized too: gmsh_Zylkopf's tets under 0.2 at its 50k size the same, 13.)
-inline constexpr double kThinWall = 0.2;
-/// Walls thinner than kThinnestWall h get none: at the size's floor their tets stay under 0.2
-/// anyway, and a tube's wall 0.039 h thick at h 13 (test_sweep_and_surface's), sized, had its
+/// Across a wall from kThinnestWall h to kThinWall h thick, the surface gets kThinWallSizeFactor
+/// times the wall's thickness: a tet of three nodes on one side and one on the other then has a
+/// height of a third of its base's sides. (Walls up to h / 3 sized too: gmsh_Zylkopf's tets under
+/// 0.2 at its 50k size the same, 13.) Thinner walls get none: sized at h / 4, walls 0.05 h to
+/// 0.083 h thick kept their flat tets and multiplied them (a random part's 87 elements under 0.2
+/// became 318); a tube's wall 0.039 h thick at h 13 (test_sweep_and_surface's), sized, had its
 /// bore's side swapped across it (+4.97 % of the volume; the way failed).
-inline constexpr double kThinnestWall = 0.05;
+inline constexpr double kThinWall = 0.2;
 inline constexpr double kThinWallSizeFactor = 3;
-inline constexpr double kThinnestWallSize = 0.25;
+inline constexpr double kThinnestWall = 0.25 / kThinWallSizeFactor;
 /// The far side of a wall faces back: its normal within this angle (degrees) of the opposite of
 /// the near side's (a ray from a face into a concave corner meets a face across the corner,
 /// which is no wall).
