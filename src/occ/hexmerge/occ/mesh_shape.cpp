@@ -451,10 +451,10 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
       for (const int f : shape.edge_faces[e])
         if (!lattice.lattice_face[f] || items_at_h.edge_size[e] < h)
           lattice.lattice_edge[e] = false;
-    field = make_size_field(surface, items_at_h, h, kLocalGrading, deflection, thin_walls);
     inside = make_size_field(surface, items_at_h, h, kLocalGrading, deflection);
-    walls = SizeField(h, kLocalGrading, deflection);
-    for (const SizedTriangle& p : thin_walls) walls.add(p.a, p.b, p.c, p.size);
+    field = inside, walls = SizeField(h, kLocalGrading, deflection);
+    for (const SizedTriangle& p : thin_walls)
+      field.add(p.a, p.b, p.c, p.size), walls.add(p.a, p.b, p.c, p.size);
     local = field.empty() ? nullptr : &field;
     report.nb_lattice_faces = lattice.nb_lattice_faces;
   };

@@ -313,7 +313,8 @@ struct MeshShapeReport {
   std::size_t nb_facet_points = 0;   ///< points added inside lattice faces (refine_facet)
   std::size_t nb_feature_edges = 0;  ///< short CAD edges given a size by `feature_size`
   std::size_t nb_feature_faces = 0;  ///< narrow CAD faces given a size (with `feature_size` on)
-  /// patches of the surface across walls thinner than h / 3 given a size (with `feature_size` on)
+  /// patches of the surface across walls h / 12 to 0.2 h thick given a size (with `feature_size`
+  /// on; thin_walls.h)
   std::size_t nb_thin_wall_patches = 0;
   /// The face layers (MeshShapeParameters::face_layers) as applied, in their order
   std::vector<FaceLayersApplied> face_layers;

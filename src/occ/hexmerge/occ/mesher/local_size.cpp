@@ -343,11 +343,8 @@ void add_swept_segments(std::vector<LocalSizeApplied>& applied, const std::vecto
 }
 
 SizeField make_size_field(const Surface& surface, const LocalSizeItems& items, double h,
-                          double grading, double deflection,
-                          const std::vector<SizedTriangle>& patches) {
+                          double grading, double deflection) {
   SizeField field(h, grading, deflection);
-  for (const SizedTriangle& p : patches)
-    if (p.size < h) field.add(p.a, p.b, p.c, p.size);
   for (const SurfaceTriangle& t : surface.triangles) {
     const double size = items.face_size[t.face];
     if (size < h)

@@ -16,7 +16,6 @@
 #include "hexmerge/occ/mesher/lattice.h"
 #include "hexmerge/occ/mesher/surface.h"
 #include "hexmerge/occ/mesher/sweep.h"
-#include "hexmerge/occ/mesher/thin_walls.h"
 
 namespace hexmerge::mesher {
 
@@ -167,10 +166,8 @@ void add_swept_segments(std::vector<LocalSizeApplied>& applied, const std::vecto
 /// The size field of the triangles (world coordinates) of the faces, and the segments of the
 /// edges, with a local size below h.
 /// @param[in] deflection  the chord deflection of `surface` (the field's slack)
-/// @param[in] patches     more patches with sizes of their own (thin_wall_sizes())
 SizeField make_size_field(const Surface& surface, const LocalSizeItems& items, double h,
-                          double grading, double deflection,
-                          const std::vector<SizedTriangle>& patches = {});
+                          double grading, double deflection);
 
 /// Points of the lattices of spacing lattice.spacing / 2^l (l = 1, 2, ...) filling the graded
 /// zone inside the shape (frame coordinates): a point first on level l is placed where the size

@@ -78,6 +78,16 @@ double size_that_fits(const TopoDS_Shape& shape, double size, double deflection_
   return std::ceil(hi / unit) * unit;
 }
 
+namespace {
+
+// The tets an area of local size s < h adds: 10 / s² on it, 11 / (2 g) (1 / s² - 1 / h²) in the
+// zone graded by g inside, less its 10 / h² at h.
+double graded_area_tets(double area, double s, double h, double grading) {
+  return area * (10 / (s * s) + 11 / (2 * grading) * (1 / (s * s) - 1 / (h * h)) - 10 / (h * h));
+}
+
+}  // namespace
+
 double estimate_local_tets(const TopTools_IndexedMapOfShape& faces,
                            const TopTools_IndexedMapOfShape& edges,
                            const std::vector<double>& face_size,
@@ -88,8 +98,7 @@ double estimate_local_tets(const TopTools_IndexedMapOfShape& faces,
     if (s >= h) continue;
     GProp_GProps area;
     BRepGProp::SurfaceProperties(faces(f), area);
-    tets += area.Mass() *
-            (10 / (s * s) + 11 / (2 * grading) * (1 / (s * s) - 1 / (h * h)) - 10 / (h * h));
+    tets += graded_area_tets(area.Mass(), s, h, grading);
   }
   for (int e = 1; e <= edges.Extent(); ++e) {
     const double s = edge_size[e - 1];
@@ -104,10 +113,8 @@ double estimate_local_tets(const TopTools_IndexedMapOfShape& faces,
 double estimate_patch_tets(const std::vector<SizedTriangle>& patches, double h, double grading) {
   double tets = 0;
   for (const SizedTriangle& p : patches) {
-    const double s = p.size;
-    if (s >= h) continue;
-    const double area = 0.5 * (p.b - p.a).cross(p.c - p.a).norm();
-    tets += area * (10 / (s * s) + 11 / (2 * grading) * (1 / (s * s) - 1 / (h * h)) - 10 / (h * h));
+    if (p.size < h)
+      tets += graded_area_tets(0.5 * (p.b - p.a).cross(p.c - p.a).norm(), p.size, h, grading);
   }
   return tets;
 }

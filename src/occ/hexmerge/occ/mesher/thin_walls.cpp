@@ -38,7 +38,7 @@ std::vector<SizedTriangle> thin_wall_sizes(const Surface& surface, double h) {
     const SurfaceTriangle& t = surface.triangles[i];
     std::array<Vec3, 3> v;
     for (int k = 0; k < 3; ++k) v[k] = surface.nodes[static_cast<std::size_t>(t.node[k])];
-    const Vec3 n = (v[1] - v[0]).cross(v[2] - v[0]);
+    const Vec3 n = normal_of(surface.nodes, t.node[0], t.node[1], t.node[2]);
     const double length = n.norm();
     normals.push_back(length > 0 ? n * (1 / length) : Vec3{0, 0, 0});
     if (!(length > 0)) continue;

@@ -1,7 +1,7 @@
 #pragma once
 /// @file
-/// Thin walls (internal header of mesh_shape(); no OpenCASCADE): where the solid is thinner
-/// across than 0.2 h, its surface gets a size of its own, so that the tets across the wall are
+/// Thin walls (internal header of mesh_shape(); no OpenCASCADE): where the solid is h / 12 to
+/// 0.2 h thick, its surface gets a size of its own, so that the tets across the wall are
 /// not flat (a wall 0.175 h thick between triangles of side h holds no tet much better than
 /// scaled Jacobian 0.2: gmsh_1385_Laufrad_1000's blades at its 50k size, 112 elements under 0.2;
 /// at 0.2 h, a third of the side, about 0.25).
