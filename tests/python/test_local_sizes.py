@@ -418,3 +418,28 @@ def test_thin_walls_get_sizes_of_their_own_and_count_in_the_estimate(tmp_path) -
     with pytest.raises(hexmerge.InputError, match=r"million tets \(with the sizes of its thin "
                        r"walls\), which need about .* GB .*: give a size of at least"):
         hexmerge.mesh_shape(shape, h, recombine=False, memory_limit=limit)
+
+
+WEDGE_GEO = """SetFactory("OpenCASCADE");
+Point(1) = {0, 0, 0}; Point(2) = {40, 0, 0}; Point(3) = {40, 8.14, 0};
+Line(1) = {1, 2}; Line(2) = {2, 3}; Line(3) = {3, 1};
+Curve Loop(1) = {1, 2, 3}; Plane Surface(1) = {1};
+w() = Extrude {0, 0, 30} { Surface{1}; };
+Box(2) = {30, -10, 10, 10, 10, 10};
+BooleanUnion{ Volume{w(1)}; Delete; }{ Volume{2}; Delete; }
+"""
+
+
+def test_a_wedge_is_no_thin_wall(tmp_path) -> None:
+    """A prism whose faces meet at 11.5 degrees along an edge (a block on it so that it is not
+    swept) is 0.05 h to 0.2 h thick across a band of that edge at h 4, but no wall: its thickness
+    grows with the distance from the edge (by a fifth of it), and sizes of three times the
+    thickness make the same tets there, smaller and more of them (with faces up to 45 degrees
+    apart counted as walls: 20 patches, 1,343 -> 2,424 tets, elements under 0.2 27 -> 64). Its
+    faces get no sizes of their own, and the mesh is the one made without feature sizes."""
+    shape = gmsh_brep(tmp_path, "wedge", WEDGE_GEO)
+    h = 4.0
+    tets, meshing, _, cells, _ = meshed_with_feature_size(shape, h, 0.1)
+    assert meshing["nb_thin_wall_patches"] == 0
+    _, _, _, cells_off, _ = meshed_with_feature_size(shape, h, 0.0)
+    assert len(cells) == len(cells_off)

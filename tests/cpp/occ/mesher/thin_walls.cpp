@@ -56,37 +56,44 @@ TEST(thin_wall_sizes, leaves_walls_thicker_than_a_fifth_of_h) {
   EXPECT_NEAR(covered, 2 * 30 * 20, 1e-6);
 }
 
-// A triangle facing down (z = 0) under one 1 above it: facing back, a wall 1 thick; tilted 50
-// degrees (its normal more than kWallFacing from the opposite of the first's), a face across a
-// corner, no wall. Triangles as given (outward), nodes as given.
-TEST(thin_wall_sizes, a_face_across_a_corner_is_no_wall) {
-  ASSERT_EQ(mesher::kWallFacing, 45.0);
+// A triangle facing down (z = 0) under one 1 above it: facing back, a wall 1 thick. Tilted
+// about the line x = 0 at z = 1, by 8 degrees (within atan(kWallTaper), 9.46) it still is one; by
+// 12 degrees (a wedge: the thickness grows by a fifth of the distance, over a size of 3 t by more
+// than half of t) and by 50 (a face across a corner) it is none. Triangles as given (outward).
+TEST(thin_wall_sizes, a_wedge_or_a_face_across_a_corner_is_no_wall) {
+  ASSERT_EQ(mesher::kWallTaper, 1.0 / 6);
   const double h = 6;
-  const auto patches_under = [&](const std::vector<Vec3>& above) {
+  const auto patches_under = [&](double degrees) {
+    const double slope = std::tan(degrees * M_PI / 180);  // z = 1 - slope x
     mesher::Surface surface;
-    surface.nodes = {{0, 0, 0}, {0, 10, 0}, {10, 0, 0}, above[0], above[1], above[2]};
+    surface.nodes = {{0, 0, 0},
+                     {0, 10, 0},
+                     {10, 0, 0},
+                     {-5, -5, 1 + 5 * slope},
+                     {5, -5, 1 - 5 * slope},
+                     {-5, 20, 1 + 5 * slope}};
+    if (degrees == 0) surface.nodes[4] = {20, -5, 1};
     mesher::SurfaceTriangle down, up;
     down.node = {0, 1, 2}, down.face = 0;
     up.node = {3, 4, 5}, up.face = 1;
     surface.triangles = {down, up};
     return mesher::thin_wall_sizes(surface, h);
   };
-  const std::vector<mesher::SizedTriangle> wall =
-      patches_under({{-5, -5, 1}, {20, -5, 1}, {-5, 20, 1}});
   double lower = 0, upper = 0;  // the patches' area on each
-  for (const mesher::SizedTriangle& q : wall) {
+  for (const mesher::SizedTriangle& q : patches_under(0)) {
     EXPECT_DOUBLE_EQ(q.size, 3.0);
     (q.a.z == 0 ? lower : upper) += area(q);
   }
   EXPECT_NEAR(lower, 50, 1e-9);  // all of it
   EXPECT_GT(upper, 0);           // where it lies over the lower one
   EXPECT_LT(upper, 2 * 50);      // (its patches, up to h across, straddle the lower one's outline)
-  // Tilted about the line x = 0 at z = 1 by 50 degrees: z = 1 - tan(50) x, its normal
-  // (sin 50, 0, cos 50).
-  const double slope = std::tan(50 * M_PI / 180);
-  EXPECT_TRUE(
-      patches_under({{-5, -5, 1 + 5 * slope}, {5, -5, 1 - 5 * slope}, {-5, 20, 1 + 5 * slope}})
-          .empty());
+  // Tilted by 8 degrees: the lower triangle's patches whose centroids lie h / 12 to 0.2 h under
+  // the upper one (x up to 1.2 tan 82 = 8.5 from where it is 0.5 above) are still a wall.
+  const std::vector<mesher::SizedTriangle> tapered = patches_under(8);
+  EXPECT_FALSE(tapered.empty());
+  for (const mesher::SizedTriangle& q : tapered) EXPECT_LE(q.size, 3 * 0.2 * h + 1e-9);
+  EXPECT_TRUE(patches_under(12).empty());
+  EXPECT_TRUE(patches_under(50).empty());
 }
 
 }  // namespace

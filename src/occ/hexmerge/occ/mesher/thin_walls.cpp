@@ -74,7 +74,7 @@ std::vector<SizedTriangle> thin_wall_sizes(const Surface& surface, double h) {
   std::vector<SizedTriangle> out;
   if (patches.empty()) return out;
   const Tree tree(patches.begin(), patches.end());
-  const double facing = -std::cos(kWallFacing * M_PI / 180);
+  const double facing = -1 / std::sqrt(1 + kWallTaper * kWallTaper);  // -cos(atan(taper))
   for (std::size_t k = 0; k < patches.size(); ++k) {
     const Vec3& n = normals[source[k]];
     const Triangle& q = patches[k];
@@ -85,7 +85,7 @@ std::vector<SizedTriangle> thin_wall_sizes(const Surface& surface, double h) {
     });
     if (!hit) continue;
     const std::size_t j = source[static_cast<std::size_t>(hit->second - patches.begin())];
-    if (normals[j].dot(n) > facing) continue;  // no wall: a face across a corner
+    if (normals[j].dot(n) > facing) continue;  // no wall: a wedge, a face across a corner
     const Point* at = boost::get<Point>(&hit->first);
     if (!at) continue;  // along the patch: no thickness to measure
     const double thickness = std::sqrt(CGAL::squared_distance(centre, *at));
