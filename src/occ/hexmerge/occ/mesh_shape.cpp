@@ -301,7 +301,10 @@ TetMesh mesh_shape_impl(const std::string& brep, const MeshShapeParameters& para
                   [&](double w) { return w < kNarrowFace * 1.1 * parameters.size; })) {
     try {
       return run_ways(true);
-    } catch (const InputError&) {
+    } catch (const InputError& e) {
+      // A parameter's refusal (the thin walls' sizes would not fit in memory) holds without the
+      // merge too.
+      if (e.entity() == Entity::Parameter) throw;
     }
   }
   return run_ways(false);
