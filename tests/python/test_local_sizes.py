@@ -443,4 +443,3 @@ def test_a_wedge_is_no_thin_wall(tmp_path) -> None:
     assert meshing["nb_thin_wall_patches"] == 0
     _, _, _, cells_off, _ = meshed_with_feature_size(shape, h, 0.0)
     assert len(cells) == len(cells_off)
-
