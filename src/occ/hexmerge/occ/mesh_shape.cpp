@@ -139,13 +139,14 @@ struct GivenItems {
 
 // One attempt: steps 3 to 14 of mesh_shape() with one strategy; the Tet10 mesh too when
 // `tet10` is given. `sharp`: the shape's sharp features (the report has them), whose surface
-// nodes the attempt reports. `widths`: the faces' widths (face_widths()); with `merge_narrow`,
-// faces narrower than kNarrowFace h are merged away.
+// nodes the attempt reports. `widths`, `spans`: the faces' widths (face_widths()) and spans
+// (face_spans()); with `merge_narrow`, faces narrower than kNarrowFace h are merged away.
 TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Frame& frame,
                      const SharpFeatures& sharp, const std::string& regions_brep,
                      const MeshShapeParameters& parameters, const Strategy& strategy,
-                     const std::vector<double>& widths, bool merge_narrow, MeshShapeReport& report,
-                     Tet10Mesh* tet10, const ProgressCallback& progress);
+                     const std::vector<double>& widths, const std::vector<double>& spans,
+                     bool merge_narrow, MeshShapeReport& report, Tet10Mesh* tet10,
+                     const ProgressCallback& progress);
 
 // mesh_shape() and, with `tet10`, mesh_shape_tet10().
 TetMesh mesh_shape_impl(const std::string& brep, const MeshShapeParameters& parameters,
@@ -219,8 +220,8 @@ TetMesh mesh_shape_impl(const std::string& brep, const MeshShapeParameters& para
   const SharpFeatures sharp = sharp_features(shape, kSharpAngle);
   report.sharp_features = sharp_feature_reports(sharp, given_items.faces, given_items.edges);
 
-  // The faces' widths (twice their area over their perimeter).
-  const std::vector<double> widths = face_widths(shape);
+  // The faces' widths (twice their area over their perimeter) and how far they span across.
+  const std::vector<double> widths = face_widths(shape), spans = face_spans(shape);
 
   // 2. A size whose mesh would not fit in memory is refused before any work.
   SizeEstimate estimate =
@@ -229,7 +230,7 @@ TetMesh mesh_shape_impl(const std::string& brep, const MeshShapeParameters& para
   // overestimated).
   LocalSizeItems estimated = local_items;
   const auto [feature_edges, feature_faces] = add_feature_sizes(
-      shape.edge_length, widths, parameters.size, parameters.feature_size, estimated);
+      shape.edge_length, widths, spans, parameters.size, parameters.feature_size, estimated);
   if (!local_sizes.empty() || feature_edges + feature_faces > 0) {
     const double extra = estimate_local_tets(shape.faces, shape.edges, estimated.face_size,
                                              estimated.edge_size, parameters.size, kLocalGrading);
@@ -272,8 +273,9 @@ TetMesh mesh_shape_impl(const std::string& brep, const MeshShapeParameters& para
       MeshShapeReport attempt = report;
       const auto attempt_start = PhaseTimer::Clock::now();
       try {
-        TetMesh mesh = mesh_attempt(shape, given_items, frame, sharp, regions_brep, parameters,
-                                    strategy, widths, merge_narrow, attempt, tet10, progress);
+        TetMesh mesh =
+            mesh_attempt(shape, given_items, frame, sharp, regions_brep, parameters, strategy,
+                         widths, spans, merge_narrow, attempt, tet10, progress);
         attempt.strategy = strategy.name;
         add_phase_seconds(attempt.phase_seconds, "shape", shape_seconds);
         if (failed_seconds > 0)
@@ -313,8 +315,9 @@ TetMesh mesh_shape_impl(const std::string& brep, const MeshShapeParameters& para
 TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Frame& frame,
                      const SharpFeatures& sharp, const std::string& regions_brep,
                      const MeshShapeParameters& parameters, const Strategy& strategy,
-                     const std::vector<double>& widths, bool merge_narrow, MeshShapeReport& report,
-                     Tet10Mesh* tet10, const ProgressCallback& progress) {
+                     const std::vector<double>& widths, const std::vector<double>& spans,
+                     bool merge_narrow, MeshShapeReport& report, Tet10Mesh* tet10,
+                     const ProgressCallback& progress) {
   PhaseTimer clock(report.phase_seconds);
   // Each step's end: its time, and the progress of this way of placing the points ("mesh shape:
   // <step>", the way's name after the first); a callback asking to stop cancels here.
@@ -418,7 +421,7 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
   std::vector<SizedTriangle> thin_walls;
   const auto feature_sizes = [&] {
     std::tie(report.nb_feature_edges, report.nb_feature_faces) =
-        add_feature_sizes(shape.edge_length, widths, h, parameters.feature_size, items_at_h);
+        add_feature_sizes(shape.edge_length, widths, spans, h, parameters.feature_size, items_at_h);
     if (parameters.feature_size > 0) thin_walls = thin_wall_sizes(surface, h);
     report.nb_thin_wall_patches = thin_walls.size();
     if (thin_walls.empty()) return;

@@ -86,7 +86,8 @@ TEST(add_narrow_face_sizes, sizes_the_narrow_faces_only) {
   ASSERT_EQ(mesher::kNarrowFaceSizeFactor, 3.0);
   const std::vector<double> width = {inf, 0.5, 0.99, 1.0, 0.02, 30.0, 0.2, 0.1, 0.0};
   std::vector<double> size = {h, h, h, h, h, h, 0.3, h, h};
-  EXPECT_EQ(mesher::add_narrow_face_sizes(width, h, size), 3u);
+  std::vector<double> span(width.size(), 30.0);
+  EXPECT_EQ(mesher::add_narrow_face_sizes(width, span, h, size), 3u);
   EXPECT_EQ(size[0], h);
   EXPECT_DOUBLE_EQ(size[1], 1.5);
   EXPECT_DOUBLE_EQ(size[2], 2.97);
@@ -100,7 +101,34 @@ TEST(add_narrow_face_sizes, sizes_the_narrow_faces_only) {
   // 0.1 h.
   const Prepared p = prepare(occ_plate_with_hole(), 5.0);
   std::vector<double> plate(static_cast<std::size_t>(p.shape.faces.Extent()), 5.0);
-  EXPECT_EQ(mesher::add_narrow_face_sizes(mesher::face_widths(p.shape), 5.0, plate), 0u);
+  EXPECT_EQ(mesher::add_narrow_face_sizes(mesher::face_widths(p.shape), mesher::face_spans(p.shape),
+                                          5.0, plate),
+            0u);
+  // A face 0.5 wide (0.05 h) that spans 0.09 across (a whole cylinder of radius 0.045): none.
+  std::vector<double> one = {h};
+  EXPECT_EQ(mesher::add_narrow_face_sizes({0.5}, {0.09}, h, one), 0u);
+  EXPECT_EQ(one[0], h);
+  EXPECT_EQ(mesher::add_narrow_face_sizes({0.5}, {0.1}, h, one), 1u);
+  EXPECT_DOUBLE_EQ(one[0], 1.5);
+}
+
+// How far each face spans across: a rod of radius 0.5 and height 30 (its wall, a whole cylinder,
+// spans 1, its width is about 2 pi 0.5; its caps 1); a box 60 x 40 x 10: its faces span their
+// shorter side.
+TEST(face_spans, are_the_middle_sides_of_the_faces_boxes) {
+  const mesher::Shape rod = load(occ_cylinder(0.5, 30));
+  const std::vector<double> spans = mesher::face_spans(rod), widths = mesher::face_widths(rod);
+  ASSERT_EQ(spans.size(), 3u);
+  for (std::size_t f = 0; f < spans.size(); ++f) {
+    EXPECT_NEAR(spans[f], 1.0, 0.05) << f;
+    if (widths[f] > 2)  // the wall: twice its area over its circles and its seam, twice
+      EXPECT_NEAR(widths[f], 2 * (2 * M_PI * 0.5 * 30) / (2 * (2 * M_PI * 0.5) + 2 * 30), 1e-3);
+  }
+  std::vector<double> box = mesher::face_spans(load(occ_box(0, 0, 0, 60, 40, 10)));
+  std::sort(box.begin(), box.end());
+  EXPECT_EQ(box.size(), 6u);
+  for (std::size_t f = 0; f < 4; ++f) EXPECT_NEAR(box[f], 10, 1e-6) << f;
+  for (std::size_t f = 4; f < 6; ++f) EXPECT_NEAR(box[f], 40, 1e-6) << f;
 }
 
 // The hole's wall (face of radius 8 about (30, 20)) at a local size: refine() brings its sides to

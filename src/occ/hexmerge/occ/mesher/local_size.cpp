@@ -136,12 +136,14 @@ std::size_t add_short_edge_sizes(const std::vector<double>& edge_length, double 
   return added;
 }
 
-std::size_t add_narrow_face_sizes(const std::vector<double>& face_width, double h,
+std::size_t add_narrow_face_sizes(const std::vector<double>& face_width,
+                                  const std::vector<double>& face_span, double h,
                                   std::vector<double>& face_size) {
   std::size_t added = 0;
   for (std::size_t f = 0; f < face_width.size(); ++f) {
     const double width = face_width[f];
     if (!(width >= kNarrowestSizedFace * h) || width >= kNarrowFaceWidth * h) continue;
+    if (!(face_span[f] >= kNarrowestSizedFace * h)) continue;
     const double size = kNarrowFaceSizeFactor * width;
     if (size < face_size[f]) {
       face_size[f] = size;
@@ -153,10 +155,12 @@ std::size_t add_narrow_face_sizes(const std::vector<double>& face_width, double 
 
 std::pair<std::size_t, std::size_t> add_feature_sizes(const std::vector<double>& edge_length,
                                                       const std::vector<double>& face_width,
+                                                      const std::vector<double>& face_span,
                                                       double h, double fraction,
                                                       LocalSizeItems& items) {
   const std::size_t edges = add_short_edge_sizes(edge_length, h, fraction, items.edge_size);
-  return {edges, fraction > 0 ? add_narrow_face_sizes(face_width, h, items.face_size) : 0};
+  return {edges,
+          fraction > 0 ? add_narrow_face_sizes(face_width, face_span, h, items.face_size) : 0};
 }
 
 std::vector<LocalSizeApplied> local_sizes_applied(const std::vector<LocalSize>& sizes,

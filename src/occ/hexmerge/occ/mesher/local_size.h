@@ -118,13 +118,19 @@ std::size_t add_short_edge_sizes(const std::vector<double>& edge_length, double 
 /// edge of w beside edges of h. Narrower faces lie within half the chord deflection of their
 /// neighbours: sized, the boundary left the CAD (a random part's cone sliver 0.003 h wide at
 /// h 68: nodes 0.44 mm off it).
+/// A face that spans less than kNarrowestSizedFace h across in space is none of them either,
+/// whatever its width (KiCad's Valve_Mini_Pentode_Linear: a whole cylinder 0.006 mm across, 3.1
+/// mm long, at h 0.94 0.016 mm wide; sized at 0.047, its triangles folded over each other in
+/// every way).
 /// @param[in]     face_width  per face, its width (face_widths())
+/// @param[in]     face_span   per face, how far it spans across (face_spans())
 /// @param[in,out] face_size   per face, its local size (h: none)
 /// @return the faces given a size
 inline constexpr double kNarrowFaceWidth = 0.1;
 inline constexpr double kNarrowestSizedFace = 0.01;
 inline constexpr double kNarrowFaceSizeFactor = 3;
-std::size_t add_narrow_face_sizes(const std::vector<double>& face_width, double h,
+std::size_t add_narrow_face_sizes(const std::vector<double>& face_width,
+                                  const std::vector<double>& face_span, double h,
                                   std::vector<double>& face_size);
 
 /// The feature sizes (MeshShapeParameters::feature_size, `fraction`; 0: none):
@@ -132,6 +138,7 @@ std::size_t add_narrow_face_sizes(const std::vector<double>& face_width, double 
 /// @return the edges and the faces given a size
 std::pair<std::size_t, std::size_t> add_feature_sizes(const std::vector<double>& edge_length,
                                                       const std::vector<double>& face_width,
+                                                      const std::vector<double>& face_span,
                                                       double h, double fraction,
                                                       LocalSizeItems& items);
 

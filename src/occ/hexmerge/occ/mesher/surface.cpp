@@ -2,10 +2,12 @@
 
 #include <BRepAdaptor_Curve.hxx>
 #include <BRepAdaptor_Surface.hxx>
+#include <BRepBndLib.hxx>
 #include <BRepGProp.hxx>
 #include <BRepMesh_IncrementalMesh.hxx>
 #include <BRepTools.hxx>
 #include <BRep_Tool.hxx>
+#include <Bnd_OBB.hxx>
 #include <GProp_GProps.hxx>
 #include <Geom2d_Curve.hxx>
 #include <Geom_Surface.hxx>
@@ -371,6 +373,20 @@ std::vector<double> face_widths(const Shape& s) {
     if (perimeter > 0) width[static_cast<std::size_t>(f - 1)] = 2 * area.Mass() / perimeter;
   }
   return width;
+}
+
+std::vector<double> face_spans(const Shape& s) {
+  std::vector<double> span(static_cast<std::size_t>(s.faces.Extent()), 0.0);
+  for (int f = 1; f <= s.faces.Extent(); ++f) {
+    Bnd_OBB box;
+    BRepBndLib::AddOBB(s.faces(f), box, /*theIsTriangulationUsed=*/false,
+                       /*theIsOptimal=*/false, /*theIsShapeToleranceUsed=*/false);
+    if (box.IsVoid()) continue;
+    std::array<double, 3> sides = {box.XHSize(), box.YHSize(), box.ZHSize()};
+    std::sort(sides.begin(), sides.end());
+    span[static_cast<std::size_t>(f - 1)] = 2 * sides[1];
+  }
+  return span;
 }
 
 std::size_t merge_narrow_faces(Surface& surface, const Shape& s,
