@@ -376,12 +376,13 @@ std::vector<double> face_widths(const Shape& s) {
 }
 
 std::vector<double> face_spans(const Shape& s) {
-  std::vector<double> span(static_cast<std::size_t>(s.faces.Extent()), 0.0);
+  std::vector<double> span(static_cast<std::size_t>(s.faces.Extent()),
+                           std::numeric_limits<double>::infinity());
   for (int f = 1; f <= s.faces.Extent(); ++f) {
     Bnd_OBB box;
     BRepBndLib::AddOBB(s.faces(f), box, /*theIsTriangulationUsed=*/false,
                        /*theIsOptimal=*/false, /*theIsShapeToleranceUsed=*/false);
-    if (box.IsVoid()) continue;
+    if (box.IsVoid()) continue;  // no points to measure: no limit
     std::array<double, 3> sides = {box.XHSize(), box.YHSize(), box.ZHSize()};
     std::sort(sides.begin(), sides.end());
     span[static_cast<std::size_t>(f - 1)] = 2 * sides[1];

@@ -106,7 +106,7 @@ std::vector<double> face_widths(const Shape& s);
 
 /// Per face of `s`, how far it spans across: the middle side of its oriented bounding box (from
 /// its geometry, OpenCASCADE's). Below its width where the face closes round: a whole cylinder
-/// of radius r spans 2 r, its width is about 2 pi r.
+/// of radius r spans 2 r, its width is about 2 pi r. Infinite where OpenCASCADE finds no box.
 std::vector<double> face_spans(const Shape& s);
 
 /// Faces narrower than `width` (`face_width`, face_widths()) are no faces: every node of theirs
