@@ -220,8 +220,11 @@ TetMesh mesh_shape_impl(const std::string& brep, const MeshShapeParameters& para
   const SharpFeatures sharp = sharp_features(shape, kSharpAngle);
   report.sharp_features = sharp_feature_reports(sharp, given_items.faces, given_items.edges);
 
-  // The faces' widths (twice their area over their perimeter) and how far they span across.
-  const std::vector<double> widths = face_widths(shape), spans = face_spans(shape);
+  // The faces' widths (2 area / perimeter), and the spans of those a way may size (its size is
+  // at most 1.1 times the one asked for).
+  const std::vector<double> widths = face_widths(shape);
+  const double sized_below = kNarrowFaceWidth * 1.1 * parameters.size;
+  const std::vector<double> spans = face_spans(shape, widths, sized_below);
 
   // 2. A size whose mesh would not fit in memory is refused before any work.
   SizeEstimate estimate =

@@ -101,8 +101,9 @@ TEST(add_narrow_face_sizes, sizes_the_narrow_faces_only) {
   // 0.1 h.
   const Prepared p = prepare(occ_plate_with_hole(), 5.0);
   std::vector<double> plate(static_cast<std::size_t>(p.shape.faces.Extent()), 5.0);
-  EXPECT_EQ(mesher::add_narrow_face_sizes(mesher::face_widths(p.shape), mesher::face_spans(p.shape),
-                                          5.0, plate),
+  const std::vector<double> plate_widths = mesher::face_widths(p.shape);
+  EXPECT_EQ(mesher::add_narrow_face_sizes(
+                plate_widths, mesher::face_spans(p.shape, plate_widths, 1e9), 5.0, plate),
             0u);
   // A face 0.5 wide (0.05 h) that spans 0.09 across (a whole cylinder of radius 0.045): none.
   std::vector<double> one = {h};
@@ -117,18 +118,34 @@ TEST(add_narrow_face_sizes, sizes_the_narrow_faces_only) {
 // shorter side.
 TEST(face_spans, are_the_middle_sides_of_the_faces_boxes) {
   const mesher::Shape rod = load(occ_cylinder(0.5, 30));
-  const std::vector<double> spans = mesher::face_spans(rod), widths = mesher::face_widths(rod);
+  const std::vector<double> widths = mesher::face_widths(rod),
+                            spans = mesher::face_spans(rod, widths, 1e9);
   ASSERT_EQ(spans.size(), 3u);
   for (std::size_t f = 0; f < spans.size(); ++f) {
     EXPECT_NEAR(spans[f], 1.0, 0.05) << f;
     if (widths[f] > 2)  // the wall: twice its area over its circles and its seam, twice
       EXPECT_NEAR(widths[f], 2 * (2 * M_PI * 0.5 * 30) / (2 * (2 * M_PI * 0.5) + 2 * 30), 1e-3);
   }
-  std::vector<double> box = mesher::face_spans(load(occ_box(0, 0, 0, 60, 40, 10)));
+  const mesher::Shape block = load(occ_box(0, 0, 0, 60, 40, 10));
+  std::vector<double> box = mesher::face_spans(block, mesher::face_widths(block), 1e9);
   std::sort(box.begin(), box.end());
   EXPECT_EQ(box.size(), 6u);
   for (std::size_t f = 0; f < 4; ++f) EXPECT_NEAR(box[f], 10, 1e-6) << f;
   for (std::size_t f = 4; f < 6; ++f) EXPECT_NEAR(box[f], 40, 1e-6) << f;
+  // Only the faces narrower than `below` are measured: of widths 8 (40 x 10), 8.57 (60 x 10) and
+  // 24 (60 x 40), below 8.5 the two 40 x 10 faces, spanning 10.
+  const std::vector<double> widths_of_block = mesher::face_widths(block);
+  const std::vector<double> narrow = mesher::face_spans(block, widths_of_block, 8.5);
+  int measured = 0;
+  for (std::size_t f = 0; f < narrow.size(); ++f) {
+    if (widths_of_block[f] < 8.5) {
+      EXPECT_NEAR(narrow[f], 10, 1e-6) << f;
+      ++measured;
+    } else {
+      EXPECT_EQ(narrow[f], std::numeric_limits<double>::infinity()) << f;
+    }
+  }
+  EXPECT_EQ(measured, 2);
 }
 
 // The hole's wall (face of radius 8 about (30, 20)) at a local size: refine() brings its sides to

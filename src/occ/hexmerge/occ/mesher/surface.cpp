@@ -375,10 +375,12 @@ std::vector<double> face_widths(const Shape& s) {
   return width;
 }
 
-std::vector<double> face_spans(const Shape& s) {
+std::vector<double> face_spans(const Shape& s, const std::vector<double>& face_width,
+                               double below) {
   std::vector<double> span(static_cast<std::size_t>(s.faces.Extent()),
                            std::numeric_limits<double>::infinity());
   for (int f = 1; f <= s.faces.Extent(); ++f) {
+    if (!(face_width[static_cast<std::size_t>(f - 1)] < below)) continue;
     Bnd_OBB box;
     BRepBndLib::AddOBB(s.faces(f), box, /*theIsTriangulationUsed=*/false,
                        /*theIsOptimal=*/false, /*theIsShapeToleranceUsed=*/false);
