@@ -13,10 +13,12 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <initializer_list>
 #include <map>
 #include <memory>
 #include <optional>
 #include <set>
+#include <tuple>
 #include <unordered_map>
 #include <unordered_set>
 #include <utility>
@@ -89,6 +91,31 @@ bool segments_meet(const P2& a, const P2& b, const P2& c, const P2& d) {
          std::min(c[1], d[1]) <= std::max(a[1], b[1]);
 }
 
+// Boxes in a chart's plane as BucketGrid's (z = 0): lo and hi of points, grown by `margin` (and a
+// hair more, so that a test at exactly the margin still finds them).
+std::pair<Vec3, Vec3> plane_box(std::initializer_list<P2> points, double margin) {
+  Vec3 lo{points.begin()[0][0], points.begin()[0][1], 0}, hi = lo;
+  for (const P2& p : points) {
+    lo.x = std::min(lo.x, p[0]), lo.y = std::min(lo.y, p[1]);
+    hi.x = std::max(hi.x, p[0]), hi.y = std::max(hi.y, p[1]);
+  }
+  const double grow = margin * (1 + 1e-9) + 1e-12 * (std::abs(hi.x) + std::abs(hi.y) + 1);
+  return {lo - Vec3{grow, grow, 0}, hi + Vec3{grow, grow, 0}};
+}
+// A grid over the chart's plane of cells about `cell` wide (at most about 1,000 across) holding
+// each item's box: items(add) calls add(item, box) for every item.
+template <typename Items>
+BucketGrid plane_grid(const std::vector<P2>& xy, double cell, const Items& items) {
+  Vec3 lo{0, 0, 0}, hi{0, 0, 0};
+  if (!xy.empty()) std::tie(lo, hi) = plane_box({xy[0]}, 0);
+  for (const P2& p : xy)
+    lo.x = std::min(lo.x, p[0]), lo.y = std::min(lo.y, p[1]), hi.x = std::max(hi.x, p[0]),
+    hi.y = std::max(hi.y, p[1]);
+  BucketGrid grid(lo, hi, std::max({cell, (hi.x - lo.x) / 1000, (hi.y - lo.y) / 1000, 1e-300}));
+  items([&](int item, const std::pair<Vec3, Vec3>& box) { grid.add(item, box.first, box.second); });
+  return grid;
+}
+
 // A base corner's projection onto the surface: its face, parameters and place (frame).
 struct Top {
   int face = -1;
@@ -111,8 +138,9 @@ struct FaceChart {
   std::vector<std::array<int, 2>> outline;  // sides used once
   std::vector<char> on_outline;             // per vertex
   bool counter_clockwise = true;
-  double area = 0;            // of its triangles (3D)
-  double smallest_angle = 0;  // of its triangles, degrees
+  double area = 0;                          // of its triangles (3D)
+  double smallest_angle = 0;                // of its triangles, degrees
+  std::optional<BucketGrid> triangle_grid;  // its triangles by their boxes (place_in())
 
   P2 scaled(const UV& p) const { return {a * p.u + b * p.v, c * p.v}; }
 };
@@ -202,6 +230,25 @@ std::optional<FaceChart> chart_of(const Shape& shape, const Surface& surface,
       chart.on_outline[static_cast<std::size_t>(side.first)] = 1;
       chart.on_outline[static_cast<std::size_t>(side.second)] = 1;
     }
+  // (Cells about a triangle wide; boxes grown by a millionth of their size: place_in() takes a
+  // point up to 1e-9 outside.)
+  double area2 = 0;
+  for (const auto& v : chart.corners)
+    area2 += std::abs(cross2(chart.xy[static_cast<std::size_t>(v[0])],
+                             chart.xy[static_cast<std::size_t>(v[1])],
+                             chart.xy[static_cast<std::size_t>(v[2])]));
+  const double cell =
+      std::sqrt(area2 / static_cast<double>(std::max<std::size_t>(chart.corners.size(), 1)));
+  chart.triangle_grid = plane_grid(chart.xy, cell, [&](const auto& add) {
+    for (std::size_t t = 0; t < chart.corners.size(); ++t) {
+      const auto& v = chart.corners[t];
+      const P2 &a = chart.xy[static_cast<std::size_t>(v[0])],
+               &b = chart.xy[static_cast<std::size_t>(v[1])],
+               &c = chart.xy[static_cast<std::size_t>(v[2])];
+      const auto [lo, hi] = plane_box({a, b, c}, 0);
+      add(static_cast<int>(t), plane_box({a, b, c}, 1e-6 * (hi - lo).norm()));
+    }
+  });
   return chart;
 }
 
@@ -214,16 +261,18 @@ std::optional<P2> place_in(const FaceChart& chart, UV& uv) {
       if (sv != 0 && chart.v_period == 0) continue;
       const UV shifted{uv.u + su * chart.u_period, uv.v + sv * chart.v_period};
       const P2 p = chart.scaled(shifted);
-      for (const auto& v : chart.corners) {
-        const P2 &a = chart.xy[v[0]], &b = chart.xy[v[1]], &c = chart.xy[v[2]];
-        const double whole = cross2(a, b, c);
-        if (whole == 0) continue;
-        const double l0 = cross2(p, b, c) / whole, l1 = cross2(a, p, c) / whole,
-                     l2 = cross2(a, b, p) / whole;
-        if (l0 >= -1e-9 && l1 >= -1e-9 && l2 >= -1e-9) {
-          uv = shifted;
-          return p;
-        }
+      const auto [lo, hi] = plane_box({p}, 0);
+      if (chart.triangle_grid->any_in(lo, hi, [&](int t) {
+            const auto& v = chart.corners[static_cast<std::size_t>(t)];
+            const P2 &a = chart.xy[v[0]], &b = chart.xy[v[1]], &c = chart.xy[v[2]];
+            const double whole = cross2(a, b, c);
+            if (whole == 0) return false;
+            const double l0 = cross2(p, b, c) / whole, l1 = cross2(a, p, c) / whole,
+                         l2 = cross2(a, b, p) / whole;
+            return l0 >= -1e-9 && l1 >= -1e-9 && l2 >= -1e-9;
+          })) {
+        uv = shifted;
+        return p;
       }
     }
   }
@@ -249,10 +298,21 @@ std::optional<Retriangulated> retriangulate(const FaceChart& chart, const Surfac
   // the face gets no tops.
   const std::size_t nv = chart.node.size();
   std::vector<char> gone(nv, 0);
+  // The quads by their boxes grown by the clearance: those a vertex may be near or in.
+  const BucketGrid near_quads = plane_grid(chart.xy, h, [&](const auto& add) {
+    for (std::size_t i = 0; i < quads.size(); ++i) {
+      const auto& q = quads[i];
+      const auto at = [&](int k) { return top_xy[static_cast<std::size_t>(q[k])]; };
+      add(static_cast<int>(i), plane_box({at(0), at(1), at(2), at(3)}, kNodeClearance * h));
+    }
+  });
   for (std::size_t v = 0; v < nv; ++v) {
     if (chart.on_outline[v]) continue;
     const P2& p = chart.xy[v];
-    for (const auto& q : quads) {
+    const auto [lo, hi] = plane_box({p}, 0);
+    bool elsewhere = false;
+    near_quads.any_in(lo, hi, [&](int i) {
+      const auto& q = quads[static_cast<std::size_t>(i)];
       const bool turn =
           cross2(top_xy[static_cast<std::size_t>(q[0])], top_xy[static_cast<std::size_t>(q[1])],
                  top_xy[static_cast<std::size_t>(q[2])]) > 0;
@@ -266,12 +326,12 @@ std::optional<Retriangulated> retriangulate(const FaceChart& chart, const Surfac
       for (int k = 0; k < 4 && !near; ++k)
         near = to_segment(p, top_xy[static_cast<std::size_t>(q[k])],
                           top_xy[static_cast<std::size_t>(q[(k + 1) % 4])]) < kNodeClearance * h;
-      if (near) {
-        if (node_elsewhere[static_cast<std::size_t>(chart.node[v])]) return std::nullopt;
-        gone[v] = 1;
-        break;
-      }
-    }
+      if (!near) return false;
+      elsewhere = node_elsewhere[static_cast<std::size_t>(chart.node[v])];
+      gone[v] = 1;
+      return true;
+    });
+    if (elsewhere) return std::nullopt;
   }
   Cdt cdt;
   std::vector<Cdt::Vertex_handle> handle(nv + top_xy.size());
@@ -542,6 +602,7 @@ BufferCells buffer_layer(const Shape& shape, const Lattice& lattice, const CoreL
   for (std::size_t t = 0; t < surface.triangles.size(); ++t)
     face_triangles[surface.triangles[t].face].push_back(static_cast<int>(t));
   std::map<int, FaceChart> charts;
+  std::map<int, BucketGrid> outline_grids;  // per chart, its outline's sides by their boxes
   std::unordered_map<std::size_t, P2> top_xy;
   std::unordered_map<std::size_t, UV> top_uv;
   const auto face_of = [&](std::size_t i) { return top_of(base_of[i][0])->face; };
@@ -556,19 +617,38 @@ BufferCells buffer_layer(const Shape& shape, const Lattice& lattice, const CoreL
         continue;
       }
       it = charts.emplace(face, std::move(*chart)).first;
+      const FaceChart& made = it->second;
+      outline_grids.emplace(
+          face, plane_grid(made.xy, h, [&](const auto& add) {
+            for (std::size_t s = 0; s < made.outline.size(); ++s)
+              add(static_cast<int>(s),
+                  plane_box({made.xy[static_cast<std::size_t>(made.outline[s][0])],
+                             made.xy[static_cast<std::size_t>(made.outline[s][1])]},
+                            0));
+          }));
     }
     const FaceChart& chart = it->second;
+    const BucketGrid& outline_grid = outline_grids.at(face);
+    // The sides of the outline whose boxes come within `margin` of the points' box: f(side)
+    // until it returns true; whether it did.
+    const auto any_side_near = [&](std::initializer_list<P2> points, double margin, const auto& f) {
+      const auto [lo, hi] = plane_box(points, margin);
+      return outline_grid.any_in(lo, hi, [&](int s) {
+        return f(chart.xy[static_cast<std::size_t>(chart.outline[static_cast<std::size_t>(s)][0])],
+                 chart.xy[static_cast<std::size_t>(chart.outline[static_cast<std::size_t>(s)][1])]);
+      });
+    };
     std::array<P2, 4> xy;
     for (int m = 0; m < 4 && chosen[i]; ++m) {
       const std::size_t p = base_of[i][m];
       if (!top_xy.count(p)) {
         UV uv = top_of(p)->uv;
         const std::optional<P2> placed = place_in(chart, uv);
-        bool clear = placed.has_value();
-        for (std::size_t s = 0; s < chart.outline.size() && clear; ++s)
-          clear = to_segment(*placed, chart.xy[static_cast<std::size_t>(chart.outline[s][0])],
-                             chart.xy[static_cast<std::size_t>(chart.outline[s][1])]) >=
-                  kEdgeClearance * h;
+        const bool clear =
+            placed.has_value() &&
+            !any_side_near({*placed}, kEdgeClearance * h, [&](const P2& a, const P2& b) {
+              return !(to_segment(*placed, a, b) >= kEdgeClearance * h);
+            });
         if (!clear) {
           chosen[i] = 0;
           break;
@@ -584,12 +664,11 @@ BufferCells buffer_layer(const Shape& shape, const Lattice& lattice, const CoreL
     const double s0 = cross2(xy[0], xy[1], xy[2]), s1 = cross2(xy[0], xy[2], xy[3]);
     bool ok = s0 != 0 && (s0 > 0) == (s1 > 0);
     for (int k = 0; k < 4 && ok; ++k)
-      for (std::size_t s = 0; s < chart.outline.size() && ok; ++s) {
-        const P2 &a = chart.xy[static_cast<std::size_t>(chart.outline[s][0])],
-                 &b = chart.xy[static_cast<std::size_t>(chart.outline[s][1])];
-        ok = !segments_meet(xy[k], xy[(k + 1) % 4], a, b) &&
-             to_segment(a, xy[k], xy[(k + 1) % 4]) >= 0.5 * kEdgeClearance * h;
-      }
+      ok = !any_side_near(
+          {xy[k], xy[(k + 1) % 4]}, 0.5 * kEdgeClearance * h, [&](const P2& a, const P2& b) {
+            return !(!segments_meet(xy[k], xy[(k + 1) % 4], a, b) &&
+                     to_segment(a, xy[k], xy[(k + 1) % 4]) >= 0.5 * kEdgeClearance * h);
+          });
     if (ok) {
       Vec3 middle{0, 0, 0};
       for (int m = 0; m < 4; ++m) middle = middle + top_of(base_of[i][m])->at * 0.25;
