@@ -64,6 +64,26 @@ TEST(crosses_any, each_triangle_against_a_list) {
   EXPECT_EQ(mesher::crosses_any(nodes, {}, inner), std::vector<char>(inner.size(), 0));
 }
 
+// Triangles that touch exactly (a corner on another's side, two corners at one place in one
+// plane) cross; those 1e-9 apart or clearly apart do not: the quick separation test that runs
+// before the exact one never hides a touch.
+TEST(crosses_any, touching_exactly_is_crossing) {
+  const std::vector<Vec3> nodes = {
+      {0, 0, 0},     {2, 0, 0},  {0, 2, 0},    // 0-2: in z = 0
+      {1, 0, 0},     {1, -1, 1}, {1, -1, -1},  // 3-5: a corner on the side 0-1
+      {1, -1e-9, 0},                           // 6: with 4, 5: 1e-9 off it
+      {2, 0, 0},     {3, 0, 0},  {2, 1, 0},    // 7-9: in the plane, at node 1's place
+      {3, 0, 0},     {4, 0, 0},  {3, 1, 0}};   // 10-12: in the plane, apart
+  const std::vector<std::array<int, 3>> surface = {{0, 1, 2}};
+  const std::vector<std::array<int, 3>> inner = {{3, 4, 5}, {6, 4, 5}, {7, 8, 9}, {10, 11, 12}};
+  EXPECT_EQ(mesher::crosses_any(nodes, surface, inner), (std::vector<char>{1, 0, 1, 0}));
+  // Moved far from the origin (by whole numbers: the same configuration).
+  std::vector<Vec3> far = nodes;
+  for (Vec3& p : far) p = p + Vec3{1e5, -2e5, 3e5};
+  far[6] = Vec3{1, 0, 0} + Vec3{1e5, -2e5, 3e5};  // (the 1e-9 is below the rounding there)
+  EXPECT_EQ(mesher::crosses_any(far, surface, inner), (std::vector<char>{1, 1, 1, 0}));
+}
+
 // Four triangles on the side 0-1, of faces 0 to 3: one solid's boundary passing there twice (two
 // CAD edges at one place) is found, unless one CAD edge bounds the four faces (a non-manifold
 // solid's edge); faces of touching solids glued (face 2 bounding both) pass it once each.

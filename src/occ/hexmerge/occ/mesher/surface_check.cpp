@@ -61,6 +61,40 @@ bool one_side(const Vec3& a, const Vec3& b, const Vec3& c, const std::array<Vec3
   return true;
 }
 
+// Whether segment pq and triangle abc are certainly apart: some axis (the triangle's normal, its
+// sides' normals in its plane, the segment's direction across each side and the segment's normal
+// in the plane) on which their projections lie apart by far more than rounding can close. False
+// when unsure (touching, crossing, or too close to tell): CGAL's exact test decides then. On the
+// core's lattice faces most pairs tested touch a plane exactly, where CGAL's filtered
+// predicates fail over to exact arithmetic: this takes most of them first.
+bool clearly_apart(const Vec3& p, const Vec3& q, const Vec3& a, const Vec3& b, const Vec3& c) {
+  const Vec3 pa = p - a, qa = q - a, ba = b - a, ca = c - a;
+  const Vec3 d = q - p, e0 = ba, e1 = c - b, e2 = a - c, n = ba.cross(ca);
+  const double extent = std::max({pa.norm(), qa.norm(), ba.norm(), ca.norm()});
+  const double far = std::max({std::abs(a.x), std::abs(a.y), std::abs(a.z)});
+  const double tolerance = 1e-9 * (extent + 1e-5 * far);
+  const Vec3 axes[8] = {n,           n.cross(e0), n.cross(e1), n.cross(e2),
+                        d.cross(e0), d.cross(e1), d.cross(e2), n.cross(d)};
+  for (const Vec3& axis : axes) {
+    const double length = axis.norm();
+    if (!(length > 0)) continue;
+    const double s0 = axis.dot(pa), s1 = axis.dot(qa);
+    const double t1 = axis.dot(ba), t2 = axis.dot(ca);  // (a projects to 0)
+    const double gap = std::max(std::min({0.0, t1, t2}) - std::max(s0, s1),
+                                std::min(s0, s1) - std::max({0.0, t1, t2}));
+    if (gap > tolerance * length) return true;
+  }
+  return false;
+}
+
+// Whether triangle p has no area: CGAL's exact test where the floating-point area is too small to
+// tell (its collinearity test fails over to exact arithmetic on every triangle in an axis plane).
+bool degenerate(const std::array<Vec3, 3>& p, const Triangle& t) {
+  const Vec3 u = p[1] - p[0], v = p[2] - p[0];
+  if (u.cross(v).norm() > 1e-10 * u.norm() * v.norm()) return false;
+  return t.is_degenerate();
+}
+
 bool cross(const std::vector<Vec3>& nodes, const std::array<int, 3>& a,
            const std::array<int, 3>& b) {
   int shared = 0, in_a = -1, in_b = -1;
@@ -75,15 +109,23 @@ bool cross(const std::vector<Vec3>& nodes, const std::array<int, 3>& a,
   if (shared == 0) {
     // Most pairs near each other lie on one side of the other's plane.
     if (one_side(pa[0], pa[1], pa[2], pb) || one_side(pb[0], pb[1], pb[2], pa)) return false;
-    return !ta.is_degenerate() && !tb.is_degenerate() && CGAL::do_intersect(ta, tb);
+    // Triangles that meet meet where a side of one meets the other.
+    bool apart = true;
+    for (int k = 0; k < 3 && apart; ++k)
+      apart = clearly_apart(pa[k], pa[(k + 1) % 3], pb[0], pb[1], pb[2]) &&
+              clearly_apart(pb[k], pb[(k + 1) % 3], pa[0], pa[1], pa[2]);
+    if (apart) return false;
+    return !degenerate(pa, ta) && !degenerate(pb, tb) && CGAL::do_intersect(ta, tb);
   }
-  if (ta.is_degenerate() || tb.is_degenerate()) return false;  // collinear nodes: no area
+  if (degenerate(pa, ta) || degenerate(pb, tb)) return false;  // collinear nodes: no area
   // The side of each opposite the shared node, against the other triangle.
   const std::array<Vec3, 2> side_a{pa[(in_a + 1) % 3], pa[(in_a + 2) % 3]};
   const std::array<Vec3, 2> side_b{pb[(in_b + 1) % 3], pb[(in_b + 2) % 3]};
   return (!one_side(pb[0], pb[1], pb[2], side_a) &&
+          !clearly_apart(side_a[0], side_a[1], pb[0], pb[1], pb[2]) &&
           CGAL::do_intersect(Segment(point(side_a[0]), point(side_a[1])), tb)) ||
          (!one_side(pa[0], pa[1], pa[2], side_b) &&
+          !clearly_apart(side_b[0], side_b[1], pa[0], pa[1], pa[2]) &&
           CGAL::do_intersect(Segment(point(side_b[0]), point(side_b[1])), ta));
 }
 
