@@ -423,15 +423,20 @@ PulledCore pull_core(const Lattice& lattice, const Surroundings& around, const P
           if (move.count(p) && scale[p] > 0) failing.insert(p);
     }
     // Moved nodes stay clear of the faces and the surface's nodes (TetGen drops a point on a
-    // face) and inside.
+    // face) and inside. (Not tested where a cell has failed them already: the costly tests
+    // only ever add to `failing`.)
     for (const std::size_t p : nodes_to_test) {
-      if (scale[p] == 0) continue;
+      if (scale[p] == 0 || failing.count(p)) continue;
       const Vec3 q = point_of(p) + node_shift(p);
       if (!parity.inside(q) || !clear_path(point_of(p), q, kPullNodeClearance * h) ||
           around.surface_points.any_within(q, kPullNodeClearance * h))
         failing.insert(p);
     }
     for (const std::size_t a : apexes_to_test) {
+      if (std::none_of(apex_corners[a].begin(), apex_corners[a].end(), [&](std::size_t p) {
+            return move.count(p) && scale[p] > 0 && !failing.count(p);
+          }))
+        continue;
       const std::vector<std::size_t>& list = apex_pyramids[a];
       const Vec3 centre = home(a), apex = centre + apex_shift(a);
       bool ok = parity.inside(apex) && clear_path(centre, apex, kApexClearance * h) &&
