@@ -1,10 +1,4 @@
-// CGAL before OpenCASCADE: OCCT's Handle() macro breaks CGAL's headers.
 #include "hexmerge/occ/mesher/buffer_layer.h"
-
-#include <CGAL/Constrained_Delaunay_triangulation_2.h>
-#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
-#include <CGAL/Triangulation_face_base_with_info_2.h>
-#include <CGAL/Triangulation_vertex_base_with_info_2.h>
 
 #include <BRepAdaptor_Surface.hxx>
 #include <BRep_Tool.hxx>
@@ -13,18 +7,17 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <initializer_list>
 #include <map>
 #include <memory>
 #include <optional>
 #include <set>
-#include <tuple>
 #include <unordered_map>
 #include <unordered_set>
 #include <utility>
 
 #include "hexmerge/geometry/quality.h"
 #include "hexmerge/occ/mesher/common.h"
+#include "hexmerge/occ/mesher/face_chart.h"
 #include "hexmerge/occ/mesher/pull_core.h"
 #include "hexmerge/occ/mesher/shape.h"
 #include "hexmerge/occ/mesher/spatial.h"
@@ -58,384 +51,12 @@ constexpr double kAreaChange = 0.02;
 constexpr double kSagitta = 0.05;
 constexpr double kLeastAngle = 15.0;
 
-using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
-using VertexBase = CGAL::Triangulation_vertex_base_with_info_2<int, Kernel>;
-using FaceInfo = CGAL::Triangulation_face_base_with_info_2<signed char, Kernel>;
-using FaceBase = CGAL::Constrained_triangulation_face_base_2<Kernel, FaceInfo>;
-using Tds = CGAL::Triangulation_data_structure_2<VertexBase, FaceBase>;
-using Cdt =
-    CGAL::Constrained_Delaunay_triangulation_2<Kernel, Tds, CGAL::No_constraint_intersection_tag>;
-
-using P2 = std::array<double, 2>;
-
-double cross2(const P2& a, const P2& b, const P2& c) {
-  return (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]);
-}
-double distance2(const P2& a, const P2& b) { return std::hypot(a[0] - b[0], a[1] - b[1]); }
-// Distance from p to segment ab.
-double to_segment(const P2& p, const P2& a, const P2& b) {
-  const double dx = b[0] - a[0], dy = b[1] - a[1], l2 = dx * dx + dy * dy;
-  double t = l2 > 0 ? ((p[0] - a[0]) * dx + (p[1] - a[1]) * dy) / l2 : 0;
-  t = std::clamp(t, 0.0, 1.0);
-  return distance2(p, {a[0] + t * dx, a[1] + t * dy});
-}
-// Whether segments ab and cd cross or touch.
-bool segments_meet(const P2& a, const P2& b, const P2& c, const P2& d) {
-  const double d1 = cross2(a, b, c), d2 = cross2(a, b, d), d3 = cross2(c, d, a),
-               d4 = cross2(c, d, b);
-  return ((d1 > 0) != (d2 > 0) || d1 == 0 || d2 == 0) &&
-         ((d3 > 0) != (d4 > 0) || d3 == 0 || d4 == 0) &&
-         std::min(a[0], b[0]) <= std::max(c[0], d[0]) &&
-         std::min(c[0], d[0]) <= std::max(a[0], b[0]) &&
-         std::min(a[1], b[1]) <= std::max(c[1], d[1]) &&
-         std::min(c[1], d[1]) <= std::max(a[1], b[1]);
-}
-
-// Boxes in a chart's plane as BucketGrid's (z = 0): lo and hi of points, grown by `margin` (and a
-// hair more, so that a test at exactly the margin still finds them).
-std::pair<Vec3, Vec3> plane_box(std::initializer_list<P2> points, double margin) {
-  Vec3 lo{points.begin()[0][0], points.begin()[0][1], 0}, hi = lo;
-  for (const P2& p : points) {
-    lo.x = std::min(lo.x, p[0]), lo.y = std::min(lo.y, p[1]);
-    hi.x = std::max(hi.x, p[0]), hi.y = std::max(hi.y, p[1]);
-  }
-  const double grow = margin * (1 + 1e-9) + 1e-12 * (std::abs(hi.x) + std::abs(hi.y) + 1);
-  return {lo - Vec3{grow, grow, 0}, hi + Vec3{grow, grow, 0}};
-}
-// A grid over the chart's plane of cells about `cell` wide (at most about 1,000 across) holding
-// each item's box: items(add) calls add(item, box) for every item.
-template <typename Items>
-BucketGrid plane_grid(const std::vector<P2>& xy, double cell, const Items& items) {
-  Vec3 lo{0, 0, 0}, hi{0, 0, 0};
-  if (!xy.empty()) std::tie(lo, hi) = plane_box({xy[0]}, 0);
-  for (const P2& p : xy)
-    lo.x = std::min(lo.x, p[0]), lo.y = std::min(lo.y, p[1]), hi.x = std::max(hi.x, p[0]),
-    hi.y = std::max(hi.y, p[1]);
-  BucketGrid grid(lo, hi, std::max({cell, (hi.x - lo.x) / 1000, (hi.y - lo.y) / 1000, 1e-300}));
-  items([&](int item, const std::pair<Vec3, Vec3>& box) { grid.add(item, box.first, box.second); });
-  return grid;
-}
-
 // A base corner's projection onto the surface: its face, parameters and place (frame).
 struct Top {
   int face = -1;
   UV uv;
   Vec3 at;
 };
-
-// One face's triangles in its parameters scaled by their mean metric (x = a u + b v, y = c v):
-// a vertex per node and parameters (a node on the seam is two), its sides used once (its edges
-// and seams), and whether its triangles go counter-clockwise.
-struct FaceChart {
-  int face = -1;
-  double a = 1, b = 0, c = 1;
-  double u_period = 0, v_period = 0;        // 0: not periodic
-  std::vector<int> triangles;               // into the surface's
-  std::vector<int> node;                    // per vertex
-  std::vector<UV> uv;                       // per vertex
-  std::vector<P2> xy;                       // per vertex
-  std::vector<std::array<int, 3>> corners;  // per triangle, its vertices
-  std::vector<std::array<int, 2>> outline;  // sides used once
-  std::vector<char> on_outline;             // per vertex
-  bool counter_clockwise = true;
-  double area = 0;                          // of its triangles (3D)
-  double smallest_angle = 0;                // of its triangles, degrees
-  std::optional<BucketGrid> triangle_grid;  // its triangles by their boxes (place_in())
-
-  P2 scaled(const UV& p) const { return {a * p.u + b * p.v, c * p.v}; }
-};
-
-// The chart of face `face`, or none when its metric cannot be fitted.
-std::optional<FaceChart> chart_of(const Shape& shape, const Surface& surface,
-                                  const std::vector<int>& triangles, int face) {
-  FaceChart chart;
-  chart.face = face;
-  chart.triangles = triangles;
-  const BRepAdaptor_Surface adaptor(TopoDS::Face(shape.faces(face + 1)));
-  if (adaptor.IsUPeriodic()) chart.u_period = adaptor.UPeriod();
-  if (adaptor.IsVPeriodic()) chart.v_period = adaptor.VPeriod();
-  // The metric (E, F, G) fitted to the triangles' sides by least squares.
-  double m[3][3] = {}, r[3] = {};
-  for (const int t : triangles) {
-    const SurfaceTriangle& tri = surface.triangles[static_cast<std::size_t>(t)];
-    for (int k = 0; k < 3; ++k) {
-      const int l = (k + 1) % 3;
-      const double du = tri.uv[l].u - tri.uv[k].u, dv = tri.uv[l].v - tri.uv[k].v;
-      const Vec3 side = surface.nodes[static_cast<std::size_t>(tri.node[l])] -
-                        surface.nodes[static_cast<std::size_t>(tri.node[k])];
-      const double length2 = side.dot(side);
-      const double row[3] = {du * du, 2 * du * dv, dv * dv};
-      for (int i = 0; i < 3; ++i) {
-        for (int j = 0; j < 3; ++j) m[i][j] += row[i] * row[j];
-        r[i] += row[i] * length2;
-      }
-    }
-  }
-  const auto det = [](const double(&q)[3][3]) {
-    return q[0][0] * (q[1][1] * q[2][2] - q[1][2] * q[2][1]) -
-           q[0][1] * (q[1][0] * q[2][2] - q[1][2] * q[2][0]) +
-           q[0][2] * (q[1][0] * q[2][1] - q[1][1] * q[2][0]);
-  };
-  const double d = det(m);
-  if (!(std::abs(d) > 0)) return std::nullopt;
-  double efg[3];
-  for (int i = 0; i < 3; ++i) {
-    double q[3][3];
-    for (int row = 0; row < 3; ++row)
-      for (int col = 0; col < 3; ++col) q[row][col] = col == i ? r[row] : m[row][col];
-    efg[i] = det(q) / d;
-  }
-  const double e = efg[0], f = efg[1], g = efg[2];
-  if (!(e > 0) || !(g > 0) || !(e * g - f * f > 0)) return std::nullopt;
-  chart.a = std::sqrt(e), chart.b = f / chart.a, chart.c = std::sqrt(g - chart.b * chart.b);
-  // The vertices: a node with its parameters (to 1e-9 of the face's parameter range).
-  double range = 0;
-  for (const int t : triangles)
-    for (const UV& p : surface.triangles[static_cast<std::size_t>(t)].uv)
-      range = std::max({range, std::abs(p.u), std::abs(p.v)});
-  const double quantum = 1e-9 * std::max(range, 1.0);
-  std::map<std::array<long long, 3>, int> vertex;
-  int ccw = 0;
-  chart.smallest_angle = 180;
-  for (const int t : triangles) {
-    const SurfaceTriangle& tri = surface.triangles[static_cast<std::size_t>(t)];
-    std::array<int, 3> v{};
-    for (int k = 0; k < 3; ++k) {
-      const std::array<long long, 3> key{tri.node[k], std::llround(tri.uv[k].u / quantum),
-                                         std::llround(tri.uv[k].v / quantum)};
-      const auto [it, fresh] = vertex.emplace(key, static_cast<int>(chart.node.size()));
-      if (fresh) {
-        chart.node.push_back(tri.node[k]);
-        chart.uv.push_back(tri.uv[k]);
-        chart.xy.push_back(chart.scaled(tri.uv[k]));
-      }
-      v[k] = it->second;
-    }
-    chart.corners.push_back(v);
-    ccw += cross2(chart.xy[v[0]], chart.xy[v[1]], chart.xy[v[2]]) > 0 ? 1 : -1;
-    const Vec3 &p0 = surface.nodes[static_cast<std::size_t>(tri.node[0])],
-               &p1 = surface.nodes[static_cast<std::size_t>(tri.node[1])],
-               &p2 = surface.nodes[static_cast<std::size_t>(tri.node[2])];
-    chart.area += 0.5 * (p1 - p0).cross(p2 - p0).norm();
-    chart.smallest_angle = std::min(chart.smallest_angle, smallest_angle(p0, p1, p2) * 180 / M_PI);
-  }
-  chart.counter_clockwise = ccw >= 0;
-  std::map<std::pair<int, int>, int> uses;
-  for (const auto& v : chart.corners)
-    for (int k = 0; k < 3; ++k) ++uses[std::minmax(v[k], v[(k + 1) % 3])];
-  chart.on_outline.assign(chart.node.size(), 0);
-  for (const auto& [side, count] : uses)
-    if (count == 1) {
-      chart.outline.push_back({side.first, side.second});
-      chart.on_outline[static_cast<std::size_t>(side.first)] = 1;
-      chart.on_outline[static_cast<std::size_t>(side.second)] = 1;
-    }
-  // (Cells about a triangle wide; boxes grown by a millionth of their size: place_in() takes a
-  // point up to 1e-9 outside.)
-  double area2 = 0;
-  for (const auto& v : chart.corners)
-    area2 += std::abs(cross2(chart.xy[static_cast<std::size_t>(v[0])],
-                             chart.xy[static_cast<std::size_t>(v[1])],
-                             chart.xy[static_cast<std::size_t>(v[2])]));
-  const double cell =
-      std::sqrt(area2 / static_cast<double>(std::max<std::size_t>(chart.corners.size(), 1)));
-  chart.triangle_grid = plane_grid(chart.xy, cell, [&](const auto& add) {
-    for (std::size_t t = 0; t < chart.corners.size(); ++t) {
-      const auto& v = chart.corners[t];
-      const P2 &a = chart.xy[static_cast<std::size_t>(v[0])],
-               &b = chart.xy[static_cast<std::size_t>(v[1])],
-               &c = chart.xy[static_cast<std::size_t>(v[2])];
-      const auto [lo, hi] = plane_box({a, b, c}, 0);
-      add(static_cast<int>(t), plane_box({a, b, c}, 1e-6 * (hi - lo).norm()));
-    }
-  });
-  return chart;
-}
-
-// The scaled parameters of uv inside the chart's triangles (shifted by whole periods where the
-// face is periodic), or none.
-std::optional<P2> place_in(const FaceChart& chart, UV& uv) {
-  for (int su = -1; su <= 1; ++su) {
-    if (su != 0 && chart.u_period == 0) continue;
-    for (int sv = -1; sv <= 1; ++sv) {
-      if (sv != 0 && chart.v_period == 0) continue;
-      const UV shifted{uv.u + su * chart.u_period, uv.v + sv * chart.v_period};
-      const P2 p = chart.scaled(shifted);
-      const auto [lo, hi] = plane_box({p}, 0);
-      if (chart.triangle_grid->any_in(lo, hi, [&](int t) {
-            const auto& v = chart.corners[static_cast<std::size_t>(t)];
-            const P2 &a = chart.xy[v[0]], &b = chart.xy[v[1]], &c = chart.xy[v[2]];
-            const double whole = cross2(a, b, c);
-            if (whole == 0) return false;
-            const double l0 = cross2(p, b, c) / whole, l1 = cross2(a, p, c) / whole,
-                         l2 = cross2(a, b, p) / whole;
-            return l0 >= -1e-9 && l1 >= -1e-9 && l2 >= -1e-9;
-          })) {
-        uv = shifted;
-        return p;
-      }
-    }
-  }
-  return std::nullopt;
-}
-
-// A face triangulated again: its triangles (nodes: the surface's, or -1 - k for the k-th top)
-// and their parameters.
-struct Retriangulated {
-  std::vector<std::array<int, 3>> node;
-  std::vector<std::array<UV, 3>> uv;
-};
-
-// The chart's face triangulated again with the quads `quads` (tops by index into `tops`, around
-// as the bases' corners, split on the diagonal from the first to the third) in it, or none.
-std::optional<Retriangulated> retriangulate(const FaceChart& chart, const Surface& surface,
-                                            const std::vector<std::array<int, 4>>& quads,
-                                            const std::vector<P2>& top_xy,
-                                            const std::vector<UV>& top_uv,
-                                            const std::vector<Vec3>& top_world,
-                                            const std::vector<char>& node_elsewhere, double h) {
-  // The face's inner vertices near a quad go; one that another face uses too stays, and then
-  // the face gets no tops.
-  const std::size_t nv = chart.node.size();
-  std::vector<char> gone(nv, 0);
-  // The quads by their boxes grown by the clearance: those a vertex may be near or in.
-  const BucketGrid near_quads = plane_grid(chart.xy, h, [&](const auto& add) {
-    for (std::size_t i = 0; i < quads.size(); ++i) {
-      const auto& q = quads[i];
-      const auto at = [&](int k) { return top_xy[static_cast<std::size_t>(q[k])]; };
-      add(static_cast<int>(i), plane_box({at(0), at(1), at(2), at(3)}, kNodeClearance * h));
-    }
-  });
-  for (std::size_t v = 0; v < nv; ++v) {
-    if (chart.on_outline[v]) continue;
-    const P2& p = chart.xy[v];
-    const auto [lo, hi] = plane_box({p}, 0);
-    bool elsewhere = false;
-    near_quads.any_in(lo, hi, [&](int i) {
-      const auto& q = quads[static_cast<std::size_t>(i)];
-      const bool turn =
-          cross2(top_xy[static_cast<std::size_t>(q[0])], top_xy[static_cast<std::size_t>(q[1])],
-                 top_xy[static_cast<std::size_t>(q[2])]) > 0;
-      bool inside = true;
-      for (int k = 0; k < 4 && inside; ++k) {
-        const P2 &a = top_xy[static_cast<std::size_t>(q[k])],
-                 &b = top_xy[static_cast<std::size_t>(q[(k + 1) % 4])];
-        inside = (cross2(a, b, p) > 0) == turn;
-      }
-      bool near = inside;
-      for (int k = 0; k < 4 && !near; ++k)
-        near = to_segment(p, top_xy[static_cast<std::size_t>(q[k])],
-                          top_xy[static_cast<std::size_t>(q[(k + 1) % 4])]) < kNodeClearance * h;
-      if (!near) return false;
-      elsewhere = node_elsewhere[static_cast<std::size_t>(chart.node[v])];
-      gone[v] = 1;
-      return true;
-    });
-    if (elsewhere) return std::nullopt;
-  }
-  Cdt cdt;
-  std::vector<Cdt::Vertex_handle> handle(nv + top_xy.size());
-  std::size_t inserted = 0;
-  for (std::size_t v = 0; v < nv; ++v) {
-    if (gone[v]) continue;
-    handle[v] = cdt.insert(Kernel::Point_2(chart.xy[v][0], chart.xy[v][1]));
-    handle[v]->info() = static_cast<int>(v);
-    ++inserted;
-  }
-  std::vector<char> used_top(top_xy.size(), 0);
-  for (const auto& q : quads)
-    for (const int t : q) used_top[static_cast<std::size_t>(t)] = 1;
-  for (std::size_t t = 0; t < top_xy.size(); ++t) {
-    if (!used_top[t]) continue;
-    handle[nv + t] = cdt.insert(Kernel::Point_2(top_xy[t][0], top_xy[t][1]));
-    handle[nv + t]->info() = static_cast<int>(nv + t);
-    ++inserted;
-  }
-  if (cdt.number_of_vertices() != inserted) return std::nullopt;  // two at one place
-  std::set<std::pair<int, int>> outline;
-  try {
-    for (const auto& side : chart.outline) {
-      if (gone[static_cast<std::size_t>(side[0])] || gone[static_cast<std::size_t>(side[1])])
-        return std::nullopt;
-      cdt.insert_constraint(handle[static_cast<std::size_t>(side[0])],
-                            handle[static_cast<std::size_t>(side[1])]);
-      outline.insert(std::minmax(side[0], side[1]));
-    }
-    std::set<std::pair<int, int>> sides;  // each once
-    for (const auto& q : quads)
-      for (const auto& [a, b] : {std::pair<int, int>{q[0], q[1]}, std::pair<int, int>{q[1], q[2]},
-                                 std::pair<int, int>{q[2], q[3]}, std::pair<int, int>{q[3], q[0]},
-                                 std::pair<int, int>{q[0], q[2]}})
-        if (sides.insert(std::minmax(a, b)).second)
-          cdt.insert_constraint(handle[nv + static_cast<std::size_t>(a)],
-                                handle[nv + static_cast<std::size_t>(b)]);
-  } catch (const Cdt::Intersection_of_constraints_exception&) {
-    return std::nullopt;
-  }
-  if (cdt.number_of_vertices() != inserted) return std::nullopt;
-  // Inside: reached from outside across an odd number of the outline's sides.
-  for (Cdt::Face_handle f : cdt.all_face_handles()) f->info() = -1;
-  std::vector<Cdt::Face_handle> stack;
-  for (Cdt::Face_handle f : cdt.all_face_handles())
-    if (cdt.is_infinite(f)) f->info() = 0, stack.push_back(f);
-  while (!stack.empty()) {
-    const Cdt::Face_handle f = stack.back();
-    stack.pop_back();
-    for (int i = 0; i < 3; ++i) {
-      const Cdt::Face_handle next = f->neighbor(i);
-      const Cdt::Vertex_handle a = f->vertex(Cdt::cw(i)), b = f->vertex(Cdt::ccw(i));
-      const bool crossing = !cdt.is_infinite(a) && !cdt.is_infinite(b) && f->is_constrained(i) &&
-                            outline.count(std::minmax(a->info(), b->info()));
-      const signed char state = static_cast<signed char>(crossing ? 1 - f->info() : f->info());
-      if (next->info() == -1) {
-        next->info() = state;
-        stack.push_back(next);
-      } else if (next->info() != state) {
-        return std::nullopt;  // the outline does not bound a region
-      }
-    }
-  }
-  // The new triangles, in the face's orientation; each quad's two among them.
-  const auto world = [&](int v) {
-    return v < static_cast<int>(nv)
-               ? surface.nodes[static_cast<std::size_t>(chart.node[static_cast<std::size_t>(v)])]
-               : top_world[static_cast<std::size_t>(v) - nv];
-  };
-  Retriangulated out;
-  std::set<std::array<int, 3>> made;
-  double area = 0, smallest = 180;
-  for (Cdt::Face_handle f : cdt.finite_face_handles()) {
-    if (f->info() != 1) continue;
-    std::array<int, 3> v{f->vertex(0)->info(), f->vertex(1)->info(), f->vertex(2)->info()};
-    if (!chart.counter_clockwise) std::swap(v[1], v[2]);
-    std::array<int, 3> node{};
-    std::array<UV, 3> uv;
-    for (int k = 0; k < 3; ++k) {
-      const auto w = static_cast<std::size_t>(v[k]);
-      node[k] = w < nv ? chart.node[w] : -1 - static_cast<int>(w - nv);
-      uv[k] = w < nv ? chart.uv[w] : top_uv[w - nv];
-    }
-    const Vec3 p0 = world(v[0]), p1 = world(v[1]), p2 = world(v[2]);
-    area += 0.5 * (p1 - p0).cross(p2 - p0).norm();
-    smallest = std::min(smallest, smallest_angle(p0, p1, p2) * 180 / M_PI);
-    std::array<int, 3> key = v;
-    std::sort(key.begin(), key.end());
-    made.insert(key);
-    out.node.push_back(node);
-    out.uv.push_back(uv);
-  }
-  for (const auto& q : quads)
-    for (const std::array<int, 3> t :
-         {std::array<int, 3>{q[0], q[1], q[2]}, std::array<int, 3>{q[0], q[2], q[3]}}) {
-      std::array<int, 3> key{static_cast<int>(nv) + t[0], static_cast<int>(nv) + t[1],
-                             static_cast<int>(nv) + t[2]};
-      std::sort(key.begin(), key.end());
-      if (!made.count(key)) return std::nullopt;
-    }
-  if (std::abs(area - chart.area) > kAreaChange * chart.area) return std::nullopt;
-  if (smallest < std::min(kLeastAngle, chart.smallest_angle)) return std::nullopt;
-  return out;
-}
 
 // The hexahedron of base corners b (base_corners() order, the base facing +axis when `up`) and
 // tops t, in cell_type.h's order: its scaled Jacobian.
@@ -602,7 +223,6 @@ BufferCells buffer_layer(const Shape& shape, const Lattice& lattice, const CoreL
   for (std::size_t t = 0; t < surface.triangles.size(); ++t)
     face_triangles[surface.triangles[t].face].push_back(static_cast<int>(t));
   std::map<int, FaceChart> charts;
-  std::map<int, BucketGrid> outline_grids;  // per chart, its outline's sides by their boxes
   std::unordered_map<std::size_t, P2> top_xy;
   std::unordered_map<std::size_t, UV> top_uv;
   const auto face_of = [&](std::size_t i) { return top_of(base_of[i][0])->face; };
@@ -617,38 +237,19 @@ BufferCells buffer_layer(const Shape& shape, const Lattice& lattice, const CoreL
         continue;
       }
       it = charts.emplace(face, std::move(*chart)).first;
-      const FaceChart& made = it->second;
-      outline_grids.emplace(
-          face, plane_grid(made.xy, h, [&](const auto& add) {
-            for (std::size_t s = 0; s < made.outline.size(); ++s)
-              add(static_cast<int>(s),
-                  plane_box({made.xy[static_cast<std::size_t>(made.outline[s][0])],
-                             made.xy[static_cast<std::size_t>(made.outline[s][1])]},
-                            0));
-          }));
     }
     const FaceChart& chart = it->second;
-    const BucketGrid& outline_grid = outline_grids.at(face);
-    // The sides of the outline whose boxes come within `margin` of the points' box: f(side)
-    // until it returns true; whether it did.
-    const auto any_side_near = [&](std::initializer_list<P2> points, double margin, const auto& f) {
-      const auto [lo, hi] = plane_box(points, margin);
-      return outline_grid.any_in(lo, hi, [&](int s) {
-        return f(chart.xy[static_cast<std::size_t>(chart.outline[static_cast<std::size_t>(s)][0])],
-                 chart.xy[static_cast<std::size_t>(chart.outline[static_cast<std::size_t>(s)][1])]);
-      });
-    };
     std::array<P2, 4> xy;
     for (int m = 0; m < 4 && chosen[i]; ++m) {
       const std::size_t p = base_of[i][m];
       if (!top_xy.count(p)) {
         UV uv = top_of(p)->uv;
         const std::optional<P2> placed = place_in(chart, uv);
-        const bool clear =
-            placed.has_value() &&
-            !any_side_near({*placed}, kEdgeClearance * h, [&](const P2& a, const P2& b) {
-              return !(to_segment(*placed, a, b) >= kEdgeClearance * h);
-            });
+        const bool clear = placed.has_value() &&
+                           !any_outline_side_near(
+                               chart, {*placed}, kEdgeClearance * h, [&](const P2& a, const P2& b) {
+                                 return !(to_segment(*placed, a, b) >= kEdgeClearance * h);
+                               });
         if (!clear) {
           chosen[i] = 0;
           break;
@@ -664,8 +265,8 @@ BufferCells buffer_layer(const Shape& shape, const Lattice& lattice, const CoreL
     const double s0 = cross2(xy[0], xy[1], xy[2]), s1 = cross2(xy[0], xy[2], xy[3]);
     bool ok = s0 != 0 && (s0 > 0) == (s1 > 0);
     for (int k = 0; k < 4 && ok; ++k)
-      ok = !any_side_near(
-          {xy[k], xy[(k + 1) % 4]}, 0.5 * kEdgeClearance * h, [&](const P2& a, const P2& b) {
+      ok = !any_outline_side_near(
+          chart, {xy[k], xy[(k + 1) % 4]}, 0.5 * kEdgeClearance * h, [&](const P2& a, const P2& b) {
             return !(!segments_meet(xy[k], xy[(k + 1) % 4], a, b) &&
                      to_segment(a, xy[k], xy[(k + 1) % 4]) >= 0.5 * kEdgeClearance * h);
           });
@@ -824,7 +425,8 @@ BufferCells buffer_layer(const Shape& shape, const Lattice& lattice, const CoreL
           quads.push_back(q);
         }
         std::optional<Retriangulated> made =
-            retriangulate(charts.at(face), surface, quads, xy, uv, world, node_elsewhere, h);
+            retriangulate(charts.at(face), surface, quads, xy, uv, world, node_elsewhere, h,
+                          {kNodeClearance, kAreaChange, kLeastAngle});
         if (!made) {
           for (const std::size_t i : bases) chosen[i] = 0;
           failed = true;
