@@ -7,6 +7,7 @@
 #include <unordered_set>
 
 #include "hexmerge/geometry/quality.h"
+#include "hexmerge/mesh/tet_topology.h"
 #include "hexmerge/occ/mesher/common.h"
 #include "hexmerge/occ/mesher/spatial.h"
 #include "hexmerge/occ/mesher/surface_check.h"
@@ -485,21 +486,28 @@ std::size_t resplit_core(const std::vector<double>& coordinates, std::vector<ind
   for (std::size_t i = 0; i < nb_points; ++i) at.add(static_cast<int>(i));
   std::unordered_set<FaceKey, FaceKeyHash> barrier;
   for (const std::array<int, 3>& t : constraints) barrier.insert(face_key(t[0], t[1], t[2]));
-  // Regions: union-find over the tets across the faces that are no barrier.
+  // Regions: union-find over the tets across the faces that are no barrier, each face joined
+  // from the later of its two tets (the order decides the roots, which key `members` below).
   std::vector<index_t> parent(nb_tets);
   for (index_t t = 0; t < nb_tets; ++t) parent[t] = t;
   const auto find = [&](index_t t) {
     while (parent[t] != t) t = parent[t] = parent[parent[t]];
     return t;
   };
-  std::unordered_map<FaceKey, index_t, FaceKeyHash> open_face;
-  for (index_t t = 0; t < nb_tets; ++t) {
-    const index_t* v = &tets[4 * t];
-    for (int f = 0; f < 4; ++f) {
-      const FaceKey k = face_key(v[(f + 1) % 4], v[(f + 2) % 4], v[(f + 3) % 4]);
-      if (barrier.count(k)) continue;
-      const auto [it, fresh] = open_face.emplace(k, t);
-      if (!fresh) parent[find(t)] = find(it->second);
+  {
+    TetMesh mesh;
+    mesh.points = coordinates;
+    mesh.tets = tets;
+    const TetTopology topology(mesh);
+    for (index_t t = 0; t < nb_tets; ++t) {
+      const index_t* v = &tets[4 * t];
+      for (int f = 0; f < 4; ++f) {
+        const index_t n = topology.neighbor(t, f);
+        if (n == NO_CELL || n > t ||
+            barrier.count(face_key(v[(f + 1) % 4], v[(f + 2) % 4], v[(f + 3) % 4])))
+          continue;
+        parent[find(t)] = find(n);
+      }
     }
   }
   std::unordered_map<index_t, std::vector<index_t>> members;
