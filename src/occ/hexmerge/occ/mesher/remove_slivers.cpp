@@ -42,20 +42,29 @@ class FlipMesh {
   FlipMesh(TetMesh& mesh, const std::vector<char>& fixed,
            const std::vector<std::int32_t>& boundary_patch)
       : points_(mesh.points) {
+    // Each vertex's list allocated once, at its number of tets (the flips add a few).
+    std::vector<index_t> degree(mesh.nb_vertices(), 0);
+    for (const index_t v : mesh.tets) ++degree[v];
     at_vertex_.resize(mesh.nb_vertices());
+    for (std::size_t v = 0; v < at_vertex_.size(); ++v) at_vertex_[v].reserve(degree[v]);
     changed_.assign(mesh.nb_vertices(), 0);
+    for (auto* list : {&examined_, &tried_}) list->reserve(mesh.nb_tets());
+    tets_.reserve(mesh.nb_tets()), region_.reserve(mesh.nb_tets());
+    fixed_.reserve(mesh.nb_tets()), alive_.reserve(mesh.nb_tets());
+    quality_.reserve(mesh.nb_tets());
     for (index_t t = 0; t < mesh.nb_tets(); ++t) {
       const index_t* v = mesh.tet(t);
       add(Tet{v[0], v[1], v[2], v[3]}, mesh.region(t), !fixed.empty() && fixed[t]);
     }
     if (boundary_patch.empty()) return;
+    // The patches of the boundary faces (a face without one reads as -1, as a face not kept).
     for (index_t t = 0; t < mesh.nb_tets(); ++t)
-      for (int f = 0; f < 4; ++f)
-        if (across(t, f) == NO_CELL) {
-          const index_t* v = mesh.tet(t);
-          patch_[face_key(v[(f + 1) % 4], v[(f + 2) % 4], v[(f + 3) % 4])] =
-              boundary_patch[4 * static_cast<std::size_t>(t) + f];
-        }
+      for (int f = 0; f < 4; ++f) {
+        const std::int32_t patch = boundary_patch[4 * static_cast<std::size_t>(t) + f];
+        if (patch < 0 || across(t, f) != NO_CELL) continue;
+        const index_t* v = mesh.tet(t);
+        patch_[face_key(v[(f + 1) % 4], v[(f + 2) % 4], v[(f + 3) % 4])] = patch;
+      }
   }
 
   double quality(const Tet& t) const {
