@@ -255,13 +255,20 @@ TetrahedralizeOutput Tetrahedralizer::run(TetrahedralizeInput input) const {
     TetrahedralizeInput points_alone;
     points_alone.points = points;
     const TetrahedralizeOutput tets = Tetrahedralizer(alone).run(std::move(points_alone));
+    // Only sides between points of those facets are asked about.
+    std::vector<char> on_loop(points.size(), 0);
+    for (const Facet& f : facets)
+      if (has_loop(f))
+        for (const auto& polygon : f.polygons)
+          for (const int v : polygon) on_loop[static_cast<std::size_t>(v)] = 1;
     std::unordered_set<std::uint64_t> sides;
-    sides.reserve(tets.tets.size() * 2);
     for (std::size_t t = 0; t < tets.tets.size(); t += 4)
       for (int a = 0; a < 4; ++a)
-        for (int b = a + 1; b < 4; ++b)
-          sides.insert(
-              side_key(static_cast<int>(tets.tets[t + a]), static_cast<int>(tets.tets[t + b])));
+        for (int b = a + 1; b < 4; ++b) {
+          const auto u = static_cast<int>(tets.tets[t + a]), w = static_cast<int>(tets.tets[t + b]);
+          if (on_loop[static_cast<std::size_t>(u)] && on_loop[static_cast<std::size_t>(w)])
+            sides.insert(side_key(u, w));
+        }
     triangulate_facets(facets, points, &sides);
   }
   const fs::path poly = work.path() / (delaunay ? "shape.node" : "shape.poly");
