@@ -30,8 +30,13 @@ std::vector<index_t> components(const TetMesh& mesh,
                                 Touch&& touch) {
   std::unordered_map<FaceKey, std::size_t, FaceKeyHash> on_face;
   on_face.reserve(triangles.size());
-  for (std::size_t i = 0; i < triangles.size(); ++i)
+  // Only a face whose three vertices are the triangles' can be one (most faces have a vertex
+  // inside: no look-up for them).
+  std::vector<char> on_triangle(mesh.nb_vertices(), 0);
+  for (std::size_t i = 0; i < triangles.size(); ++i) {
     on_face.emplace(face_key(triangles[i][0], triangles[i][1], triangles[i][2]), i);
+    for (const index_t v : triangles[i]) on_triangle[v] = 1;
+  }
   const index_t nb_tets = mesh.nb_tets();
   const TetTopology topology(mesh);
   std::vector<index_t> parent(nb_tets);
@@ -39,7 +44,10 @@ std::vector<index_t> components(const TetMesh& mesh,
   for (index_t t = 0; t < nb_tets; ++t) {
     const index_t* v = mesh.tet(t);
     for (int f = 0; f < 4; ++f) {
-      const auto face = on_face.find(face_key(v[(f + 1) % 4], v[(f + 2) % 4], v[(f + 3) % 4]));
+      const index_t a = v[(f + 1) % 4], b = v[(f + 2) % 4], c = v[(f + 3) % 4];
+      const auto face = on_triangle[a] && on_triangle[b] && on_triangle[c]
+                            ? on_face.find(face_key(a, b, c))
+                            : on_face.end();
       if (face != on_face.end()) {
         touch(t, face->second);
       } else if (topology.neighbor(t, f) != NO_CELL) {
