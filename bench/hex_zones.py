@@ -15,6 +15,9 @@ Two more measures of what the next hexahedra would need:
   are not counted.
   It is a bound: it counts neither the surface that would have to be remeshed to hold the
   projected quads, nor the quads at the edge of a projected patch, which need closing.
+- the buffer layer's own census (the mesher's report, `buffer_bases`): each closing pyramid's
+  base at the first test it fails (apex shared at a concave step, no top for a corner and why,
+  tops on two faces, height or tilt, quality, folds, dropped by the later steps) or kept.
 
 For each part (real_parts.py's names; sizes from bench/results/real-parts-sizes.json) the tets
 are made with hexmerge.mesh_shape(..., recombine=False) and the given mesher options, recombined
@@ -192,6 +195,7 @@ def analyse(path: str, h: float, options: dict) -> dict:
         "counts": {k: meshing[k] for k in ("nb_core_cells", "nb_lattice_points", "nb_apex_points",
                                            "nb_layer_points", "nb_lattice_faces", "nb_faces", "sweep_axis",
                                            "nb_surface_nodes")},
+        "buffer_bases": meshing["buffer_bases"],
     }
 
 
@@ -242,6 +246,8 @@ def main() -> int:
             b = row["buffer"]
             print(f"    buffer layer bound: {b['projectable']} of {b['pyramid_bases']} closing pyramids' bases "
                   f"project, +{100 * b['volume']:.1f} % of the volume")
+            print("    buffer layer's census of the bases: " +
+                  ", ".join(f"{k} {v}" for k, v in row["buffer_bases"].items()))
     if args.json:
         with open(args.json, "w") as f:
             json.dump({"options": options, "size": args.size, "rows": rows}, f, indent=1)

@@ -400,6 +400,13 @@ def test_the_buffer_layer_reaches_the_curved_face(shapes) -> None:
     assert meshing["strategy"] == "lattice" and meshing["failed_strategies"] == []
     assert meshing["nb_buffer_hexes"] >= 80 and meshing["nb_buffer_faces"] == 1
     assert meshing["nb_buffer_pyramids"] > 0
+    # The census: every closing pyramid's base once, at the test it fails, or kept. The cylinder's
+    # core is a staircase (its concave steps share apexes), and the bases beside its caps, which
+    # are lattice faces, have corners nearest a cap, which takes no tops.
+    bases = meshing["buffer_bases"]
+    assert bases["kept"] == meshing["nb_buffer_hexes"]
+    assert sum(v for k, v in bases.items() if k != "considered") == bases["considered"]
+    assert bases["apex_shared"] > 0 and bases["no_top_face"] > 0
     cells = tets.cell_vertices.reshape(-1, 4).astype(np.int64)
     assert tet_scaled_jacobians(tets.points, cells).min() >= 0.2
     mesh, report = hexmerge.recombine(tets.points, cells, tets.regions)
@@ -409,6 +416,7 @@ def test_the_buffer_layer_reaches_the_curved_face(shapes) -> None:
 
     _, without = hexmerge.mesh_shape(shapes["cylinder"], h, sweep=False, buffer_layer=False)
     assert without["meshing"]["nb_buffer_hexes"] == 0 and without["meshing"]["strategy"] == "lattice"
+    assert without["meshing"]["buffer_bases"]["considered"] == 0
     assert report["volume_fraction"]["hex"] >= without["volume_fraction"]["hex"] + 0.06
 
 

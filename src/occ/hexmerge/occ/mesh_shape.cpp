@@ -647,6 +647,7 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
       report.nb_buffer_hexes = made.nb_hexes;
       report.nb_buffer_pyramids = made.nb_pyramids;
       report.nb_buffer_faces = made.nb_faces;
+      report.buffer_bases = made.bases;
       if (made.nb_faces > 0) {
         nodes = frame_nodes(shape, surface, lattice, sweep_axis, swept);
         around = std::make_unique<Surroundings>(nodes, surface, lattice, h);

@@ -223,6 +223,29 @@ struct SharpFeatureReport {
   std::array<double, 3> point{};  ///< the corner, or where the edge's angle is smallest
 };
 
+/// The buffer layer's census of the core's closing pyramids' bases (MeshShapeReport::buffer_bases):
+/// each base at the first of these tests it fails, or kept. The tops are the bases' corners
+/// projected onto the surface.
+struct BufferBaseCounts {
+  std::size_t considered = 0;   ///< closing pyramids' bases
+  std::size_t apex_shared = 0;  ///< at the core's concave edges and corners (apex shared)
+  std::size_t no_top_far = 0;   ///< a corner with no surface within 1.5 h
+  /// a corner nearest a face that takes no tops (a lattice face, a face with a local size or
+  /// face layers, a face between two solids)
+  std::size_t no_top_face = 0;
+  std::size_t no_top_projection = 0;  ///< a corner whose projection onto its face went elsewhere
+  std::size_t no_top_clearance = 0;   ///< a corner's top within 0.3 h of another face
+  std::size_t two_faces = 0;          ///< corners whose tops lie on different faces
+  std::size_t height_or_tilt = 0;     ///< a top nearer than 0.15 h, beyond 1.5 h or past 35 degrees
+  std::size_t hex_quality = 0;        ///< the hexahedron under scaled Jacobian 0.3
+  std::size_t split_quality = 0;      ///< one of its six tets under 0.2
+  std::size_t folds = 0;  ///< its top or a side folds, or a quad corner opens, past the limits
+  /// passed those, then dropped: its face's chart, the quads side by side, the side pyramids,
+  /// the face's new triangles, crossings
+  std::size_t dropped_later = 0;
+  std::size_t kept = 0;  ///< buffer hexahedra (nb_buffer_hexes)
+};
+
 struct MeshShapeReport {
   std::size_t nb_solids = 0;
   std::size_t nb_faces = 0;
@@ -248,6 +271,9 @@ struct MeshShapeReport {
   /// Buffer hexahedra and pyramids given up after TetGen: a tet under 0.2 beside them that the
   /// flips left (their tets and corners then improved as the others)
   std::size_t nb_buffer_cells_released = 0;
+  /// Why the core's closing pyramids' bases got a buffer hexahedron or not (each base counted
+  /// once, at the first test it fails, in this order; docs/mesher.md, step 8a)
+  BufferBaseCounts buffer_bases;
   std::size_t nb_resplit_cells = 0;   ///< pulled cells and pyramids TetGen split otherwise, resplit
   std::size_t nb_layer_points = 0;    ///< boundary-layer points inserted
   std::size_t nb_steiner_points = 0;  ///< points TetGen added

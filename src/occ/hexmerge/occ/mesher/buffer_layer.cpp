@@ -129,10 +129,13 @@ BufferCells buffer_layer(const Shape& shape, const Lattice& lattice, const CoreL
   std::vector<std::unique_ptr<ShapeAnalysis_Surface>> analysis(
       static_cast<std::size_t>(shape.faces.Extent()));
   std::unordered_map<std::size_t, std::optional<Top>> top_cache;
+  // Per lattice point without a top, why (a BufferBaseCounts member).
+  std::unordered_map<std::size_t, std::size_t BufferBaseCounts::*> no_top;
   const auto top_of = [&](std::size_t p) -> const std::optional<Top>& {
     const auto found = top_cache.find(p);
     if (found != top_cache.end()) return found->second;
     std::optional<Top>& top = top_cache[p];
+    no_top[p] = &BufferBaseCounts::no_top_far;
     const Vec3 q = layout.point_at(lattice, p);
     int nearest = -1;
     double best = kHighest * h * kHighest * h;
@@ -146,6 +149,7 @@ BufferCells buffer_layer(const Shape& shape, const Lattice& lattice, const CoreL
     });
     if (nearest < 0) return top;
     const SurfaceTriangle& t = surface.triangles[static_cast<std::size_t>(nearest)];
+    no_top[p] = &BufferBaseCounts::no_top_face;
     if (!eligible[static_cast<std::size_t>(t.face)]) return top;
     const int its_face = t.face;
     double s = 0, r = 0;
@@ -162,13 +166,16 @@ BufferCells buffer_layer(const Shape& shape, const Lattice& lattice, const CoreL
     const gp_Pnt2d found_uv = a->NextValueOfUV(gp_Pnt2d(guess.u, guess.v),
                                                gp_Pnt(world.x, world.y, world.z), 1e-7 * h, -1.0);
     const Vec3 at = lattice.frame.to_frame(of(a->Value(found_uv)));
+    no_top[p] = &BufferBaseCounts::no_top_projection;
     if ((at - on).norm() > 0.1 * h) return top;  // Newton went elsewhere
+    no_top[p] = &BufferBaseCounts::no_top_clearance;
     // Clear of the other faces (across a thin wall or a concave edge), as of its face's edges.
     if (around.every_face.any_within(at, kEdgeClearance * h, [&](int i) {
           return surface.triangles[static_cast<std::size_t>(i)].face != its_face;
         }))
       return top;
     top = Top{t.face, UV{found_uv.X(), found_uv.Y()}, at};
+    no_top.erase(p);
     return top;
   };
   // 3. The hexahedra each base could have.
@@ -176,9 +183,14 @@ BufferCells buffer_layer(const Shape& shape, const Lattice& lattice, const CoreL
   const double tilt = std::cos(kTilt * M_PI / 180);
   std::vector<char> chosen(faces.size(), 0);
   std::vector<std::array<std::size_t, 4>> base_of(faces.size());
+  BufferBaseCounts& count = report.bases;
+  count.considered = faces.size();
   for (std::size_t i = 0; i < faces.size(); ++i) {
     const PyramidFace& f = faces[i];
-    if (at_apex[cell_of(f.n)] != 1) continue;
+    if (at_apex[cell_of(f.n)] != 1) {
+      ++count.apex_shared;
+      continue;
+    }
     // The cell across is beside no other core cell (one on the boundary needs no pyramid).
     bool alone = true;
     for (int dir = 0; dir < 6 && alone; ++dir) {
@@ -188,7 +200,10 @@ BufferCells buffer_layer(const Shape& shape, const Lattice& lattice, const CoreL
       alone = n[0] < 0 || n[1] < 0 || n[2] < 0 || n[0] >= lattice.cells[0] ||
               n[1] >= lattice.cells[1] || n[2] >= lattice.cells[2] || !layout.core[cell_of(n)];
     }
-    if (!alone) continue;
+    if (!alone) {
+      ++count.apex_shared;
+      continue;
+    }
     base_of[i] = base_corners(lattice, f);
     const int axis = f.dir / 2;
     Vec3 normal{0, 0, 0};
@@ -196,10 +211,12 @@ BufferCells buffer_layer(const Shape& shape, const Lattice& lattice, const CoreL
     std::array<Vec3, 4> b, t;
     int face = -1;
     bool ok = true;
+    std::size_t BufferBaseCounts::*failed = nullptr;  // the test it fails
     for (int m = 0; m < 4 && ok; ++m) {
       const std::optional<Top>& top = top_of(base_of[i][m]);
       if (!top || (face >= 0 && top->face != face)) {
         ok = false;
+        failed = top ? &BufferBaseCounts::two_faces : no_top.at(base_of[i][m]);
         break;
       }
       face = top->face;
@@ -208,16 +225,24 @@ BufferCells buffer_layer(const Shape& shape, const Lattice& lattice, const CoreL
       const Vec3 d = t[m] - b[m];
       const double length = d.norm();
       ok = length >= kLowest * h && length <= kHighest * h && d.dot(normal) >= tilt * length;
+      if (!ok) failed = &BufferBaseCounts::height_or_tilt;
     }
-    ok = ok && hex_quality(b, t, f.dir % 2 == 1) >= recombine.min_scaled_jacobian &&
-         worst_split_tet(b, t, f.dir % 2 == 1) >= kTetFloor &&
-         flat_enough(t[0], t[1], t[2], t[3], recombine.min_boundary_dihedral_angle,
-                     recombine.max_face_angle);
+    if (ok && !(hex_quality(b, t, f.dir % 2 == 1) >= recombine.min_scaled_jacobian))
+      ok = false, failed = &BufferBaseCounts::hex_quality;
+    if (ok && !(worst_split_tet(b, t, f.dir % 2 == 1) >= kTetFloor))
+      ok = false, failed = &BufferBaseCounts::split_quality;
+    ok = ok && flat_enough(t[0], t[1], t[2], t[3], recombine.min_boundary_dihedral_angle,
+                           recombine.max_face_angle);
     for (int m = 0; m < 4 && ok; ++m)
       ok = flat_enough(b[m], b[(m + 1) % 4], t[(m + 1) % 4], t[m], recombine.min_dihedral_angle,
                        recombine.max_face_angle);
-    if (ok) chosen[i] = 1;
+    if (!ok && !failed) failed = &BufferBaseCounts::folds;
+    if (ok)
+      chosen[i] = 1;
+    else
+      ++(count.*failed);
   }
+  const std::size_t passed = static_cast<std::size_t>(std::count(chosen.begin(), chosen.end(), 1));
   // 4. Per face, its chart; the tops placed in it, clear of its edges.
   std::unordered_map<int, std::vector<int>> face_triangles;
   for (std::size_t t = 0; t < surface.triangles.size(); ++t)
@@ -443,6 +468,7 @@ BufferCells buffer_layer(const Shape& shape, const Lattice& lattice, const CoreL
     }
     if (remeshed.empty()) {
       surface = original;
+      count.dropped_later = passed;
       return out;
     }
     // 6. The surface with the new triangles and tops.
@@ -615,6 +641,8 @@ BufferCells buffer_layer(const Shape& shape, const Lattice& lattice, const CoreL
   out.pyramids = pyramids;
   report.nb_hexes = out.hexes.size();
   report.nb_pyramids = out.pyramids.size();
+  count.kept = out.hexes.size();
+  count.dropped_later = passed - count.kept;
   return out;
 }
 

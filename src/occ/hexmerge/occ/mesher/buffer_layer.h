@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "hexmerge/geometry/vec3.h"
+#include "hexmerge/occ/mesh_shape.h"
 #include "hexmerge/occ/mesher/core.h"
 #include "hexmerge/occ/mesher/surface.h"
 
@@ -23,6 +24,7 @@ struct BufferReport {
   std::size_t nb_hexes = 0;     ///< hexahedra between the core and the surface
   std::size_t nb_pyramids = 0;  ///< pyramids closing their side faces
   std::size_t nb_faces = 0;     ///< CAD faces triangulated again with the hexahedra's tops
+  BufferBaseCounts bases;       ///< why each base got a hexahedron or not
 };
 
 /// The hexahedra between the core's closing pyramids' bases and the surface, and the surface
