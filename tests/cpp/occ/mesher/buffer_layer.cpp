@@ -2,12 +2,16 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
+#include <optional>
 #include <set>
 #include <string>
+#include <vector>
 
 #include "hexmerge/geometry/quality.h"
+#include "hexmerge/occ/mesher/face_chart.h"
 #include "hexmerge/occ/mesher/pull_core.h"
 #include "mesher_fixtures.h"
 
@@ -112,6 +116,77 @@ TEST(buffer_layer, a_cylinders_core_reaches_its_curved_face) {
                        scaled_jacobian_of(CellType::Pyramid, corners, kOther)),
               0.4);
   }
+}
+
+// A planar face, the square [0, 4]^2 as a grid of unit squares split in two (its nodes the
+// surface's, world = (x, y, 0)), triangulated again with two quads: A inside, which takes the
+// nodes near it, and B beside the outline, 0.1 from it, whose sides leave triangles of about 11
+// degrees against it. With both the face fails (the face's own smallest angle is 45, the limit
+// 15) and only B's tops are blamed; with A alone it takes A's two triangles and keeps its area.
+TEST(retriangulate, blames_the_tops_of_the_thin_triangles_only) {
+  mesher::Surface surface;
+  mesher::FaceChart chart;
+  chart.face = 0;
+  const auto id = [](int i, int j) { return 5 * j + i; };
+  for (int j = 0; j <= 4; ++j)
+    for (int i = 0; i <= 4; ++i) {
+      surface.nodes.push_back(Vec3{double(i), double(j), 0});
+      chart.node.push_back(id(i, j));
+      chart.uv.push_back(mesher::UV{double(i), double(j)});
+      chart.xy.push_back(mesher::P2{double(i), double(j)});
+      chart.on_outline.push_back(i == 0 || j == 0 || i == 4 || j == 4);
+    }
+  for (int j = 0; j < 4; ++j)
+    for (int i = 0; i < 4; ++i) {
+      chart.corners.push_back({id(i, j), id(i + 1, j), id(i + 1, j + 1)});
+      chart.corners.push_back({id(i, j), id(i + 1, j + 1), id(i, j + 1)});
+    }
+  for (int k = 0; k < 4; ++k) {
+    chart.outline.push_back({id(k, 0), id(k + 1, 0)});
+    chart.outline.push_back({id(4, k), id(4, k + 1)});
+    chart.outline.push_back({id(k + 1, 4), id(k, 4)});
+    chart.outline.push_back({id(0, k + 1), id(0, k)});
+  }
+  chart.area = 16;
+  chart.smallest_angle = 45;
+  // Tops 0-3: quad A, around (1.5, 1.5); tops 4-7: quad B, x from 0.1 to 0.9, y from 2.5 to 3.5.
+  const std::vector<mesher::P2> xy{{1.2, 1.2}, {1.8, 1.2}, {1.8, 1.8}, {1.2, 1.8},
+                                   {0.1, 2.5}, {0.9, 2.5}, {0.9, 3.5}, {0.1, 3.5}};
+  std::vector<mesher::UV> uv;
+  std::vector<Vec3> world;
+  for (const mesher::P2& q : xy) uv.push_back({q[0], q[1]}), world.push_back(Vec3{q[0], q[1], 0});
+  const std::vector<char> elsewhere(surface.nodes.size(), 0);
+  const mesher::RetriangulateLimits limits{0.35, 0.02, 15.0};
+  const std::array<int, 4> a{0, 1, 2, 3}, b{4, 5, 6, 7};
+
+  std::vector<int> blamed;
+  EXPECT_FALSE(mesher::retriangulate(chart, surface, {a, b}, xy, uv, world, elsewhere, 1.0, limits,
+                                     &blamed));
+  ASSERT_FALSE(blamed.empty());
+  for (const int top : blamed) EXPECT_GE(top, 4) << "a top of quad A blamed";
+  // The thin triangles' corners at x = 0.1, against the outline.
+  EXPECT_TRUE(std::count(blamed.begin(), blamed.end(), 4) &&
+              std::count(blamed.begin(), blamed.end(), 7));
+
+  blamed = {99};
+  const std::optional<mesher::Retriangulated> made =
+      mesher::retriangulate(chart, surface, {a}, xy, uv, world, elsewhere, 1.0, limits, &blamed);
+  ASSERT_TRUE(made);
+  EXPECT_EQ(blamed, std::vector<int>{99});  // untouched when it succeeds
+  double area = 0;
+  std::set<std::array<int, 3>> triangles;
+  for (const std::array<int, 3>& t : made->node) {
+    const auto at = [&](int n) {
+      return n >= 0 ? surface.nodes[std::size_t(n)] : world[std::size_t(-1 - n)];
+    };
+    area += 0.5 * (at(t[1]) - at(t[0])).cross(at(t[2]) - at(t[0])).norm();
+    std::array<int, 3> sorted = t;
+    std::sort(sorted.begin(), sorted.end());
+    triangles.insert(sorted);
+  }
+  EXPECT_NEAR(area, 16.0, 1e-9);
+  EXPECT_TRUE(triangles.count({-3, -2, -1}));  // tops 0, 1, 2
+  EXPECT_TRUE(triangles.count({-4, -3, -1}));  // tops 0, 2, 3
 }
 
 }  // namespace

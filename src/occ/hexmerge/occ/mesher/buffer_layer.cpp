@@ -449,11 +449,24 @@ BufferCells buffer_layer(const Shape& shape, const Lattice& lattice, const CoreL
           }
           quads.push_back(q);
         }
+        std::vector<int> poor_tops;
         std::optional<Retriangulated> made =
             retriangulate(charts.at(face), surface, quads, xy, uv, world, node_elsewhere, h,
-                          {kNodeClearance, kAreaChange, kLeastAngle});
+                          {kNodeClearance, kAreaChange, kLeastAngle}, &poor_tops);
         if (!made) {
-          for (const std::size_t i : bases) chosen[i] = 0;
+          // Where only new triangles too thin fail it, the hexahedra whose tops they have (or
+          // whose quads took the nodes beside them) go; else all of the face's.
+          std::vector<char> poor(xy.size(), 0);
+          for (const int k : poor_tops) poor[static_cast<std::size_t>(k)] = 1;
+          bool any = false;
+          for (std::size_t b = 0; b < bases.size(); ++b)
+            for (const int k : quads[b])
+              if (poor[static_cast<std::size_t>(k)]) {
+                chosen[bases[b]] = 0, any = true;
+                break;
+              }
+          if (!any)
+            for (const std::size_t i : bases) chosen[i] = 0;
           failed = true;
           continue;
         }

@@ -198,13 +198,11 @@ std::optional<P2> place_in(const FaceChart& chart, UV& uv) {
   return std::nullopt;
 }
 
-std::optional<Retriangulated> retriangulate(const FaceChart& chart, const Surface& surface,
-                                            const std::vector<std::array<int, 4>>& quads,
-                                            const std::vector<P2>& top_xy,
-                                            const std::vector<UV>& top_uv,
-                                            const std::vector<Vec3>& top_world,
-                                            const std::vector<char>& node_elsewhere, double h,
-                                            const RetriangulateLimits& limits) {
+std::optional<Retriangulated> retriangulate(
+    const FaceChart& chart, const Surface& surface, const std::vector<std::array<int, 4>>& quads,
+    const std::vector<P2>& top_xy, const std::vector<UV>& top_uv,
+    const std::vector<Vec3>& top_world, const std::vector<char>& node_elsewhere, double h,
+    const RetriangulateLimits& limits, std::vector<int>* poor_tops) {
   // The face's inner vertices near a quad go; one that another face uses too stays, and then
   // the face gets no tops.
   const std::size_t nv = chart.node.size();
@@ -316,6 +314,8 @@ std::optional<Retriangulated> retriangulate(const FaceChart& chart, const Surfac
   Retriangulated out;
   std::set<std::array<int, 3>> made;
   double area = 0, smallest = 180;
+  const double least = std::min(limits.least_angle, chart.smallest_angle);
+  std::vector<std::array<int, 3>> poor;  // the triangles under `least` (chart vertices)
   for (Cdt::Face_handle f : cdt.finite_face_handles()) {
     if (f->info() != 1) continue;
     std::array<int, 3> v{f->vertex(0)->info(), f->vertex(1)->info(), f->vertex(2)->info()};
@@ -329,7 +329,9 @@ std::optional<Retriangulated> retriangulate(const FaceChart& chart, const Surfac
     }
     const Vec3 p0 = world(v[0]), p1 = world(v[1]), p2 = world(v[2]);
     area += 0.5 * (p1 - p0).cross(p2 - p0).norm();
-    smallest = std::min(smallest, smallest_angle(p0, p1, p2) * 180 / M_PI);
+    const double angle = smallest_angle(p0, p1, p2) * 180 / M_PI;
+    smallest = std::min(smallest, angle);
+    if (angle < least) poor.push_back(v);
     std::array<int, 3> key = v;
     std::sort(key.begin(), key.end());
     made.insert(key);
@@ -345,7 +347,26 @@ std::optional<Retriangulated> retriangulate(const FaceChart& chart, const Surfac
       if (!made.count(key)) return std::nullopt;
     }
   if (std::abs(area - chart.area) > limits.area_change * chart.area) return std::nullopt;
-  if (smallest < std::min(limits.least_angle, chart.smallest_angle)) return std::nullopt;
+  if (smallest < least) {
+    if (poor_tops) {
+      std::set<int> blamed;
+      for (const std::array<int, 3>& t : poor) {
+        bool has_top = false;
+        for (const int v : t)
+          if (v >= static_cast<int>(nv)) blamed.insert(v - static_cast<int>(nv)), has_top = true;
+        if (has_top) continue;
+        for (const int v : t) {
+          const auto [lo, hi] = plane_box({chart.xy[static_cast<std::size_t>(v)]}, 0);
+          near_quads.any_in(lo, hi, [&](int i) {
+            for (const int top : quads[static_cast<std::size_t>(i)]) blamed.insert(top);
+            return false;
+          });
+        }
+      }
+      poor_tops->assign(blamed.begin(), blamed.end());
+    }
+    return std::nullopt;
+  }
   return out;
 }
 

@@ -111,13 +111,14 @@ struct RetriangulateLimits {
 /// `top_uv` and `top_world`, around as the bases' corners, split on the diagonal from the first
 /// to the third) in it, or none: where an inner node near a quad is also another face's
 /// (`node_elsewhere`, per surface node), two points fall at one place, constraints cross, the
-/// outline bounds no region, or a limit is broken.
-std::optional<Retriangulated> retriangulate(const FaceChart& chart, const Surface& surface,
-                                            const std::vector<std::array<int, 4>>& quads,
-                                            const std::vector<P2>& top_xy,
-                                            const std::vector<UV>& top_uv,
-                                            const std::vector<Vec3>& top_world,
-                                            const std::vector<char>& node_elsewhere, double h,
-                                            const RetriangulateLimits& limits);
+/// outline bounds no region, or a limit is broken. Where only the smallest angle is (the rest
+/// held), `poor_tops` (when given) gets the tops to blame: the corners of each triangle under
+/// it that are tops, or, for one with none, the tops of the quads whose clearance took the
+/// face's nodes beside it; empty when no triangle can be blamed so.
+std::optional<Retriangulated> retriangulate(
+    const FaceChart& chart, const Surface& surface, const std::vector<std::array<int, 4>>& quads,
+    const std::vector<P2>& top_xy, const std::vector<UV>& top_uv,
+    const std::vector<Vec3>& top_world, const std::vector<char>& node_elsewhere, double h,
+    const RetriangulateLimits& limits, std::vector<int>* poor_tops = nullptr);
 
 }  // namespace hexmerge::mesher
