@@ -8,7 +8,6 @@
 #include <limits>
 #include <map>
 #include <string>
-#include <unordered_set>
 
 #include "hexmerge/core/error.h"
 #include "hexmerge/occ/mesher/common.h"
@@ -399,26 +398,36 @@ Parity::Parity(const std::vector<Vec3>& nodes, const Surface& surface,
   }
 }
 
-std::vector<double> Parity::crossings(double y, double z) const {
+template <typename F>
+void Parity::for_each_crossing(double y, double z, F&& f) const {
   y += 1.234567e-7 * h_, z += 2.345678e-7 * h_;
-  std::vector<double> xs;
-  std::unordered_set<int> seen;
+  // (The point's box lies in one bucket, which holds each triangle once.)
   yz_.any_in(Vec3{y, z, 0}, Vec3{y, z, 0}, [&](int i) {
-    if (!seen.insert(i).second) return false;
     const auto& t = triangles_[i];
     const Vec3 &p0 = nodes_[t[0]], &p1 = nodes_[t[1]], &p2 = nodes_[t[2]];
     double u, v;
     if (!coordinates_across(Vec3{0, y, z}, p0, p1, p2, 0, u, v)) return false;
     if (u < 0 || v < 0 || u + v > 1) return false;
-    xs.push_back(p0.x + u * (p1.x - p0.x) + v * (p2.x - p0.x));
+    f(p0.x + u * (p1.x - p0.x) + v * (p2.x - p0.x));
     return false;
   });
+}
+
+std::vector<double> Parity::crossings(double y, double z) const {
+  std::vector<double> xs;
+  for_each_crossing(y, z, [&](double x) { xs.push_back(x); });
   std::sort(xs.begin(), xs.end());
   return xs;
 }
 
 bool Parity::inside_given(const std::vector<double>& xs, double x) {
   return (std::lower_bound(xs.begin(), xs.end(), x) - xs.begin()) % 2 == 1;
+}
+
+bool Parity::inside(const Vec3& q) const {
+  std::size_t before = 0;
+  for_each_crossing(q.y, q.z, [&](double x) { before += x < q.x; });
+  return before % 2 == 1;
 }
 
 KeptPoints keep_lattice_points(const Lattice& lattice, const Surroundings& around,

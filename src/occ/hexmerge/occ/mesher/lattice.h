@@ -204,9 +204,15 @@ class Parity {
   std::vector<double> crossings(double y, double z) const;
   /// Whether x is inside, given the crossings of its line.
   static bool inside_given(const std::vector<double>& xs, double x);
-  bool inside(const Vec3& q) const { return inside_given(crossings(q.y, q.z), q.x); }
+  /// Whether q is inside: inside_given(crossings(q.y, q.z), q.x), the crossings before q.x
+  /// counted as they come.
+  bool inside(const Vec3& q) const;
 
  private:
+  /// Calls f(x) for each crossing of the line {y, z} (nudged as crossings() does), unsorted.
+  template <typename F>
+  void for_each_crossing(double y, double z, F&& f) const;
+
   const std::vector<Vec3>& nodes_;
   double h_;
   std::vector<std::array<int, 3>> triangles_;
