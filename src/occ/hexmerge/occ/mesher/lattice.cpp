@@ -390,6 +390,13 @@ Parity::Parity(const std::vector<Vec3>& nodes, const Surface& surface,
       yz_(Vec3{around.box_lo.y, around.box_lo.z, 0}, Vec3{around.box_hi.y, around.box_hi.z, 0}, h) {
   for (const SurfaceTriangle& t : surface.triangles)
     if (face_solid_count[t.face] <= 1) triangles_.push_back(t.node);
+  // By their smallest x, so that a bucket's list runs along x and inside() stops at q.x.
+  const auto least_x = [&](const std::array<int, 3>& t) {
+    return std::min({nodes[t[0]].x, nodes[t[1]].x, nodes[t[2]].x});
+  };
+  std::stable_sort(triangles_.begin(), triangles_.end(),
+                   [&](const auto& a, const auto& b) { return least_x(a) < least_x(b); });
+  for (const auto& t : triangles_) least_x_.push_back(least_x(t));
   for (std::size_t i = 0; i < triangles_.size(); ++i) {
     const auto& t = triangles_[i];
     Vec3 a{nodes[t[0]].y, nodes[t[0]].z, 0}, b{nodes[t[1]].y, nodes[t[1]].z, 0},
@@ -399,10 +406,11 @@ Parity::Parity(const std::vector<Vec3>& nodes, const Surface& surface,
 }
 
 template <typename F>
-void Parity::for_each_crossing(double y, double z, F&& f) const {
+void Parity::for_each_crossing(double y, double z, double before, F&& f) const {
   y += 1.234567e-7 * h_, z += 2.345678e-7 * h_;
   // (The point's box lies in one bucket, which holds each triangle once.)
   yz_.any_in(Vec3{y, z, 0}, Vec3{y, z, 0}, [&](int i) {
+    if (least_x_[static_cast<std::size_t>(i)] > before) return true;  // the rest start beyond
     const auto& t = triangles_[i];
     const Vec3 &p0 = nodes_[t[0]], &p1 = nodes_[t[1]], &p2 = nodes_[t[2]];
     double u, v;
@@ -415,7 +423,8 @@ void Parity::for_each_crossing(double y, double z, F&& f) const {
 
 std::vector<double> Parity::crossings(double y, double z) const {
   std::vector<double> xs;
-  for_each_crossing(y, z, [&](double x) { xs.push_back(x); });
+  for_each_crossing(y, z, std::numeric_limits<double>::infinity(),
+                    [&](double x) { xs.push_back(x); });
   std::sort(xs.begin(), xs.end());
   return xs;
 }
@@ -426,7 +435,7 @@ bool Parity::inside_given(const std::vector<double>& xs, double x) {
 
 bool Parity::inside(const Vec3& q) const {
   std::size_t before = 0;
-  for_each_crossing(q.y, q.z, [&](double x) { before += x < q.x; });
+  for_each_crossing(q.y, q.z, q.x, [&](double x) { before += x < q.x; });
   return before % 2 == 1;
 }
 

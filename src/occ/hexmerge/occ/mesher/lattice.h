@@ -209,14 +209,16 @@ class Parity {
   bool inside(const Vec3& q) const;
 
  private:
-  /// Calls f(x) for each crossing of the line {y, z} (nudged as crossings() does), unsorted.
+  /// Calls f(x) for each crossing of the line {y, z} (nudged as crossings() does), unsorted,
+  /// up to the triangles that start beyond `before` along x.
   template <typename F>
-  void for_each_crossing(double y, double z, F&& f) const;
+  void for_each_crossing(double y, double z, double before, F&& f) const;
 
   const std::vector<Vec3>& nodes_;
   double h_;
-  std::vector<std::array<int, 3>> triangles_;
-  BucketGrid yz_;
+  std::vector<std::array<int, 3>> triangles_;  // by their smallest x
+  std::vector<double> least_x_;                // per triangle
+  BucketGrid yz_;                              // each bucket's in the order of triangles_
 };
 
 /// Per lattice point (i fastest, then j, then k), whether it is kept and the lattice face it
