@@ -483,21 +483,8 @@ py::tuple run_mesh_shape(const std::string& brep, const std::map<std::string, st
   d["nb_buffer_faces"] = report.nb_buffer_faces;
   d["nb_buffer_cells_released"] = report.nb_buffer_cells_released;
   {
-    const BufferBaseCounts& b = report.buffer_bases;
     py::dict bases;
-    bases["considered"] = b.considered;
-    bases["apex_shared"] = b.apex_shared;
-    bases["no_top_far"] = b.no_top_far;
-    bases["no_top_face"] = b.no_top_face;
-    bases["no_top_projection"] = b.no_top_projection;
-    bases["no_top_clearance"] = b.no_top_clearance;
-    bases["two_faces"] = b.two_faces;
-    bases["height_or_tilt"] = b.height_or_tilt;
-    bases["hex_quality"] = b.hex_quality;
-    bases["split_quality"] = b.split_quality;
-    bases["folds"] = b.folds;
-    bases["dropped_later"] = b.dropped_later;
-    bases["kept"] = b.kept;
+    for (const auto& [name, member] : kBufferBaseCounts) bases[name] = report.buffer_bases.*member;
     d["buffer_bases"] = bases;
   }
   d["nb_resplit_cells"] = report.nb_resplit_cells;

@@ -47,6 +47,7 @@
 #include <array>
 #include <cstddef>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "hexmerge/core/parameter_table.h"
@@ -245,6 +246,22 @@ struct BufferBaseCounts {
   std::size_t dropped_later = 0;
   std::size_t kept = 0;  ///< buffer hexahedra (nb_buffer_hexes)
 };
+
+/// BufferBaseCounts' members by name (the report's keys), in the order of the tests.
+inline constexpr std::pair<const char*, std::size_t BufferBaseCounts::*> kBufferBaseCounts[] = {
+    {"considered", &BufferBaseCounts::considered},
+    {"apex_shared", &BufferBaseCounts::apex_shared},
+    {"no_top_far", &BufferBaseCounts::no_top_far},
+    {"no_top_face", &BufferBaseCounts::no_top_face},
+    {"no_top_projection", &BufferBaseCounts::no_top_projection},
+    {"no_top_clearance", &BufferBaseCounts::no_top_clearance},
+    {"two_faces", &BufferBaseCounts::two_faces},
+    {"height_or_tilt", &BufferBaseCounts::height_or_tilt},
+    {"hex_quality", &BufferBaseCounts::hex_quality},
+    {"split_quality", &BufferBaseCounts::split_quality},
+    {"folds", &BufferBaseCounts::folds},
+    {"dropped_later", &BufferBaseCounts::dropped_later},
+    {"kept", &BufferBaseCounts::kept}};
 
 struct MeshShapeReport {
   std::size_t nb_solids = 0;
