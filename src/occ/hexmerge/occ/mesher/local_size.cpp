@@ -432,11 +432,12 @@ std::size_t place_graded_points(const SizeField& field, const Lattice& lattice,
       for (int a = 0; a < 3; ++a)
         if (ijk[a] % scale == 0) index[a] = static_cast<int>(ijk[a] / scale);
       const int face = around.on_lattice_face(q, index);
-      if (face < 0 && around.every_face.any_within(q, room)) return;
-      if (around.curved.any_within(q, room) || around.surface_points.any_within(q, room) ||
-          around.layer_points.any_within(q, room) || around.core_points.any_within(q, room) ||
-          around.core_balls.holds(q, 0.05 * size) || around.buffer_cells.near(q, room) ||
-          graded.any_within(q, 0.5 * room))
+      // (The curved faces' triangles are some of every face's: clear of these, clear of those.)
+      if (face < 0 ? around.every_face.any_within(q, room) : around.curved.any_within(q, room))
+        return;
+      if (around.surface_points.any_within(q, room) || around.layer_points.any_within(q, room) ||
+          around.core_points.any_within(q, room) || around.core_balls.holds(q, 0.05 * size) ||
+          around.buffer_cells.near(q, room) || graded.any_within(q, 0.5 * room))
         return;
       if (face < 0 && !inside(q, j, k)) return;  // the costliest test last
       graded.add(q);
