@@ -485,7 +485,12 @@ std::size_t resplit_core(const std::vector<double>& coordinates, std::vector<ind
   NodeHash at(points, 1e3 * tolerance);
   for (std::size_t i = 0; i < nb_points; ++i) at.add(static_cast<int>(i));
   std::unordered_set<FaceKey, FaceKeyHash> barrier;
-  for (const std::array<int, 3>& t : constraints) barrier.insert(face_key(t[0], t[1], t[2]));
+  // Only a face whose three vertices are the constraints' can be one (no look-up for the rest).
+  std::vector<char> on_barrier(nb_points, 0);
+  for (const std::array<int, 3>& t : constraints) {
+    barrier.insert(face_key(t[0], t[1], t[2]));
+    for (const int v : t) on_barrier[static_cast<std::size_t>(v)] = 1;
+  }
   // Regions: union-find over the tets across the faces that are no barrier, each face joined
   // from the later of its two tets (the order decides the roots, which key `members` below).
   std::vector<index_t> parent(nb_tets);
@@ -495,20 +500,22 @@ std::size_t resplit_core(const std::vector<double>& coordinates, std::vector<ind
     return t;
   };
   {
-    TetMesh mesh;
+    TetMesh mesh;  // (the tets lent to it for the topology, and taken back)
     mesh.points = coordinates;
-    mesh.tets = tets;
+    mesh.tets = std::move(tets);
     const TetTopology topology(mesh);
     for (index_t t = 0; t < nb_tets; ++t) {
-      const index_t* v = &tets[4 * t];
+      const index_t* v = &mesh.tets[4 * t];
       for (int f = 0; f < 4; ++f) {
         const index_t n = topology.neighbor(t, f);
-        if (n == NO_CELL || n > t ||
-            barrier.count(face_key(v[(f + 1) % 4], v[(f + 2) % 4], v[(f + 3) % 4])))
+        if (n == NO_CELL || n > t) continue;
+        const index_t a = v[(f + 1) % 4], b = v[(f + 2) % 4], c = v[(f + 3) % 4];
+        if (on_barrier[a] && on_barrier[b] && on_barrier[c] && barrier.count(face_key(a, b, c)))
           continue;
         parent[find(t)] = find(n);
       }
     }
+    tets = std::move(mesh.tets);
   }
   std::unordered_map<index_t, std::vector<index_t>> members;
   std::vector<std::size_t> size(nb_tets, 0);
