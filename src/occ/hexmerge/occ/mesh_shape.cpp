@@ -181,8 +181,8 @@ TetMesh mesh_shape_impl(const std::string& brep, const MeshShapeParameters& para
   const std::vector<double> spans = face_spans(shape, widths, sized_below);
 
   // 2. A size whose mesh would not fit in memory is refused before any work.
-  SizeEstimate estimate =
-      estimate_size(shape.shape, parameters.size, parameters.surface_deflection * parameters.size);
+  SizeEstimate estimate = estimate_size(shape.shape, shape.volume.Mass(), parameters.size,
+                                        parameters.surface_deflection * parameters.size);
   // The sizes at short edges and narrow faces counted too (swept shapes, which go without them,
   // overestimated).
   LocalSizeItems estimated = local_items;

@@ -221,6 +221,13 @@ Shape load_shape(const std::string& brep, double glue_tolerance, GlueSolidsRepor
     BRepGProp::LinearProperties(edge, length);
     s.edge_length[static_cast<std::size_t>(e - 1)] = length.Mass();
   }
+  s.face_area.assign(static_cast<std::size_t>(s.faces.Extent()), 0.0);
+  for (int f = 1; f <= s.faces.Extent(); ++f) {
+    GProp_GProps area;
+    BRepGProp::SurfaceProperties(s.faces(f), area);
+    s.face_area[static_cast<std::size_t>(f - 1)] = area.Mass();
+  }
+  BRepGProp::VolumeProperties(s.shape, s.volume);
   TopTools_IndexedDataMapOfShapeListOfShape edge_faces;
   TopExp::MapShapesAndAncestors(s.shape, TopAbs_EDGE, TopAbs_FACE, edge_faces);
   for (int e = 1; e <= edge_faces.Extent(); ++e) {
@@ -310,9 +317,7 @@ std::optional<gp_Pln> plane_of(const TopoDS_Face& face, double diagonal) {
 Frame choose_frame(const Shape& s, const std::string& kind) {
   const Vec3 global[3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
   if (kind == "global") return make_frame(global[2], &global[0], global);
-  GProp_GProps volume;
-  BRepGProp::VolumeProperties(s.shape, volume);
-  const GProp_PrincipalProps principal = volume.PrincipalProperties();
+  const GProp_PrincipalProps principal = s.volume.PrincipalProperties();
   const Vec3 principal_axes[3] = {of(gp_Dir(principal.FirstAxisOfInertia())),
                                   of(gp_Dir(principal.SecondAxisOfInertia())),
                                   of(gp_Dir(principal.ThirdAxisOfInertia()))};
@@ -323,13 +328,12 @@ Frame choose_frame(const Shape& s, const std::string& kind) {
     const TopoDS_Face& face = TopoDS::Face(s.faces(i));
     const std::optional<gp_Pln> plane = plane_of(face, s.diagonal);
     if (!plane) continue;
-    GProp_GProps area;
-    BRepGProp::SurfaceProperties(face, area);
+    const double area = s.face_area[static_cast<std::size_t>(i - 1)];
     const Vec3 n = of(plane->Axis().Direction());
     bool merged = false;
     for (auto& [d, a] : directions)
-      if (std::abs(std::abs(d.dot(n)) - 1) < 1e-9) a += area.Mass(), merged = true;
-    if (!merged) directions.emplace_back(n, area.Mass());
+      if (std::abs(std::abs(d.dot(n)) - 1) < 1e-9) a += area, merged = true;
+    if (!merged) directions.emplace_back(n, area);
   }
   if (directions.empty()) return make_frame(principal_axes[2], &principal_axes[0], principal_axes);
   std::stable_sort(directions.begin(), directions.end(),
@@ -350,13 +354,12 @@ std::vector<std::optional<AxisPlane>> face_planes(const Shape& shape, const Fram
     for (int a = 0; a < 3; ++a) {
       if (std::abs(std::abs(n.dot(frame.axis[a])) - 1) > 1e-9) continue;
       const double offset = coord(frame.to_frame(of(plane->Location())), a);
-      GProp_GProps area;
-      BRepGProp::SurfaceProperties(shape.faces(fi), area);
+      const double area = shape.face_area[static_cast<std::size_t>(fi - 1)];
       double perimeter = 0;
       for (TopExp_Explorer e(shape.faces(fi), TopAbs_EDGE); e.More(); e.Next())
         perimeter +=
             shape.edge_length[static_cast<std::size_t>(shape.edges.FindIndex(e.Current()) - 1)];
-      face_plane[fi - 1] = AxisPlane{a, offset, perimeter > 0 ? 2 * area.Mass() / perimeter : 0};
+      face_plane[fi - 1] = AxisPlane{a, offset, perimeter > 0 ? 2 * area / perimeter : 0};
     }
   }
   return face_plane;

@@ -4,6 +4,7 @@
 /// it; its planar faces normal to a frame axis. Internal header of mesh_shape(), and the one
 /// mesher header that includes OpenCASCADE: the other stages take `const Shape&` declared only.
 
+#include <GProp_GProps.hxx>
 #include <Poly_Triangulation.hxx>
 #include <TopTools_IndexedMapOfShape.hxx>
 #include <TopoDS_Face.hxx>
@@ -30,7 +31,9 @@ struct Shape {
   std::vector<int> face_solid_count;          ///< per face, how many (2: shared by two)
   std::vector<std::vector<int>> edge_faces;   ///< per edge, the faces it bounds
   std::vector<double> edge_length;            ///< per edge, its length (0: degenerated, a pole)
-  double diagonal = 0;                        ///< the diagonal of the shape's bounding box
+  std::vector<double> face_area;              ///< per face, its area
+  GProp_GProps volume;  ///< the shape's volume properties (mass: its volume; principal axes)
+  double diagonal = 0;  ///< the diagonal of the shape's bounding box
 };
 
 /// The shape in BREP text, its solids glued where they touch (glue_solids(), within

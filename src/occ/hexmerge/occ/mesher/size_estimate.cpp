@@ -19,12 +19,12 @@
 
 namespace hexmerge::mesher {
 
-SizeEstimate estimate_size(const TopoDS_Shape& shape, double size, double deflection) {
-  GProp_GProps volume, area;
-  BRepGProp::VolumeProperties(shape, volume);
+SizeEstimate estimate_size(const TopoDS_Shape& shape, double volume, double size,
+                           double deflection) {
+  GProp_GProps area;
   BRepGProp::SurfaceProperties(shape, area);
   SizeEstimate e;
-  e.tets = 11 * std::abs(volume.Mass()) / (size * size * size) + 10 * area.Mass() / (size * size);
+  e.tets = 11 * std::abs(volume) / (size * size * size) + 10 * area.Mass() / (size * size);
   // Curved faces of small radius r: BRepMesh cuts them into strips (one per kSurfaceAngle or per
   // chord of sagitta `deflection`, the shorter), which refine() splits to h along: 2 A / (r a h)
   // triangles (a the strip's angle) where A / (0.433 h²) are at size h, that many times more.
@@ -59,15 +59,19 @@ SizeEstimate estimate_size(const TopoDS_Shape& shape, double size, double deflec
 
 double size_that_fits(const TopoDS_Shape& shape, double size, double deflection_ratio,
                       double bytes) {
+  GProp_GProps volume;
+  BRepGProp::VolumeProperties(shape, volume);
   auto fits = [&](double h) {
-    return estimate_size(shape, h, deflection_ratio * h).bytes <= bytes;
+    return estimate_size(shape, volume.Mass(), h, deflection_ratio * h).bytes <= bytes;
   };
   double lo = size, hi = size;
   // Grown by the cube root of the excess (exact for the volume's term; the surface's grow
   // slower), then bisected to 1 %.
   for (int i = 0; i < 60 && !fits(hi); ++i) {
     lo = hi;
-    hi *= std::max(1.01, std::cbrt(estimate_size(shape, hi, deflection_ratio * hi).bytes / bytes));
+    hi *= std::max(
+        1.01,
+        std::cbrt(estimate_size(shape, volume.Mass(), hi, deflection_ratio * hi).bytes / bytes));
   }
   while (hi > 1.01 * lo) {
     const double mid = std::sqrt(lo * hi);

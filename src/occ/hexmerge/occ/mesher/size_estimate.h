@@ -27,7 +27,9 @@ struct SizeEstimate {
 /// kSurfaceAngle (surface.h) or the chord of sagitta `deflection` wide, a radians, are finer than h
 /// counts f = 0.866 h / (r a) times its 10 A / h² (f > 1; pyocc_11752's 178 channels of radius 1.1
 /// and 1.6 mm, 1140 mm long, at h 13.08: f 18 to 26, 2.8k triangles each, not 150).
-SizeEstimate estimate_size(const TopoDS_Shape& shape, double size, double deflection);
+/// `volume`: the shape's (Shape::volume's mass; size_that_fits() computes it).
+SizeEstimate estimate_size(const TopoDS_Shape& shape, double volume, double size,
+                           double deflection);
 
 /// The smallest size from `size` up whose estimate_size() (deflection `deflection_ratio` times
 /// the size) needs at most `bytes`, to 1 %, rounded up to three significant digits: pyocc_11752

@@ -365,12 +365,12 @@ std::vector<double> face_widths(const Shape& s) {
   std::vector<double> width(static_cast<std::size_t>(s.faces.Extent()),
                             std::numeric_limits<double>::infinity());
   for (int f = 1; f <= s.faces.Extent(); ++f) {
-    GProp_GProps area;
-    BRepGProp::SurfaceProperties(s.faces(f), area);
     double perimeter = 0;
     for (TopExp_Explorer e(s.faces(f), TopAbs_EDGE); e.More(); e.Next())
       perimeter += s.edge_length[static_cast<std::size_t>(s.edges.FindIndex(e.Current()) - 1)];
-    if (perimeter > 0) width[static_cast<std::size_t>(f - 1)] = 2 * area.Mass() / perimeter;
+    if (perimeter > 0)
+      width[static_cast<std::size_t>(f - 1)] =
+          2 * s.face_area[static_cast<std::size_t>(f - 1)] / perimeter;
   }
   return width;
 }
