@@ -93,7 +93,7 @@ struct GivenItems {
 
 // One attempt: steps 3 to 14 of mesh_shape() with one strategy; the Tet10 mesh too when
 // `tet10` is given. `sharp`: the shape's sharp features (the report has them), whose surface
-// nodes the attempt reports. `widths`, `spans`: the faces' widths (face_widths()) and spans
+// nodes the attempt reports. `widths`, `spans`: the faces' widths (Shape::face_width) and spans
 // (face_spans()); with `merge_narrow`, faces narrower than kNarrowFace h are merged away.
 TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Frame& frame,
                      const SharpFeatures& sharp, const std::string& regions_brep,
@@ -176,7 +176,7 @@ TetMesh mesh_shape_impl(const std::string& brep, const MeshShapeParameters& para
 
   // The faces' widths (2 area / perimeter), and the spans of those a way may size (its size is
   // at most 1.1 times the one asked for).
-  const std::vector<double> widths = face_widths(shape);
+  const std::vector<double>& widths = shape.face_width;
   const double sized_below = kNarrowFaceWidth * 1.1 * parameters.size;
   const std::vector<double> spans = face_spans(shape, widths, sized_below);
 

@@ -101,7 +101,7 @@ TEST(add_narrow_face_sizes, sizes_the_narrow_faces_only) {
   // 0.1 h.
   const Prepared p = prepare(occ_plate_with_hole(), 5.0);
   std::vector<double> plate(static_cast<std::size_t>(p.shape.faces.Extent()), 5.0);
-  const std::vector<double> plate_widths = mesher::face_widths(p.shape);
+  const std::vector<double>& plate_widths = p.shape.face_width;
   EXPECT_EQ(mesher::add_narrow_face_sizes(
                 plate_widths, mesher::face_spans(p.shape, plate_widths, 1e9), 5.0, plate),
             0u);
@@ -118,8 +118,8 @@ TEST(add_narrow_face_sizes, sizes_the_narrow_faces_only) {
 // shorter side.
 TEST(face_spans, are_the_middle_sides_of_the_faces_boxes) {
   const mesher::Shape rod = load(occ_cylinder(0.5, 30));
-  const std::vector<double> widths = mesher::face_widths(rod),
-                            spans = mesher::face_spans(rod, widths, 1e9);
+  const std::vector<double>& widths = rod.face_width;
+  const std::vector<double> spans = mesher::face_spans(rod, widths, 1e9);
   ASSERT_EQ(spans.size(), 3u);
   for (std::size_t f = 0; f < spans.size(); ++f) {
     EXPECT_NEAR(spans[f], 1.0, 0.05) << f;
@@ -127,14 +127,14 @@ TEST(face_spans, are_the_middle_sides_of_the_faces_boxes) {
       EXPECT_NEAR(widths[f], 2 * (2 * M_PI * 0.5 * 30) / (2 * (2 * M_PI * 0.5) + 2 * 30), 1e-3);
   }
   const mesher::Shape block = load(occ_box(0, 0, 0, 60, 40, 10));
-  std::vector<double> box = mesher::face_spans(block, mesher::face_widths(block), 1e9);
+  std::vector<double> box = mesher::face_spans(block, block.face_width, 1e9);
   std::sort(box.begin(), box.end());
   EXPECT_EQ(box.size(), 6u);
   for (std::size_t f = 0; f < 4; ++f) EXPECT_NEAR(box[f], 10, 1e-6) << f;
   for (std::size_t f = 4; f < 6; ++f) EXPECT_NEAR(box[f], 40, 1e-6) << f;
   // Only the faces narrower than `below` are measured: of widths 8 (40 x 10), 8.57 (60 x 10) and
   // 24 (60 x 40), below 8.5 the two 40 x 10 faces, spanning 10.
-  const std::vector<double> widths_of_block = mesher::face_widths(block);
+  const std::vector<double>& widths_of_block = block.face_width;
   const std::vector<double> narrow = mesher::face_spans(block, widths_of_block, 8.5);
   int measured = 0;
   for (std::size_t f = 0; f < narrow.size(); ++f) {

@@ -122,7 +122,7 @@ std::size_t add_short_edge_sizes(const std::vector<double>& edge_length, double 
 /// whatever its width (KiCad's Valve_Mini_Pentode_Linear: a whole cylinder 0.006 mm across, 3.1
 /// mm long, at h 0.94 0.016 mm wide; sized at 0.047, its triangles folded over each other in
 /// every way).
-/// @param[in]     face_width  per face, its width (face_widths())
+/// @param[in]     face_width  per face, its width (Shape::face_width)
 /// @param[in]     face_span   per face, how far it spans across (face_spans())
 /// @param[in,out] face_size   per face, its local size (h: none)
 /// @return the faces given a size

@@ -27,6 +27,7 @@
 #include <cmath>
 #include <gp_Pln.hxx>
 #include <gp_Pnt2d.hxx>
+#include <limits>
 #include <optional>
 #include <sstream>
 #include <string>
@@ -222,10 +223,16 @@ Shape load_shape(const std::string& brep, double glue_tolerance, GlueSolidsRepor
     s.edge_length[static_cast<std::size_t>(e - 1)] = length.Mass();
   }
   s.face_area.assign(static_cast<std::size_t>(s.faces.Extent()), 0.0);
+  s.face_width.assign(s.face_area.size(), std::numeric_limits<double>::infinity());
   for (int f = 1; f <= s.faces.Extent(); ++f) {
     GProp_GProps area;
     BRepGProp::SurfaceProperties(s.faces(f), area);
-    s.face_area[static_cast<std::size_t>(f - 1)] = area.Mass();
+    const auto i = static_cast<std::size_t>(f - 1);
+    s.face_area[i] = area.Mass();
+    double perimeter = 0;
+    for (TopExp_Explorer e(s.faces(f), TopAbs_EDGE); e.More(); e.Next())
+      perimeter += s.edge_length[static_cast<std::size_t>(s.edges.FindIndex(e.Current()) - 1)];
+    if (perimeter > 0) s.face_width[i] = 2 * s.face_area[i] / perimeter;
   }
   BRepGProp::VolumeProperties(s.shape, s.volume);
   TopTools_IndexedDataMapOfShapeListOfShape edge_faces;
@@ -354,12 +361,8 @@ std::vector<std::optional<AxisPlane>> face_planes(const Shape& shape, const Fram
     for (int a = 0; a < 3; ++a) {
       if (std::abs(std::abs(n.dot(frame.axis[a])) - 1) > 1e-9) continue;
       const double offset = coord(frame.to_frame(of(plane->Location())), a);
-      const double area = shape.face_area[static_cast<std::size_t>(fi - 1)];
-      double perimeter = 0;
-      for (TopExp_Explorer e(shape.faces(fi), TopAbs_EDGE); e.More(); e.Next())
-        perimeter +=
-            shape.edge_length[static_cast<std::size_t>(shape.edges.FindIndex(e.Current()) - 1)];
-      face_plane[fi - 1] = AxisPlane{a, offset, perimeter > 0 ? 2 * area / perimeter : 0};
+      const double width = shape.face_width[static_cast<std::size_t>(fi - 1)];
+      face_plane[fi - 1] = AxisPlane{a, offset, std::isinf(width) ? 0 : width};
     }
   }
   return face_plane;

@@ -32,6 +32,8 @@ struct Shape {
   std::vector<std::vector<int>> edge_faces;   ///< per edge, the faces it bounds
   std::vector<double> edge_length;            ///< per edge, its length (0: degenerated, a pole)
   std::vector<double> face_area;              ///< per face, its area
+  /// per face, its width: twice its area over its perimeter (infinite without a perimeter)
+  std::vector<double> face_width;
   GProp_GProps volume;  ///< the shape's volume properties (mass: its volume; principal axes)
   double diagonal = 0;  ///< the diagonal of the shape's bounding box
 };

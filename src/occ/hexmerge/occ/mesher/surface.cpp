@@ -361,20 +361,6 @@ void remove_folds(Surface& surface, double tolerance) {
   drop_unused_nodes(surface);
 }
 
-std::vector<double> face_widths(const Shape& s) {
-  std::vector<double> width(static_cast<std::size_t>(s.faces.Extent()),
-                            std::numeric_limits<double>::infinity());
-  for (int f = 1; f <= s.faces.Extent(); ++f) {
-    double perimeter = 0;
-    for (TopExp_Explorer e(s.faces(f), TopAbs_EDGE); e.More(); e.Next())
-      perimeter += s.edge_length[static_cast<std::size_t>(s.edges.FindIndex(e.Current()) - 1)];
-    if (perimeter > 0)
-      width[static_cast<std::size_t>(f - 1)] =
-          2 * s.face_area[static_cast<std::size_t>(f - 1)] / perimeter;
-  }
-  return width;
-}
-
 std::vector<double> face_spans(const Shape& s, const std::vector<double>& face_width,
                                double below) {
   std::vector<double> span(static_cast<std::size_t>(s.faces.Extent()),

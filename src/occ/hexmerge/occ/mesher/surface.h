@@ -101,17 +101,14 @@ void remove_folds(Surface& surface, double tolerance);
 /// another), which failed every way of placing the points.
 void drop_unused_nodes(Surface& surface);
 
-/// Per face of `s`, its width: twice its area over its perimeter (infinite without a perimeter).
-std::vector<double> face_widths(const Shape& s);
-
-/// Per face of `s` narrower than `below` (`face_width`, face_widths()), how far it spans across:
-/// the middle side of its oriented bounding box (from its geometry, OpenCASCADE's). Below its
-/// width where the face closes round: a whole cylinder of radius r spans 2 r, its width is about
-/// 2 pi r. Infinite for the wider faces (not measured: as long as the widths, 0.47 s on a KiCad
-/// connector's 3,094 faces) and where OpenCASCADE finds no box.
+/// Per face of `s` narrower than `below` (`face_width`: Shape::face_width), how far it spans
+/// across: the middle side of its oriented bounding box (from its geometry, OpenCASCADE's). Below
+/// its width where the face closes round: a whole cylinder of radius r spans 2 r, its width is
+/// about 2 pi r. Infinite for the wider faces (not measured: as long as the widths, 0.47 s on a
+/// KiCad connector's 3,094 faces) and where OpenCASCADE finds no box.
 std::vector<double> face_spans(const Shape& s, const std::vector<double>& face_width, double below);
 
-/// Faces narrower than `width` (`face_width`, face_widths()) are no faces: every node of theirs
+/// Faces narrower than `width` (`face_width`: Shape::face_width) are no faces: every node of theirs
 /// and every node within `width` of one become one node (remove_folds() then takes out their
 /// triangles), unless the surface would then touch itself or have a gap (it is left as it
 /// was). Returns how many such faces had triangles and went (0: none went).
