@@ -195,8 +195,8 @@ TetMesh mesh_shape_impl(const std::string& brep, const MeshShapeParameters& para
     estimate.bytes += extra * kBytesPerTet;
   }
   report.estimated_tets = estimate.tets;
-  refuse_if_too_large(estimate, shape.shape, parameters.size, parameters.surface_deflection,
-                      parameters.memory_limit, "");
+  refuse_if_too_large(estimate, shape.shape, shape.volume.Mass(), parameters.size,
+                      parameters.surface_deflection, parameters.memory_limit, "");
   const double shape_seconds = seconds_since(start);
 
   // 3. The attempts, simplest input last; what failed is reported. Faces narrower than
@@ -385,8 +385,8 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
     // The thin walls' sizes counted in the estimate of step 2 too.
     report.estimated_tets += estimate_patch_tets(thin_walls, h, kLocalGrading);
     refuse_if_too_large({report.estimated_tets, report.estimated_tets * kBytesPerTet}, shape.shape,
-                        parameters.size, parameters.surface_deflection, parameters.memory_limit,
-                        "with the sizes of its thin walls");
+                        shape.volume.Mass(), parameters.size, parameters.surface_deflection,
+                        parameters.memory_limit, "with the sizes of its thin walls");
   };
   if (!sweep_as_found) feature_sizes();
   // Face layers (none when this way places no layers): their faces are no lattice faces either.

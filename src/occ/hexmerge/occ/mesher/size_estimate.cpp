@@ -57,12 +57,10 @@ SizeEstimate estimate_size(const TopoDS_Shape& shape, double volume, double size
   return e;
 }
 
-double size_that_fits(const TopoDS_Shape& shape, double size, double deflection_ratio,
-                      double bytes) {
-  GProp_GProps volume;
-  BRepGProp::VolumeProperties(shape, volume);
+double size_that_fits(const TopoDS_Shape& shape, double volume, double size,
+                      double deflection_ratio, double bytes) {
   auto fits = [&](double h) {
-    return estimate_size(shape, volume.Mass(), h, deflection_ratio * h).bytes <= bytes;
+    return estimate_size(shape, volume, h, deflection_ratio * h).bytes <= bytes;
   };
   double lo = size, hi = size;
   // Grown by the cube root of the excess (exact for the volume's term; the surface's grow
@@ -70,8 +68,7 @@ double size_that_fits(const TopoDS_Shape& shape, double size, double deflection_
   for (int i = 0; i < 60 && !fits(hi); ++i) {
     lo = hi;
     hi *= std::max(
-        1.01,
-        std::cbrt(estimate_size(shape, volume.Mass(), hi, deflection_ratio * hi).bytes / bytes));
+        1.01, std::cbrt(estimate_size(shape, volume, hi, deflection_ratio * hi).bytes / bytes));
   }
   while (hi > 1.01 * lo) {
     const double mid = std::sqrt(lo * hi);
@@ -123,8 +120,9 @@ double estimate_patch_tets(const std::vector<SizedTriangle>& patches, double h, 
   return tets;
 }
 
-void refuse_if_too_large(const SizeEstimate& estimate, const TopoDS_Shape& shape, double size,
-                         double deflection_ratio, double memory_limit, const std::string& why) {
+void refuse_if_too_large(const SizeEstimate& estimate, const TopoDS_Shape& shape, double volume,
+                         double size, double deflection_ratio, double memory_limit,
+                         const std::string& why) {
   const double limit =
       memory_limit > 0 ? memory_limit * 1e9 : static_cast<double>(available_memory());
   if (!(limit > 0) || estimate.bytes <= limit) return;
@@ -136,7 +134,7 @@ void refuse_if_too_large(const SizeEstimate& estimate, const TopoDS_Shape& shape
        << (memory_limit > 0 ? "memory_limit is " : "the system has ") << limit / 1e9 << " GB"
        << (memory_limit > 0 ? "" : " available") << ": give a size of at least "
        << std::max(size * std::cbrt(estimate.bytes / limit),
-                   size_that_fits(shape, size, deflection_ratio, limit))
+                   size_that_fits(shape, volume, size, deflection_ratio, limit))
        << " (or raise memory_limit)";
   throw InputError(text.str(), Entity::Parameter);
 }

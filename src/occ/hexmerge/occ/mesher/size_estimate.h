@@ -27,7 +27,7 @@ struct SizeEstimate {
 /// kSurfaceAngle (surface.h) or the chord of sagitta `deflection` wide, a radians, are finer than h
 /// counts f = 0.866 h / (r a) times its 10 A / h² (f > 1; pyocc_11752's 178 channels of radius 1.1
 /// and 1.6 mm, 1140 mm long, at h 13.08: f 18 to 26, 2.8k triangles each, not 150).
-/// `volume`: the shape's (Shape::volume's mass; size_that_fits() computes it).
+/// `volume`: the shape's (Shape::volume's mass).
 SizeEstimate estimate_size(const TopoDS_Shape& shape, double volume, double size,
                            double deflection);
 
@@ -35,8 +35,8 @@ SizeEstimate estimate_size(const TopoDS_Shape& shape, double volume, double size
 /// the size) needs at most `bytes`, to 1 %, rounded up to three significant digits: pyocc_11752
 /// under 8.45 GB, 11.8 where the cube root of the excess at its 250k size 7.56 said 8.81 (its
 /// channels' strips grow with 1 / h only).
-double size_that_fits(const TopoDS_Shape& shape, double size, double deflection_ratio,
-                      double bytes);
+double size_that_fits(const TopoDS_Shape& shape, double volume, double size,
+                      double deflection_ratio, double bytes);
 
 /// Tets that local sizes add to estimate_size()'s: per face of local size s < h, its area A times
 /// 10 / s² (its surface) + 11 / (2 g) (1 / s² - 1 / h²) (the zone graded by g inside), less its
@@ -56,8 +56,9 @@ double estimate_patch_tets(const std::vector<SizedTriangle>& patches, double h, 
 /// @throws InputError (Entity::Parameter) when `estimate` needs more, giving the tets, the
 ///         memory and the smallest size (from `size` up, size_that_fits()) whose estimate fits;
 ///         `why` (may be empty) says what the estimate counts beyond the shape's volume and area
-void refuse_if_too_large(const SizeEstimate& estimate, const TopoDS_Shape& shape, double size,
-                         double deflection_ratio, double memory_limit, const std::string& why);
+void refuse_if_too_large(const SizeEstimate& estimate, const TopoDS_Shape& shape, double volume,
+                         double size, double deflection_ratio, double memory_limit,
+                         const std::string& why);
 
 /// Peak bytes per tet of meshing a shape and recombining the tets (TetGen's process, the
 /// engine's candidates and selection on lattice tets, the arrays handed to Python).
