@@ -388,15 +388,16 @@ Parity::Parity(const std::vector<Vec3>& nodes, const Surface& surface,
     : nodes_(nodes),
       h_(h),
       yz_(Vec3{around.box_lo.y, around.box_lo.z, 0}, Vec3{around.box_hi.y, around.box_hi.z, 0}, h) {
+  // By their smallest x (each computed once), so that a bucket's list runs along x and inside()
+  // stops at q.x.
+  std::vector<std::pair<double, std::array<int, 3>>> by_x;
   for (const SurfaceTriangle& t : surface.triangles)
-    if (face_solid_count[t.face] <= 1) triangles_.push_back(t.node);
-  // By their smallest x, so that a bucket's list runs along x and inside() stops at q.x.
-  const auto least_x = [&](const std::array<int, 3>& t) {
-    return std::min({nodes[t[0]].x, nodes[t[1]].x, nodes[t[2]].x});
-  };
-  std::stable_sort(triangles_.begin(), triangles_.end(),
-                   [&](const auto& a, const auto& b) { return least_x(a) < least_x(b); });
-  for (const auto& t : triangles_) least_x_.push_back(least_x(t));
+    if (face_solid_count[t.face] <= 1)
+      by_x.emplace_back(std::min({nodes[t.node[0]].x, nodes[t.node[1]].x, nodes[t.node[2]].x}),
+                        t.node);
+  std::stable_sort(by_x.begin(), by_x.end(),
+                   [](const auto& a, const auto& b) { return a.first < b.first; });
+  for (const auto& [x, t] : by_x) least_x_.push_back(x), triangles_.push_back(t);
   for (std::size_t i = 0; i < triangles_.size(); ++i) {
     const auto& t = triangles_[i];
     Vec3 a{nodes[t[0]].y, nodes[t[0]].z, 0}, b{nodes[t[1]].y, nodes[t[1]].z, 0},
