@@ -128,14 +128,19 @@ BufferCells buffer_layer(const Shape& shape, const Lattice& lattice, const CoreL
   // triangles, then Newton's method on the face's surface from its parameters there.
   std::vector<std::unique_ptr<ShapeAnalysis_Surface>> analysis(
       static_cast<std::size_t>(shape.faces.Extent()));
-  std::unordered_map<std::size_t, std::optional<Top>> top_cache;
-  // Per lattice point without a top, why (a BufferBaseCounts member).
-  std::unordered_map<std::size_t, std::size_t BufferBaseCounts::*> no_top;
+  // Per lattice point, its top, or why it has none (a BufferBaseCounts member).
+  struct Found {
+    std::optional<Top> top;
+    std::size_t BufferBaseCounts::*miss = nullptr;
+  };
+  std::unordered_map<std::size_t, Found> top_cache;
   const auto top_of = [&](std::size_t p) -> const std::optional<Top>& {
     const auto found = top_cache.find(p);
-    if (found != top_cache.end()) return found->second;
-    std::optional<Top>& top = top_cache[p];
-    no_top[p] = &BufferBaseCounts::no_top_far;
+    if (found != top_cache.end()) return found->second.top;
+    Found& entry = top_cache[p];
+    std::optional<Top>& top = entry.top;
+    std::size_t BufferBaseCounts::*& miss = entry.miss;
+    miss = &BufferBaseCounts::no_top_far;
     const Vec3 q = layout.point_at(lattice, p);
     int nearest = -1;
     double best = kHighest * h * kHighest * h;
@@ -149,7 +154,7 @@ BufferCells buffer_layer(const Shape& shape, const Lattice& lattice, const CoreL
     });
     if (nearest < 0) return top;
     const SurfaceTriangle& t = surface.triangles[static_cast<std::size_t>(nearest)];
-    no_top[p] = &BufferBaseCounts::no_top_face;
+    miss = &BufferBaseCounts::no_top_face;
     if (!eligible[static_cast<std::size_t>(t.face)]) return top;
     const int its_face = t.face;
     double s = 0, r = 0;
@@ -166,16 +171,16 @@ BufferCells buffer_layer(const Shape& shape, const Lattice& lattice, const CoreL
     const gp_Pnt2d found_uv = a->NextValueOfUV(gp_Pnt2d(guess.u, guess.v),
                                                gp_Pnt(world.x, world.y, world.z), 1e-7 * h, -1.0);
     const Vec3 at = lattice.frame.to_frame(of(a->Value(found_uv)));
-    no_top[p] = &BufferBaseCounts::no_top_projection;
+    miss = &BufferBaseCounts::no_top_projection;
     if ((at - on).norm() > 0.1 * h) return top;  // Newton went elsewhere
-    no_top[p] = &BufferBaseCounts::no_top_clearance;
+    miss = &BufferBaseCounts::no_top_clearance;
     // Clear of the other faces (across a thin wall or a concave edge), as of its face's edges.
     if (around.every_face.any_within(at, kEdgeClearance * h, [&](int i) {
           return surface.triangles[static_cast<std::size_t>(i)].face != its_face;
         }))
       return top;
     top = Top{t.face, UV{found_uv.X(), found_uv.Y()}, at};
-    no_top.erase(p);
+    miss = nullptr;
     return top;
   };
   // 3. The hexahedra each base could have.
@@ -216,7 +221,7 @@ BufferCells buffer_layer(const Shape& shape, const Lattice& lattice, const CoreL
       const std::optional<Top>& top = top_of(base_of[i][m]);
       if (!top || (face >= 0 && top->face != face)) {
         ok = false;
-        failed = top ? &BufferBaseCounts::two_faces : no_top.at(base_of[i][m]);
+        failed = top ? &BufferBaseCounts::two_faces : top_cache.at(base_of[i][m]).miss;
         break;
       }
       face = top->face;
