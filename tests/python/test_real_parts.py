@@ -418,6 +418,32 @@ def test_buffer_cells_beside_a_poor_tet_are_released() -> None:
     assert shares[1] > shares[0], shares
 
 
+def test_a_core_cell_under_a_released_buffer_hexahedron_keeps_the_block_whole() -> None:
+    """gmsh_t20_data at its 50k size (h 1.637): four buffer cells are released beside tets under
+    0.2, and the flips take one hexahedron's six tets apart. Nothing then closed the face of the
+    core cell under it, so the recombination's block lost that cell and, since a lattice cell's
+    six tets can close only three of its faces, cells beside it after it: 2,733 hexahedra in the
+    output of 2,859 core and buffer hexahedra, 64.1 % hex volume. That core cell is now split
+    into six pyramids to a vertex at its centre (measured when this was done: one cell split,
+    2,916 hexahedra, 68.4 %); the tets stay positive and the volume the same."""
+    import numpy as np
+
+    h = 1.6374014847391156
+    tets, report = hexmerge.mesh_shape(CAD / "gmsh_t20_data.step", h, recombine=False)
+    meshing = report["meshing"]
+    assert meshing["strategy"] == "lattice"
+    assert meshing["nb_buffer_cells_released"] > 0 and meshing["nb_split_core_cells"] >= 1
+    points, cells = tets.points, tets.cell_vertices.reshape(-1, 4).astype(np.int64)
+    assert tet_scaled_jacobians(points, cells).min() > 0
+    mesh, rec = hexmerge.recombine(points, cells, tets.regions)
+    check = hexmerge.check(mesh, points, cells, tets.regions)
+    assert check["valid"] and check["cracks"] == 0 and check["nonconforming_quads"] == 0
+    made = meshing["nb_core_cells"] + meshing["nb_buffer_hexes"]
+    assert rec["output_counts"]["hex"] >= made - 2 * meshing["nb_buffer_cells_released"]
+    assert rec["volume_fraction"]["hex"] >= 0.67
+    assert meshing["max_boundary_distance"] <= 1e-3 * h
+
+
 @pytest.mark.parametrize("h", [5.98665337686162, 6.709462096760412])
 def test_every_core_cell_of_an_assembly_is_a_hexahedron(h: float) -> None:
     """gmsh_as1-tu-203 at h 5.987 (its 50k size before the change): the cells per axis chosen

@@ -288,6 +288,9 @@ struct MeshShapeReport {
   /// Buffer hexahedra and pyramids given up after TetGen: a tet under 0.2 beside them that the
   /// flips left (their tets and corners then improved as the others)
   std::size_t nb_buffer_cells_released = 0;
+  /// core cells under released buffer hexahedra whose tets the flips took apart, split into six
+  /// pyramids to their centre (ImproveParameters::cells_under)
+  std::size_t nb_split_core_cells = 0;
   /// Why the core's closing pyramids' bases got a buffer hexahedron or not (each base counted
   /// once, at the first test it fails, in this order; docs/mesher.md, step 8a)
   BufferBaseCounts buffer_bases;

@@ -8,12 +8,148 @@
 
 #include "hexmerge/geometry/quality.h"
 #include "hexmerge/occ/mesher/common.h"
+#include "hexmerge/occ/mesher/core.h"
 #include "hexmerge/occ/mesher/frame.h"
 #include "hexmerge/occ/mesher/remove_slivers.h"
 #include "hexmerge/occ/mesher/smooth_nodes.h"
 
 namespace hexmerge::mesher {
 namespace {
+
+// The tets as sorted vertex quadruples, for look-ups by vertices.
+struct TetIndex {
+  std::unordered_map<std::uint64_t, std::vector<index_t>> by_key;
+  static std::array<index_t, 4> sorted(std::array<index_t, 4> v) {
+    std::sort(v.begin(), v.end());
+    return v;
+  }
+  static std::uint64_t key(const std::array<index_t, 4>& v) {
+    std::uint64_t k = 1469598103934665603ull;
+    for (const index_t x : v) k = (k ^ x) * 1099511628211ull;
+    return k;
+  }
+  explicit TetIndex(const TetMesh& mesh) : mesh_(mesh) {
+    for (index_t t = 0; t < mesh.nb_tets(); ++t) {
+      const index_t* v = mesh.tet(t);
+      by_key[key(sorted({v[0], v[1], v[2], v[3]}))].push_back(t);
+    }
+  }
+  // The tet with these vertices, or NO_INDEX.
+  index_t find(const std::array<index_t, 4>& vertices) const {
+    const std::array<index_t, 4> want = sorted(vertices);
+    const auto it = by_key.find(key(want));
+    if (it == by_key.end()) return NO_INDEX;
+    for (const index_t t : it->second) {
+      const index_t* v = mesh_.tet(t);
+      if (sorted({v[0], v[1], v[2], v[3]}) == want) return t;
+    }
+    return NO_INDEX;
+  }
+  const TetMesh& mesh_;
+};
+
+// Splits the core cell under each released buffer hexahedron whose six tets are gone (see
+// ImproveParameters::cells_under) into six pyramids to a new vertex at its centre, where its
+// own six tets are still the lattice's split and each new tet keeps `floor`; how many.
+std::size_t split_cells_under(TetMesh& mesh, const std::vector<std::vector<index_t>>& kept_cells,
+                              const std::vector<std::vector<index_t>>& cells_under,
+                              const std::vector<char>& released, double floor,
+                              double pyramid_floor) {
+  const TetIndex index(mesh);
+  // The fourth vertex of the tet on `triangle` whose fourth vertex is not one of `cell`'s, or
+  // NO_INDEX.
+  const auto across = [&](const std::array<index_t, 3>& triangle,
+                          const std::vector<index_t>& cell) {
+    for (index_t t = 0; t < mesh.nb_tets(); ++t) {
+      const index_t* v = mesh.tet(t);
+      int shared = 0;
+      index_t other = NO_INDEX;
+      for (int k = 0; k < 4; ++k) {
+        if (std::find(triangle.begin(), triangle.end(), v[k]) != triangle.end())
+          ++shared;
+        else
+          other = v[k];
+      }
+      if (shared == 3 && std::find(cell.begin(), cell.end(), other) == cell.end()) return other;
+    }
+    return NO_INDEX;
+  };
+  std::vector<char> drop(mesh.nb_tets(), 0);
+  std::vector<index_t> added;  // 4 per new tet
+  std::vector<std::int32_t> added_region;
+  std::size_t split = 0;
+  const auto at = [&](index_t v) { return Vec3::of(mesh.point(v)); };
+  for (std::size_t c = 0; c < kept_cells.size() && c < cells_under.size(); ++c) {
+    const std::vector<index_t>& hex = kept_cells[c];
+    const std::vector<index_t>& cell = cells_under[c];
+    if (!released[c] || hex.size() != 8 || cell.size() != 8) continue;
+    bool intact = true;
+    for (const auto& q : kKuhnPaths)
+      intact = intact && index.find({hex[0], hex[q[0]], hex[q[1]], hex[7]}) != NO_INDEX;
+    if (intact) continue;
+    std::array<index_t, 6> own{};
+    bool whole = true;
+    for (int k = 0; k < 6 && whole; ++k) {
+      own[k] = index.find({cell[0], cell[kKuhnPaths[k][0]], cell[kKuhnPaths[k][1]], cell[7]});
+      whole = own[k] != NO_INDEX && !drop[own[k]];
+    }
+    if (!whole) continue;
+    // Where the two tets across the cell's face under the hexahedron (its base, split on the
+    // diagonal from the base's corner 0 to its corner 3) share their apex, a pyramid closes it
+    // (at pyramid_floor): the cell stays whole.
+    const index_t apex = across({hex[0], hex[1], hex[3]}, cell);
+    if (apex != NO_INDEX && apex == across({hex[0], hex[2], hex[3]}, cell)) {
+      const index_t around[5] = {hex[0], hex[1], hex[3], hex[2], apex},
+                    other_way[5] = {hex[0], hex[2], hex[3], hex[1], apex};
+      if (std::max(scaled_jacobian(CellType::Pyramid, mesh.points.data(), around),
+                   scaled_jacobian(CellType::Pyramid, mesh.points.data(), other_way)) >=
+          pyramid_floor)
+        continue;
+    }
+    Vec3 centre{0, 0, 0};
+    for (const index_t v : cell) centre = centre + at(v) * 0.125;
+    // Each tet {0, a, b, 7} of the split has faces {0, a, b} and {a, b, 7} on the cell's faces.
+    std::vector<std::array<index_t, 3>> faces;
+    for (const auto& q : kKuhnPaths) {
+      faces.push_back({cell[0], cell[q[0]], cell[q[1]]});
+      faces.push_back({cell[q[0]], cell[q[1]], cell[7]});
+    }
+    const index_t middle = mesh.nb_vertices();
+    std::vector<index_t> made;
+    bool good = true;
+    for (std::array<index_t, 3> f : faces) {
+      if (det3(at(f[1]) - at(f[0]), at(f[2]) - at(f[0]), centre - at(f[0])) < 0)
+        std::swap(f[1], f[2]);
+      const double xyz[12] = {at(f[0]).x, at(f[0]).y, at(f[0]).z, at(f[1]).x,
+                              at(f[1]).y, at(f[1]).z, at(f[2]).x, at(f[2]).y,
+                              at(f[2]).z, centre.x,   centre.y,   centre.z};
+      static const index_t kTet[4] = {0, 1, 2, 3};
+      good = good && scaled_jacobian(CellType::Tet, xyz, kTet) >= floor;
+      made.insert(made.end(), {f[0], f[1], f[2], middle});
+    }
+    if (!good) continue;
+    for (const index_t t : own) drop[t] = 1;
+    added.insert(added.end(), made.begin(), made.end());
+    added_region.insert(added_region.end(), 12, mesh.region(own[0]));
+    mesh.points.insert(mesh.points.end(), {centre.x, centre.y, centre.z});
+    ++split;
+  }
+  if (split == 0) return 0;
+  std::vector<index_t> tets;
+  std::vector<std::int32_t> regions;
+  tets.reserve(mesh.tets.size() + added.size());
+  for (index_t t = 0; t < mesh.nb_tets(); ++t) {
+    if (drop[t]) continue;
+    tets.insert(tets.end(), mesh.tet(t), mesh.tet(t) + 4);
+    if (!mesh.regions.empty()) regions.push_back(mesh.regions[t]);
+  }
+  tets.insert(tets.end(), added.begin(), added.end());
+  if (!mesh.regions.empty())
+    regions.insert(regions.end(), added_region.begin(), added_region.end());
+  mesh.tets = std::move(tets);
+  mesh.regions = std::move(regions);
+  return split;
+}
 
 // Rounds of flips (remove_slivers) and node moves (smooth_nodes); the last is flips.
 constexpr int kQualityRounds = 4;
@@ -311,6 +447,10 @@ void improve_tets(TetMesh& mesh, const std::vector<double>& frame_points,
     report.boundary_node_moves += moves.surface_moves;
     if (moves.moves == 0 && !release_once()) break;
   }
+  if (report.released_cells > 0)
+    report.split_core_cells =
+        split_cells_under(mesh, parameters.kept_cells, parameters.cells_under, released,
+                          parameters.insert_below, parameters.pyramid_floor);
 }
 
 }  // namespace hexmerge::mesher
