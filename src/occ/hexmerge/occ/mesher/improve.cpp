@@ -16,38 +16,6 @@
 namespace hexmerge::mesher {
 namespace {
 
-// The tets as sorted vertex quadruples, for look-ups by vertices.
-struct TetIndex {
-  std::unordered_map<std::uint64_t, std::vector<index_t>> by_key;
-  static std::array<index_t, 4> sorted(std::array<index_t, 4> v) {
-    std::sort(v.begin(), v.end());
-    return v;
-  }
-  static std::uint64_t key(const std::array<index_t, 4>& v) {
-    std::uint64_t k = 1469598103934665603ull;
-    for (const index_t x : v) k = (k ^ x) * 1099511628211ull;
-    return k;
-  }
-  explicit TetIndex(const TetMesh& mesh) : mesh_(mesh) {
-    for (index_t t = 0; t < mesh.nb_tets(); ++t) {
-      const index_t* v = mesh.tet(t);
-      by_key[key(sorted({v[0], v[1], v[2], v[3]}))].push_back(t);
-    }
-  }
-  // The tet with these vertices, or NO_INDEX.
-  index_t find(const std::array<index_t, 4>& vertices) const {
-    const std::array<index_t, 4> want = sorted(vertices);
-    const auto it = by_key.find(key(want));
-    if (it == by_key.end()) return NO_INDEX;
-    for (const index_t t : it->second) {
-      const index_t* v = mesh_.tet(t);
-      if (sorted({v[0], v[1], v[2], v[3]}) == want) return t;
-    }
-    return NO_INDEX;
-  }
-  const TetMesh& mesh_;
-};
-
 // Splits the core cell under each released buffer hexahedron whose six tets are gone (see
 // ImproveParameters::cells_under) into six pyramids to a new vertex at its centre, where its
 // own six tets are still the lattice's split and each new tet keeps `floor`; how many.
@@ -55,23 +23,45 @@ std::size_t split_cells_under(TetMesh& mesh, const std::vector<std::vector<index
                               const std::vector<std::vector<index_t>>& cells_under,
                               const std::vector<char>& released, double floor,
                               double pyramid_floor) {
-  const TetIndex index(mesh);
-  // The fourth vertex of the tet on `triangle` whose fourth vertex is not one of `cell`'s, or
-  // NO_INDEX.
-  const auto across = [&](const std::array<index_t, 3>& triangle,
-                          const std::vector<index_t>& cell) {
-    for (index_t t = 0; t < mesh.nb_tets(); ++t) {
-      const index_t* v = mesh.tet(t);
-      int shared = 0;
-      index_t other = NO_INDEX;
-      for (int k = 0; k < 4; ++k) {
-        if (std::find(triangle.begin(), triangle.end(), v[k]) != triangle.end())
-          ++shared;
-        else
-          other = v[k];
-      }
-      if (shared == 3 && std::find(cell.begin(), cell.end(), other) == cell.end()) return other;
+  const auto sorted = [](std::array<index_t, 4> v) {
+    std::sort(v.begin(), v.end());
+    return v;
+  };
+  // One pass over the tets finds what the released hexahedra ask about: each tet of their splits
+  // and of their core cells' (by its sorted vertices), and the fourth vertices of the tets on
+  // their bases' two triangles.
+  std::map<std::array<index_t, 4>, index_t> tet_of;
+  std::unordered_map<FaceKey, std::vector<index_t>, FaceKeyHash> apexes_on;
+  std::vector<std::size_t> asked;
+  for (std::size_t c = 0; c < kept_cells.size() && c < cells_under.size(); ++c) {
+    const std::vector<index_t>& hex = kept_cells[c];
+    const std::vector<index_t>& cell = cells_under[c];
+    if (!released[c] || hex.size() != 8 || cell.size() != 8) continue;
+    asked.push_back(c);
+    for (const auto& q : kKuhnPaths) {
+      tet_of.emplace(sorted({hex[0], hex[q[0]], hex[q[1]], hex[7]}), NO_INDEX);
+      tet_of.emplace(sorted({cell[0], cell[q[0]], cell[q[1]], cell[7]}), NO_INDEX);
     }
+    apexes_on[face_key(hex[0], hex[1], hex[3])];
+    apexes_on[face_key(hex[0], hex[2], hex[3])];
+  }
+  if (asked.empty()) return 0;
+  for (index_t t = 0; t < mesh.nb_tets(); ++t) {
+    const index_t* v = mesh.tet(t);
+    const auto it = tet_of.find(sorted({v[0], v[1], v[2], v[3]}));
+    if (it != tet_of.end() && it->second == NO_INDEX) it->second = t;
+    for (int f = 0; f < 4; ++f) {
+      const auto on = apexes_on.find(face_key(v[(f + 1) % 4], v[(f + 2) % 4], v[(f + 3) % 4]));
+      if (on != apexes_on.end()) on->second.push_back(v[f]);
+    }
+  }
+  const auto find = [&](const std::array<index_t, 4>& vertices) {
+    return tet_of.at(sorted(vertices));
+  };
+  // The fourth vertex of the tet on `triangle` that is not one of `cell`'s, or NO_INDEX.
+  const auto across = [&](const FaceKey& triangle, const std::vector<index_t>& cell) {
+    for (const index_t other : apexes_on.at(triangle))
+      if (std::find(cell.begin(), cell.end(), other) == cell.end()) return other;
     return NO_INDEX;
   };
   std::vector<char> drop(mesh.nb_tets(), 0);
@@ -79,26 +69,25 @@ std::size_t split_cells_under(TetMesh& mesh, const std::vector<std::vector<index
   std::vector<std::int32_t> added_region;
   std::size_t split = 0;
   const auto at = [&](index_t v) { return Vec3::of(mesh.point(v)); };
-  for (std::size_t c = 0; c < kept_cells.size() && c < cells_under.size(); ++c) {
+  for (const std::size_t c : asked) {
     const std::vector<index_t>& hex = kept_cells[c];
     const std::vector<index_t>& cell = cells_under[c];
-    if (!released[c] || hex.size() != 8 || cell.size() != 8) continue;
     bool intact = true;
     for (const auto& q : kKuhnPaths)
-      intact = intact && index.find({hex[0], hex[q[0]], hex[q[1]], hex[7]}) != NO_INDEX;
+      intact = intact && find({hex[0], hex[q[0]], hex[q[1]], hex[7]}) != NO_INDEX;
     if (intact) continue;
     std::array<index_t, 6> own{};
     bool whole = true;
     for (int k = 0; k < 6 && whole; ++k) {
-      own[k] = index.find({cell[0], cell[kKuhnPaths[k][0]], cell[kKuhnPaths[k][1]], cell[7]});
+      own[k] = find({cell[0], cell[kKuhnPaths[k][0]], cell[kKuhnPaths[k][1]], cell[7]});
       whole = own[k] != NO_INDEX && !drop[own[k]];
     }
     if (!whole) continue;
     // Where the two tets across the cell's face under the hexahedron (its base, split on the
     // diagonal from the base's corner 0 to its corner 3) share their apex, a pyramid closes it
     // (at pyramid_floor): the cell stays whole.
-    const index_t apex = across({hex[0], hex[1], hex[3]}, cell);
-    if (apex != NO_INDEX && apex == across({hex[0], hex[2], hex[3]}, cell)) {
+    const index_t apex = across(face_key(hex[0], hex[1], hex[3]), cell);
+    if (apex != NO_INDEX && apex == across(face_key(hex[0], hex[2], hex[3]), cell)) {
       const index_t around[5] = {hex[0], hex[1], hex[3], hex[2], apex},
                     other_way[5] = {hex[0], hex[2], hex[3], hex[1], apex};
       if (std::max(scaled_jacobian(CellType::Pyramid, mesh.points.data(), around),
