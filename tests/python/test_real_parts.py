@@ -444,6 +444,34 @@ def test_a_core_cell_under_a_released_buffer_hexahedron_keeps_the_block_whole() 
     assert meshing["max_boundary_distance"] <= 1e-3 * h
 
 
+@pytest.mark.parametrize("scale", [0.983, 1.02])
+def test_a_cell_with_an_open_face_keeps_the_block_whole(scale: float) -> None:
+    """pyocc_face_recognition_sample_part 2 % under and over its 50k size (h 7.603): beside a
+    released buffer hexahedron whose flips took its tets apart, a cell's face had nothing to
+    close it (at 0.983: the two tets across a buffer hexahedron's side share no apex; at 1.02: they
+    make a pyramid to a lattice corner whose tet lies on the face of the core cell beside it,
+    which needs it too). The recombination's block lost that cell and, a cell's six tets closing
+    only three of its faces, cells beside it after it: 68.8 and 80.5 % hex volume (92.7 % at
+    h 7.603). Such a cell is now split into six pyramids to a vertex at its centre (measured when
+    this was done: 92.7 % at both)."""
+    import numpy as np
+
+    h = 7.6034392455820 * scale
+    tets, report = hexmerge.mesh_shape(CAD / "pyocc_face_recognition_sample_part.stp", h,
+                                       recombine=False)
+    meshing = report["meshing"]
+    assert meshing["strategy"] == "lattice" and meshing["nb_split_open_cells"] >= 1
+    points, cells = tets.points, tets.cell_vertices.reshape(-1, 4).astype(np.int64)
+    assert tet_scaled_jacobians(points, cells).min() > 0
+    mesh, rec = hexmerge.recombine(points, cells, tets.regions)
+    check = hexmerge.check(mesh, points, cells, tets.regions)
+    assert check["valid"] and check["cracks"] == 0 and check["nonconforming_quads"] == 0
+    made = meshing["nb_core_cells"] + meshing["nb_buffer_hexes"] - meshing["nb_split_open_cells"]
+    assert rec["output_counts"]["hex"] >= made - 2 * meshing["nb_buffer_cells_released"]
+    assert rec["volume_fraction"]["hex"] >= 0.9
+    assert meshing["max_boundary_distance"] <= 1e-3 * h
+
+
 @pytest.mark.parametrize("h", [5.98665337686162, 6.709462096760412])
 def test_every_core_cell_of_an_assembly_is_a_hexahedron(h: float) -> None:
     """gmsh_as1-tu-203 at h 5.987 (its 50k size before the change): the cells per axis chosen

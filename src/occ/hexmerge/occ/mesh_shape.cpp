@@ -932,6 +932,7 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
   report.nb_inserted_points = improved.inserted_vertices;
   report.nb_buffer_cells_released = improved.released_cells;
   report.nb_split_core_cells = improved.split_core_cells;
+  report.nb_split_open_cells = improved.split_open_cells;
   step("slivers", 0.9);
   // A tet the flips and moves left flat or folded (gmsh_Block at h 1.18: scaled Jacobian
   // 1e-13) fails this way of placing the points, not the whole run: the next way is tried.

@@ -291,6 +291,10 @@ struct MeshShapeReport {
   /// core cells under released buffer hexahedra whose tets the flips took apart, split into six
   /// pyramids to their centre (ImproveParameters::cells_under)
   std::size_t nb_split_core_cells = 0;
+  /// Lattice cells and buffer hexahedra one of whose faces nothing closed after the tet
+  /// improvement, split into six pyramids to a vertex at their centre (else the recombination's
+  /// block loses them and cells beside them after them).
+  std::size_t nb_split_open_cells = 0;
   /// Why the core's closing pyramids' bases got a buffer hexahedron or not (each base counted
   /// once, at the first test it fails, in this order; docs/mesher.md, step 8a)
   BufferBaseCounts buffer_bases;

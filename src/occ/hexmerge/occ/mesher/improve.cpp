@@ -2,8 +2,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <map>
+#include <set>
 #include <unordered_map>
+#include <unordered_set>
 #include <utility>
 
 #include "hexmerge/geometry/quality.h"
@@ -15,6 +18,77 @@
 
 namespace hexmerge::mesher {
 namespace {
+
+// Whether a pyramid on `base` (around) with apex `apex` keeps `floor` in either of its
+// orientations: the base's two triangles' tets sharing that apex close it.
+bool closes(const TetMesh& mesh, const std::array<index_t, 4>& base, index_t apex, double floor) {
+  const index_t around[5] = {base[0], base[1], base[2], base[3], apex},
+                other_way[5] = {base[0], base[3], base[2], base[1], apex};
+  return std::max(scaled_jacobian(CellType::Pyramid, mesh.points.data(), around),
+                  scaled_jacobian(CellType::Pyramid, mesh.points.data(), other_way)) >= floor;
+}
+
+// Lattice cells split into six pyramids to a new vertex at their centre (twelve tets), replacing
+// their six tets (the lattice's split), applied at once.
+class CellSplits {
+ public:
+  explicit CellSplits(TetMesh& mesh) : mesh_(mesh), drop_(mesh.nb_tets(), 0) {}
+  // The split of a cell (its corners `cell`, its boundary triangles `faces`, its tets `own`),
+  // where each new tet keeps `floor`; whether it is made.
+  bool add(const std::vector<index_t>& cell, const std::vector<std::array<index_t, 3>>& faces,
+           const std::vector<index_t>& own, double floor) {
+    for (const index_t t : own)
+      if (drop_[t]) return false;
+    const auto at = [&](index_t v) { return Vec3::of(mesh_.point(v)); };
+    Vec3 centre{0, 0, 0};
+    for (const index_t v : cell) centre = centre + at(v) * (1.0 / static_cast<double>(cell.size()));
+    const index_t middle = static_cast<index_t>(mesh_.nb_vertices() + nb_split_);
+    std::vector<index_t> made;
+    for (std::array<index_t, 3> f : faces) {
+      if (det3(at(f[1]) - at(f[0]), at(f[2]) - at(f[0]), centre - at(f[0])) < 0)
+        std::swap(f[1], f[2]);
+      const double xyz[12] = {at(f[0]).x, at(f[0]).y, at(f[0]).z, at(f[1]).x,
+                              at(f[1]).y, at(f[1]).z, at(f[2]).x, at(f[2]).y,
+                              at(f[2]).z, centre.x,   centre.y,   centre.z};
+      static const index_t kTet[4] = {0, 1, 2, 3};
+      if (scaled_jacobian(CellType::Tet, xyz, kTet) < floor) return false;
+      made.insert(made.end(), {f[0], f[1], f[2], middle});
+    }
+    for (const index_t t : own) drop_[t] = 1;
+    added_.insert(added_.end(), made.begin(), made.end());
+    added_region_.insert(added_region_.end(), faces.size(), mesh_.region(own[0]));
+    centres_.insert(centres_.end(), {centre.x, centre.y, centre.z});
+    ++nb_split_;
+    return true;
+  }
+  // The mesh with the splits made; how many.
+  std::size_t apply() {
+    if (nb_split_ == 0) return 0;
+    std::vector<index_t> tets;
+    std::vector<std::int32_t> regions;
+    tets.reserve(mesh_.tets.size() + added_.size());
+    for (index_t t = 0; t < mesh_.nb_tets(); ++t) {
+      if (drop_[t]) continue;
+      tets.insert(tets.end(), mesh_.tet(t), mesh_.tet(t) + 4);
+      if (!mesh_.regions.empty()) regions.push_back(mesh_.regions[t]);
+    }
+    tets.insert(tets.end(), added_.begin(), added_.end());
+    if (!mesh_.regions.empty())
+      regions.insert(regions.end(), added_region_.begin(), added_region_.end());
+    mesh_.tets = std::move(tets);
+    mesh_.regions = std::move(regions);
+    mesh_.points.insert(mesh_.points.end(), centres_.begin(), centres_.end());
+    return nb_split_;
+  }
+
+ private:
+  TetMesh& mesh_;
+  std::vector<char> drop_;
+  std::vector<index_t> added_;  // 4 per new tet
+  std::vector<std::int32_t> added_region_;
+  std::vector<double> centres_;
+  std::size_t nb_split_ = 0;
+};
 
 // Splits the core cell under each released buffer hexahedron whose six tets are gone (see
 // ImproveParameters::cells_under) into six pyramids to a new vertex at its centre, where its
@@ -64,11 +138,7 @@ std::size_t split_cells_under(TetMesh& mesh, const std::vector<std::vector<index
       if (std::find(cell.begin(), cell.end(), other) == cell.end()) return other;
     return NO_INDEX;
   };
-  std::vector<char> drop(mesh.nb_tets(), 0);
-  std::vector<index_t> added;  // 4 per new tet
-  std::vector<std::int32_t> added_region;
-  std::size_t split = 0;
-  const auto at = [&](index_t v) { return Vec3::of(mesh.point(v)); };
+  CellSplits splits(mesh);
   for (const std::size_t c : asked) {
     const std::vector<index_t>& hex = kept_cells[c];
     const std::vector<index_t>& cell = cells_under[c];
@@ -80,64 +150,260 @@ std::size_t split_cells_under(TetMesh& mesh, const std::vector<std::vector<index
     bool whole = true;
     for (int k = 0; k < 6 && whole; ++k) {
       own[k] = find({cell[0], cell[kKuhnPaths[k][0]], cell[kKuhnPaths[k][1]], cell[7]});
-      whole = own[k] != NO_INDEX && !drop[own[k]];
+      whole = own[k] != NO_INDEX;
     }
     if (!whole) continue;
     // Where the two tets across the cell's face under the hexahedron (its base, split on the
     // diagonal from the base's corner 0 to its corner 3) share their apex, a pyramid closes it
     // (at pyramid_floor): the cell stays whole.
     const index_t apex = across(face_key(hex[0], hex[1], hex[3]), cell);
-    if (apex != NO_INDEX && apex == across(face_key(hex[0], hex[2], hex[3]), cell)) {
-      const index_t around[5] = {hex[0], hex[1], hex[3], hex[2], apex},
-                    other_way[5] = {hex[0], hex[2], hex[3], hex[1], apex};
-      if (std::max(scaled_jacobian(CellType::Pyramid, mesh.points.data(), around),
-                   scaled_jacobian(CellType::Pyramid, mesh.points.data(), other_way)) >=
-          pyramid_floor)
-        continue;
-    }
-    Vec3 centre{0, 0, 0};
-    for (const index_t v : cell) centre = centre + at(v) * 0.125;
+    if (apex != NO_INDEX && apex == across(face_key(hex[0], hex[2], hex[3]), cell) &&
+        closes(mesh, {hex[0], hex[1], hex[3], hex[2]}, apex, pyramid_floor))
+      continue;
     // Each tet {0, a, b, 7} of the split has faces {0, a, b} and {a, b, 7} on the cell's faces.
     std::vector<std::array<index_t, 3>> faces;
     for (const auto& q : kKuhnPaths) {
       faces.push_back({cell[0], cell[q[0]], cell[q[1]]});
       faces.push_back({cell[q[0]], cell[q[1]], cell[7]});
     }
-    const index_t middle = mesh.nb_vertices();
-    std::vector<index_t> made;
-    bool good = true;
-    for (std::array<index_t, 3> f : faces) {
-      if (det3(at(f[1]) - at(f[0]), at(f[2]) - at(f[0]), centre - at(f[0])) < 0)
-        std::swap(f[1], f[2]);
-      const double xyz[12] = {at(f[0]).x, at(f[0]).y, at(f[0]).z, at(f[1]).x,
-                              at(f[1]).y, at(f[1]).z, at(f[2]).x, at(f[2]).y,
-                              at(f[2]).z, centre.x,   centre.y,   centre.z};
-      static const index_t kTet[4] = {0, 1, 2, 3};
-      good = good && scaled_jacobian(CellType::Tet, xyz, kTet) >= floor;
-      made.insert(made.end(), {f[0], f[1], f[2], middle});
+    splits.add(cell, faces, std::vector<index_t>(own.begin(), own.end()), floor);
+  }
+  return splits.apply();
+}
+
+// Splits each hexahedral cell the recombination's block would take (a lattice cell filled by
+// five or six tets of its corners, or a buffer hexahedron, `kept_cells` (corners in
+// buffer_hex_corners() order), still its six tets) one of whose faces nothing closes into six
+// pyramids to a new vertex at its centre, each new tet keeping `floor`; how many. A face is
+// closed where it lies on the boundary, against another such cell, or where the two tets across
+// share their fourth vertex in a pyramid of `pyramid_floor` neither of whose tets lies on another
+// such cell's open face (a pyramid to a lattice corner beside the face does: the block cannot
+// take it for both). Else the block loses the cell and, a cell's six tets closing at most three
+// of its faces, cells beside it after it, to the block's edge: beside a released buffer
+// hexahedron whose flips took its tets apart, pyocc_face_recognition_sample_part at h 7.474 lost
+// 1,829 of its block's 4,653 hexahedra to one such face.
+std::size_t split_open_cells(TetMesh& mesh, const std::vector<std::array<double, 3>>& cell_of,
+                             const std::vector<char>& lattice_point,
+                             const std::vector<std::vector<index_t>>& kept_cells, double floor,
+                             double pyramid_floor) {
+  const std::size_t made = lattice_point.size();
+  const auto sorted = [](std::array<index_t, 4> v) {
+    std::sort(v.begin(), v.end());
+    return v;
+  };
+  struct Cell {
+    std::vector<index_t> corner;                                // 8
+    std::vector<index_t> tets;                                  // its own
+    std::array<std::array<std::array<index_t, 3>, 2>, 6> face;  // its faces' triangles
+  };
+  std::vector<Cell> cells;
+  std::vector<std::int64_t> cell_of_tet(mesh.nb_tets(), -1);
+  // The lattice cells: tets of lattice points within one cell, by its lowest corner.
+  {
+    using Key = std::array<std::int64_t, 3>;
+    struct KeyHash {
+      std::size_t operator()(const Key& c) const {
+        return static_cast<std::size_t>(c[0] * 73856093 ^ c[1] * 19349663 ^ c[2] * 83492791);
+      }
+    };
+    std::unordered_map<Key, Cell, KeyHash> by_key;
+    for (index_t t = 0; t < mesh.nb_tets(); ++t) {
+      const index_t* v = mesh.tet(t);
+      if (std::any_of(v, v + 4, [&](index_t w) { return w >= made || !lattice_point[w]; }))
+        continue;
+      std::array<double, 3> least{1e300, 1e300, 1e300}, most{-1e300, -1e300, -1e300};
+      for (int k = 0; k < 4; ++k)
+        for (std::size_t a = 0; a < 3; ++a)
+          least[a] = std::min(least[a], cell_of[v[k]][a]),
+          most[a] = std::max(most[a], cell_of[v[k]][a]);
+      bool one = true;
+      for (std::size_t a = 0; a < 3; ++a) one = one && std::abs(most[a] - least[a] - 1) < 1e-6;
+      if (!one) continue;
+      Cell& cell = by_key[{std::llround(least[0]), std::llround(least[1]), std::llround(least[2])}];
+      if (cell.corner.empty()) cell.corner.assign(8, NO_INDEX);
+      cell.tets.push_back(t);
+      for (int k = 0; k < 4; ++k) {
+        std::size_t bits = 0;
+        for (std::size_t a = 0; a < 3; ++a)
+          if (cell_of[v[k]][a] > least[a] + 0.5) bits |= std::size_t{1} << a;
+        cell.corner[bits] = v[k];
+      }
     }
-    if (!good) continue;
-    for (const index_t t : own) drop[t] = 1;
-    added.insert(added.end(), made.begin(), made.end());
-    added_region.insert(added_region.end(), 12, mesh.region(own[0]));
-    mesh.points.insert(mesh.points.end(), {centre.x, centre.y, centre.z});
-    ++split;
+    for (auto& [key, cell] : by_key) {
+      (void)key;
+      if ((cell.tets.size() != 5 && cell.tets.size() != 6) ||
+          std::find(cell.corner.begin(), cell.corner.end(), NO_INDEX) != cell.corner.end())
+        continue;
+      // Its boundary triangles (a side of one of its tets only), each on the face of the corner
+      // bit its three corners share.
+      std::map<std::array<index_t, 3>, int> count;
+      for (const index_t t : cell.tets) {
+        const index_t* v = mesh.tet(t);
+        for (int f = 0; f < 4; ++f) {
+          std::array<index_t, 3> tri{v[(f + 1) % 4], v[(f + 2) % 4], v[(f + 3) % 4]};
+          std::sort(tri.begin(), tri.end());
+          ++count[tri];
+        }
+      }
+      std::array<std::size_t, 6> n{};
+      bool filled = true;
+      for (const auto& [tri, times] : count) {
+        if (times != 1) continue;
+        std::array<int, 3> bits{};
+        for (std::size_t k = 0; k < 3; ++k)
+          bits[k] = static_cast<int>(std::find(cell.corner.begin(), cell.corner.end(), tri[k]) -
+                                     cell.corner.begin());
+        int face = -1;
+        for (int bit = 0; bit < 3 && face < 0; ++bit) {
+          const int value = bits[0] >> bit & 1;
+          if ((bits[1] >> bit & 1) == value && (bits[2] >> bit & 1) == value)
+            face = 2 * bit + value;
+        }
+        if (face < 0 || n[static_cast<std::size_t>(face)] >= 2) {
+          filled = false;
+          break;
+        }
+        const auto f = static_cast<std::size_t>(face);
+        cell.face[f][n[f]++] = tri;
+      }
+      if (!filled || std::any_of(n.begin(), n.end(), [](std::size_t k) { return k != 2; }))
+        continue;
+      for (const index_t t : cell.tets) cell_of_tet[t] = static_cast<std::int64_t>(cells.size());
+      cells.push_back(std::move(cell));
+    }
   }
-  if (split == 0) return 0;
-  std::vector<index_t> tets;
-  std::vector<std::int32_t> regions;
-  tets.reserve(mesh.tets.size() + added.size());
+  // The buffer hexahedra still their six tets.
+  {
+    std::map<std::array<index_t, 4>, index_t> tet_id;
+    std::set<std::array<index_t, 4>> wanted;
+    for (const std::vector<index_t>& hex : kept_cells)
+      if (hex.size() == 8)
+        for (const auto& q : kKuhnPaths)
+          wanted.insert(sorted({hex[0], hex[static_cast<std::size_t>(q[0])],
+                                hex[static_cast<std::size_t>(q[1])], hex[7]}));
+    for (index_t t = 0; t < mesh.nb_tets() && !wanted.empty(); ++t) {
+      const index_t* v = mesh.tet(t);
+      const auto key = sorted({v[0], v[1], v[2], v[3]});
+      if (wanted.count(key)) tet_id.emplace(key, t);
+    }
+    for (const std::vector<index_t>& hex : kept_cells) {
+      if (hex.size() != 8) continue;
+      Cell cell{hex, {}, {}};
+      std::array<std::size_t, 6> n{};
+      for (const auto& q : kKuhnPaths) {
+        const auto it = tet_id.find(sorted({hex[0], hex[static_cast<std::size_t>(q[0])],
+                                            hex[static_cast<std::size_t>(q[1])], hex[7]}));
+        if (it == tet_id.end() || cell_of_tet[it->second] >= 0) break;
+        cell.tets.push_back(it->second);
+        // Its faces {0, a, b} and {a, b, 7} on the hexahedron's faces (the bit they share).
+        for (const std::array<int, 3> tri :
+             {std::array<int, 3>{0, q[0], q[1]}, std::array<int, 3>{q[0], q[1], 7}})
+          for (int bit = 0; bit < 3; ++bit) {
+            const int value = tri[0] >> bit & 1;
+            if ((tri[1] >> bit & 1) != value || (tri[2] >> bit & 1) != value) continue;
+            const auto face = static_cast<std::size_t>(2 * bit + value);
+            std::array<index_t, 3> corners{hex[static_cast<std::size_t>(tri[0])],
+                                           hex[static_cast<std::size_t>(tri[1])],
+                                           hex[static_cast<std::size_t>(tri[2])]};
+            std::sort(corners.begin(), corners.end());
+            cell.face[face][n[face]++ % 2] = corners;
+          }
+      }
+      if (cell.tets.size() != 6) continue;
+      for (const index_t t : cell.tets) cell_of_tet[t] = static_cast<std::int64_t>(cells.size());
+      cells.push_back(std::move(cell));
+    }
+  }
+  if (cells.empty()) return 0;
+  // The tets on each of the cells' faces' triangles.
+  std::unordered_map<FaceKey, std::array<index_t, 2>, FaceKeyHash> on;
+  for (const Cell& cell : cells)
+    for (const auto& face : cell.face)
+      for (const auto& tri : face)
+        on.try_emplace(face_key(tri[0], tri[1], tri[2]),
+                       std::array<index_t, 2>{NO_INDEX, NO_INDEX});
   for (index_t t = 0; t < mesh.nb_tets(); ++t) {
-    if (drop[t]) continue;
-    tets.insert(tets.end(), mesh.tet(t), mesh.tet(t) + 4);
-    if (!mesh.regions.empty()) regions.push_back(mesh.regions[t]);
+    const index_t* v = mesh.tet(t);
+    for (int f = 0; f < 4; ++f) {
+      const auto it = on.find(face_key(v[(f + 1) % 4], v[(f + 2) % 4], v[(f + 3) % 4]));
+      if (it != on.end()) it->second[it->second[0] == NO_INDEX ? 0 : 1] = t;
+    }
   }
-  tets.insert(tets.end(), added.begin(), added.end());
-  if (!mesh.regions.empty())
-    regions.insert(regions.end(), added_region.begin(), added_region.end());
-  mesh.tets = std::move(tets);
-  mesh.regions = std::move(regions);
-  return split;
+  // Per cell face that is open (neither on the boundary nor against another cell): the tets
+  // across it. The open faces' corners, any three of them: a tet with a face there lies on one.
+  struct Open {
+    std::size_t cell, face;
+    std::array<index_t, 2> across;
+  };
+  std::vector<Open> open;
+  std::unordered_set<FaceKey, FaceKeyHash> on_open;
+  for (std::size_t c = 0; c < cells.size(); ++c)
+    for (std::size_t f = 0; f < 6; ++f) {
+      std::array<index_t, 2> across{NO_INDEX, NO_INDEX};
+      for (std::size_t k = 0; k < 2; ++k) {
+        const auto& tri = cells[c].face[f][k];
+        for (const index_t t : on.at(face_key(tri[0], tri[1], tri[2])))
+          if (t != NO_INDEX && cell_of_tet[t] != static_cast<std::int64_t>(c)) across[k] = t;
+      }
+      if (across[0] == NO_INDEX && across[1] == NO_INDEX) continue;
+      if (across[0] != NO_INDEX && across[1] != NO_INDEX && cell_of_tet[across[0]] >= 0 &&
+          cell_of_tet[across[0]] == cell_of_tet[across[1]])
+        continue;
+      open.push_back({c, f, across});
+      std::vector<index_t> corners;
+      for (const auto& tri : cells[c].face[f])
+        for (const index_t v : tri)
+          if (std::find(corners.begin(), corners.end(), v) == corners.end()) corners.push_back(v);
+      if (corners.size() != 4) continue;
+      for (std::size_t skip = 0; skip < 4; ++skip) {
+        std::array<index_t, 3> three{};
+        for (std::size_t k = 0, m = 0; k < 4; ++k)
+          if (k != skip) three[m++] = corners[k];
+        on_open.insert(face_key(three[0], three[1], three[2]));
+      }
+    }
+  std::vector<char> split(cells.size(), 0);
+  for (const Open& o : open) {
+    if (split[o.cell]) continue;
+    const auto& tris = cells[o.cell].face[o.face];
+    bool closed = o.across[0] != NO_INDEX && o.across[1] != NO_INDEX;
+    std::array<index_t, 2> apex{NO_INDEX, NO_INDEX};
+    for (std::size_t k = 0; k < 2 && closed; ++k) {
+      const index_t* v = mesh.tet(o.across[k]);
+      for (int m = 0; m < 4; ++m)
+        if (v[m] != tris[k][0] && v[m] != tris[k][1] && v[m] != tris[k][2]) apex[k] = v[m];
+      // Its faces at the apex lie on no open face.
+      for (int m = 0; m < 4 && closed; ++m)
+        if (v[m] != apex[k])
+          closed = !on_open.count(face_key(v[(m + 1) % 4], v[(m + 2) % 4], v[(m + 3) % 4]));
+    }
+    if (closed && (apex[0] == NO_INDEX || apex[0] != apex[1])) closed = false;
+    if (closed) {
+      // The face's corners around: the first triangle from its corner not on the second, then
+      // the second's corner not on the first.
+      const auto in = [](const std::array<index_t, 3>& tri, index_t v) {
+        return v == tri[0] || v == tri[1] || v == tri[2];
+      };
+      std::size_t lone = 0;
+      index_t extra = NO_INDEX;
+      for (std::size_t k = 0; k < 3; ++k) {
+        if (!in(tris[1], tris[0][k])) lone = k;
+        if (!in(tris[0], tris[1][k])) extra = tris[1][k];
+      }
+      closed =
+          closes(mesh, {tris[0][lone], tris[0][(lone + 1) % 3], extra, tris[0][(lone + 2) % 3]},
+                 apex[0], pyramid_floor);
+    }
+    if (!closed) split[o.cell] = 1;
+  }
+  CellSplits splits(mesh);
+  for (std::size_t c = 0; c < cells.size(); ++c) {
+    if (!split[c]) continue;
+    std::vector<std::array<index_t, 3>> faces;
+    for (const auto& face : cells[c].face) faces.insert(faces.end(), face.begin(), face.end());
+    splits.add(cells[c].corner, faces, cells[c].tets, floor);
+  }
+  return splits.apply();
 }
 
 // Rounds of flips (remove_slivers) and node moves (smooth_nodes); the last is flips.
@@ -440,6 +706,9 @@ void improve_tets(TetMesh& mesh, const std::vector<double>& frame_points,
     report.split_core_cells =
         split_cells_under(mesh, parameters.kept_cells, parameters.cells_under, released,
                           parameters.insert_below, parameters.pyramid_floor);
+  if (parameters.sweep_axis < 0)
+    report.split_open_cells = split_open_cells(mesh, cell_of, lattice_point, parameters.kept_cells,
+                                               parameters.insert_below, parameters.pyramid_floor);
 }
 
 }  // namespace hexmerge::mesher

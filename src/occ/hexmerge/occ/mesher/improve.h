@@ -26,6 +26,9 @@ struct ImproveReport {
   std::size_t released_cells = 0;       ///< kept cells released (ImproveParameters::kept_cells)
   /// core cells split into six pyramids to their centre (ImproveParameters::cells_under)
   std::size_t split_core_cells = 0;
+  /// cells (lattice cells, buffer hexahedra) with a face nothing closes, split into six pyramids
+  /// to their centre (split_open_cells())
+  std::size_t split_open_cells = 0;
 };
 
 /// How improve_tets() works.
