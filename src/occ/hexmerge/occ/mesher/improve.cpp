@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdlib>
 #include <map>
 #include <set>
 #include <unordered_map>
@@ -170,6 +169,9 @@ std::size_t split_cells_under(TetMesh& mesh, const std::vector<std::vector<index
   return splits.apply();
 }
 
+// The most open faces a cell split_open_cells() splits may have.
+constexpr int kMostOpenFaces = 2;
+
 // Splits each hexahedral cell the recombination's block would take (a lattice cell filled by
 // five or six tets of its corners, or a buffer hexahedron, `kept_cells` (corners in
 // buffer_hex_corners() order), still its six tets) one of whose faces nothing closes into six
@@ -181,9 +183,6 @@ std::size_t split_cells_under(TetMesh& mesh, const std::vector<std::vector<index
 // of its faces, cells beside it after it, to the block's edge: beside a released buffer
 // hexahedron whose flips took its tets apart, pyocc_face_recognition_sample_part at h 7.474 lost
 // 1,829 of its block's 4,653 hexahedra to one such face.
-// The most open faces a cell split_open_cells() splits may have.
-constexpr int kMostOpenFaces = 2;
-
 std::size_t split_open_cells(TetMesh& mesh, const std::vector<std::array<double, 3>>& cell_of,
                              const std::vector<char>& lattice_point,
                              const std::vector<std::vector<index_t>>& kept_cells, double floor,
@@ -236,21 +235,24 @@ std::size_t split_open_cells(TetMesh& mesh, const std::vector<std::array<double,
       if ((cell.tets.size() != 5 && cell.tets.size() != 6) ||
           std::find(cell.corner.begin(), cell.corner.end(), NO_INDEX) != cell.corner.end())
         continue;
-      // Its boundary triangles (a side of one of its tets only), each on the face of the corner
-      // bit its three corners share.
-      std::map<std::array<index_t, 3>, int> count;
+      // Its boundary triangles (a side of one of its tets only), in sorted order, each on the
+      // face of the corner bit its three corners share.
+      std::array<std::array<index_t, 3>, 24> sides{};
+      std::size_t nb_sides = 0;
       for (const index_t t : cell.tets) {
         const index_t* v = mesh.tet(t);
         for (int f = 0; f < 4; ++f) {
           std::array<index_t, 3> tri{v[(f + 1) % 4], v[(f + 2) % 4], v[(f + 3) % 4]};
           std::sort(tri.begin(), tri.end());
-          ++count[tri];
+          sides[nb_sides++] = tri;
         }
       }
+      std::sort(sides.begin(), sides.begin() + static_cast<std::ptrdiff_t>(nb_sides));
       std::array<std::size_t, 6> n{};
       bool filled = true;
-      for (const auto& [tri, times] : count) {
-        if (times != 1) continue;
+      for (std::size_t i = 0; i < nb_sides; ++i) {
+        const std::array<index_t, 3>& tri = sides[i];
+        if ((i > 0 && sides[i - 1] == tri) || (i + 1 < nb_sides && sides[i + 1] == tri)) continue;
         std::array<int, 3> bits{};
         for (std::size_t k = 0; k < 3; ++k)
           bits[k] = static_cast<int>(std::find(cell.corner.begin(), cell.corner.end(), tri[k]) -
