@@ -198,15 +198,16 @@ std::size_t split_open_cells(TetMesh& mesh, const std::vector<std::array<double,
     std::array<std::array<std::array<index_t, 3>, 2>, 6> face;  // its faces' triangles
   };
   std::vector<Cell> cells;
+  using Key = std::array<std::int64_t, 3>;
+  struct KeyHash {
+    std::size_t operator()(const Key& c) const {
+      return static_cast<std::size_t>(c[0] * 73856093 ^ c[1] * 19349663 ^ c[2] * 83492791);
+    }
+  };
+  std::unordered_map<Key, std::size_t, KeyHash> lattice_cell;  // by its lowest corner
   std::vector<std::int64_t> cell_of_tet(mesh.nb_tets(), -1);
   // The lattice cells: tets of lattice points within one cell, by its lowest corner.
   {
-    using Key = std::array<std::int64_t, 3>;
-    struct KeyHash {
-      std::size_t operator()(const Key& c) const {
-        return static_cast<std::size_t>(c[0] * 73856093 ^ c[1] * 19349663 ^ c[2] * 83492791);
-      }
-    };
     std::unordered_map<Key, Cell, KeyHash> by_key;
     for (index_t t = 0; t < mesh.nb_tets(); ++t) {
       const index_t* v = mesh.tet(t);
@@ -231,7 +232,6 @@ std::size_t split_open_cells(TetMesh& mesh, const std::vector<std::array<double,
       }
     }
     for (auto& [key, cell] : by_key) {
-      (void)key;
       if ((cell.tets.size() != 5 && cell.tets.size() != 6) ||
           std::find(cell.corner.begin(), cell.corner.end(), NO_INDEX) != cell.corner.end())
         continue;
@@ -273,6 +273,7 @@ std::size_t split_open_cells(TetMesh& mesh, const std::vector<std::array<double,
       if (!filled || std::any_of(n.begin(), n.end(), [](std::size_t k) { return k != 2; }))
         continue;
       for (const index_t t : cell.tets) cell_of_tet[t] = static_cast<std::int64_t>(cells.size());
+      lattice_cell.emplace(key, cells.size());
       cells.push_back(std::move(cell));
     }
   }
@@ -319,18 +320,62 @@ std::size_t split_open_cells(TetMesh& mesh, const std::vector<std::array<double,
     }
   }
   if (cells.empty()) return 0;
-  // The tets on each of the cells' faces' triangles.
-  std::unordered_map<FaceKey, std::array<index_t, 2>, FaceKeyHash> on;
-  for (const Cell& cell : cells)
-    for (const auto& face : cell.face)
-      for (const auto& tri : face)
-        on.try_emplace(face_key(tri[0], tri[1], tri[2]),
-                       std::array<index_t, 2>{NO_INDEX, NO_INDEX});
-  for (index_t t = 0; t < mesh.nb_tets(); ++t) {
-    const index_t* v = mesh.tet(t);
-    for (int f = 0; f < 4; ++f) {
-      const auto it = on.find(face_key(v[(f + 1) % 4], v[(f + 2) % 4], v[(f + 3) % 4]));
-      if (it != on.end()) it->second[it->second[0] == NO_INDEX ? 0 : 1] = t;
+  // The tet across each of the cells' faces' triangles (NO_INDEX on the boundary) and the cell
+  // it is in (-1 for none): where the lattice cell beside a face has the same triangles, its own
+  // (found when the face is open), else found by one pass over the tets that asks only about
+  // tets whose three corners lie on such a triangle.
+  struct Across {
+    std::array<index_t, 2> tet{NO_INDEX, NO_INDEX};
+    std::array<std::int64_t, 2> cell{-1, -1};
+  };
+  std::vector<std::array<Across, 6>> across_of(cells.size());
+  {
+    struct Alone {
+      FaceKey tri;
+      std::size_t cell, face, k;
+      bool operator<(const Alone& other) const { return tri < other.tri; }
+    };
+    std::vector<Alone> alone;
+    std::vector<char> on_alone(mesh.nb_vertices(), 0);
+    for (const auto& [key, c] : lattice_cell)
+      for (std::size_t f = 0; f < 6; ++f) {
+        Key beside = key;
+        beside[f / 2] += f % 2 == 1 ? 1 : -1;
+        const auto it = lattice_cell.find(beside);
+        for (std::size_t k = 0; k < 2; ++k) {
+          const auto& tri = cells[c].face[f][k];
+          if (it != lattice_cell.end() && (cells[it->second].face[f ^ 1][0] == tri ||
+                                           cells[it->second].face[f ^ 1][1] == tri)) {
+            across_of[c][f].cell[k] = static_cast<std::int64_t>(it->second);
+            continue;
+          }
+          alone.push_back({face_key(tri[0], tri[1], tri[2]), c, f, k});
+          for (const index_t v : tri) on_alone[v] = 1;
+        }
+      }
+    for (std::size_t c = lattice_cell.size(); c < cells.size(); ++c)  // the buffer hexahedra
+      for (std::size_t f = 0; f < 6; ++f)
+        for (std::size_t k = 0; k < 2; ++k) {
+          const auto& tri = cells[c].face[f][k];
+          alone.push_back({face_key(tri[0], tri[1], tri[2]), c, f, k});
+          for (const index_t v : tri) on_alone[v] = 1;
+        }
+    std::sort(alone.begin(), alone.end());
+    for (index_t t = 0; t < mesh.nb_tets() && !alone.empty(); ++t) {
+      const index_t* v = mesh.tet(t);
+      for (int f = 0; f < 4; ++f) {
+        const index_t a = v[(f + 1) % 4], b = v[(f + 2) % 4], c = v[(f + 3) % 4];
+        if (!on_alone[a] || !on_alone[b] || !on_alone[c]) continue;
+        const auto [first, last] =
+            std::equal_range(alone.begin(), alone.end(), Alone{face_key(a, b, c), 0, 0, 0});
+        for (auto it = first; it != last; ++it) {
+          const auto& [tri, cell, face, k] = *it;
+          if (cell_of_tet[t] != static_cast<std::int64_t>(cell)) {
+            across_of[cell][face].tet[k] = t;
+            across_of[cell][face].cell[k] = cell_of_tet[t];
+          }
+        }
+      }
     }
   }
   // Per cell face that is open (neither on the boundary nor against another cell): the tets
@@ -343,17 +388,22 @@ std::size_t split_open_cells(TetMesh& mesh, const std::vector<std::array<double,
   std::unordered_map<FaceKey, std::size_t, FaceKeyHash> on_open;  // -> its cell
   for (std::size_t c = 0; c < cells.size(); ++c)
     for (std::size_t f = 0; f < 6; ++f) {
-      std::array<index_t, 2> across{NO_INDEX, NO_INDEX};
-      for (std::size_t k = 0; k < 2; ++k) {
-        const auto& tri = cells[c].face[f][k];
-        for (const index_t t : on.at(face_key(tri[0], tri[1], tri[2])))
-          if (t != NO_INDEX && cell_of_tet[t] != static_cast<std::int64_t>(c)) across[k] = t;
-      }
-      if (across[0] == NO_INDEX && across[1] == NO_INDEX) continue;
-      if (across[0] != NO_INDEX && across[1] != NO_INDEX && cell_of_tet[across[0]] >= 0 &&
-          cell_of_tet[across[0]] == cell_of_tet[across[1]])
-        continue;
-      open.push_back({c, f, across});
+      Across& across = across_of[c][f];
+      if (across.cell[0] >= 0 && across.cell[0] == across.cell[1]) continue;
+      for (std::size_t k = 0; k < 2; ++k)
+        if (across.cell[k] >= 0 && across.tet[k] == NO_INDEX) {
+          // The lattice cell beside: its tet on the triangle.
+          const auto& tri = cells[c].face[f][k];
+          for (const index_t t : cells[static_cast<std::size_t>(across.cell[k])].tets) {
+            const index_t* v = mesh.tet(t);
+            if (std::all_of(tri.begin(), tri.end(), [&](index_t w) {
+                  return w == v[0] || w == v[1] || w == v[2] || w == v[3];
+                }))
+              across.tet[k] = t;
+          }
+        }
+      if (across.tet[0] == NO_INDEX && across.tet[1] == NO_INDEX) continue;
+      open.push_back({c, f, across.tet});
       std::vector<index_t> corners;
       for (const auto& tri : cells[c].face[f])
         for (const index_t v : tri)
