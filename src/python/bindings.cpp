@@ -482,7 +482,6 @@ py::tuple run_mesh_shape(const std::string& brep, const std::map<std::string, st
   d["nb_buffer_pyramids"] = report.nb_buffer_pyramids;
   d["nb_buffer_faces"] = report.nb_buffer_faces;
   d["nb_buffer_cells_released"] = report.nb_buffer_cells_released;
-  d["nb_split_core_cells"] = report.nb_split_core_cells;
   d["nb_split_open_cells"] = report.nb_split_open_cells;
   {
     py::dict bases;

@@ -769,7 +769,7 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
   // with their lattice positions: improve_tets() tells the core's cells and pyramids by those.
   std::vector<std::pair<std::size_t, Vec3>> pulled;
   // The buffer's cells, by their vertices among TetGen's points: improve_tets() keeps them.
-  std::vector<std::vector<index_t>> kept_cells, cells_under;
+  std::vector<std::vector<index_t>> kept_cells;
   if (!inserted.pulled.empty() || !inserted.kept_cells.empty()) {
     NodeHash at(input.points, 1e-3 * h);
     for (std::size_t i = 0; i < given; ++i) at.add(static_cast<int>(i));
@@ -784,20 +784,13 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
       input.facets.push_back(Facet{{{a, b, c}}, {}, constraint_marker});
       constraints.push_back({a, b, c});
     }
-    const auto vertices_of = [&](const std::vector<Vec3>& cell) {
+    for (const std::vector<Vec3>& cell : inserted.kept_cells) {
       std::vector<index_t> vertices;
       for (const Vec3& q : cell) {
         const int i = at.find(q, 1e-6 * h);
         if (i >= 0) vertices.push_back(static_cast<index_t>(i));
       }
-      if (vertices.size() != cell.size()) vertices.clear();
-      return vertices;
-    };
-    for (std::size_t c = 0; c < inserted.kept_cells.size(); ++c) {
-      std::vector<index_t> vertices = vertices_of(inserted.kept_cells[c]);
-      if (vertices.empty()) continue;
-      kept_cells.push_back(std::move(vertices));
-      cells_under.push_back(vertices_of(inserted.cells_under[c]));
+      if (vertices.size() == cell.size()) kept_cells.push_back(std::move(vertices));
     }
   }
   input.to_world = [&](const Vec3& p) { return lattice.frame.to_world(p); };
@@ -881,7 +874,6 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
   // against 90.8 % kept).
   improve.pyramid_floor = RecombineParameters{}.min_scaled_jacobian;
   improve.kept_cells = std::move(kept_cells);
-  improve.cells_under = std::move(cells_under);
   std::vector<std::int32_t> boundary_face(tets.boundary_marker.size());
   for (std::size_t i = 0; i < boundary_face.size(); ++i)
     boundary_face[i] = static_cast<std::int32_t>(tets.boundary_marker[i]) - 1;
@@ -931,7 +923,6 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
   report.nb_boundary_node_moves = improved.boundary_node_moves;
   report.nb_inserted_points = improved.inserted_vertices;
   report.nb_buffer_cells_released = improved.released_cells;
-  report.nb_split_core_cells = improved.split_core_cells;
   report.nb_split_open_cells = improved.split_open_cells;
   step("slivers", 0.9);
   // A tet the flips and moves left flat or folded (gmsh_Block at h 1.18: scaled Jacobian

@@ -288,9 +288,6 @@ struct MeshShapeReport {
   /// Buffer hexahedra and pyramids given up after TetGen: a tet under 0.2 beside them that the
   /// flips left (their tets and corners then improved as the others)
   std::size_t nb_buffer_cells_released = 0;
-  /// core cells under released buffer hexahedra whose tets the flips took apart, split into six
-  /// pyramids to their centre (ImproveParameters::cells_under)
-  std::size_t nb_split_core_cells = 0;
   /// Lattice cells and buffer hexahedra one of whose faces nothing closed after the tet
   /// improvement, split into six pyramids to a vertex at their centre (else the recombination's
   /// block loses them and cells beside them after them).

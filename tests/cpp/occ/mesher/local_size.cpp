@@ -123,8 +123,9 @@ TEST(face_spans, are_the_middle_sides_of_the_faces_boxes) {
   ASSERT_EQ(spans.size(), 3u);
   for (std::size_t f = 0; f < spans.size(); ++f) {
     EXPECT_NEAR(spans[f], 1.0, 0.05) << f;
-    if (widths[f] > 2)  // the wall: twice its area over its circles and its seam, twice
+    if (widths[f] > 2) {  // the wall: twice its area over its circles and its seam, twice
       EXPECT_NEAR(widths[f], 2 * (2 * M_PI * 0.5 * 30) / (2 * (2 * M_PI * 0.5) + 2 * 30), 1e-3);
+    }
   }
   const mesher::Shape block = load(occ_box(0, 0, 0, 60, 40, 10));
   std::vector<double> box = mesher::face_spans(block, block.face_width, 1e9);

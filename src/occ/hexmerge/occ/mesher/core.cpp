@@ -435,12 +435,11 @@ CoreCounts emit_core(const Lattice& lattice, const CoreLayout& layout, const Buf
       }
     }
     // A buffer cell: its tets go to around.buffer_cells, its corners to inserted.kept_cells.
-    auto keep_cell = [&](const InsertedPoints::Split& split, std::vector<Vec3> under) {
+    auto keep_cell = [&](const InsertedPoints::Split& split) {
       for (const std::array<int, 4>& t : split.tets)
         around.buffer_cells.add(
             {split.corners[t[0]], split.corners[t[1]], split.corners[t[2]], split.corners[t[3]]});
       inserted.kept_cells.push_back(split.corners);
-      inserted.cells_under.push_back(std::move(under));
     };
     // A buffer hexahedron: the six tets around the diagonal from its base's least corner to the
     // top of the opposite one (corner bits u, v across the base, w out of it; u and v swapped
@@ -457,11 +456,7 @@ CoreCounts emit_core(const Lattice& lattice, const CoreLayout& layout, const Buf
           buffer_hex_corners({at[0], at[1], at[2], at[3]}, hex.top, f.dir % 2 == 1);
       split.corners.assign(corners.begin(), corners.end());
       for (const auto& q : kKuhnPaths) split.tets.push_back({0, q[0], q[1], 7});
-      std::vector<Vec3> under;
-      for (int b = 0; b < 8; ++b)
-        under.push_back(point_at(lattice.point_index(f.c[0] + (b & 1), f.c[1] + ((b >> 1) & 1),
-                                                     f.c[2] + ((b >> 2) & 1))));
-      keep_cell(split, std::move(under));
+      keep_cell(split);
       inserted.splits.push_back(std::move(split));
       add_quad(axis, f.c[axis] + f.dir % 2, f.c[(axis + 1) % 3], f.c[(axis + 2) % 3]);
       for (int m = 0; m < 4; ++m) {
@@ -484,7 +479,7 @@ CoreCounts emit_core(const Lattice& lattice, const CoreLayout& layout, const Buf
       InsertedPoints::Split split;
       split.corners.assign(at.begin(), at.end());
       split.tets = {{0, 1, 2, 4}, {0, 2, 3, 4}};
-      keep_cell(split, {});
+      keep_cell(split);
       inserted.splits.push_back(std::move(split));
       for (int m = 0; m < 4; ++m) {
         const int n = (m + 1) % 4;

@@ -88,87 +88,6 @@ class CellSplits {
   std::size_t nb_split_ = 0;
 };
 
-// Splits the core cell under each released buffer hexahedron whose six tets are gone (see
-// ImproveParameters::cells_under) into six pyramids to a new vertex at its centre, where its
-// own six tets are still the lattice's split and each new tet keeps `floor`; how many.
-std::size_t split_cells_under(TetMesh& mesh, const std::vector<std::vector<index_t>>& kept_cells,
-                              const std::vector<std::vector<index_t>>& cells_under,
-                              const std::vector<char>& released, double floor,
-                              double pyramid_floor) {
-  const auto sorted = [](std::array<index_t, 4> v) {
-    std::sort(v.begin(), v.end());
-    return v;
-  };
-  // One pass over the tets finds what the released hexahedra ask about: each tet of their splits
-  // and of their core cells' (by its sorted vertices), and the fourth vertices of the tets on
-  // their bases' two triangles.
-  std::map<std::array<index_t, 4>, index_t> tet_of;
-  std::unordered_map<FaceKey, std::vector<index_t>, FaceKeyHash> apexes_on;
-  std::vector<std::size_t> asked;
-  for (std::size_t c = 0; c < kept_cells.size() && c < cells_under.size(); ++c) {
-    const std::vector<index_t>& hex = kept_cells[c];
-    const std::vector<index_t>& cell = cells_under[c];
-    if (!released[c] || hex.size() != 8 || cell.size() != 8) continue;
-    asked.push_back(c);
-    for (const auto& q : kKuhnPaths) {
-      tet_of.emplace(sorted({hex[0], hex[q[0]], hex[q[1]], hex[7]}), NO_INDEX);
-      tet_of.emplace(sorted({cell[0], cell[q[0]], cell[q[1]], cell[7]}), NO_INDEX);
-    }
-    apexes_on[face_key(hex[0], hex[1], hex[3])];
-    apexes_on[face_key(hex[0], hex[2], hex[3])];
-  }
-  if (asked.empty()) return 0;
-  for (index_t t = 0; t < mesh.nb_tets(); ++t) {
-    const index_t* v = mesh.tet(t);
-    const auto it = tet_of.find(sorted({v[0], v[1], v[2], v[3]}));
-    if (it != tet_of.end() && it->second == NO_INDEX) it->second = t;
-    for (int f = 0; f < 4; ++f) {
-      const auto on = apexes_on.find(face_key(v[(f + 1) % 4], v[(f + 2) % 4], v[(f + 3) % 4]));
-      if (on != apexes_on.end()) on->second.push_back(v[f]);
-    }
-  }
-  const auto find = [&](const std::array<index_t, 4>& vertices) {
-    return tet_of.at(sorted(vertices));
-  };
-  // The fourth vertex of the tet on `triangle` that is not one of `cell`'s, or NO_INDEX.
-  const auto across = [&](const FaceKey& triangle, const std::vector<index_t>& cell) {
-    for (const index_t other : apexes_on.at(triangle))
-      if (std::find(cell.begin(), cell.end(), other) == cell.end()) return other;
-    return NO_INDEX;
-  };
-  CellSplits splits(mesh);
-  for (const std::size_t c : asked) {
-    const std::vector<index_t>& hex = kept_cells[c];
-    const std::vector<index_t>& cell = cells_under[c];
-    bool intact = true;
-    for (const auto& q : kKuhnPaths)
-      intact = intact && find({hex[0], hex[q[0]], hex[q[1]], hex[7]}) != NO_INDEX;
-    if (intact) continue;
-    std::array<index_t, 6> own{};
-    bool whole = true;
-    for (int k = 0; k < 6 && whole; ++k) {
-      own[k] = find({cell[0], cell[kKuhnPaths[k][0]], cell[kKuhnPaths[k][1]], cell[7]});
-      whole = own[k] != NO_INDEX;
-    }
-    if (!whole) continue;
-    // Where the two tets across the cell's face under the hexahedron (its base, split on the
-    // diagonal from the base's corner 0 to its corner 3) share their apex, a pyramid closes it
-    // (at pyramid_floor): the cell stays whole.
-    const index_t apex = across(face_key(hex[0], hex[1], hex[3]), cell);
-    if (apex != NO_INDEX && apex == across(face_key(hex[0], hex[2], hex[3]), cell) &&
-        closes(mesh, {hex[0], hex[1], hex[3], hex[2]}, apex, pyramid_floor))
-      continue;
-    // Each tet {0, a, b, 7} of the split has faces {0, a, b} and {a, b, 7} on the cell's faces.
-    std::vector<std::array<index_t, 3>> faces;
-    for (const auto& q : kKuhnPaths) {
-      faces.push_back({cell[0], cell[q[0]], cell[q[1]]});
-      faces.push_back({cell[q[0]], cell[q[1]], cell[7]});
-    }
-    splits.add(cell, faces, std::vector<index_t>(own.begin(), own.end()), floor);
-  }
-  return splits.apply();
-}
-
 // The most open faces a cell split_open_cells() splits may have.
 constexpr int kMostOpenFaces = 2;
 
@@ -764,10 +683,6 @@ void improve_tets(TetMesh& mesh, const std::vector<double>& frame_points,
     report.boundary_node_moves += moves.surface_moves;
     if (moves.moves == 0 && !release_once()) break;
   }
-  if (report.released_cells > 0)
-    report.split_core_cells =
-        split_cells_under(mesh, parameters.kept_cells, parameters.cells_under, released,
-                          parameters.insert_below, parameters.pyramid_floor);
   if (parameters.sweep_axis < 0)
     report.split_open_cells = split_open_cells(mesh, cell_of, lattice_point, parameters.kept_cells,
                                                parameters.insert_below, parameters.pyramid_floor);

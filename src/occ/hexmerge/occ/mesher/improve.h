@@ -24,8 +24,6 @@ struct ImproveReport {
   std::size_t boundary_node_moves = 0;  ///< of those, of boundary nodes along a CAD face or edge
   std::size_t inserted_vertices = 0;    ///< vertices inserted into tets no flip improved
   std::size_t released_cells = 0;       ///< kept cells released (ImproveParameters::kept_cells)
-  /// core cells split into six pyramids to their centre (ImproveParameters::cells_under)
-  std::size_t split_core_cells = 0;
   /// cells (lattice cells, buffer hexahedra) with a face nothing closes, split into six pyramids
   /// to their centre (split_open_cells())
   std::size_t split_open_cells = 0;
@@ -57,13 +55,6 @@ struct ImproveParameters {
   /// buffer layer's hexahedra and pyramids: buffer_layer()), until a tet under insert_below
   /// outside them touches one after a round's flips: then it is released.
   std::vector<std::vector<index_t>> kept_cells;
-  /// Per kept cell, for a buffer hexahedron (kept_cells' corners in buffer_hex_corners() order)
-  /// the corners of the core cell it stands on (bits x, y, z), else none. Where a released
-  /// hexahedron's tets are no longer its split after the flips, that core cell, its six tets the
-  /// lattice's split, is split into six pyramids to a vertex at its centre (twelve tets): nothing
-  /// else would close its face towards the hexahedron, and the recombination's block would lose
-  /// the cell and cells beside it after it.
-  std::vector<std::vector<index_t>> cells_under;
 };
 
 /// The closing pyramids at some cell centres: at each vertex v with `apex_of[v]` (a lattice cell's

@@ -131,9 +131,6 @@ struct InsertedPoints {
   /// The buffer's cells (emit_core()), by their corners' positions: the tets inside each stay as
   /// they are after TetGen (improve_tets()).
   std::vector<std::vector<Vec3>> kept_cells;
-  /// Per kept cell, for a buffer hexahedron the corners of the core cell it stands on (corner
-  /// bits x, y, z: the lattice's split around its diagonal from corner 0 to corner 7), else none.
-  std::vector<std::vector<Vec3>> cells_under;
 };
 
 /// Balls (centre, radius), with "does one hold q" queries, over the box [lo, hi].
