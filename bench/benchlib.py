@@ -75,8 +75,8 @@ def jsonable(x):
 
 def compare_hashes(results: dict, path: str) -> int:
     """Compare {case: {"sha1", "report", ...}} with the same written earlier to `path`: print each
-    case whose hash or report differs (with the report's changed fields), then the count; 1 when
-    any differs, else 0."""
+    case whose hash or report differs (with the report's changed fields, and whether the mesh
+    alone is identical where both have "mesh_sha1"), then the count; 1 when any differs, else 0."""
     with open(path) as f:
         old = json.load(f)
     bad = 0
@@ -87,8 +87,15 @@ def compare_hashes(results: dict, path: str) -> int:
         before, after = old[key].get("report", {}), new.get("report", {})
         if old[key]["sha1"] != new["sha1"] or before != after:
             bad += 1
-            diff = {k: (before.get(k), v) for k, v in after.items() if before.get(k) != v}
-            print(f"{key}: DIFFERENT sha1 {old[key]['sha1'][:12]} -> {new['sha1'][:12]} {diff}")
+            diff = {k: (before.get(k), after.get(k)) for k in sorted(set(before) | set(after))
+                    if before.get(k) != after.get(k)}
+            # (A report key removed changes the first hash with the same mesh: the second, of the
+            # mesh alone, tells.)
+            mesh = ""
+            if "mesh_sha1" in old[key] and "mesh_sha1" in new:
+                same = old[key]["mesh_sha1"] == new["mesh_sha1"]
+                mesh = " (the mesh identical)" if same else " (the mesh differs)"
+            print(f"{key}: DIFFERENT sha1 {old[key]['sha1'][:12]} -> {new['sha1'][:12]}{mesh} {diff}")
     print(f"{len(results) - bad} of {len(results)} identical to {path}")
     return 1 if bad else 0
 

@@ -131,19 +131,22 @@ def shape_text(shape: str, work: str, cad: str) -> str | None:
     return _core.read_shape_file(brep)
 
 
-def fingerprint(points, tets, regions, report: dict, work: str, drop=()) -> tuple[str, dict]:
+def fingerprint(points, tets, regions, report: dict, work: str, drop=()) -> tuple[str, str, dict]:
+    """SHA-1 of the mesh and the report, SHA-1 of the mesh alone (points, tets, regions), and
+    the report hashed (without its times and the keys in `drop`)."""
     import numpy as np
     h = hashlib.sha1()
     for name, a in (("points", points), ("tets", tets), ("regions", regions)):
         a = np.ascontiguousarray(a)
         h.update(name.encode() + str(a.dtype).encode() + str(a.shape).encode())
         h.update(a.tobytes())
+    mesh_sha = h.hexdigest()
     rep = {k: v for k, v in benchlib.jsonable(dict(report)).items()
            if k != "phase_seconds" and k not in drop}
     if "tetgen_command" in rep:
         rep["tetgen_command"] = rep["tetgen_command"].replace(work, "<work>")
     h.update(json.dumps(rep, sort_keys=True).encode())
-    return h.hexdigest(), rep
+    return h.hexdigest(), mesh_sha, rep
 
 
 def option_texts(options: dict) -> dict:
@@ -208,9 +211,9 @@ def main() -> int:
             drop = ()
             if name in old and "report" in old[name]:
                 drop = set(dict(report)) - set(old[name]["report"]) - {"phase_seconds"}
-            sha, rep = fingerprint(points, tets, regions, report, run_dir, drop)
-            results[name] = {"sha1": sha, "tets": int(len(tets)), "points": int(len(points)),
-                             "report": rep, "seconds": seconds}
+            sha, mesh_sha, rep = fingerprint(points, tets, regions, report, run_dir, drop)
+            results[name] = {"sha1": sha, "mesh_sha1": mesh_sha, "tets": int(len(tets)),
+                             "points": int(len(points)), "report": rep, "seconds": seconds}
             print(f"{name:32s} {sha}  {len(tets):7d} tets {seconds:6.2f} s", flush=True)
     if skipped:
         print(f"skipped (no file in {args.cad}): {', '.join(skipped)}")
