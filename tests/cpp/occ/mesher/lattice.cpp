@@ -42,7 +42,7 @@ TEST(lay_lattice, spacing_puts_planes_on_the_steps) {
   const auto& l = p.lattice;
   for (int a = 0; a < 3; ++a) {
     EXPECT_GE(l.spacing[a], 0.75 * p.h * (1 - 1e-9));
-    EXPECT_LE(l.spacing[a], 1.5 * p.h * (1 + 1e-9));
+    EXPECT_LE(l.spacing[a], 1.2 * p.h * (1 + 1e-9));
   }
   EXPECT_EQ(l.cells[0], 18);
   EXPECT_EQ(l.cells[2], 15);
