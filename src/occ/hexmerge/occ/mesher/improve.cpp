@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
-#include <set>
 #include <unordered_map>
 #include <utility>
 
@@ -198,17 +197,23 @@ std::size_t split_open_cells(TetMesh& mesh, const std::vector<std::array<double,
   }
   // The buffer hexahedra still their six tets.
   {
+    // Their splits' tets by sorted corners (NO_INDEX until found), asked only of the tets whose
+    // corners are all buffer hexahedra's.
     std::map<std::array<index_t, 4>, index_t> tet_id;
-    std::set<std::array<index_t, 4>> wanted;
+    std::vector<char> on_hex(mesh.nb_vertices(), 0);
     for (const std::vector<index_t>& hex : kept_cells)
-      if (hex.size() == 8)
+      if (hex.size() == 8) {
         for (const auto& q : kKuhnPaths)
-          wanted.insert(sorted({hex[0], hex[static_cast<std::size_t>(q[0])],
-                                hex[static_cast<std::size_t>(q[1])], hex[7]}));
-    for (index_t t = 0; t < mesh.nb_tets() && !wanted.empty(); ++t) {
+          tet_id.emplace(sorted({hex[0], hex[static_cast<std::size_t>(q[0])],
+                                 hex[static_cast<std::size_t>(q[1])], hex[7]}),
+                         NO_INDEX);
+        for (const index_t v : hex) on_hex[v] = 1;
+      }
+    for (index_t t = 0; t < mesh.nb_tets() && !tet_id.empty(); ++t) {
       const index_t* v = mesh.tet(t);
-      const auto key = sorted({v[0], v[1], v[2], v[3]});
-      if (wanted.count(key)) tet_id.emplace(key, t);
+      if (!on_hex[v[0]] || !on_hex[v[1]] || !on_hex[v[2]] || !on_hex[v[3]]) continue;
+      const auto it = tet_id.find(sorted({v[0], v[1], v[2], v[3]}));
+      if (it != tet_id.end() && it->second == NO_INDEX) it->second = t;
     }
     for (const std::vector<index_t>& hex : kept_cells) {
       if (hex.size() != 8) continue;
@@ -217,7 +222,7 @@ std::size_t split_open_cells(TetMesh& mesh, const std::vector<std::array<double,
       for (const auto& q : kKuhnPaths) {
         const auto it = tet_id.find(sorted({hex[0], hex[static_cast<std::size_t>(q[0])],
                                             hex[static_cast<std::size_t>(q[1])], hex[7]}));
-        if (it == tet_id.end() || cell_of_tet[it->second] >= 0) break;
+        if (it->second == NO_INDEX || cell_of_tet[it->second] >= 0) break;
         cell.tets.push_back(it->second);
         // Its faces {0, a, b} and {a, b, 7} on the hexahedron's faces (the bit they share).
         for (const std::array<int, 3> tri :
@@ -256,6 +261,11 @@ std::size_t split_open_cells(TetMesh& mesh, const std::vector<std::array<double,
     };
     std::vector<Alone> alone;
     std::vector<char> on_alone(mesh.nb_vertices(), 0);
+    const auto add_alone = [&](std::size_t c, std::size_t f, std::size_t k) {
+      const auto& tri = cells[c].face[f][k];
+      alone.push_back({face_key(tri[0], tri[1], tri[2]), c, f, k});
+      for (const index_t v : tri) on_alone[v] = 1;
+    };
     for (const auto& [key, c] : lattice_cell)
       for (std::size_t f = 0; f < 6; ++f) {
         Key beside = key;
@@ -268,17 +278,12 @@ std::size_t split_open_cells(TetMesh& mesh, const std::vector<std::array<double,
             across_of[c][f].cell[k] = static_cast<std::int64_t>(it->second);
             continue;
           }
-          alone.push_back({face_key(tri[0], tri[1], tri[2]), c, f, k});
-          for (const index_t v : tri) on_alone[v] = 1;
+          add_alone(c, f, k);
         }
       }
     for (std::size_t c = lattice_cell.size(); c < cells.size(); ++c)  // the buffer hexahedra
       for (std::size_t f = 0; f < 6; ++f)
-        for (std::size_t k = 0; k < 2; ++k) {
-          const auto& tri = cells[c].face[f][k];
-          alone.push_back({face_key(tri[0], tri[1], tri[2]), c, f, k});
-          for (const index_t v : tri) on_alone[v] = 1;
-        }
+        for (std::size_t k = 0; k < 2; ++k) add_alone(c, f, k);
     std::sort(alone.begin(), alone.end());
     for (index_t t = 0; t < mesh.nb_tets() && !alone.empty(); ++t) {
       const index_t* v = mesh.tet(t);
