@@ -27,10 +27,23 @@ Results: bench/results/gmsh-reference.json (--output; written after every run), 
 on stdout. bench/real_parts.py --table adds its "Gmsh min SJ" and "Gmsh min boundary angle"
 columns from it.
 
+--hex-dominant runs Gmsh's own hex-dominant mesher instead (issue 13's comparison: Gmsh >= 4.12,
+`-setnumber Mesh.Algorithm3D 9 -setnumber Mesh.Recombine3DAll 1`: frontal points along a frame
+field, Delaunay, then its recombination into hexahedra) and measures its mixed mesh: the cells of
+each type and their volume fractions (each cell split into tets), the zero-volume "trihedra" it
+glues quads to triangles with, the quad faces against triangles (non-conforming: a quad face of a
+cell that is no other cell's quad face while one of its triangles is another cell's face), the
+smallest scaled Jacobian over the cells with volume (Verdict's, real_parts.CORNERS; Gmsh orders a
+cell's vertices as hexmerge does) and those below 0.2. Results: bench/results/gmsh-reference-hexdominant.json;
+its table puts hexmerge's hex volume of the same part at the same h beside Gmsh's (--ours, default
+bench/results/real-parts-latest.json). Debian 12's Gmsh 4.8.4 is too old: bench/fetch_gmsh.py
+unpacks Debian 13's 4.13.1; --gmsh (or $HEXMERGE_GMSH) names the Gmsh to run.
+
 Usage:
   /usr/bin/python3.11 bench/gmsh_reference.py                       # every part, 50k and 250k
   /usr/bin/python3.11 bench/gmsh_reference.py --parts Block,t20 --targets 50k
   /usr/bin/python3.11 bench/gmsh_reference.py --table bench/results/gmsh-reference.json
+  /usr/bin/python3.11 bench/gmsh_reference.py --hex-dominant --gmsh ~/.cache/hexmerge/gmsh-trixie/gmsh
 """
 import argparse
 import concurrent.futures
@@ -51,16 +64,29 @@ import benchlib
 import real_parts
 
 OUTPUT = os.path.join(benchlib.RESULTS_DIR, "gmsh-reference.json")
+HEX_OUTPUT = os.path.join(benchlib.RESULTS_DIR, "gmsh-reference-hexdominant.json")
 GMSH_OPTIONS = ["-3", "-clmax", "{h}", "-format", "msh2"]  # then -o OUT; FILE comes first
+HEX_DOMINANT = ["-setnumber", "Mesh.Algorithm3D", "9", "-setnumber", "Mesh.Recombine3DAll", "1"]
+# Gmsh's element types (its GmshDefines.h) of the volume cells: name, hexmerge's CellType index
+# (real_parts.CORNERS), faces (Gmsh's vertex order), tets the cell's volume is summed over.
+TRIHEDRON = 140  # MSH_TRIH_4: a quad glued to two triangles, no volume
+CELLS = {
+    4: ("tet", 0, [(1, 2, 3), (0, 2, 3), (0, 1, 3), (0, 1, 2)], [(0, 1, 2, 3)]),
+    7: ("pyramid", 1, [(0, 1, 2, 3), (0, 1, 4), (1, 2, 4), (2, 3, 4), (3, 0, 4)], [(0, 1, 2, 4), (0, 2, 3, 4)]),
+    6: ("prism", 2, [(0, 1, 4, 3), (1, 2, 5, 4), (2, 0, 3, 5), (0, 1, 2), (3, 4, 5)],
+        [(0, 1, 2, 3), (1, 2, 3, 4), (2, 3, 4, 5)]),
+    5: ("hex", 3, [(0, 1, 2, 3), (4, 5, 6, 7), (0, 1, 5, 4), (1, 2, 6, 5), (2, 3, 7, 6), (3, 0, 4, 7)],
+        [(0, 1, 2, 6), (0, 2, 3, 6), (0, 3, 7, 6), (0, 7, 4, 6), (0, 4, 5, 6), (0, 5, 1, 6)]),
+}
 ANGLE_FLOOR = 5.0  # issue 13: no boundary triangle angle below 5 degrees
 # The lines of Gmsh's error summary box (after the messages themselves).
 SUMMARY = re.compile(r"^(Warning|Error)\s*:\s*(-+|Mesh generation error summary|\d+ (warning|error)s?"
                      r"|Check the full log for details)$")
 
 
-def gmsh_version() -> str:
+def gmsh_version(gmsh: str = "gmsh") -> str:
     """What `gmsh --version` prints (4.8.4 on Debian 12)."""
-    p = subprocess.run(["gmsh", "--version"], capture_output=True, text=True)
+    p = subprocess.run([gmsh, "--version"], capture_output=True, text=True)
     return (p.stdout + p.stderr).strip()
 
 
@@ -107,6 +133,66 @@ def measure(msh: str) -> dict:
             "boundary_below_angle_floor": int((angles < ANGLE_FLOOR).sum())}
 
 
+def read_msh2(msh: str):
+    """Points (n x 3) and the elements by Gmsh type (type -> m x k vertex indices) of an ASCII
+    MSH 2.2 file (meshio knows no trihedra)."""
+    import numpy as np
+
+    with open(msh) as f:
+        lines = iter(f.read().splitlines())
+    points, index, cells = None, {}, {}
+    for line in lines:
+        if line == "$Nodes":
+            n = int(next(lines))
+            rows = [next(lines).split() for _ in range(n)]
+            index = {int(r[0]): i for i, r in enumerate(rows)}
+            points = np.array([[float(x) for x in r[1:4]] for r in rows])
+        elif line == "$Elements":
+            for _ in range(int(next(lines))):
+                r = next(lines).split()
+                kind, tags = int(r[1]), int(r[2])
+                cells.setdefault(kind, []).append([index[int(v)] for v in r[3 + tags:]])
+    return points, {k: np.array(v, dtype=np.int64) for k, v in cells.items()}
+
+
+def measure_mixed(msh: str) -> dict:
+    """Gmsh's hex-dominant mesh measured: cells, volume fractions, trihedra, quads against
+    triangles, scaled Jacobians (see the module's docstring)."""
+    import numpy as np
+
+    points, cells = read_msh2(msh)
+    row = {"cells": {}, "volume_fraction": {}, "trihedra": int(len(cells.get(TRIHEDRON, [])))}
+    volume, sj, quads, triangles = {}, [], [], []
+    for kind, (name, t, faces, split) in CELLS.items():
+        c = cells.get(kind, np.zeros((0, len(split[0]) * 2), np.int64))
+        row["cells"][name] = int(len(c))
+        p = points[c] if len(c) else np.zeros((0, max(max(f) for f in faces) + 1, 3))
+        vol = np.zeros(len(c))
+        for a, b, d, e in split:
+            vol += np.abs(np.einsum("ij,ij->i", p[:, b] - p[:, a], np.cross(p[:, d] - p[:, a], p[:, e] - p[:, a]))) / 6
+        volume[name] = float(vol.sum())
+        if len(c):
+            corners, scale = real_parts.CORNERS[t]
+            sj.append(real_parts.corner_scaled_jacobians(p, corners, scale))
+        for f in faces:
+            (quads if len(f) == 4 else triangles).append(np.sort(c[:, list(f)], axis=1))
+    total = sum(volume.values())
+    row["volume_fraction"] = {k: v / total for k, v in volume.items()}
+    row["volume"] = total
+    sj = np.concatenate(sj)
+    row.update(min_sj=float(sj.min()), below_sj_floor=int((sj < real_parts.SJ_FLOOR).sum()),
+               nonpositive_sj=int((sj <= 0).sum()), tets=row["cells"]["tet"])
+    # A quad face of one cell only, one of whose four triangles is a face of a cell: against triangles.
+    quads = np.concatenate(quads)
+    quads, counts = np.unique(quads, axis=0, return_counts=True)
+    alone = quads[counts == 1]
+    tri = {tuple(f) for f in np.concatenate(triangles).tolist()}
+    row["nonconforming_quads"] = sum(
+        1 for q in alone.tolist()
+        if any(tuple(sorted(q[i] for i in k)) in tri for k in ((0, 1, 2), (0, 1, 3), (0, 2, 3), (1, 2, 3))))
+    return row
+
+
 def run(name: str, path: str, target: str, h, args) -> dict:
     """Gmsh's tet mesh of one part at one size, measured: the result row."""
     row = {"part": name, "target": target, "h": h, "file": os.path.basename(path)}
@@ -115,7 +201,7 @@ def run(name: str, path: str, target: str, h, args) -> dict:
         return row
     with tempfile.TemporaryDirectory(prefix="gmsh-reference-") as work:
         out = os.path.join(work, "tets.msh")
-        cmd = (["gmsh", os.path.abspath(path)] + [o.format(h=repr(h)) for o in GMSH_OPTIONS]
+        cmd = ([args.gmsh, os.path.abspath(path)] + [o.format(h=repr(h)) for o in options(args)]
                + shlex.split(args.gmsh_args) + ["-o", out])
         kind, payload, err, seconds = benchlib.run_worker(cmd, args.timeout, None, int(args.memory * 2**30))
         row["gmsh_s"] = seconds
@@ -129,20 +215,77 @@ def run(name: str, path: str, target: str, h, args) -> dict:
             row.update(status="error", error=f"exit {payload}: {gmsh_error(err)}".rstrip(": "))
         else:
             try:
-                row.update(measure(out))
-                row["status"] = "ok" if row["tets"] else "error"
-                if not row["tets"]:
-                    row["error"] = "no tets in Gmsh's mesh"
+                row.update(measure_mixed(out) if args.hex_dominant else measure(out))
+                row["status"] = "ok" if row["tets"] or row.get("cells", {}).get("hex") else "error"
+                if row["status"] != "ok":
+                    row["error"] = "no cells in Gmsh's mesh"
             except Exception as e:  # an unreadable mesh is the result
                 row.update(status="error", error=real_parts.first_line(e))
     print(f"  {name} {target} h {h:.4g}: {row['status']}"
           + (f", {row['tets']:,} tets, min SJ {row['min_sj']:.3g}" if row.get("tets") else "")
+          + (f", hex volume {100 * row['volume_fraction']['hex']:.1f} %" if row.get("volume_fraction") else "")
           + (f", {row['error']}" if row.get("error") else "") + f" ({row['gmsh_s']:.1f} s)",
           file=sys.stderr, flush=True)
     return row
 
 
+def options(args) -> list:
+    """Gmsh's options after FILE ({h} for the size), before --gmsh-args and -o OUT."""
+    return GMSH_OPTIONS + (HEX_DOMINANT if args.hex_dominant else [])
+
+
 # --------------------------------------------------------------------------- table
+def median(values):
+    values = sorted(values)
+    n = len(values)
+    return (values[(n - 1) // 2] + values[n // 2]) / 2 if n else float("nan")
+
+
+def markdown_hex(data, ours) -> str:
+    """The hex-dominant table: Gmsh's cells beside hexmerge's hex volume at the same h."""
+    m, o = data["machine"], data["options"]
+    mine = {(r["part"], r["target"]): r for r in (ours or {}).get("rows", []) if r.get("status") == "ok"}
+    lines = [f"Commit `{data['commit']}`, {m['nproc']} CPUs ({m['cpu_model']}), {data['date']}; "
+             f"Gmsh {data['gmsh_version']}: `{data['command']}`; timeout {o['timeout']:g} s, "
+             f"{o['jobs']} run(s) at a time; h from `{o['sizes_from']}`; hexmerge: "
+             f"`{(ours or {}).get('commit', 'none')}`.", "",
+             "| part | target | h | status | Gmsh s | hexahedra | prisms | pyramids | tets | trihedra "
+             "| quads against triangles | min SJ | # SJ < 0.2 | Gmsh hex vol % | hexmerge hex vol % (same h) |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+    rows = sorted(data["rows"], key=lambda r: (o["targets"].index(r["target"]) if r["target"] in o["targets"]
+                                               else len(o["targets"]), r["part"].lower()))
+
+    def hexmerge_hex(r):
+        h = mine.get((r["part"], r["target"]))
+        return 100 * h["volume_fraction"]["hex"] if h and abs(h["h"] - r["h"]) <= 1e-9 * r["h"] else None
+
+    for r in rows:
+        status = r["status"] if r["status"] == "ok" else real_parts.short(f"{r['status']}: {r.get('error', '')}")
+        c = r.get("cells", {})
+        ok = r["status"] == "ok"
+        ours_hex = hexmerge_hex(r)
+        lines.append(" | ".join([
+            f"| {r['part']}", r["target"], real_parts.cell(r, "h", ".4g"), status, real_parts.cell(r, "gmsh_s", ".1f")]
+            + [f"{c[k]:,}" if ok else "–" for k in ("hex", "prism", "pyramid", "tet")]
+            + [real_parts.cell(r, "trihedra", ","), real_parts.cell(r, "nonconforming_quads", ","),
+               real_parts.cell(r, "min_sj", ".3g"), real_parts.cell(r, "below_sj_floor", ","),
+               f"{100 * r['volume_fraction']['hex']:.1f}" if ok else "–",
+               f"{ours_hex:.1f}" if ours_hex is not None else "–"]) + " |")
+    lines.append("")
+    for target in o["targets"]:
+        here = [r for r in rows if r["target"] == target]
+        ok = [r for r in here if r["status"] == "ok"]
+        both = [(100 * r["volume_fraction"]["hex"], hexmerge_hex(r)) for r in ok if hexmerge_hex(r) is not None]
+        lines.append(
+            f"- {target}: Gmsh meshed {len(ok)} of {len(here)} parts, median hex volume "
+            f"{median([100 * r['volume_fraction']['hex'] for r in ok]):.1f} %, "
+            f"{sum(r['nonconforming_quads'] for r in ok):,} quads against triangles and "
+            f"{sum(r['trihedra'] for r in ok):,} trihedra in all; on the {len(both)} parts both meshed at the "
+            f"same h: median hex volume Gmsh {median([g for g, _ in both]):.1f} %, hexmerge "
+            f"{median([h for _, h in both]):.1f} %; hexmerge at least Gmsh's on {sum(1 for g, h in both if h >= g)}")
+    return "\n".join(lines)
+
+
 def markdown(data) -> str:
     m = data["machine"]
     o = data["options"]
@@ -182,16 +325,35 @@ def main() -> int:
                     help="the h per part and target (default: %(default)s)")
     ap.add_argument("--targets", default="50k,250k", help="target tet counts of the sizes file (default: %(default)s)")
     ap.add_argument("--gmsh-args", default="", help="more Gmsh options, appended (e.g. '-nt 1')")
+    ap.add_argument("--gmsh", default=os.environ.get("HEXMERGE_GMSH", "gmsh"),
+                    help="the Gmsh to run (default: $HEXMERGE_GMSH, else gmsh; bench/fetch_gmsh.py for 4.13)")
+    ap.add_argument("--hex-dominant", action="store_true",
+                    help="Gmsh's hex-dominant mesher and its mixed mesh measured (default output "
+                         "bench/results/gmsh-reference-hexdominant.json)")
+    ap.add_argument("--ours", default=real_parts.RESULTS,
+                    help="hexmerge's results beside Gmsh's in the hex-dominant table (default: %(default)s)")
     ap.add_argument("--timeout", type=float, default=300, help="seconds per Gmsh run (default: %(default)s)")
     ap.add_argument("--memory", type=float, default=8, help="GB of address space per run (default: %(default)s)")
     ap.add_argument("--jobs", type=int, default=1, help="Gmsh runs at a time (default: %(default)s)")
-    ap.add_argument("--output", default=OUTPUT, help="results JSON (default: %(default)s)")
+    ap.add_argument("--output", help=f"results JSON (default: {os.path.relpath(OUTPUT, benchlib.ROOT)}, "
+                                     f"with --hex-dominant {os.path.relpath(HEX_OUTPUT, benchlib.ROOT)})")
     ap.add_argument("--table", metavar="JSON", help="print the table of an earlier results file and exit")
     args = ap.parse_args()
 
+    args.output = args.output or (HEX_OUTPUT if args.hex_dominant else OUTPUT)
+
+    def table(data) -> str:
+        if "cells" not in next((r for r in data["rows"] if r["status"] == "ok"), {}):
+            return markdown(data)
+        ours = None
+        if args.ours and os.path.exists(args.ours):
+            with open(args.ours) as f:
+                ours = json.load(f)
+        return markdown_hex(data, ours)
+
     if args.table:
         with open(args.table) as f:
-            print(markdown(json.load(f)))
+            print(table(json.load(f)))
         return 0
 
     benchlib.stop_workers_on_signals()
@@ -199,11 +361,11 @@ def main() -> int:
         sizes = json.load(f).get("parts", {})
     targets = [t.strip().lower() for t in args.targets.split(",") if t.strip()]
     targets.sort(key=real_parts.parse_count)
-    command = " ".join(["gmsh FILE"] + [o.format(h="H") for o in GMSH_OPTIONS]
+    command = " ".join(["gmsh FILE"] + [o.format(h="H") for o in options(args)]
                        + shlex.split(args.gmsh_args) + ["-o OUT"])
     header = {"commit": benchlib.git_commit(), "machine": benchlib.machine(),
               "date": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC"),
-              "gmsh_version": gmsh_version(), "command": command,
+              "gmsh_version": gmsh_version(args.gmsh), "command": command,
               "options": {"timeout": args.timeout, "memory": args.memory, "jobs": args.jobs, "targets": targets,
                           "sizes_from": os.path.relpath(os.path.abspath(args.sizes_from), benchlib.ROOT),
                           "gmsh_args": args.gmsh_args}}
@@ -232,7 +394,7 @@ def main() -> int:
         print(f"gmsh_reference: {len(parts)} parts, targets {', '.join(targets)}: {command}", file=sys.stderr)
         with concurrent.futures.ThreadPoolExecutor(max_workers=max(1, args.jobs)) as pool:
             list(pool.map(one, jobs))
-    print(markdown(dict(header, rows=rows)))
+    print(table(dict(header, rows=rows)))
     return 0
 
 

@@ -1,6 +1,7 @@
 """The real-parts benchmark's element measures (bench/real_parts.py), which bench/gmsh_reference.py
 uses on Gmsh's own tet meshes: the scaled Jacobian of plain tet arrays and of a MixedMesh, and the
-boundary triangles' smallest angles, on hand-made tets."""
+boundary triangles' smallest angles, on hand-made tets; and gmsh_reference's measures of Gmsh's
+hex-dominant meshes (cells, volume fractions, quads against triangles) on hand-made .msh files."""
 
 from __future__ import annotations
 
@@ -9,6 +10,7 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
+import gmsh_reference
 import real_parts
 
 REGULAR = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.5, 3**0.5 / 2, 0.0], [0.5, 3**0.5 / 6, (2 / 3) ** 0.5]])
@@ -38,3 +40,42 @@ def test_boundary_triangles_are_faces_of_one_tet() -> None:
     angles = real_parts.boundary_triangle_angles(points, np.array([[0, 1, 2, 3], [0, 2, 1, 4]]))
     assert len(angles) == 6  # the shared face is inside
     assert angles == pytest.approx(np.full(6, 60.0))
+
+
+# Two unit cubes side by side along x: the first a hexahedron, the second as given.
+CUBES = [(x, y, z) for z in (0, 1) for y in (0, 1) for x in (0, 1, 2)]  # node i + 1 at CUBES[i]
+HEX_A = [1, 2, 5, 4, 7, 8, 11, 10]
+HEX_B = [2, 3, 6, 5, 8, 9, 12, 11]
+# The second cube as six tets around its diagonal from (1,0,0) to (2,1,1): its face at x = 1 (nodes
+# 2, 5, 11, 8) is split by the diagonal 2-11, two of the tets' faces.
+TETS_B = [[2, 3, 6, 12], [2, 6, 5, 12], [2, 5, 11, 12], [2, 11, 8, 12], [2, 8, 9, 12], [2, 9, 3, 12]]
+
+
+def write_msh2(path, cells) -> str:
+    """An ASCII MSH 2.2 file of CUBES' nodes and cells [(Gmsh type, node ids)]."""
+    lines = ["$MeshFormat", "2.2 0 8", "$EndMeshFormat", "$Nodes", str(len(CUBES))]
+    lines += [f"{i + 1} {x} {y} {z}" for i, (x, y, z) in enumerate(CUBES)]
+    lines += ["$EndNodes", "$Elements", str(len(cells))]
+    lines += [f"{i + 1} {kind} 2 1 1 " + " ".join(map(str, nodes)) for i, (kind, nodes) in enumerate(cells)]
+    lines += ["$EndElements"]
+    path.write_text("\n".join(lines) + "\n")
+    return str(path)
+
+
+def test_gmsh_hex_dominant_quads_against_triangles(tmp_path) -> None:
+    msh = write_msh2(tmp_path / "mixed.msh", [(5, HEX_A)] + [(4, t) for t in TETS_B] + [(140, [2, 5, 11, 8])])
+    row = gmsh_reference.measure_mixed(msh)
+    assert row["cells"] == {"tet": 6, "pyramid": 0, "prism": 0, "hex": 1}
+    assert row["trihedra"] == 1
+    assert row["volume"] == pytest.approx(2.0)
+    assert row["volume_fraction"]["hex"] == pytest.approx(0.5)
+    assert row["volume_fraction"]["tet"] == pytest.approx(0.5)
+    assert row["nonconforming_quads"] == 1  # the hexahedron's face at x = 1, against two tets
+    assert row["min_sj"] > 0 and row["nonpositive_sj"] == 0
+
+
+def test_gmsh_hex_dominant_conforming_hexahedra(tmp_path) -> None:
+    row = gmsh_reference.measure_mixed(write_msh2(tmp_path / "hexes.msh", [(5, HEX_A), (5, HEX_B)]))
+    assert row["cells"]["hex"] == 2 and row["volume_fraction"]["hex"] == pytest.approx(1.0)
+    assert row["nonconforming_quads"] == 0  # the shared face is the other hexahedron's, the rest boundary
+    assert row["min_sj"] == pytest.approx(1.0) and row["below_sj_floor"] == 0
