@@ -100,11 +100,12 @@ def compare_hashes(results: dict, path: str) -> int:
     return 1 if bad else 0
 
 
-def run_worker(cmd, timeout, env=None, memory_bytes=None):
+def run_worker(cmd, timeout, env=None, memory_bytes=None, cwd=None):
     """Run `cmd` (a worker printing RESULT_MARKER + JSON on a line of its stdout) in a new
     session, so that a timeout ends the worker and every process it started (TetGen).
 
-    memory_bytes: the address-space limit (RLIMIT_AS) of the worker and its children, or None.
+    memory_bytes: the address-space limit (RLIMIT_AS) of the worker and its children, or None;
+    cwd: the folder it runs in (None: this process's).
     Returns (kind, payload, stderr, seconds): kind "result" with the decoded JSON, "timeout"
     (payload None), or "exit" with the return code (negative: the signal) when the worker
     printed no result."""
@@ -115,7 +116,7 @@ def run_worker(cmd, timeout, env=None, memory_bytes=None):
             resource.setrlimit(resource.RLIMIT_AS, (memory_bytes, memory_bytes))
 
     t0 = time.perf_counter()
-    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env,
+    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env, cwd=cwd,
                             start_new_session=True, preexec_fn=limit if memory_bytes else None)
     LIVE_WORKERS.add(proc.pid)
     try:

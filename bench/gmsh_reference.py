@@ -203,7 +203,8 @@ def run(name: str, path: str, target: str, h, args) -> dict:
         out = os.path.join(work, "tets.msh")
         cmd = ([args.gmsh, os.path.abspath(path)] + [o.format(h=repr(h)) for o in options(args)]
                + shlex.split(args.gmsh_args) + ["-o", out])
-        kind, payload, err, seconds = benchlib.run_worker(cmd, args.timeout, None, int(args.memory * 2**30))
+        # In the temporary folder: the hex-dominant mesher writes its points to new_points.pos there.
+        kind, payload, err, seconds = benchlib.run_worker(cmd, args.timeout, None, int(args.memory * 2**30), work)
         row["gmsh_s"] = seconds
         row["warnings"] = gmsh_lines(err, "Warning")[:5]
         if kind == "timeout":
