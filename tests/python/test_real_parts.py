@@ -454,14 +454,16 @@ def test_a_cell_with_an_open_face_keeps_the_block_whole(scale: float) -> None:
     which needs it too). The recombination's block lost that cell and, a cell's six tets closing
     only three of its faces, cells beside it after it: 68.8 and 80.5 % hex volume (92.7 % at
     h 7.603). Such a cell is now split into six pyramids to a vertex at its centre (measured when
-    this was done: 92.7 % at both)."""
+    this was done: 92.7 % at both). Since the sliver stage runs eight rounds instead of four, the
+    flips at 0.983 leave no such cell (none split, 92.7 %); at 1.02 one is split."""
     import numpy as np
 
     h = 7.6034392455820 * scale
     tets, report = hexmerge.mesh_shape(CAD / "pyocc_face_recognition_sample_part.stp", h,
                                        recombine=False)
     meshing = report["meshing"]
-    assert meshing["strategy"] == "lattice" and meshing["nb_split_open_cells"] >= 1
+    assert meshing["strategy"] == "lattice"
+    assert meshing["nb_split_open_cells"] >= (1 if scale > 1 else 0)
     points, cells = tets.points, tets.cell_vertices.reshape(-1, 4).astype(np.int64)
     assert tet_scaled_jacobians(points, cells).min() > 0
     mesh, rec = hexmerge.recombine(points, cells, tets.regions)
