@@ -13,12 +13,15 @@ generation time (wall seconds); meshes skipped because they exist keep their ear
 
 Kinds:
   delaunay  Mesh.Algorithm3D = 1 (Delaunay).
-  lattice   Mesh.Algorithm3D = 9 (Gmsh's R-tree / lattice-point mesher) with
+  lattice   Mesh.Algorithm3D = 9 (Gmsh's R-tree / lattice-point mesher: points placed
+            frontally along a frame field aligned with the boundary) with
             Mesh.Recombine3DAll = 0, i.e. its points tetrahedralised, no recombination.
-            Debian's gmsh 4.8.4 is built without ANN and this algorithm crashes
-            (SIGSEGV in Frame_field::search, called from Filler::get_metric) on every shape,
-            at every size. The script still tries it and records the failure in the manifest
-            (later runs skip a mesh recorded as failed unless --retry-failed).
+            Needs Gmsh >= 4.12: Debian 12's gmsh 4.8.4 is built without ANN and this algorithm
+            crashes there (SIGSEGV in Frame_field::search, called from Filler::get_metric) on
+            every shape, at every size; bench/fetch_gmsh.py unpacks Debian 13's 4.13.1, and
+            --gmsh (or $HEXMERGE_GMSH) runs it. A failure is recorded in the manifest (later
+            runs skip a mesh recorded as failed unless --retry-failed). Its h per shape and
+            size (H_LATTICE) were found with 4.13.1.
   tetgen-lattice
             A stand-in for the missing lattice kind: Gmsh's surface mesh (gmsh -2 -clmax h)
             plus the points of an axis-aligned cubic lattice of spacing h at least 0.6 h inside
@@ -33,6 +36,8 @@ Usage:
   /usr/bin/python3.11 bench/make_meshes.py --shapes box,torus --kinds delaunay
   /usr/bin/python3.11 bench/make_meshes.py --find-h box:100000  # search the h of a target count
   /usr/bin/python3.11 bench/make_meshes.py --kinds tetgen-lattice --find-h box:100000:1.9
+  /usr/bin/python3.11 bench/make_meshes.py --kinds lattice --sizes 10k,100k \
+      --gmsh ~/.cache/hexmerge/gmsh-trixie/gmsh                  # Gmsh >= 4.12: fetch_gmsh.py
 """
 import argparse
 import json
@@ -61,6 +66,20 @@ H = {
     "sphere":   {"10k": 3.2,  "100k": 1.44, "1m": 0.665},   #  9,831 /  99,995 / 1,001,791
     "torus":    {"10k": 3.84, "100k": 1.74, "1m": 0.8},     # 10,267 /  99,950 / 1,000,624
 }
+
+# -clmax h for the lattice kind (Gmsh 4.13.1's algorithm 9, -nt 1: the same h gives the same
+# mesh), found with --kinds lattice --find-h; comments give the measured tet counts.
+# The sphere and the torus have none: on them algorithm 9 does not follow -clmax (the sphere
+# 330,881 tets at h 1.61 and 366,020 at every h from 13 to 16,000; the torus 644,167 at h 1.95 and
+# a segmentation fault at h 17.2).
+H_LATTICE = {
+    "box":      {"10k": 4.48, "100k": 2.0,  "1m": None},   # 9,975 / 99,920
+    "cylinder": {"10k": 4.25, "100k": 1.97, "1m": None},   # 9,705 / 102,292
+    "bracket":  {"10k": 3.4,  "100k": 1.53, "1m": None},   # 9,936 / 97,130
+    "sphere":   {"10k": None, "100k": None, "1m": None},
+    "torus":    {"10k": None, "100k": None, "1m": None},
+}
+GMSH = os.environ.get("HEXMERGE_GMSH", "gmsh")  # the Gmsh run (--gmsh)
 
 KINDS = {
     "delaunay": ["-setnumber", "Mesh.Algorithm3D", "1"],
@@ -190,12 +209,14 @@ def run_gmsh(shape, kind, h, out, timeout=3600):
     if kind == "tetgen-lattice":
         return make_tetgen_lattice(shape, h, out, timeout)
     geo = os.path.join(GEOMETRY_DIR, shape + ".geo")
-    cmd = ["gmsh", "-3", "-clmax", repr(h), "-order", "1", "-format", "msh41", "-nt", "1"]
-    cmd += KINDS[kind] + [geo, "-o", out]
+    cmd = [GMSH, "-3", "-clmax", repr(h), "-order", "1", "-format", "msh41", "-nt", "1"]
+    cmd += KINDS[kind] + [geo, "-o", os.path.abspath(out)]
     t0 = time.perf_counter()
     try:
-        p = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
-                           timeout=timeout)
+        # In a folder of its own: algorithm 9 writes its points to new_points.pos where it runs.
+        with tempfile.TemporaryDirectory() as work:
+            p = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+                               timeout=timeout, cwd=work)
         rc = p.returncode
         log = p.stdout
     except subprocess.TimeoutExpired as e:
@@ -244,6 +265,7 @@ def save_manifest_entry(name, entry):
 
 
 def main():
+    global GMSH
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--sizes", default="10k,100k,1m", help="comma list of 10k, 100k, 1m")
     ap.add_argument("--shapes", default=",".join(SHAPES), help="comma list of " + ", ".join(SHAPES))
@@ -251,11 +273,14 @@ def main():
     ap.add_argument("--force", action="store_true", help="regenerate meshes that exist")
     ap.add_argument("--retry-failed", action="store_true",
                     help="retry kinds recorded as failed in the manifest (by default skipped)")
+    ap.add_argument("--gmsh", default=GMSH,
+                    help="the Gmsh to run (default: $HEXMERGE_GMSH, else gmsh; the lattice kind needs >= 4.12)")
     ap.add_argument("--find-h", metavar="SHAPE:COUNT[:H0]", action="append",
                     help="search the -clmax giving about COUNT tets (first guess H0) of the first of --kinds "
                          "(default delaunay), print it and exit")
     args = ap.parse_args()
     args.kinds_given = any(a.startswith("--kinds") for a in sys.argv[1:])
+    GMSH = args.gmsh
 
     if args.find_h:
         for spec in args.find_h:
@@ -285,7 +310,7 @@ def main():
             for kind in kinds:
                 name = f"{shape}-{kind}-{size}"
                 out = os.path.join(MESH_DIR, name + ".msh")
-                h = (H_TETGEN_LATTICE if kind == "tetgen-lattice" else H)[shape][size]
+                h = {"tetgen-lattice": H_TETGEN_LATTICE, "lattice": H_LATTICE}.get(kind, H)[shape][size]
                 if h is None:
                     print(f"{name}: no h chosen yet, skipped")
                     continue
