@@ -802,11 +802,4 @@ bool good_enough(const AcceptanceCriteria& criteria, const TetMesh& mesh, CellTy
   return true;
 }
 
-FaceKey face_key(const Candidate& c, int f) {
-  const CellDescriptor& d = descriptor(c.type);
-  FaceKey k{NO_VERTEX, NO_VERTEX, NO_VERTEX, NO_VERTEX};
-  for (int i = 0; i < d.face_size[f]; ++i) k[i] = c.vertices[d.face[f][i]];
-  return sorted(k);
-}
-
 }  // namespace hexmerge

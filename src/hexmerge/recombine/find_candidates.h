@@ -17,9 +17,27 @@
 namespace hexmerge {
 
 /// The sorted vertices of a face of a candidate's cell (NO_VERTEX past a triangle's three): equal
-/// for two cells exactly when they share that face.
+/// for two cells exactly when they share that face. Inline, a sorting network: the selection's
+/// groups ask for keys in their inner loops (as a call, 10 % of the samples on Gmsh's frontal
+/// tets of the box at 100k).
 using FaceKey = std::array<index_t, 4>;
-FaceKey face_key(const Candidate& c, int f);
+inline FaceKey face_key(const Candidate& c, int f) {
+  const CellDescriptor& d = descriptor(c.type);
+  const std::array<int, 4>& face = d.face[f];
+  FaceKey k{c.vertices[face[0]], c.vertices[face[1]], c.vertices[face[2]],
+            d.face_size[f] == 4 ? c.vertices[face[3]] : NO_VERTEX};
+  const auto order = [&k](int i, int j) {
+    const index_t lo = k[i] < k[j] ? k[i] : k[j];
+    k[j] = k[i] < k[j] ? k[j] : k[i];
+    k[i] = lo;
+  };
+  order(0, 1);
+  order(2, 3);
+  order(0, 2);
+  order(1, 3);
+  order(1, 2);
+  return k;
+}
 
 /// What a candidate must satisfy.
 struct AcceptanceCriteria {

@@ -16,22 +16,6 @@ using QuadKey = FaceKey;
 
 bool holds(TetSpan tets, index_t t) { return std::binary_search(tets.begin(), tets.end(), t); }
 
-// face_key of a quad face, inline (a sorting network): the keys are made twice per quad face.
-QuadKey quad_key(const Candidate& c, int f) {
-  const std::array<int, 4>& face = descriptor(c.type).face[f];
-  std::array<index_t, 4> k{c.vertices[face[0]], c.vertices[face[1]], c.vertices[face[2]],
-                           c.vertices[face[3]]};
-  auto order = [&](int i, int j) {
-    if (k[j] < k[i]) std::swap(k[i], k[j]);
-  };
-  order(0, 1);
-  order(2, 3);
-  order(0, 2);
-  order(1, 3);
-  order(1, 2);
-  return k;
-}
-
 // A quad face of a candidate: what is across its triangles (the tets there are the neighbours of
 // the Side's front tets across their faces on the quad).
 struct Quad {
@@ -159,7 +143,7 @@ Candidates prune_unclosable(const TetMesh& mesh, const TetTopology& topology, Ca
     const Candidate& c = candidates[by_local[l]];
     const CellDescriptor& d = descriptor(c.type);
     for (int f = 0; f < d.nb_faces; ++f)
-      if (d.face_size[f] == 4 && i-- == 0) return quad_key(c, f);
+      if (d.face_size[f] == 4 && i-- == 0) return face_key(c, f);
     return QuadKey{};
   };
 
@@ -214,7 +198,7 @@ Candidates prune_unclosable(const TetMesh& mesh, const TetTopology& topology, Ca
         std::uint32_t place = 0;
         for (int f = 0; f < d.nb_faces; ++f) {
           if (d.face_size[f] != 4) continue;
-          const QuadKey key = quad_key(c, f);
+          const QuadKey key = face_key(c, f);
           entries[fill[vertex_rank[key[0]]]++] = {(hash_of(key) & ~7u) | place++, l};
         }
       }
