@@ -242,19 +242,30 @@ def median(values):
     return (values[(n - 1) // 2] + values[n // 2]) / 2 if n else float("nan")
 
 
+def heading(data) -> str:
+    """The line that heads a table: commit, machine, date, Gmsh and its command, run options."""
+    m, o = data["machine"], data["options"]
+    return (f"Commit `{data['commit']}`, {m['nproc']} CPUs ({m['cpu_model']}), {data['date']}; "
+            f"Gmsh {data['gmsh_version']}: `{data['command']}`; timeout {o['timeout']:g} s, "
+            f"{o['jobs']} run(s) at a time; h from `{o['sizes_from']}`")
+
+
+def sorted_rows(data) -> list:
+    """The rows by target (in the options' order), then part."""
+    targets = data["options"]["targets"]
+    return sorted(data["rows"], key=lambda r: (targets.index(r["target"]) if r["target"] in targets
+                                               else len(targets), r["part"].lower()))
+
+
 def markdown_hex(data, ours) -> str:
     """The hex-dominant table: Gmsh's cells beside hexmerge's hex volume at the same h."""
-    m, o = data["machine"], data["options"]
+    o = data["options"]
     mine = {(r["part"], r["target"]): r for r in (ours or {}).get("rows", []) if r.get("status") == "ok"}
-    lines = [f"Commit `{data['commit']}`, {m['nproc']} CPUs ({m['cpu_model']}), {data['date']}; "
-             f"Gmsh {data['gmsh_version']}: `{data['command']}`; timeout {o['timeout']:g} s, "
-             f"{o['jobs']} run(s) at a time; h from `{o['sizes_from']}`; hexmerge: "
-             f"`{(ours or {}).get('commit', 'none')}`.", "",
+    lines = [heading(data) + f"; hexmerge: `{(ours or {}).get('commit', 'none')}`.", "",
              "| part | target | h | status | Gmsh s | hexahedra | prisms | pyramids | tets | trihedra "
              "| quads against triangles | min SJ | # SJ < 0.2 | Gmsh hex vol % | hexmerge hex vol % (same h) |",
              "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
-    rows = sorted(data["rows"], key=lambda r: (o["targets"].index(r["target"]) if r["target"] in o["targets"]
-                                               else len(o["targets"]), r["part"].lower()))
+    rows = sorted_rows(data)
 
     def hexmerge_hex(r):
         h = mine.get((r["part"], r["target"]))
@@ -288,16 +299,12 @@ def markdown_hex(data, ours) -> str:
 
 
 def markdown(data) -> str:
-    m = data["machine"]
     o = data["options"]
-    lines = [f"Commit `{data['commit']}`, {m['nproc']} CPUs ({m['cpu_model']}), {data['date']}; "
-             f"Gmsh {data['gmsh_version']}: `{data['command']}`; timeout {o['timeout']:g} s, "
-             f"{o['jobs']} run(s) at a time; h from `{o['sizes_from']}`.", "",
+    lines = [heading(data) + ".", "",
              "| part | target | h | status | Gmsh s | Gmsh tets | min SJ | # SJ < 0.2 | min boundary angle ° "
              "| # boundary triangles < 5° |",
              "|---|---|---|---|---|---|---|---|---|---|"]
-    rows = sorted(data["rows"], key=lambda r: (o["targets"].index(r["target"]) if r["target"] in o["targets"]
-                                               else len(o["targets"]), r["part"].lower()))
+    rows = sorted_rows(data)
     for r in rows:
         status = r["status"] if r["status"] == "ok" else real_parts.short(f"{r['status']}: {r.get('error', '')}")
         lines.append(" | ".join([
