@@ -1,7 +1,8 @@
 """The real-parts benchmark's element measures (bench/real_parts.py), which bench/gmsh_reference.py
 uses on Gmsh's own tet meshes: the scaled Jacobian of plain tet arrays and of a MixedMesh, and the
 boundary triangles' smallest angles, on hand-made tets; and gmsh_reference's measures of Gmsh's
-hex-dominant meshes (cells, volume fractions, quads against triangles) on hand-made .msh files."""
+hex-dominant meshes (cells, volume fractions, quads against triangles) on hand-made .msh files;
+fetch_gmsh's dependency closure on a hand-made package index."""
 
 from __future__ import annotations
 
@@ -10,6 +11,7 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
+import fetch_gmsh
 import gmsh_reference
 import real_parts
 
@@ -79,3 +81,23 @@ def test_gmsh_hex_dominant_conforming_hexahedra(tmp_path) -> None:
     assert row["cells"]["hex"] == 2 and row["volume_fraction"]["hex"] == pytest.approx(1.0)
     assert row["nonconforming_quads"] == 0  # the shared face is the other hexahedron's, the rest boundary
     assert row["min_sj"] == pytest.approx(1.0) and row["below_sj_floor"] == 0
+
+
+def test_fetch_gmsh_takes_every_package_gmsh_needs_and_no_more() -> None:
+    index = {
+        "gmsh": {"Depends": "libgmsh4 (= 4.13.1), libc6 (>= 2.38)"},
+        "libgmsh4": {"Depends": "libocct-data-exchange-7.8 | libocct-foreign, libblas.so.3, debconf (>= 0.5)"},
+        "libocct-data-exchange-7.8": {"Depends": "libc6"},
+        "libocct-foreign": {"Depends": "libunused"},
+        "libunused": {},
+        "libblas3": {"Provides": "libblas.so.3", "Pre-Depends": "libc6:any"},
+        "libc6": {"Depends": "libgcc-s1"},
+        "libgcc-s1": {"Depends": "libc6"},  # a cycle
+        "debconf": {"Depends": "perl-base"},
+        "perl-base": {},
+    }
+    # The first of each alternative, a virtual package by its provider, no maintainer-script tools.
+    assert fetch_gmsh.closure(index, "gmsh") == [
+        "gmsh", "libblas3", "libc6", "libgcc-s1", "libgmsh4", "libocct-data-exchange-7.8"]
+    with pytest.raises(SystemExit, match="libmissing"):
+        fetch_gmsh.closure({"gmsh": {"Depends": "libmissing"}}, "gmsh")
