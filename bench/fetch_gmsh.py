@@ -98,8 +98,9 @@ def main() -> int:
     ap.add_argument("--force", action="store_true", help="fetch again even where DEST/gmsh works")
     args = ap.parse_args()
     gmsh = os.path.join(args.dest, "gmsh")
-    if not args.force and works(gmsh):
-        print(f"fetch_gmsh: {gmsh} is there: Gmsh {works(gmsh)}")
+    version = "" if args.force else works(gmsh)
+    if version:
+        print(f"fetch_gmsh: {gmsh} is there: Gmsh {version}")
         return 0
     index = packages(args.suite)
     names = closure(index, "gmsh")

@@ -140,7 +140,7 @@ def read_msh2(msh: str):
 
     with open(msh) as f:
         lines = iter(f.read().splitlines())
-    points, index, cells = None, {}, {}
+    points, index, cells = np.zeros((0, 3)), {}, {}
     for line in lines:
         if line == "$Nodes":
             n = int(next(lines))
@@ -164,9 +164,9 @@ def measure_mixed(msh: str) -> dict:
     row = {"cells": {}, "volume_fraction": {}, "trihedra": int(len(cells.get(TRIHEDRON, [])))}
     volume, sj, quads, triangles = {}, [], [], []
     for kind, (name, t, faces, split) in CELLS.items():
-        c = cells.get(kind, np.zeros((0, len(split[0]) * 2), np.int64))
+        c = cells.get(kind, np.zeros((0, 1 + max(max(f) for f in faces)), np.int64))
         row["cells"][name] = int(len(c))
-        p = points[c] if len(c) else np.zeros((0, max(max(f) for f in faces) + 1, 3))
+        p = points[c]
         vol = np.zeros(len(c))
         for a, b, d, e in split:
             vol += np.abs(np.einsum("ij,ij->i", p[:, b] - p[:, a], np.cross(p[:, d] - p[:, a], p[:, e] - p[:, a]))) / 6
@@ -176,6 +176,9 @@ def measure_mixed(msh: str) -> dict:
             sj.append(real_parts.corner_scaled_jacobians(p, corners, scale))
         for f in faces:
             (quads if len(f) == 4 else triangles).append(np.sort(c[:, list(f)], axis=1))
+    if not sj:  # no volume cells: the caller's row says so
+        row["tets"] = 0
+        return row
     total = sum(volume.values())
     row["volume_fraction"] = {k: v / total for k, v in volume.items()}
     row["volume"] = total

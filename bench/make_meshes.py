@@ -79,7 +79,7 @@ H_LATTICE = {
     "sphere":   {"10k": None, "100k": None, "1m": None},
     "torus":    {"10k": None, "100k": None, "1m": None},
 }
-GMSH = os.environ.get("HEXMERGE_GMSH", "gmsh")  # the Gmsh run (--gmsh)
+GMSH = os.environ.get("HEXMERGE_GMSH", "gmsh")  # the Gmsh every kind runs (--gmsh)
 
 KINDS = {
     "delaunay": ["-setnumber", "Mesh.Algorithm3D", "1"],
@@ -138,7 +138,7 @@ def make_tetgen_lattice(shape, h, out, timeout=3600, jitter=0.0, seed=1):
     t0 = time.perf_counter()
     with tempfile.TemporaryDirectory() as tmp:
         surf = os.path.join(tmp, "s.mesh")
-        cmd = ["gmsh", "-2", "-clmax", repr(h), "-nt", "1", "-save_all", "-format", "mesh",
+        cmd = [GMSH, "-2", "-clmax", repr(h), "-nt", "1", "-save_all", "-format", "mesh",
                os.path.join(GEOMETRY_DIR, shape + ".geo"), "-o", surf]
         p = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
                            timeout=timeout)

@@ -83,6 +83,11 @@ def test_gmsh_hex_dominant_conforming_hexahedra(tmp_path) -> None:
     assert row["min_sj"] == pytest.approx(1.0) and row["below_sj_floor"] == 0
 
 
+def test_gmsh_hex_dominant_without_volume_cells(tmp_path) -> None:
+    row = gmsh_reference.measure_mixed(write_msh2(tmp_path / "surface.msh", [(2, [1, 2, 5])]))
+    assert row["tets"] == 0 and row["cells"]["hex"] == 0 and row["volume_fraction"] == {}
+
+
 def test_fetch_gmsh_takes_every_package_gmsh_needs_and_no_more() -> None:
     index = {
         "gmsh": {"Depends": "libgmsh4 (= 4.13.1), libc6 (>= 2.38)"},
