@@ -31,11 +31,7 @@ std::array<index_t, N> sorted_by(std::array<index_t, N> a,
   return a;
 }
 
-std::array<index_t, 4> sorted(const std::array<index_t, 4>& a) {
-  static constexpr std::array<std::pair<int, int>, 5> kNetwork{
-      {{0, 1}, {2, 3}, {0, 2}, {1, 3}, {1, 2}}};
-  return sorted_by(a, kNetwork);
-}
+std::array<index_t, 4> sorted(const std::array<index_t, 4>& a) { return sorted4(a); }
 
 // Whether v is among the n ids at `ids`. (A plain loop: std::find is a call on these short
 // lists, 3k instructions per tet on lattice meshes.)
