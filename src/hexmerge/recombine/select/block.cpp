@@ -7,9 +7,6 @@
 
 namespace hexmerge::select {
 namespace {
-// Scaled Jacobian from which a hexahedron may join the block (Selector::select_block). The
-// share of hexahedra on lattice-seeded meshes is the same from 0.7 to 0.95.
-constexpr float kBlockQuality = 0.9f;
 // Per face of a hexahedron (cell_type.h's order: bottom, top, then the sides around), the face
 // opposite it.
 constexpr int kOppositeHexFace[6] = {1, 0, 4, 5, 2, 3};
@@ -87,7 +84,7 @@ void Selector::select_block() {
   // The near-perfect hexahedra, then the planar-quad ones on the tets they leave (all ranked
   // below them: by type, then quality), so that only those are tested for planarity.
   auto near_perfect = [&](index_t h) {
-    return cands_[h].type == CellType::Hex && cands_[h].quality >= kBlockQuality;
+    return cands_[h].type == CellType::Hex && cands_[h].quality >= kBlockHexQuality;
   };
   std::vector<index_t> order, planar;
   for (index_t ci = 0; ci < cands_.size(); ++ci)
