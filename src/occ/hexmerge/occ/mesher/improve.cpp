@@ -311,6 +311,7 @@ std::size_t split_open_cells(TetMesh& mesh, const std::vector<std::array<double,
   // cells to one between two of its hexahedra) lend their tets to the pyramids closing the faces
   // beside them; where their tets cannot close all of those, they are split instead.
   std::vector<char> member(cells.size(), 1);
+  std::vector<double> quality(cells.size(), 0);  // the hexahedron's scaled Jacobian
   {
     const RecombineParameters recombine;
     static constexpr int kBitsAt[8] = {0, 1, 3, 2, 4, 5, 7, 6};  // cell_type.h's order
@@ -346,9 +347,9 @@ std::size_t split_open_cells(TetMesh& mesh, const std::vector<std::array<double,
       }
       index_t corners[8];
       for (int k = 0; k < 8; ++k) corners[k] = cell.corner[static_cast<std::size_t>(kBitsAt[k])];
-      const double quality = std::abs(scaled_jacobian(CellType::Hex, mesh.points.data(), corners));
-      member[c] = good && (c < lattice_cell.size() ? planar || quality >= kBlockHexQuality
-                                                   : quality >= recombine.min_scaled_jacobian);
+      quality[c] = std::abs(scaled_jacobian(CellType::Hex, mesh.points.data(), corners));
+      member[c] = good && (c < lattice_cell.size() ? planar || quality[c] >= kBlockHexQuality
+                                                   : quality[c] >= recombine.min_scaled_jacobian);
     }
   }
   // The tets across face f of cell c (NO_INDEX on the boundary); against a lattice cell with
@@ -406,82 +407,86 @@ std::size_t split_open_cells(TetMesh& mesh, const std::vector<std::array<double,
                ? apex[0]
                : NO_INDEX;
   };
-  // A cell with an open face no pyramid closes leaves the block where it has more than
-  // kMostOpenFaces open faces (fewer: it is split below), and the faces beside it are open then
-  // (gmsh_t20_data at h 0.8434: a lattice cell open on three faces, one of them unclosable, left
-  // two of the block's cells needing one tet of its for their pyramids, and 4,551 cells left
-  // after them).
-  {
-    std::vector<std::size_t> work;
-    for (std::size_t c = 0; c < cells.size(); ++c)
-      if (member[c]) work.push_back(c);
-    while (!work.empty()) {
-      const std::size_t c = work.back();
-      work.pop_back();
-      if (!member[c]) continue;
-      int nb = 0;
-      bool unclosable = false;
-      for (std::size_t f = 0; f < 6; ++f)
-        if (is_open(c, f)) ++nb, unclosable = unclosable || pyramid_apex(c, f) == NO_INDEX;
-      if (!unclosable || nb <= kMostOpenFaces) continue;
-      member[c] = 0;
-      for (std::size_t f = 0; f < 6; ++f)
-        for (const std::int64_t beside : across_of[c][f].cell)
-          if (beside >= 0 && member[static_cast<std::size_t>(beside)])
-            work.push_back(static_cast<std::size_t>(beside));
-    }
-  }
-  // Per open face of a cell the block takes: the tets across it. The open faces' corners, any
-  // three of them: a tet with a face there lies on one.
-  struct Open {
-    std::size_t cell, face;
-    std::array<index_t, 2> across;
-  };
-  std::vector<Open> open;
-  std::unordered_map<FaceKey, std::size_t, FaceKeyHash> on_open;  // -> its cell
-  for (std::size_t c = 0; c < cells.size(); ++c)
-    for (std::size_t f = 0; f < 6 && member[c]; ++f) {
-      if (!is_open(c, f)) continue;
-      open.push_back({c, f, tets_across(c, f)});
-      std::vector<index_t> corners;
-      for (const auto& tri : cells[c].face[f])
-        for (const index_t v : tri)
-          if (std::find(corners.begin(), corners.end(), v) == corners.end()) corners.push_back(v);
-      if (corners.size() != 4) continue;
-      for (std::size_t skip = 0; skip < 4; ++skip) {
-        std::array<index_t, 3> three{};
-        for (std::size_t k = 0, m = 0; k < 4; ++k)
-          if (k != skip) three[m++] = corners[k];
-        on_open.emplace(face_key(three[0], three[1], three[2]), c);
-      }
-    }
-  // A cell with three or more open faces lies at the block's edge: what leaves with it is little
-  // (random_20261204_023 at its 30k size: 88 lattice cells the core did not take, each open on
-  // three to five faces, split for 0.3 points less hex volume).
-  std::vector<int> nb_open(cells.size(), 0);
-  for (const Open& o : open) ++nb_open[o.cell];
+  // Per open face of a cell the block takes, until none leaves: whether a pyramid of the tets
+  // across closes it, its tets' faces at the apex on no other such cell's open face (but one
+  // of a cell split already, which its own pyramid closes). Where none does, the cell split is
+  // the cell across when the block does not take it (its pyramid closes the face), else of two
+  // cells that need one pyramid the one the block drops first (not near-perfect, then fewer
+  // faces shared with the block, then the lesser scaled Jacobian), else the cell itself, where
+  // it has at most kMostOpenFaces open faces. A cell with more lies at the block's edge, where
+  // little leaves with it (random_20261204_023 at its 30k size: 88 lattice cells the core did
+  // not take, each open on three to five faces, split for 0.3 points less hex volume): it
+  // leaves, and the faces beside it are open then (gmsh_t20_data at h 0.8434: a lattice cell
+  // open on three faces, one unclosable, left two of the block's cells needing one tet of its
+  // for their pyramids, and 4,551 cells left after them).
   std::vector<char> split(cells.size(), 0);
-  for (const Open& o : open) {
-    if (split[o.cell] || nb_open[o.cell] > kMostOpenFaces) continue;
-    // Against a cell the block does not take: that cell is split where its tets do not close
-    // the face (its pyramid then does).
-    const std::int64_t beside = across_of[o.cell][o.face].cell[0];
-    const bool lends = beside >= 0 && beside == across_of[o.cell][o.face].cell[1];
-    if (lends && split[static_cast<std::size_t>(beside)]) continue;
-    const index_t apex = pyramid_apex(o.cell, o.face);
-    bool closed = apex != NO_INDEX;
-    // The pyramid's tets' faces at the apex lie on no other cell's open face (but one of a cell
-    // split already, which its own pyramid closes: of two cells that need one pyramid, one is
-    // split).
-    for (std::size_t k = 0; k < 2 && closed; ++k) {
-      const index_t* v = mesh.tet(o.across[k]);
-      for (int m = 0; m < 4 && closed; ++m) {
-        if (v[m] == apex) continue;
-        const auto it = on_open.find(face_key(v[(m + 1) % 4], v[(m + 2) % 4], v[(m + 3) % 4]));
-        closed = it == on_open.end() || it->second == o.cell || split[it->second];
+  for (bool left = true; left;) {
+    left = false;
+    struct Open {
+      std::size_t cell, face;
+    };
+    std::vector<Open> open;
+    // The open faces' corners, any three of them: a tet with a face there lies on one.
+    std::unordered_map<FaceKey, std::size_t, FaceKeyHash> on_open;  // -> its cell
+    std::vector<int> nb_open(cells.size(), 0), nb_shared(cells.size(), 0);
+    for (std::size_t c = 0; c < cells.size(); ++c)
+      for (std::size_t f = 0; f < 6 && member[c]; ++f) {
+        const Across& across = across_of[c][f];
+        if (across.cell[0] >= 0 && across.cell[0] == across.cell[1] &&
+            member[static_cast<std::size_t>(across.cell[0])])
+          ++nb_shared[c];
+        if (!is_open(c, f)) continue;
+        open.push_back({c, f});
+        ++nb_open[c];
+        std::vector<index_t> corners;
+        for (const auto& tri : cells[c].face[f])
+          for (const index_t v : tri)
+            if (std::find(corners.begin(), corners.end(), v) == corners.end()) corners.push_back(v);
+        if (corners.size() != 4) continue;
+        for (std::size_t skip = 0; skip < 4; ++skip) {
+          std::array<index_t, 3> three{};
+          for (std::size_t k = 0, m = 0; k < 4; ++k)
+            if (k != skip) three[m++] = corners[k];
+          on_open.emplace(face_key(three[0], three[1], three[2]), c);
+        }
       }
+    const auto near_perfect = [&](std::size_t c) { return quality[c] >= kBlockHexQuality; };
+    const auto lesser = [&](std::size_t a, std::size_t b) {
+      if (near_perfect(a) != near_perfect(b)) return near_perfect(b);
+      if (nb_shared[a] != nb_shared[b]) return nb_shared[a] < nb_shared[b];
+      if (quality[a] != quality[b]) return quality[a] < quality[b];
+      return a > b;
+    };
+    for (const Open& o : open) {
+      if (split[o.cell] || !member[o.cell]) continue;
+      const std::int64_t beside = across_of[o.cell][o.face].cell[0];
+      const bool lends = beside >= 0 && beside == across_of[o.cell][o.face].cell[1];
+      if (lends && split[static_cast<std::size_t>(beside)]) continue;
+      const index_t apex = pyramid_apex(o.cell, o.face);
+      bool closed = apex != NO_INDEX;
+      std::size_t rival = o.cell;
+      for (const index_t t : tets_across(o.cell, o.face)) {
+        if (!closed) break;
+        const index_t* v = mesh.tet(t);
+        for (int m = 0; m < 4 && closed; ++m) {
+          if (v[m] == apex) continue;
+          const auto it = on_open.find(face_key(v[(m + 1) % 4], v[(m + 2) % 4], v[(m + 3) % 4]));
+          closed = it == on_open.end() || it->second == o.cell || split[it->second] ||
+                   !member[it->second];
+          if (!closed) rival = it->second;
+        }
+      }
+      if (closed) continue;
+      if (lends) {
+        split[static_cast<std::size_t>(beside)] = 1;
+        continue;
+      }
+      const std::size_t loser = rival != o.cell && lesser(rival, o.cell) ? rival : o.cell;
+      if (nb_open[loser] <= kMostOpenFaces)
+        split[loser] = 1;
+      else
+        member[loser] = 0, left = true;
     }
-    if (!closed) split[lends ? static_cast<std::size_t>(beside) : o.cell] = 1;
   }
   CellSplits splits(mesh);
   for (std::size_t c = 0; c < cells.size(); ++c) {
