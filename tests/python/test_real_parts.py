@@ -94,6 +94,18 @@ def test_part_min_scaled_jacobian(meshed: dict, name: str) -> None:
     assert meshed[name][4]["min_scaled_jacobian"] >= SJ_FLOOR
 
 
+def recombined_and_checked(tets) -> tuple:
+    """The mesher's tets (mesh_shape(..., recombine=False)) recombined with the defaults and
+    checked: valid, conforming, without cracks. (points, cells, mesh, report, check)."""
+    import numpy as np
+
+    points, cells = tets.points, tets.cell_vertices.reshape(-1, 4).astype(np.int64)
+    mesh, rec = hexmerge.recombine(points, cells, tets.regions)
+    check = hexmerge.check(mesh, points, cells, tets.regions)
+    assert check["valid"] and check["cracks"] == 0 and check["nonconforming_quads"] == 0
+    return points, cells, mesh, rec, check
+
+
 def boundary_angles_and_tet_sj(tets) -> tuple[float, float]:
     """The smallest corner angle (degrees) of the tet mesh's boundary triangles, and the smallest
     scaled Jacobian of its tets (the real-parts benchmark's measures)."""
@@ -328,19 +340,14 @@ def test_pulled_pyramids_do_not_cut_the_cells_beside_them() -> None:
     ("a segment and a subface intersect") and the way without the pull ran, 8 s more, 41.4 %
     hex volume. pull_core now holds back the moving corners of pyramid sides that cross another
     face: the first way, 45.7 % (measured when this was fixed)."""
-    import numpy as np
-
     h = 1.402525066781042
     tets, report = hexmerge.mesh_shape(CAD / "gmsh_U_Joint_2.stp", h, recombine=False)
     meshing = report["meshing"]
     assert meshing["failed_strategies"] == []
     assert meshing["strategy"] == "lattice"
     assert meshing["nb_pulled_points"] > 0
-    points, cells = tets.points, tets.cell_vertices.reshape(-1, 4).astype(np.int64)
+    points, cells, mesh, rec, check = recombined_and_checked(tets)
     assert tet_scaled_jacobians(points, cells).min() > 0
-    mesh, rec = hexmerge.recombine(points, cells, tets.regions)
-    check = hexmerge.check(mesh, points, cells, tets.regions)
-    assert check["valid"] and check["cracks"] == 0 and check["nonconforming_quads"] == 0
     assert rec["volume_fraction"]["hex"] > 0.44
 
 
@@ -350,17 +357,12 @@ def test_the_buffer_layer_leaves_no_poor_element_beside_it() -> None:
     (against 2 and 0.180 without the layer); the lattice points keep 0.25 h off the buffer's
     cells now, and a cell a poor tet touches after the flips is released to them (measured when
     this was fixed: 2 under 0.2, 0.180)."""
-    import numpy as np
-
     h = 4.306615107940826
     outcome = {}
     for buffer in (False, True):
         tets, report = hexmerge.mesh_shape(CAD / "gmsh_Angled.step", h, recombine=False,
                                            buffer_layer=buffer)
-        points, cells = tets.points, tets.cell_vertices.reshape(-1, 4).astype(np.int64)
-        mesh, rec = hexmerge.recombine(points, cells, tets.regions)
-        check = hexmerge.check(mesh, points, cells, tets.regions)
-        assert check["valid"] and check["cracks"] == 0 and check["nonconforming_quads"] == 0
+        points, cells, mesh, rec, check = recombined_and_checked(tets)
         outcome[buffer] = (report["meshing"], rec["volume_fraction"]["hex"], check["min_scaled_jacobian"],
                            int((scaled_jacobians(mesh) < SJ_FLOOR).sum()))
     meshing, hexes, least, poor = outcome[True]
@@ -376,18 +378,13 @@ def test_a_face_whose_new_triangles_are_thin_in_places_keeps_its_other_buffer_he
     hex volume). Only the hexahedra whose tops that triangle has, or whose quads took the nodes
     beside it, go now: measured when this was done, 404 kept, 92.7 % hex volume, 7 elements
     under 0.2 as before, the smallest 0.156 (0.160 before)."""
-    import numpy as np
-
     h = 7.603439245582035
     tets, report = hexmerge.mesh_shape(CAD / "pyocc_face_recognition_sample_part.stp", h, recombine=False)
     meshing = report["meshing"]
     bases = meshing["buffer_bases"]
     assert meshing["strategy"] == "lattice" and bases["kept"] == meshing["nb_buffer_hexes"] >= 300
     assert bases["dropped_later"] < 100
-    points, cells = tets.points, tets.cell_vertices.reshape(-1, 4).astype(np.int64)
-    mesh, rec = hexmerge.recombine(points, cells, tets.regions)
-    check = hexmerge.check(mesh, points, cells, tets.regions)
-    assert check["valid"] and check["cracks"] == 0 and check["nonconforming_quads"] == 0
+    points, cells, mesh, rec, check = recombined_and_checked(tets)
     assert rec["volume_fraction"]["hex"] >= 0.9
     assert check["min_scaled_jacobian"] >= 0.15 and int((scaled_jacobians(mesh) < SJ_FLOOR).sum()) <= 7
     assert meshing["max_boundary_distance"] <= 1e-3 * h
@@ -400,17 +397,12 @@ def test_buffer_cells_beside_a_poor_tet_are_released() -> None:
     a tet under 0.2 touches after the last flips are now released for one more round (measured
     when this was done: 16 released, none under 0.2, hex volume 85.8 %, 82.2 % without the
     layer)."""
-    import numpy as np
-
     h = 11.0
     shares = []
     for buffer in (False, True):
         tets, report = hexmerge.mesh_shape(CAD / "pyocc_face_recognition_sample_part.stp", h,
                                            recombine=False, buffer_layer=buffer)
-        points, cells = tets.points, tets.cell_vertices.reshape(-1, 4).astype(np.int64)
-        mesh, rec = hexmerge.recombine(points, cells, tets.regions)
-        check = hexmerge.check(mesh, points, cells, tets.regions)
-        assert check["valid"] and check["cracks"] == 0 and check["nonconforming_quads"] == 0
+        points, cells, mesh, rec, check = recombined_and_checked(tets)
         shares.append(rec["volume_fraction"]["hex"])
     meshing = report["meshing"]
     assert meshing["nb_buffer_hexes"] > 200 and meshing["nb_buffer_cells_released"] > 0
@@ -427,18 +419,13 @@ def test_a_core_cell_under_a_released_buffer_hexahedron_keeps_the_block_whole() 
     into six pyramids to a vertex at its centre, as every cell with a face nothing closes
     (split_open_cells; measured when this was done: one cell split, 2,916 hexahedra, 68.4 %);
     the tets stay positive and the volume the same."""
-    import numpy as np
-
     h = 1.6374014847391156
     tets, report = hexmerge.mesh_shape(CAD / "gmsh_t20_data.step", h, recombine=False)
     meshing = report["meshing"]
     assert meshing["strategy"] == "lattice"
     assert meshing["nb_buffer_cells_released"] > 0 and meshing["nb_split_open_cells"] >= 1
-    points, cells = tets.points, tets.cell_vertices.reshape(-1, 4).astype(np.int64)
+    points, cells, mesh, rec, check = recombined_and_checked(tets)
     assert tet_scaled_jacobians(points, cells).min() > 0
-    mesh, rec = hexmerge.recombine(points, cells, tets.regions)
-    check = hexmerge.check(mesh, points, cells, tets.regions)
-    assert check["valid"] and check["cracks"] == 0 and check["nonconforming_quads"] == 0
     made = meshing["nb_core_cells"] + meshing["nb_buffer_hexes"]
     assert rec["output_counts"]["hex"] >= made - 2 * meshing["nb_buffer_cells_released"]
     assert rec["volume_fraction"]["hex"] >= 0.67
@@ -456,19 +443,14 @@ def test_a_cell_with_an_open_face_keeps_the_block_whole(scale: float) -> None:
     h 7.603). Such a cell is now split into six pyramids to a vertex at its centre (measured when
     this was done: 92.7 % at both). Since the sliver stage runs eight rounds instead of four, the
     flips at 0.983 leave no such cell (none split, 92.7 %); at 1.02 one is split."""
-    import numpy as np
-
     h = 7.6034392455820 * scale
     tets, report = hexmerge.mesh_shape(CAD / "pyocc_face_recognition_sample_part.stp", h,
                                        recombine=False)
     meshing = report["meshing"]
     assert meshing["strategy"] == "lattice"
     assert meshing["nb_split_open_cells"] >= (1 if scale > 1 else 0)
-    points, cells = tets.points, tets.cell_vertices.reshape(-1, 4).astype(np.int64)
+    points, cells, mesh, rec, check = recombined_and_checked(tets)
     assert tet_scaled_jacobians(points, cells).min() > 0
-    mesh, rec = hexmerge.recombine(points, cells, tets.regions)
-    check = hexmerge.check(mesh, points, cells, tets.regions)
-    assert check["valid"] and check["cracks"] == 0 and check["nonconforming_quads"] == 0
     made = meshing["nb_core_cells"] + meshing["nb_buffer_hexes"] - meshing["nb_split_open_cells"]
     assert rec["output_counts"]["hex"] >= made - 2 * meshing["nb_buffer_cells_released"]
     assert rec["volume_fraction"]["hex"] >= 0.9
@@ -486,18 +468,13 @@ def test_a_cell_the_block_cannot_take_does_not_empty_it() -> None:
     it open, and where its tets cannot close all of them it is split into six pyramids to a
     vertex at its centre (measured when this was done: 85.3 % hex volume, the block 25,459;
     85.5 % and 25,916 with the block's fringe taking every buffer hexahedron beside it)."""
-    import numpy as np
-
     h = 0.8434271093868881
     tets, report = hexmerge.mesh_shape(CAD / "gmsh_t20_data.step", h, recombine=False)
     meshing = report["meshing"]
     assert meshing["strategy"] == "lattice"
     assert meshing["nb_split_open_cells"] >= 1
-    points, cells = tets.points, tets.cell_vertices.reshape(-1, 4).astype(np.int64)
+    points, cells, mesh, rec, check = recombined_and_checked(tets)
     assert tet_scaled_jacobians(points, cells).min() > 0
-    mesh, rec = hexmerge.recombine(points, cells, tets.regions)
-    check = hexmerge.check(mesh, points, cells, tets.regions)
-    assert check["valid"] and check["cracks"] == 0 and check["nonconforming_quads"] == 0
     made = meshing["nb_core_cells"] + meshing["nb_buffer_hexes"]
     assert rec["block_hexahedra"] >= 0.95 * made, (rec["block_hexahedra"], made)
     assert rec["volume_fraction"]["hex"] >= 0.83
@@ -513,16 +490,11 @@ def test_the_block_takes_the_buffer_hexahedra_beside_it() -> None:
     volume. The block's fringe now takes every hexahedron beside a near-perfect member whose
     opposite face is on the boundary (measured when this was done: 15,878 block hexahedra,
     68.5 %)."""
-    import numpy as np
-
     h = 0.4177234448606672
     tets, report = hexmerge.mesh_shape(CAD / "gmsh_Kurbelwelle.stp", h, recombine=False)
     meshing = report["meshing"]
     assert meshing["strategy"] == "lattice"
-    points, cells = tets.points, tets.cell_vertices.reshape(-1, 4).astype(np.int64)
-    mesh, rec = hexmerge.recombine(points, cells, tets.regions)
-    check = hexmerge.check(mesh, points, cells, tets.regions)
-    assert check["valid"] and check["cracks"] == 0 and check["nonconforming_quads"] == 0
+    points, cells, mesh, rec, check = recombined_and_checked(tets)
     made = meshing["nb_core_cells"] + meshing["nb_buffer_hexes"]
     assert rec["block_hexahedra"] >= 0.99 * made, (rec["block_hexahedra"], made)
     assert rec["volume_fraction"]["hex"] >= 0.68
