@@ -26,6 +26,23 @@ bool closes(const TetMesh& mesh, const std::array<index_t, 4>& base, index_t ape
                   scaled_jacobian(CellType::Pyramid, mesh.points.data(), other_way)) >= floor;
 }
 
+// The corners of a quad face split into triangles `tris` (sharing a side), around: the first
+// triangle's corner not on the second, then round that triangle with the second's corner not on
+// the first between; the shared side is the diagonal from the second to the fourth. The third is
+// NO_INDEX where the triangles share no side.
+std::array<index_t, 4> face_around(const std::array<std::array<index_t, 3>, 2>& tris) {
+  const auto in = [](const std::array<index_t, 3>& tri, index_t v) {
+    return v == tri[0] || v == tri[1] || v == tri[2];
+  };
+  std::size_t lone = 0;
+  index_t extra = NO_INDEX;
+  for (std::size_t k = 0; k < 3; ++k) {
+    if (!in(tris[1], tris[0][k])) lone = k;
+    if (!in(tris[0], tris[1][k])) extra = tris[1][k];
+  }
+  return {tris[0][lone], tris[0][(lone + 1) % 3], extra, tris[0][(lone + 2) % 3]};
+}
+
 // Lattice cells split into six pyramids to a new vertex at their centre (twelve tets), replacing
 // their six tets (the lattice's split), applied at once.
 class CellSplits {
@@ -306,10 +323,10 @@ std::size_t split_open_cells(TetMesh& mesh, const std::vector<std::array<double,
   // The cells the block takes: their hexahedron a candidate (each face's two triangles folding
   // by no more than the quad pairs let them, min_boundary_dihedral_angle on the boundary and
   // between regions, min_dihedral_angle inside; no corner wider than max_face_angle), a lattice
-  // cell near-perfect (kBlockHexQuality) or with planar quads. The others (a buffer hexahedron
-  // whose released top folds by 1.25 degrees: gmsh_t20_data at h 0.8434, whose block lost 4,551
-  // cells to one between two of its hexahedra) lend their tets to the pyramids closing the faces
-  // beside them; where their tets cannot close all of those, they are split instead.
+  // cell near-perfect (kBlockHexQuality) or with planar quads, a buffer hexahedron at
+  // min_scaled_jacobian (the block's fringe takes it). The others lend their tets to the
+  // pyramids closing the faces beside them; where their tets cannot close all of those, they are
+  // split instead (below).
   std::vector<char> member(cells.size(), 1);
   std::vector<double> quality(cells.size(), 0);  // the hexahedron's scaled Jacobian
   {
@@ -319,19 +336,10 @@ std::size_t split_open_cells(TetMesh& mesh, const std::vector<std::array<double,
       const Cell& cell = cells[c];
       bool good = true, planar = true;
       for (std::size_t f = 0; f < 6 && good; ++f) {
-        const auto& tris = cell.face[f];
-        index_t lone0 = NO_INDEX, lone1 = NO_INDEX;
-        for (std::size_t k = 0; k < 3; ++k) {
-          if (std::find(tris[1].begin(), tris[1].end(), tris[0][k]) == tris[1].end())
-            lone0 = tris[0][k];
-          if (std::find(tris[0].begin(), tris[0].end(), tris[1][k]) == tris[0].end())
-            lone1 = tris[1][k];
-        }
-        std::array<index_t, 2> shared{};
-        for (std::size_t k = 0, m = 0; k < 3; ++k)
-          if (tris[0][k] != lone0) shared[m++] = tris[0][k];
-        const double *a = mesh.point(shared[0]), *b = mesh.point(lone0), *q = mesh.point(shared[1]),
-                     *d = mesh.point(lone1);
+        // The quad from a corner of its diagonal (the triangles' shared side).
+        const std::array<index_t, 4> around = face_around(cell.face[f]);
+        const double *a = mesh.point(around[1]), *b = mesh.point(around[2]),
+                     *q = mesh.point(around[3]), *d = mesh.point(around[0]);
         const Across& across = across_of[c][f];
         bool boundary = across.cell[0] < 0 && across.cell[1] < 0 && across.tet[0] == NO_INDEX &&
                         across.tet[1] == NO_INDEX;
@@ -391,21 +399,7 @@ std::size_t split_open_cells(TetMesh& mesh, const std::vector<std::array<double,
         if (v[m] != tris[k][0] && v[m] != tris[k][1] && v[m] != tris[k][2]) apex[k] = v[m];
     }
     if (apex[0] == NO_INDEX || apex[0] != apex[1]) return NO_INDEX;
-    // The face's corners around: the first triangle from its corner not on the second, then
-    // the second's corner not on the first.
-    const auto in = [](const std::array<index_t, 3>& tri, index_t v) {
-      return v == tri[0] || v == tri[1] || v == tri[2];
-    };
-    std::size_t lone = 0;
-    index_t extra = NO_INDEX;
-    for (std::size_t k = 0; k < 3; ++k) {
-      if (!in(tris[1], tris[0][k])) lone = k;
-      if (!in(tris[0], tris[1][k])) extra = tris[1][k];
-    }
-    return closes(mesh, {tris[0][lone], tris[0][(lone + 1) % 3], extra, tris[0][(lone + 2) % 3]},
-                  apex[0], pyramid_floor)
-               ? apex[0]
-               : NO_INDEX;
+    return closes(mesh, face_around(tris), apex[0], pyramid_floor) ? apex[0] : NO_INDEX;
   };
   // Per open face of a cell the block takes, until none leaves: whether a pyramid of the tets
   // across closes it, its tets' faces at the apex on no other such cell's open face (but one
@@ -438,11 +432,8 @@ std::size_t split_open_cells(TetMesh& mesh, const std::vector<std::array<double,
         if (!is_open(c, f)) continue;
         open.push_back({c, f});
         ++nb_open[c];
-        std::vector<index_t> corners;
-        for (const auto& tri : cells[c].face[f])
-          for (const index_t v : tri)
-            if (std::find(corners.begin(), corners.end(), v) == corners.end()) corners.push_back(v);
-        if (corners.size() != 4) continue;
+        const std::array<index_t, 4> corners = face_around(cells[c].face[f]);
+        if (corners[2] == NO_INDEX) continue;
         for (std::size_t skip = 0; skip < 4; ++skip) {
           std::array<index_t, 3> three{};
           for (std::size_t k = 0, m = 0; k < 4; ++k)
