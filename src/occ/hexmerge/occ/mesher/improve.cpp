@@ -377,12 +377,15 @@ std::size_t split_open_cells(TetMesh& mesh, const std::vector<std::array<double,
       }
     return across.tet;
   };
+  // Whether face f of cell c lies against a cell the block takes.
+  const auto against_member = [&](std::size_t c, std::size_t f) {
+    const Across& across = across_of[c][f];
+    return across.cell[0] >= 0 && across.cell[0] == across.cell[1] &&
+           member[static_cast<std::size_t>(across.cell[0])];
+  };
   // Whether face f of cell c is open: neither on the boundary nor against a cell the block takes.
   const auto is_open = [&](std::size_t c, std::size_t f) {
-    const Across& across = across_of[c][f];
-    if (across.cell[0] >= 0 && across.cell[0] == across.cell[1] &&
-        member[static_cast<std::size_t>(across.cell[0])])
-      return false;
+    if (against_member(c, f)) return false;
     const std::array<index_t, 2>& tets = tets_across(c, f);
     return tets[0] != NO_INDEX || tets[1] != NO_INDEX;
   };
@@ -425,10 +428,7 @@ std::size_t split_open_cells(TetMesh& mesh, const std::vector<std::array<double,
     std::vector<int> nb_open(cells.size(), 0), nb_shared(cells.size(), 0);
     for (std::size_t c = 0; c < cells.size(); ++c)
       for (std::size_t f = 0; f < 6 && member[c]; ++f) {
-        const Across& across = across_of[c][f];
-        if (across.cell[0] >= 0 && across.cell[0] == across.cell[1] &&
-            member[static_cast<std::size_t>(across.cell[0])])
-          ++nb_shared[c];
+        if (against_member(c, f)) ++nb_shared[c];
         if (!is_open(c, f)) continue;
         open.push_back({c, f});
         ++nb_open[c];
