@@ -173,6 +173,62 @@ TEST(remove_slivers, inserted_vertices_take_out_tets_no_flip_improves) {
   EXPECT_THROW(remove_slivers(m, {}, {}, p, inserted), InputError);
 }
 
+// The tets at each vertex, as sorted vertex lists.
+std::vector<std::set<std::array<index_t, 4>>> tets_at_vertices(const TetMesh& m) {
+  std::vector<std::set<std::array<index_t, 4>>> out(m.nb_vertices());
+  for (index_t t = 0; t < m.nb_tets(); ++t) {
+    std::array<index_t, 4> key{m.tet(t)[0], m.tet(t)[1], m.tet(t)[2], m.tet(t)[3]};
+    std::sort(key.begin(), key.end());
+    for (const index_t v : key) out[v].insert(key);
+  }
+  return out;
+}
+
+// The state a call leaves (the tets no flip improves, the vertices whose tets changed) makes
+// the next call skip those tets, not flip otherwise: with it or without, the same tets. Between
+// the calls some tets are flipped by a call with fewer passes, so that the state is partial.
+TEST(remove_slivers, the_state_left_for_the_next_call_changes_no_flip) {
+  const TetMesh given = test::tetgen_lattice(6, 0.45, 11);
+  if (given.nb_tets() == 0) GTEST_SKIP() << "the tetgen program is not installed";
+  RemoveSliversParameters first;
+  first.max_passes = 1;
+  RemoveSliversState state;
+  RemoveSliversReport report;
+  TetMesh m = given;
+  remove_slivers(m, {}, {}, first, report, &state);
+  ASSERT_GT(report.edge_removals + report.face_removals, 0u);
+  ASSERT_EQ(state.settled.size(), m.nb_tets());
+  ASSERT_EQ(state.touched.size(), m.nb_vertices());
+  // Every vertex whose tets changed is marked touched; some tets below the target are settled.
+  const auto before = tets_at_vertices(given), after = tets_at_vertices(m);
+  std::size_t touched = 0, settled_below = 0;
+  for (index_t v = 0; v < m.nb_vertices(); ++v) {
+    if (before[v] != after[v]) EXPECT_TRUE(state.touched[v]) << "vertex " << v;
+    touched += state.touched[v] != 0;
+  }
+  for (index_t t = 0; t < m.nb_tets(); ++t)
+    settled_below += state.settled[t] &&
+                     scaled_jacobian(CellType::Tet, m.points.data(), m.tet(t)) < first.target;
+  EXPECT_GT(touched, 0u);
+  EXPECT_LT(touched, m.nb_vertices());
+  EXPECT_GT(settled_below, 0u);
+  RemoveSliversParameters next;
+  next.insert_below = 0.2;
+  TetMesh with_state = m, without = m;
+  RemoveSliversReport with_report, without_report;
+  remove_slivers(with_state, {}, {}, next, with_report, &state);
+  remove_slivers(without, {}, {}, next, without_report);
+  validate_tet_mesh(with_state);
+  EXPECT_EQ(with_state.tets, without.tets);
+  EXPECT_EQ(with_state.points, without.points);
+  EXPECT_EQ(with_report.edge_removals, without_report.edge_removals);
+  EXPECT_EQ(with_report.face_removals, without_report.face_removals);
+  EXPECT_EQ(with_report.insertions, without_report.insertions);
+  // A state of another mesh is refused.
+  state.settled.push_back(1);
+  EXPECT_THROW(remove_slivers(with_state, {}, {}, next, with_report, &state), InputError);
+}
+
 TEST(remove_slivers, bad_parameters_are_reported) {
   TetMesh m = sliver_between_pyramids();
   RemoveSliversReport report;

@@ -277,6 +277,60 @@ TEST(smooth_nodes, fixed_nodes_and_good_tets_stay) {
   EXPECT_EQ(m.points, before);
 }
 
+// The nodes a call leaves settled (their search moved them nowhere, and no node of a tet at
+// them moved after) are skipped by the next call, which moves the others as it would without:
+// the same points. The first call makes two passes only, so that some nodes are not settled;
+// with a lower target, fewer nodes are searched and some stay settled.
+TEST(smooth_nodes, the_settled_nodes_a_call_leaves_change_no_move) {
+  const TetMesh given = test::tetgen_lattice(6, 0.45, 11);
+  if (given.nb_tets() == 0) GTEST_SKIP() << "the tetgen program is not installed";
+  // The nodes inside are free (a node on the lattice's box is in a boundary face).
+  std::vector<char> movable(given.nb_vertices(), kFree);
+  {
+    std::vector<std::array<index_t, 3>> faces;
+    for (index_t t = 0; t < given.nb_tets(); ++t)
+      for (int f = 0; f < 4; ++f) {
+        std::array<index_t, 3> k{given.tet(t)[(f + 1) % 4], given.tet(t)[(f + 2) % 4],
+                                 given.tet(t)[(f + 3) % 4]};
+        std::sort(k.begin(), k.end());
+        faces.push_back(k);
+      }
+    std::sort(faces.begin(), faces.end());
+    for (std::size_t i = 0; i < faces.size(); ++i) {
+      const bool shared =
+          (i > 0 && faces[i - 1] == faces[i]) || (i + 1 < faces.size() && faces[i + 1] == faces[i]);
+      if (!shared)
+        for (const index_t v : faces[i]) movable[v] = kFixed;
+    }
+  }
+  SmoothNodesParameters lower, two_passes;
+  lower.target = lower.nudge_target = 0.15;  // fewer nodes searched: some stay settled
+  two_passes = lower;
+  two_passes.max_passes = 2;
+  std::vector<char> settled(given.nb_vertices(), 0);
+  TetMesh m = given;
+  SmoothNodesReport report;
+  smooth_nodes(m, movable, two_passes, report, nullptr, {}, &settled);
+  ASSERT_GT(report.moves, 0u);
+  ASSERT_EQ(settled.size(), m.nb_vertices());
+  const auto count = std::count(settled.begin(), settled.end(), 1);
+  EXPECT_GT(count, 0);
+  EXPECT_LT(static_cast<std::size_t>(count), m.nb_vertices());
+  TetMesh with_state = m, without = m;
+  SmoothNodesReport with_report, without_report;
+  smooth_nodes(with_state, movable, lower, with_report, nullptr, {}, &settled);
+  smooth_nodes(without, movable, lower, without_report);
+  ASSERT_GT(without_report.moves, 0u);
+  EXPECT_EQ(with_state.points, without.points);
+  EXPECT_EQ(with_report.moves, without_report.moves);
+  EXPECT_DOUBLE_EQ(with_report.min_after, without_report.min_after);
+  // Settled flags of another mesh are refused.
+  settled.pop_back();
+  EXPECT_THROW(smooth_nodes(with_state, movable, SmoothNodesParameters{}, with_report, nullptr, {},
+                            &settled),
+               InputError);
+}
+
 TEST(smooth_nodes, bad_arguments_name_what_is_wrong) {
   TetMesh m = star_with_an_offset_centre();
   SmoothNodesReport report;

@@ -700,6 +700,15 @@ void improve_tets(TetMesh& mesh, const std::vector<double>& frame_points,
     }
     return false;
   };
+  // What the rounds know of the mesh they leave (the output does not depend on it, only the
+  // work): per tet, no flip improves it as the mesh stands (remove_slivers' `settled`: the
+  // flips of the next round skip it, unless a node moved near it since or the fixed tets
+  // changed); per node, its search leaves it where it stands (smooth_nodes' `settled`: skipped
+  // until a tet at it changes or a node of one moves).
+  RemoveSliversState flip_state;
+  std::vector<char>& settled = flip_state.settled;
+  settled.assign(mesh.nb_tets(), 0);
+  std::vector<char> still(mesh.nb_vertices(), 0);
   // Releases the kept cells a tet under insert_below outside them touches at one of their
   // boundary corners (the tops: their corners inside stay either way); how many.
   const auto release_cells = [&]() {
@@ -717,7 +726,7 @@ void improve_tets(TetMesh& mesh, const std::vector<double>& frame_points,
           if (!released[c]) released[c] = 1, ++count;
       }
     }
-    if (count > 0) keep_cells();
+    if (count > 0) keep_cells(), settled.assign(settled.size(), 0), still.assign(still.size(), 0);
     return count;
   };
   int extra = 0;  // the round after a release
@@ -727,6 +736,7 @@ void improve_tets(TetMesh& mesh, const std::vector<double>& frame_points,
     extra = report.released_cells > 0 ? 1 : 0;
     return extra > 0;
   };
+  std::vector<FaceKey> flat_before;  // the faces of the flat tets of the round before
   for (int round = 0;; ++round) {
     std::vector<char> fixed(mesh.nb_tets(), 0);
     for (index_t t = 0; t < mesh.nb_tets(); ++t) fixed[t] = in_one_cell(t) || in_one_slab(t);
@@ -747,6 +757,13 @@ void improve_tets(TetMesh& mesh, const std::vector<double>& frame_points,
             if (flat_faces.count(face_key(v[(f + 1) % 4], v[(f + 2) % 4], v[(f + 3) % 4])))
               fixed[t] = 0;
         }
+      // Other flat tets, other tets freed: the settled tets are examined anew.
+      std::vector<FaceKey> flat;
+      flat.reserve(flat_faces.size());
+      for (const auto& entry : flat_faces) flat.push_back(entry.first);
+      std::sort(flat.begin(), flat.end());
+      if (flat != flat_before) settled.assign(settled.size(), 0);
+      flat_before = std::move(flat);
     }
     if (!kept_cells_at.empty())
       for (index_t t = 0; t < mesh.nb_tets(); ++t)
@@ -768,7 +785,10 @@ void improve_tets(TetMesh& mesh, const std::vector<double>& frame_points,
     RemoveSliversParameters flip_parameters;
     flip_parameters.max_boundary_shift = parameters.max_boundary_shift;
     flip_parameters.insert_below = parameters.insert_below;
-    remove_slivers(mesh, fixed, boundary_patch, flip_parameters, flips);
+    remove_slivers(mesh, fixed, boundary_patch, flip_parameters, flips, &flip_state);
+    still.resize(mesh.nb_vertices(), 0);
+    for (std::size_t v = 0; v < still.size(); ++v)
+      if (flip_state.touched[v]) still[v] = 0;
     // The inserted vertices: free, off the lattice, inside.
     half_lattice.resize(mesh.nb_vertices(), 0);
     cell_of.resize(mesh.nb_vertices());
@@ -783,7 +803,22 @@ void improve_tets(TetMesh& mesh, const std::vector<double>& frame_points,
     SmoothNodesReport moves;
     SmoothNodesParameters move_parameters;
     move_parameters.pyramid_floor = parameters.pyramid_floor;
-    smooth_nodes(mesh, movable, move_parameters, moves, surface, kept_pyramids);
+    const std::vector<double> unmoved = mesh.points;
+    smooth_nodes(mesh, movable, move_parameters, moves, surface, kept_pyramids, &still);
+    // A moved node changes the tets around it and the flips of every tet at their vertices.
+    std::vector<char> near_move(mesh.nb_vertices(), 0);
+    for (index_t t = 0; t < mesh.nb_tets(); ++t) {
+      const index_t* v = mesh.tet(t);
+      if (std::any_of(v, v + 4, [&](index_t w) {
+            const std::size_t i = 3 * static_cast<std::size_t>(w);
+            return mesh.points[i] != unmoved[i] || mesh.points[i + 1] != unmoved[i + 1] ||
+                   mesh.points[i + 2] != unmoved[i + 2];
+          }))
+        for (int k = 0; k < 4; ++k) near_move[v[k]] = 1;
+    }
+    for (index_t t = 0; t < mesh.nb_tets(); ++t)
+      if (std::any_of(mesh.tet(t), mesh.tet(t) + 4, [&](index_t w) { return near_move[w]; }))
+        settled[t] = 0;
     report.node_moves += moves.moves;
     report.boundary_node_moves += moves.surface_moves;
     if (moves.moves == 0 && !release_once()) break;

@@ -40,7 +40,7 @@ bool same_orientation(const Tet& t, index_t w, index_t x, index_t y, index_t z) 
 class FlipMesh {
  public:
   FlipMesh(TetMesh& mesh, const std::vector<char>& fixed,
-           const std::vector<std::int32_t>& boundary_patch)
+           const std::vector<std::int32_t>& boundary_patch, const std::vector<char>& settled)
       : points_(mesh.points) {
     // Each vertex's list allocated once, at its number of tets (the flips add a few).
     std::vector<index_t> degree(mesh.nb_vertices(), 0);
@@ -56,6 +56,10 @@ class FlipMesh {
       const index_t* v = mesh.tet(t);
       add(Tet{v[0], v[1], v[2], v[3]}, mesh.region(t), !fixed.empty() && fixed[t]);
     }
+    // The tets settled before: examined after every stamp the adds above left.
+    clock_ = kBuilt;
+    for (std::size_t t = 0; t < settled.size(); ++t)
+      if (settled[t]) examined_[t] = clock_;
     if (boundary_patch.empty()) return;
     // The patches of the boundary faces (a face without one reads as -1, as a face not kept).
     for (index_t t = 0; t < mesh.nb_tets(); ++t)
@@ -221,14 +225,24 @@ class FlipMesh {
   }
 
   // The live tets, renumbered; regions when the input had them.
-  void write(TetMesh& mesh) const {
+  // The living tets into `mesh`; into `state` (when not null), whether each was examined and
+  // nothing at its vertices changed since, and the vertices at which a tet changed.
+  void write(TetMesh& mesh, RemoveSliversState* state) const {
     const bool with_regions = !mesh.regions.empty();
     mesh.tets.clear();
     mesh.regions.clear();
+    std::vector<char>* settled = state != nullptr ? &state->settled : nullptr;
+    if (settled != nullptr) settled->clear();
     for (std::size_t t = 0; t < tets_.size(); ++t) {
       if (!alive_[t]) continue;
       mesh.tets.insert(mesh.tets.end(), tets_[t].begin(), tets_[t].end());
       if (with_regions) mesh.regions.push_back(region_[t]);
+      if (settled != nullptr)
+        settled->push_back(examined_[t] != 0 && !changed_since_examined(static_cast<index_t>(t)));
+    }
+    if (state != nullptr) {
+      state->touched.resize(changed_.size());
+      for (std::size_t v = 0; v < changed_.size(); ++v) state->touched[v] = changed_[v] >= kBuilt;
     }
   }
 
@@ -242,7 +256,9 @@ class FlipMesh {
   // Change stamps: per tet the clock when it was last examined, per vertex when a tet at it was
   // last added or removed (see changed_since_examined).
   std::vector<std::uint64_t> examined_, tried_, changed_;
-  std::uint64_t clock_ = 1;
+  // The clock while the mesh is built, and after.
+  static constexpr std::uint64_t kBuilding = 1, kBuilt = 2;
+  std::uint64_t clock_ = kBuilding;
   std::unordered_map<FaceKey, std::int32_t, FaceKeyHash> patch_;
   // The set's stamps: a tet is in it when its stamp is the set's clock.
   std::vector<std::uint64_t> set_;
@@ -566,7 +582,8 @@ void best_insertion(FlipMesh& m, index_t t, double floor, Insertion& best) {
 
 void remove_slivers(TetMesh& mesh, const std::vector<char>& fixed,
                     const std::vector<std::int32_t>& boundary_patch,
-                    const RemoveSliversParameters& parameters, RemoveSliversReport& report) {
+                    const RemoveSliversParameters& parameters, RemoveSliversReport& report,
+                    RemoveSliversState* state) {
   if (!(parameters.target > 0 && parameters.target <= 1) || parameters.max_passes < 1 ||
       parameters.max_ring < 3 || parameters.max_ring > 10 ||
       !(parameters.max_boundary_shift >= 0) ||
@@ -579,8 +596,10 @@ void remove_slivers(TetMesh& mesh, const std::vector<char>& fixed,
     throw InputError("remove_slivers: one fixed flag per tet", Entity::Parameter);
   if (!boundary_patch.empty() && boundary_patch.size() != 4 * std::size_t{mesh.nb_tets()})
     throw InputError("remove_slivers: four boundary patches per tet", Entity::Parameter);
+  if (state != nullptr && !state->settled.empty() && state->settled.size() != mesh.nb_tets())
+    throw InputError("remove_slivers: one settled flag per tet", Entity::Parameter);
   report = RemoveSliversReport{};
-  FlipMesh m(mesh, fixed, boundary_patch);
+  FlipMesh m(mesh, fixed, boundary_patch, state != nullptr ? state->settled : std::vector<char>{});
   auto summarise = [&](double& min, std::size_t& below) {
     min = kInfinity;
     for (index_t t = 0; t < m.nb_slots(); ++t)
@@ -669,7 +688,7 @@ void remove_slivers(TetMesh& mesh, const std::vector<char>& fixed,
     if (inserted == 0) break;
   }
   summarise(report.min_after, report.below_after);
-  m.write(mesh);
+  m.write(mesh, state);
 }
 
 }  // namespace hexmerge

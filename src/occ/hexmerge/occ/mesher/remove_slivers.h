@@ -42,6 +42,20 @@ struct RemoveSliversReport {
   std::size_t insertions = 0;      ///< vertices inserted (see insert_below), appended to the points
 };
 
+/// What remove_slivers() knows of the mesh it leaves, for a caller that calls it again (between
+/// rounds of node moves): the flips done do not depend on it, only the work.
+struct RemoveSliversState {
+  /// #T flags: in, tets that no flip improves as the mesh stands, not examined again until a
+  /// tet at one of their vertices changes (the caller vouches for them: a tet near which a node
+  /// moved since, one whose vertices or the other vertices of the tets around these moved, or
+  /// a tet near it whose `fixed` flag changed, is not settled; empty: none); out, the same for
+  /// the tets written.
+  std::vector<char> settled;
+  /// Out, #V flags (with the vertices inserted): the vertices at which a tet was added or
+  /// removed.
+  std::vector<char> touched;
+};
+
 /// Raises the smallest scaled Jacobian (quality.h) of a tet mesh by flips, Shewchuk's "face
 /// removal" (two tets across a face become three around the edge joining their apexes) and
 /// "edge removal" (the n tets around an interior edge become 2n - 4, the best triangulation of
@@ -62,8 +76,11 @@ struct RemoveSliversReport {
 ///                                it is on the boundary, >= 0; -1: never changed
 /// @param[in]     parameters      see RemoveSliversParameters
 /// @param[out]    report      the minimum and the flips done
+/// @param[in,out] state           null, or what the flips leave for the next call (see
+///                                RemoveSliversState)
 void remove_slivers(TetMesh& mesh, const std::vector<char>& fixed,
                     const std::vector<std::int32_t>& boundary_patch,
-                    const RemoveSliversParameters& parameters, RemoveSliversReport& report);
+                    const RemoveSliversParameters& parameters, RemoveSliversReport& report,
+                    RemoveSliversState* state = nullptr);
 
 }  // namespace hexmerge

@@ -44,7 +44,8 @@ RowsByNode rows_by_node(index_t nb_nodes, const std::vector<index_t>& keys, std:
 
 void smooth_nodes(TetMesh& mesh, const std::vector<char>& movable,
                   const SmoothNodesParameters& parameters, SmoothNodesReport& report,
-                  SurfacePath* surface, const std::vector<std::array<index_t, 5>>& pyramids) {
+                  SurfacePath* surface, const std::vector<std::array<index_t, 5>>& pyramids,
+                  std::vector<char>* settled) {
   if (!(parameters.target > 0 && parameters.target <= 1) ||
       !(parameters.nudge_target > 0 && parameters.nudge_target <= 1) ||
       !(parameters.floor > 0 && parameters.floor <= 1) ||
@@ -57,6 +58,11 @@ void smooth_nodes(TetMesh& mesh, const std::vector<char>& movable,
     throw InputError("smooth_nodes: one movable flag per node (" +
                          std::to_string(mesh.nb_vertices()) + "), not " +
                          std::to_string(movable.size()),
+                     Entity::Parameter);
+  if (settled != nullptr && settled->size() != mesh.nb_vertices())
+    throw InputError("smooth_nodes: one settled flag per node (" +
+                         std::to_string(mesh.nb_vertices()) + "), not " +
+                         std::to_string(settled->size()),
                      Entity::Parameter);
   report = SmoothNodesReport{};
   const index_t nv = mesh.nb_vertices(), nt = mesh.nb_tets();
@@ -87,6 +93,13 @@ void smooth_nodes(TetMesh& mesh, const std::vector<char>& movable,
   std::vector<double> pyramid_bound(pyramids.size());
   for (std::size_t i = 0; i < pyramids.size(); ++i)
     pyramid_bound[i] = std::min(parameters.pyramid_floor, pyramid_quality(i));
+  // Per node: its search would leave it where it stands (it did, and no node of a tet at it
+  // moved since). An apex whose pyramid is under the floor has a bound of this call's (higher
+  // than the call's before, where its search ran): searched again.
+  std::vector<char> still(nv, 0);
+  if (settled != nullptr) still = *settled;
+  for (std::size_t i = 0; i < pyramids.size(); ++i)
+    if (pyramid_bound[i] < parameters.pyramid_floor) still[pyramids[i][4]] = 0;
   // Whether node v's kept pyramids are all at their bounds where it stands now.
   auto pyramids_kept = [&](index_t v) {
     for (std::size_t i = apex_start[v]; i < apex_start[v + 1]; ++i)
@@ -147,7 +160,13 @@ void smooth_nodes(TetMesh& mesh, const std::vector<char>& movable,
   for (int pass = 0; pass < parameters.max_passes; ++pass) {
     std::size_t moved = 0;
     for (index_t v = 0; v < nv; ++v) {
-      if (movable[v] == kFixed || start[v] == start[v + 1]) continue;
+      if (movable[v] == kFixed || start[v] == start[v + 1] || still[v]) continue;
+      // Searched now: where it ends, it stays unless a node of a tet at it moves after.
+      still[v] = 1;
+      const auto unsettle_around = [&] {
+        for (std::size_t i = start[v]; i < start[v + 1]; ++i)
+          for (int k = 0; k < 4; ++k) still[mesh.tet(at[i])[k]] = 0;
+      };
       const bool on_surface = movable[v] == kOnSurface;
       if (on_surface && (!surface || surface->dimension(v) == 0)) continue;
       const bool nudged = movable[v] == kNudged;
@@ -258,7 +277,8 @@ void smooth_nodes(TetMesh& mesh, const std::vector<char>& movable,
           if (!better) step *= 0.5;
         }
         if ((here - origin).norm() > 0)
-          surface->moved(v, a, b), ++moved, ++report.moves, ++report.surface_moves;
+          surface->moved(v, a, b), ++moved, ++report.moves, ++report.surface_moves,
+              unsettle_around();
         continue;
       }
       if (!nudged) try_at(centroid) || try_at((here + centroid) * 0.5);
@@ -280,10 +300,11 @@ void smooth_nodes(TetMesh& mesh, const std::vector<char>& movable,
       // scaled Jacobian below Gmsh's on three more parts; so, 6 % fewer and none more).
       if (kept_worst >= 0.5 * parameters.floor && below_floor() > below)
         here = kept_here, place(v, here);
-      if ((here - origin).norm() > 0) ++moved, ++report.moves;
+      if ((here - origin).norm() > 0) ++moved, ++report.moves, unsettle_around();
     }
     if (moved == 0) break;
   }
+  if (settled != nullptr) *settled = std::move(still);
   report.min_after = std::numeric_limits<double>::infinity();
   for (index_t t = 0; t < nt; ++t) report.min_after = std::min(report.min_after, quality(t));
 }

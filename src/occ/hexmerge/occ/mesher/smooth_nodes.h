@@ -89,11 +89,18 @@ struct SmoothNodesReport {
 /// @param[in,out] surface     where kOnSurface nodes go (null: they stay)
 /// @param[in]     pyramids    pyramids to keep (cell_type.h's order: base 0-1-2-3, apex 4),
 ///                            each the union of tets of the mesh, positively oriented
-/// @throws InputError for a `movable` of another size than #V, a pyramid with a node out of
-///         range, or bad parameters
+/// @param[in,out] settled     null, or #V flags: in, nodes whose search would leave them where
+///                            they stand (the caller vouches: no tet at the node was added or
+///                            removed, nor its mobility, the parameters or the pyramids at it
+///                            changed, since a call left it flagged),
+///                            which are not searched until a node of a tet at them moves; out,
+///                            the same as the mesh stands. The moves made do not depend on it.
+/// @throws InputError for a `movable` or `settled` of another size than #V, a pyramid with a
+///         node out of range, or bad parameters
 void smooth_nodes(TetMesh& mesh, const std::vector<char>& movable,
                   const SmoothNodesParameters& parameters, SmoothNodesReport& report,
                   SurfacePath* surface = nullptr,
-                  const std::vector<std::array<index_t, 5>>& pyramids = {});
+                  const std::vector<std::array<index_t, 5>>& pyramids = {},
+                  std::vector<char>* settled = nullptr);
 
 }  // namespace hexmerge
