@@ -296,6 +296,60 @@ TEST(add_core, box_is_all_core) {
   EXPECT_EQ(core.nb_lattice_points, points - placed.nodes.size());
 }
 
+// A cylinder's core cut by a gap across y (the cells of one or two layers out of the core, the
+// lattice points inside it not kept), closing pyramids on the faces towards the gap: across a
+// gap of two cells, the faces are pulled into it; across a gap of one, they stay where they are. Pulled from both sides, the apexes in
+// such a gap passed each other's bases and left flat tets between them (gmsh_Kurbelwelle).
+TEST(pull_core, faces_across_a_gap_of_one_cell_are_not_pulled) {
+  const double h = 2.5;
+  const Prepared p = prepare(occ_cylinder(10, 20), h);
+  Placed placed = place(p);
+  const auto& l = p.lattice;
+  const mesher::KeptPoints all =
+      mesher::keep_lattice_points(l, *placed.around, *placed.parity, 0.6 * h, 0.3 * h, true);
+  const mesher::CoreLayout laid =
+      mesher::lay_core(l, *placed.around, *placed.parity, all, -1, h, false);
+  const auto cell_index = [&](int i, int j, int k) {
+    return (static_cast<std::size_t>(k) * l.cells[1] + j) * l.cells[0] + i;
+  };
+  const int gj = l.cells[1] / 2;
+  // How many of the base corners of the faces towards the gap move.
+  const auto moved_towards_gap = [&](int width) {
+    // (The lattice points inside the gap not kept: a node beside one stays.)
+    mesher::KeptPoints kept = all;
+    for (int k = 0; k <= l.cells[2]; ++k)
+      for (int i = 0; i <= l.cells[0]; ++i)
+        for (int j = gj + 1; j < gj + width; ++j) kept.kept[l.point_index(i, j, k)] = 0;
+    std::vector<char> core = laid.core;
+    for (int k = 0; k < l.cells[2]; ++k)
+      for (int i = 0; i < l.cells[0]; ++i)
+        for (int j = gj; j < gj + width; ++j) core[cell_index(i, j, k)] = 0;
+    std::vector<char> core_corner(kept.kept.size(), 0);
+    std::vector<mesher::PyramidFace> faces;
+    for (int k = 0; k < l.cells[2]; ++k)
+      for (int i = 0; i < l.cells[0]; ++i) {
+        if (!core[cell_index(i, gj - 1, k)] || !core[cell_index(i, gj + width, k)]) continue;
+        faces.push_back({{i, gj - 1, k}, 3, {i, gj, k}});
+        faces.push_back({{i, gj + width, k}, 2, {i, gj + width - 1, k}});
+      }
+    for (int k = 0; k < l.cells[2]; ++k)
+      for (int j = 0; j < l.cells[1]; ++j)
+        for (int i = 0; i < l.cells[0]; ++i)
+          if (core[cell_index(i, j, k)])
+            for (int c = 0; c < 8; ++c)
+              core_corner[l.point_index(i + (c & 1), j + ((c >> 1) & 1), k + ((c >> 2) & 1))] = 1;
+    EXPECT_GT(faces.size(), 8u);
+    const mesher::PulledCore pulled = mesher::pull_core(l, *placed.around, *placed.parity, kept,
+                                                        core, core_corner, faces, {}, h);
+    std::size_t moved = 0;
+    for (const mesher::PyramidFace& f : faces)
+      for (const std::size_t q : mesher::base_corners(l, f)) moved += pulled.node.count(q);
+    return moved;
+  };
+  EXPECT_GT(moved_towards_gap(2), 0u);
+  EXPECT_EQ(moved_towards_gap(1), 0u);
+}
+
 // A closing pyramid's scaled Jacobian (Verdict's): positive with the apex on the side `up`
 // names, the same for the pyramid mirrored, falling as the apex comes down to its base (0.82 at
 // half the base's side, kCorePyramidFloor 0.4 at about 0.21).

@@ -210,11 +210,38 @@ PulledCore pull_core(const Lattice& lattice, const Surroundings& around, const P
       }
     return false;
   };
+  // Whether the core lies beyond the apex cell of face f, one cell on along the face's normal
+  // (that cell, or one beside it whose cell beside the apex cell is not in the core): the apex
+  // cell is a gap of one cell between two parts of the core, and the face is not pulled. Pulled
+  // from both sides, the gap closed and the apexes in it passed each other's bases: flat tets
+  // between them that no flip or move takes out (gmsh_Kurbelwelle at its 250k size: 108 tets under
+  // scaled Jacobian 0.2 of two apexes and two core nodes, 57 more of a core face's triangle and a
+  // surface node, down to 0.038).
+  const auto core_beyond = [&](const PyramidFace& f) {
+    const int axis = f.dir / 2, u = (axis + 1) % 3, v = (axis + 2) % 3;
+    int c[3] = {f.n[0], f.n[1], f.n[2]};
+    c[axis] += f.dir % 2 ? 1 : -1;
+    if (c[axis] < 0 || c[axis] >= lattice.cells[axis]) return false;
+    for (int du = -1; du <= 1; ++du)
+      for (int dv = -1; dv <= 1; ++dv) {
+        int m[3] = {c[0], c[1], c[2]};
+        m[u] += du, m[v] += dv;
+        if (m[u] < 0 || m[u] >= lattice.cells[u] || m[v] < 0 || m[v] >= lattice.cells[v]) continue;
+        // (The cell beside the apex cell towards it not in the core: else the apex cell is a
+        // notch of the core, which both faces fill.)
+        int beside[3] = {f.n[0], f.n[1], f.n[2]};
+        beside[u] += du, beside[v] += dv;
+        if (core[cell_index(m)] && !core[cell_index(beside)]) return true;
+      }
+    return false;
+  };
   for (const PyramidFace& f : faces) {
     const Vec3 apex = home(cell_index(f.n));
     const double s =
-        std::clamp(distance_to(around.every_face, apex, 2 * h, tolerance) - kPullTarget * h, 0.0,
-                   kPullMost * h);
+        core_beyond(f)
+            ? 0.0
+            : std::clamp(distance_to(around.every_face, apex, 2 * h, tolerance) - kPullTarget * h,
+                         0.0, kPullMost * h);
     for (const std::size_t p : base_corners(lattice, f)) {
       Room& r = room[p];
       if (!(r.has >> f.dir & 1)) r.s[f.dir] = s;
