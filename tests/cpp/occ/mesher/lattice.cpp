@@ -298,8 +298,9 @@ TEST(add_core, box_is_all_core) {
 
 // A cylinder's core cut by a gap across y (the cells of one or two layers out of the core, the
 // lattice points inside it not kept), closing pyramids on the faces towards the gap: across a
-// gap of two cells, the faces are pulled into it; across a gap of one, they stay where they are. Pulled from both sides, the apexes in
-// such a gap passed each other's bases and left flat tets between them (gmsh_Kurbelwelle).
+// gap of two cells, the faces are pulled into it; across a gap of one, they stay where they are.
+// Pulled from both sides, the apexes in such a gap passed each other's bases and left flat tets
+// between them (gmsh_Kurbelwelle).
 TEST(pull_core, faces_across_a_gap_of_one_cell_are_not_pulled) {
   const double h = 2.5;
   const Prepared p = prepare(occ_cylinder(10, 20), h);
@@ -339,8 +340,8 @@ TEST(pull_core, faces_across_a_gap_of_one_cell_are_not_pulled) {
             for (int c = 0; c < 8; ++c)
               core_corner[l.point_index(i + (c & 1), j + ((c >> 1) & 1), k + ((c >> 2) & 1))] = 1;
     EXPECT_GT(faces.size(), 8u);
-    const mesher::PulledCore pulled = mesher::pull_core(l, *placed.around, *placed.parity, kept,
-                                                        core, core_corner, faces, {}, h);
+    const mesher::PulledCore pulled =
+        mesher::pull_core(l, *placed.around, *placed.parity, kept, core, core_corner, faces, {}, h);
     std::size_t moved = 0;
     for (const mesher::PyramidFace& f : faces)
       for (const std::size_t q : mesher::base_corners(l, f)) moved += pulled.node.count(q);
