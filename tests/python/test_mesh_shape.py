@@ -824,6 +824,29 @@ def test_a_tetgen_failure_on_the_pulled_core_falls_back_to_the_lattice_as_laid(s
     assert_checked(mesh, tets, rep, 5.0)
 
 
+# A random part of bench/random_parts.py (seed 20261204, its part 006, written by FreeCAD): at
+# h 4.4417 its core is pulled and the buffer layer's hexahedra stand on it.
+PULLED_PYRAMID_SIDE = ROOT / "tests" / "data" / "pulled_pyramid_side.brep"
+
+
+@needs_tetgen
+def test_a_pulled_pyramids_sides_cross_no_face() -> None:
+    """pull_core moved an apex and its base's corners each clear of the faces, but a pyramid's
+    side between them crossed the surface: TetGen stopped ("a segment and a subface intersect",
+    faces 13 and 1), with the buffer layer and without, and the mesh fell back to the core not
+    pulled (69.9 % hex volume against 80.3). A moved pyramid's way from its base to its apex now
+    keeps clear of the faces, as an inner apex's does."""
+    h = 4.441692740424754
+    tets, tet_report = hexmerge.mesh_shape(PULLED_PYRAMID_SIDE, h, recombine=False)
+    meshing = tet_report["meshing"]
+    assert meshing["strategy"] == "lattice" and meshing["failed_strategies"] == []
+    assert meshing["nb_pulled_points"] > 0 and meshing["nb_buffer_hexes"] > 0
+    cells = tets.cell_vertices.reshape(-1, 4).astype(np.int64)
+    mesh, report = hexmerge.recombine(tets.points, cells, tets.regions)
+    assert_checked(mesh, tets, report, h)
+    assert report["volume_fraction"]["hex"] >= 0.78
+
+
 @needs_tetgen
 def test_tetgen_gets_the_lattice_faces_as_triangles(shapes, tmp_path) -> None:
     """TetGen 1.5 triangulating a lattice face from its loops stopped ("Two segments ... intersect"

@@ -309,6 +309,17 @@ PulledCore pull_core(const Lattice& lattice, const Surroundings& around, const P
         return false;
     return true;
   };
+  // Whether a pyramid's side from base corner c to its apex keeps kApexClearance h from every
+  // face beyond kPullNodeClearance h of c (a moved corner keeps that much, an unmoved one may lie
+  // on a lattice face): the apex and its corners each clear, a side between them crossed the
+  // surface, and TetGen stopped on it (a random part at h 4.44: "a segment and a subface
+  // intersect", with the buffer layer and without).
+  const auto side_clear = [&](const Vec3& c, const Vec3& apex) {
+    const double length = (apex - c).norm();
+    if (length <= kPullNodeClearance * h) return true;
+    const Vec3 from = c + (apex - c) * (kPullNodeClearance * h / length);
+    return clear_path(from, apex, kApexClearance * h);
+  };
   // The faces of the cells with a corner that may move, of the core cells beside them and of
   // every closing pyramid, each quad split on its diagonal from its least corner (as emit_core()
   // gives them to TetGen), where the moves put them; the moving corners of those that cross
@@ -475,6 +486,7 @@ PulledCore pull_core(const Lattice& lattice, const Surroundings& around, const P
         for (int m = 0; m < 4; ++m) corner[m] = point_of(base[m]) + node_shift(base[m]);
         ok =
             closing_pyramid_quality(corner, apex, faces[list[i]].dir % 2 == 1) >= kCorePyramidFloor;
+        for (int m = 0; m < 4 && ok; ++m) ok = side_clear(corner[m], apex);
       }
       if (!ok)
         for (const std::size_t p : apex_corners[a])
