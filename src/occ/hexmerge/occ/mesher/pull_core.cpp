@@ -29,6 +29,10 @@ constexpr double kPullTarget = 0.15;
 constexpr double kPullMost = 0.5;
 constexpr double kPullCellFloor = 0.9;
 constexpr double kPullFold = 15.0;
+// A face across a gap of one cell in the core (see core_beyond in pull_core()) moves at most this
+// fraction of h: the gap closes by at most twice that, and its apexes stay short of each other's
+// bases.
+constexpr double kPullGapMost = 0.1;
 // Moved core nodes keep this fraction of h from the faces and the surface's nodes: at 0.1 h the
 // tets between them and the boundary triangles were flat (real parts at their 250k sizes: 1,413
 // elements under scaled Jacobian 0.2 against 1,095 unpulled; hex_bolt 194, thin_bracket 47; at
@@ -212,7 +216,8 @@ PulledCore pull_core(const Lattice& lattice, const Surroundings& around, const P
   };
   // Whether the core lies beyond the apex cell of face f, one cell on along the face's normal
   // (that cell, or one beside it whose cell beside the apex cell is not in the core): the apex
-  // cell is a gap of one cell between two parts of the core, and the face is not pulled. Pulled
+  // cell is a gap of one cell between two parts of the core, and the face is pulled by at most
+  // kPullGapMost h. Pulled
   // from both sides, the gap closed and the apexes in it passed each other's bases: flat tets
   // between them that no flip or move takes out (gmsh_Kurbelwelle at its 250k size: 108 tets under
   // scaled Jacobian 0.2 of two apexes and two core nodes, 57 more of a core face's triangle and a
@@ -238,10 +243,8 @@ PulledCore pull_core(const Lattice& lattice, const Surroundings& around, const P
   for (const PyramidFace& f : faces) {
     const Vec3 apex = home(cell_index(f.n));
     const double s =
-        core_beyond(f)
-            ? 0.0
-            : std::clamp(distance_to(around.every_face, apex, 2 * h, tolerance) - kPullTarget * h,
-                         0.0, kPullMost * h);
+        std::clamp(distance_to(around.every_face, apex, 2 * h, tolerance) - kPullTarget * h, 0.0,
+                   (core_beyond(f) ? kPullGapMost : kPullMost) * h);
     for (const std::size_t p : base_corners(lattice, f)) {
       Room& r = room[p];
       if (!(r.has >> f.dir & 1)) r.s[f.dir] = s;
