@@ -217,11 +217,10 @@ PulledCore pull_core(const Lattice& lattice, const Surroundings& around, const P
   // Whether the core lies beyond the apex cell of face f, one cell on along the face's normal
   // (that cell, or one beside it whose cell beside the apex cell is not in the core): the apex
   // cell is a gap of one cell between two parts of the core, and the face is pulled by at most
-  // kPullGapMost h. Pulled
-  // from both sides, the gap closed and the apexes in it passed each other's bases: flat tets
-  // between them that no flip or move takes out (gmsh_Kurbelwelle at its 250k size: 108 tets under
-  // scaled Jacobian 0.2 of two apexes and two core nodes, 57 more of a core face's triangle and a
-  // surface node, down to 0.038).
+  // kPullGapMost h. Pulled from both sides by up to kPullMost h, the gap closed and the apexes in
+  // it passed each other's bases: flat tets between them that no flip or move takes out
+  // (gmsh_Kurbelwelle at its 250k size: 84 tets of two apexes and two core nodes and 24 of an
+  // apex and three, down to scaled Jacobian 0.038).
   const auto core_beyond = [&](const PyramidFace& f) {
     const int axis = f.dir / 2, u = (axis + 1) % 3, v = (axis + 2) % 3;
     int c[3] = {f.n[0], f.n[1], f.n[2]};

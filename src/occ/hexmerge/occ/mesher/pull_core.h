@@ -56,9 +56,11 @@ std::optional<Vec3> place_inner_apex(const Lattice& lattice, const Surroundings&
 /// moved node come within 0.25 h of a face or a surface node, an apex within kApexClearance h of
 /// a face (kApexNodeClearance h of a node), or either leave the solid; dropped after five
 /// halvings. Nodes on lattice faces, on the surface, or beside a kept point that is no core
-/// corner (`core_corner`, per lattice point) or lies on a lattice face stay, and so do faces
-/// whose apex cell has the core one cell on along their normal (that cell or one beside it): a
-/// gap in the core, which a pull from both sides would close.
+/// corner (`core_corner`, per lattice point) or lies on a lattice face stay, and a face whose
+/// apex cell has the core one cell on along its normal (that cell, or one beside it whose cell
+/// beside the apex cell is out of the core: a gap in the core, which a pull from both sides
+/// would close) moves at most 0.1 h. A moved pyramid's sides keep 0.02 h from the faces beyond
+/// 0.25 h of their base corners.
 /// @param[in] core        per cell (i fastest): in the core
 /// @param[in] faces       the core's closing pyramids
 /// @param[in] inner_apex  per cell across a face whose centre is outside: the apex inside that
