@@ -396,7 +396,9 @@ def test_buffer_cells_beside_a_poor_tet_are_released() -> None:
     (smallest 0.155) beside buffer cells whose tops the tet improvement could not move; the cells
     a tet under 0.2 touches after the last flips are now released for one more round (measured
     when this was done: 16 released, none under 0.2, hex volume 85.8 %, 82.2 % without the
-    layer)."""
+    layer). Since a face across a one-cell gap of the core is pulled by at most 0.1 h (d70f912),
+    no tet under 0.2 touches a buffer cell at this size (none released, at h 9.5 to 12 neither);
+    the release is exercised on gmsh_t20_data below."""
     h = 11.0
     shares = []
     for buffer in (False, True):
@@ -405,7 +407,7 @@ def test_buffer_cells_beside_a_poor_tet_are_released() -> None:
         points, cells, mesh, rec, check = recombined_and_checked(tets)
         shares.append(rec["volume_fraction"]["hex"])
     meshing = report["meshing"]
-    assert meshing["nb_buffer_hexes"] > 200 and meshing["nb_buffer_cells_released"] > 0
+    assert meshing["nb_buffer_hexes"] > 200
     assert check["min_scaled_jacobian"] >= SJ_FLOOR
     assert shares[1] > shares[0], shares
 
