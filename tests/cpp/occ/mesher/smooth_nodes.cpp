@@ -11,6 +11,7 @@
 #include "hexmerge/core/error.h"
 #include "hexmerge/geometry/quality.h"
 #include "hexmerge/geometry/vec3.h"
+#include "hexmerge/mesh/tet_topology.h"
 
 namespace hexmerge {
 namespace {
@@ -286,23 +287,12 @@ TEST(smooth_nodes, the_settled_nodes_a_call_leaves_change_no_move) {
   if (given.nb_tets() == 0) GTEST_SKIP() << "the tetgen program is not installed";
   // The nodes inside are free (a node on the lattice's box is in a boundary face).
   std::vector<char> movable(given.nb_vertices(), kFree);
-  {
-    std::vector<std::array<index_t, 3>> faces;
-    for (index_t t = 0; t < given.nb_tets(); ++t)
-      for (int f = 0; f < 4; ++f) {
-        std::array<index_t, 3> k{given.tet(t)[(f + 1) % 4], given.tet(t)[(f + 2) % 4],
-                                 given.tet(t)[(f + 3) % 4]};
-        std::sort(k.begin(), k.end());
-        faces.push_back(k);
-      }
-    std::sort(faces.begin(), faces.end());
-    for (std::size_t i = 0; i < faces.size(); ++i) {
-      const bool shared =
-          (i > 0 && faces[i - 1] == faces[i]) || (i + 1 < faces.size() && faces[i + 1] == faces[i]);
-      if (!shared)
-        for (const index_t v : faces[i]) movable[v] = kFixed;
-    }
-  }
+  const TetTopology topology(given);
+  for (index_t t = 0; t < given.nb_tets(); ++t)
+    for (int f = 0; f < 4; ++f)
+      if (topology.on_boundary(t, f))
+        for (int k = 0; k < 4; ++k)
+          if (k != f) movable[given.tet(t)[k]] = kFixed;
   SmoothNodesParameters lower, two_passes;
   lower.target = lower.nudge_target = 0.15;  // fewer nodes searched: some stay settled
   two_passes = lower;

@@ -40,7 +40,7 @@ bool same_orientation(const Tet& t, index_t w, index_t x, index_t y, index_t z) 
 class FlipMesh {
  public:
   FlipMesh(TetMesh& mesh, const std::vector<char>& fixed,
-           const std::vector<std::int32_t>& boundary_patch, const std::vector<char>& settled)
+           const std::vector<std::int32_t>& boundary_patch, const std::vector<char>* settled)
       : points_(mesh.points) {
     // Each vertex's list allocated once, at its number of tets (the flips add a few).
     std::vector<index_t> degree(mesh.nb_vertices(), 0);
@@ -58,8 +58,9 @@ class FlipMesh {
     }
     // The tets settled before: examined after every stamp the adds above left.
     clock_ = kBuilt;
-    for (std::size_t t = 0; t < settled.size(); ++t)
-      if (settled[t]) examined_[t] = clock_;
+    if (settled != nullptr)
+      for (std::size_t t = 0; t < settled->size(); ++t)
+        if ((*settled)[t]) examined_[t] = clock_;
     if (boundary_patch.empty()) return;
     // The patches of the boundary faces (a face without one reads as -1, as a face not kept).
     for (index_t t = 0; t < mesh.nb_tets(); ++t)
@@ -599,7 +600,7 @@ void remove_slivers(TetMesh& mesh, const std::vector<char>& fixed,
   if (state != nullptr && !state->settled.empty() && state->settled.size() != mesh.nb_tets())
     throw InputError("remove_slivers: one settled flag per tet", Entity::Parameter);
   report = RemoveSliversReport{};
-  FlipMesh m(mesh, fixed, boundary_patch, state != nullptr ? state->settled : std::vector<char>{});
+  FlipMesh m(mesh, fixed, boundary_patch, state != nullptr ? &state->settled : nullptr);
   auto summarise = [&](double& min, std::size_t& below) {
     min = kInfinity;
     for (index_t t = 0; t < m.nb_slots(); ++t)
