@@ -203,8 +203,10 @@ class TriangleSet {
       : nodes_(nodes), grid_(lo, hi, cell) {}
   void add(const std::array<int, 3>& t) {
     const Vec3 &a = nodes_[t[0]], &b = nodes_[t[1]], &c = nodes_[t[2]];
-    grid_.add(static_cast<int>(tris_.size()), vmin(a, vmin(b, c)), vmax(a, vmax(b, c)));
+    const Vec3 lo = vmin(a, vmin(b, c)), hi = vmax(a, vmax(b, c));
+    grid_.add(static_cast<int>(tris_.size()), lo, hi);
     tris_.push_back(t);
+    boxes_.push_back({lo, hi});
   }
   bool any_within(const Vec3& q, double r) const {
     return any_within(q, r, [](int) { return true; });
@@ -213,9 +215,16 @@ class TriangleSet {
   template <typename Counts>
   bool any_within(const Vec3& q, double r, Counts&& counts) const {
     const Vec3 d{r, r, r};
+    // A triangle's box farther than r from q (by more than the distance's rounding, 1e-9 of the
+    // coordinates' size) holds no point within r: the distance to the triangle is not computed.
+    const double reach =
+        r + 1e-9 * (std::max({std::abs(q.x), std::abs(q.y), std::abs(q.z)}) + std::abs(r));
     return grid_.any_in(q - d, q + d, [&](int i) {
       const auto& t = tris_[i];
-      return counts(i) &&
+      if (!counts(i)) return false;
+      const std::array<Vec3, 2>& box = boxes_[i];
+      const Vec3 out = vmax(vmax(box[0] - q, q - box[1]), Vec3{0, 0, 0});
+      return out.dot(out) <= reach * reach &&
              squared_distance_to_triangle(q, nodes_[t[0]], nodes_[t[1]], nodes_[t[2]]) < r * r;
     });
   }
@@ -224,6 +233,7 @@ class TriangleSet {
   const std::vector<Vec3>& nodes_;
   BucketGrid grid_;
   std::vector<std::array<int, 3>> tris_;
+  std::vector<std::array<Vec3, 2>> boxes_;  // per triangle, its bounding box
 };
 
 }  // namespace hexmerge::mesher
