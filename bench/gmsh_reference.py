@@ -34,7 +34,10 @@ each type and their volume fractions (each cell split into tets), the zero-volum
 glues quads to triangles with, the quad faces against triangles (non-conforming: a quad face of a
 cell that is no other cell's quad face while one of its triangles is another cell's face), the
 smallest scaled Jacobian over the cells with volume (Verdict's, real_parts.CORNERS; Gmsh orders a
-cell's vertices as hexmerge does) and those below 0.2. Results: bench/results/gmsh-reference-hexdominant.json;
+cell's vertices as hexmerge does) and those below 0.2, and the volume of its conforming hexahedra
+(no quad face against triangles: the ones a conforming mesh made from Gmsh's keeps, every other
+hexahedron split; `usable_hex_fraction`: of those, scaled Jacobian 0.2 or more). Results:
+bench/results/gmsh-reference-hexdominant.json;
 its table puts hexmerge's hex volume of the same part at the same h beside Gmsh's (--ours, default
 bench/results/real-parts-latest.json). Debian 12's Gmsh 4.8.4 is too old: bench/fetch_gmsh.py
 unpacks Debian 13's 4.13.1; --gmsh (or $HEXMERGE_GMSH) names the Gmsh to run.
@@ -163,6 +166,7 @@ def measure_mixed(msh: str) -> dict:
     points, cells = read_msh2(msh)
     row = {"cells": {}, "volume_fraction": {}, "trihedra": int(len(cells.get(TRIHEDRON, [])))}
     volume, sj, quads, triangles = {}, [], [], []
+    hex_cells, hex_volume, hex_sj = None, None, None  # the hexahedra, their volumes and scaled Jacobians
     for kind, (name, t, faces, split) in CELLS.items():
         c = cells.get(kind, np.zeros((0, 1 + max(max(f) for f in faces)), np.int64))
         row["cells"][name] = int(len(c))
@@ -174,6 +178,9 @@ def measure_mixed(msh: str) -> dict:
         if len(c):
             corners, scale = real_parts.CORNERS[t]
             sj.append(real_parts.corner_scaled_jacobians(p, corners, scale))
+        if name == "hex":
+            hex_cells, hex_volume = c, vol
+            hex_sj = sj[-1] if len(c) else np.zeros(0)
         for f in faces:
             (quads if len(f) == 4 else triangles).append(np.sort(c[:, list(f)], axis=1))
     if not sj:  # no volume cells: the caller's row says so
@@ -190,9 +197,24 @@ def measure_mixed(msh: str) -> dict:
     quads, counts = np.unique(quads, axis=0, return_counts=True)
     alone = quads[counts == 1]
     tri = {tuple(f) for f in np.concatenate(triangles).tolist()}
-    row["nonconforming_quads"] = sum(
-        1 for q in alone.tolist()
-        if any(tuple(sorted(q[i] for i in k)) in tri for k in ((0, 1, 2), (0, 1, 3), (0, 2, 3), (1, 2, 3))))
+    against = {tuple(q) for q in alone.tolist()
+               if any(tuple(sorted(q[i] for i in k)) in tri for k in ((0, 1, 2), (0, 1, 3), (0, 2, 3), (1, 2, 3)))}
+    row["nonconforming_quads"] = len(against)
+    # The hexahedra a conforming mesh could keep as they are: no quad face against triangles (each
+    # meets another cell's quad or the boundary); of those, the ones a solver can use (scaled
+    # Jacobian at least the issue's 0.2). Fractions of the whole volume, as the hex volume.
+    if hex_cells is not None and len(hex_cells):
+        faces = CELLS[5][2]
+        open_face = np.zeros(len(hex_cells), dtype=bool)
+        for f in faces:
+            keys = np.sort(hex_cells[:, list(f)], axis=1)
+            open_face |= np.array([tuple(k) in against for k in keys.tolist()])
+        conforming = ~open_face
+        row["conforming_hexes"] = int(conforming.sum())
+        row["conforming_hex_fraction"] = float(hex_volume[conforming].sum() / total)
+        usable = conforming & (hex_sj >= real_parts.SJ_FLOOR)
+        row["usable_hexes"] = int(usable.sum())
+        row["usable_hex_fraction"] = float(hex_volume[usable].sum() / total)
     return row
 
 
@@ -266,8 +288,9 @@ def markdown_hex(data, ours) -> str:
     mine = {(r["part"], r["target"]): r for r in (ours or {}).get("rows", []) if r.get("status") == "ok"}
     lines = [heading(data) + f"; hexmerge: `{(ours or {}).get('commit', 'none')}`.", "",
              "| part | target | h | status | Gmsh s | hexahedra | prisms | pyramids | tets | trihedra "
-             "| quads against triangles | min SJ | # SJ < 0.2 | Gmsh hex vol % | hexmerge hex vol % (same h) |",
-             "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+             "| quads against triangles | min SJ | # SJ < 0.2 | Gmsh hex vol % | Gmsh conforming hex vol % "
+             "| hexmerge hex vol % (same h) |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     rows = sorted_rows(data)
 
     def hexmerge_hex(r):
@@ -285,19 +308,26 @@ def markdown_hex(data, ours) -> str:
             + [real_parts.cell(r, "trihedra", ","), real_parts.cell(r, "nonconforming_quads", ","),
                real_parts.cell(r, "min_sj", ".3g"), real_parts.cell(r, "below_sj_floor", ","),
                f"{100 * r['volume_fraction']['hex']:.1f}" if ok else "–",
+               f"{100 * r['conforming_hex_fraction']:.1f}" if ok and "conforming_hex_fraction" in r else "–",
                f"{ours_hex:.1f}" if ours_hex is not None else "–"]) + " |")
     lines.append("")
     for target in o["targets"]:
         here = [r for r in rows if r["target"] == target]
         ok = [r for r in here if r["status"] == "ok"]
         both = [(100 * r["volume_fraction"]["hex"], hexmerge_hex(r)) for r in ok if hexmerge_hex(r) is not None]
+        conforming = [(100 * r["conforming_hex_fraction"], hexmerge_hex(r)) for r in ok
+                      if hexmerge_hex(r) is not None and "conforming_hex_fraction" in r]
         lines.append(
             f"- {target}: Gmsh meshed {len(ok)} of {len(here)} parts, median hex volume "
             f"{median([100 * r['volume_fraction']['hex'] for r in ok]):.1f} %, "
             f"{sum(r['nonconforming_quads'] for r in ok):,} quads against triangles and "
             f"{sum(r['trihedra'] for r in ok):,} trihedra in all; on the {len(both)} parts both meshed at the "
             f"same h: median hex volume Gmsh {median([g for g, _ in both]):.1f} %, hexmerge "
-            f"{median([h for _, h in both]):.1f} %; hexmerge at least Gmsh's on {sum(1 for g, h in both if h >= g)}")
+            f"{median([h for _, h in both]):.1f} %; hexmerge at least Gmsh's on {sum(1 for g, h in both if h >= g)}"
+            + (f"; Gmsh's conforming hexahedra (no quad face against triangles) median "
+               f"{median([g for g, _ in conforming]):.1f} % of the volume ({min(g for g, _ in conforming):.1f} to "
+               f"{max(g for g, _ in conforming):.1f}), hexmerge at least that on "
+               f"{sum(1 for g, h in conforming if h >= g)} of {len(conforming)}" if conforming else ""))
     return "\n".join(lines)
 
 

@@ -53,10 +53,10 @@ HEX_B = [2, 3, 6, 5, 8, 9, 12, 11]
 TETS_B = [[2, 3, 6, 12], [2, 6, 5, 12], [2, 5, 11, 12], [2, 11, 8, 12], [2, 8, 9, 12], [2, 9, 3, 12]]
 
 
-def write_msh2(path, cells) -> str:
-    """An ASCII MSH 2.2 file of CUBES' nodes and cells [(Gmsh type, node ids)]."""
-    lines = ["$MeshFormat", "2.2 0 8", "$EndMeshFormat", "$Nodes", str(len(CUBES))]
-    lines += [f"{i + 1} {x} {y} {z}" for i, (x, y, z) in enumerate(CUBES)]
+def write_msh2(path, cells, nodes=CUBES) -> str:
+    """An ASCII MSH 2.2 file of the nodes (CUBES') and cells [(Gmsh type, node ids)]."""
+    lines = ["$MeshFormat", "2.2 0 8", "$EndMeshFormat", "$Nodes", str(len(nodes))]
+    lines += [f"{i + 1} {x} {y} {z}" for i, (x, y, z) in enumerate(nodes)]
     lines += ["$EndNodes", "$Elements", str(len(cells))]
     lines += [f"{i + 1} {kind} 2 1 1 " + " ".join(map(str, nodes)) for i, (kind, nodes) in enumerate(cells)]
     lines += ["$EndElements"]
@@ -74,6 +74,21 @@ def test_gmsh_hex_dominant_quads_against_triangles(tmp_path) -> None:
     assert row["volume_fraction"]["tet"] == pytest.approx(0.5)
     assert row["nonconforming_quads"] == 1  # the hexahedron's face at x = 1, against two tets
     assert row["min_sj"] > 0 and row["nonpositive_sj"] == 0
+    # Made conforming, the mesh cannot keep that hexahedron: none of its volume is conforming.
+    assert row["conforming_hexes"] == 0 and row["conforming_hex_fraction"] == 0.0
+    assert row["usable_hex_fraction"] == 0.0
+
+
+def test_gmsh_hex_dominant_conforming_but_unusable_hexahedron(tmp_path) -> None:
+    # The second cube's far top edge brought down and in, to (1.2, y, 0.1): its corners at x = 2
+    # nearly flat (scaled Jacobian about 0.12), its face against the first still shared.
+    nodes = [(1.2, y, 0.1) if (x, z) == (2, 1) else (x, y, z) for (x, y, z) in CUBES]
+    row = gmsh_reference.measure_mixed(write_msh2(tmp_path / "squashed.msh", [(5, HEX_A), (5, HEX_B)], nodes))
+    assert row["nonconforming_quads"] == 0
+    assert row["conforming_hexes"] == 2 and row["conforming_hex_fraction"] == pytest.approx(1.0)
+    assert row["below_sj_floor"] == 1
+    assert row["usable_hexes"] == 1  # the first cube only
+    assert row["usable_hex_fraction"] == pytest.approx(1.0 / row["volume"])
 
 
 def test_gmsh_hex_dominant_conforming_hexahedra(tmp_path) -> None:
@@ -81,6 +96,8 @@ def test_gmsh_hex_dominant_conforming_hexahedra(tmp_path) -> None:
     assert row["cells"]["hex"] == 2 and row["volume_fraction"]["hex"] == pytest.approx(1.0)
     assert row["nonconforming_quads"] == 0  # the shared face is the other hexahedron's, the rest boundary
     assert row["min_sj"] == pytest.approx(1.0) and row["below_sj_floor"] == 0
+    assert row["conforming_hexes"] == row["usable_hexes"] == 2
+    assert row["conforming_hex_fraction"] == pytest.approx(1.0)
 
 
 def test_gmsh_hex_dominant_without_volume_cells(tmp_path) -> None:
