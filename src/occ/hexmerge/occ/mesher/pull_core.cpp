@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <map>
 #include <unordered_map>
 #include <unordered_set>
 
@@ -525,15 +524,18 @@ std::size_t resplit_core(const std::vector<double>& coordinates, std::vector<ind
   for (std::size_t i = 0; i < nb_points; ++i) points[i] = Vec3::of(&coordinates[3 * i]);
   NodeHash at(points, 1e3 * tolerance);
   for (std::size_t i = 0; i < nb_points; ++i) at.add(static_cast<int>(i));
-  std::unordered_set<FaceKey, FaceKeyHash> barrier;
-  // Only a face whose three vertices are the constraints' can be one (no look-up for the rest).
+  // The constraints' faces, sorted for look-ups; only a face whose three vertices are the
+  // constraints' can be one (no look-up for the rest).
+  std::vector<FaceKey> barrier;
+  barrier.reserve(constraints.size());
   std::vector<char> on_barrier(nb_points, 0);
   for (const std::array<int, 3>& t : constraints) {
-    barrier.insert(face_key(t[0], t[1], t[2]));
+    barrier.push_back(face_key(t[0], t[1], t[2]));
     for (const int v : t) on_barrier[static_cast<std::size_t>(v)] = 1;
   }
+  std::sort(barrier.begin(), barrier.end());
   // Regions: union-find over the tets across the faces that are no barrier, each face joined
-  // from the later of its two tets (the order decides the roots, which key `members` below).
+  // from the later of its two tets (the order decides the roots, which key the regions below).
   std::vector<index_t> parent(nb_tets);
   for (index_t t = 0; t < nb_tets; ++t) parent[t] = t;
   const auto find = [&](index_t t) {
@@ -551,26 +553,67 @@ std::size_t resplit_core(const std::vector<double>& coordinates, std::vector<ind
         const index_t n = topology.neighbor(t, f);
         if (n == NO_CELL || n > t) continue;
         const index_t a = v[(f + 1) % 4], b = v[(f + 2) % 4], c = v[(f + 3) % 4];
-        if (on_barrier[a] && on_barrier[b] && on_barrier[c] && barrier.count(face_key(a, b, c)))
+        if (on_barrier[a] && on_barrier[b] && on_barrier[c] &&
+            std::binary_search(barrier.begin(), barrier.end(), face_key(a, b, c)))
           continue;
         parent[find(t)] = find(n);
       }
     }
     tets = std::move(mesh.tets);
   }
-  std::unordered_map<index_t, std::vector<index_t>> members;
+  // The regions of at most 12 tets (a cell's or a pyramid's): their tets in order, by root
+  // (compressed rows), and their sorted corners, the regions sorted by those for look-ups.
+  std::vector<index_t> root(nb_tets);
   std::vector<std::size_t> size(nb_tets, 0);
-  for (index_t t = 0; t < nb_tets; ++t) ++size[find(t)];
+  for (index_t t = 0; t < nb_tets; ++t) ++size[root[t] = find(t)];
+  std::vector<std::size_t> first(nb_tets + 1, 0);
   for (index_t t = 0; t < nb_tets; ++t)
-    if (size[find(t)] <= 12) members[find(t)].push_back(t);
-  std::map<std::vector<index_t>, index_t> region_of;  // sorted corners -> region root
-  for (const auto& [root, list] : members) {
-    std::vector<index_t> corners;
-    for (const index_t t : list) corners.insert(corners.end(), &tets[4 * t], &tets[4 * t + 4]);
-    std::sort(corners.begin(), corners.end());
-    corners.erase(std::unique(corners.begin(), corners.end()), corners.end());
-    region_of[corners] = root;
+    if (size[root[t]] <= 12) ++first[root[t] + 1];
+  for (index_t t = 0; t < nb_tets; ++t) first[t + 1] += first[t];
+  std::vector<index_t> member(first[nb_tets]);
+  {
+    std::vector<std::size_t> fill(first.begin(), first.end() - 1);
+    for (index_t t = 0; t < nb_tets; ++t)
+      if (size[root[t]] <= 12) member[fill[root[t]]++] = t;
   }
+  struct Region {
+    std::size_t begin, end;  // its corners in `corners`
+    index_t root;
+  };
+  std::vector<index_t> corners;
+  std::vector<Region> regions;
+  for (index_t r = 0; r < nb_tets; ++r) {
+    if (first[r] == first[r + 1]) continue;
+    const std::size_t begin = corners.size();
+    for (std::size_t i = first[r]; i < first[r + 1]; ++i)
+      corners.insert(corners.end(), &tets[4 * member[i]], &tets[4 * member[i] + 4]);
+    std::sort(corners.begin() + static_cast<std::ptrdiff_t>(begin), corners.end());
+    corners.erase(std::unique(corners.begin() + static_cast<std::ptrdiff_t>(begin), corners.end()),
+                  corners.end());
+    regions.push_back({begin, corners.size(), r});
+  }
+  const auto less = [&](const Region& x, const Region& y) {
+    return std::lexicographical_compare(corners.begin() + static_cast<std::ptrdiff_t>(x.begin),
+                                        corners.begin() + static_cast<std::ptrdiff_t>(x.end),
+                                        corners.begin() + static_cast<std::ptrdiff_t>(y.begin),
+                                        corners.begin() + static_cast<std::ptrdiff_t>(y.end));
+  };
+  std::sort(regions.begin(), regions.end(), less);
+  // The region whose corners are `sorted`, or null.
+  const auto region_of = [&](const std::vector<index_t>& sorted) -> const Region* {
+    const auto it = std::lower_bound(regions.begin(), regions.end(), sorted,
+                                     [&](const Region& x, const std::vector<index_t>& key) {
+                                       return std::lexicographical_compare(
+                                           corners.begin() + static_cast<std::ptrdiff_t>(x.begin),
+                                           corners.begin() + static_cast<std::ptrdiff_t>(x.end),
+                                           key.begin(), key.end());
+                                     });
+    if (it == regions.end() || !std::equal(corners.begin() + static_cast<std::ptrdiff_t>(it->begin),
+                                           corners.begin() + static_cast<std::ptrdiff_t>(it->end),
+                                           sorted.begin(), sorted.end()))
+      return nullptr;
+    return &*it;
+  };
   const auto volume = [&](index_t a, index_t b, index_t c, index_t d) {
     return det3(points[b] - points[a], points[c] - points[a], points[d] - points[a]) / 6;
   };
@@ -587,9 +630,11 @@ std::size_t resplit_core(const std::vector<double>& coordinates, std::vector<ind
     if (ids.size() != split.corners.size()) continue;
     std::vector<index_t> sorted = ids;
     std::sort(sorted.begin(), sorted.end());
-    const auto it = region_of.find(sorted);
-    if (it == region_of.end()) continue;
-    const std::vector<index_t>& list = members[it->second];
+    const Region* region = region_of(sorted);
+    if (region == nullptr) continue;
+    const std::vector<index_t> list(
+        member.begin() + static_cast<std::ptrdiff_t>(first[region->root]),
+        member.begin() + static_cast<std::ptrdiff_t>(first[region->root + 1]));
     double before = 0, after = 0;
     for (const index_t t : list) {
       const index_t* v = &tets[4 * t];
@@ -607,16 +652,22 @@ std::size_t resplit_core(const std::vector<double>& coordinates, std::vector<ind
     }
     // The same outer faces (the region's are constraints, or it touches the surface and its
     // faces there are the surface's triangles, which the split need not have).
+    // (In order, each face once that one tet only has.)
     const auto outer_faces = [](const auto& tet_list, const auto& corners_of) {
-      std::map<FaceKey, int> count;
+      std::vector<FaceKey> all;
       for (const auto& t : tet_list) {
         const index_t* v = corners_of(t);
         for (int f = 0; f < 4; ++f)
-          ++count[face_key(v[(f + 1) % 4], v[(f + 2) % 4], v[(f + 3) % 4])];
+          all.push_back(face_key(v[(f + 1) % 4], v[(f + 2) % 4], v[(f + 3) % 4]));
       }
+      std::sort(all.begin(), all.end());
       std::vector<FaceKey> once;
-      for (const auto& [k, n] : count)
-        if (n == 1) once.push_back(k);
+      for (std::size_t i = 0; i < all.size();) {
+        std::size_t j = i;
+        while (j < all.size() && all[j] == all[i]) ++j;
+        if (j - i == 1) once.push_back(all[i]);
+        i = j;
+      }
       return once;
     };
     if (!positive || std::abs(after - before) > 1e-9 * after ||

@@ -42,10 +42,15 @@ class NodeHash {
   /// The same, among the nodes n for which `wanted(n)` holds.
   template <class Wanted>
   int find_if(const Vec3& p, double tolerance, const Wanted& wanted) const {
+    // The cells around p's that a node within `tolerance` can lie in (the ball's box, widened to
+    // twice the tolerance against rounding), in the order of the whole 3 x 3 x 3 block: the same
+    // nodes, met in the same order, as over the whole block.
     const std::array<long long, 3> c = cell_of(p);
-    for (long long i = c[0] - 1; i <= c[0] + 1; ++i)
-      for (long long j = c[1] - 1; j <= c[1] + 1; ++j)
-        for (long long k = c[2] - 1; k <= c[2] + 1; ++k) {
+    const Vec3 reach{2 * tolerance, 2 * tolerance, 2 * tolerance};
+    const std::array<long long, 3> lo = cell_of(p - reach), hi = cell_of(p + reach);
+    for (long long i = std::max(c[0] - 1, lo[0]); i <= std::min(c[0] + 1, hi[0]); ++i)
+      for (long long j = std::max(c[1] - 1, lo[1]); j <= std::min(c[1] + 1, hi[1]); ++j)
+        for (long long k = std::max(c[2] - 1, lo[2]); k <= std::min(c[2] + 1, hi[2]); ++k) {
           const auto it = cells_.find(hash(i, j, k));
           if (it == cells_.end()) continue;
           for (int n : it->second)
