@@ -166,7 +166,7 @@ def measure_mixed(msh: str) -> dict:
     points, cells = read_msh2(msh)
     row = {"cells": {}, "volume_fraction": {}, "trihedra": int(len(cells.get(TRIHEDRON, [])))}
     volume, sj, quads, triangles = {}, [], [], []
-    hex_cells, hex_volume, hex_sj = None, None, None  # the hexahedra, their volumes and scaled Jacobians
+    hex_faces, hex_volume, hex_sj = [], None, None  # the hexahedra's sorted faces, volumes, scaled Jacobians
     for kind, (name, t, faces, split) in CELLS.items():
         c = cells.get(kind, np.zeros((0, 1 + max(max(f) for f in faces)), np.int64))
         row["cells"][name] = int(len(c))
@@ -179,10 +179,13 @@ def measure_mixed(msh: str) -> dict:
             corners, scale = real_parts.CORNERS[t]
             sj.append(real_parts.corner_scaled_jacobians(p, corners, scale))
         if name == "hex":
-            hex_cells, hex_volume = c, vol
+            hex_volume = vol
             hex_sj = sj[-1] if len(c) else np.zeros(0)
         for f in faces:
-            (quads if len(f) == 4 else triangles).append(np.sort(c[:, list(f)], axis=1))
+            keys = np.sort(c[:, list(f)], axis=1)
+            (quads if len(f) == 4 else triangles).append(keys)
+            if name == "hex":
+                hex_faces.append(keys)
     if not sj:  # no volume cells: the caller's row says so
         row["tets"] = 0
         return row
@@ -203,11 +206,9 @@ def measure_mixed(msh: str) -> dict:
     # The hexahedra a conforming mesh could keep as they are: no quad face against triangles (each
     # meets another cell's quad or the boundary); of those, the ones a solver can use (scaled
     # Jacobian at least the 0.2). Fractions of the whole volume, as the hex volume.
-    if hex_cells is not None and len(hex_cells):
-        faces = CELLS[5][2]
-        open_face = np.zeros(len(hex_cells), dtype=bool)
-        for f in faces:
-            keys = np.sort(hex_cells[:, list(f)], axis=1)
+    if len(hex_volume):
+        open_face = np.zeros(len(hex_volume), dtype=bool)
+        for keys in hex_faces:
             open_face |= np.array([tuple(k) in against for k in keys.tolist()])
         conforming = ~open_face
         row["conforming_hexes"] = int(conforming.sum())

@@ -58,7 +58,7 @@ def write_msh2(path, cells, nodes=CUBES) -> str:
     lines = ["$MeshFormat", "2.2 0 8", "$EndMeshFormat", "$Nodes", str(len(nodes))]
     lines += [f"{i + 1} {x} {y} {z}" for i, (x, y, z) in enumerate(nodes)]
     lines += ["$EndNodes", "$Elements", str(len(cells))]
-    lines += [f"{i + 1} {kind} 2 1 1 " + " ".join(map(str, nodes)) for i, (kind, nodes) in enumerate(cells)]
+    lines += [f"{i + 1} {kind} 2 1 1 " + " ".join(map(str, ids)) for i, (kind, ids) in enumerate(cells)]
     lines += ["$EndElements"]
     path.write_text("\n".join(lines) + "\n")
     return str(path)

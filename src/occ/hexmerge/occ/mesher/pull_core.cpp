@@ -592,25 +592,23 @@ std::size_t resplit_core(const std::vector<double>& coordinates, std::vector<ind
                   corners.end());
     regions.push_back({begin, corners.size(), r});
   }
-  const auto less = [&](const Region& x, const Region& y) {
-    return std::lexicographical_compare(corners.begin() + static_cast<std::ptrdiff_t>(x.begin),
-                                        corners.begin() + static_cast<std::ptrdiff_t>(x.end),
-                                        corners.begin() + static_cast<std::ptrdiff_t>(y.begin),
-                                        corners.begin() + static_cast<std::ptrdiff_t>(y.end));
+  const auto from = [&](const Region& x) {
+    return corners.begin() + static_cast<std::ptrdiff_t>(x.begin);
   };
-  std::sort(regions.begin(), regions.end(), less);
+  const auto to = [&](const Region& x) {
+    return corners.begin() + static_cast<std::ptrdiff_t>(x.end);
+  };
+  std::sort(regions.begin(), regions.end(), [&](const Region& x, const Region& y) {
+    return std::lexicographical_compare(from(x), to(x), from(y), to(y));
+  });
   // The region whose corners are `sorted`, or null.
   const auto region_of = [&](const std::vector<index_t>& sorted) -> const Region* {
     const auto it = std::lower_bound(regions.begin(), regions.end(), sorted,
                                      [&](const Region& x, const std::vector<index_t>& key) {
-                                       return std::lexicographical_compare(
-                                           corners.begin() + static_cast<std::ptrdiff_t>(x.begin),
-                                           corners.begin() + static_cast<std::ptrdiff_t>(x.end),
-                                           key.begin(), key.end());
+                                       return std::lexicographical_compare(from(x), to(x),
+                                                                           key.begin(), key.end());
                                      });
-    if (it == regions.end() || !std::equal(corners.begin() + static_cast<std::ptrdiff_t>(it->begin),
-                                           corners.begin() + static_cast<std::ptrdiff_t>(it->end),
-                                           sorted.begin(), sorted.end()))
+    if (it == regions.end() || !std::equal(from(*it), to(*it), sorted.begin(), sorted.end()))
       return nullptr;
     return &*it;
   };
@@ -632,12 +630,12 @@ std::size_t resplit_core(const std::vector<double>& coordinates, std::vector<ind
     std::sort(sorted.begin(), sorted.end());
     const Region* region = region_of(sorted);
     if (region == nullptr) continue;
-    const std::vector<index_t> list(
-        member.begin() + static_cast<std::ptrdiff_t>(first[region->root]),
-        member.begin() + static_cast<std::ptrdiff_t>(first[region->root + 1]));
+    // The region's tets, in place.
+    const index_t* const list = member.data() + first[region->root];
+    const index_t* const list_end = member.data() + first[region->root + 1];
     double before = 0, after = 0;
-    for (const index_t t : list) {
-      const index_t* v = &tets[4 * t];
+    for (const index_t* t = list; t != list_end; ++t) {
+      const index_t* v = &tets[4 * *t];
       before += std::abs(volume(v[0], v[1], v[2], v[3]));
     }
     std::vector<std::array<index_t, 4>> made;
@@ -653,10 +651,10 @@ std::size_t resplit_core(const std::vector<double>& coordinates, std::vector<ind
     // The same outer faces (the region's are constraints, or it touches the surface and its
     // faces there are the surface's triangles, which the split need not have).
     // (In order, each face once that one tet only has.)
-    const auto outer_faces = [](const auto& tet_list, const auto& corners_of) {
+    const auto outer_faces = [](auto begin, auto end, const auto& corners_of) {
       std::vector<FaceKey> all;
-      for (const auto& t : tet_list) {
-        const index_t* v = corners_of(t);
+      for (auto t = begin; t != end; ++t) {
+        const index_t* v = corners_of(*t);
         for (int f = 0; f < 4; ++f)
           all.push_back(face_key(v[(f + 1) % 4], v[(f + 2) % 4], v[(f + 3) % 4]));
       }
@@ -671,10 +669,11 @@ std::size_t resplit_core(const std::vector<double>& coordinates, std::vector<ind
       return once;
     };
     if (!positive || std::abs(after - before) > 1e-9 * after ||
-        outer_faces(list, [&](index_t t) { return &tets[4 * t]; }) !=
-            outer_faces(made, [](const std::array<index_t, 4>& t) { return t.data(); }))
+        outer_faces(list, list_end, [&](index_t t) { return &tets[4 * t]; }) !=
+            outer_faces(made.begin(), made.end(),
+                        [](const std::array<index_t, 4>& t) { return t.data(); }))
       continue;
-    for (const index_t t : list) drop[t] = 1;
+    for (const index_t* t = list; t != list_end; ++t) drop[*t] = 1;
     for (const auto& t : made) added.insert(added.end(), t.begin(), t.end());
     ++replaced;
   }
