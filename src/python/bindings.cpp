@@ -519,6 +519,7 @@ py::tuple run_mesh_shape(const std::string& brep, const std::map<std::string, st
   d["max_boundary_distance"] = report.max_boundary_distance;
   d["estimated_tets"] = report.estimated_tets;
   d["nb_unrefined_faces"] = report.nb_unrefined_faces;
+  d["nb_corner_nodes_removed"] = report.nb_corner_nodes_removed;
   d["nb_flat_surface_triangles"] = report.nb_flat_surface_triangles;
   d["nb_revolution_faces"] = report.nb_revolution_faces;
   d["nb_zipped_faces"] = report.nb_zipped_faces;

@@ -325,6 +325,9 @@ struct MeshShapeReport {
   /// Faces whose surface refinement to h did not converge and was given up (sides longer
   /// than h remain on them)
   std::size_t nb_unrefined_faces = 0;
+  /// Surface nodes taken off the edges of sharp corners, where the face between them is
+  /// narrower than 0.3 h up to 4 h from the vertex (coarsen_sharp_corners)
+  std::size_t nb_corner_nodes_removed = 0;
   /// BRepMesh's surface triangles whose three nodes lay on one line (a face whose outline runs
   /// along one line and back), taken out: the triangle across split at the third node
   std::size_t nb_flat_surface_triangles = 0;

@@ -2,10 +2,16 @@
 
 #include <gtest/gtest.h>
 
+#include <BRepAlgoAPI_Common.hxx>
+#include <BRepBuilderAPI_MakeFace.hxx>
+#include <BRepBuilderAPI_MakePolygon.hxx>
+#include <BRepPrimAPI_MakeCone.hxx>
+#include <BRepPrimAPI_MakePrism.hxx>
 #include <algorithm>
 #include <cmath>
 #include <string>
 
+#include "hexmerge/occ/mesher/sharp_features.h"
 #include "hexmerge/occ/mesher/surface_repair.h"
 #include "mesher_fixtures.h"
 
@@ -164,6 +170,95 @@ TEST(collapse_sides, a_cap_on_a_cad_edge_loses_its_middle_node) {
   EXPECT_EQ(segment.edge, 0);
   EXPECT_EQ(segment.t_lo, 0.0);
   EXPECT_EQ(segment.t_hi, 1.0);
+}
+
+// A hexagonal head 20 across its flats and 10 tall, chamfered by a cone (45 degrees) that meets
+// the top in a circle touching the six flats (hex_bolt's head, whose elements under scaled
+// Jacobian 0.2 were most of them 1 to 4 h from those points): the cone's face narrows to nothing
+// at each, between the circle and the flat's hyperbola, which part by about 0.07 d^2 at d from
+// it. At h 1 the nodes across that neck closer than 0.3 h to the other side go (the closest
+// two across then four times as far apart at least); the surface
+// stays closed, outward, on the CAD and encloses the same volume, and the angles of the
+// triangles at the corners get no smaller.
+TEST(coarsen_sharp_corners, nodes_across_a_narrow_neck_go) {
+  const double h = 1;
+  BRepBuilderAPI_MakePolygon hexagon;
+  for (int k = 0; k < 6; ++k) {
+    const double t = (30 + 60 * k) * M_PI / 180, r = 10 / std::cos(M_PI / 6);
+    hexagon.Add(gp_Pnt(r * std::cos(t), r * std::sin(t), 0));
+  }
+  hexagon.Close();
+  const TopoDS_Shape prism =
+      BRepPrimAPI_MakePrism(BRepBuilderAPI_MakeFace(hexagon.Wire()).Face(), gp_Vec(0, 0, 10))
+          .Shape();
+  const TopoDS_Shape cone =
+      BRepPrimAPI_MakeCone(gp_Ax2(gp_Pnt(0, 0, 0), gp_Dir(0, 0, 1)), 20, 10, 10).Shape();
+  Prepared p = prepare(BRepAlgoAPI_Common(prism, cone).Shape(), h);
+  repair_surface(p);
+  const mesher::SharpFeatures sharp = mesher::sharp_features(p.shape, mesher::kSharpAngle);
+  ASSERT_GE(sharp.corners.size(), 6u);
+  // The closest two nodes across a neck, one on each of a corner's edges within the reach of
+  // it (neither the corner's own), over h; and the smallest angle at the corners' nodes.
+  double angle_before = 0, angle_after = 0;
+  const auto across = [&](const mesher::Surface& surface, double& angle) {
+    std::vector<std::vector<int>> on_edge(static_cast<std::size_t>(p.shape.edges.Extent()));
+    for (const auto& [key, segment] : surface.segments)
+      for (const int n : {static_cast<int>(key >> 32), static_cast<int>(key & 0xffffffffu)})
+        on_edge[static_cast<std::size_t>(segment.edge)].push_back(n);
+    double closest = 1e300;
+    angle = M_PI;
+    for (const mesher::SharpCorner& c : sharp.corners) {
+      const auto near = [&](int n) {
+        const double d = (surface.nodes[n] - c.point).norm();
+        return d > 1e-9 && d < mesher::kCornerReach * h;
+      };
+      for (const int u : on_edge[c.edges[0]])
+        for (const int v : on_edge[c.edges[1]])
+          if (near(u) && near(v))
+            closest = std::min(closest, (surface.nodes[u] - surface.nodes[v]).norm());
+      for (const mesher::SurfaceTriangle& t : surface.triangles)
+        for (const int n : t.node)
+          if ((surface.nodes[n] - c.point).norm() < 1e-9)
+            angle = std::min(angle, mesher::smallest_angle(surface.nodes, t.node));
+    }
+    return closest / h;
+  };
+  const double across_before = across(p.surface, angle_before);
+  ASSERT_LT(across_before, mesher::kCornerStripWidth);
+  const double volume = enclosed_volume(p.surface.nodes, p.surface.triangles);
+  const std::size_t nb_nodes = p.surface.nodes.size();
+  const std::size_t removed = mesher::coarsen_sharp_corners(p.shape, p.surface, sharp.corners,
+                                                            p.lattice.lattice_face, h, 0.02 * h);
+  EXPECT_GE(removed, 12u);  // at least one on each side of each corner
+  EXPECT_EQ(p.surface.nodes.size(), nb_nodes - removed);
+  // (0.06 h before, 0.29 h after: a node next to where the neck reaches 0.3 h stays when its
+  // removal would make a triangle of the cone's face thinner.)
+  EXPECT_GT(across(p.surface, angle_after), 4 * across_before);
+  EXPECT_GE(angle_after, angle_before);
+  expect_sound_surface(p, p.surface, volume, 1e-4, 1e-6 * h);
+}
+
+// A corner of 3 degrees between straight sides 50 long: 0.3 h apart only 5.7 h from it, past
+// the reach (4 h), so a long triangle there would be as thin: no node goes.
+TEST(coarsen_sharp_corners, a_strip_thin_past_the_reach_keeps_its_nodes) {
+  const double a = 3 * M_PI / 180, h = 2;
+  BRepBuilderAPI_MakePolygon polygon;
+  for (const gp_Pnt& q :
+       {gp_Pnt(0, 0, 0), gp_Pnt(50, 0, 0), gp_Pnt(50 * std::cos(a), 50 * std::sin(a), 0)})
+    polygon.Add(q);
+  polygon.Close();
+  const TopoDS_Shape wedge =
+      BRepPrimAPI_MakePrism(BRepBuilderAPI_MakeFace(polygon.Wire()).Face(), gp_Vec(0, 0, 10))
+          .Shape();
+  Prepared p = prepare(wedge, h);
+  repair_surface(p);
+  const mesher::SharpFeatures sharp = mesher::sharp_features(p.shape, mesher::kSharpAngle);
+  ASSERT_FALSE(sharp.corners.empty());
+  const std::size_t nb_nodes = p.surface.nodes.size();
+  EXPECT_EQ(mesher::coarsen_sharp_corners(p.shape, p.surface, sharp.corners, p.lattice.lattice_face,
+                                          h, 0.02 * h),
+            0u);
+  EXPECT_EQ(p.surface.nodes.size(), nb_nodes);
 }
 
 TEST(coordinates_across, seen_along_each_axis) {
