@@ -518,8 +518,8 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
              gap_sizes);
       report.nb_unrefined_faces = surface.unrefined_faces.size();
       collapse_sides(shape, surface, h, h, max_gap, lattice.lattice_face, sizes, gap_sizes);
-      report.nb_corner_nodes_removed = coarsen_sharp_corners(
-          shape, surface, sharp.corners, lattice.lattice_face, h, max_gap, gap_sizes);
+      report.nb_corner_nodes_removed =
+          coarsen_sharp_corners(shape, surface, sharp.corners, h, max_gap, gap_sizes);
       remove_folds(surface, 1e-8 * shape.diagonal);  // TetGen's own coincidence tolerance
     };
     const Surface triangulated = surface;

@@ -227,8 +227,8 @@ TEST(coarsen_sharp_corners, nodes_across_a_narrow_neck_go) {
   ASSERT_LT(across_before, mesher::kCornerStripWidth);
   const double volume = enclosed_volume(p.surface.nodes, p.surface.triangles);
   const std::size_t nb_nodes = p.surface.nodes.size();
-  const std::size_t removed = mesher::coarsen_sharp_corners(p.shape, p.surface, sharp.corners,
-                                                            p.lattice.lattice_face, h, 0.02 * h);
+  const std::size_t removed =
+      mesher::coarsen_sharp_corners(p.shape, p.surface, sharp.corners, h, 0.02 * h);
   EXPECT_GE(removed, 12u);  // at least one on each side of each corner
   EXPECT_EQ(p.surface.nodes.size(), nb_nodes - removed);
   // (0.06 h before, 0.29 h after: a node next to where the neck reaches 0.3 h stays when its
@@ -255,9 +255,7 @@ TEST(coarsen_sharp_corners, a_strip_thin_past_the_reach_keeps_its_nodes) {
   const mesher::SharpFeatures sharp = mesher::sharp_features(p.shape, mesher::kSharpAngle);
   ASSERT_FALSE(sharp.corners.empty());
   const std::size_t nb_nodes = p.surface.nodes.size();
-  EXPECT_EQ(mesher::coarsen_sharp_corners(p.shape, p.surface, sharp.corners, p.lattice.lattice_face,
-                                          h, 0.02 * h),
-            0u);
+  EXPECT_EQ(mesher::coarsen_sharp_corners(p.shape, p.surface, sharp.corners, h, 0.02 * h), 0u);
   EXPECT_EQ(p.surface.nodes.size(), nb_nodes);
 }
 

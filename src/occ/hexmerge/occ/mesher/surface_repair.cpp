@@ -171,6 +171,66 @@ PolygonTriangulation best_triangulation(const std::vector<Vec3>& nodes, const st
   return out;
 }
 
+// Node r's segments to a and b (both on one CAD edge) become the one segment from a to b, with
+// the edge's parameters at a and b.
+void join_segments(Surface& surface, int r, int a, int b) {
+  const auto ra = surface.segments.find(pair_key(r, a)), rb = surface.segments.find(pair_key(r, b));
+  const auto t_at = [](const std::pair<const std::uint64_t, EdgeSegment>& segment, int n) {
+    return static_cast<int>(segment.first >> 32) == n ? segment.second.t_lo : segment.second.t_hi;
+  };
+  const double ta = t_at(*ra, a), tb = t_at(*rb, b);
+  const int edge = ra->second.edge;
+  surface.segments.erase(ra);
+  surface.segments.erase(rb);
+  surface.segments[pair_key(a, b)] = a < b ? EdgeSegment{edge, ta, tb} : EdgeSegment{edge, tb, ta};
+}
+
+// The triangles in `slots` (a node's, taken out) replaced by `made` (as many or fewer: the
+// slots left over die), the nodes' lists of their triangles (`around`) kept up to date.
+void replace_triangles(std::vector<SurfaceTriangle>& tris, std::vector<std::vector<int>>& around,
+                       std::vector<char>& dead, const std::vector<int>& slots,
+                       const std::vector<SurfaceTriangle>& made) {
+  for (int ti : slots)
+    for (int n : tris[ti].node)
+      around[n].erase(std::remove(around[n].begin(), around[n].end(), ti), around[n].end());
+  for (std::size_t k = 0; k < slots.size(); ++k) {
+    const int ti = slots[k];
+    if (k >= made.size()) {
+      dead[ti] = 1;
+      continue;
+    }
+    tris[ti] = made[k];
+    for (int n : made[k].node) around[n].push_back(ti);
+  }
+}
+
+// The surface without its `removed` nodes and `dead` triangles, the rest renumbered in their
+// order, with their segments; Surface::seed gives each node's index in `surface` or, with
+// `keep_seeds`, the seed it had there.
+void drop_removed(Surface& surface, const std::vector<char>& removed, const std::vector<char>& dead,
+                  bool keep_seeds) {
+  const int nb_nodes = static_cast<int>(surface.nodes.size());
+  std::vector<int> renumber(nb_nodes, -1);
+  Surface out;
+  for (int n = 0; n < nb_nodes; ++n)
+    if (!removed[n]) {
+      renumber[n] = static_cast<int>(out.nodes.size());
+      out.nodes.push_back(surface.nodes[n]);
+      out.node_face.push_back(surface.node_face[n]);
+      out.seed.push_back(keep_seeds && !surface.seed.empty() ? surface.seed[n] : n);
+    }
+  for (std::size_t ti = 0; ti < surface.triangles.size(); ++ti) {
+    if (dead[ti]) continue;
+    SurfaceTriangle t = surface.triangles[ti];
+    for (int& n : t.node) n = renumber[n];
+    out.triangles.push_back(t);
+  }
+  out.unrefined_faces = surface.unrefined_faces;
+  for (const auto& [key, segment] : surface.segments)
+    out.segments[pair_key(renumber[key >> 32], renumber[key & 0xffffffffu])] = segment;
+  surface = std::move(out);
+}
+
 }  // namespace
 
 // Splits the triangles of the faces that are not lattice faces until no side is longer than
@@ -845,18 +905,7 @@ void collapse_sides(const Shape& s, Surface& surface, double target, double max_
     for (int ti : around[r])
       for (int n : tris[ti].node) changed_at[n] = nb_collapses;
     const std::vector<int> slots = around[r];
-    for (int ti : slots)
-      for (int n : tris[ti].node)
-        around[n].erase(std::remove(around[n].begin(), around[n].end(), ti), around[n].end());
-    for (std::size_t k = 0; k < slots.size(); ++k) {
-      const int ti = slots[k];
-      if (k >= made.size()) {
-        dead[ti] = 1;
-        continue;
-      }
-      tris[ti] = made[k];
-      for (int n : made[k].node) around[n].push_back(ti);
-    }
+    replace_triangles(tris, around, dead, slots, made);
     removed[r] = 1;
     return true;
   };
@@ -906,16 +955,7 @@ void collapse_sides(const Shape& s, Surface& surface, double target, double max_
           best = after, onto = k;
       }
       if (onto < 0) continue;
-      const auto t_at = [](const std::pair<const std::uint64_t, EdgeSegment>& segment, int n) {
-        return static_cast<int>(segment.first >> 32) == n ? segment.second.t_lo
-                                                          : segment.second.t_hi;
-      };
-      const double ta = t_at(*ra, a), tb = t_at(*rb, b);
-      const int edge = ra->second.edge;
-      surface.segments.erase(pair_key(r, a));
-      surface.segments.erase(pair_key(r, b));
-      surface.segments[pair_key(a, b)] =
-          a < b ? EdgeSegment{edge, ta, tb} : EdgeSegment{edge, tb, ta};
+      join_segments(surface, r, a, b);
       collapse(r, onto);
       return true;
     }
@@ -971,25 +1011,7 @@ void collapse_sides(const Shape& s, Surface& surface, double target, double max_
       changed = true;
     }
   }
-  std::vector<int> renumber(nb_nodes, -1);
-  Surface out;
-  for (int n = 0; n < nb_nodes; ++n)
-    if (!removed[n]) {
-      renumber[n] = static_cast<int>(out.nodes.size());
-      out.nodes.push_back(nodes[n]);
-      out.node_face.push_back(surface.node_face[n]);
-      out.seed.push_back(n);
-    }
-  for (std::size_t ti = 0; ti < tris.size(); ++ti) {
-    if (dead[ti]) continue;
-    SurfaceTriangle t = tris[ti];
-    for (int& n : t.node) n = renumber[n];
-    out.triangles.push_back(t);
-  }
-  out.unrefined_faces = surface.unrefined_faces;
-  for (const auto& [key, segment] : surface.segments)
-    out.segments[pair_key(renumber[key >> 32], renumber[key & 0xffffffffu])] = segment;
-  surface = std::move(out);
+  drop_removed(surface, removed, dead, false);
 }
 
 // The strips at the CAD's sharp corners: a face narrowing to a corner between two edges (a
@@ -1000,8 +1022,7 @@ void collapse_sides(const Shape& s, Surface& surface, double target, double max_
 // nodes out leaves one triangle from the corner to where the strip is wide enough, as thin as the
 // corner itself makes it there and no thinner, and the tets at the corner's node alone thin.
 std::size_t coarsen_sharp_corners(const Shape& s, Surface& surface,
-                                  const std::vector<SharpCorner>& corners,
-                                  const std::vector<bool>& lattice_face, double h,
+                                  const std::vector<SharpCorner>& corners, double h,
                                   double deflection, const SizeField* deflection_field) {
   if (corners.empty()) return 0;
   FaceGaps gaps(s, deflection, h, deflection_field);
@@ -1095,29 +1116,8 @@ std::size_t coarsen_sharp_corners(const Shape& s, Surface& surface,
       return worst;
     };
     if (!gaps.keeps_close(made_gap, [&] { return gap_before; })) return false;
-    for (int ti : slots)
-      for (int n : tris[ti].node)
-        around[n].erase(std::remove(around[n].begin(), around[n].end(), ti), around[n].end());
-    for (std::size_t k = 0; k < slots.size(); ++k) {  // (one triangle fewer per face)
-      const int ti = slots[k];
-      if (k >= made.size()) {
-        dead[ti] = 1;
-        continue;
-      }
-      tris[ti] = made[k];
-      for (int n : made[k].node) around[n].push_back(ti);
-    }
-    const auto ra = surface.segments.find(pair_key(r, a)),
-               rb = surface.segments.find(pair_key(r, b));
-    const auto t_at = [](const std::pair<const std::uint64_t, EdgeSegment>& segment, int n) {
-      return static_cast<int>(segment.first >> 32) == n ? segment.second.t_lo : segment.second.t_hi;
-    };
-    const double ta = t_at(*ra, a), tb = t_at(*rb, b);
-    const int edge = ra->second.edge;
-    surface.segments.erase(ra);
-    surface.segments.erase(rb);
-    surface.segments[pair_key(a, b)] =
-        a < b ? EdgeSegment{edge, ta, tb} : EdgeSegment{edge, tb, ta};
+    replace_triangles(tris, around, dead, slots, made);  // (one triangle fewer per face)
+    join_segments(surface, r, a, b);
     for (auto& [other, e] : segments_at[a])
       if (other == r) other = b;
     for (auto& [other, e] : segments_at[b])
@@ -1170,29 +1170,7 @@ std::size_t coarsen_sharp_corners(const Shape& s, Surface& surface,
     for (const auto& [d, n] : strip)
       if (remove_edge_node(n, corner.face)) ++nb_removed;
   }
-  if (nb_removed == 0) return 0;
-  std::vector<int> renumber(nb_nodes, -1);
-  Surface out;
-  for (int n = 0; n < nb_nodes; ++n)
-    if (!removed[n]) {
-      renumber[n] = static_cast<int>(out.nodes.size());
-      out.nodes.push_back(nodes[n]);
-      out.node_face.push_back(surface.node_face[n]);
-      out.seed.push_back(surface.seed.empty() ? n : surface.seed[static_cast<std::size_t>(n)]);
-    }
-  for (std::size_t ti = 0; ti < tris.size(); ++ti) {
-    if (dead[ti]) continue;
-    SurfaceTriangle t = tris[ti];
-    for (int& n : t.node) n = renumber[n];
-    out.triangles.push_back(t);
-  }
-  for (const auto& [key, segment] : surface.segments)
-    out.segments[pair_key(renumber[key >> 32], renumber[key & 0xffffffffu])] = segment;
-  out.unrefined_faces = std::move(surface.unrefined_faces);
-  out.nb_flat_triangles = surface.nb_flat_triangles;
-  out.nb_revolution_faces = surface.nb_revolution_faces;
-  out.nb_zipped_faces = surface.nb_zipped_faces;
-  surface = std::move(out);
+  if (nb_removed > 0) drop_removed(surface, removed, dead, true);
   return nb_removed;
 }
 

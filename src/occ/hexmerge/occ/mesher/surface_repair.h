@@ -70,8 +70,7 @@ constexpr double kCornerReach = 4.0;
 /// keeps each node's index from before collapse_sides().
 /// @return the nodes taken out
 std::size_t coarsen_sharp_corners(const Shape& s, Surface& surface,
-                                  const std::vector<SharpCorner>& corners,
-                                  const std::vector<bool>& lattice_face, double h,
+                                  const std::vector<SharpCorner>& corners, double h,
                                   double deflection, const SizeField* deflection_field = nullptr);
 
 }  // namespace hexmerge::mesher
