@@ -370,6 +370,21 @@ def main():
     # wrappers flagged as the QApplication: see flag_as_qapp), the next panel's boxes usable
     FreeCADGui.Selection.clearSelection()
     big_doc, big = helpers.box_doc("1st", 2.5, name="HexMergeCancel")
+    # The engine is held at its "candidates" and "selection" calls until Cancel stops it: on a
+    # quiet machine the box's whole run could end between two of this test's polls (CI of
+    # 11813b8: the second attempt found the run 'done').
+    from freecad.hexmerge import base_taskpanel
+    unheld_progress = base_taskpanel.BackgroundRun.progress
+
+    def held_progress(run, message, fraction):
+        unheld_progress(run, message, fraction)
+        if str(message) in ("candidates", "selection"):
+            deadline = time.monotonic() + 30
+            while not run.stopped and time.monotonic() < deadline:
+                time.sleep(0.01)
+        return not run.stopped
+
+    base_taskpanel.BackgroundRun.progress = held_progress
     for attempt in range(3):
         panel = open_panel("HexMerge_MeshHexDominant", big)
         for spec, w in panel.widgets.values():
@@ -397,6 +412,7 @@ def main():
         assert not [o for o in big_doc.Objects if o.Name.startswith("HexDominant")], "Cancel kept it"
         print("Cancel {} during '{}': timer stopped, thread ended, no error".format(
             attempt + 1, run.message))
+    base_taskpanel.BackgroundRun.progress = unheld_progress
     FreeCAD.closeDocument(big_doc.Name)
     FreeCAD.setActiveDocument(doc.Name)
 
