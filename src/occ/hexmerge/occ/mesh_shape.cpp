@@ -23,6 +23,7 @@
 #include "hexmerge/occ/mesher/boundary_distance.h"
 #include "hexmerge/occ/mesher/buffer_layer.h"
 #include "hexmerge/occ/mesher/core.h"
+#include "hexmerge/occ/mesher/corner_strips.h"
 #include "hexmerge/occ/mesher/facets.h"
 #include "hexmerge/occ/mesher/improve.h"
 #include "hexmerge/occ/mesher/lattice.h"

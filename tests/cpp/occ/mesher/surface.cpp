@@ -11,6 +11,7 @@
 #include <cmath>
 #include <string>
 
+#include "hexmerge/occ/mesher/corner_strips.h"
 #include "hexmerge/occ/mesher/sharp_features.h"
 #include "hexmerge/occ/mesher/surface_repair.h"
 #include "mesher_fixtures.h"

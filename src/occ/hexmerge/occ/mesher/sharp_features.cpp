@@ -285,34 +285,44 @@ SharpFeatures sharp_features(const Shape& shape, double limit) {
   return features;
 }
 
-std::vector<int> nodes_at(const SharpFeatures& features, const Surface& surface) {
-  std::vector<char> wanted;  // per edge: 1 sharp, 2 at a sharp corner, 3 both
-  const auto want = [&](int edge, char kind) {
-    if (edge >= static_cast<int>(wanted.size()))
-      wanted.resize(static_cast<std::size_t>(edge) + 1, 0);
-    wanted[edge] |= kind;
-  };
-  for (const SharpEdge& e : features.edges) want(e.edge, 1);
-  for (const SharpCorner& c : features.corners) want(c.edges[0], 2), want(c.edges[1], 2);
-  std::vector<int> out;
-  std::vector<std::vector<int>> ends(wanted.size());  // per edge at a corner: its nodes
-  for (const auto& [key, segment] : surface.segments) {
-    if (segment.edge < 0 || segment.edge >= static_cast<int>(wanted.size()) ||
-        !wanted[segment.edge])
-      continue;
-    for (const int n : {static_cast<int>(key >> 32), static_cast<int>(key & 0xffffffffu)}) {
-      if (wanted[segment.edge] & 1) out.push_back(n);
-      ends[segment.edge].push_back(n);
+std::vector<int> corner_nodes(const std::vector<SharpCorner>& corners, const Surface& surface) {
+  std::vector<char> wanted;  // per edge: at a corner
+  for (const SharpCorner& c : corners)
+    for (const int e : c.edges) {
+      if (e >= static_cast<int>(wanted.size())) wanted.resize(static_cast<std::size_t>(e) + 1, 0);
+      wanted[e] = 1;
     }
-  }
-  for (const SharpCorner& c : features.corners) {
+  std::vector<std::vector<int>> ends(wanted.size());  // per edge at a corner: its nodes
+  for (const auto& [key, segment] : surface.segments)
+    if (segment.edge >= 0 && segment.edge < static_cast<int>(wanted.size()) && wanted[segment.edge])
+      for (const int n : {static_cast<int>(key >> 32), static_cast<int>(key & 0xffffffffu)})
+        ends[segment.edge].push_back(n);
+  std::vector<int> out;
+  for (const SharpCorner& c : corners) {
     int nearest = -1;
     double best = std::numeric_limits<double>::infinity();
     for (const int e : c.edges)
       for (const int n : ends[e])
         if (const double d = (surface.nodes[n] - c.point).norm(); d < best) best = d, nearest = n;
-    if (nearest >= 0) out.push_back(nearest);
+    out.push_back(nearest);
   }
+  return out;
+}
+
+std::vector<int> nodes_at(const SharpFeatures& features, const Surface& surface) {
+  std::vector<char> sharp;  // per edge: whether it is a sharp edge
+  for (const SharpEdge& e : features.edges) {
+    if (e.edge >= static_cast<int>(sharp.size()))
+      sharp.resize(static_cast<std::size_t>(e.edge) + 1, 0);
+    sharp[e.edge] = 1;
+  }
+  std::vector<int> out;
+  for (const auto& [key, segment] : surface.segments)
+    if (segment.edge >= 0 && segment.edge < static_cast<int>(sharp.size()) && sharp[segment.edge])
+      for (const int n : {static_cast<int>(key >> 32), static_cast<int>(key & 0xffffffffu)})
+        out.push_back(n);
+  for (const int nearest : corner_nodes(features.corners, surface))
+    if (nearest >= 0) out.push_back(nearest);
   std::sort(out.begin(), out.end());
   out.erase(std::unique(out.begin(), out.end()), out.end());
   return out;

@@ -46,6 +46,10 @@ struct SharpFeatures {
 };
 SharpFeatures sharp_features(const Shape& shape, double limit);
 
+/// Per corner, the surface's node at its vertex: of its edges' segments' ends, the nearest to
+/// it (-1: its edges have none).
+std::vector<int> corner_nodes(const std::vector<SharpCorner>& corners, const Surface& surface);
+
 /// The surface's nodes at the features, sorted: both ends of every segment on a sharp edge,
 /// and per corner the node at its vertex (of its edges' segments' ends, the nearest to it).
 std::vector<int> nodes_at(const SharpFeatures& features, const Surface& surface);
