@@ -33,6 +33,7 @@ Usage (after building the module, see bench/README.md):
   ... real_parts.py --parts Kurbel,flanged --sizes 50k --timeout 120
   ... real_parts.py --sizes-from bench/results/real-parts-sizes.json --docs
   ... real_parts.py --table bench/results/real-parts-latest.json           # re-print the tables
+  ... real_parts.py --buffer-census bench/results/real-parts-latest.json   # why the bases got no hexahedron
 """
 import argparse
 import concurrent.futures
@@ -165,7 +166,7 @@ def worker(path: str, size: float, options: dict | None = None) -> dict:
                    boundary_distance=meshing["max_boundary_distance"],
                    solids=meshing["nb_solids"], sweep_axis=meshing["sweep_axis"],
                    tetgen_restarts=meshing["nb_tetgen_restarts"],
-                   nudged_points=meshing["nb_nudged_points"],
+                   nudged_points=meshing["nb_nudged_points"], buffer_bases=meshing["buffer_bases"],
                    min_boundary_angle=float(boundary_triangle_angles(points, cells).min()))
         out["phase"] = "recombine"
         start = time.perf_counter()
@@ -492,6 +493,29 @@ def markdown(data, reference=None) -> str:
     return "\n".join(lines)
 
 
+def buffer_census(data) -> str:
+    """The buffer layer's census (the mesher's `buffer_bases`, docs/mesher.md step 8a) of the
+    rows that have one: per part and size, the core's closing pyramids' bases and why they got
+    no hexahedron to the surface, then the totals per size."""
+    rows = [r for r in data["rows"] if r.get("status") == "ok" and r.get("buffer_bases")]
+    lines = ["| part | size | bases | apex shared | corner nearest a face that takes no top | "
+             "other tests | dropped later | kept |", "|---|---|---|---|---|---|---|---|"]
+    totals = {}
+    for r in sorted(rows, key=lambda r: (parse_count(r["target"]), r["part"])):
+        b = r["buffer_bases"]
+        if not b["considered"]:
+            continue
+        other = b["considered"] - b["apex_shared"] - b["no_top_face"] - b["dropped_later"] - b["kept"]
+        values = [b["considered"], b["apex_shared"], b["no_top_face"], other, b["dropped_later"], b["kept"]]
+        total = totals.setdefault(r["target"], [0] * len(values))
+        for k, v in enumerate(values):
+            total[k] += v
+        lines.append(f"| {r['part']} | {r['target']} | " + " | ".join(f"{v:,}" for v in values) + " |")
+    for target, total in totals.items():
+        lines.append(f"| all | {target} | " + " | ".join(f"{v:,}" for v in total) + " |")
+    return "\n".join(lines)
+
+
 def write_docs(table: str) -> None:
     text = open(DOCS).read() if os.path.exists(DOCS) else ""
     if TABLE_BEGIN in text and TABLE_END in text:
@@ -526,6 +550,8 @@ def main() -> int:
     ap.add_argument("--jobs", type=int, default=1, help="parts run at a time (default: %(default)s)")
     ap.add_argument("--docs", action="store_true", help=f"also write the tables into {os.path.relpath(DOCS, ROOT)}")
     ap.add_argument("--table", metavar="JSON", help="print the tables of an earlier results file and exit")
+    ap.add_argument("--buffer-census", metavar="JSON",
+                    help="print the buffer layer's census (why the core's bases got no hexahedron) of a results file and exit")
     ap.add_argument("--gmsh-reference", metavar="JSON",
                     help="Gmsh's own tet mesh at the same sizes (bench/gmsh_reference.py) for the tables' Gmsh "
                     f"columns (default: {os.path.relpath(GMSH_REFERENCE, ROOT)} when it exists; '' for none)")
@@ -542,6 +568,10 @@ def main() -> int:
             options[name] = run_bench.parse_value(value)
         print(benchlib.RESULT_MARKER + json.dumps(benchlib.jsonable(worker(args.worker, args.size, options))),
               flush=True)
+        return 0
+    if args.buffer_census:
+        with open(args.buffer_census) as f:
+            print(buffer_census(json.load(f)))
         return 0
     if args.table:
         with open(args.table) as f:

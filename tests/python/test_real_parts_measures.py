@@ -2,7 +2,8 @@
 uses on Gmsh's own tet meshes: the scaled Jacobian of plain tet arrays and of a MixedMesh, and the
 boundary triangles' smallest angles, on hand-made tets; and gmsh_reference's measures of Gmsh's
 hex-dominant meshes (cells, volume fractions, quads against triangles) on hand-made .msh files;
-fetch_gmsh's dependency closure on a hand-made package index."""
+the buffer layer's census of hand-made rows; fetch_gmsh's dependency closure on a hand-made
+package index."""
 
 from __future__ import annotations
 
@@ -103,6 +104,23 @@ def test_gmsh_hex_dominant_conforming_hexahedra(tmp_path) -> None:
 def test_gmsh_hex_dominant_without_volume_cells(tmp_path) -> None:
     row = gmsh_reference.measure_mixed(write_msh2(tmp_path / "surface.msh", [(2, [1, 2, 5])]))
     assert row["tets"] == 0 and row["cells"]["hex"] == 0 and row["volume_fraction"] == {}
+
+
+def test_buffer_census_counts_every_base_once() -> None:
+    # The mesher's counts: each base counted once, at the first test it fails, or kept.
+    def bases(considered, apex, face, later, kept, **tests):
+        return dict(considered=considered, apex_shared=apex, no_top_face=face, dropped_later=later, kept=kept,
+                    **tests)
+
+    rows = [
+        {"part": "a", "target": "50k", "status": "ok", "buffer_bases": bases(10, 4, 2, 1, 1, folds=2)},
+        {"part": "b", "target": "50k", "status": "ok", "buffer_bases": bases(6, 1, 0, 0, 3, two_faces=2)},
+        {"part": "c", "target": "50k", "status": "ok", "buffer_bases": bases(0, 0, 0, 0, 0)},  # no core
+        {"part": "a", "target": "250k", "status": "error"},
+    ]
+    lines = real_parts.buffer_census({"rows": rows}).splitlines()
+    assert lines[2:] == ["| a | 50k | 10 | 4 | 2 | 2 | 1 | 1 |", "| b | 50k | 6 | 1 | 0 | 2 | 0 | 3 |",
+                         "| all | 50k | 16 | 5 | 2 | 4 | 1 | 4 |"]
 
 
 def test_fetch_gmsh_takes_every_package_gmsh_needs_and_no_more() -> None:
