@@ -1,5 +1,8 @@
 // Selection step 0 (conforming mode): the block of hexahedra and prisms kept together.
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <unordered_set>
 
 #include "hexmerge/core/work_queue.h"
 #include "hexmerge/geometry/vec3.h"
@@ -123,6 +126,38 @@ void Selector::select_block() {
     if ((c.type == CellType::Prism || (c.type == CellType::Hex && !near_perfect(ci))) &&
         unclaimed(c) && planar_quads(c))
       planar.push_back(ci);
+  }
+  // In a region that the near-perfect hexahedra and the planar-quad candidates do not cover
+  // whole (not a swept region, where every tet is in a column), only the planar-quad prisms
+  // beside the hexahedra taken so far: elsewhere their points lie in planes by chance, and taken
+  // first they keep the hexahedra out (Gmsh's frontal points on the benchmark's bracket: 57.5 %
+  // of the volume in prisms, 3.6 % in hexahedra).
+  {
+    std::vector<char> covered(mesh_.nb_tets(), 0);
+    for (index_t t = 0; t < mesh_.nb_tets(); ++t) covered[t] = block_of[t] != NO_INDEX;
+    for (index_t ci : planar)
+      for (index_t t : cands_.tets(cands_[ci])) covered[t] = 1;
+    std::unordered_set<std::int32_t> partial;
+    for (index_t t = 0; t < mesh_.nb_tets(); ++t)
+      if (!covered[t]) partial.insert(mesh_.region(t));
+    const auto beside_block = [&](index_t ci) {
+      const Sides s = sides(ci);
+      for (int f = 0; f < descriptor(cands_[ci].type).nb_faces; ++f) {
+        if (!is_quad(cands_[ci], f)) continue;
+        const auto n = tets_behind(s, f);
+        if (n[0] != NO_CELL && block_of[n[0]] != NO_INDEX) return true;
+      }
+      return false;
+    };
+    if (!partial.empty())
+      planar.erase(std::remove_if(planar.begin(), planar.end(),
+                                  [&](index_t ci) {
+                                    const Candidate& c = cands_[ci];
+                                    return c.type == CellType::Prism &&
+                                           partial.count(mesh_.region(cands_.tets(c)[0])) &&
+                                           !beside_block(ci);
+                                  }),
+                   planar.end());
   }
   rank(planar);
   take_disjoint(planar);
