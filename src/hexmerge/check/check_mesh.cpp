@@ -766,7 +766,26 @@ CheckReport check_at_scale(const MixedMesh& mesh, const TetMesh& input) {
         six = six_volume(f[0], f[1], f[2]);
       } else {
         int d = quad_diagonal[i];
-        if (d < 0) d = static_cast<int>(std::min_element(f, f + 4) - f) % 2;
+        if (d < 0) {
+          // A quad two cells share: split as the input's tets are, where both triangles of one
+          // diagonal are faces of them (no flip or contraction changes a face between two
+          // regions, and a bent quad there, split the other way, moved its bend's volume from
+          // one region to the other: a glued assembly's interfaces), else through its least
+          // corner (the same for both cells).
+          const auto input_split = [&](int k) {
+            const index_t t0[3] = {f[k], f[k + 1], f[(k + 2) % 4]};
+            const index_t t1[3] = {f[k], f[(k + 2) % 4], f[(k + 3) % 4]};
+            for (const index_t* t : {t0, t1}) {
+              if (t[0] >= nv_in || t[1] >= nv_in || t[2] >= nv_in) return false;
+              const auto range = input_faces.find(t, 3);
+              if (range.first == range.second) return false;
+            }
+            return true;
+          };
+          const bool first = input_split(0), second = input_split(1);
+          d = first != second ? (first ? 0 : 1)
+                              : static_cast<int>(std::min_element(f, f + 4) - f) % 2;
+        }
         six = six_volume(f[d], f[d + 1], f[(d + 2) % 4]) +
               six_volume(f[d], f[(d + 2) % 4], f[(d + 3) % 4]);
       }

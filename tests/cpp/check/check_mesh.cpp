@@ -438,6 +438,45 @@ TEST(check_mesh, finds_region_mismatches) {
   EXPECT_GE(check_mesh(make_mixed(h.input, cells, {1, 2, 3}), h.input).region_mismatches, 1u);
 }
 
+TEST(check_mesh, a_bent_quad_between_two_regions_is_split_as_the_input_splits_it) {
+  // Two layers of cubes, five tets each (the split alternating, so half the quads between the
+  // layers are split off their least corner), one region per layer, the node in the middle of
+  // the interface raised: its four quads are bent. As hexahedra, with a declared (unmoved) node,
+  // each region keeps its volume only where the checker splits those quads as the tets do.
+  const int n = 2;
+  TetMesh input = five_tet_grid(n);
+  const index_t middle = grid_node(n, 1, 1, 1);
+  input.points[3 * middle + 2] += 0.15;
+  ASSERT_NO_THROW(validate_tet_mesh(input));
+  for (index_t t = 0; t < input.nb_tets(); ++t) {
+    double z = 0;
+    for (int i = 0; i < 4; ++i) z += input.point(input.tet(t)[i])[2] / 4;
+    input.regions.push_back(z < 1 ? 1 : 2);
+  }
+  std::vector<Cell> hexes;
+  std::vector<std::int32_t> regions;
+  for (int k = 0; k < n; ++k) {
+    for (int j = 0; j < n; ++j) {
+      for (int i = 0; i < n; ++i) {
+        hexes.push_back(
+            {CellType::Hex,
+             {grid_node(n, i, j, k), grid_node(n, i + 1, j, k), grid_node(n, i + 1, j + 1, k),
+              grid_node(n, i, j + 1, k), grid_node(n, i, j, k + 1), grid_node(n, i + 1, j, k + 1),
+              grid_node(n, i + 1, j + 1, k + 1), grid_node(n, i, j + 1, k + 1)},
+             {}});
+        regions.push_back(k + 1);
+      }
+    }
+  }
+  MixedMesh mesh = make_mixed(input, hexes, regions);
+  mesh.source_offsets.clear();
+  mesh.changed_nodes = {middle};
+  const CheckReport r = check_mesh(mesh, input);
+  EXPECT_TRUE(r.valid()) << all_problems(r);
+  EXPECT_EQ(r.volume_not_kept, 0u);
+  EXPECT_LT(r.linear_volume_difference, 1e-12);
+}
+
 TEST(check_mesh, finds_unused_nodes_and_foreign_corners) {
   const HandBuilt h = hand_built();
   std::vector<Cell> cells = h.cells;

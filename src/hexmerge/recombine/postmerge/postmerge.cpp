@@ -587,24 +587,24 @@ bool all_alive(const FlipMesh& m, TetSpan tets) {
 }
 
 /// Locks the candidate's tets and closes its quad faces one by one (pass 0: only those closed as
-/// the tets are; else by flips), locking each closing pyramid; every tet locked is added to
-/// `locked`. False at the first face that does not close.
+/// the tets are; else by flips), locking each closing pyramid; every tet this call locks is added
+/// to `locked` (not one locked before: a closing pyramid's tets may be those of an element the
+/// selection keeps, which give_up() must leave locked).
 bool close_faces(Stage& stage, FlipMesh& m, const Candidate& cand, TetSpan tets,
                  const std::vector<QuadFace>& faces, int pass, std::vector<index_t>& locked) {
-  for (const index_t t : tets) {
+  const auto lock = [&](index_t t) {
+    if (m.locked(t)) return;
     m.set_locked(t, true);
     locked.push_back(t);
-  }
+  };
+  for (const index_t t : tets) lock(t);
   for (const QuadFace& q : faces) {
     if (stage.on_boundary(q)) continue;
     std::array<index_t, 2> pyramid{};
     if (!(pass == 0 ? stage.closed(q, cand, pyramid) : stage.close(q, cand, pyramid))) {
       return false;
     }
-    for (index_t t : pyramid) {
-      m.set_locked(t, true);
-      locked.push_back(t);
-    }
+    for (index_t t : pyramid) lock(t);
   }
   return true;
 }
