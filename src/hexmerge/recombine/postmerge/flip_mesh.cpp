@@ -6,6 +6,7 @@
 
 #include "hexmerge/core/error.h"
 #include "hexmerge/geometry/quality.h"
+#include "hexmerge/mesh/tet_topology.h"
 
 namespace hexmerge {
 namespace {
@@ -37,6 +38,10 @@ FlipMesh::FlipMesh(const TetMesh& mesh)
     regions_[t] = mesh.region(t);
     for (int i = 0; i < 4; ++i) incidence_[mesh.tet(t)[i]].push_back(t);
   }
+  const TetTopology topology(mesh);
+  input_neighbors_.resize(4 * static_cast<std::size_t>(mesh.nb_tets()));
+  for (index_t t = 0; t < mesh.nb_tets(); ++t)
+    for (int f = 0; f < 4; ++f) input_neighbors_[4 * std::size_t{t} + f] = topology.neighbor(t, f);
 }
 
 void FlipMesh::tets_with_edge(index_t a, index_t b, std::vector<index_t>& out) const {
@@ -50,6 +55,24 @@ void FlipMesh::tets_with_edge(index_t a, index_t b, std::vector<index_t>& out) c
 }
 
 index_t FlipMesh::tet_with_face(index_t a, index_t b, index_t c, index_t except) const {
+  // An input tet alive with the face: its input neighbour across it, when alive (no other tet
+  // can hold the face then), or none on the domain's boundary (changes keep each cavity's
+  // surface, so nothing comes beyond it).
+  if (except != NO_CELL && 4 * std::size_t{except} < input_neighbors_.size() && alive_[except]) {
+    const index_t* q = tet(except);
+    int off = -1, held = 0;
+    for (int i = 0; i < 4; ++i) {
+      if (q[i] == a || q[i] == b || q[i] == c) {
+        ++held;
+      } else {
+        off = i;
+      }
+    }
+    if (held == 3) {
+      const index_t n = input_neighbors_[4 * std::size_t{except} + off];
+      if (n == NO_CELL || alive_[n]) return n;
+    }
+  }
   for (index_t t : incidence_[a]) {
     if (t != except && t < nb_slots() && alive_[t] && holds(tet(t), a) && holds(tet(t), b) &&
         holds(tet(t), c)) {

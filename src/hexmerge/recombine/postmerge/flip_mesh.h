@@ -188,6 +188,10 @@ class FlipMesh {
   std::vector<char> locked_;
   /// Tets that held each vertex at some time (dead and stale ids included; filtered on use).
   std::vector<std::vector<index_t>> incidence_;
+  /// The input's tets' neighbours (TetTopology's, 4 per tet): an input tet keeps its slot, so
+  /// across a face of one that is alive is its neighbour there when that one is alive too, or
+  /// nothing on the domain's boundary (tet_with_face() without a scan).
+  std::vector<index_t> input_neighbors_;
   struct Entry {
     index_t tet;
     bool created;  ///< created (undo kills it) or killed (undo revives it)

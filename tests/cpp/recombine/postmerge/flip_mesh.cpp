@@ -544,5 +544,41 @@ TEST(flip_mesh, a_vertex_split_refuses_boundary_nodes_locks_regions_the_floor_an
   EXPECT_EQ(same.split(6, plus_x_tets(same), {-0.2, 0, 0}, {0.2, 0, 0}, 0.0), 7u);
 }
 
+// tet_with_face() answers from the input's neighbours where it can: the same tet as a search of
+// every live tet, after flips, a flip undone and flips again.
+TEST(flip_mesh, the_tet_across_a_face_is_the_one_a_search_finds) {
+  const TetMesh mesh = bipyramid({0.3, 0.3, -1});
+  FlipMesh m(mesh);
+  const auto expect_as_searched = [&] {
+    for (index_t t : alive_tets(m)) {
+      for (int f = 0; f < 4; ++f) {
+        std::array<index_t, 3> face{};
+        int n = 0;
+        for (int i = 0; i < 4; ++i) {
+          if (i != f) face[n++] = m.tet(t)[i];
+        }
+        index_t searched = NO_CELL;
+        for (index_t u : alive_tets(m)) {
+          const index_t* q = m.tet(u);
+          if (u != t && std::count(q, q + 4, face[0]) && std::count(q, q + 4, face[1]) &&
+              std::count(q, q + 4, face[2])) {
+            searched = u;
+          }
+        }
+        EXPECT_EQ(m.tet_with_face(face[0], face[1], face[2], t), searched) << t << " " << f;
+      }
+    }
+  };
+  expect_as_searched();
+  const std::size_t start = m.mark();
+  ASSERT_TRUE(m.flip_23(0, 1, 0.0));  // the input's two tets die: a search answers
+  expect_as_searched();
+  m.undo(start);  // alive again: their neighbours answer
+  expect_as_searched();
+  ASSERT_TRUE(m.flip_23(0, 1, 0.0));
+  ASSERT_TRUE(m.remove_edge(3, 4, 0, 0.0));
+  expect_as_searched();
+}
+
 }  // namespace
 }  // namespace hexmerge
