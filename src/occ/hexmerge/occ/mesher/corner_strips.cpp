@@ -1,10 +1,5 @@
 #include "hexmerge/occ/mesher/corner_strips.h"
 
-#include <BRep_Tool.hxx>
-#include <Geom_Curve.hxx>
-#include <ShapeAnalysis_Curve.hxx>
-#include <TopoDS.hxx>
-#include <TopoDS_Edge.hxx>
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -48,13 +43,8 @@ std::size_t coarsen_sharp_corners(const Shape& s, Surface& surface,
     return t.node[0] == n || t.node[1] == n || t.node[2] == n;
   };
   const auto distance_to_edge = [&](const Vec3& p, int edge) {
-    double first = 0, last = 0;
-    const Handle(Geom_Curve) curve = BRep_Tool::Curve(TopoDS::Edge(s.edges(edge + 1)), first, last);
-    if (curve.IsNull()) return std::numeric_limits<double>::infinity();
-    gp_Pnt projected;
-    double parameter = 0;
-    return ShapeAnalysis_Curve().Project(curve, gp_Pnt(p.x, p.y, p.z), 1e-9 * h, projected,
-                                         parameter, first, last);
+    const auto nearest = nearest_on_edge(s, edge, p, 1e-9 * h);
+    return nearest ? nearest->first : std::numeric_limits<double>::infinity();
   };
   // Node r, on one CAD edge between two of its segments (to a and b) and on two faces, taken
   // out: on each face its triangles' polygon re-triangulated with the largest smallest angle (a
@@ -75,9 +65,14 @@ std::size_t coarsen_sharp_corners(const Shape& s, Surface& surface,
       return false;
     };
     if (connected(a, b)) return false;
+    // Per face, the smallest angle of its triangles at r; r's smallest over both.
+    std::map<int, double> face_before;
     double before = M_PI, gap_before = 0;
     for (int ti : around[r]) {
-      before = std::min(before, smallest_angle(nodes, tris[ti].node));
+      const double angle = smallest_angle(nodes, tris[ti].node);
+      const auto [it, fresh] = face_before.emplace(tris[ti].face, angle);
+      if (!fresh) it->second = std::min(it->second, angle);
+      before = std::min(before, angle);
       gap_before = std::max(gap_before, gaps.of(nodes, tris[ti]));
     }
     std::vector<SurfaceTriangle> made;
@@ -108,9 +103,8 @@ std::size_t coarsen_sharp_corners(const Shape& s, Surface& surface,
       if (v.size() != next.size() + 1 || v.back() != (v.front() == a ? b : a)) return false;
       const PolygonTriangulation polygon = best_triangulation(
           nodes, v, face, uv, reference, std::numeric_limits<double>::infinity(), connected);
-      double face_before = M_PI;
-      for (int ti : fan) face_before = std::min(face_before, smallest_angle(nodes, tris[ti].node));
-      if (!(polygon.smallest >= (face == corner_face ? face_before : before))) return false;
+      if (!(polygon.smallest >= (face == corner_face ? face_before.at(face) : before)))
+        return false;
       made.insert(made.end(), polygon.triangles.begin(), polygon.triangles.end());
       slots.insert(slots.end(), fan.begin(), fan.end());
     }

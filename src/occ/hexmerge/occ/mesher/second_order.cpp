@@ -1,11 +1,8 @@
 #include "hexmerge/occ/mesher/second_order.h"
 
 #include <BRep_Tool.hxx>
-#include <Geom_Curve.hxx>
-#include <ShapeAnalysis_Curve.hxx>
 #include <ShapeAnalysis_Surface.hxx>
 #include <TopoDS.hxx>
-#include <TopoDS_Edge.hxx>
 #include <TopoDS_Face.hxx>
 #include <algorithm>
 #include <cmath>
@@ -202,15 +199,8 @@ Tet10Mesh second_order_mesh(const Shape& shape, const TetMesh& mesh,
         if (std::find(ef.begin(), ef.end(), faces[0]) == ef.end() ||
             std::find(ef.begin(), ef.end(), faces[1]) == ef.end())
           continue;
-        double first = 0, last = 0;
-        const Handle(Geom_Curve) curve =
-            BRep_Tool::Curve(TopoDS::Edge(shape.edges(c + 1)), first, last);
-        if (curve.IsNull()) continue;
-        gp_Pnt projected;
-        double parameter = 0;
-        const double distance =
-            ShapeAnalysis_Curve().Project(curve, p, tolerance, projected, parameter, first, last);
-        if (distance < best) best = distance, on = of(projected);
+        const auto nearest = nearest_on_edge(shape, c, of(p), tolerance);
+        if (nearest && nearest->first < best) best = nearest->first, on = nearest->second;
       }
     }
     if (!on || !near_middle(a, b, *on)) {

@@ -12,6 +12,8 @@
 #include <GProp_PrincipalProps.hxx>
 #include <Geom2d_Curve.hxx>
 #include <GeomLib_IsPlanarSurface.hxx>
+#include <Geom_Curve.hxx>
+#include <ShapeAnalysis_Curve.hxx>
 #include <ShapeFix_Solid.hxx>
 #include <TopExp.hxx>
 #include <TopExp_Explorer.hxx>
@@ -383,6 +385,18 @@ bool triangulation_collapsed(const TopoDS_Face& face, const Poly_Triangulation& 
   BRepGProp::SurfaceProperties(face, area);
   BRepGProp::LinearProperties(face, perimeter);
   return 2 * area.Mass() > 10 * tolerance * perimeter.Mass();
+}
+
+std::optional<std::pair<double, Vec3>> nearest_on_edge(const Shape& s, int edge, const Vec3& p,
+                                                       double tolerance) {
+  double first = 0, last = 0;
+  const Handle(Geom_Curve) curve = BRep_Tool::Curve(TopoDS::Edge(s.edges(edge + 1)), first, last);
+  if (curve.IsNull()) return std::nullopt;
+  gp_Pnt projected;
+  double parameter = 0;
+  const double distance = ShapeAnalysis_Curve().Project(curve, gp_Pnt(p.x, p.y, p.z), tolerance,
+                                                        projected, parameter, first, last);
+  return std::pair<double, Vec3>{distance, of(projected)};
 }
 
 }  // namespace hexmerge::mesher

@@ -62,6 +62,12 @@ std::vector<std::optional<AxisPlane>> face_planes(const Shape& s, const Frame& f
 inline Vec3 of(const gp_Dir& d) { return {d.X(), d.Y(), d.Z()}; }
 inline Vec3 of(const gp_Pnt& p) { return {p.X(), p.Y(), p.Z()}; }
 
+/// The point of CAD edge `edge` (numbered from 0: Shape::edges(edge + 1)) nearest to p and its
+/// distance (ShapeAnalysis_Curve's projection onto the edge's curve within its range, to
+/// `tolerance`); nothing for an edge without a 3D curve.
+std::optional<std::pair<double, Vec3>> nearest_on_edge(const Shape& s, int edge, const Vec3& p,
+                                                       double tolerance);
+
 /// Whether every triangle of a face's triangulation has two corners within `tolerance`
 /// (triangulate() merges them: the face would get no triangle) though the face is wider than 10
 /// `tolerance` (2 area / perimeter): BRepMesh failed on it. A KiCad connector's cone 0.45 mm long,
