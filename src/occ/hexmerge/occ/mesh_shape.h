@@ -338,6 +338,9 @@ struct MeshShapeReport {
   /// the same ends, narrower than the chord deflection (slivers): no triangle on them, the
   /// faces across joined along one chain of segments
   std::size_t nb_zipped_faces = 0;
+  /// Patches where OpenCASCADE's surface mesher folded a face's triangles over each other (near
+  /// a sphere's pole or a cone's apex), triangulated anew on their outline
+  std::size_t nb_unfolded_patches = 0;
   /// faces narrower than 9e-4 h (twice their area over their perimeter) merged away, their nodes
   /// and those within that of them one node (none where that made the surface touch itself or
   /// leave a gap, or where every way failed or the shape was refused so: then the ways ran again)

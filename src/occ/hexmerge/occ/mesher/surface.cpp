@@ -39,6 +39,7 @@
 #include "hexmerge/occ/mesher/shape.h"
 #include "hexmerge/occ/mesher/spatial.h"
 #include "hexmerge/occ/mesher/surface_check.h"
+#include "hexmerge/occ/mesher/surface_unfold.h"
 
 namespace hexmerge::mesher {
 namespace {
@@ -907,6 +908,7 @@ Surface triangulate(const Shape& s, double deflection, double tolerance,
   remove_faces_without_area(surface);
   surface.nb_flat_triangles = remove_flat_triangles(surface, tolerance);
   drop_unused_nodes(surface);
+  surface.nb_unfolded_patches = unfold_faces(surface).patches;
   return surface;
 }
 

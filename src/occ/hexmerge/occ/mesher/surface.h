@@ -68,6 +68,9 @@ struct Surface {
   /// Faces BRepMesh left without triangles between two edges with the same ends, narrower than
   /// the chord deflection, closed by joining the faces across them (triangulate()).
   std::size_t nb_zipped_faces = 0;
+  /// Patches of faces whose triangles folded over each other, triangulated anew (triangulate():
+  /// unfold_faces()).
+  std::size_t nb_unfolded_patches = 0;
 };
 
 /// BRepMesh's angular deflection in triangulate() (radians). Its CAD edges' segments turn by at
