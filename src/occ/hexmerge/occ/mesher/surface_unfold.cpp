@@ -233,14 +233,29 @@ std::optional<Patch> triangulate_patch(const Surface& surface, const std::vector
     (void)key;
     if (normals.size() == 2 && folds(normals[0], normals[1])) return std::nullopt;
   }
-  // No new triangle crosses the surface outside the patch.
+  // No new triangle crosses the surface outside the patch (the triangles whose boxes meet the
+  // patch's: one scan, then the exact test on those only).
   std::vector<char> in_region(tris.size(), 0);
   for (const int ti : region) in_region[static_cast<std::size_t>(ti)] = 1;
   std::vector<std::array<int, 3>> others, made;
-  for (std::size_t ti = 0; ti < tris.size(); ++ti)
-    if (!in_region[ti]) others.push_back(tris[ti].node);
-  for (const SurfaceTriangle& t : patch.triangles) made.push_back(t.node);
-  const std::vector<char> crossing = crosses_any(surface.nodes, others, made);
+  Vec3 lo = surface.nodes[static_cast<std::size_t>(loop.front())], hi = lo;
+  for (const SurfaceTriangle& t : patch.triangles) {
+    made.push_back(t.node);
+    for (const int n : t.node)
+      lo = vmin(lo, surface.nodes[static_cast<std::size_t>(n)]),
+      hi = vmax(hi, surface.nodes[static_cast<std::size_t>(n)]);
+  }
+  for (std::size_t ti = 0; ti < tris.size(); ++ti) {
+    if (in_region[ti]) continue;
+    Vec3 a = surface.nodes[static_cast<std::size_t>(tris[ti].node[0])], b = a;
+    for (const int n : tris[ti].node)
+      a = vmin(a, surface.nodes[static_cast<std::size_t>(n)]),
+      b = vmax(b, surface.nodes[static_cast<std::size_t>(n)]);
+    if (a.x <= hi.x && a.y <= hi.y && a.z <= hi.z && lo.x <= b.x && lo.y <= b.y && lo.z <= b.z)
+      others.push_back(tris[ti].node);
+  }
+  const std::vector<char> crossing =
+      others.empty() ? std::vector<char>() : crosses_any(surface.nodes, others, made);
   if (std::any_of(crossing.begin(), crossing.end(), [](char c) { return c != 0; }))
     return std::nullopt;
   return patch;
