@@ -268,6 +268,17 @@ def test_a_part_whose_faces_meet_off_their_edges_is_refused_by_name() -> None:
     assert "(meeting there)" in message and "Part > Check geometry" in message, message
 
 
+def test_a_part_whose_edges_lie_at_one_place_is_still_refused_by_name() -> None:
+    """pyocc_11752 at its 50k size (h 10.94): two of its edges lie at one place at each end, and
+    the faces there meet along BRepMesh's shared side (faces_meet_along), so the shape is refused
+    as broken, naming them, as before a shared side between faces that lie apart became a size
+    the next way retries."""
+    with pytest.raises(ValueError, match="the shape is broken: its surface touches itself along a "
+                       "curve") as refused:
+        hexmerge.mesh_shape(CAD / "pyocc_11752.stp", 10.937051647031948, recombine=False)
+    assert "Face793, Face889, Face1016 and Face1017 meet near (" in str(refused.value)
+
+
 def test_short_cad_edges_graded_on_a_crankshaft() -> None:
     """gmsh_Kurbelwelle at its 50k size (h 1.15): its 13 CAD edges under 0.2 h get local sizes
     of their own (feature_size 0.1): tets under 0.2 19 -> 5, the smallest 0.108 -> 0.154

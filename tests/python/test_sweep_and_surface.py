@@ -547,3 +547,26 @@ def test_a_sphere_s_pole_folded_by_the_surface_mesher_is_unfolded(tmp_path, h: f
         u, w = p[:, (i + 1) % 3] - p[:, i], p[:, (i + 2) % 3] - p[:, i]
         angles = np.degrees(np.arctan2(np.linalg.norm(np.cross(u, w), axis=1), np.einsum("ij,ij->i", u, w)))
         assert angles.min() > 5.0
+
+
+# A random part (bench/random_parts.py, seed 20261209, number 020: a turned part with holes, cones
+# and a torus) whose hole's cylinder and a cone meet along two curves with a web up to 0.27 mm
+# thick between them: at h 9 to 25 (but 17) BRepMesh gave both faces the same chord across the
+# web, and the part was refused as broken ("its surface touches itself along a curve").
+CYLINDER_CONE_WEB = ROOT / "tests" / "data" / "cylinder_cone_web.brep"
+
+
+@pytest.mark.parametrize("h", [11.4, 20.48])
+def test_faces_that_share_a_chord_only_are_meshed_on_a_finer_surface(h: float) -> None:
+    """The CAD's faces lie apart along the shared side (faces_meet_along): the first way fails as
+    too coarse, saying so, and the surface at a quarter of the chord deflection meshes."""
+    tets, report = hexmerge.mesh_shape(CYLINDER_CONE_WEB, h, recombine=False)
+    meshing = report["meshing"]
+    assert meshing["strategy"] == "lattice on a surface of a quarter of the chord deflection"
+    reason = meshing["failed_strategies"][0]
+    assert "the triangles of faces that come close share a side at this size (Face6 and Face10" in reason
+    assert "broken" not in reason
+    assert meshing["max_boundary_distance"] <= 1e-3 * h
+    cells = tets.cell_vertices.reshape(-1, 4)
+    mesh, recombined = hexmerge.recombine(tets.points, cells, tets.regions)
+    assert_checked(mesh, tets, recombined, h)

@@ -332,14 +332,24 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
   // merged): the solid touches itself there, which TetGen cannot mesh either. Checked on
   // BRepMesh's triangles (before the repairs, which take minutes on such a shape's 825k
   // triangles) and on the surface that goes to TetGen.
+  // Where the CAD's faces at such a side lie apart, BRepMesh gave two faces that only come close
+  // the same chord: this way fails as too coarse, and the surface at a quarter of the chord
+  // deflection is tried.
   const auto refuse_touching_itself = [&] {
     const std::vector<OverusedSide> overused =
         find_overused_sides(surface, shape.face_solids, shape.edge_faces);
-    if (!overused.empty())
+    if (overused.empty()) return;
+    std::vector<OverusedSide> touching;
+    for (const OverusedSide& side : overused)
+      if (faces_meet_along(shape, surface.nodes, side, 1e-4 * h)) touching.push_back(side);
+    if (!touching.empty())
       throw InputError(
           "mesh_shape: the shape is broken: its surface touches itself along a curve, where two "
           "of its edges lie at one place without being one edge: " +
-          describe_overused_sides(surface.nodes, overused, face_names) + kRepairTheShape);
+          describe_overused_sides(surface.nodes, touching, face_names) + kRepairTheShape);
+    throw SurfaceTooCoarse("the triangles of faces that come close share a side at this size (" +
+                           describe_overused_sides(surface.nodes, overused, face_names) +
+                           "), which a finer surface keeps apart");
   };
   refuse_touching_itself();
   // BRepMesh can leave part of a face without triangles at some sizes (a random part's

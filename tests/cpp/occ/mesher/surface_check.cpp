@@ -113,6 +113,27 @@ TEST(find_overused_sides, a_solid_touching_itself_along_a_side) {
   EXPECT_TRUE(mesher::find_overused_sides(surface, {{0}, {1}, {0, 1}}, edge_faces).empty());
 }
 
+// A side between two faces of a 1 x 1 x 1 box: along their common edge they meet (the refusal's
+// case: two edges at one place), across the box (opposite faces, 1 apart) they do not (faces that
+// only come close, sharing BRepMesh's chord).
+TEST(faces_meet_along, only_where_the_faces_touch_along_the_side) {
+  const mesher::Shape shape = load(occ_box(0, 0, 0, 1, 1, 1));
+  const auto face_at = [&](const Vec3& p) {
+    for (int f = 0; f < shape.faces.Extent(); ++f)
+      if (distance_to_face(shape, f, p) < 1e-9) return f;
+    return -1;
+  };
+  const int x0 = face_at({0, 0.5, 0.5}), x1 = face_at({1, 0.5, 0.5}), y0 = face_at({0.5, 0, 0.5});
+  ASSERT_GE(x0, 0);
+  ASSERT_GE(x1, 0);
+  ASSERT_GE(y0, 0);
+  const std::vector<Vec3> nodes = {{0, 0, 0.2}, {0, 0, 0.8}, {0, 0.5, 0.5}, {1, 0.5, 0.5}};
+  EXPECT_TRUE(mesher::faces_meet_along(shape, nodes, {0, 1, {x0, y0}}, 1e-6));
+  EXPECT_FALSE(mesher::faces_meet_along(shape, nodes, {2, 3, {x0, x1}}, 1e-6));
+  // Three faces, two of which meet along the side: touching.
+  EXPECT_TRUE(mesher::faces_meet_along(shape, nodes, {0, 1, {x0, x1, y0}}, 1e-6));
+}
+
 // A tube 1140 long with walls of radius 1.0795 and 1.5875 (0.508 thick, as pyocc_11752's 178)
 // at h 13, its faces about eight strips around: the refinement's flips and node moves and the
 // collapses kept every triangle within the chord deflection of its face (split sides aside);

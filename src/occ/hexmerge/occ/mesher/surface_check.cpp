@@ -13,6 +13,7 @@
 #include <TopoDS.hxx>
 #include <TopoDS_Edge.hxx>
 #include <TopoDS_Face.hxx>
+#include <TopoDS_Vertex.hxx>
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -300,6 +301,29 @@ std::string describe_overused_sides(const std::vector<Vec3>& nodes,
   if (overused.size() > kListed)
     text << "; and " << overused.size() - kListed << " more such places";
   return text.str();
+}
+
+bool faces_meet_along(const Shape& s, const std::vector<Vec3>& nodes, const OverusedSide& side,
+                      double tolerance) {
+  const Vec3 a = nodes[static_cast<std::size_t>(side.a)],
+             b = nodes[static_cast<std::size_t>(side.b)];
+  for (const double f : {0.25, 0.5, 0.75}) {
+    const Vec3 p = a + (b - a) * f;
+    const TopoDS_Vertex at = BRepBuilderAPI_MakeVertex(gp_Pnt(p.x, p.y, p.z)).Vertex();
+    // The point of each face nearest p.
+    std::vector<gp_Pnt> nearest;
+    for (const int face : side.faces) {
+      BRepExtrema_DistShapeShape distance(at, TopoDS::Face(s.faces(face + 1)));
+      if (!distance.IsDone() || distance.NbSolution() == 0) return true;  // unsure: as before
+      nearest.push_back(distance.PointOnShape2(1));
+    }
+    bool meet = false;
+    for (std::size_t i = 0; i < nearest.size() && !meet; ++i)
+      for (std::size_t j = i + 1; j < nearest.size() && !meet; ++j)
+        meet = nearest[i].Distance(nearest[j]) <= tolerance;
+    if (!meet) return false;
+  }
+  return true;
 }
 
 namespace {

@@ -54,6 +54,16 @@ std::vector<OverusedSide> find_overused_sides(const Surface& surface,
                                               const std::vector<std::vector<int>>& face_solids,
                                               const std::vector<std::vector<int>>& edge_faces);
 
+/// Whether the CAD's faces of an overused side meet along it: at a quarter, half and three
+/// quarters of the side, two of its faces come within `tolerance` of each other (two of the
+/// solid's edges at one place: broken CAD). Not where they lie apart there: faces that only come
+/// close share such a side when BRepMesh gives both the same chord between two of their common
+/// edges (a random part's cylinder and cone, 0.27 mm apart between their two curves of
+/// intersection: every size from 9 to 25 mm but 17 refused as broken), which a finer surface
+/// parts.
+bool faces_meet_along(const Shape& s, const std::vector<Vec3>& nodes, const OverusedSide& side,
+                      double tolerance);
+
 /// The faces (0-based, sorted) with a side that only one triangle of the surface has: a gap
 /// (BRepMesh covered a random part's boss cylinder only in part at h 58.8, and TetGen carved the
 /// whole solid away).
