@@ -570,3 +570,38 @@ def test_faces_that_share_a_chord_only_are_meshed_on_a_finer_surface(h: float) -
     cells = tets.cell_vertices.reshape(-1, 4)
     mesh, recombined = hexmerge.recombine(tets.points, cells, tets.regions)
     assert_checked(mesh, tets, recombined, h)
+
+
+# A tetrahedral spike whose tip touches a box's bottom face at a point, the two solids made one
+# shape by BooleanFragments (which puts the tip on the face as a vertex inside it): BRepMesh left
+# that vertex out of the face's triangles, which the tip then crossed, and every way failed at
+# every size (a random part of bench/random_parts.py, seed 20261211, had such a spike under a box).
+SPIKE_TIP_ON_A_FACE_GEO = """SetFactory("OpenCASCADE");
+Box(1) = {0, 0, 10, 10, 10, 5};
+Point(101) = {2, 2, 0}; Point(102) = {8, 2, 0}; Point(103) = {5, 8, 0}; Point(104) = {5.3, 4.7, 10};
+Line(201) = {101, 102}; Line(202) = {102, 103}; Line(203) = {103, 101};
+Line(204) = {101, 104}; Line(205) = {102, 104}; Line(206) = {103, 104};
+Curve Loop(301) = {201, 202, 203}; Plane Surface(401) = {301};
+Curve Loop(302) = {201, 205, -204}; Plane Surface(402) = {302};
+Curve Loop(303) = {202, 206, -205}; Plane Surface(403) = {303};
+Curve Loop(304) = {203, 204, -206}; Plane Surface(404) = {304};
+Surface Loop(501) = {401, 402, 403, 404}; Volume(2) = {501};
+BooleanFragments{ Volume{1, 2}; Delete; }{}
+"""
+
+
+@pytest.mark.parametrize("h", [1.5, 4.0])
+def test_solids_touching_at_a_point_share_the_node(tmp_path, h: float) -> None:
+    """The face's inner vertex becomes a node of its triangles (`nb_internal_vertices`), the face
+    no lattice face: the shape meshes in the first way, the tip one node of both solids' tets."""
+    shape = gmsh_brep(tmp_path, "spike_tip_on_a_face", SPIKE_TIP_ON_A_FACE_GEO)
+    tets, report = hexmerge.mesh_shape(shape, h, recombine=False)
+    meshing = report["meshing"]
+    assert meshing["nb_internal_vertices"] == 1
+    assert meshing["strategy"] == "lattice", meshing["failed_strategies"]
+    assert_sound(tets, report, h, 500 + 18 * 10 / 3, 1e-9)
+    cells = tets.cell_vertices.reshape(-1, 4)
+    tip = np.flatnonzero(np.linalg.norm(tets.points - [5.3, 4.7, 10], axis=1) < 1e-9)
+    assert len(tip) == 1
+    at_tip = np.any(cells == tip[0], axis=1)
+    assert set(np.unique(tets.regions[at_tip])) == set(np.unique(tets.regions)) and len(np.unique(tets.regions)) == 2

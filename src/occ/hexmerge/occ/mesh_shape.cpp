@@ -1,5 +1,6 @@
 #include "hexmerge/occ/mesh_shape.h"
 
+#include <Standard_Failure.hxx>
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -110,15 +111,35 @@ TetMesh mesh_shape_impl(const std::string& brep, const MeshShapeParameters& para
 
 }  // namespace
 
+namespace {
+
+// OpenCASCADE's exceptions are no std::exception: one that escapes the ways of placing the points
+// (reading the shape, its features) becomes an InputError in our words, naming its kind, rather
+// than a caller's "unknown exception".
+std::string occ_failure(const Standard_Failure& e) {
+  return std::string("OpenCASCADE failed on the shape's geometry (") + e.DynamicType()->Name() +
+         ")";
+}
+
+}  // namespace
+
 TetMesh mesh_shape(const std::string& brep, const MeshShapeParameters& parameters,
                    MeshShapeReport& report, const ProgressCallback& progress) {
-  return mesh_shape_impl(brep, parameters, report, nullptr, progress);
+  try {
+    return mesh_shape_impl(brep, parameters, report, nullptr, progress);
+  } catch (const Standard_Failure& e) {
+    throw InputError("mesh_shape: " + occ_failure(e));
+  }
 }
 
 Tet10Mesh mesh_shape_tet10(const std::string& brep, const MeshShapeParameters& parameters,
                            MeshShapeReport& report, const ProgressCallback& progress) {
   Tet10Mesh tet10;
-  mesh_shape_impl(brep, parameters, report, &tet10, progress);
+  try {
+    mesh_shape_impl(brep, parameters, report, &tet10, progress);
+  } catch (const Standard_Failure& e) {
+    throw InputError("mesh_shape: " + occ_failure(e));
+  }
   return tet10;
 }
 
@@ -250,6 +271,11 @@ TetMesh mesh_shape_impl(const std::string& brep, const MeshShapeParameters& para
         report.failed_strategies.push_back(std::string(strategy.name) + ": " + e.what());
         failures += std::string(failures.empty() ? "" : "; ") + strategy.name + ": " + e.what();
         failed_seconds += seconds_since(attempt_start);
+      } catch (const Standard_Failure& e) {  // this way's geometry: the next may not need it
+        report.failed_strategies.push_back(std::string(strategy.name) + ": " + occ_failure(e));
+        failures +=
+            std::string(failures.empty() ? "" : "; ") + strategy.name + ": " + occ_failure(e);
+        failed_seconds += seconds_since(attempt_start);
       }
     }
     throw InputError("mesh_shape: could not tetrahedralise the shape at size " +
@@ -327,6 +353,7 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
   report.nb_revolution_faces = surface.nb_revolution_faces;
   report.nb_zipped_faces = surface.nb_zipped_faces;
   report.nb_unfolded_patches = surface.nb_unfolded_patches;
+  report.nb_internal_vertices = surface.internal_vertex_faces.size();
   Lattice lattice = lay_lattice(shape, frame, surface.nodes, h, strategy.lattice_faces);
   // Where a solid's boundary passes a side twice, two CAD edges lie at one place (their nodes
   // merged): the solid touches itself there, which TetGen cannot mesh either. Checked on
@@ -408,6 +435,10 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
           ? face_layer_specs(layer_entries, given_items.faces, std::max(h, parameters.size))
           : std::vector<FaceLayerSpec>{};
   std::vector<char> layered(items_at_h.face_size.size(), 0);
+  // Faces with a vertex inside (solids touching there at a point): their triangles go as they are.
+  std::vector<char> internal_vertex(items_at_h.face_size.size(), 0);
+  for (const int f : surface.internal_vertex_faces)
+    internal_vertex[static_cast<std::size_t>(f)] = 1;
   for (const FaceLayerSpec& spec : layer_specs)
     for (const int f : spec.faces) layered[static_cast<std::size_t>(f)] = 1;
   const std::vector<bool> lattice_faces_as_found = lattice.lattice_face;
@@ -418,7 +449,8 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
   // The faces and edges with sizes or layers taken out of the lattice's, and the size field.
   const auto apply_sizes = [&] {
     for (std::size_t f = 0; f < items_at_h.face_size.size(); ++f)
-      if ((items_at_h.face_size[f] < h || layered[f]) && lattice.lattice_face[f]) {
+      if ((items_at_h.face_size[f] < h || layered[f] || internal_vertex[f]) &&
+          lattice.lattice_face[f]) {
         lattice.lattice_face[f] = false;
         --lattice.nb_lattice_faces;
       }
@@ -444,7 +476,8 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
   std::optional<Sweep> sweep;
   std::vector<double> wall_size;  // swept with local sizes on its caps' edges: per wall
   bool carried = false;           // an extrusion whose local sizes and face layers the sweep takes
-  if (!local && layer_specs.empty()) sweep = sweep_as_found;  // no lattice face taken away
+  if (!local && layer_specs.empty() && surface.internal_vertex_faces.empty())
+    sweep = sweep_as_found;  // no lattice face taken away
   // The sweep carries local sizes on its caps' edges only (the walls' sides split to them), and
   // the global layers only: a shape that would be swept without its other local sizes or its
   // face layers is meshed unswept, and says why.

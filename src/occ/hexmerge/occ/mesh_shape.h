@@ -341,6 +341,9 @@ struct MeshShapeReport {
   /// Patches where OpenCASCADE's surface mesher folded a face's triangles over each other (near
   /// a sphere's pole or a cone's apex), triangulated anew on their outline
   std::size_t nb_unfolded_patches = 0;
+  /// Vertices inside faces, on none of their edges (where solids touch at a point), made nodes of
+  /// the faces' triangles
+  std::size_t nb_internal_vertices = 0;
   /// faces narrower than 9e-4 h (twice their area over their perimeter) merged away, their nodes
   /// and those within that of them one node (none where that made the surface touch itself or
   /// leave a gap, or where every way failed or the shape was refused so: then the ways ran again)

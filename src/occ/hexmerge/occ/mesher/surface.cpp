@@ -36,6 +36,7 @@
 #include <vector>
 
 #include "hexmerge/core/error.h"
+#include "hexmerge/geometry/triangle_distance.h"
 #include "hexmerge/occ/mesher/shape.h"
 #include "hexmerge/occ/mesher/spatial.h"
 #include "hexmerge/occ/mesher/surface_check.h"
@@ -780,6 +781,59 @@ std::string faces_named(const std::vector<int>& faces, const TopTools_IndexedMap
 
 }  // namespace
 
+namespace {
+
+// A face's vertices on none of its edges (INTERNAL: where a solid touches another at a point,
+// BooleanFragments imprints the point on the other's face) become nodes of the face's triangles:
+// BRepMesh leaves them out, and the face's triangles passed by the other solid's node there (a
+// random part's spike touching a box on top at its tip: "the surface's triangles cross" at every
+// size). Each takes the node at its place (the other solid's), splitting the face's triangle
+// nearest it in three (one of no area where it lies on a side: remove_flat_triangles() then
+// splits the triangle across). Each such vertex's face goes to Surface::internal_vertex_faces.
+void insert_internal_vertices(const TopTools_IndexedMapOfShape& faces, NodeMerger& merger,
+                              Surface& surface) {
+  for (int fi = 1; fi <= faces.Extent(); ++fi) {
+    const TopoDS_Face& face = TopoDS::Face(faces(fi));
+    TopTools_IndexedMapOfShape on_edges;
+    for (TopExp_Explorer ex(face, TopAbs_EDGE); ex.More(); ex.Next())
+      TopExp::MapShapes(ex.Current(), TopAbs_VERTEX, on_edges);
+    for (TopExp_Explorer ex(face, TopAbs_VERTEX); ex.More(); ex.Next()) {
+      const TopoDS_Vertex& vertex = TopoDS::Vertex(ex.Current());
+      if (on_edges.Contains(vertex)) continue;
+      const Vec3 p = of(BRep_Tool::Pnt(vertex));
+      const int node = merger.id(p, fi - 1);
+      int nearest = -1;
+      bool used = false;
+      double least = std::numeric_limits<double>::infinity();
+      for (std::size_t ti = 0; ti < surface.triangles.size() && !used; ++ti) {
+        const SurfaceTriangle& t = surface.triangles[ti];
+        if (t.face != fi - 1) continue;
+        used = t.node[0] == node || t.node[1] == node || t.node[2] == node;
+        const double d = squared_distance_to_triangle(
+            p, surface.nodes[t.node[0]], surface.nodes[t.node[1]], surface.nodes[t.node[2]]);
+        if (d < least) least = d, nearest = static_cast<int>(ti);
+      }
+      if (used || nearest < 0) continue;
+      // Its parameters on the face (projected: such a vertex need not carry them).
+      const gp_Pnt2d at = ShapeAnalysis_Surface(BRep_Tool::Surface(face))
+                              .ValueOfUV(BRep_Tool::Pnt(vertex), BRep_Tool::Tolerance(vertex));
+      const SurfaceTriangle t = surface.triangles[static_cast<std::size_t>(nearest)];
+      for (int c = 0; c < 3; ++c) {
+        SurfaceTriangle part = t;
+        part.node[(c + 2) % 3] = node;
+        part.uv[(c + 2) % 3] = UV{at.X(), at.Y()};
+        if (c == 0)
+          surface.triangles[static_cast<std::size_t>(nearest)] = part;
+        else
+          surface.triangles.push_back(part);
+      }
+      surface.internal_vertex_faces.push_back(fi - 1);
+    }
+  }
+}
+
+}  // namespace
+
 Surface triangulate(const Shape& s, double deflection, double tolerance,
                     const std::vector<std::string>& face_names) {
   // BRepMesh fails on some analytic faces that are valid CAD (a cone whose apex is a circle
@@ -904,6 +958,7 @@ Surface triangulate(const Shape& s, double deflection, double tolerance,
                      " of the shape (between two edges with the same ends, wider than the chord "
                      "deflection)");
   split_doubled_segments(s, faces, edges, doubled, merger, surface, tolerance);
+  insert_internal_vertices(faces, merger, surface);
   remove_coincident_triangles(surface);
   remove_faces_without_area(surface);
   surface.nb_flat_triangles = remove_flat_triangles(surface, tolerance);

@@ -71,6 +71,10 @@ struct Surface {
   /// Patches of faces whose triangles folded over each other, triangulated anew (triangulate():
   /// unfold_faces()).
   std::size_t nb_unfolded_patches = 0;
+  /// Per vertex inside a face (on none of its edges) made a node of its triangles, that face
+  /// (triangulate(): BRepMesh leaves them out). Such a face is no lattice face: a lattice face's
+  /// triangles go to the tetrahedraliser as its loops only.
+  std::vector<int> internal_vertex_faces;
 };
 
 /// BRepMesh's angular deflection in triangulate() (radians). Its CAD edges' segments turn by at
