@@ -789,9 +789,10 @@ namespace {
 // random part's spike touching a box on top at its tip: "the surface's triangles cross" at every
 // size). Each takes the node at its place (the other solid's), splitting the face's triangle
 // nearest it in three (one of no area where it lies on a side: remove_flat_triangles() then
-// splits the triangle across). Each such vertex's face goes to Surface::internal_vertex_faces.
-void insert_internal_vertices(const TopTools_IndexedMapOfShape& faces, NodeMerger& merger,
-                              Surface& surface) {
+// splits the triangle across), when that lies within twice the chord deflection of it. Each such
+// vertex's face goes to Surface::internal_vertex_faces.
+void insert_internal_vertices(const TopTools_IndexedMapOfShape& faces, double deflection,
+                              NodeMerger& merger, Surface& surface) {
   for (int fi = 1; fi <= faces.Extent(); ++fi) {
     const TopoDS_Face& face = TopoDS::Face(faces(fi));
     TopTools_IndexedMapOfShape on_edges;
@@ -813,7 +814,8 @@ void insert_internal_vertices(const TopTools_IndexedMapOfShape& faces, NodeMerge
             p, surface.nodes[t.node[0]], surface.nodes[t.node[1]], surface.nodes[t.node[2]]);
         if (d < least) least = d, nearest = static_cast<int>(ti);
       }
-      if (used || nearest < 0) continue;
+      // (Not one off the face's triangles by more than their deflection: no such face's.)
+      if (used || nearest < 0 || std::sqrt(least) > 2 * deflection) continue;
       // Its parameters on the face (projected: such a vertex need not carry them).
       const gp_Pnt2d at = ShapeAnalysis_Surface(BRep_Tool::Surface(face))
                               .ValueOfUV(BRep_Tool::Pnt(vertex), BRep_Tool::Tolerance(vertex));
@@ -958,7 +960,7 @@ Surface triangulate(const Shape& s, double deflection, double tolerance,
                      " of the shape (between two edges with the same ends, wider than the chord "
                      "deflection)");
   split_doubled_segments(s, faces, edges, doubled, merger, surface, tolerance);
-  insert_internal_vertices(faces, merger, surface);
+  insert_internal_vertices(faces, deflection, merger, surface);
   remove_coincident_triangles(surface);
   remove_faces_without_area(surface);
   surface.nb_flat_triangles = remove_flat_triangles(surface, tolerance);
