@@ -1,10 +1,8 @@
-// CGAL before OpenCASCADE: OCCT's Handle() macro breaks CGAL's headers.
 #include "hexmerge/occ/mesher/face_chart.h"
-
-#include <CGAL/Constrained_Delaunay_triangulation_2.h>
-#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
-#include <CGAL/Triangulation_face_base_with_info_2.h>
-#include <CGAL/Triangulation_vertex_base_with_info_2.h>
+// CGAL (outline_cdt.h) before OpenCASCADE: OCCT's Handle() macro breaks CGAL's headers.
+// clang-format off
+#include "hexmerge/occ/mesher/outline_cdt.h"
+// clang-format on
 
 #include <BRepAdaptor_Surface.hxx>
 #include <TopoDS.hxx>
@@ -20,13 +18,9 @@
 namespace hexmerge::mesher {
 namespace {
 
-using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
-using VertexBase = CGAL::Triangulation_vertex_base_with_info_2<int, Kernel>;
-using FaceInfo = CGAL::Triangulation_face_base_with_info_2<signed char, Kernel>;
-using FaceBase = CGAL::Constrained_triangulation_face_base_2<Kernel, FaceInfo>;
-using Tds = CGAL::Triangulation_data_structure_2<VertexBase, FaceBase>;
-using Cdt =
-    CGAL::Constrained_Delaunay_triangulation_2<Kernel, Tds, CGAL::No_constraint_intersection_tag>;
+using cgal2::Cdt;
+using cgal2::Kernel;
+using cgal2::mark_inside;
 
 double distance2(const P2& a, const P2& b) { return std::hypot(a[0] - b[0], a[1] - b[1]); }
 
@@ -284,27 +278,7 @@ std::optional<Retriangulated> retriangulate(
   }
   if (cdt.number_of_vertices() != inserted) return std::nullopt;
   // Inside: reached from outside across an odd number of the outline's sides.
-  for (Cdt::Face_handle f : cdt.all_face_handles()) f->info() = -1;
-  std::vector<Cdt::Face_handle> stack;
-  for (Cdt::Face_handle f : cdt.all_face_handles())
-    if (cdt.is_infinite(f)) f->info() = 0, stack.push_back(f);
-  while (!stack.empty()) {
-    const Cdt::Face_handle f = stack.back();
-    stack.pop_back();
-    for (int i = 0; i < 3; ++i) {
-      const Cdt::Face_handle next = f->neighbor(i);
-      const Cdt::Vertex_handle a = f->vertex(Cdt::cw(i)), b = f->vertex(Cdt::ccw(i));
-      const bool crossing = !cdt.is_infinite(a) && !cdt.is_infinite(b) && f->is_constrained(i) &&
-                            outline.count(std::minmax(a->info(), b->info()));
-      const signed char state = static_cast<signed char>(crossing ? 1 - f->info() : f->info());
-      if (next->info() == -1) {
-        next->info() = state;
-        stack.push_back(next);
-      } else if (next->info() != state) {
-        return std::nullopt;  // the outline does not bound a region
-      }
-    }
-  }
+  if (!mark_inside(cdt, outline)) return std::nullopt;  // the outline bounds no region
   // The new triangles, in the face's orientation; each quad's two among them.
   const auto world = [&](int v) {
     return v < static_cast<int>(nv)

@@ -1,10 +1,4 @@
-// CGAL before anything that may bring OpenCASCADE: OCCT's Handle() macro breaks CGAL's headers.
 #include "hexmerge/occ/mesher/surface_unfold.h"
-
-#include <CGAL/Constrained_Delaunay_triangulation_2.h>
-#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
-#include <CGAL/Triangulation_face_base_with_info_2.h>
-#include <CGAL/Triangulation_vertex_base_with_info_2.h>
 
 #include <algorithm>
 #include <array>
@@ -17,18 +11,15 @@
 #include <utility>
 #include <vector>
 
+#include "hexmerge/occ/mesher/outline_cdt.h"
 #include "hexmerge/occ/mesher/surface_check.h"
 
 namespace hexmerge::mesher {
 namespace {
 
-using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
-using VertexBase = CGAL::Triangulation_vertex_base_with_info_2<int, Kernel>;
-using FaceInfo = CGAL::Triangulation_face_base_with_info_2<signed char, Kernel>;
-using FaceBase = CGAL::Constrained_triangulation_face_base_2<Kernel, FaceInfo>;
-using Tds = CGAL::Triangulation_data_structure_2<VertexBase, FaceBase>;
-using Cdt =
-    CGAL::Constrained_Delaunay_triangulation_2<Kernel, Tds, CGAL::No_constraint_intersection_tag>;
+using cgal2::Cdt;
+using cgal2::Kernel;
+using cgal2::mark_inside;
 
 // A new triangle may turn from the patch's normal by less than this (degrees): the patch lies on
 // one side of its plane, as a graph over it.
@@ -177,27 +168,7 @@ std::optional<Patch> triangulate_patch(const Surface& surface, const std::vector
   }
   if (cdt.number_of_vertices() != handle.size()) return std::nullopt;
   // Inside: reached from outside across an odd number of the outline's sides.
-  for (Cdt::Face_handle f : cdt.all_face_handles()) f->info() = -1;
-  std::vector<Cdt::Face_handle> stack;
-  for (Cdt::Face_handle f : cdt.all_face_handles())
-    if (cdt.is_infinite(f)) f->info() = 0, stack.push_back(f);
-  while (!stack.empty()) {
-    const Cdt::Face_handle f = stack.back();
-    stack.pop_back();
-    for (int i = 0; i < 3; ++i) {
-      const Cdt::Face_handle across = f->neighbor(i);
-      const Cdt::Vertex_handle a = f->vertex(Cdt::cw(i)), b = f->vertex(Cdt::ccw(i));
-      const bool crossing = !cdt.is_infinite(a) && !cdt.is_infinite(b) && f->is_constrained(i) &&
-                            outline.count(std::minmax(a->info(), b->info()));
-      const auto state = static_cast<signed char>(crossing ? 1 - f->info() : f->info());
-      if (across->info() == -1) {
-        across->info() = state;
-        stack.push_back(across);
-      } else if (across->info() != state) {
-        return std::nullopt;  // the outline does not bound a region
-      }
-    }
-  }
+  if (!mark_inside(cdt, outline)) return std::nullopt;  // the outline bounds no region
   Patch patch;
   const double most_turn = std::cos(kMostTurn * M_PI / 180);
   for (Cdt::Face_handle f : cdt.finite_face_handles()) {
