@@ -525,6 +525,7 @@ py::tuple run_mesh_shape(const std::string& brep, const std::map<std::string, st
   d["nb_zipped_faces"] = report.nb_zipped_faces;
   d["nb_unfolded_patches"] = report.nb_unfolded_patches;
   d["nb_internal_vertices"] = report.nb_internal_vertices;
+  d["nb_parted_sides"] = report.nb_parted_sides;
   d["nb_narrow_faces"] = report.nb_narrow_faces;
   d["glue_fuzzy"] = report.glue_fuzzy;
   d["nb_axis_points"] = report.nb_axis_points;

@@ -354,6 +354,7 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
   report.nb_zipped_faces = surface.nb_zipped_faces;
   report.nb_unfolded_patches = surface.nb_unfolded_patches;
   report.nb_internal_vertices = surface.internal_vertex_faces.size();
+  report.nb_parted_sides = surface.nb_parted_sides;
   Lattice lattice = lay_lattice(shape, frame, surface.nodes, h, strategy.lattice_faces);
   // Where a solid's boundary passes a side twice, two CAD edges lie at one place (their nodes
   // merged): the solid touches itself there, which TetGen cannot mesh either. Checked on

@@ -344,6 +344,9 @@ struct MeshShapeReport {
   /// Vertices inside faces, on none of their edges (where solids touch at a point), made nodes of
   /// the faces' triangles
   std::size_t nb_internal_vertices = 0;
+  /// Sides OpenCASCADE's surface mesher gave two faces that only come close there, each face's
+  /// triangles split apart at a node of its own
+  std::size_t nb_parted_sides = 0;
   /// faces narrower than 9e-4 h (twice their area over their perimeter) merged away, their nodes
   /// and those within that of them one node (none where that made the surface touch itself or
   /// leave a gap, or where every way failed or the shape was refused so: then the ways ran again)

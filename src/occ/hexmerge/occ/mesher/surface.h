@@ -75,6 +75,8 @@ struct Surface {
   /// (triangulate(): BRepMesh leaves them out). Such a face is no lattice face: a lattice face's
   /// triangles go to the tetrahedraliser as its loops only.
   std::vector<int> internal_vertex_faces;
+  /// Sides BRepMesh gave two faces that only come close there, split apart (triangulate()).
+  std::size_t nb_parted_sides = 0;
 };
 
 /// BRepMesh's angular deflection in triangulate() (radians). Its CAD edges' segments turn by at
