@@ -120,26 +120,27 @@ std::string occ_failure(const Standard_Failure& e) {
   return std::string("OpenCASCADE failed on the shape's geometry (") + e.DynamicType()->Name() +
          ")";
 }
-
-}  // namespace
-
-TetMesh mesh_shape(const std::string& brep, const MeshShapeParameters& parameters,
-                   MeshShapeReport& report, const ProgressCallback& progress) {
+TetMesh mesh_shape_guarded(const std::string& brep, const MeshShapeParameters& parameters,
+                           MeshShapeReport& report, Tet10Mesh* tet10,
+                           const ProgressCallback& progress) {
   try {
-    return mesh_shape_impl(brep, parameters, report, nullptr, progress);
+    return mesh_shape_impl(brep, parameters, report, tet10, progress);
   } catch (const Standard_Failure& e) {
     throw InputError("mesh_shape: " + occ_failure(e));
   }
 }
 
+}  // namespace
+
+TetMesh mesh_shape(const std::string& brep, const MeshShapeParameters& parameters,
+                   MeshShapeReport& report, const ProgressCallback& progress) {
+  return mesh_shape_guarded(brep, parameters, report, nullptr, progress);
+}
+
 Tet10Mesh mesh_shape_tet10(const std::string& brep, const MeshShapeParameters& parameters,
                            MeshShapeReport& report, const ProgressCallback& progress) {
   Tet10Mesh tet10;
-  try {
-    mesh_shape_impl(brep, parameters, report, &tet10, progress);
-  } catch (const Standard_Failure& e) {
-    throw InputError("mesh_shape: " + occ_failure(e));
-  }
+  mesh_shape_guarded(brep, parameters, report, &tet10, progress);
   return tet10;
 }
 
@@ -251,6 +252,11 @@ TetMesh mesh_shape_impl(const std::string& brep, const MeshShapeParameters& para
       ++nb_tried;
       MeshShapeReport attempt = report;
       const auto attempt_start = PhaseTimer::Clock::now();
+      const auto failed = [&](const std::string& why) {
+        report.failed_strategies.push_back(std::string(strategy.name) + ": " + why);
+        failures += std::string(failures.empty() ? "" : "; ") + strategy.name + ": " + why;
+        failed_seconds += seconds_since(attempt_start);
+      };
       try {
         TetMesh mesh =
             mesh_attempt(shape, given_items, frame, sharp, regions_brep, parameters, strategy,
@@ -268,14 +274,9 @@ TetMesh mesh_shape_impl(const std::string& brep, const MeshShapeParameters& para
               attempt.nb_pulled_points + attempt.nb_narrow_pyramids + attempt.nb_inner_apexes > 0;
           first_buffered = attempt.nb_buffer_faces > 0;
         }
-        report.failed_strategies.push_back(std::string(strategy.name) + ": " + e.what());
-        failures += std::string(failures.empty() ? "" : "; ") + strategy.name + ": " + e.what();
-        failed_seconds += seconds_since(attempt_start);
+        failed(e.what());
       } catch (const Standard_Failure& e) {  // this way's geometry: the next may not need it
-        report.failed_strategies.push_back(std::string(strategy.name) + ": " + occ_failure(e));
-        failures +=
-            std::string(failures.empty() ? "" : "; ") + strategy.name + ": " + occ_failure(e);
-        failed_seconds += seconds_since(attempt_start);
+        failed(occ_failure(e));
       }
     }
     throw InputError("mesh_shape: could not tetrahedralise the shape at size " +
@@ -360,9 +361,8 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
   // merged): the solid touches itself there, which TetGen cannot mesh either. Checked on
   // BRepMesh's triangles (before the repairs, which take minutes on such a shape's 825k
   // triangles) and on the surface that goes to TetGen.
-  // Where the CAD's faces at such a side lie apart, BRepMesh gave two faces that only come close
-  // the same chord: this way fails as too coarse, and the surface at a quarter of the chord
-  // deflection is tried.
+  // Where the faces lie apart along such a side (BRepMesh's chord of two faces that come close,
+  // left after part_shared_sides()): this way fails as too coarse.
   const auto refuse_touching_itself = [&] {
     const std::vector<OverusedSide> overused =
         find_overused_sides(surface, shape.face_solids, shape.edge_faces);
@@ -436,8 +436,7 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
           ? face_layer_specs(layer_entries, given_items.faces, std::max(h, parameters.size))
           : std::vector<FaceLayerSpec>{};
   std::vector<char> layered(items_at_h.face_size.size(), 0);
-  // Faces with a vertex inside (solids touching there at a point): their triangles go as they are.
-  std::vector<char> internal_vertex(items_at_h.face_size.size(), 0);
+  std::vector<char> internal_vertex(items_at_h.face_size.size(), 0);  // their triangles as they are
   for (const int f : surface.internal_vertex_faces)
     internal_vertex[static_cast<std::size_t>(f)] = 1;
   for (const FaceLayerSpec& spec : layer_specs)

@@ -36,38 +36,13 @@
 #include <vector>
 
 #include "hexmerge/core/error.h"
-#include "hexmerge/geometry/triangle_distance.h"
 #include "hexmerge/occ/mesher/shape.h"
 #include "hexmerge/occ/mesher/spatial.h"
 #include "hexmerge/occ/mesher/surface_check.h"
+#include "hexmerge/occ/mesher/surface_mend.h"
 #include "hexmerge/occ/mesher/surface_unfold.h"
 
 namespace hexmerge::mesher {
-namespace {
-
-// Merges points closer than a tolerance into one node.
-class NodeMerger {
- public:
-  NodeMerger(Surface& s, double tolerance)
-      : s_(s), tol_(tolerance), nodes_(s.nodes, 4 * tolerance) {}
-  int id(const Vec3& p, int face) {
-    const int found = nodes_.find(p, tol_);
-    if (found >= 0) return found;
-    const int n = static_cast<int>(s_.nodes.size());
-    s_.nodes.push_back(p);
-    s_.node_face.push_back(face);
-    nodes_.add(n);
-    return n;
-  }
-
- private:
-  Surface& s_;
-  double tol_;
-  NodeHash nodes_;
-};
-
-}  // namespace
-
 namespace {
 // The angle at v between the sides to a and b.
 double angle_at(const Vec3& v, const Vec3& a, const Vec3& b) {
@@ -781,103 +756,6 @@ std::string faces_named(const std::vector<int>& faces, const TopTools_IndexedMap
 
 }  // namespace
 
-namespace {
-
-// A face's vertices on none of its edges (INTERNAL: where a solid touches another at a point,
-// BooleanFragments imprints the point on the other's face) become nodes of the face's triangles:
-// BRepMesh leaves them out, and the face's triangles passed by the other solid's node there (a
-// random part's spike touching a box on top at its tip: "the surface's triangles cross" at every
-// size). Each takes the node at its place (the other solid's), splitting the face's triangle
-// nearest it in three (one of no area where it lies on a side: remove_flat_triangles() then
-// splits the triangle across), when that lies within twice the chord deflection of it. Each such
-// vertex's face goes to Surface::internal_vertex_faces.
-void insert_internal_vertices(const TopTools_IndexedMapOfShape& faces, double deflection,
-                              NodeMerger& merger, Surface& surface) {
-  for (int fi = 1; fi <= faces.Extent(); ++fi) {
-    const TopoDS_Face& face = TopoDS::Face(faces(fi));
-    TopTools_IndexedMapOfShape on_edges;
-    for (TopExp_Explorer ex(face, TopAbs_EDGE); ex.More(); ex.Next())
-      TopExp::MapShapes(ex.Current(), TopAbs_VERTEX, on_edges);
-    for (TopExp_Explorer ex(face, TopAbs_VERTEX); ex.More(); ex.Next()) {
-      const TopoDS_Vertex& vertex = TopoDS::Vertex(ex.Current());
-      if (on_edges.Contains(vertex)) continue;
-      const Vec3 p = of(BRep_Tool::Pnt(vertex));
-      const int node = merger.id(p, fi - 1);
-      int nearest = -1;
-      bool used = false;
-      double least = std::numeric_limits<double>::infinity();
-      for (std::size_t ti = 0; ti < surface.triangles.size() && !used; ++ti) {
-        const SurfaceTriangle& t = surface.triangles[ti];
-        if (t.face != fi - 1) continue;
-        used = t.node[0] == node || t.node[1] == node || t.node[2] == node;
-        const double d = squared_distance_to_triangle(
-            p, surface.nodes[t.node[0]], surface.nodes[t.node[1]], surface.nodes[t.node[2]]);
-        if (d < least) least = d, nearest = static_cast<int>(ti);
-      }
-      // (Not one off the face's triangles by more than their deflection: no such face's.)
-      if (used || nearest < 0 || std::sqrt(least) > 2 * deflection) continue;
-      // Its parameters on the face (projected: such a vertex need not carry them).
-      const gp_Pnt2d at = ShapeAnalysis_Surface(BRep_Tool::Surface(face))
-                              .ValueOfUV(BRep_Tool::Pnt(vertex), BRep_Tool::Tolerance(vertex));
-      const SurfaceTriangle t = surface.triangles[static_cast<std::size_t>(nearest)];
-      for (int c = 0; c < 3; ++c) {
-        SurfaceTriangle part = t;
-        part.node[(c + 2) % 3] = node;
-        part.uv[(c + 2) % 3] = UV{at.X(), at.Y()};
-        if (c == 0)
-          surface.triangles[static_cast<std::size_t>(nearest)] = part;
-        else
-          surface.triangles.push_back(part);
-      }
-      surface.internal_vertex_faces.push_back(fi - 1);
-    }
-  }
-}
-
-// Sides that BRepMesh gave two faces which only come close there (find_overused_sides(), the
-// faces apart along it by faces_meet_along()): each such face's two triangles on the side are
-// split at a node of its own, the side's middle taken onto that face, so that the faces part
-// there (a random part's torus and cylinder 0.04 mm apart between two curves of intersection, at
-// h 18.7: the same chord in both faces at every chord deflection). How many sides.
-std::size_t part_shared_sides(const Shape& s, double tolerance, NodeMerger& merger,
-                              Surface& surface) {
-  std::size_t parted = 0;
-  for (const OverusedSide& side : find_overused_sides(surface, s.face_solids, s.edge_faces)) {
-    if (faces_meet_along(s, surface.nodes, side, tolerance)) continue;  // broken: refused later
-    const Vec3 middle = (surface.nodes[static_cast<std::size_t>(side.a)] +
-                         surface.nodes[static_cast<std::size_t>(side.b)]) *
-                        0.5;
-    for (const int face : side.faces) {
-      std::vector<std::size_t> on_side;
-      for (std::size_t ti = 0; ti < surface.triangles.size(); ++ti) {
-        const SurfaceTriangle& t = surface.triangles[ti];
-        int hits = 0;
-        for (const int n : t.node) hits += n == side.a || n == side.b;
-        if (t.face == face && hits == 2) on_side.push_back(ti);
-      }
-      if (on_side.size() != 2) continue;
-      ShapeAnalysis_Surface projector(BRep_Tool::Surface(TopoDS::Face(s.faces(face + 1))));
-      const gp_Pnt2d at = projector.ValueOfUV(gp_Pnt(middle.x, middle.y, middle.z), tolerance);
-      const int m = merger.id(of(projector.Value(at)), face);
-      for (const std::size_t ti : on_side) {
-        const SurfaceTriangle t = surface.triangles[ti];
-        int c = 0;  // the side from t.node[c] to t.node[c + 1]
-        while (!((t.node[c] == side.a || t.node[c] == side.b) &&
-                 (t.node[(c + 1) % 3] == side.a || t.node[(c + 1) % 3] == side.b)))
-          ++c;
-        SurfaceTriangle first = t, second = t;
-        first.node[(c + 1) % 3] = m, first.uv[(c + 1) % 3] = UV{at.X(), at.Y()};
-        second.node[c] = m, second.uv[c] = UV{at.X(), at.Y()};
-        surface.triangles[ti] = first;
-        surface.triangles.push_back(second);
-      }
-    }
-    ++parted;
-  }
-  return parted;
-}
-}  // namespace
-
 Surface triangulate(const Shape& s, double deflection, double tolerance,
                     const std::vector<std::string>& face_names) {
   // BRepMesh fails on some analytic faces that are valid CAD (a cone whose apex is a circle
@@ -1002,7 +880,7 @@ Surface triangulate(const Shape& s, double deflection, double tolerance,
                      " of the shape (between two edges with the same ends, wider than the chord "
                      "deflection)");
   split_doubled_segments(s, faces, edges, doubled, merger, surface, tolerance);
-  insert_internal_vertices(faces, deflection, merger, surface);
+  insert_internal_vertices(s, deflection, merger, surface);
   remove_coincident_triangles(surface);
   remove_faces_without_area(surface);
   surface.nb_flat_triangles = remove_flat_triangles(surface, tolerance);
