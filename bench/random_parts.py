@@ -5,8 +5,9 @@ random places and angles (holes, counterbores, bosses, pockets, slots, ribs, sph
 cones), then fillets or chamfers on a random few of its edges, now and then a shell (a thin
 wall), and now and then a box on top touching it (a compound of solids sharing faces, as
 FreeCAD's BooleanFragments makes them). A part whose booleans or fillets fail, or that comes
-out invalid, open, in pieces or failing FreeCAD's BOP check, is drawn again. Every part is read
-back unchanged.
+out invalid, open, in pieces or failing FreeCAD's BOP check, is drawn again; so is one FreeCAD
+itself crashes on (each draw runs in a child process; the next then draws from the seed and the
+draw's number). Every part is read back unchanged.
 The seed makes them the same each run; another seed gives other parts.
 
 Run it with FreeCAD's interpreter (Debian: freecad, freecad-common):
@@ -23,6 +24,7 @@ bounding box). Then, with this repository's module:
 import json
 import math
 import os
+import pickle
 import random
 import sys
 import time
@@ -187,44 +189,83 @@ def build(r):
     return s, "; ".join(what)
 
 
+def draw(r, name):
+    """One draw of a part named `name` with generator r: its row, written to OUT, or None when it
+    is no valid closed solid, fails the BOP check or does not read back the same."""
+    try:
+        s, desc = build(r)
+    except Exception:
+        return None
+    solids = s.Solids
+    if not solids or not s.isValid() or not all(x.isValid() for x in solids):
+        return None
+    if not all(x.Shells and all(sh.isClosed() for sh in x.Shells) for x in solids):
+        return None
+    try:  # FreeCAD's Part > Check geometry with its BOP check (edges off their faces, ...)
+        s.check(True)
+    except ValueError:
+        return None
+    if s.ShapeType != "Compound" and len(solids) == 1:
+        s = solids[0]
+    path = os.path.join(OUT, name + ".brep")
+    s.exportBrep(path)
+    back = Part.Shape()
+    back.read(path)
+    if not back.isValid() or abs(back.Volume - s.Volume) > 1e-6 * abs(s.Volume):
+        return None
+    bb = s.BoundBox
+    print(f"{name}: {desc}; V={s.Volume:.0f} faces={len(s.Faces)}", flush=True)
+    return {"name": name, "description": desc, "ok": True, "path": path, "volume": s.Volume,
+            "solids": len(solids), "faces": len(s.Faces), "edges": len(s.Edges),
+            "bbox": [bb.XMin, bb.YMin, bb.ZMin, bb.XMax, bb.YMax, bb.ZMax],
+            "face_types": sorted({f.Surface.TypeId.split("::")[-1] for f in s.Faces})}
+
+
+def draw_apart(r, name):
+    """draw() in a child process: FreeCAD itself can crash on a boolean or a fillet (a
+    segmentation fault on seed 20261210's 13th part and 20261212's 37th ended their corpora).
+    The child draws with the parent's generator and sends back its row and the generator's state,
+    so the parts are those one process would draw. (row, False) where the child died."""
+    read, write = os.pipe()
+    pid = os.fork()
+    if pid == 0:
+        os.close(read)
+        try:
+            payload = pickle.dumps((draw(r, name), r.getstate()))
+        except BaseException:
+            payload = pickle.dumps((None, r.getstate()))
+        with os.fdopen(write, "wb") as f:
+            f.write(payload)
+        os._exit(0)
+    os.close(write)
+    with os.fdopen(read, "rb") as f:
+        data = f.read()
+    os.waitpid(pid, 0)
+    if not data:
+        return None, False
+    row, state = pickle.loads(data)
+    r.setstate(state)
+    return row, True
+
+
 def main():
     t0 = time.time()
     r = random.Random(SEED)
     rows = []
-    drawn = 0
+    drawn = crashed = 0
     while len(rows) < COUNT:
         drawn += 1
         name = f"random_{SEED}_{len(rows):03d}"
-        try:
-            s, desc = build(r)
-        except Exception:
+        row, survived = draw_apart(r, name)
+        if not survived:  # FreeCAD crashed: the next draws from the seed and this draw's number
+            crashed += 1
+            print(f"{name}: FreeCAD crashed on draw {drawn}; drawn again", flush=True)
+            r = random.Random(f"{SEED}-{drawn}")
             continue
-        solids = s.Solids
-        if not solids or not s.isValid() or not all(x.isValid() for x in solids):
-            continue
-        if not all(x.Shells and all(sh.isClosed() for sh in x.Shells) for x in solids):
-            continue
-        try:  # FreeCAD's Part > Check geometry with its BOP check (edges off their faces, ...)
-            s.check(True)
-        except ValueError:
-            continue
-        if s.ShapeType != "Compound" and len(solids) == 1:
-            s = solids[0]
-        path = os.path.join(OUT, name + ".brep")
-        s.exportBrep(path)
-        back = Part.Shape()
-        back.read(path)
-        if not back.isValid() or abs(back.Volume - s.Volume) > 1e-6 * abs(s.Volume):
-            continue
-        bb = s.BoundBox
-        rows.append({"name": name, "description": desc, "ok": True, "path": path, "volume": s.Volume,
-                     "solids": len(solids), "faces": len(s.Faces), "edges": len(s.Edges),
-                     "bbox": [bb.XMin, bb.YMin, bb.ZMin, bb.XMax, bb.YMax, bb.ZMax],
-                     "face_types": sorted({f.Surface.TypeId.split("::")[-1] for f in s.Faces})})
-        print(f"{name}: {desc}; V={s.Volume:.0f} faces={len(s.Faces)}", flush=True)
+        if row is not None:
+            rows.append(row)
     with open(os.path.join(OUT, "parts.json"), "w") as f:
         json.dump(rows, f, indent=1)
-    print(f"{len(rows)} parts ({drawn} drawn) in {time.time() - t0:.1f} s")
-
+    print(f"{len(rows)} parts ({drawn} drawn, FreeCAD crashed on {crashed}) in {time.time() - t0:.1f} s")
 
 main()
