@@ -27,11 +27,6 @@ constexpr double kMostTurn = 80.0;
 // And its smallest angle is at least this (degrees): not flat.
 constexpr double kLeastAngle = 1e-3;
 
-// The triangles replacing a patch of a face (node ids and parameters), or none.
-struct Patch {
-  std::vector<SurfaceTriangle> triangles;
-};
-
 // Two triangles of one face fold on their common side when their normals are further apart
 // than this (degrees): they lie almost on each other. (A face's triangles turn by at most
 // about 90 degrees where the face is smooth: BRepMesh's angular deflection.)
@@ -81,10 +76,11 @@ std::vector<char> folded_triangles(const Surface& surface, int face) {
   return folded;
 }
 
-// The patch `region` (triangle indices, all of one face) triangulated anew, or none (see
+// The triangles replacing the patch `region` (triangle indices, all of one face), or none (see
 // unfold_faces()). `folded`: per triangle of the surface, folded_triangles()' answer.
-std::optional<Patch> triangulate_patch(const Surface& surface, const std::vector<int>& region,
-                                       const std::vector<char>& folded) {
+std::optional<std::vector<SurfaceTriangle>> triangulate_patch(const Surface& surface,
+                                                              const std::vector<int>& region,
+                                                              const std::vector<char>& folded) {
   const std::vector<SurfaceTriangle>& tris = surface.triangles;
   const int face = tris[static_cast<std::size_t>(region.front())].face;
   // Sides by their nodes: how often the patch uses each, and the first use's direction.
@@ -169,7 +165,7 @@ std::optional<Patch> triangulate_patch(const Surface& surface, const std::vector
   if (cdt.number_of_vertices() != handle.size()) return std::nullopt;
   // Inside: reached from outside across an odd number of the outline's sides.
   if (!mark_inside(cdt, outline)) return std::nullopt;  // the outline bounds no region
-  Patch patch;
+  std::vector<SurfaceTriangle> patch;
   const double most_turn = std::cos(kMostTurn * M_PI / 180);
   for (Cdt::Face_handle f : cdt.finite_face_handles()) {
     if (f->info() != 1) continue;
@@ -183,9 +179,9 @@ std::optional<Patch> triangulate_patch(const Surface& surface, const std::vector
     if (!(n.dot(normal) > most_turn * n.norm()) ||
         smallest_angle(surface.nodes, t.node) < kLeastAngle * M_PI / 180)
       return std::nullopt;
-    patch.triangles.push_back(t);
+    patch.push_back(t);
   }
-  if (patch.triangles.empty()) return std::nullopt;
+  if (patch.empty()) return std::nullopt;
   // No fold on a side of the new triangles, among them or with the face's triangles around.
   std::unordered_map<std::uint64_t, std::vector<Vec3>> normals_at;
   const auto add_normals = [&](const SurfaceTriangle& t) {
@@ -193,7 +189,7 @@ std::optional<Patch> triangulate_patch(const Surface& surface, const std::vector
       normals_at[side_key(t, c)].push_back(
           normal_of(surface.nodes, t.node[0], t.node[1], t.node[2]));
   };
-  for (const SurfaceTriangle& t : patch.triangles) add_normals(t);
+  for (const SurfaceTriangle& t : patch) add_normals(t);
   std::set<int> in_patch(region.begin(), region.end());
   for (std::size_t ti = 0; ti < tris.size(); ++ti)
     if (tris[ti].face == face && !in_patch.count(static_cast<int>(ti)))
@@ -210,7 +206,7 @@ std::optional<Patch> triangulate_patch(const Surface& surface, const std::vector
   for (const int ti : region) in_region[static_cast<std::size_t>(ti)] = 1;
   std::vector<std::array<int, 3>> others, made;
   Vec3 lo = surface.nodes[static_cast<std::size_t>(loop.front())], hi = lo;
-  for (const SurfaceTriangle& t : patch.triangles) {
+  for (const SurfaceTriangle& t : patch) {
     made.push_back(t.node);
     for (const int n : t.node)
       lo = vmin(lo, surface.nodes[static_cast<std::size_t>(n)]),
@@ -287,12 +283,14 @@ UnfoldReport unfold_faces(Surface& surface) {
             if (!nodes.count(n[0]) && !nodes.count(n[1]) && !nodes.count(n[2])) continue;
             members.insert(ti), region.push_back(ti);
             nodes.insert(n.begin(), n.end());
-            added = only_folded;  // the crossing ones to a fixed point; rings one at a time
+            // The folded ones to a fixed point; else one pass over the face's triangles (those
+            // touching a node taken in during the pass come in too: a ring or a little more).
+            added = only_folded;
           }
         }
       };
       grow(true);
-      std::optional<Patch> patch;
+      std::optional<std::vector<SurfaceTriangle>> patch;
       for (int ring = 1; ring <= kUnfoldRings && !patch; ++ring) {
         grow(false);
         patch = triangulate_patch(surface, region, folded);
@@ -308,13 +306,13 @@ UnfoldReport unfold_faces(Surface& surface) {
       std::vector<char> dead(tris.size(), 0);
       std::size_t k = 0;
       for (const int ti : region) {
-        if (k < patch->triangles.size()) {
-          tris[static_cast<std::size_t>(ti)] = patch->triangles[k++];
+        if (k < (*patch).size()) {
+          tris[static_cast<std::size_t>(ti)] = (*patch)[k++];
         } else {
           dead[static_cast<std::size_t>(ti)] = 1;
         }
       }
-      for (; k < patch->triangles.size(); ++k) tris.push_back(patch->triangles[k]);
+      for (; k < (*patch).size(); ++k) tris.push_back((*patch)[k]);
       dead.resize(tris.size(), 0);
       std::size_t w = 0;
       for (std::size_t ti = 0; ti < tris.size(); ++ti)

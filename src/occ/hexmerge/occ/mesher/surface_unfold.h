@@ -16,18 +16,20 @@
 
 namespace hexmerge::mesher {
 
-/// Rings of triangles round a fold that unfold_faces() takes in at most.
+/// Passes over the face's triangles (about a ring each) that unfold_faces() grows a fold by at
+/// most.
 inline constexpr int kUnfoldRings = 4;
 
 /// What unfold_faces() did.
 struct UnfoldReport {
   std::size_t patches = 0;  ///< patches triangulated anew
-  std::size_t failed = 0;   ///< folds left as they were (no patch up to kUnfoldRings rings did)
+  std::size_t failed = 0;   ///< folds left as they were (no patch up to kUnfoldRings passes did)
 };
 
 /// Per face whose triangles cross each other (find_crossings()' exact test) or fold on a common
 /// side (normals more than 150 degrees apart), each fold (its folded triangles joined by their
-/// nodes) is grown by rings of the face's triangles, up to kUnfoldRings, until it can be
+/// nodes) is grown by passes over the face's triangles (each takes in those touching the patch,
+/// about a ring), up to kUnfoldRings, until it can be
 /// triangulated anew in the plane across its other triangles' mean normal: the constrained
 /// Delaunay triangulation of its nodes, its outline (a single loop, simple and turning
 /// counter-clockwise in that plane) and the CAD edges' segments inside it (a seam) kept. Taken
