@@ -579,6 +579,31 @@ def test_faces_that_share_a_chord_only_are_parted_or_meshed_on_a_finer_surface()
         assert_checked(mesh, tets, recombined, h)
 
 
+# A random part (bench/random_parts.py, seed 20261213, number 012: a turned base fused with a torus
+# of tube radius 21.8, a pocket cut into both, a boss): at h 55 to 90 BRepMesh's torus crossed the
+# pocket's walls, and so did it on the surface of a quarter of the chord deflection; the crossing
+# rounds only made more crossing triangles, and every way failed.
+TORUS_POCKET = ROOT / "tests" / "data" / "torus_pocket.brep"
+
+
+def test_a_surface_still_too_coarse_at_a_quarter_of_the_deflection_is_tried_at_an_eighth(
+        tmp_path: Path) -> None:
+    """At h 60 the first way and the quarter of the chord deflection fail as too coarse (the
+    faces crossing, named), and the surface at an eighth meshes: on the CAD, its volume the
+    shape's to 2 % (the chords of a torus of 44,000 mm2 and of cylinders at h 60 fall short of
+    them by 1.6 %; Gmsh's own tet mesh at h 5, by 0.53 %), its recombination valid."""
+    h = 60.0
+    shape = tmp_path / TORUS_POCKET.name
+    shutil.copy(TORUS_POCKET, shape)
+    tets, report = hexmerge.mesh_shape(shape, h, recombine=False)
+    meshing = report["meshing"]
+    assert meshing["strategy"] == "lattice on a surface of an eighth of the chord deflection"
+    failed = meshing["failed_strategies"]
+    quarter = [f for f in failed if f.startswith("lattice on a surface of a quarter")]
+    assert len(quarter) == 1 and "the surface's triangles at this size cross (Face3" in quarter[0], failed
+    assert_sound(tets, report, h, occ_volume(shape), 0.02)
+
+
 # A tetrahedral spike whose tip touches a box's bottom face at a point, the two solids made one
 # shape by BooleanFragments (which puts the tip on the face as a vertex inside it): BRepMesh left
 # that vertex out of the face's triangles, which the tip then crossed, and every way failed at

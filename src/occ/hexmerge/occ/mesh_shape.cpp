@@ -122,7 +122,10 @@ TetMesh mesh_shape_impl(const std::string& brep, const MeshShapeParameters& para
     int nb_tried = 0;
     bool first_pulled = false;    // whether the first way (which failed) pulled the core
     bool first_buffered = false;  // whether it made a buffer layer
-    bool too_coarse = false;      // whether a way failed on a surface too coarse (SurfaceTooCoarse)
+    // The finest chord deflection tried (a factor of the one asked for), and whether a way on it
+    // failed on a surface too coarse (SurfaceTooCoarse): a finer one is tried only then.
+    double finest = 1.0;
+    bool finest_too_coarse = false;
     for (const Strategy& strategy : kStrategies) {
       // The way without layers repeats the way before it (lattice points, no lattice faces, so
       // no sweep) when that one places no layers either.
@@ -134,8 +137,14 @@ TetMesh mesh_shape_impl(const std::string& brep, const MeshShapeParameters& para
       // lattice without the core pulled when that one pulled nothing.
       if (&strategy == kStrategies + 1 && !first_buffered) continue;
       if (&strategy == kStrategies + 2 && !first_pulled) continue;
-      // A finer surface only where a surface was too coarse.
-      if (strategy.deflection_factor != 1.0 && !too_coarse) continue;
+      // A finer surface only where the finest so far was too coarse.
+      if (strategy.deflection_factor != 1.0 &&
+          !(finest_too_coarse && strategy.deflection_factor < finest))
+        continue;
+      if (strategy.deflection_factor < finest) {
+        finest = strategy.deflection_factor;
+        finest_too_coarse = false;
+      }
       ++nb_tried;
       MeshShapeReport attempt = report;
       const auto attempt_start = PhaseTimer::Clock::now();
@@ -155,7 +164,8 @@ TetMesh mesh_shape_impl(const std::string& brep, const MeshShapeParameters& para
         report = std::move(attempt);
         return mesh;
       } catch (const TetrahedralizeFailure& e) {
-        too_coarse = too_coarse || dynamic_cast<const SurfaceTooCoarse*>(&e) != nullptr;
+        if (strategy.deflection_factor == finest && dynamic_cast<const SurfaceTooCoarse*>(&e))
+          finest_too_coarse = true;
         if (&strategy == kStrategies) {
           first_pulled =
               attempt.nb_pulled_points + attempt.nb_narrow_pyramids + attempt.nb_inner_apexes > 0;

@@ -19,7 +19,8 @@ struct Strategy {
   bool lattice_points;  // lattice points inside the shape (the hexahedral core)
   bool pull;            // the core pulled towards the surface (MeshShapeParameters::pull_core)
   // The surface's chord deflection: this times MeshShapeParameters::surface_deflection. A way
-  // with a finer one is tried only when a way before failed on a surface too coarse for it.
+  // with a finer one is tried only when a way on the finest tried before failed on a surface too
+  // coarse for it.
   double deflection_factor = 1.0;
   bool buffer = false;  // the buffer layer (MeshShapeParameters::buffer_layer)
 };
@@ -38,6 +39,12 @@ constexpr Strategy kStrategies[] = {
     // of radius 2.6 cut into it crossed in every way at h 35 to 60 and meshes so.
     {"lattice on a surface of a quarter of the chord deflection", 1.0, true, true, true, false,
      0.25},
+    // Where that one too was too coarse, an eighth: a random part's torus (tube radius 21.8)
+    // fused with a revolved base and a pocket cut into both crossed the pocket's walls at every
+    // size from 55 to 90 with a quarter (the crossing rounds made more crossing triangles each
+    // round) and meshes so.
+    {"lattice on a surface of an eighth of the chord deflection", 1.0, true, true, true, false,
+     0.125},
     {"lattice at 0.95 of the size", 0.95, true, true, true, false},
     {"lattice at 1.1 of the size", 1.1, true, true, true, false},
     {"lattice without lattice faces", 1.0, false, true, true, false},
