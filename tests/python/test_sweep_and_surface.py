@@ -5,6 +5,7 @@ checker, its volume against OpenCASCADE's (through Gmsh's `Mass Volume`) and its
 against the CAD surfaces."""
 from __future__ import annotations
 
+import gzip
 import shutil
 import subprocess
 from pathlib import Path
@@ -577,6 +578,28 @@ def test_faces_that_share_a_chord_only_are_parted_or_meshed_on_a_finer_surface()
         cells = tets.cell_vertices.reshape(-1, 4)
         mesh, recombined = hexmerge.recombine(tets.points, cells, tets.regions)
         assert_checked(mesh, tets, recombined, h)
+
+
+# A random part (bench/random_parts.py, seed 20261215, number 026: a heptagonal prism with a sphere
+# and two tori cut from it, ribs, a counterbore): where a sphere, a torus and a plane between them
+# meet at a vertex, BRepMesh gave the three faces one side, 0.18 mm from the sphere's and the
+# torus's curve of intersection; their nearest points there, on that common edge, came within
+# the tolerance, and the part was refused as broken at h 27.36.
+SPHERE_TORUS_PLANE = ROOT / "tests" / "data" / "sphere_torus_plane.brep.gz"
+
+
+def test_faces_meeting_along_their_common_edge_beside_a_shared_side_are_not_broken(
+        tmp_path: Path) -> None:
+    """Faces whose nearest points lie on an edge they share meet as the CAD means them to
+    (faces_meet_along): the side is parted, and the part meshes in the first way."""
+    h = 27.36
+    shape = tmp_path / "sphere_torus_plane.brep"
+    shape.write_bytes(gzip.decompress(SPHERE_TORUS_PLANE.read_bytes()))
+    tets, report = hexmerge.mesh_shape(shape, h, recombine=False)
+    meshing = report["meshing"]
+    assert meshing["strategy"] == "lattice", meshing["failed_strategies"]
+    assert meshing["nb_parted_sides"] >= 1
+    assert_sound(tets, report, h, occ_volume(shape), 0.01)
 
 
 # A random part (bench/random_parts.py, seed 20261213, number 012: a turned base fused with a torus

@@ -3,6 +3,9 @@
 #include <gtest/gtest.h>
 
 #include <BRepAlgoAPI_Cut.hxx>
+#include <BRep_Builder.hxx>
+#include <TopExp.hxx>
+#include <TopoDS_Compound.hxx>
 #include <array>
 #include <limits>
 #include <vector>
@@ -113,25 +116,48 @@ TEST(find_overused_sides, a_solid_touching_itself_along_a_side) {
   EXPECT_TRUE(mesher::find_overused_sides(surface, {{0}, {1}, {0, 1}}, edge_faces).empty());
 }
 
-// A side between two faces of a 1 x 1 x 1 box: along their common edge they meet (the refusal's
-// case: two edges at one place), across the box (opposite faces, 1 apart) they do not (faces that
-// only come close, sharing BRepMesh's chord).
-TEST(faces_meet_along, only_where_the_faces_touch_along_the_side) {
-  const mesher::Shape shape = load(occ_box(0, 0, 0, 1, 1, 1));
-  const auto face_at = [&](const Vec3& p) {
+// A side between two faces of a 1 x 1 x 1 box: along their common edge they meet as the CAD
+// means them to, across the box (opposite faces, 1 apart) they do not come close (faces that
+// only come close, sharing BRepMesh's chord): neither is touching. Two boxes touching along a
+// line, not glued (each edge there its own, as in a broken file: load_shape() would glue them):
+// their faces there meet where they share no edge, the refusal's case (two of a solid's edges at
+// one place).
+TEST(faces_meet_along, only_where_faces_touch_along_the_side_beside_their_common_edges) {
+  const auto face_at = [](const mesher::Shape& shape, const Vec3& p) {
     for (int f = 0; f < shape.faces.Extent(); ++f)
       if (distance_to_face(shape, f, p) < 1e-9) return f;
     return -1;
   };
-  const int x0 = face_at({0, 0.5, 0.5}), x1 = face_at({1, 0.5, 0.5}), y0 = face_at({0.5, 0, 0.5});
+  const mesher::Shape box = load(occ_box(0, 0, 0, 1, 1, 1));
+  const int x0 = face_at(box, {0, 0.5, 0.5}), x1 = face_at(box, {1, 0.5, 0.5}),
+            y0 = face_at(box, {0.5, 0, 0.5});
   ASSERT_GE(x0, 0);
   ASSERT_GE(x1, 0);
   ASSERT_GE(y0, 0);
   const std::vector<Vec3> nodes = {{0, 0, 0.2}, {0, 0, 0.8}, {0, 0.5, 0.5}, {1, 0.5, 0.5}};
-  EXPECT_TRUE(mesher::faces_meet_along(shape, nodes, {0, 1, {x0, y0}}, 1e-6));
-  EXPECT_FALSE(mesher::faces_meet_along(shape, nodes, {2, 3, {x0, x1}}, 1e-6));
-  // Three faces, two of which meet along the side: touching.
-  EXPECT_TRUE(mesher::faces_meet_along(shape, nodes, {0, 1, {x0, x1, y0}}, 1e-6));
+  EXPECT_FALSE(mesher::faces_meet_along(box, nodes, {0, 1, {x0, y0}}, 1e-6));
+  EXPECT_FALSE(mesher::faces_meet_along(box, nodes, {2, 3, {x0, x1}}, 1e-6));
+  EXPECT_FALSE(mesher::faces_meet_along(box, nodes, {0, 1, {x0, x1, y0}}, 1e-6));
+
+  TopoDS_Compound pair;
+  BRep_Builder builder;
+  builder.MakeCompound(pair);
+  builder.Add(pair, occ_box(0, 0, 0, 1, 1, 1));
+  builder.Add(pair, occ_box(1, 1, 0, 2, 2, 1));
+  mesher::Shape two;
+  two.shape = pair;
+  TopExp::MapShapes(pair, TopAbs_FACE, two.faces);
+  TopExp::MapShapes(pair, TopAbs_EDGE, two.edges);
+  // Box 1's face on x = 1 and box 2's on y = 1 (its faces come after box 1's; face_at() takes
+  // the first face whose surface holds the point, and box 1's y = 1 face lies on that plane too).
+  const int a = face_at(two, {1, 0.5, 0.5});
+  int b = -1;
+  for (int f = two.faces.Extent() - 1; f >= 0 && b < 0; --f)
+    if (distance_to_face(two, f, {1.5, 1, 0.5}) < 1e-9) b = f;
+  ASSERT_GE(a, 0);
+  ASSERT_GE(b, 6);
+  const std::vector<Vec3> line = {{1, 1, 0.2}, {1, 1, 0.8}};
+  EXPECT_TRUE(mesher::faces_meet_along(two, line, {0, 1, {a, b}}, 1e-6));
 }
 
 // A tube 1140 long with walls of radius 1.0795 and 1.5875 (0.508 thick, as pyocc_11752's 178)

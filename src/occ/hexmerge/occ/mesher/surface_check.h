@@ -55,8 +55,10 @@ std::vector<OverusedSide> find_overused_sides(const Surface& surface,
                                               const std::vector<std::vector<int>>& edge_faces);
 
 /// Whether the CAD's faces of an overused side meet along it: at a quarter, half and three
-/// quarters of the side, two of its faces come within `tolerance` of each other (two of the
-/// solid's edges at one place: broken CAD). Not where they lie apart there: faces that only come
+/// quarters of the side, two of its faces come within `tolerance` of each other, not on an edge
+/// they share (two of the solid's edges at one place: broken CAD; a sphere and a torus whose
+/// curve of intersection runs 0.18 mm from a side they share with a plane meet as the CAD means
+/// them to). Not where they lie apart there: faces that only come
 /// close share such a side when BRepMesh gives both the same chord between two of their common
 /// edges (a random part's cylinder and cone, 0.27 mm apart between their two curves of
 /// intersection: every size from 9 to 25 mm but 17 refused as broken), which a finer surface
