@@ -803,7 +803,7 @@ def test_a_tetgen_crash_falls_back_to_the_next_strategy(shapes, tmp_path, capsys
     assert main(["mesh", str(shapes["bracket"]), "-h", "3", "-o", str(tmp_path / "b.vtu"),
                  "--tetgen", str(fake), "--no-pull-core"]) == 0
     err = capsys.readouterr().err
-    assert "note: TetGen failed with the points placed by lattice: TetGen " in err, err
+    assert "note: meshing failed with the points placed by lattice: TetGen " in err, err
     # (The core not pulled, as above: the lattice without pulling would repeat the first way.)
     assert "the tets were made with the points placed by lattice at 0.95 of the size" in err, err
     assert "terminate called" not in err and "Aborted" not in err, err

@@ -602,6 +602,28 @@ def test_faces_meeting_along_their_common_edge_beside_a_shared_side_are_not_brok
     assert_sound(tets, report, h, occ_volume(shape), 0.01)
 
 
+# A random part (bench/random_parts.py, seed 20261216, number 051: a cylinder with pockets, a rib
+# and a torus cut, and a sphere of radius 5.6 fused on its top face at its rim): the sphere's face
+# has a hole bounded by two arcs of about 45 degrees, one segment each at h 40.64, and BRepMesh
+# left it without triangles, as a surface of revolution too; the part was refused ('OpenCASCADE
+# could not triangulate Face13') without a finer surface tried.
+SPHERE_TWO_ARC_HOLE = ROOT / "tests" / "data" / "sphere_two_arc_hole.brep.gz"
+
+
+def test_a_face_the_surface_mesher_leaves_out_is_tried_on_a_finer_surface(tmp_path: Path) -> None:
+    """The first way fails as too coarse, naming the face, and the surface at a quarter of the
+    chord deflection meshes: on the CAD, its volume the shape's to 1 %, its recombination valid."""
+    h = 40.64
+    shape = tmp_path / "sphere_two_arc_hole.brep"
+    shape.write_bytes(gzip.decompress(SPHERE_TWO_ARC_HOLE.read_bytes()))
+    tets, report = hexmerge.mesh_shape(shape, h, recombine=False)
+    meshing = report["meshing"]
+    assert meshing["strategy"] == "lattice on a surface of a quarter of the chord deflection"
+    assert meshing["failed_strategies"][0].startswith(
+        "lattice: OpenCASCADE could not triangulate Face13 (a sphere)"), meshing["failed_strategies"]
+    assert_sound(tets, report, h, occ_volume(shape), 0.01)
+
+
 # A random part (bench/random_parts.py, seed 20261213, number 012: a turned base fused with a torus
 # of tube radius 21.8, a pocket cut into both, a boss): at h 55 to 90 BRepMesh's torus crossed the
 # pocket's walls, and so did it on the surface of a quarter of the chord deflection; the crossing

@@ -315,7 +315,7 @@ def mesh_notes(meshing: dict[str, Any]) -> list[str]:
     if meshing.get("nb_sewn_solids"):
         notes.append(f"the shape held faces, not solids: sewn, they close {meshing['nb_sewn_solids']} "
                      "solid(s), which were meshed")
-    notes += [f"TetGen failed with the points placed by {failure}" for failure in meshing["failed_strategies"]]
+    notes += [f"meshing failed with the points placed by {failure}" for failure in meshing["failed_strategies"]]
     if notes:
         notes.append(f"the tets were made with the points placed by {meshing['strategy']}")
     if meshing["nb_revolution_faces"]:

@@ -117,8 +117,15 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
   // of 1e-6 mm along an 8.6 mm edge: at 1e-9 h its face's triangles were flat, 208 boundary
   // triangles under 1 degree, tets down to scaled Jacobian 4.5e-7; merged, 0.150). The
   // boundary then stays within 1e-5 h of the CAD there.
-  Surface surface =
-      triangulate(shape, deflection, 1e-5 * h + 2e-8 * shape.diagonal + 1e-12, face_names);
+  // Faces BRepMesh leaves without triangles at this deflection fail the way as too coarse: the
+  // surface at a finer one is tried.
+  Surface surface = [&] {
+    try {
+      return triangulate(shape, deflection, 1e-5 * h + 2e-8 * shape.diagonal + 1e-12, face_names);
+    } catch (const FacesNotTriangulated& e) {
+      throw SurfaceTooCoarse(e.what());
+    }
+  }();
   // Faces narrower than kNarrowFace h (a step 0.001 mm high along a KiCad pin socket's holes,
   // 2.2e-4 h at its 20k size: triangles of 0.2 degrees) are no faces at this size: merged away
   // (the boundary stays within that of the CAD). Where that makes the surface touch itself or

@@ -408,10 +408,12 @@ std::vector<int> faces_not_triangulated(const TopoDS_Shape& shape,
     // be kept where it meets the deflection: each call starts from none.
     BRepTools::Clean(shape);
     BRepMesh_IncrementalMesh mesher(shape, deflection, false, kSurfaceAngle, true);
-    if (!mesher.IsDone()) throw InputError("OpenCASCADE could not triangulate the shape's faces");
+    if (!mesher.IsDone())
+      throw FacesNotTriangulated("OpenCASCADE could not triangulate the shape's faces");
   } catch (const Standard_Failure& e) {
-    throw InputError(std::string("OpenCASCADE could not triangulate the shape's faces: ") +
-                     e.GetMessageString());
+    throw FacesNotTriangulated(
+        std::string("OpenCASCADE could not triangulate the shape's faces: ") +
+        e.GetMessageString());
   }
   std::vector<int> missing;
   for (int fi = 1; fi <= faces.Extent(); ++fi) {
@@ -776,12 +778,12 @@ Surface triangulate(const Shape& s, double deflection, double tolerance,
     TopExp::MapShapes(meshed, TopAbs_FACE, faces);
     TopExp::MapShapes(meshed, TopAbs_EDGE, edges);
     if (faces.Extent() != s.faces.Extent() || edges.Extent() != s.edges.Extent())
-      throw InputError("OpenCASCADE could not triangulate " + failed + " of the shape");
+      throw FacesNotTriangulated("OpenCASCADE could not triangulate " + failed + " of the shape");
     missing = faces_not_triangulated(meshed, faces, deflection, tolerance);
     take_lens_faces(faces, edges, missing, lenses);
     if (!missing.empty())
-      throw InputError("OpenCASCADE could not triangulate " + failed +
-                       " of the shape, nor the same faces as surfaces of revolution");
+      throw FacesNotTriangulated("OpenCASCADE could not triangulate " + failed +
+                                 " of the shape, nor the same faces as surfaces of revolution");
     for (int fi = 1; fi <= faces.Extent(); ++fi)
       nb_converted += BRepAdaptor_Surface(TopoDS::Face(faces(fi))).GetType() !=
                       BRepAdaptor_Surface(TopoDS::Face(s.faces(fi))).GetType();
@@ -875,10 +877,10 @@ Surface triangulate(const Shape& s, double deflection, double tolerance,
       zip_lens_faces(s, edges, lenses, deflection, doubled, surface);
   surface.nb_zipped_faces = lenses.size() - not_zipped.size();
   if (!not_zipped.empty())
-    throw InputError("OpenCASCADE could not triangulate " +
-                     faces_named(not_zipped, s.faces, face_names) +
-                     " of the shape (between two edges with the same ends, wider than the chord "
-                     "deflection)");
+    throw FacesNotTriangulated(
+        "OpenCASCADE could not triangulate " + faces_named(not_zipped, s.faces, face_names) +
+        " of the shape (between two edges with the same ends, wider than the chord "
+        "deflection)");
   split_doubled_segments(s, faces, edges, doubled, merger, surface, tolerance);
   insert_internal_vertices(s, deflection, merger, surface);
   remove_coincident_triangles(surface);

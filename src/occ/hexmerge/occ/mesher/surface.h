@@ -10,6 +10,7 @@
 #include <unordered_map>
 #include <vector>
 
+#include "hexmerge/core/error.h"
 #include "hexmerge/geometry/vec3.h"
 #include "hexmerge/occ/mesher/common.h"
 
@@ -87,13 +88,22 @@ struct Surface {
 /// (holed_plate at h 3.4: prisms below scaled Jacobian 0.2 1,840 -> 0).
 constexpr double kSurfaceAngle = 1.57;
 
+/// BRepMesh left faces without triangles at this chord deflection (triangulate()): another may
+/// not (a random part's sphere cut by a plane and a cylinder, the hole in its face bounded by two
+/// arcs of one segment each at h 40.64, meshes on a finer surface).
+class FacesNotTriangulated : public InputError {
+ public:
+  using InputError::InputError;
+};
+
 /// The shape's faces triangulated by OpenCASCADE (BRepMesh, chord deflection `deflection`,
 /// angular deflection kSurfaceAngle), nodes closer than `tolerance` merged into one. Where
 /// BRepMesh leaves a face without triangles, the whole shape is triangulated again with its
 /// cylinders, cones, spheres and tori as surfaces of revolution (ShapeCustom's; the same
 /// geometry), the nodes' parameters taken back onto each face's own surface.
 /// @param face_names  per face of `s`, its name for messages (as the user numbers it: "Face12")
-/// @throws InputError when a face cannot be triangulated either way (naming it and its kind)
+/// @throws FacesNotTriangulated when a face cannot be triangulated either way (naming it and its
+///         kind)
 Surface triangulate(const Shape& s, double deflection, double tolerance,
                     const std::vector<std::string>& face_names);
 
