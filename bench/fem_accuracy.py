@@ -31,11 +31,13 @@ e.g. the post-merge stage of issue 19:
 """
 
 import argparse
+import atexit
 import datetime
 import json
 import os
 import platform
 import re
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -331,6 +333,25 @@ def inp_counts(path):
     return counts, collapsed
 
 
+_WORK = []  # this process's work directory while it has one
+
+
+def work_directory(prefix):
+    """A new empty directory for one CalculiX run, inside a directory of this process's that
+    remove_work_directories() removes (called when the process exits normally; freecadcmd -t
+    skips that, so the FreeCAD tests call it themselves)."""
+    if not _WORK:
+        _WORK.append(tempfile.mkdtemp(prefix="hexmerge_ccx_"))
+        atexit.register(remove_work_directories)
+    return tempfile.mkdtemp(prefix=prefix, dir=_WORK[0])
+
+
+def remove_work_directories():
+    """Removes the CalculiX runs' directories work_directory() made."""
+    while _WORK:
+        shutil.rmtree(_WORK.pop(), ignore_errors=True)
+
+
 def solve(doc, post=None):
     """Writes the .inp (post-processed when asked), runs CalculiX; returns (result object, inp
     path, solve seconds)."""
@@ -341,7 +362,7 @@ def solve(doc, post=None):
             doc.removeObject(o.Name)
     fea = ccxtools.FemToolsCcx(doc.Analysis, solver_of(doc))
     fea.update_objects()
-    fea.setup_working_dir(tempfile.mkdtemp(prefix="hexmerge_fem_"))
+    fea.setup_working_dir(work_directory("fem_"))
     fea.setup_ccx()
     message = fea.check_prerequisites()
     if message:
@@ -489,7 +510,7 @@ def patch_test(kind, shift, workdir=None):
     shift."""
     import itertools
     from freecad.hexmerge import calculix
-    workdir = workdir or tempfile.mkdtemp(prefix="hexmerge_patch_")
+    workdir = workdir or work_directory("patch_")
     ids, points = {}, []
     for k, j, i in itertools.product(range(3), repeat=3):
         p = [float(i), float(j), float(k)]
@@ -542,7 +563,7 @@ def pyramid_patch_test(split, workdir=None):
     largest error of the nodal displacements, in % of the largest exact one, and of the
     integration-point stresses, in % of the largest exact one."""
     from freecad.hexmerge import calculix
-    workdir = workdir or tempfile.mkdtemp(prefix="hexmerge_pyramid_patch_")
+    workdir = workdir or work_directory("pyramid_patch_")
     young, nu, k = 210000.0, 0.3, 1e-3
     points, ids = [], {}
 

@@ -9,7 +9,6 @@ in the background; save and reopen print no error. Takes screenshots of the pane
 import os
 import subprocess
 import sys
-import tempfile
 import time
 import traceback
 
@@ -452,7 +451,7 @@ def main():
     check_colors(shape_obj.ViewObject, "Hexa20 box")
 
     # save and reopen: no error in the Report view
-    path = os.path.join(tempfile.mkdtemp(), "hexmerge_gui.FCStd")
+    path = os.path.join(helpers.bench.work_directory("gui_"), "hexmerge_gui.FCStd")
     errors_before = len(report_view_errors())
     shape_name = shape_obj.Name
     doc.saveAs(path)
@@ -481,4 +480,6 @@ except Exception:
     traceback.print_exc()
     print("GUI TEST FAILED")
 sys.stdout.flush()
+import helpers  # noqa: E402 (HERE is on the path)
+helpers.bench.remove_work_directories()  # os._exit skips the exit handlers
 os._exit(0)

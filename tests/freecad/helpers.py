@@ -3,7 +3,6 @@
 
 import importlib.util
 import os
-import tempfile
 
 import FreeCAD
 import ObjectsFem
@@ -59,28 +58,6 @@ def mesh_name(doc):
         if o.isDerivedFrom("Fem::FemMeshObject"):
             return o.Name
     raise LookupError("no mesh in the analysis")
-
-
-def solve(doc, workdir=None):
-    """Writes the .inp, runs CalculiX, loads the results; returns (inp path, result object)."""
-    from femtools import ccxtools
-    analysis = doc.Analysis
-    solver = [o for o in analysis.Group if o.isDerivedFrom("Fem::FemSolverObjectPython")][0]
-    workdir = workdir or tempfile.mkdtemp(prefix="hexmerge_ccx_")
-    fea = ccxtools.FemToolsCcx(analysis, solver)
-    fea.update_objects()
-    fea.setup_working_dir(workdir)
-    fea.setup_ccx()
-    message = fea.check_prerequisites()
-    if message:
-        raise RuntimeError("CalculiX prerequisites: " + message)
-    fea.write_inp_file()
-    fea.ccx_run()
-    fea.load_results()
-    results = [o for o in analysis.Group if o.isDerivedFrom("Fem::FemResultObject")]
-    if not results:
-        raise RuntimeError("CalculiX gave no results (see {})".format(workdir))
-    return fea.inp_file_name, results[-1]
 
 
 def tip_displacement(result):

@@ -4,7 +4,6 @@ Gmsh, recombined, solved with CalculiX; save and reopen; Netgen input; bad cases
 
 import os
 import subprocess
-import tempfile
 import unittest
 
 import numpy as np
@@ -20,6 +19,10 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(HERE))
 
 
+def tearDownModule():
+    helpers.bench.remove_work_directories()  # the CalculiX runs' files
+
+
 def close_all():
     for name in list(FreeCAD.listDocuments()):
         FreeCAD.closeDocument(name)
@@ -29,7 +32,7 @@ box_doc = helpers.box_doc
 
 
 def inp_count(femmesh):
-    path = os.path.join(tempfile.mkdtemp(), "m.inp")
+    path = os.path.join(helpers.bench.work_directory("addon_"), "m.inp")
     femmesh.writeABAQUS(path, 1, False)
     return sum(helpers.bench.inp_counts(path)[0].values())
 
@@ -114,16 +117,13 @@ class Cantilever(unittest.TestCase):
     def test_recombined_tip_is_closer_to_beam_theory(self):
         doc = helpers.cantilever("1st", 200.0)
         src = doc.getObject(helpers.mesh_name(doc))
-        inp, res = helpers.solve(doc)
+        res, inp, _ = helpers.bench.solve(doc)
         tet_tip = helpers.tip_displacement(res)
         self.assertEqual(sum(helpers.bench.inp_counts(inp)[0].values()), src.FemMesh.VolumeCount)
-        for o in list(doc.Analysis.Group):
-            if o.isDerivedFrom("Fem::FemResultObject"):
-                doc.removeObject(o.Name)
         obj = hm.make_hexdominant_mesh(doc, src)
         self.assertIn(obj, doc.Analysis.Group)
         self.assertNotIn(src, doc.Analysis.Group)
-        inp, res = helpers.solve(doc)
+        res, inp, _ = helpers.bench.solve(doc)
         counts = helpers.bench.inp_counts(inp)[0]
         self.assertEqual(sum(counts.values()), obj.FemMesh.VolumeCount)
         hex_tip = helpers.tip_displacement(res)
@@ -150,7 +150,7 @@ class CantileverFromShape(unittest.TestCase):
                          [obj])
         report = mesh_hexdominant.report_dict(obj)
         self.assertLessEqual(report["meshing"]["max_boundary_distance"], 1e-3 * obj.TargetSize.Value)
-        inp, res = helpers.solve(doc)
+        res, inp, _ = helpers.bench.solve(doc)
         counts = helpers.bench.inp_counts(inp)[0]
         self.assertEqual(sum(counts.values()), obj.FemMesh.VolumeCount)
         self.assertIn("C3D20", counts)  # second order: Hexa20
@@ -344,7 +344,7 @@ class ShapeMode(unittest.TestCase):
     def test_save_reopen(self):
         doc, box = self.box()
         name = hm.make_hexdominant_mesh(doc, box, target_size=10, second_order=False).Name
-        path = os.path.join(tempfile.mkdtemp(), "shape.FCStd")
+        path = os.path.join(helpers.bench.work_directory("addon_"), "shape.FCStd")
         doc.saveAs(path)
         FreeCAD.closeDocument(doc.Name)
         doc = FreeCAD.openDocument(path)
@@ -457,7 +457,7 @@ class WriterLink(unittest.TestCase):
         gmsh = doc.getObject(helpers.mesh_name(doc))
         name = hm.make_hexdominant_mesh(doc, gmsh).Name
         self.assertEqual(self.shape_seen_by_writer(doc, doc.getObject(name)), doc.Box)
-        path = os.path.join(tempfile.mkdtemp(), "link.FCStd")
+        path = os.path.join(helpers.bench.work_directory("addon_"), "link.FCStd")
         doc.saveAs(path)
         FreeCAD.closeDocument(doc.Name)
         doc = FreeCAD.openDocument(path)
@@ -499,7 +499,7 @@ class MultiMaterial(unittest.TestCase):
             for eid in elements[:50]:
                 xs = [m.getNodeById(n).x for n in m.getElementNodes(eid)]
                 self.assertEqual(expected[int(np.mean(xs) // 20)] + "_Solids", name)
-        inp, res = helpers.solve(doc)
+        res, inp, _ = helpers.bench.solve(doc)
         self.assertEqual(sum(helpers.bench.inp_counts(inp)[0].values()), m.VolumeCount)
         self.assertGreater(helpers.tip_displacement(res), 0)
 
@@ -516,7 +516,7 @@ class SaveReopen(unittest.TestCase):
                                        make_pyramids=False)
         count = obj.FemMesh.VolumeCount
         name = obj.Name
-        path = os.path.join(tempfile.mkdtemp(), "hexmerge.FCStd")
+        path = os.path.join(helpers.bench.work_directory("addon_"), "hexmerge.FCStd")
         doc.saveAs(path)
         FreeCAD.closeDocument(doc.Name)
         doc = FreeCAD.openDocument(path)
@@ -543,7 +543,7 @@ class Netgen(unittest.TestCase):
 
     def test_netgen_mesh_imported_and_recombined(self):
         import meshio
-        vol = os.path.join(tempfile.mkdtemp(), "cyl.vol")
+        vol = os.path.join(helpers.bench.work_directory("addon_"), "cyl.vol")
         subprocess.run(["/usr/bin/python3.11", os.path.join(HERE, "make_netgen_mesh.py"), vol],
                        check=True, capture_output=True)
         mio = meshio.read(vol)

@@ -21,6 +21,10 @@ import helpers
 bench = helpers.bench
 
 
+def tearDownModule():
+    helpers.bench.remove_work_directories()  # the CalculiX runs' files
+
+
 def close_all():
     for name in list(FreeCAD.listDocuments()):
         FreeCAD.closeDocument(name)

@@ -82,6 +82,10 @@ class NodeOrderTables(unittest.TestCase):
 
 
 class FemMeshRoundTrip(unittest.TestCase):
+    def setUp(self):
+        work = tempfile.TemporaryDirectory(prefix="hexmerge_test_")
+        self.addCleanup(work.cleanup)
+        self.work = work.name
 
     def one_element_mesh(self, name, **kw):
         p = reference_element(name)
@@ -109,7 +113,7 @@ class FemMeshRoundTrip(unittest.TestCase):
         # SMESH's own reader checks the element; a wrong order would come back reordered.
         for name in fa.LINEAR_CELLS + fa.QUADRATIC_CELLS:
             m, p, _ = self.one_element_mesh(name)
-            path = os.path.join(tempfile.mkdtemp(), "e.med")
+            path = os.path.join(self.work, "e.med")
             m.write(path)
             back = fa.femmesh_to_arrays(Fem.read(path))
             (bname, cells), = back.blocks
@@ -121,7 +125,7 @@ class FemMeshRoundTrip(unittest.TestCase):
             m, p, ids = self.one_element_mesh(name, pyramids_as_hexahedra=True)
             self.assertEqual(m.VolumeCount, 1)
             self.assertEqual(m.PyramidCount, 0)
-            path = os.path.join(tempfile.mkdtemp(), "e.inp")
+            path = os.path.join(self.work, "e.inp")
             m.writeABAQUS(path, 1, False)
             text = open(path).read()
             self.assertIn("TYPE=" + ccx, text, name)
@@ -132,7 +136,7 @@ class FemMeshRoundTrip(unittest.TestCase):
     def test_pyramids_left_as_pyramids_are_dropped_by_the_writer(self):
         # The fact that makes the option necessary (DESIGN.md).
         m, _, _ = self.one_element_mesh("pyramid")
-        path = os.path.join(tempfile.mkdtemp(), "e.inp")
+        path = os.path.join(self.work, "e.inp")
         m.writeABAQUS(path, 1, False)
         self.assertNotIn("C3D", open(path).read().split("** Volume elements")[-1][:200])
 
