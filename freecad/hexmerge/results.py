@@ -83,6 +83,9 @@ def results_rows(report):
     if meshing:
         rows.append(("target size", "", "{:g} mm".format(meshing["parameters"]["size"])))
         rows.append(("boundary dist.", "", "{:.2g} mm".format(meshing["max_boundary_distance"])))
+        if meshing.get("shape_volume"):
+            rows.append(("volume vs. shape", "", "{:+.2f} %".format(
+                100 * (meshing["mesh_volume"] / meshing["shape_volume"] - 1))))
         rows.append(("meshing time", "", "{:.2f} s".format(meshing["seconds"])))
     fc = report.get("freecad", {})
     if fc:

@@ -517,6 +517,8 @@ py::tuple run_mesh_shape(const std::string& brep, const std::map<std::string, st
   d["frame"] = axes;
   d["spacing"] = py::make_tuple(report.spacing[0], report.spacing[1], report.spacing[2]);
   d["max_boundary_distance"] = report.max_boundary_distance;
+  d["shape_volume"] = report.shape_volume;
+  d["mesh_volume"] = report.mesh_volume;
   d["estimated_tets"] = report.estimated_tets;
   d["nb_unrefined_faces"] = report.nb_unrefined_faces;
   d["nb_corner_nodes_removed"] = report.nb_corner_nodes_removed;

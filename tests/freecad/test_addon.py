@@ -13,7 +13,7 @@ import FreeCAD
 import helpers
 import freecad.hexmerge as hm
 from freecad.hexmerge import femmesh_arrays as fa
-from freecad.hexmerge import mesh_hexdominant
+from freecad.hexmerge import mesh_hexdominant, results
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(HERE))
@@ -87,7 +87,7 @@ class Box(unittest.TestCase):
     def test_post_merge_node_moves_reach_the_femmesh(self):
         """same_nodes off (issue 19): the FemMesh has the engine's node positions (a moved node
         at its new place, not the source's), and the nodes contracted away are left out."""
-        from freecad.hexmerge import jobs, results
+        from freecad.hexmerge import jobs
         doc, mesh = box_doc("1st", size=6.0)
         source = fa.femmesh_to_arrays(mesh.FemMesh)
         job = jobs.RecombineJob.prepare(mesh.FemMesh, {"same_nodes": False}, regions="none")
@@ -150,6 +150,8 @@ class CantileverFromShape(unittest.TestCase):
                          [obj])
         report = mesh_hexdominant.report_dict(obj)
         self.assertLessEqual(report["meshing"]["max_boundary_distance"], 1e-3 * obj.TargetSize.Value)
+        # The beam (a box): the tets' volume is the shape's, and the results table says so.
+        self.assertIn(("volume vs. shape", "", "+0.00 %"), results.results_rows(report))
         res, inp, _ = helpers.bench.solve(doc)
         counts = helpers.bench.inp_counts(inp)[0]
         self.assertEqual(sum(counts.values()), obj.FemMesh.VolumeCount)

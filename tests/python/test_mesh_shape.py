@@ -623,6 +623,11 @@ def test_box_is_all_hexahedra(shapes) -> None:
     # 100 x 40 x 30 mm at h = 10: a 10 x 4 x 3 lattice, every cell one hexahedron.
     assert report["output_counts"] == {"tet": 0, "pyramid": 0, "prism": 0, "hex": 120}
     assert report["volume_fraction"]["hex"] >= 0.99
+    # A box's tets have its volume exactly: no note on it.
+    meshing = report["meshing"]
+    assert meshing["shape_volume"] == pytest.approx(120000.0, rel=1e-9)
+    assert meshing["mesh_volume"] == pytest.approx(120000.0, rel=1e-9)
+    assert not any("volume" in note for note in hexmerge.mesh_notes(meshing))
 
 
 @needs_tetgen

@@ -232,7 +232,9 @@ def mesh_shape(
         recombine, recombine()'s report; in both cases the mesher's report under ``"meshing"``
         (counts, ``frame``, ``spacing``, ``sweep_axis`` (the frame axis the tets are swept
         along, -1: not swept), ``sweep_skipped`` (why an extrusion was not swept, "" when it
-        was or is none), ``max_boundary_distance`` of the corner nodes to the CAD, ``phase_seconds``, ``seconds``, ``tets``, ``points``, ``parameters``).
+        was or is none), ``max_boundary_distance`` of the corner nodes to the CAD,
+        ``shape_volume`` (the CAD's) and ``mesh_volume`` (the tets'), ``phase_seconds``,
+        ``seconds``, ``tets``, ``points``, ``parameters``).
 
     Raises
     ------
@@ -306,8 +308,9 @@ def mesh_shape(
 
 def mesh_notes(meshing: dict[str, Any]) -> list[str]:
     """What the user should know about how the tets were made: the ways of placing points that
-    TetGen failed on (the mesh comes from a simpler one, with fewer hexahedra), faces left
-    coarser than h, the CAD's corners and edges too sharp for usable elements."""
+    failed (the mesh comes from a simpler one, with fewer hexahedra), faces left coarser than h,
+    a volume more than 1 % off the shape's, the CAD's corners and edges too sharp for usable
+    elements."""
     notes = []
     if meshing.get("converted_to_millimetres"):
         notes.append(f"the file declares its lengths in {meshing['file_length_unit']}: the shape is "
@@ -338,12 +341,31 @@ def mesh_notes(meshing: dict[str, Any]) -> list[str]:
             notes.append(f"local size {applied['size']:g} on {','.join(items)}: sides up to "
                          f"{applied['max_side']:.3g} remain there (a face that did not refine)")
     notes += face_layer_notes(meshing)
+    volume = volume_note(meshing)
+    if volume:
+        notes.append(volume)
     sharp = sharp_feature_note(meshing)
     if sharp:
         notes.append(sharp)
     if meshing.get("sweep_skipped"):
         notes.append(meshing["sweep_skipped"])
     return notes
+
+
+# The tets' volume is noted where it differs from the shape's by more than this fraction.
+VOLUME_NOTE = 0.01
+
+
+def volume_note(meshing: dict[str, Any]) -> str | None:
+    """A line saying how far the tets' volume is from the shape's, where that is more than 1 %
+    of it (the chords of curved faces of small radius at a coarse size); None otherwise."""
+    shape, mesh = meshing.get("shape_volume", 0.0), meshing.get("mesh_volume", 0.0)
+    if not shape > 0 or abs(mesh / shape - 1) <= VOLUME_NOTE:
+        return None
+    change = 100 * (mesh / shape - 1)
+    return (f"the tets' volume is {abs(change):.1f} % {'less' if change < 0 else 'more'} than the "
+            f"shape's ({mesh:.6g} against {shape:.6g}): the chords of its curved faces at this size; "
+            "a smaller size or surface deflection follows them closer")
 
 
 def face_layer_notes(meshing: dict[str, Any]) -> list[str]:

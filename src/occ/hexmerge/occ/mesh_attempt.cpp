@@ -747,6 +747,8 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
          << " % (walls thinner than the chord deflection, " << std::noshowpos << deflection << "?)";
     throw SurfaceTooCoarse(text.str());
   }
+  report.shape_volume = shape.volume.Mass();
+  report.mesh_volume = volume_after;
   report.min_tet_quality_before = improved.min_quality_before;
   report.nb_face_flips = improved.face_flips;
   report.nb_edge_flips = improved.edge_flips;
