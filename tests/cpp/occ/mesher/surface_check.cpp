@@ -5,6 +5,7 @@
 #include <BRepAlgoAPI_Cut.hxx>
 #include <BRep_Builder.hxx>
 #include <TopExp.hxx>
+#include <TopExp_Explorer.hxx>
 #include <TopoDS_Compound.hxx>
 #include <array>
 #include <limits>
@@ -148,6 +149,11 @@ TEST(faces_meet_along, only_where_faces_touch_along_the_side_beside_their_common
   two.shape = pair;
   TopExp::MapShapes(pair, TopAbs_FACE, two.faces);
   TopExp::MapShapes(pair, TopAbs_EDGE, two.edges);
+  two.edge_faces.resize(static_cast<std::size_t>(two.edges.Extent()));
+  for (int f = 1; f <= two.faces.Extent(); ++f)
+    for (TopExp_Explorer ex(two.faces(f), TopAbs_EDGE); ex.More(); ex.Next())
+      two.edge_faces[static_cast<std::size_t>(two.edges.FindIndex(ex.Current()) - 1)].push_back(f -
+                                                                                                1);
   // Box 1's face on x = 1 and box 2's on y = 1 (its faces come after box 1's; face_at() takes
   // the first face whose surface holds the point, and box 1's y = 1 face lies on that plane too).
   const int a = face_at(two, {1, 0.5, 0.5});

@@ -31,6 +31,12 @@
 namespace hexmerge::mesher {
 namespace {
 
+// Whether CAD edge `edge` bounds face `face` (both numbered from 0).
+bool edge_bounds(const Shape& s, int edge, int face) {
+  const std::vector<int>& faces = s.edge_faces[static_cast<std::size_t>(edge)];
+  return std::find(faces.begin(), faces.end(), face) != faces.end();
+}
+
 using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
 using Point = Kernel::Point_3;
 using Segment = Kernel::Segment_3;
@@ -310,12 +316,9 @@ bool faces_meet_along(const Shape& s, const std::vector<Vec3>& nodes, const Over
   // Whether `at` lies within `tolerance` of an edge that faces x and y share: there they meet as
   // the CAD means them to.
   const auto on_common_edge = [&](int x, int y, const gp_Pnt& at) {
-    std::set<int> edges_of_y;
-    for (TopExp_Explorer ex(s.faces(y + 1), TopAbs_EDGE); ex.More(); ex.Next())
-      edges_of_y.insert(s.edges.FindIndex(ex.Current()));
     const TopoDS_Vertex point = BRepBuilderAPI_MakeVertex(at).Vertex();
     for (TopExp_Explorer ex(s.faces(x + 1), TopAbs_EDGE); ex.More(); ex.Next()) {
-      if (!edges_of_y.count(s.edges.FindIndex(ex.Current()))) continue;
+      if (!edge_bounds(s, s.edges.FindIndex(ex.Current()) - 1, y)) continue;
       BRepExtrema_DistShapeShape distance(point, ex.Current());
       if (distance.IsDone() && distance.NbSolution() > 0 && distance.Value() <= tolerance)
         return true;
@@ -356,11 +359,8 @@ bool faces_meet(const Shape& s, int a, int b, double tolerance) {
   auto edge_on = [&](int x, int y) {
     const TopoDS_Face& fa = TopoDS::Face(s.faces(x + 1));
     const TopoDS_Face& fb = TopoDS::Face(s.faces(y + 1));
-    std::set<int> edges_of_b;
-    for (TopExp_Explorer ex(fb, TopAbs_EDGE); ex.More(); ex.Next())
-      edges_of_b.insert(s.edges.FindIndex(ex.Current()));
     for (TopExp_Explorer ex(fa, TopAbs_EDGE); ex.More(); ex.Next()) {
-      if (edges_of_b.count(s.edges.FindIndex(ex.Current())) ||
+      if (edge_bounds(s, s.edges.FindIndex(ex.Current()) - 1, y) ||
           BRep_Tool::Degenerated(TopoDS::Edge(ex.Current())))
         continue;
       const BRepAdaptor_Curve curve(TopoDS::Edge(ex.Current()));
