@@ -8,6 +8,7 @@ from __future__ import annotations
 import gzip
 import shutil
 import subprocess
+import tempfile
 from pathlib import Path
 
 import numpy as np
@@ -23,13 +24,21 @@ pytestmark = MESHES_SHAPES
 
 def occ_volume(path: Path) -> float:
     """The volume of the solids of a CAD file, by OpenCASCADE (Gmsh's `Mass Volume`)."""
-    geo = path.parent / f"{path.stem}-volume.geo"
-    geo.write_text('SetFactory("OpenCASCADE");\nMerge "%s";\nv() = Volume{:};\nm = 0;\n'
-                   'For i In {0:#v()-1}\n  m += Mass Volume{v(i)};\nEndFor\n'
-                   'Printf("volume %%.17g", m);\n' % path)
-    out = subprocess.run(["gmsh", str(geo), "-parse_and_exit"], check=True, capture_output=True,
-                         text=True).stdout
+    with tempfile.TemporaryDirectory() as work:
+        geo = Path(work) / "volume.geo"
+        geo.write_text('SetFactory("OpenCASCADE");\nMerge "%s";\nv() = Volume{:};\nm = 0;\n'
+                       'For i In {0:#v()-1}\n  m += Mass Volume{v(i)};\nEndFor\n'
+                       'Printf("volume %%.17g", m);\n' % path.resolve())
+        out = subprocess.run(["gmsh", str(geo), "-parse_and_exit"], check=True,
+                             capture_output=True, text=True).stdout
     return float(next(line.split()[1] for line in out.splitlines() if line.startswith("volume ")))
+
+
+def unzipped(path: Path, folder: Path) -> Path:
+    """A gzipped shape file of tests/data written out in `folder`."""
+    shape = folder / path.stem
+    shape.write_bytes(gzip.decompress(path.read_bytes()))
+    return shape
 
 
 def tet_volume(tets: hexmerge.MixedMesh) -> float:
@@ -593,8 +602,7 @@ def test_faces_meeting_along_their_common_edge_beside_a_shared_side_are_not_brok
     """Faces whose nearest points lie on an edge they share meet as the CAD means them to
     (faces_meet_along): the side is parted, and the part meshes in the first way."""
     h = 27.36
-    shape = tmp_path / "sphere_torus_plane.brep"
-    shape.write_bytes(gzip.decompress(SPHERE_TORUS_PLANE.read_bytes()))
+    shape = unzipped(SPHERE_TORUS_PLANE, tmp_path)
     tets, report = hexmerge.mesh_shape(shape, h, recombine=False)
     meshing = report["meshing"]
     assert meshing["strategy"] == "lattice", meshing["failed_strategies"]
@@ -614,8 +622,7 @@ def test_a_face_the_surface_mesher_leaves_out_is_tried_on_a_finer_surface(tmp_pa
     """The first way fails as too coarse, naming the face, and the surface at a quarter of the
     chord deflection meshes: on the CAD, its volume the shape's to 1 %, its recombination valid."""
     h = 40.64
-    shape = tmp_path / "sphere_two_arc_hole.brep"
-    shape.write_bytes(gzip.decompress(SPHERE_TWO_ARC_HOLE.read_bytes()))
+    shape = unzipped(SPHERE_TWO_ARC_HOLE, tmp_path)
     tets, report = hexmerge.mesh_shape(shape, h, recombine=False)
     meshing = report["meshing"]
     assert meshing["strategy"] == "lattice on a surface of a quarter of the chord deflection"
@@ -631,22 +638,19 @@ def test_a_face_the_surface_mesher_leaves_out_is_tried_on_a_finer_surface(tmp_pa
 TORUS_POCKET = ROOT / "tests" / "data" / "torus_pocket.brep"
 
 
-def test_a_surface_still_too_coarse_at_a_quarter_of_the_deflection_is_tried_at_an_eighth(
-        tmp_path: Path) -> None:
+def test_a_surface_still_too_coarse_at_a_quarter_of_the_deflection_is_tried_at_an_eighth() -> None:
     """At h 60 the first way and the quarter of the chord deflection fail as too coarse (the
     faces crossing, named), and the surface at an eighth meshes: on the CAD, its volume the
     shape's to 2 % (the chords of a torus of 44,000 mm2 and of cylinders at h 60 fall short of
     them by 1.6 %; Gmsh's own tet mesh at h 5, by 0.53 %), its recombination valid."""
     h = 60.0
-    shape = tmp_path / TORUS_POCKET.name
-    shutil.copy(TORUS_POCKET, shape)
-    tets, report = hexmerge.mesh_shape(shape, h, recombine=False)
+    tets, report = hexmerge.mesh_shape(TORUS_POCKET, h, recombine=False)
     meshing = report["meshing"]
     assert meshing["strategy"] == "lattice on a surface of an eighth of the chord deflection"
     failed = meshing["failed_strategies"]
     quarter = [f for f in failed if f.startswith("lattice on a surface of a quarter")]
     assert len(quarter) == 1 and "the surface's triangles at this size cross (Face3" in quarter[0], failed
-    volume = occ_volume(shape)
+    volume = occ_volume(TORUS_POCKET)
     assert_sound(tets, report, h, volume, 0.02)
     # The report's volumes are the CAD's and the tets'; more than 1 % apart, a note says so.
     assert meshing["shape_volume"] == pytest.approx(volume, rel=1e-6)
