@@ -537,6 +537,7 @@ py::tuple run_mesh_shape(const std::string& brep, const std::map<std::string, st
   d["nb_void_tets"] = report.nb_void_tets;
   d["nb_shared_faces"] = report.nb_shared_faces;
   d["nb_sewn_solids"] = report.nb_sewn_solids;
+  d["nb_split_lens_edges"] = report.nb_split_lens_edges;
   py::list local_sizes;
   for (const LocalSizeApplied& l : report.local_sizes) {
     py::dict e;

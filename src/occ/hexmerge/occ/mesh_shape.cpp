@@ -54,6 +54,7 @@ TetMesh mesh_shape_impl(const std::string& brep, const MeshShapeParameters& para
   report.nb_shared_faces = glue.nb_shared_faces;
   report.glue_fuzzy = glue.fuzzy;
   report.nb_sewn_solids = glue.nb_sewn_solids;
+  report.nb_split_lens_edges = glue.nb_split_lens_edges;
   // A shape of faces sewn into solids has faces of its own: FaceN of the shape given names none.
   if (glue.nb_sewn_solids > 0 &&
       (!parameters.local_sizes.empty() || !parameters.face_layers.empty()))
@@ -71,7 +72,8 @@ TetMesh mesh_shape_impl(const std::string& brep, const MeshShapeParameters& para
   GivenItems given_items{
       ItemNumbering::identity("Face", static_cast<std::size_t>(shape.faces.Extent())),
       ItemNumbering::identity("Edge", static_cast<std::size_t>(shape.edges.Extent()))};
-  if (glue.glued) {
+  const bool remade = glue.glued || glue.nb_split_lens_edges > 0;
+  if (remade) {
     given_items.faces.to_shape = glue.face_images;
     given_items.edges.to_shape = glue.edge_images;
   }
@@ -79,7 +81,7 @@ TetMesh mesh_shape_impl(const std::string& brep, const MeshShapeParameters& para
       local_size_items(local_sizes, given_items.faces, given_items.edges, parameters.size);
   // Face layers on faces the shape has not, or thicker than h, fail now too.
   face_layer_specs(parse_face_layers(parameters.face_layers), given_items.faces, parameters.size);
-  const std::string regions_brep = glue.glued ? write_brep(shape.shape) : brep;
+  const std::string regions_brep = remade ? write_brep(shape.shape) : brep;
   // The CAD's sharp corners and edges, named as in the shape given.
   const SharpFeatures sharp = sharp_features(shape, kSharpAngle);
   report.sharp_features = sharp_feature_reports(sharp, given_items.faces, given_items.edges);

@@ -368,6 +368,10 @@ struct MeshShapeReport {
   /// Solids made of a shape that held faces or shells only (an IGES file, a STEP file of
   /// surfaces): its faces sewn, each closed shell a solid; 0 when it held solids
   std::size_t nb_sewn_solids = 0;
+  /// Edges split at their middle before meshing: one of the two edges of each hole (or face)
+  /// bounded by two nearly straight edges between the same two vertices, which BRepMesh would
+  /// divide into one segment each, leaving the hole no area (split_lens_edges())
+  std::size_t nb_split_lens_edges = 0;
   /// The local sizes (MeshShapeParameters::local_sizes) as applied, in their order
   std::vector<LocalSizeApplied> local_sizes;
   std::size_t nb_graded_points = 0;  ///< points of the finer lattices around local sizes

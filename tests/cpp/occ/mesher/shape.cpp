@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <BRepAlgoAPI_BuilderAlgo.hxx>
+#include <BRepAlgoAPI_Cut.hxx>
 #include <BRepBuilderAPI_Copy.hxx>
 #include <BRepBuilderAPI_MakeEdge.hxx>
 #include <BRepBuilderAPI_MakeFace.hxx>
@@ -10,6 +11,7 @@
 #include <BRepBuilderAPI_Transform.hxx>
 #include <BRepGProp.hxx>
 #include <BRepLib.hxx>
+#include <BRepPrimAPI_MakePrism.hxx>
 #include <BRepPrimAPI_MakeSphere.hxx>
 #include <BRep_Builder.hxx>
 #include <GProp_GProps.hxx>
@@ -18,15 +20,19 @@
 #include <Poly_Triangle.hxx>
 #include <Poly_Triangulation.hxx>
 #include <TopExp.hxx>
+#include <TopTools_IndexedMapOfShape.hxx>
 #include <TopoDS.hxx>
 #include <TopoDS_Compound.hxx>
+#include <TopoDS_Edge.hxx>
 #include <TopoDS_Face.hxx>
 #include <TopoDS_Shell.hxx>
 #include <TopoDS_Solid.hxx>
 #include <array>
 #include <cmath>
 #include <gp_Ax1.hxx>
+#include <gp_Ax2.hxx>
 #include <gp_Ax3.hxx>
+#include <gp_Circ.hxx>
 #include <gp_Dir2d.hxx>
 #include <gp_Pln.hxx>
 #include <gp_Pnt2d.hxx>
@@ -114,6 +120,92 @@ TEST(load_shape, no_solid_and_open_shell_are_input_errors) {
 // A box's faces, each copied on its own (no edge shared, as an IGES file or a STEP file of
 // surfaces gives them): sewn into one solid of the box's volume; one face fewer leaves the others
 // open, and that is refused (they would be lost).
+// A 10 x 10 x 4 box with a hole through it along z whose section is a circular segment (the
+// arc of `degrees` of a circle of radius 3 round (5, 5) and its chord): its top and bottom faces
+// have a hole of two edges between the same two vertices.
+TopoDS_Shape box_with_segment_hole(double degrees) {
+  const double half = degrees * M_PI / 360;
+  const gp_Pnt a(5 + 3 * std::cos(-half), 5 + 3 * std::sin(-half), -1);
+  const gp_Pnt b(5 + 3 * std::cos(half), 5 + 3 * std::sin(half), -1);
+  const gp_Circ circle(gp_Ax2(gp_Pnt(5, 5, -1), gp_Dir(0, 0, 1)), 3);
+  const TopoDS_Edge arc = BRepBuilderAPI_MakeEdge(circle, -half, half);
+  const TopoDS_Edge chord = BRepBuilderAPI_MakeEdge(b, a);
+  const TopoDS_Face section = BRepBuilderAPI_MakeFace(BRepBuilderAPI_MakeWire(arc, chord));
+  const TopoDS_Shape prism = BRepPrimAPI_MakePrism(section, gp_Vec(0, 0, 6));
+  return BRepAlgoAPI_Cut(occ_box(0, 0, 0, 10, 10, 4), prism).Shape();
+}
+
+TEST(load_shape, a_hole_of_two_nearly_straight_edges_gets_a_vertex) {
+  // An arc of 60 degrees (under BRepMesh's angular deflection, kSurfaceAngle: one segment at a
+  // coarse chord deflection, as its chord): the longer edge of each of the two holes, the arc,
+  // is split at its middle, and the edges as given lead to the split ones.
+  const TopoDS_Shape shape = box_with_segment_hole(60);
+  TopTools_IndexedMapOfShape given_faces, given_edges;
+  TopExp::MapShapes(shape, TopAbs_FACE, given_faces);
+  TopExp::MapShapes(shape, TopAbs_EDGE, given_edges);
+  mesher::GlueSolidsReport glue;
+  const mesher::Shape s = mesher::load_shape(write_brep(shape), 1e-7, glue);
+  EXPECT_EQ(glue.nb_split_lens_edges, 2u);
+  EXPECT_EQ(s.faces.Extent(), given_faces.Extent());
+  EXPECT_EQ(s.edges.Extent(), given_edges.Extent() + 2);
+  ASSERT_EQ(glue.face_images.size(), static_cast<std::size_t>(given_faces.Extent()));
+  ASSERT_EQ(glue.edge_images.size(), static_cast<std::size_t>(given_edges.Extent()));
+  for (const auto& images : glue.face_images) EXPECT_EQ(images.size(), 1u);
+  int split = 0;
+  double length = 0;
+  for (int e = 1; e <= given_edges.Extent(); ++e) {
+    const std::vector<int>& images = glue.edge_images[static_cast<std::size_t>(e - 1)];
+    ASSERT_FALSE(images.empty());
+    if (images.size() == 1) continue;
+    ++split;
+    // The two pieces make the edge given: an arc of 60 degrees of radius 3.
+    ASSERT_EQ(images.size(), 2u);
+    for (const int piece : images) length += s.edge_length[static_cast<std::size_t>(piece)];
+  }
+  EXPECT_EQ(split, 2);
+  EXPECT_NEAR(length, 2 * M_PI, 1e-6);
+  // The solid is as it was.
+  GProp_GProps before, after;
+  BRepGProp::VolumeProperties(shape, before);
+  BRepGProp::VolumeProperties(s.shape, after);
+  EXPECT_NEAR(after.Mass(), before.Mass(), 1e-9 * before.Mass());
+
+  // A half circle turns by more than kSurfaceAngle: BRepMesh divides it, nothing is split.
+  mesher::GlueSolidsReport half;
+  const mesher::Shape whole =
+      mesher::load_shape(write_brep(box_with_segment_hole(180)), 1e-7, half);
+  EXPECT_EQ(half.nb_split_lens_edges, 0u);
+  EXPECT_TRUE(half.edge_images.empty());
+  EXPECT_EQ(whole.edges.Extent(), given_edges.Extent());
+
+  // Glued to a box beside it, the same: two solids sharing one face, the images composed (each
+  // given face one face, the arcs two edges each).
+  TopTools_ListOfShape arguments;
+  arguments.Append(shape);
+  arguments.Append(occ_box(10, 0, 0, 20, 10, 4));
+  BRepAlgoAPI_BuilderAlgo fuse;
+  fuse.SetArguments(arguments);
+  fuse.Build();
+  TopTools_IndexedMapOfShape pair_faces, pair_edges;
+  TopExp::MapShapes(fuse.Shape(), TopAbs_FACE, pair_faces);
+  TopExp::MapShapes(fuse.Shape(), TopAbs_EDGE, pair_edges);
+  mesher::GlueSolidsReport pair;
+  const mesher::Shape glued = mesher::load_shape(write_brep(fuse.Shape()), 1e-7, pair);
+  EXPECT_TRUE(pair.glued);
+  EXPECT_EQ(pair.nb_shared_faces, 1u);
+  EXPECT_EQ(pair.nb_split_lens_edges, 2u);
+  EXPECT_EQ(glued.solids.Extent(), 2);
+  ASSERT_EQ(pair.face_images.size(), static_cast<std::size_t>(pair_faces.Extent()));
+  std::size_t in_two = 0;
+  for (const auto& images : pair.face_images) EXPECT_EQ(images.size(), 1u);
+  for (const auto& images : pair.edge_images) in_two += images.size() == 2;
+  EXPECT_EQ(in_two, 2u);
+  EXPECT_EQ(glued.edges.Extent(), pair_edges.Extent() + 2);
+  GProp_GProps both;
+  BRepGProp::VolumeProperties(glued.shape, both);
+  EXPECT_NEAR(both.Mass(), before.Mass() + 400, 1e-9 * both.Mass());
+}
+
 TEST(load_shape, faces_only_are_sewn_into_solids) {
   TopTools_IndexedMapOfShape faces;
   TopExp::MapShapes(occ_box(0, 0, 0, 3, 2, 1), TopAbs_FACE, faces);

@@ -1,22 +1,35 @@
 #include "hexmerge/occ/mesher/glue_solids.h"
 
+#include <BRepAdaptor_Curve.hxx>
 #include <BRepAlgoAPI_BuilderAlgo.hxx>
+#include <BRepAlgoAPI_Splitter.hxx>
+#include <BRepBuilderAPI_MakeVertex.hxx>
 #include <BRepGProp.hxx>
+#include <BRepTools.hxx>
 #include <BRep_Builder.hxx>
+#include <BRep_Tool.hxx>
 #include <GProp_GProps.hxx>
 #include <Standard_Failure.hxx>
 #include <TopExp.hxx>
+#include <TopExp_Explorer.hxx>
 #include <TopTools_IndexedDataMapOfShapeListOfShape.hxx>
 #include <TopTools_IndexedMapOfShape.hxx>
 #include <TopTools_ListOfShape.hxx>
 #include <TopoDS.hxx>
 #include <TopoDS_Compound.hxx>
+#include <TopoDS_Edge.hxx>
+#include <TopoDS_Face.hxx>
+#include <TopoDS_Iterator.hxx>
+#include <TopoDS_Vertex.hxx>
+#include <TopoDS_Wire.hxx>
 #include <algorithm>
+#include <cmath>
 #include <sstream>
 #include <string>
 #include <vector>
 
 #include "hexmerge/core/error.h"
+#include "hexmerge/occ/mesher/surface.h"
 
 namespace hexmerge::mesher {
 namespace {
@@ -39,6 +52,29 @@ std::vector<std::vector<int>> images_of(BRepAlgoAPI_BuilderAlgo& fuse, const Top
     if (images.empty() && !fuse.IsDeleted(before(i))) add(before(i));
   }
   return out;
+}
+
+// The angle an edge's tangent turns through along it (radians), from 32 steps.
+double turning(const TopoDS_Edge& edge) {
+  const BRepAdaptor_Curve curve(edge);
+  const double t0 = curve.FirstParameter(), t1 = curve.LastParameter();
+  constexpr int kSteps = 32;
+  double total = 0;
+  gp_Vec before;
+  for (int i = 0; i <= kSteps; ++i) {
+    gp_Pnt p;
+    gp_Vec d;
+    curve.D1(t0 + (t1 - t0) * i / kSteps, p, d);
+    if (i > 0 && before.Magnitude() > 0 && d.Magnitude() > 0) total += before.Angle(d);
+    before = d;
+  }
+  return total;
+}
+
+double length_of(const TopoDS_Edge& edge) {
+  GProp_GProps props;
+  BRepGProp::LinearProperties(edge, props);
+  return props.Mass();
 }
 
 double volume_of(const TopoDS_Shape& solid) {
@@ -143,6 +179,78 @@ TopoDS_Shape glue_solids(const TopoDS_Shape& shape, double tolerance, GlueSolids
   report.face_images = images_of(fuse, shape, glued, TopAbs_FACE);
   report.edge_images = images_of(fuse, shape, glued, TopAbs_EDGE);
   return glued;
+}
+
+TopoDS_Shape split_lens_edges(const TopoDS_Shape& shape, GlueSolidsReport& report) {
+  TopTools_IndexedMapOfShape to_split;
+  TopTools_IndexedMapOfShape faces;
+  TopExp::MapShapes(shape, TopAbs_FACE, faces);
+  for (int f = 1; f <= faces.Extent(); ++f) {
+    // A face whose outline is a lens (not a hole in it) is zipped shut after BRepMesh instead
+    // (surface.cpp, zip_lens_faces()).
+    const TopoDS_Face& face = TopoDS::Face(faces(f));
+    const TopoDS_Wire outer = BRepTools::OuterWire(face);
+    for (TopoDS_Iterator wire(face); wire.More(); wire.Next()) {
+      if (wire.Value().ShapeType() != TopAbs_WIRE || wire.Value().IsSame(outer)) continue;
+      std::vector<TopoDS_Edge> edges;
+      for (TopoDS_Iterator it(wire.Value()); it.More() && edges.size() <= 2; it.Next())
+        if (!BRep_Tool::Degenerated(TopoDS::Edge(it.Value())))
+          edges.push_back(TopoDS::Edge(it.Value()));
+      if (edges.size() != 2 || edges[0].IsSame(edges[1])) continue;
+      TopoDS_Vertex a0, a1, b0, b1;
+      TopExp::Vertices(edges[0], a0, a1);
+      TopExp::Vertices(edges[1], b0, b1);
+      if (a0.IsNull() || a1.IsNull() || b0.IsNull() || b1.IsNull() || a0.IsSame(a1) ||
+          !((a0.IsSame(b0) && a1.IsSame(b1)) || (a0.IsSame(b1) && a1.IsSame(b0))))
+        continue;
+      if (!(turning(edges[0]) < kSurfaceAngle) || !(turning(edges[1]) < kSurfaceAngle)) continue;
+      to_split.Add(length_of(edges[0]) >= length_of(edges[1]) ? edges[0] : edges[1]);
+    }
+  }
+  if (to_split.IsEmpty()) return shape;
+  TopTools_ListOfShape arguments, tools;
+  arguments.Append(shape);
+  for (int i = 1; i <= to_split.Extent(); ++i) {
+    const BRepAdaptor_Curve curve(TopoDS::Edge(to_split(i)));
+    tools.Append(BRepBuilderAPI_MakeVertex(
+        curve.Value(0.5 * (curve.FirstParameter() + curve.LastParameter()))));
+  }
+  BRepAlgoAPI_Splitter splitter;
+  splitter.SetArguments(arguments);
+  splitter.SetTools(tools);
+  splitter.SetNonDestructive(true);
+  // Where OpenCASCADE cannot split them, the edges stay as they are, as before this step (the
+  // surface at a finer deflection may still give the hole area; nb_split_lens_edges says 0).
+  try {
+    splitter.Build();
+  } catch (const Standard_Failure&) {
+    return shape;
+  }
+  if (splitter.HasErrors() || !splitter.IsDone()) return shape;
+  const TopoDS_Shape split = splitter.Shape();
+  TopTools_IndexedMapOfShape faces_after;
+  TopExp::MapShapes(split, TopAbs_FACE, faces_after);
+  if (faces_after.Extent() != faces.Extent()) return shape;
+  // Through the split: per item of `shape`, its items in `split`; then composed with the gluing.
+  const auto compose = [&](TopAbs_ShapeEnum kind, std::vector<std::vector<int>>& images) {
+    const std::vector<std::vector<int>> step = images_of(splitter, shape, split, kind);
+    if (images.empty()) {  // not glued: the shape as given is `shape`
+      images = step;
+      return;
+    }
+    for (std::vector<int>& image : images) {
+      std::vector<int> composed;
+      for (const int i : image)
+        for (const int j : step[static_cast<std::size_t>(i)])
+          if (std::find(composed.begin(), composed.end(), j) == composed.end())
+            composed.push_back(j);
+      image = std::move(composed);
+    }
+  };
+  compose(TopAbs_FACE, report.face_images);
+  compose(TopAbs_EDGE, report.edge_images);
+  report.nb_split_lens_edges = static_cast<std::size_t>(to_split.Extent());
+  return split;
 }
 
 }  // namespace hexmerge::mesher

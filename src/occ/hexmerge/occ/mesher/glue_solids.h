@@ -30,6 +30,9 @@ struct GlueSolidsReport {
   std::vector<std::vector<int>> face_images;
   /// Likewise per edge (FreeCAD's EdgeN).
   std::vector<std::vector<int>> edge_images;
+  /// Edges split at their middle by split_lens_edges() (then face_images and edge_images lead
+  /// from the shape as given to the shape split, glued or not).
+  std::size_t nb_split_lens_edges = 0;
 };
 
 /// The shape's solids, in the order TopExp::MapShapes(shape, TopAbs_SOLID) gives them, glued:
@@ -42,5 +45,18 @@ struct GlueSolidsReport {
 /// @throws InputError naming the two solids (0-based, in the order above) when solids overlap
 ///         in volume, or when OpenCASCADE cannot intersect the solids' faces
 TopoDS_Shape glue_solids(const TopoDS_Shape& shape, double tolerance, GlueSolidsReport& report);
+
+/// The shape with one edge of each lens wire split at its middle (a vertex added there): a wire
+/// of two edges between the same two vertices, each turning by less than BRepMesh's angular
+/// deflection (kSurfaceAngle), which BRepMesh divides into one segment each at a coarse enough
+/// chord deflection: the hole they bound then has no area, and BRepMesh fails on the face without
+/// a word (a random part's torus, whose hole of two 0.94 mm edges where a plane and a cylinder
+/// meet it had triangles up to 9 mm off it at every deflection; a sphere's hole of two arcs left
+/// without triangles). The longer edge of the two is split (the hole then has three segments at
+/// least). The faces keep their numbers; `report`'s face_images and edge_images lead from the
+/// shape as given (before `glued`, when report.glued) to the one returned.
+/// @param[in]     shape   the shape as glue_solids() returned it
+/// @param[in,out] report  its images, composed; nb_split_lens_edges
+TopoDS_Shape split_lens_edges(const TopoDS_Shape& shape, GlueSolidsReport& report);
 
 }  // namespace hexmerge::mesher

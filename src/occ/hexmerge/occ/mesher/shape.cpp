@@ -195,6 +195,7 @@ Shape load_shape(const std::string& brep, double glue_tolerance, GlueSolidsRepor
                      "to " +
                      std::to_string(1e-4 * given_diagonal) +
                      ": glue the solids in FreeCAD (Part BooleanFragments) and mesh the result");
+  s.shape = split_lens_edges(s.shape, glue);
   glue.nb_sewn_solids = nb_sewn;
   s.solids.Clear();
   TopExp::MapShapes(s.shape, TopAbs_SOLID, s.solids);

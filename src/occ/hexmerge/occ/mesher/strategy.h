@@ -39,10 +39,9 @@ constexpr Strategy kStrategies[] = {
     // of radius 2.6 cut into it crossed in every way at h 35 to 60 and meshes so.
     {"lattice on a surface of a quarter of the chord deflection", 1.0, true, true, true, false,
      0.25},
-    // Where that one too was too coarse, an eighth: a random part's torus (tube radius 21.8)
-    // fused with a revolved base and a pocket cut into both crossed the pocket's walls at every
-    // size from 55 to 90 with a quarter (the crossing rounds made more crossing triangles each
-    // round) and meshes so.
+    // Where that one too was too coarse, an eighth: a random part's cylinder of radius 5.64 and a
+    // fillet of radius 0.45 beside it, closer than the chord deflection at h 6, cross on a
+    // quarter and mesh so.
     {"lattice on a surface of an eighth of the chord deflection", 1.0, true, true, true, false,
      0.125},
     {"lattice at 0.95 of the size", 0.95, true, true, true, false},
