@@ -742,3 +742,33 @@ def test_solids_touching_at_a_point_share_the_node(tmp_path, h: float) -> None:
     assert len(tip) == 1
     at_tip = np.any(cells == tip[0], axis=1)
     assert set(np.unique(tets.regions[at_tip])) == set(np.unique(tets.regions)) and len(np.unique(tets.regions)) == 2
+
+
+# A cylinder of radius 5 lying on a 40 x 30 x 10 box, touching its top along a line (two solids of
+# one shape, glued: the line becomes an edge inside the box's top face, a slit).
+CYLINDER_ON_A_BOX_GEO = """SetFactory("OpenCASCADE");
+Box(1) = {0, 0, 0, 40, 30, 10};
+Cylinder(2) = {5, 15, 15, 30, 0, 0, 5};
+"""
+
+
+@pytest.mark.parametrize("h", [2.0, 5.0])
+def test_solids_touching_along_a_line_share_its_nodes(tmp_path, h: float) -> None:
+    """The box's top is a lattice face, meshed from its outline and the lattice points: the line
+    inside it was left out, the cylinder's triangles crossed the top at the line's nodes, and the
+    shape meshed only in the fifth way, without lattice faces. The line's segments are the face's
+    too now: the first way meshes, the line's nodes in tets of both solids."""
+    shape = gmsh_brep(tmp_path, "cylinder_on_a_box", CYLINDER_ON_A_BOX_GEO)
+    tets, report = hexmerge.mesh_shape(shape, h, recombine=False)
+    meshing = report["meshing"]
+    assert meshing["strategy"] == "lattice" and meshing["failed_strategies"] == []
+    assert meshing["nb_lattice_faces"] > 0
+    assert_sound(tets, report, h, 40 * 30 * 10 + np.pi * 25 * 30, 0.01)
+    cells = tets.cell_vertices.reshape(-1, 4)
+    p = tets.points
+    on_line = np.flatnonzero((np.abs(p[:, 1] - 15) < 1e-9) & (np.abs(p[:, 2] - 10) < 1e-9) &
+                             (p[:, 0] > 5 - 1e-9) & (p[:, 0] < 35 + 1e-9))
+    assert len(on_line) >= 30 / h
+    for node in on_line:
+        at = np.any(cells == node, axis=1)
+        assert len(np.unique(tets.regions[at])) == 2

@@ -95,6 +95,17 @@ std::vector<Facet> make_facets(const Surface& surface, const std::vector<Vec3>& 
       }
       facet.polygons.push_back(std::move(loop));
     }
+    // The CAD edges inside the face (both sides on it: where another solid touches it along a
+    // curve only, the General Fuse puts that curve into the face as a slit): each segment a
+    // polygon of two points, so that the nodes the other solid's faces have there are the
+    // facet's too (a cylinder lying on a box: without them, every way with lattice faces failed,
+    // the cylinder's triangles crossing the box's top at those nodes).
+    std::vector<std::uint64_t> inside;
+    for (const auto& [key, count] : uses)
+      if (count == 2 && surface.segments.count(key)) inside.push_back(key);
+    std::sort(inside.begin(), inside.end());
+    for (const std::uint64_t key : inside)
+      facet.polygons.push_back({static_cast<int>(key >> 32), static_cast<int>(key & 0xffffffffu)});
     facets.push_back(std::move(facet));
   }
   return facets;
@@ -156,6 +167,7 @@ void add_face_points(std::vector<Facet>& facets, const std::vector<Vec3>& points
       bool on_boundary = false, inside = false;
       for (std::size_t p = 0; p < facet.polygons.size() && !on_boundary; ++p) {
         const auto& polygon = facet.polygons[p];
+        if (polygon.size() < 3) continue;  // a segment inside the face (make_facets()) or a point
         for (std::size_t k = 0; k < polygon.size() && !on_boundary; ++k) {
           const Vec3 &a = points[polygon[k]], &b = points[polygon[(k + 1) % polygon.size()]];
           const double du = coord(b, u) - coord(a, u), dv = coord(b, v) - coord(a, v);
