@@ -51,10 +51,12 @@ TopoDS_Shape glue_solids(const TopoDS_Shape& shape, double tolerance, GlueSolids
 /// deflection (kSurfaceAngle), which BRepMesh divides into one segment each at a coarse enough
 /// chord deflection: the hole they bound then has no area, and BRepMesh fails on the face without
 /// a word (a random part's torus, whose hole of two 0.94 mm edges where a plane and a cylinder
-/// meet it had triangles up to 9 mm off it at every deflection; a sphere's hole of two arcs left
-/// without triangles). The longer edge of the two is split (the hole then has three segments at
-/// least). The faces keep their numbers; `report`'s face_images and edge_images lead from the
-/// shape as given (before `glued`, when report.glued) to the one returned.
+/// meet it had triangles up to 9 mm off it at every deflection). The longer edge of the two is
+/// split (the hole then has three segments at least). Only holes (wires other than the face's
+/// outer one): a face whose outline is such a lens is zipped shut after BRepMesh, and a sphere
+/// whose one wire is one goes to a finer surface (surface.cpp). The faces keep their numbers;
+/// `report`'s face_images and edge_images lead from the shape as given (before `glued`, when
+/// report.glued) to the one returned.
 /// @param[in]     shape   the shape as glue_solids() returned it
 /// @param[in,out] report  its images, composed; nb_split_lens_edges
 TopoDS_Shape split_lens_edges(const TopoDS_Shape& shape, GlueSolidsReport& report);
