@@ -181,6 +181,15 @@ TopoDS_Shape glue_solids(const TopoDS_Shape& shape, double tolerance, GlueSolids
   return glued;
 }
 
+bool lens_edges(const TopoDS_Edge& a, const TopoDS_Edge& b) {
+  if (a.IsSame(b) || BRep_Tool::Degenerated(a) || BRep_Tool::Degenerated(b)) return false;
+  TopoDS_Vertex a0, a1, b0, b1;
+  TopExp::Vertices(a, a0, a1);
+  TopExp::Vertices(b, b0, b1);
+  if (a0.IsNull() || a1.IsNull() || b0.IsNull() || b1.IsNull() || a0.IsSame(a1)) return false;
+  return (a0.IsSame(b0) && a1.IsSame(b1)) || (a0.IsSame(b1) && a1.IsSame(b0));
+}
+
 TopoDS_Shape split_lens_edges(const TopoDS_Shape& shape, GlueSolidsReport& report) {
   TopTools_IndexedMapOfShape to_split;
   TopTools_IndexedMapOfShape faces;
@@ -196,13 +205,7 @@ TopoDS_Shape split_lens_edges(const TopoDS_Shape& shape, GlueSolidsReport& repor
       for (TopoDS_Iterator it(wire.Value()); it.More() && edges.size() <= 2; it.Next())
         if (!BRep_Tool::Degenerated(TopoDS::Edge(it.Value())))
           edges.push_back(TopoDS::Edge(it.Value()));
-      if (edges.size() != 2 || edges[0].IsSame(edges[1])) continue;
-      TopoDS_Vertex a0, a1, b0, b1;
-      TopExp::Vertices(edges[0], a0, a1);
-      TopExp::Vertices(edges[1], b0, b1);
-      if (a0.IsNull() || a1.IsNull() || b0.IsNull() || b1.IsNull() || a0.IsSame(a1) ||
-          !((a0.IsSame(b0) && a1.IsSame(b1)) || (a0.IsSame(b1) && a1.IsSame(b0))))
-        continue;
+      if (edges.size() != 2 || !lens_edges(edges[0], edges[1])) continue;
       if (!(turning(edges[0]) < kSurfaceAngle) || !(turning(edges[1]) < kSurfaceAngle)) continue;
       to_split.Add(length_of(edges[0]) >= length_of(edges[1]) ? edges[0] : edges[1]);
     }

@@ -8,6 +8,7 @@
 /// imprints every solid on the others with OpenCASCADE's General Fuse, so that the area two
 /// solids share becomes one face bounding both; solids that overlap in volume are refused.
 
+#include <TopoDS_Edge.hxx>
 #include <TopoDS_Shape.hxx>
 #include <cstddef>
 #include <vector>
@@ -45,6 +46,10 @@ struct GlueSolidsReport {
 /// @throws InputError naming the two solids (0-based, in the order above) when solids overlap
 ///         in volume, or when OpenCASCADE cannot intersect the solids' faces
 TopoDS_Shape glue_solids(const TopoDS_Shape& shape, double tolerance, GlueSolidsReport& report);
+
+/// Whether `a` and `b` bound a lens: two distinct edges, neither degenerated nor closed, between
+/// the same two vertices (a hole split_lens_edges() splits, a face triangulate() zips shut).
+bool lens_edges(const TopoDS_Edge& a, const TopoDS_Edge& b);
 
 /// The shape with one edge of each lens wire split at its middle (a vertex added there): a wire
 /// of two edges between the same two vertices, each turning by less than BRepMesh's angular

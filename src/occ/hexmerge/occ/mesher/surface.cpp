@@ -22,7 +22,6 @@
 #include <TopoDS.hxx>
 #include <TopoDS_Edge.hxx>
 #include <TopoDS_Face.hxx>
-#include <TopoDS_Vertex.hxx>
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -469,22 +468,10 @@ void take_lens_faces(const TopTools_IndexedMapOfShape& faces,
   for (const int f : missing) {
     TopTools_IndexedMapOfShape face_edges;
     TopExp::MapShapes(faces(f + 1), TopAbs_EDGE, face_edges);
-    bool lens = face_edges.Extent() == 2;
-    std::vector<TopoDS_Vertex> ends;
-    for (int e = 1; lens && e <= face_edges.Extent(); ++e) {
-      const TopoDS_Edge& edge = TopoDS::Edge(face_edges(e));
-      TopoDS_Vertex v0, v1;
-      TopExp::Vertices(edge, v0, v1);
-      lens = !BRep_Tool::Degenerated(edge) && !v0.IsNull() && !v1.IsNull() && !v0.IsSame(v1);
-      if (lens && ends.empty())
-        ends = {v0, v1};
-      else if (lens)
-        lens = (v0.IsSame(ends[0]) && v1.IsSame(ends[1])) ||
-               (v0.IsSame(ends[1]) && v1.IsSame(ends[0]));
-    }
-    if (lens) {
+    if (face_edges.Extent() == 2 &&
+        lens_edges(TopoDS::Edge(face_edges(1)), TopoDS::Edge(face_edges(2))))
       lenses.push_back({f, edges.FindIndex(face_edges(1)) - 1, edges.FindIndex(face_edges(2)) - 1});
-    } else
+    else
       rest.push_back(f);
   }
   missing = rest;
