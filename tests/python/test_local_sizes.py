@@ -420,6 +420,40 @@ def test_thin_walls_get_sizes_of_their_own_and_count_in_the_estimate(tmp_path) -
         hexmerge.mesh_shape(shape, h, recombine=False, memory_limit=limit)
 
 
+# A box 120 x 80 x 40, hollowed from its top: walls 1.2 thick, open at the top.
+HOLLOW_BOX_GEO = """SetFactory("OpenCASCADE");
+Box(1) = {0, 0, 0, 120, 80, 40};
+Box(2) = {1.2, 1.2, 1.2, 117.6, 77.6, 40};
+BooleanDifference(3) = { Volume{1}; Delete; }{ Volume{2}; Delete; };
+"""
+
+
+@pytest.mark.parametrize("h", [25.0, 40.0, 55.0])
+def test_a_thin_shell_meshes_with_usable_elements_at_many_times_its_walls(tmp_path, h: float) -> None:
+    """A shell whose walls are 0.02 h to h / 12 thick (1.2 at h 25 to 55): the walls get sizes of
+    three times their thickness, and every element of the recombined mesh has a scaled Jacobian
+    of at least 0.2. Before walls that thin were sized (h / 12 the least), at h 25 and 40 the
+    tets across the walls were flat: 844 and 678 elements under 0.2, the worst 0.060 and 0.049
+    (measured when they were sized). The box's volume is kept (its faces are planes)."""
+    shape = gmsh_brep(tmp_path, "hollow_box", HOLLOW_BOX_GEO)
+    tets, report = hexmerge.mesh_shape(shape, h, recombine=False)
+    meshing = report["meshing"]
+    assert meshing["nb_thin_wall_patches"] > 0
+    mesh, recombined = hexmerge.recombine(tets.points, tets.cell_vertices.reshape(-1, 4), tets.regions)
+    result = assert_checked(mesh, tets, recombined, h)
+    assert result["min_scaled_jacobian"] >= 0.2
+    volume = 120 * 80 * 40 - 117.6 * 77.6 * 38.8
+    assert meshing["mesh_volume"] == pytest.approx(volume, rel=1e-9)
+    # Every boundary node on one of the box's planes.
+    p = boundary_nodes(tets)
+    on = [np.abs(p[:, 0] - x) for x in (0, 1.2, 118.8, 120)] + [
+        np.abs(p[:, 1] - y) for y in (0, 1.2, 78.8, 80)] + [np.abs(p[:, 2] - z) for z in (0, 1.2, 40)]
+    assert np.minimum.reduce(on).max() < 1e-9
+    if h == 55.0:  # thinner than 0.02 h (h 62: 0.019 h), the walls get no size (flat tets)
+        _, thinner = hexmerge.mesh_shape(shape, 62.0, recombine=False)
+        assert thinner["meshing"]["nb_thin_wall_patches"] == 0
+
+
 WEDGE_GEO = """SetFactory("OpenCASCADE");
 Point(1) = {0, 0, 0}; Point(2) = {40, 0, 0}; Point(3) = {40, 8.14, 0};
 Line(1) = {1, 2}; Line(2) = {2, 3}; Line(3) = {3, 1};

@@ -13,15 +13,15 @@ namespace {
 
 double area(const mesher::SizedTriangle& p) { return 0.5 * (p.b - p.a).cross(p.c - p.a).norm(); }
 
-// A slab 30 x 20 x t at h 6: across its thickness t (h / 12 to 0.2 h) both large faces are covered
+// A slab 30 x 20 x t at h 6: across its thickness t (0.02 h to 0.2 h) both large faces are covered
 // by patches of 3 t, each side at most 2 h; across its 20 and 30 (over 0.2 h) no
 // patch.
 TEST(thin_wall_sizes, covers_both_faces_of_a_thin_slab) {
   ASSERT_EQ(mesher::kThinWall, 0.2);
   ASSERT_EQ(mesher::kThinWallSizeFactor, 3.0);
   const double h = 6;
-  ASSERT_EQ(mesher::kThinnestWall, 0.25 / 3);
-  for (const double t : {1.0, 0.6}) {
+  ASSERT_EQ(mesher::kThinnestWall, 0.02);
+  for (const double t : {1.0, 0.6, 0.2}) {
     const Prepared p = prepare(occ_box(0, 0, 0, 30, 20, t), h);
     const std::vector<mesher::SizedTriangle> patches = mesher::thin_wall_sizes(p.surface, h);
     ASSERT_FALSE(patches.empty());
@@ -36,9 +36,9 @@ TEST(thin_wall_sizes, covers_both_faces_of_a_thin_slab) {
     }
     EXPECT_NEAR(covered, 2 * 30 * 20, 1e-6);
   }
-  // Thinner than 0.05 h (0.2 at h 6): none.
+  // Thinner than 0.02 h (0.12 at h 6): none.
   EXPECT_TRUE(
-      mesher::thin_wall_sizes(prepare(occ_box(0, 0, 0, 30, 20, 0.2), h).surface, h).empty());
+      mesher::thin_wall_sizes(prepare(occ_box(0, 0, 0, 30, 20, 0.1), h).surface, h).empty());
 }
 
 // A box 30 x 20 x 10 (triangulated at h 6): at h 6 thicker than 0.2 h everywhere, no patch; at
@@ -94,6 +94,66 @@ TEST(thin_wall_sizes, a_wedge_or_a_face_across_a_corner_is_no_wall) {
   for (const mesher::SizedTriangle& q : tapered) EXPECT_LE(q.size, 3 * 0.2 * h + 1e-9);
   EXPECT_TRUE(patches_under(12).empty());
   EXPECT_TRUE(patches_under(50).empty());
+}
+
+// A triangle facing down (z = 0, 60 x 30) under a plane that rises from 0.06 at x = 0 by 1.5
+// degrees (the gap 0.12, 0.02 h at h 6, at x = 2.3; h / 12 = 0.5 at x = 16.8): the gap is a wall
+// from x = 2.3 on, but under h / 12 only 2 h (kTooThinReach) from where it is thinner than 0.02 h
+// (a wall tapering to nothing, as a boss nearly tangent to a side: sized down to 0.06 h beside
+// triangles of h, a random part's elements under 0.2 went from 570 to 2,282). Under a parallel
+// plane 0.3 above (0.05 h, nowhere thinner), the lower triangle is sized all over, at 0.9.
+TEST(thin_wall_sizes, walls_under_h_over_12_only_even_and_away_from_thinner_ones) {
+  ASSERT_EQ(mesher::kEvenWall, 0.25 / 3);
+  ASSERT_EQ(mesher::kTooThinReach, 2.0);
+  const double h = 6;
+  const auto patches_under = [&](double start, double degrees) {
+    const double slope = std::tan(degrees * M_PI / 180);  // z = start + slope x
+    mesher::Surface surface;
+    surface.nodes = {{0, 0, 0},
+                     {0, 30, 0},
+                     {60, 0, 0},
+                     {-5, -5, start - 5 * slope},
+                     {70, -5, start + 70 * slope},
+                     {-5, 40, start - 5 * slope}};
+    mesher::SurfaceTriangle down, up;
+    down.node = {0, 1, 2}, down.face = 0;
+    up.node = {3, 4, 5}, up.face = 1;
+    surface.triangles = {down, up};
+    std::vector<mesher::SizedTriangle> lower;
+    for (const mesher::SizedTriangle& q : mesher::thin_wall_sizes(surface, h))
+      if (q.a.z == 0 && q.b.z == 0 && q.c.z == 0) lower.push_back(q);
+    return lower;
+  };
+  double covered = 0;
+  for (const mesher::SizedTriangle& q : patches_under(0.3, 0)) {
+    EXPECT_NEAR(q.size, 0.9, 1e-9);
+    covered += area(q);
+  }
+  EXPECT_NEAR(covered, 60 * 30 / 2, 1e-6);
+  std::size_t under = 0, over = 0;
+  for (const mesher::SizedTriangle& q : patches_under(0.06, 1.5)) {
+    const Vec3 centre = (q.a + q.b + q.c) * (1.0 / 3);
+    const double t = q.size / 3;
+    EXPECT_NEAR(t, 0.06 + centre.x * std::tan(1.5 * M_PI / 180), 1e-9);
+    EXPECT_GE(t, 0.02 * h);
+    if (t < h / 12) {
+      EXPECT_GT(centre.x, 10) << "a patch " << t << " thick within 2 h of the gap under 0.12";
+      ++under;
+    } else {
+      ++over;
+    }
+  }
+  EXPECT_GT(over, 0);
+  EXPECT_GT(under, 0);  // 2 h on, the wall is sized under h / 12 too
+  // Rising by 4 degrees from 0.13 (nowhere under 0.02 h), the wall's thickness more than doubles
+  // across a patch (up to h along x) where it is under h / 12 (x under 5.3): none sized there.
+  ASSERT_EQ(mesher::kEvenWallRatio, 1.5);
+  std::size_t steep = 0;
+  for (const mesher::SizedTriangle& q : patches_under(0.13, 4)) {
+    EXPECT_GE(q.size / 3, h / 12);
+    ++steep;
+  }
+  EXPECT_GT(steep, 0);
 }
 
 }  // namespace

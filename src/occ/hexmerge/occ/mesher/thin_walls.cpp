@@ -11,6 +11,7 @@
 #include <cstddef>
 #include <iterator>
 #include <limits>
+#include <map>
 
 namespace hexmerge::mesher {
 namespace {
@@ -89,13 +90,15 @@ std::vector<SizedTriangle> thin_wall_sizes(const Surface& surface, double h) {
   const Tree tree(patches.begin(), patches.end());
   const double facing = -1 / std::sqrt(1 + kWallTaper * kWallTaper);  // -cos(atan(taper))
   std::vector<Hit> hits;
-  for (std::size_t k = 0; k < patches.size(); ++k) {
+  // The wall's thickness under `from` on patch k (from triangle source[k]): along its inward
+  // normal to the first patch of another triangle, when that one faces back nearly parallel
+  // (kWallTaper); NaN for none within kThinWall h.
+  const auto thickness_at = [&](const Point& from, std::size_t k) {
+    constexpr double kNone = std::numeric_limits<double>::quiet_NaN();
     const Vec3& n = normals[source[k]];
-    const Triangle& q = patches[k];
-    const Point centre = CGAL::centroid(q);
     // Only walls under kThinWall h count: the probe goes that far, not across the part (a ray
     // along pyocc_11752's needles, through boxes that span it, took 40 s at h 6.25).
-    const Segment probe(centre, centre - (kThinWall * h) * Kernel::Vector_3(n.x, n.y, n.z));
+    const Segment probe(from, from - (kThinWall * h) * Kernel::Vector_3(n.x, n.y, n.z));
     hits.clear();
     tree.all_intersections(probe, std::back_inserter(hits));
     // The first hit along the probe, not on the patch's own triangle (along another patch in its
@@ -104,23 +107,66 @@ std::vector<SizedTriangle> thin_wall_sizes(const Surface& surface, double h) {
     double nearest = std::numeric_limits<double>::infinity();
     for (const Hit& hit : hits) {
       if (source[static_cast<std::size_t>(hit.second - patches.begin())] == source[k]) continue;
-      const double d = distance_along(centre, hit.first);
+      const double d = distance_along(from, hit.first);
       if (d < nearest) nearest = d, first = &hit;
     }
-    if (!first) continue;
+    if (!first) return kNone;
     const std::size_t j = source[static_cast<std::size_t>(first->second - patches.begin())];
-    if (normals[j].dot(n) > facing) continue;         // no wall: a wedge, a face across a corner
-    if (!boost::get<Point>(&first->first)) continue;  // along the patch: no thickness to measure
+    if (normals[j].dot(n) > facing) return kNone;         // a wedge, a face across a corner
+    if (!boost::get<Point>(&first->first)) return kNone;  // along the patch: no thickness
     // The point where the ray along the probe meets that patch (to the last digit as a ray
     // query finds it).
     const auto meets =
-        CGAL::intersection(Ray(centre, centre - Kernel::Vector_3(n.x, n.y, n.z)), *first->second);
+        CGAL::intersection(Ray(from, from - Kernel::Vector_3(n.x, n.y, n.z)), *first->second);
     const Point* at = meets ? boost::get<Point>(&*meets) : nullptr;
-    if (!at) continue;
-    const double thickness = std::sqrt(CGAL::squared_distance(centre, *at));
-    if (thickness >= kThinWall * h || thickness < kThinnestWall * h) continue;
+    return at ? std::sqrt(CGAL::squared_distance(from, *at)) : kNone;
+  };
+  std::vector<double> thickness(patches.size());
+  for (std::size_t k = 0; k < patches.size(); ++k)
+    thickness[k] = thickness_at(CGAL::centroid(patches[k]), k);
+  // The walls too thin to size (under kThinnestWall h), on a grid of cells kTooThinReach h wide.
+  const double reach = kTooThinReach * h;
+  const auto cell_of = [&](const Point& p) {
+    return std::array<long long, 3>{static_cast<long long>(std::floor(p.x() / reach)),
+                                    static_cast<long long>(std::floor(p.y() / reach)),
+                                    static_cast<long long>(std::floor(p.z() / reach))};
+  };
+  std::map<std::array<long long, 3>, std::vector<Point>> too_thin;
+  for (std::size_t k = 0; k < patches.size(); ++k)
+    if (thickness[k] < kThinnestWall * h) {
+      const Point c = CGAL::centroid(patches[k]);
+      too_thin[cell_of(c)].push_back(c);
+    }
+  const auto near_too_thin = [&](const Point& p) {
+    const std::array<long long, 3> at = cell_of(p);
+    for (long long i = -1; i <= 1; ++i)
+      for (long long j = -1; j <= 1; ++j)
+        for (long long l = -1; l <= 1; ++l) {
+          const auto it = too_thin.find({at[0] + i, at[1] + j, at[2] + l});
+          if (it == too_thin.end()) continue;
+          for (const Point& c : it->second)
+            if (CGAL::squared_distance(p, c) < reach * reach) return true;
+        }
+    return false;
+  };
+  for (std::size_t k = 0; k < patches.size(); ++k) {
+    const Triangle& q = patches[k];
+    const Point centre = CGAL::centroid(q);
+    const double t = thickness[k];
+    if (!(t < kThinWall * h && t >= kThinnestWall * h)) continue;
+    // Under kEvenWall h, a wall only kTooThinReach h from where it is thinner than sized, and
+    // only where it keeps its thickness across the patch: probed again from near each corner (a
+    // twentieth of the way in), within a factor kEvenWallRatio of the centre's.
+    constexpr std::array<int, 3> corners{0, 1, 2};
+    if (t < kEvenWall * h &&
+        (near_too_thin(centre) || !std::all_of(corners.begin(), corners.end(), [&](int c) {
+           const Point corner = q[c];
+           const double there = thickness_at(corner + (centre - corner) * 0.05, k);
+           return there <= kEvenWallRatio * t && there * kEvenWallRatio >= t;
+         })))
+      continue;
     const auto vec = [](const Point& p) { return Vec3{p.x(), p.y(), p.z()}; };
-    out.push_back({vec(q[0]), vec(q[1]), vec(q[2]), kThinWallSizeFactor * thickness});
+    out.push_back({vec(q[0]), vec(q[1]), vec(q[2]), kThinWallSizeFactor * t});
   }
   return out;
 }
