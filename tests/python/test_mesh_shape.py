@@ -1397,6 +1397,47 @@ def test_second_order_boundary_mid_nodes_on_the_cad(shapes) -> None:
         assert result["inverted_cells"] == 0
 
 
+# An assembly exported as one file per part: the file itself holds only the references.
+EXTERNAL_PARTS_STEP = """ISO-10303-21;
+HEADER;
+FILE_DESCRIPTION(('assembly of two parts in their own files'),'2;1');
+FILE_NAME('asm.stp','2026-12-07T00:00:00',(''),(''),'','','');
+FILE_SCHEMA(('AUTOMOTIVE_DESIGN { 1 0 10303 214 1 1 1 1 }'));
+ENDSEC;
+DATA;
+#1=APPLICATION_CONTEXT('automotive design');
+#2=PRODUCT_CONTEXT('',#1,'mechanical');
+#3=PRODUCT('asm','asm','',(#2));
+#4=PRODUCT_DEFINITION_FORMATION('','',#3);
+#5=PRODUCT_DEFINITION_CONTEXT('part definition',#1,'design');
+#6=PRODUCT_DEFINITION('design','',#4,#5);
+#7=DOCUMENT_TYPE('geometry');
+#8=DOCUMENT_FILE('left_part.stp','','',#7,'',$);
+#9=DOCUMENT_FILE('right_part.stp','','',#7,'',$);
+#10=DOCUMENT_FILE('left_part.stp','','',#7,'',$);
+ENDSEC;
+END-ISO-10303-21;
+"""
+
+
+def test_a_step_file_whose_parts_are_in_other_files_is_refused_naming_them(tmp_path) -> None:
+    """A STEP assembly exported one file per part (the CAX-IF s1 model's FOOT.stp names
+    FOOT_FRONT_000.stp and FOOT_BACK_000.stp) holds no shape: the error says which files hold
+    its parts, each once, in the order the file names them."""
+    path = tmp_path / "asm.stp"
+    path.write_text(EXTERNAL_PARTS_STEP)
+    with pytest.raises(hexmerge.InputError) as error:
+        hexmerge.mesh_shape(path, 5.0)
+    assert str(error.value).endswith(
+        "asm.stp: the STEP file holds no shape: its parts are in other files (left_part.stp, "
+        "right_part.stp), which it only names; mesh those, or export the assembly with its parts "
+        "in one file")
+    # A STEP file with no shape and no such reference: the plain message.
+    path.write_text(EXTERNAL_PARTS_STEP.replace("DOCUMENT_FILE", "DOCUMENT_FILE_NOT"))
+    with pytest.raises(hexmerge.InputError, match=r"the STEP file holds no shape$"):
+        hexmerge.mesh_shape(path, 5.0)
+
+
 INCH_UNIT = ("#9000 = ( LENGTH_UNIT() NAMED_UNIT(*) SI_UNIT(.MILLI.,.METRE.) );\n"
              "#9001 = LENGTH_MEASURE_WITH_UNIT(LENGTH_MEASURE(25.4),#9000);\n"
              "#9002 = DIMENSIONAL_EXPONENTS(1.,0.,0.,0.,0.,0.,0.);\n")

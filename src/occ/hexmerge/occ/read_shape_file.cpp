@@ -14,7 +14,10 @@
 #include <cctype>
 #include <fstream>
 #include <mutex>
+#include <regex>
+#include <set>
 #include <sstream>
+#include <vector>
 
 #include "hexmerge/core/error.h"
 #include "hexmerge/occ/brep_text.h"
@@ -67,6 +70,35 @@ class QuietReading {
   Message_SequenceOfPrinters printers_;
 };
 
+// The files a STEP file's parts are in, when it refers to others (DOCUMENT_FILE entities: an
+// assembly whose parts were exported one file each, as the CAX-IF's s1 test model), in order.
+std::vector<std::string> external_files(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream text;
+  text << in.rdbuf();
+  const std::string all = text.str();
+  static const std::regex entity(R"(DOCUMENT_FILE\s*\(\s*'([^']+)')", std::regex::icase);
+  std::vector<std::string> names;
+  std::set<std::string> seen;
+  for (auto it = std::sregex_iterator(all.begin(), all.end(), entity); it != std::sregex_iterator();
+       ++it)
+    if (seen.insert((*it)[1].str()).second) names.push_back((*it)[1].str());
+  return names;
+}
+
+// "the STEP file holds no shape", and why where it can be told.
+std::string no_shape(const std::string& path, const char* kind) {
+  std::string text = path + ": the " + kind + " file holds no shape";
+  if (std::string(kind) != "STEP") return text;
+  const std::vector<std::string> files = external_files(path);
+  if (files.empty()) return text;
+  text += ": its parts are in other files (";
+  for (std::size_t i = 0; i < files.size(); ++i) text += (i > 0 ? ", " : "") + files[i];
+  return text +
+         "), which it only names; mesh those, or export the assembly with its parts in one "
+         "file";
+}
+
 // Reads a STEP or IGES file with an XSControl reader; every root becomes one shape.
 template <typename Reader>
 TopoDS_Shape read_with(const std::string& path, const char* kind, std::string* length_unit) {
@@ -74,10 +106,9 @@ TopoDS_Shape read_with(const std::string& path, const char* kind, std::string* l
   Reader reader;
   if (reader.ReadFile(path.c_str()) != IFSelect_RetDone)
     throw InputError("cannot read " + path + " as a " + kind + " file");
-  if (reader.TransferRoots() == 0)
-    throw InputError(path + ": the " + kind + " file holds no shape");
+  if (reader.TransferRoots() == 0) throw InputError(no_shape(path, kind));
   TopoDS_Shape shape = reader.OneShape();
-  if (shape.IsNull()) throw InputError(path + ": the " + kind + " file holds no shape");
+  if (shape.IsNull()) throw InputError(no_shape(path, kind));
   if (length_unit) *length_unit = declared_length_unit(reader);
   return shape;
 }
