@@ -11,6 +11,9 @@
 namespace hexmerge::test {
 namespace {
 
+// Walls from the chord deflection on are sized: mesh_shape()'s default, 0.02 h.
+constexpr double kDeflection = 0.02;
+
 double area(const mesher::SizedTriangle& p) { return 0.5 * (p.b - p.a).cross(p.c - p.a).norm(); }
 
 // A slab 30 x 20 x t at h 6: across its thickness t (0.02 h to 0.2 h) both large faces are covered
@@ -20,10 +23,10 @@ TEST(thin_wall_sizes, covers_both_faces_of_a_thin_slab) {
   ASSERT_EQ(mesher::kThinWall, 0.2);
   ASSERT_EQ(mesher::kThinWallSizeFactor, 3.0);
   const double h = 6;
-  ASSERT_EQ(mesher::kThinnestWall, 0.02);
   for (const double t : {1.0, 0.6, 0.2}) {
     const Prepared p = prepare(occ_box(0, 0, 0, 30, 20, t), h);
-    const std::vector<mesher::SizedTriangle> patches = mesher::thin_wall_sizes(p.surface, h);
+    const std::vector<mesher::SizedTriangle> patches =
+        mesher::thin_wall_sizes(p.surface, h, kDeflection * h);
     ASSERT_FALSE(patches.empty());
     double covered = 0;
     for (const mesher::SizedTriangle& q : patches) {
@@ -36,17 +39,23 @@ TEST(thin_wall_sizes, covers_both_faces_of_a_thin_slab) {
     }
     EXPECT_NEAR(covered, 2 * 30 * 20, 1e-6);
   }
-  // Thinner than 0.02 h (0.12 at h 6): none.
+  // Thinner than the chord deflection, 0.02 h (0.12 at h 6): none.
   EXPECT_TRUE(
-      mesher::thin_wall_sizes(prepare(occ_box(0, 0, 0, 30, 20, 0.1), h).surface, h).empty());
+      mesher::thin_wall_sizes(prepare(occ_box(0, 0, 0, 30, 20, 0.1), h).surface, h, kDeflection * h)
+          .empty());
+  // On a surface of a quarter of that deflection (0.005 h), walls from 0.03 on are sized.
+  EXPECT_FALSE(mesher::thin_wall_sizes(prepare(occ_box(0, 0, 0, 30, 20, 0.1), h).surface, h,
+                                       kDeflection / 4 * h)
+                   .empty());
 }
 
 // A box 30 x 20 x 10 (triangulated at h 6): at h 6 thicker than 0.2 h everywhere, no patch; at
 // h 60 its faces 10 apart (under 12) are a wall, those 20 and 30 apart are not.
 TEST(thin_wall_sizes, leaves_walls_thicker_than_a_fifth_of_h) {
   const Prepared p = prepare(occ_box(0, 0, 0, 30, 20, 10), 6);
-  EXPECT_TRUE(mesher::thin_wall_sizes(p.surface, 6).empty());
-  const std::vector<mesher::SizedTriangle> patches = mesher::thin_wall_sizes(p.surface, 60);
+  EXPECT_TRUE(mesher::thin_wall_sizes(p.surface, 6, kDeflection * 6).empty());
+  const std::vector<mesher::SizedTriangle> patches =
+      mesher::thin_wall_sizes(p.surface, 60, kDeflection * 60);
   double covered = 0;
   for (const mesher::SizedTriangle& q : patches) {
     EXPECT_NEAR(std::abs(q.b.z - q.a.z) + std::abs(q.c.z - q.a.z), 0, 1e-9);  // top or bottom
@@ -77,7 +86,7 @@ TEST(thin_wall_sizes, a_wedge_or_a_face_across_a_corner_is_no_wall) {
     down.node = {0, 1, 2}, down.face = 0;
     up.node = {3, 4, 5}, up.face = 1;
     surface.triangles = {down, up};
-    return mesher::thin_wall_sizes(surface, h);
+    return mesher::thin_wall_sizes(surface, h, kDeflection * h);
   };
   double lower = 0, upper = 0;  // the patches' area on each
   for (const mesher::SizedTriangle& q : patches_under(0)) {
@@ -120,7 +129,7 @@ TEST(thin_wall_sizes, walls_under_h_over_12_only_even_and_away_from_thinner_ones
     up.node = {3, 4, 5}, up.face = 1;
     surface.triangles = {down, up};
     std::vector<mesher::SizedTriangle> lower;
-    for (const mesher::SizedTriangle& q : mesher::thin_wall_sizes(surface, h))
+    for (const mesher::SizedTriangle& q : mesher::thin_wall_sizes(surface, h, kDeflection * h))
       if (q.a.z == 0 && q.b.z == 0 && q.c.z == 0) lower.push_back(q);
     return lower;
   };

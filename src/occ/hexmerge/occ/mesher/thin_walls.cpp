@@ -39,7 +39,7 @@ double distance_along(const Point& from, const decltype(Hit::first)& at) {
 
 }  // namespace
 
-std::vector<SizedTriangle> thin_wall_sizes(const Surface& surface, double h) {
+std::vector<SizedTriangle> thin_wall_sizes(const Surface& surface, double h, double thinnest) {
   // The patches and the triangle each comes from: each triangle cut into bands across from its
   // shortest side, each band into quads split in two, sides at most h (the diagonals 2 h):
   // a needle triangle along a channel 1,140 mm long (pyocc_11752) in as many patches as its
@@ -124,7 +124,7 @@ std::vector<SizedTriangle> thin_wall_sizes(const Surface& surface, double h) {
   std::vector<double> thickness(patches.size());
   for (std::size_t k = 0; k < patches.size(); ++k)
     thickness[k] = thickness_at(CGAL::centroid(patches[k]), k);
-  // The walls too thin to size (under kThinnestWall h), on a grid of cells kTooThinReach h wide.
+  // The walls too thin to size (under `thinnest`), on a grid of cells kTooThinReach h wide.
   const double reach = kTooThinReach * h;
   const auto cell_of = [&](const Point& p) {
     return std::array<long long, 3>{static_cast<long long>(std::floor(p.x() / reach)),
@@ -133,7 +133,7 @@ std::vector<SizedTriangle> thin_wall_sizes(const Surface& surface, double h) {
   };
   std::map<std::array<long long, 3>, std::vector<Point>> too_thin;
   for (std::size_t k = 0; k < patches.size(); ++k)
-    if (thickness[k] < kThinnestWall * h) {
+    if (thickness[k] < thinnest) {
       const Point c = CGAL::centroid(patches[k]);
       too_thin[cell_of(c)].push_back(c);
     }
@@ -153,7 +153,7 @@ std::vector<SizedTriangle> thin_wall_sizes(const Surface& surface, double h) {
     const Triangle& q = patches[k];
     const Point centre = CGAL::centroid(q);
     const double t = thickness[k];
-    if (!(t < kThinWall * h && t >= kThinnestWall * h)) continue;
+    if (!(t < kThinWall * h && t >= thinnest)) continue;
     // Under kEvenWall h, a wall only kTooThinReach h from where it is thinner than sized, and
     // only where it keeps its thickness across the patch: probed again from near each corner (a
     // twentieth of the way in), within a factor kEvenWallRatio of the centre's.
