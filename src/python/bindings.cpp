@@ -562,6 +562,9 @@ py::tuple run_mesh_shape(const std::string& brep, const std::map<std::string, st
   d["nb_feature_edges"] = report.nb_feature_edges;
   d["nb_feature_faces"] = report.nb_feature_faces;
   d["nb_thin_wall_patches"] = report.nb_thin_wall_patches;
+  d["nb_unsized_wall_patches"] = report.nb_unsized_wall_patches;
+  d["thinnest_unsized_wall"] = report.thinnest_unsized_wall;
+  d["thickest_unsized_wall"] = report.thickest_unsized_wall;
   if (second_order) {
     d["nb_projected_mid_nodes"] = report.nb_projected_mid_nodes;
     d["nb_straight_mid_nodes"] = report.nb_straight_mid_nodes;

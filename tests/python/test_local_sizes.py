@@ -17,6 +17,7 @@ import pytest
 import hexmerge
 from conftest import MESHES_SHAPES
 from hexmerge import cli
+from hexmerge._shape import mesh_notes
 from real_parts import tet_scaled_jacobians
 from test_mesh_shape import PLATE, SURFACES, assert_checked, boundary_nodes, gmsh_brep
 
@@ -432,7 +433,8 @@ BooleanDifference(3) = { Volume{1}; Delete; }{ Volume{2}; Delete; };
 def test_a_thin_shell_meshes_with_usable_elements_at_many_times_its_walls(tmp_path, h: float) -> None:
     """A shell whose walls are 0.02 h to h / 12 thick (1.2 at h 25 to 55): the walls get sizes of
     three times their thickness, and every element of the recombined mesh has a scaled Jacobian
-    of at least 0.2. Before walls that thin were sized (h / 12 the least), at h 25 and 40 the
+    of at least 0.2; thinner than the chord deflection, none, and a note says which size gives
+    them one. Before walls that thin were sized (h / 12 the least), at h 25 and 40 the
     tets across the walls were flat: 844 and 678 elements under 0.2, the worst 0.060 and 0.049
     (measured when they were sized). The box's volume is kept (its faces are planes)."""
     shape = gmsh_brep(tmp_path, "hollow_box", HOLLOW_BOX_GEO)
@@ -449,9 +451,22 @@ def test_a_thin_shell_meshes_with_usable_elements_at_many_times_its_walls(tmp_pa
     on = [np.abs(p[:, 0] - x) for x in (0, 1.2, 118.8, 120)] + [
         np.abs(p[:, 1] - y) for y in (0, 1.2, 78.8, 80)] + [np.abs(p[:, 2] - z) for z in (0, 1.2, 40)]
     assert np.minimum.reduce(on).max() < 1e-9
-    if h == 55.0:  # thinner than 0.02 h (h 62: 0.019 h), the walls get no size (flat tets)
+    assert meshing["nb_unsized_wall_patches"] == 0
+    assert not any("thinner than the surface's chord deflection" in n for n in mesh_notes(meshing))
+    if h == 55.0:
+        # Thinner than the chord deflection, 0.02 h (h 62: 0.019 h), the walls get no size: the
+        # report and a note say so, and which size gives them one (59.4), which does.
         _, thinner = hexmerge.mesh_shape(shape, 62.0, recombine=False)
-        assert thinner["meshing"]["nb_thin_wall_patches"] == 0
+        unsized = thinner["meshing"]
+        assert unsized["nb_thin_wall_patches"] == 0 and unsized["nb_unsized_wall_patches"] > 0
+        assert unsized["thinnest_unsized_wall"] == pytest.approx(1.2, abs=1e-9)
+        assert unsized["thickest_unsized_wall"] == pytest.approx(1.2, abs=1e-9)
+        assert ("walls 1.2 thick are thinner than the surface's chord deflection (0.02 h): they get "
+                "no size of their own and the tets across them are flat; a size of at most 59.4 "
+                "gives them one") in mesh_notes(unsized)
+        _, suggested = hexmerge.mesh_shape(shape, 59.4, recombine=False)
+        assert suggested["meshing"]["nb_thin_wall_patches"] > 0
+        assert suggested["meshing"]["nb_unsized_wall_patches"] == 0
 
 
 WEDGE_GEO = """SetFactory("OpenCASCADE");

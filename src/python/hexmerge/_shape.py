@@ -347,6 +347,9 @@ def mesh_notes(meshing: dict[str, Any]) -> list[str]:
     sharp = sharp_feature_note(meshing)
     if sharp:
         notes.append(sharp)
+    unsized = unsized_wall_note(meshing)
+    if unsized:
+        notes.append(unsized)
     if meshing.get("sweep_skipped"):
         notes.append(meshing["sweep_skipped"])
     return notes
@@ -384,6 +387,20 @@ def face_layer_notes(meshing: dict[str, Any]) -> list[str]:
         notes.append(f"boundary layers on {items}: nodes per layer {counts} of the face's "
                      f"{applied['nb_nodes']} (no room deeper, or a point too near another)")
     return notes
+
+
+def unsized_wall_note(meshing: dict[str, Any]) -> str | None:
+    """A line saying that walls thinner than the surface's chord deflection got no size of
+    their own (the tets across them are flat) and the size that would give them one; None when
+    there are none."""
+    if not meshing.get("nb_unsized_wall_patches"):
+        return None
+    thinnest, thickest = meshing["thinnest_unsized_wall"], meshing["thickest_unsized_wall"]
+    walls = f"{thinnest:.3g}" if thickest <= thinnest * 1.001 else f"{thinnest:.3g} to {thickest:.3g}"
+    deflection = meshing["parameters"]["surface_deflection"]
+    return (f"walls {walls} thick are thinner than the surface's chord deflection "
+            f"({deflection:g} h): they get no size of their own and the tets across them are flat; "
+            f"a size of at most {0.99 * thinnest / deflection:.3g} gives them one")
 
 
 def sharp_feature_note(meshing: dict[str, Any]) -> str | None:

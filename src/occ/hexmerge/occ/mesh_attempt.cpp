@@ -204,8 +204,12 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
   const auto feature_sizes = [&] {
     std::tie(report.nb_feature_edges, report.nb_feature_faces) =
         add_feature_sizes(shape.edge_length, widths, spans, h, parameters.feature_size, items_at_h);
-    if (parameters.feature_size > 0) thin_walls = thin_wall_sizes(surface, h, deflection);
+    UnsizedWalls unsized;
+    if (parameters.feature_size > 0) thin_walls = thin_wall_sizes(surface, h, deflection, &unsized);
     report.nb_thin_wall_patches = thin_walls.size();
+    report.nb_unsized_wall_patches = unsized.patches;
+    report.thinnest_unsized_wall = unsized.thinnest;
+    report.thickest_unsized_wall = unsized.thickest;
     if (thin_walls.empty()) return;
     // The thin walls' sizes counted in the estimate of step 2 too.
     report.estimated_tets += estimate_patch_tets(thin_walls, h, kLocalGrading);

@@ -380,9 +380,13 @@ struct MeshShapeReport {
   std::size_t nb_facet_points = 0;   ///< points added inside lattice faces (refine_facet)
   std::size_t nb_feature_edges = 0;  ///< short CAD edges given a size by `feature_size`
   std::size_t nb_feature_faces = 0;  ///< narrow CAD faces given a size (with `feature_size` on)
-  /// patches of the surface across walls h / 12 to 0.2 h thick given a size (with `feature_size`
-  /// on; thin_walls.h)
+  /// patches of the surface across walls from the chord deflection to 0.2 h thick given a size
+  /// (with `feature_size` on; thin_walls.h)
   std::size_t nb_thin_wall_patches = 0;
+  /// patches across walls thinner than the chord deflection, of even thickness, left without a
+  /// size (their tets are flat), and those walls' thinnest and thickest (0: none)
+  std::size_t nb_unsized_wall_patches = 0;
+  double thinnest_unsized_wall = 0, thickest_unsized_wall = 0;
   /// The face layers (MeshShapeParameters::face_layers) as applied, in their order
   std::vector<FaceLayersApplied> face_layers;
   /// Why the shape was not swept where sweep is on (empty: swept, or not an extrusion)

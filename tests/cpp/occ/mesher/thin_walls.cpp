@@ -25,9 +25,11 @@ TEST(thin_wall_sizes, covers_both_faces_of_a_thin_slab) {
   const double h = 6;
   for (const double t : {1.0, 0.6, 0.2}) {
     const Prepared p = prepare(occ_box(0, 0, 0, 30, 20, t), h);
+    mesher::UnsizedWalls none;
     const std::vector<mesher::SizedTriangle> patches =
-        mesher::thin_wall_sizes(p.surface, h, kDeflection * h);
+        mesher::thin_wall_sizes(p.surface, h, kDeflection * h, &none);
     ASSERT_FALSE(patches.empty());
+    EXPECT_EQ(none.patches, 0u);
     double covered = 0;
     for (const mesher::SizedTriangle& q : patches) {
       for (const Vec3* c : {&q.a, &q.b, &q.c})  // on the top or the bottom
@@ -39,10 +41,14 @@ TEST(thin_wall_sizes, covers_both_faces_of_a_thin_slab) {
     }
     EXPECT_NEAR(covered, 2 * 30 * 20, 1e-6);
   }
-  // Thinner than the chord deflection, 0.02 h (0.12 at h 6): none.
-  EXPECT_TRUE(
-      mesher::thin_wall_sizes(prepare(occ_box(0, 0, 0, 30, 20, 0.1), h).surface, h, kDeflection * h)
-          .empty());
+  // Thinner than the chord deflection, 0.02 h (0.12 at h 6): none, said (both faces, 0.1 apart).
+  mesher::UnsizedWalls unsized;
+  EXPECT_TRUE(mesher::thin_wall_sizes(prepare(occ_box(0, 0, 0, 30, 20, 0.1), h).surface, h,
+                                      kDeflection * h, &unsized)
+                  .empty());
+  EXPECT_GE(unsized.patches, 2u);
+  EXPECT_NEAR(unsized.thinnest, 0.1, 1e-9);
+  EXPECT_NEAR(unsized.thickest, 0.1, 1e-9);
   // On a surface of a quarter of that deflection (0.005 h), walls from 0.03 on are sized.
   EXPECT_FALSE(mesher::thin_wall_sizes(prepare(occ_box(0, 0, 0, 30, 20, 0.1), h).surface, h,
                                        kDeflection / 4 * h)

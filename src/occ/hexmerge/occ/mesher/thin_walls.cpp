@@ -39,7 +39,8 @@ double distance_along(const Point& from, const decltype(Hit::first)& at) {
 
 }  // namespace
 
-std::vector<SizedTriangle> thin_wall_sizes(const Surface& surface, double h, double thinnest) {
+std::vector<SizedTriangle> thin_wall_sizes(const Surface& surface, double h, double thinnest,
+                                           UnsizedWalls* unsized) {
   // The patches and the triangle each comes from: each triangle cut into bands across from its
   // shortest side, each band into quads split in two, sides at most h (the diagonals 2 h):
   // a needle triangle along a channel 1,140 mm long (pyocc_11752) in as many patches as its
@@ -149,22 +150,30 @@ std::vector<SizedTriangle> thin_wall_sizes(const Surface& surface, double h, dou
         }
     return false;
   };
+  // Whether the wall keeps its thickness t across patch k: probed again from near each corner (a
+  // twentieth of the way in), within a factor kEvenWallRatio of the centre's.
+  const auto even = [&](std::size_t k, const Point& centre, double t) {
+    const Triangle& q = patches[k];
+    for (int c = 0; c < 3; ++c) {
+      const double there = thickness_at(q[c] + (centre - q[c]) * 0.05, k);
+      if (!(there <= kEvenWallRatio * t && there * kEvenWallRatio >= t)) return false;
+    }
+    return true;
+  };
+  if (unsized) *unsized = UnsizedWalls{};
   for (std::size_t k = 0; k < patches.size(); ++k) {
     const Triangle& q = patches[k];
     const Point centre = CGAL::centroid(q);
     const double t = thickness[k];
+    if (unsized && t > 0 && t < thinnest && even(k, centre, t)) {
+      unsized->thinnest = unsized->patches > 0 ? std::min(unsized->thinnest, t) : t;
+      unsized->thickest = std::max(unsized->thickest, t);
+      ++unsized->patches;
+    }
     if (!(t < kThinWall * h && t >= thinnest)) continue;
     // Under kEvenWall h, a wall only kTooThinReach h from where it is thinner than sized, and
-    // only where it keeps its thickness across the patch: probed again from near each corner (a
-    // twentieth of the way in), within a factor kEvenWallRatio of the centre's.
-    constexpr std::array<int, 3> corners{0, 1, 2};
-    if (t < kEvenWall * h &&
-        (near_too_thin(centre) || !std::all_of(corners.begin(), corners.end(), [&](int c) {
-           const Point corner = q[c];
-           const double there = thickness_at(corner + (centre - corner) * 0.05, k);
-           return there <= kEvenWallRatio * t && there * kEvenWallRatio >= t;
-         })))
-      continue;
+    // only where it keeps its thickness across the patch.
+    if (t < kEvenWall * h && (near_too_thin(centre) || !even(k, centre, t))) continue;
     const auto vec = [](const Point& p) { return Vec3{p.x(), p.y(), p.z()}; };
     out.push_back({vec(q[0]), vec(q[1]), vec(q[2]), kThinWallSizeFactor * t});
   }

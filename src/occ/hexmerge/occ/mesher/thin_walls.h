@@ -58,8 +58,18 @@ inline constexpr double kWallTaper = 1.0 / 6;
 /// is thinner than `thinnest` and where the wall is as thick under the patch's corners (a face
 /// between two solids: into the solid its triangles leave; the faces of the other solid that face
 /// back across it are probed from there).
-/// @param[in] surface   the surface (world coordinates), triangles oriented outward
-/// @param[in] thinnest  the thinnest wall sized: the surface's chord deflection
-std::vector<SizedTriangle> thin_wall_sizes(const Surface& surface, double h, double thinnest);
+/// Walls left unsized for being thinner than the deflection, where they keep their thickness
+/// across a patch (a shell meshed at a size over 50 times its wall; not where two faces come
+/// together at a tangent): their patches and their thinnest and thickest.
+struct UnsizedWalls {
+  std::size_t patches = 0;
+  double thinnest = 0, thickest = 0;
+};
+
+/// @param[in]  surface   the surface (world coordinates), triangles oriented outward
+/// @param[in]  thinnest  the thinnest wall sized: the surface's chord deflection
+/// @param[out] unsized   null, or the even walls thinner than `thinnest` (none: 0 patches)
+std::vector<SizedTriangle> thin_wall_sizes(const Surface& surface, double h, double thinnest,
+                                           UnsizedWalls* unsized = nullptr);
 
 }  // namespace hexmerge::mesher
