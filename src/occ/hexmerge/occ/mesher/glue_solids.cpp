@@ -71,12 +71,6 @@ double turning(const TopoDS_Edge& edge) {
   return total;
 }
 
-double length_of(const TopoDS_Edge& edge) {
-  GProp_GProps props;
-  BRepGProp::LinearProperties(edge, props);
-  return props.Mass();
-}
-
 double volume_of(const TopoDS_Shape& solid) {
   GProp_GProps props;
   BRepGProp::VolumeProperties(solid, props);
@@ -181,6 +175,12 @@ TopoDS_Shape glue_solids(const TopoDS_Shape& shape, double tolerance, GlueSolids
   return glued;
 }
 
+double edge_length(const TopoDS_Edge& edge) {
+  GProp_GProps props;
+  BRepGProp::LinearProperties(edge, props);
+  return props.Mass();
+}
+
 bool lens_edges(const TopoDS_Edge& a, const TopoDS_Edge& b) {
   if (a.IsSame(b) || BRep_Tool::Degenerated(a) || BRep_Tool::Degenerated(b)) return false;
   TopoDS_Vertex a0, a1, b0, b1;
@@ -207,7 +207,7 @@ TopoDS_Shape split_lens_edges(const TopoDS_Shape& shape, GlueSolidsReport& repor
           edges.push_back(TopoDS::Edge(it.Value()));
       if (edges.size() != 2 || !lens_edges(edges[0], edges[1])) continue;
       if (!(turning(edges[0]) < kSurfaceAngle) || !(turning(edges[1]) < kSurfaceAngle)) continue;
-      to_split.Add(length_of(edges[0]) >= length_of(edges[1]) ? edges[0] : edges[1]);
+      to_split.Add(edge_length(edges[0]) >= edge_length(edges[1]) ? edges[0] : edges[1]);
     }
   }
   if (to_split.IsEmpty()) return shape;

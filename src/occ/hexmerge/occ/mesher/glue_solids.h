@@ -47,6 +47,9 @@ struct GlueSolidsReport {
 ///         in volume, or when OpenCASCADE cannot intersect the solids' faces
 TopoDS_Shape glue_solids(const TopoDS_Shape& shape, double tolerance, GlueSolidsReport& report);
 
+/// An edge's length (OpenCASCADE's linear properties; load_shape()'s Shape::edge_length too).
+double edge_length(const TopoDS_Edge& edge);
+
 /// Whether `a` and `b` bound a lens: two distinct edges, neither degenerated nor closed, between
 /// the same two vertices (a hole split_lens_edges() splits, a face triangulate() zips shut).
 bool lens_edges(const TopoDS_Edge& a, const TopoDS_Edge& b);

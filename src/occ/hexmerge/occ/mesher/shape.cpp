@@ -220,10 +220,8 @@ Shape load_shape(const std::string& brep, double glue_tolerance, GlueSolidsRepor
   s.edge_length.assign(static_cast<std::size_t>(s.edges.Extent()), 0.0);
   for (int e = 1; e <= s.edges.Extent(); ++e) {
     const TopoDS_Edge& edge = TopoDS::Edge(s.edges(e));
-    if (BRep_Tool::Degenerated(edge)) continue;
-    GProp_GProps length;
-    BRepGProp::LinearProperties(edge, length);
-    s.edge_length[static_cast<std::size_t>(e - 1)] = length.Mass();
+    if (!BRep_Tool::Degenerated(edge))
+      s.edge_length[static_cast<std::size_t>(e - 1)] = edge_length(edge);
   }
   s.face_area.assign(static_cast<std::size_t>(s.faces.Extent()), 0.0);
   s.face_width.assign(s.face_area.size(), std::numeric_limits<double>::infinity());

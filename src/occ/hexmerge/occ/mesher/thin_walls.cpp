@@ -11,7 +11,8 @@
 #include <cstddef>
 #include <iterator>
 #include <limits>
-#include <map>
+
+#include "hexmerge/occ/mesher/spatial.h"
 
 namespace hexmerge::mesher {
 namespace {
@@ -125,31 +126,17 @@ std::vector<SizedTriangle> thin_wall_sizes(const Surface& surface, double h, dou
   std::vector<double> thickness(patches.size());
   for (std::size_t k = 0; k < patches.size(); ++k)
     thickness[k] = thickness_at(CGAL::centroid(patches[k]), k);
-  // The walls too thin to size (under `thinnest`), on a grid of cells kTooThinReach h wide.
+  // The walls too thin to size (under `thinnest`): their patches' centroids.
+  const auto vec = [](const Point& p) { return Vec3{p.x(), p.y(), p.z()}; };
+  Vec3 lo = surface.nodes.front(), hi = lo;
+  for (const Vec3& p : surface.nodes) {
+    lo = {std::min(lo.x, p.x), std::min(lo.y, p.y), std::min(lo.z, p.z)};
+    hi = {std::max(hi.x, p.x), std::max(hi.y, p.y), std::max(hi.z, p.z)};
+  }
   const double reach = kTooThinReach * h;
-  const auto cell_of = [&](const Point& p) {
-    return std::array<long long, 3>{static_cast<long long>(std::floor(p.x() / reach)),
-                                    static_cast<long long>(std::floor(p.y() / reach)),
-                                    static_cast<long long>(std::floor(p.z() / reach))};
-  };
-  std::map<std::array<long long, 3>, std::vector<Point>> too_thin;
+  PointSet too_thin(lo, hi, reach);
   for (std::size_t k = 0; k < patches.size(); ++k)
-    if (thickness[k] < thinnest) {
-      const Point c = CGAL::centroid(patches[k]);
-      too_thin[cell_of(c)].push_back(c);
-    }
-  const auto near_too_thin = [&](const Point& p) {
-    const std::array<long long, 3> at = cell_of(p);
-    for (long long i = -1; i <= 1; ++i)
-      for (long long j = -1; j <= 1; ++j)
-        for (long long l = -1; l <= 1; ++l) {
-          const auto it = too_thin.find({at[0] + i, at[1] + j, at[2] + l});
-          if (it == too_thin.end()) continue;
-          for (const Point& c : it->second)
-            if (CGAL::squared_distance(p, c) < reach * reach) return true;
-        }
-    return false;
-  };
+    if (thickness[k] < thinnest) too_thin.add(vec(CGAL::centroid(patches[k])));
   // Whether the wall keeps its thickness t across patch k: probed again from near each corner (a
   // twentieth of the way in), within a factor kEvenWallRatio of the centre's.
   const auto even = [&](std::size_t k, const Point& centre, double t) {
@@ -173,8 +160,8 @@ std::vector<SizedTriangle> thin_wall_sizes(const Surface& surface, double h, dou
     if (!(t < kThinWall * h && t >= thinnest)) continue;
     // Under kEvenWall h, a wall only kTooThinReach h from where it is thinner than sized, and
     // only where it keeps its thickness across the patch.
-    if (t < kEvenWall * h && (near_too_thin(centre) || !even(k, centre, t))) continue;
-    const auto vec = [](const Point& p) { return Vec3{p.x(), p.y(), p.z()}; };
+    if (t < kEvenWall * h && (too_thin.any_within(vec(centre), reach) || !even(k, centre, t)))
+      continue;
     out.push_back({vec(q[0]), vec(q[1]), vec(q[2]), kThinWallSizeFactor * t});
   }
   return out;
