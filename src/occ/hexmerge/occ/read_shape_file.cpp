@@ -70,13 +70,18 @@ class QuietReading {
   Message_SequenceOfPrinters printers_;
 };
 
-// The files a STEP file's parts are in, when it refers to others (DOCUMENT_FILE entities: an
-// assembly whose parts were exported one file each, as the CAX-IF's s1 test model), in order.
-std::vector<std::string> external_files(const std::string& path) {
+// A file's bytes.
+std::string file_text(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   std::ostringstream text;
   text << in.rdbuf();
-  const std::string all = text.str();
+  return text.str();
+}
+
+// The files a STEP file's parts are in, when it refers to others (DOCUMENT_FILE entities: an
+// assembly whose parts were exported one file each, as the CAX-IF's s1 test model), in order.
+std::vector<std::string> external_files(const std::string& path) {
+  const std::string all = file_text(path);
   static const std::regex entity(R"(DOCUMENT_FILE\s*\(\s*'([^']+)')", std::regex::icase);
   std::vector<std::string> names;
   std::set<std::string> seen;
@@ -121,15 +126,13 @@ std::string read_shape_file(const std::string& path, std::string* length_unit) {
   const std::string ext = lower_extension(path);
   try {
     if (ext == "brep" || ext == "brp") {
-      std::ifstream in(path, std::ios::binary);
-      std::ostringstream text;
-      text << in.rdbuf();
+      std::string text = file_text(path);
       try {
-        read_brep(text.str());  // fails here, naming the file, rather than later
+        read_brep(text);  // fails here, naming the file, rather than later
       } catch (const InputError& e) {
         throw InputError("cannot read " + path + ": " + e.what());
       }
-      return text.str();
+      return text;
     }
     if (ext == "step" || ext == "stp")
       return write_brep(read_with<STEPControl_Reader>(path, "STEP", length_unit));
