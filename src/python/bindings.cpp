@@ -481,6 +481,9 @@ py::tuple run_mesh_shape(const std::string& brep, const std::map<std::string, st
   d["nb_buffer_hexes"] = report.nb_buffer_hexes;
   d["nb_buffer_pyramids"] = report.nb_buffer_pyramids;
   d["nb_buffer_faces"] = report.nb_buffer_faces;
+  d["nb_wall_hexes"] = report.nb_wall_hexes;
+  d["nb_walls"] = report.nb_walls;
+  d["nb_wall_faces"] = report.nb_wall_faces;
   d["nb_buffer_cells_released"] = report.nb_buffer_cells_released;
   d["nb_split_open_cells"] = report.nb_split_open_cells;
   {

@@ -43,6 +43,7 @@
 #include "hexmerge/occ/mesher/surface_repair.h"
 #include "hexmerge/occ/mesher/sweep.h"
 #include "hexmerge/occ/mesher/thin_walls.h"
+#include "hexmerge/occ/mesher/wall_cells.h"
 #include "hexmerge/recombine/parameters.h"
 #include "hexmerge/tetgen/tetrahedralize.h"
 #include "hexmerge/tetgen/triangulate_facets.h"
@@ -473,6 +474,7 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
     // or face layers, faces between two solids); the surface's nodes and what lies near them
     // then anew.
     BufferCells buffer;
+    std::vector<int> buffered_faces;
     if (pull && strategy.buffer && parameters.buffer_layer) {
       std::vector<char> eligible(static_cast<std::size_t>(shape.faces.Extent()), 1);
       for (std::size_t f = 0; f < eligible.size(); ++f)
@@ -484,11 +486,41 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
       report.nb_buffer_pyramids = made.nb_pyramids;
       report.nb_buffer_faces = made.nb_faces;
       report.buffer_bases = made.bases;
+      buffered_faces = made.faces;
       if (made.nb_faces > 0) {
         nodes = frame_nodes(shape, surface, lattice, sweep_axis, swept);
         around = std::make_unique<Surroundings>(nodes, surface, lattice, h);
         parity = std::make_unique<Parity>(nodes, surface, shape.face_solid_count, *around, h);
       }
+    }
+    // 8b. Hexahedra across tube walls too thin for the core, their quads put into their
+    // cylinders' triangles (not faces the buffer layer took, nor those it may not take).
+    WallCells tube_walls;
+    if (pull && strategy.buffer && parameters.buffer_layer) {
+      std::vector<char> eligible(static_cast<std::size_t>(shape.faces.Extent()), 1);
+      for (std::size_t f = 0; f < eligible.size(); ++f)
+        eligible[f] = !lattice.lattice_face[f] && shape.face_solid_count[f] == 1 &&
+                      !(items_at_h.face_size[f] < h);
+      for (const int f : buffered_faces) eligible[static_cast<std::size_t>(f)] = 0;
+      // The core's corners, its pyramids' apexes and the buffer's tops keep clear of them.
+      PointSet obstacles(around->box_lo, around->box_hi, h);
+      for (std::size_t p = 0; p < layout.core_corner.size(); ++p)
+        if (layout.core_corner[p]) obstacles.add(layout.point_at(lattice, p));
+      for (std::size_t c = 0; c < layout.apex_cell.size(); ++c)
+        if (layout.apex_cell[c]) obstacles.add(layout.apex_at(lattice, c));
+      for (const auto& [p, at] : buffer.top_of) obstacles.add(at);
+      WallReport made;
+      tube_walls =
+          wall_cells(shape, lattice.frame, eligible, obstacles, h, deflection, surface, made);
+      report.nb_wall_hexes = made.nb_hexes;
+      report.nb_walls = made.nb_walls;
+      report.nb_wall_faces = made.nb_faces;
+      if (made.nb_faces > 0) {
+        nodes = frame_nodes(shape, surface, lattice, sweep_axis, swept);
+        around = std::make_unique<Surroundings>(nodes, surface, lattice, h);
+        parity = std::make_unique<Parity>(nodes, surface, shape.face_solid_count, *around, h);
+      }
+      emit_wall_cells(tube_walls, *around, inserted);
     }
     const CoreCounts core = emit_core(lattice, layout, buffer, kept, h, *around, inserted);
     report.nb_core_cells = core.nb_core_cells;

@@ -115,6 +115,9 @@ struct MeshShapeParameters {
   /// the face's edges, becomes a hexahedron (scaled Jacobian at least 0.3) whose top is two of the
   /// face's triangles: the face is triangulated again with the tops in it. Side faces no other such
   /// hexahedron shares are closed by pyramids to the apexes of the core's pyramids beside them.
+  /// With it, the walls between two coaxial cylinders of one solid kThinnestWallCell h to
+  /// kThickestWallCell h apart (mesher/wall_cells.h), which the core does not reach, get a grid of
+  /// hexahedra across them, their quads put into both cylinders' triangles.
   /// When TetGen fails on them, the next way of placing the points is the pulled core without the
   /// layer.
   bool buffer_layer = true;
@@ -285,6 +288,11 @@ struct MeshShapeReport {
   std::size_t nb_buffer_hexes = 0;
   std::size_t nb_buffer_pyramids = 0;
   std::size_t nb_buffer_faces = 0;
+  /// Hexahedra across tube walls (between two coaxial cylinders too close for the core), the
+  /// walls that have them, and the CAD faces triangulated again with their quads
+  std::size_t nb_wall_hexes = 0;
+  std::size_t nb_walls = 0;
+  std::size_t nb_wall_faces = 0;
   /// Buffer hexahedra and pyramids given up after TetGen: a tet under 0.2 beside them that the
   /// flips left (their tets and corners then improved as the others)
   std::size_t nb_buffer_cells_released = 0;

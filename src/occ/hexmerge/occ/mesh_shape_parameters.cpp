@@ -61,8 +61,10 @@ ParameterTable<MeshShapeParameters> make_table() {
            "With the core pulled: hexahedra between the core's closing pyramids' bases and the "
            "surface, the bases' corners projected onto one CAD face (not a lattice face, a face "
            "with a local size or one between two solids) and the face triangulated again with "
-           "their tops in it; their open side faces closed by pyramids; when TetGen fails on "
-           "them the pulled core is tried without"),
+           "their tops in it; their open side faces closed by pyramids; and hexahedra across "
+           "tube walls (two coaxial cylinders 0.5 h to 2.5 h apart) too thin for the core, their "
+           "quads put into both cylinders' triangles; when TetGen fails on them the pulled core "
+           "is tried without"),
       number(&P::tetgen_time_limit, "tetgen_time_limit", "s", 0, 86400, "TetGen time limit",
              "Time limit of one TetGen run (0: 30 s plus 1 ms per point); a run past it, or one "
              "that leaves no tet, is restarted with the lattice faces' loops started elsewhere, "

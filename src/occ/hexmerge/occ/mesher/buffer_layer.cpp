@@ -529,6 +529,8 @@ BufferCells buffer_layer(const Shape& shape, const Lattice& lattice, const CoreL
         n = renumbered.find(lattice.frame.to_world(top_of(p)->at), 1e-9 * h);
     }
     report.nb_faces = remeshed.size();
+    report.faces.clear();
+    for (const auto& [face, made] : remeshed) report.faces.push_back(face);
     // 7. The cells whose faces cross the surface, or that hold a surface node or a point of the
     // core, go; then steps 5 to 7 again without them.
     frame_points.resize(surface.nodes.size());

@@ -24,6 +24,7 @@ struct BufferReport {
   std::size_t nb_hexes = 0;     ///< hexahedra between the core and the surface
   std::size_t nb_pyramids = 0;  ///< pyramids closing their side faces
   std::size_t nb_faces = 0;     ///< CAD faces triangulated again with the hexahedra's tops
+  std::vector<int> faces;       ///< those faces (0-based)
   BufferBaseCounts bases;       ///< why each base got a hexahedron or not
 };
 

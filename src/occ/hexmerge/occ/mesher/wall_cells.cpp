@@ -1,0 +1,550 @@
+#include "hexmerge/occ/mesher/wall_cells.h"
+
+#include <BRepAdaptor_Surface.hxx>
+#include <ElSLib.hxx>
+#include <TopoDS.hxx>
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <map>
+#include <optional>
+#include <set>
+#include <unordered_map>
+#include <utility>
+
+#include "hexmerge/geometry/quality.h"
+#include "hexmerge/occ/mesher/common.h"
+#include "hexmerge/occ/mesher/core.h"
+#include "hexmerge/occ/mesher/face_chart.h"
+#include "hexmerge/occ/mesher/shape.h"
+#include "hexmerge/occ/mesher/surface_check.h"
+
+namespace hexmerge::mesher {
+
+namespace {
+
+// As the buffer layer's tops: corners at least kEdgeClearance h inside their face's edges, the
+// face's inner nodes nearer than kNodeClearance h to a quad gone, the face's area kept to
+// kAreaChange, no new triangle under kLeastAngle degrees (or the face's own smallest). Where a
+// face fails so, it is tried again with kWideNodeClearance (else the quads blamed go): a column
+// whose corners come within kEdgeClearance h of a seam or an edge is not made, and the nodes left
+// in such a strip, up to a column and kEdgeClearance h wide, made triangles of 9 degrees with the
+// seam's nodes on a tube at h 3. (Everywhere, the wide clearance lost walls: flanged_tee at h
+// 5.512 66.0 -> 55.1 % hex volume.)
+constexpr double kEdgeClearance = 0.3;
+constexpr double kNodeClearance = 0.5;
+constexpr double kWideNodeClearance = 1.5;
+constexpr double kAreaChange = 0.02;
+constexpr double kLeastAngle = 15.0;
+// A cell's six tets keep the mesher's floor (where the recombination does not take the cell,
+// its tets stay).
+constexpr double kTetFloor = 0.2;
+// Two cylinders are coaxial when their axes' directions differ by less than this (radians) and
+// each axis passes within kAxisOffset h of the other's origin.
+constexpr double kAxisAngle = 1e-9;
+constexpr double kAxisOffset = 1e-6;
+// A quad's side in its face's chart is at most this many times its length on the face.
+constexpr double kChartStretch = 1.5;
+
+// A cylinder of the shape: its face, axis, radius, and whether the solid lies inside it (the
+// outer face of a wall) or outside (a bore).
+struct Cylinder {
+  int face;
+  gp_Ax1 axis;
+  gp_Dir x_dir;
+  double radius;
+  bool outer;
+};
+
+// A wall: coaxial cylinders of one radius outside and one inside, their faces.
+struct Wall {
+  gp_Pnt origin;
+  gp_Dir axis, x_dir, y_dir;
+  double outer_radius, inner_radius;
+  std::vector<int> outer_faces, inner_faces;
+  double z_lo = 0, z_hi = 0;  // the faces' common length along the axis
+};
+
+double tet_quality(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
+  const double xyz[12] = {a.x, a.y, a.z, b.x, b.y, b.z, c.x, c.y, c.z, d.x, d.y, d.z};
+  static const index_t kTet[4] = {0, 1, 2, 3};
+  return scaled_jacobian(CellType::Tet, xyz, kTet);
+}
+
+}  // namespace
+
+WallCells wall_cells(const Shape& shape, const Frame& frame, const std::vector<char>& eligible,
+                     const PointSet& obstacles, double h, double deflection, Surface& surface,
+                     WallReport& report) {
+  WallCells out;
+  // 1. The cylinders, which side the solid is on by their triangles' outward normals.
+  std::vector<std::vector<int>> face_triangles(static_cast<std::size_t>(shape.faces.Extent()));
+  for (std::size_t t = 0; t < surface.triangles.size(); ++t)
+    face_triangles[static_cast<std::size_t>(surface.triangles[t].face)].push_back(
+        static_cast<int>(t));
+  std::vector<Cylinder> cylinders;
+  for (int f = 0; f < shape.faces.Extent(); ++f) {
+    if (!eligible[static_cast<std::size_t>(f)] ||
+        face_triangles[static_cast<std::size_t>(f)].empty())
+      continue;
+    const BRepAdaptor_Surface s(TopoDS::Face(shape.faces(f + 1)), false);
+    if (s.GetType() != GeomAbs_Cylinder) continue;
+    const gp_Cylinder c = s.Cylinder();
+    double outward = 0;
+    for (const int t : face_triangles[static_cast<std::size_t>(f)]) {
+      const auto& n = surface.triangles[static_cast<std::size_t>(t)].node;
+      const Vec3 a = surface.nodes[static_cast<std::size_t>(n[0])],
+                 b = surface.nodes[static_cast<std::size_t>(n[1])],
+                 d = surface.nodes[static_cast<std::size_t>(n[2])];
+      const Vec3 centre = (a + b + d) * (1.0 / 3);
+      const gp_Vec from(c.Location(), gp_Pnt(centre.x, centre.y, centre.z));
+      const gp_Vec radial = from - gp_Vec(c.Axis().Direction()) * from.Dot(c.Axis().Direction());
+      const Vec3 normal = (b - a).cross(d - a);
+      outward += normal.x * radial.X() + normal.y * radial.Y() + normal.z * radial.Z();
+    }
+    if (outward == 0) continue;
+    cylinders.push_back({f, c.Axis(), c.Position().XDirection(), c.Radius(), outward > 0});
+  }
+  // 2. The walls: per coaxial pair of radii, the outer faces and the inner ones.
+  std::vector<Wall> walls;
+  const auto coaxial = [&](const gp_Ax1& a, const gp_Ax1& b) {
+    if (!a.IsParallel(b, kAxisAngle)) return false;
+    const gp_Vec d(a.Location(), b.Location());
+    return (d - gp_Vec(a.Direction()) * d.Dot(a.Direction())).Magnitude() <= kAxisOffset * h;
+  };
+  const auto same = [&](double a, double b) { return std::abs(a - b) <= kAxisOffset * h; };
+  for (const Cylinder& o : cylinders) {
+    if (!o.outer) continue;
+    for (const Cylinder& i : cylinders) {
+      if (i.outer || !coaxial(o.axis, i.axis)) continue;
+      const double t = o.radius - i.radius;
+      if (!(t >= kThinnestWallCell * h && t <= kThickestWallCell * h)) continue;
+      Wall* wall = nullptr;
+      for (Wall& w : walls)
+        if (coaxial(gp_Ax1(w.origin, w.axis), o.axis) && same(w.outer_radius, o.radius) &&
+            same(w.inner_radius, i.radius))
+          wall = &w;
+      if (!wall) {
+        walls.emplace_back();
+        wall = &walls.back();
+        wall->origin = o.axis.Location();
+        wall->axis = o.axis.Direction();
+        wall->x_dir = o.x_dir;
+        wall->y_dir = wall->axis.Crossed(wall->x_dir);
+        wall->outer_radius = o.radius, wall->inner_radius = i.radius;
+      }
+      if (std::find(wall->outer_faces.begin(), wall->outer_faces.end(), o.face) ==
+          wall->outer_faces.end())
+        wall->outer_faces.push_back(o.face);
+      if (std::find(wall->inner_faces.begin(), wall->inner_faces.end(), i.face) ==
+          wall->inner_faces.end())
+        wall->inner_faces.push_back(i.face);
+    }
+  }
+  if (walls.empty()) return out;
+  // The faces' lengths along the axis (from their nodes): the common one.
+  const auto span = [&](const Wall& w, const std::vector<int>& faces) {
+    double lo = 1e300, hi = -1e300;
+    const Vec3 origin = of(w.origin), along = of(w.axis);
+    for (const int f : faces)
+      for (const int t : face_triangles[static_cast<std::size_t>(f)])
+        for (const int n : surface.triangles[static_cast<std::size_t>(t)].node) {
+          const double z = (surface.nodes[static_cast<std::size_t>(n)] - origin).dot(along);
+          lo = std::min(lo, z), hi = std::max(hi, z);
+        }
+    return std::pair{lo, hi};
+  };
+  for (Wall& w : walls) {
+    const auto [olo, ohi] = span(w, w.outer_faces);
+    const auto [ilo, ihi] = span(w, w.inner_faces);
+    w.z_lo = std::max(olo, ilo), w.z_hi = std::min(ohi, ihi);
+  }
+
+  // 3. Per wall, its grid; the cells whose corners place in one face's chart on each side.
+  std::map<int, FaceChart> charts;
+  const auto chart = [&](int face) -> const FaceChart* {
+    auto it = charts.find(face);
+    if (it == charts.end()) {
+      std::optional<FaceChart> made =
+          chart_of(shape, surface, face_triangles[static_cast<std::size_t>(face)], face);
+      if (!made) return nullptr;
+      it = charts.emplace(face, std::move(*made)).first;
+    }
+    return &it->second;
+  };
+  // A grid node: wall, layer (0 inner .. k outer), round (i, mod n), along (j).
+  struct Node {
+    std::size_t wall;
+    int layer, i, j;
+    bool operator<(const Node& o) const {
+      return std::tie(wall, layer, i, j) < std::tie(o.wall, o.layer, o.i, o.j);
+    }
+  };
+  struct Cell {
+    std::size_t wall;
+    int i, j;  // its least corner
+    int outer_face, inner_face;
+    std::array<Node, 8> corner;  // kKuhnPaths' order
+  };
+  std::vector<Cell> cells;
+  std::map<Node, Vec3> world;                                // every corner's place
+  std::map<std::pair<Node, int>, std::pair<P2, UV>> placed;  // per (node, face), in its chart
+  struct Grid {
+    int n, m, k;
+    double z0, dz;
+  };
+  std::vector<Grid> grids(walls.size());
+  for (std::size_t wi = 0; wi < walls.size(); ++wi) {
+    const Wall& w = walls[wi];
+    const double middle = 0.5 * (w.outer_radius + w.inner_radius);
+    const double length = w.z_hi - w.z_lo - h;  // rows h / 2 inside the ends
+    if (!(length >= 0.5 * h)) continue;
+    Grid& g = grids[wi];
+    // About h round the middle, and the outer face's chords within the chord deflection.
+    const double chord_angle = 2 * std::acos(std::max(-1.0, 1 - deflection / w.outer_radius));
+    g.n = std::max({8, static_cast<int>(std::lround(2 * M_PI * middle / h)),
+                    static_cast<int>(std::ceil(2 * M_PI / chord_angle))});
+    g.m = std::max(1, static_cast<int>(std::lround(length / h)));
+    g.k = std::max(1, static_cast<int>(std::lround((w.outer_radius - w.inner_radius) / h)));
+    g.z0 = w.z_lo + 0.5 * h, g.dz = length / g.m;
+    const auto at = [&](int layer, int i, int j) {
+      const double theta = (i + 0.5) * 2 * M_PI / g.n;
+      const double r = w.inner_radius + (w.outer_radius - w.inner_radius) * layer / g.k;
+      const gp_Vec radial = gp_Vec(w.x_dir) * std::cos(theta) + gp_Vec(w.y_dir) * std::sin(theta);
+      return w.origin.Translated(radial * r + gp_Vec(w.axis) * (g.z0 + j * g.dz));
+    };
+    // Where grid node (layer, i, j) on the wall's face places in that face's chart, clear of
+    // its edges.
+    const auto place = [&](int layer, int i, int j, int face) -> std::optional<P2> {
+      const Node node{wi, layer, ((i % g.n) + g.n) % g.n, j};
+      const auto key = std::pair{node, face};
+      if (const auto it = placed.find(key); it != placed.end()) return it->second.first;
+      const FaceChart* c = chart(face);
+      if (!c) return std::nullopt;
+      const gp_Pnt p = at(layer, i, j);
+      const BRepAdaptor_Surface s(TopoDS::Face(shape.faces(face + 1)), false);
+      UV uv;
+      ElSLib::Parameters(s.Cylinder(), p, uv.u, uv.v);
+      const std::optional<P2> xy = place_in(*c, uv);
+      if (!xy ||
+          any_outline_side_near(*c, {*xy}, kEdgeClearance * h, [&](const P2& a, const P2& b) {
+            return !(to_segment(*xy, a, b) >= kEdgeClearance * h);
+          }))
+        return std::nullopt;
+      placed[key] = {*xy, uv};
+      world[node] = of(p);
+      return xy;
+    };
+    // The quad of cell (i, j) on the faces of layer `layer`, in one of `faces`: that face.
+    const auto quad_face = [&](int layer, int i, int j, const std::vector<int>& faces) {
+      for (const int face : faces) {
+        std::array<P2, 4> xy;
+        bool ok = true;
+        const int di[4] = {0, 1, 1, 0}, dj[4] = {0, 0, 1, 1};
+        for (int c = 0; c < 4 && ok; ++c) {
+          const std::optional<P2> q = place(layer, i + di[c], j + dj[c], face);
+          ok = q.has_value();
+          if (ok) xy[static_cast<std::size_t>(c)] = *q;
+        }
+        if (!ok) continue;
+        const double s0 = cross2(xy[0], xy[1], xy[2]), s1 = cross2(xy[0], xy[2], xy[3]);
+        ok = s0 != 0 && (s0 > 0) == (s1 > 0);
+        // Its sides in the chart as long as on the face (the chart's metric is the face's): not
+        // the way round a periodic face's parameters from one side of its seam to the other.
+        for (int e = 0; e < 4 && ok; ++e) {
+          const double chord =
+              (world.at(Node{wi, layer, ((i + di[e]) % g.n + g.n) % g.n, j + dj[e]}) -
+               world.at(
+                   Node{wi, layer, ((i + di[(e + 1) % 4]) % g.n + g.n) % g.n, j + dj[(e + 1) % 4]}))
+                  .norm();
+          ok = std::hypot(xy[e][0] - xy[(e + 1) % 4][0], xy[e][1] - xy[(e + 1) % 4][1]) <=
+               kChartStretch * chord;
+        }
+        const FaceChart& c = *chart(face);
+        for (int e = 0; e < 4 && ok; ++e)
+          ok = !any_outline_side_near(
+              c, {xy[e], xy[(e + 1) % 4]}, 0.5 * kEdgeClearance * h, [&](const P2& a, const P2& b) {
+                return segments_meet(xy[e], xy[(e + 1) % 4], a, b) ||
+                       !(to_segment(a, xy[e], xy[(e + 1) % 4]) >= 0.5 * kEdgeClearance * h);
+              });
+        if (ok) return face;
+      }
+      return -1;
+    };
+    for (int j = 0; j < g.m; ++j)
+      for (int i = 0; i < g.n; ++i) {
+        const int inner = quad_face(0, i, j, w.inner_faces);
+        if (inner < 0) continue;
+        const int outer = quad_face(g.k, i, j, w.outer_faces);
+        if (outer < 0) continue;
+        for (int layer = 0; layer < g.k; ++layer) {
+          Cell cell{wi, i, j, layer == g.k - 1 ? outer : -1, layer == 0 ? inner : -1, {}};
+          for (int b = 0; b < 8; ++b) {
+            const Node node{wi, layer + ((b >> 2) & 1), (i + (b & 1)) % g.n, j + ((b >> 1) & 1)};
+            cell.corner[static_cast<std::size_t>(b)] = node;
+            if (!world.count(node)) world[node] = of(at(node.layer, i + (b & 1), node.j));
+          }
+          cells.push_back(cell);
+        }
+      }
+  }
+  if (cells.empty()) return out;
+
+  // 4. Per cell, its corners in the frame: its six tets at kTetFloor (turned positive), no point
+  // of the core near it.
+  const auto corners_of = [&](const Cell& c) {
+    std::array<Vec3, 8> at;
+    for (int b = 0; b < 8; ++b) at[b] = frame.to_frame(world.at(c.corner[b]));
+    return at;
+  };
+  const auto column = [](const Cell& c) { return std::tuple{c.wall, c.i, c.j}; };
+  std::set<std::tuple<std::size_t, int, int>> dropped;
+  for (Cell& c : cells) {
+    std::array<Vec3, 8> at = corners_of(c);
+    if (tet_quality(at[0], at[1], at[3], at[7]) < 0) {  // left-handed: bits u and v swapped
+      for (const int b : {0, 4}) std::swap(c.corner[b + 1], c.corner[b + 2]);
+      at = corners_of(c);
+    }
+    bool ok = true;
+    for (const auto& q : kKuhnPaths)
+      ok = ok && std::abs(tet_quality(at[0], at[q[0]], at[q[1]], at[7])) >= kTetFloor;
+    Vec3 lo = at[0], hi = at[0];
+    for (const Vec3& q : at) lo = vmin(lo, q), hi = vmax(hi, q);
+    ok = ok && !obstacles.any_within((lo + hi) * 0.5, 0.5 * (hi - lo).norm() + 0.25 * h);
+    if (!ok) dropped.insert(column(c));
+  }
+
+  // 5. Each face with quads triangulated again, until every face takes its quads and no cell
+  // crosses the surface, holds a node or crosses another cell.
+  std::vector<char> node_elsewhere(surface.nodes.size(), 0);
+  {
+    std::vector<int> first_face(surface.nodes.size(), -1);
+    for (const SurfaceTriangle& t : surface.triangles)
+      for (const int n : t.node) {
+        int& f = first_face[static_cast<std::size_t>(n)];
+        if (f < 0) f = t.face;
+        if (f != t.face) node_elsewhere[static_cast<std::size_t>(n)] = 1;
+      }
+  }
+  const Surface original = surface;
+  std::map<Node, int> node_of;  // the corners on the surface: their nodes
+  for (bool again = true; again;) {
+    again = false;
+    surface = original;
+    // The quads per face: corners by node, around with the split's diagonal first to third.
+    std::map<int, std::vector<std::pair<std::array<Node, 4>, std::tuple<std::size_t, int, int>>>>
+        quads_on;
+    for (const Cell& c : cells) {
+      if (dropped.count(column(c))) continue;
+      if (c.inner_face >= 0)
+        quads_on[c.inner_face].push_back(
+            {{c.corner[0], c.corner[1], c.corner[3], c.corner[2]}, column(c)});
+      if (c.outer_face >= 0)
+        quads_on[c.outer_face].push_back(
+            {{c.corner[4], c.corner[5], c.corner[7], c.corner[6]}, column(c)});
+    }
+    std::map<int, std::pair<Retriangulated, std::vector<Node>>> remeshed;
+    for (const auto& [face, quads] : quads_on) {
+      std::map<Node, int> index;
+      std::vector<Node> tops;
+      std::vector<P2> xy;
+      std::vector<UV> uv;
+      std::vector<Vec3> at;
+      std::vector<std::array<int, 4>> around;
+      for (const auto& [corners, col] : quads) {
+        std::array<int, 4> q{};
+        for (int m = 0; m < 4; ++m) {
+          const auto [it, fresh] = index.emplace(corners[m], static_cast<int>(tops.size()));
+          if (fresh) {
+            const auto& [p, u] = placed.at({corners[m], face});
+            tops.push_back(corners[m]), xy.push_back(p), uv.push_back(u);
+            at.push_back(world.at(corners[m]));
+          }
+          q[m] = it->second;
+        }
+        around.push_back(q);
+      }
+      std::vector<int> poor_tops;
+      std::optional<Retriangulated> made =
+          retriangulate(charts.at(face), surface, around, xy, uv, at, node_elsewhere, h,
+                        {kNodeClearance, kAreaChange, kLeastAngle}, &poor_tops);
+      if (!made)
+        made = retriangulate(charts.at(face), surface, around, xy, uv, at, node_elsewhere, h,
+                             {kWideNodeClearance, kAreaChange, kLeastAngle});
+      if (!made) {
+        std::set<Node> poor;
+        for (const int k : poor_tops) poor.insert(tops[static_cast<std::size_t>(k)]);
+        bool any = false;
+        for (const auto& [corners, col] : quads)
+          for (const Node& n : corners)
+            if (poor.count(n)) {
+              any = dropped.insert(col).second || any;
+              break;
+            }
+        if (!any)
+          for (const auto& [corners, col] : quads) dropped.insert(col);
+        again = true;
+        continue;
+      }
+      remeshed.emplace(face, std::pair{std::move(*made), std::move(tops)});
+    }
+    if (again) continue;
+    if (remeshed.empty()) break;
+    // The surface with the new triangles and the corners.
+    std::map<Node, int> added;
+    std::vector<SurfaceTriangle> kept;
+    for (const SurfaceTriangle& t : surface.triangles)
+      if (!remeshed.count(t.face)) kept.push_back(t);
+    for (const auto& [face, made] : remeshed) {
+      const auto& [tris, tops] = made;
+      for (std::size_t k = 0; k < tris.node.size(); ++k) {
+        SurfaceTriangle t;
+        for (int c = 0; c < 3; ++c) {
+          int n = tris.node[k][static_cast<std::size_t>(c)];
+          if (n < 0) {
+            const Node& node = tops[static_cast<std::size_t>(-1 - n)];
+            const auto [it, fresh] = added.emplace(node, static_cast<int>(surface.nodes.size()));
+            if (fresh) {
+              surface.nodes.push_back(world.at(node));
+              surface.node_face.push_back(face);
+              if (!surface.seed.empty())
+                surface.seed.push_back(static_cast<int>(surface.seed.size()));
+            }
+            n = it->second;
+          }
+          t.node[static_cast<std::size_t>(c)] = n;
+        }
+        t.uv = tris.uv[k];
+        t.face = face;
+        kept.push_back(t);
+      }
+    }
+    surface.triangles = std::move(kept);
+    drop_unused_nodes(surface);
+    NodeHash renumbered(surface.nodes, h);
+    for (int n = 0; n < static_cast<int>(surface.nodes.size()); ++n) renumbered.add(n);
+    node_of.clear();
+    for (const auto& [node, n] : added) node_of[node] = renumbered.find(world.at(node), 1e-9 * h);
+    // 6. The cells' faces inside the shape against the surface and each other; the surface's
+    // nodes inside a cell.
+    std::vector<Vec3> points(surface.nodes.size());
+    for (std::size_t n = 0; n < points.size(); ++n) points[n] = frame.to_frame(surface.nodes[n]);
+    std::map<Node, int> inside_point;
+    const auto point_of = [&](const Node& node) {
+      if (const auto it = node_of.find(node); it != node_of.end()) return it->second;
+      const auto [it, fresh] = inside_point.emplace(node, static_cast<int>(points.size()));
+      if (fresh) points.push_back(frame.to_frame(world.at(node)));
+      return it->second;
+    };
+    std::vector<std::array<int, 3>> inner;
+    std::vector<std::tuple<std::size_t, int, int>> owner;
+    std::set<std::array<int, 3>> seen;
+    for (const Cell& c : cells) {
+      if (dropped.count(column(c))) continue;
+      std::array<int, 8> id;
+      for (int b = 0; b < 8; ++b) id[b] = point_of(c.corner[b]);
+      for (const auto& q : kKuhnPaths) {
+        const int tet[4] = {0, q[0], q[1], 7};
+        for (int f = 0; f < 4; ++f) {
+          const int a = tet[(f + 1) % 4], b = tet[(f + 2) % 4], d = tet[(f + 3) % 4];
+          // On a face of the cell (its corners share a bit), not on the surface.
+          const int shared = ~(a ^ b) & ~(a ^ d) & 7;
+          if (shared == 0) continue;
+          if (shared & 4) {
+            const bool top = (a & 4) != 0;
+            if ((top && c.outer_face >= 0) || (!top && c.inner_face >= 0)) continue;
+          }
+          std::array<int, 3> key{id[a], id[b], id[d]};
+          std::sort(key.begin(), key.end());
+          if (!seen.insert(key).second) continue;
+          inner.push_back({id[a], id[b], id[d]});
+          owner.push_back(column(c));
+        }
+      }
+      // A surface node inside it (on a face too; not at a corner).
+      std::array<Vec3, 8> at;
+      for (int b = 0; b < 8; ++b) at[b] = points[static_cast<std::size_t>(id[b])];
+      Vec3 lo = at[0], hi = at[0];
+      for (const Vec3& q : at) lo = vmin(lo, q), hi = vmax(hi, q);
+      bool holds = false;
+      for (std::size_t n = 0; n < surface.nodes.size() && !holds; ++n) {
+        const Vec3& q = points[n];
+        if (q.x < lo.x - 1e-6 * h || q.y < lo.y - 1e-6 * h || q.z < lo.z - 1e-6 * h ||
+            q.x > hi.x + 1e-6 * h || q.y > hi.y + 1e-6 * h || q.z > hi.z + 1e-6 * h)
+          continue;
+        if (std::find(id.begin(), id.end(), static_cast<int>(n)) != id.end()) continue;
+        for (const auto& path : kKuhnPaths)
+          holds = holds || in_tet(q, at[0], at[path[0]], at[path[1]], at[7], -1e-6);
+      }
+      if (holds && dropped.insert(column(c)).second) again = true;
+    }
+    std::vector<std::array<int, 3>> against;
+    for (const SurfaceTriangle& t : surface.triangles) against.push_back(t.node);
+    against.insert(against.end(), inner.begin(), inner.end());
+    const std::vector<char> crossing = crosses_any(points, against, inner);
+    for (std::size_t k = 0; k < inner.size(); ++k)
+      if (crossing[k] && dropped.insert(owner[k]).second) again = true;
+    if (!again) {
+      report.nb_faces = remeshed.size();
+      for (const auto& [face, made] : remeshed) report.faces.push_back(face);
+    }
+  }
+  // 7. The cells.
+  std::set<Node> inside;
+  std::set<std::size_t> walls_with;
+  for (const Cell& c : cells) {
+    if (dropped.count(column(c)) || report.nb_faces == 0) continue;
+    std::array<Vec3, 8> at;
+    for (int b = 0; b < 8; ++b) {
+      const Node& node = c.corner[b];
+      at[b] = frame.to_frame(world.at(node));
+      if (!node_of.count(node) && inside.insert(node).second) out.points.push_back(at[b]);
+    }
+    out.hexes.push_back(at);
+    out.on_surface.push_back(
+        static_cast<char>((c.inner_face >= 0 ? 1 : 0) | (c.outer_face >= 0 ? 2 : 0)));
+    walls_with.insert(c.wall);
+  }
+  if (report.nb_faces == 0) surface = original;
+  report.nb_hexes = out.hexes.size();
+  report.nb_walls = walls_with.size();
+  return out;
+}
+
+void emit_wall_cells(const WallCells& cells, Surroundings& around, InsertedPoints& inserted) {
+  for (const Vec3& q : cells.points) {
+    inserted.points.push_back(q);
+    inserted.face.push_back(-1);
+  }
+  std::set<std::array<double, 9>> seen;
+  for (std::size_t hex = 0; hex < cells.hexes.size(); ++hex) {
+    const std::array<Vec3, 8>& at = cells.hexes[hex];
+    InsertedPoints::Split split;
+    split.corners.assign(at.begin(), at.end());
+    for (const auto& q : kKuhnPaths) {
+      split.tets.push_back({0, q[0], q[1], 7});
+      around.buffer_cells.add({at[0], at[q[0]], at[q[1]], at[7]});
+      // The tet's faces on the cell's faces: constraints (those on the surface are its own).
+      const int tet[4] = {0, q[0], q[1], 7};
+      for (int f = 0; f < 4; ++f) {
+        const int a = tet[(f + 1) % 4], b = tet[(f + 2) % 4], d = tet[(f + 3) % 4];
+        const int same = ~(a ^ b) & ~(a ^ d) & 7;
+        if (same == 0) continue;
+        if ((same & 4) && (cells.on_surface[hex] & ((a & 4) ? 2 : 1))) continue;
+        std::array<Vec3, 3> t{at[a], at[b], at[d]};
+        std::array<double, 9> key;
+        std::array<Vec3, 3> sorted = t;
+        std::sort(sorted.begin(), sorted.end(), [](const Vec3& u, const Vec3& v) {
+          return std::tie(u.x, u.y, u.z) < std::tie(v.x, v.y, v.z);
+        });
+        for (int k = 0; k < 3; ++k)
+          key[3 * k] = sorted[k].x, key[3 * k + 1] = sorted[k].y, key[3 * k + 2] = sorted[k].z;
+        if (seen.insert(key).second) inserted.constraints.push_back(t);
+      }
+    }
+    inserted.kept_cells.push_back(split.corners);
+    inserted.splits.push_back(std::move(split));
+  }
+}
+
+}  // namespace hexmerge::mesher
