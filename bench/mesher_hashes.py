@@ -110,6 +110,10 @@ CASES = [
     ("gmsh_part", "cad:gmsh_part.step", 4.8, {}),
     ("pyocc_face_recognition", "cad:pyocc_face_recognition_sample_part.stp", 11.0, {}),
     ("gmsh_t20_data", "cad:gmsh_t20_data.step", 2.8, {}),
+    # Hexahedra across tube walls (step 8b): the tee's pipes, an unswept tube, the yoke's bores.
+    ("flanged_tee-5.5", "flanged_tee", 5.5, {}),
+    ("tube-3.5-unswept", "tube", 3.5, {"sweep": False}),
+    ("gmsh_U_Joint_2", "cad:gmsh_U_Joint_2.stp", 2.69, {}),
 ]
 
 

@@ -73,23 +73,7 @@ TEST(buffer_layer, a_cylinders_core_reaches_its_curved_face) {
           std::min(smallest_after, mesher::smallest_angle(p.surface.nodes, t.node) * 180 / M_PI);
   EXPECT_GE(smallest_after, std::min(15.0, smallest_before));
 
-  // The surface's triangles by their corners' positions (world, rounded to 1e-9 h).
-  const auto key = [&](const Vec3& q) {
-    return std::array<long long, 3>{std::llround(q.x / (1e-9 * h)), std::llround(q.y / (1e-9 * h)),
-                                    std::llround(q.z / (1e-9 * h))};
-  };
-  std::set<std::array<std::array<long long, 3>, 3>> triangles;
-  for (const mesher::SurfaceTriangle& t : p.surface.triangles) {
-    std::array<std::array<long long, 3>, 3> corners{};
-    for (int c = 0; c < 3; ++c) corners[c] = key(p.surface.nodes[t.node[c]]);
-    std::sort(corners.begin(), corners.end());
-    triangles.insert(corners);
-  }
-  const auto has_triangle = [&](const Vec3& a, const Vec3& b, const Vec3& c) {
-    std::array<std::array<long long, 3>, 3> corners{key(a), key(b), key(c)};
-    std::sort(corners.begin(), corners.end());
-    return triangles.count(corners) > 0;
-  };
+  const TriangleSet triangles(p.surface, 1e-9 * h);
   static const index_t kUp[8] = {0, 1, 2, 3, 4, 5, 6, 7}, kDown[8] = {0, 3, 2, 1, 4, 7, 6, 5};
   for (const mesher::BufferCells::Hex& hex : buffer.hexes) {
     const mesher::PyramidFace& f = layout.pyramid_faces[hex.face];
@@ -103,8 +87,8 @@ TEST(buffer_layer, a_cylinders_core_reaches_its_curved_face) {
       EXPECT_LT(distance_to_face(p.shape, curved, top_world[m]), 1e-6 * h);
     }
     EXPECT_GE(scaled_jacobian_of(CellType::Hex, corners, f.dir % 2 ? kUp : kDown), 0.3);
-    EXPECT_TRUE(has_triangle(top_world[0], top_world[1], top_world[2]));
-    EXPECT_TRUE(has_triangle(top_world[0], top_world[2], top_world[3]));
+    EXPECT_TRUE(triangles.has(top_world[0], top_world[1], top_world[2]));
+    EXPECT_TRUE(triangles.has(top_world[0], top_world[2], top_world[3]));
   }
   static const index_t kAround[5] = {0, 1, 2, 3, 4}, kOther[5] = {0, 3, 2, 1, 4};
   for (const mesher::BufferCells::SidePyramid& pyramid : buffer.pyramids) {

@@ -9,6 +9,8 @@
 #include <ShapeAnalysis_Surface.hxx>
 #include <TopoDS.hxx>
 #include <TopoDS_Face.hxx>
+#include <algorithm>
+#include <cmath>
 #include <gp_Ax2.hxx>
 #include <map>
 #include <sstream>
@@ -90,6 +92,26 @@ bool closed_and_oriented(const std::vector<mesher::SurfaceTriangle>& triangles,
     }
   }
   return true;
+}
+
+TriangleSet::TriangleSet(const mesher::Surface& surface, double tolerance) : tolerance_(tolerance) {
+  for (const mesher::SurfaceTriangle& t : surface.triangles)
+    triangles_.insert(
+        key(surface.nodes[t.node[0]], surface.nodes[t.node[1]], surface.nodes[t.node[2]]));
+}
+
+TriangleSet::Key TriangleSet::key(const Vec3& a, const Vec3& b, const Vec3& c) const {
+  const auto round = [&](const Vec3& q) {
+    return std::array<long long, 3>{std::llround(q.x / tolerance_), std::llround(q.y / tolerance_),
+                                    std::llround(q.z / tolerance_)};
+  };
+  Key corners{round(a), round(b), round(c)};
+  std::sort(corners.begin(), corners.end());
+  return corners;
+}
+
+bool TriangleSet::has(const Vec3& a, const Vec3& b, const Vec3& c) const {
+  return triangles_.count(key(a, b, c)) > 0;
 }
 
 double enclosed_volume(const std::vector<Vec3>& nodes,

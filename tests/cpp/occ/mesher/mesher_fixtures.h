@@ -4,7 +4,9 @@
 /// the mesher's first steps (frame, triangulation, lattice) run on them.
 
 #include <TopoDS_Shape.hxx>
+#include <array>
 #include <memory>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -74,6 +76,19 @@ bool closed_and_oriented(const std::vector<mesher::SurfaceTriangle>& triangles,
 /// The volume the triangles bound (positive when they face outward).
 double enclosed_volume(const std::vector<Vec3>& nodes,
                        const std::vector<mesher::SurfaceTriangle>& triangles);
+
+/// The surface's triangles by their corners' positions (rounded to `tolerance`), in any order.
+class TriangleSet {
+ public:
+  TriangleSet(const mesher::Surface& surface, double tolerance);
+  bool has(const Vec3& a, const Vec3& b, const Vec3& c) const;
+
+ private:
+  using Key = std::array<std::array<long long, 3>, 3>;
+  Key key(const Vec3& a, const Vec3& b, const Vec3& c) const;
+  double tolerance_;
+  std::set<Key> triangles_;
+};
 
 /// Distance of point p (world coordinates) to face `face` of the shape (its surface, untrimmed).
 double distance_to_face(const mesher::Shape& shape, int face, const Vec3& p);

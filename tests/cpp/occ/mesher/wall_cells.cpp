@@ -18,6 +18,15 @@
 namespace hexmerge::test {
 namespace {
 
+// A tube along z: radii 10 and 7, 40 long.
+TopoDS_Shape tube() {
+  const TopoDS_Shape outer =
+      BRepPrimAPI_MakeCylinder(gp_Ax2(gp_Pnt(0, 0, 0), gp_Dir(0, 0, 1)), 10, 40).Shape();
+  const TopoDS_Shape bore =
+      BRepPrimAPI_MakeCylinder(gp_Ax2(gp_Pnt(0, 0, -1), gp_Dir(0, 0, 1)), 7, 42).Shape();
+  return BRepAlgoAPI_Cut(outer, bore).Shape();
+}
+
 // A tube (radii 10 and 7, 40 long) at h 3: its wall, one cell thick, gets a ring of cells along
 // it (29 round, the outer face's chords within the chord deflection 0.06, 12 along, the column
 // across the outer face's seam and the one across the inner face's lost, the rows h / 2 inside
@@ -30,11 +39,7 @@ namespace {
 // tube as constraints (none of them a surface triangle).
 TEST(wall_cells, a_tubes_wall_gets_a_ring_of_cells) {
   const double h = 3;
-  const TopoDS_Shape outer =
-      BRepPrimAPI_MakeCylinder(gp_Ax2(gp_Pnt(0, 0, 0), gp_Dir(0, 0, 1)), 10, 40).Shape();
-  const TopoDS_Shape bore =
-      BRepPrimAPI_MakeCylinder(gp_Ax2(gp_Pnt(0, 0, -1), gp_Dir(0, 0, 1)), 7, 42).Shape();
-  Prepared p = prepare(BRepAlgoAPI_Cut(outer, bore).Shape(), h);
+  Prepared p = prepare(tube(), h);
   repair_surface(p);
   const double volume_before = enclosed_volume(p.surface.nodes, p.surface.triangles);
   std::vector<char> eligible(static_cast<std::size_t>(p.shape.faces.Extent()), 1);
@@ -53,22 +58,7 @@ TEST(wall_cells, a_tubes_wall_gets_a_ring_of_cells) {
   EXPECT_NEAR(enclosed_volume(p.surface.nodes, p.surface.triangles), volume_before,
               1e-2 * volume_before);
 
-  const auto key = [&](const Vec3& q) {
-    return std::array<long long, 3>{std::llround(q.x / (1e-9 * h)), std::llround(q.y / (1e-9 * h)),
-                                    std::llround(q.z / (1e-9 * h))};
-  };
-  std::set<std::array<std::array<long long, 3>, 3>> triangles;
-  for (const mesher::SurfaceTriangle& t : p.surface.triangles) {
-    std::array<std::array<long long, 3>, 3> corners{};
-    for (int c = 0; c < 3; ++c) corners[c] = key(p.surface.nodes[t.node[c]]);
-    std::sort(corners.begin(), corners.end());
-    triangles.insert(corners);
-  }
-  const auto has_triangle = [&](const Vec3& a, const Vec3& b, const Vec3& c) {
-    std::array<std::array<long long, 3>, 3> corners{key(a), key(b), key(c)};
-    std::sort(corners.begin(), corners.end());
-    return triangles.count(corners) > 0;
-  };
+  const TriangleSet triangles(p.surface, 1e-9 * h);
   // Cell-type order (cell_type.h) from kKuhnPaths' bits: 0 1 3 2 on the inner face, 4 5 7 6.
   static const index_t kHex[8] = {0, 1, 3, 2, 4, 5, 7, 6};
   static const index_t kTet[4] = {0, 1, 2, 3};
@@ -92,8 +82,8 @@ TEST(wall_cells, a_tubes_wall_gets_a_ring_of_cells) {
       const double r = std::hypot(w[b].x, w[b].y);
       EXPECT_NEAR(r, b & 4 ? 10.0 : 7.0, 1e-9 * h);
     }
-    EXPECT_TRUE(has_triangle(w[4], w[5], w[7]) && has_triangle(w[4], w[7], w[6]));
-    EXPECT_TRUE(has_triangle(w[0], w[1], w[3]) && has_triangle(w[0], w[3], w[2]));
+    EXPECT_TRUE(triangles.has(w[4], w[5], w[7]) && triangles.has(w[4], w[7], w[6]));
+    EXPECT_TRUE(triangles.has(w[0], w[1], w[3]) && triangles.has(w[0], w[3], w[2]));
   }
 
   const Placed placed = place(p);
@@ -108,8 +98,8 @@ TEST(wall_cells, a_tubes_wall_gets_a_ring_of_cells) {
   EXPECT_GE(inserted.constraints.size(), 4 * cells.hexes.size());
   EXPECT_LE(inserted.constraints.size(), 8 * cells.hexes.size());
   for (const std::array<Vec3, 3>& t : inserted.constraints)
-    EXPECT_FALSE(has_triangle(p.lattice.frame.to_world(t[0]), p.lattice.frame.to_world(t[1]),
-                              p.lattice.frame.to_world(t[2])));
+    EXPECT_FALSE(triangles.has(p.lattice.frame.to_world(t[0]), p.lattice.frame.to_world(t[1]),
+                               p.lattice.frame.to_world(t[2])));
   EXPECT_TRUE(around.buffer_cells.near(cells.hexes[0][0], 1e-9));
 }
 
@@ -117,11 +107,7 @@ TEST(wall_cells, a_tubes_wall_gets_a_ring_of_cells) {
 // kThinnestWallCell h gets none.
 TEST(wall_cells, keeps_clear_of_the_core_and_of_walls_too_thin) {
   const double h = 3;
-  const TopoDS_Shape outer =
-      BRepPrimAPI_MakeCylinder(gp_Ax2(gp_Pnt(0, 0, 0), gp_Dir(0, 0, 1)), 10, 40).Shape();
-  const TopoDS_Shape bore =
-      BRepPrimAPI_MakeCylinder(gp_Ax2(gp_Pnt(0, 0, -1), gp_Dir(0, 0, 1)), 7, 42).Shape();
-  Prepared p = prepare(BRepAlgoAPI_Cut(outer, bore).Shape(), h);
+  Prepared p = prepare(tube(), h);
   repair_surface(p);
   std::vector<char> eligible(static_cast<std::size_t>(p.shape.faces.Extent()), 1);
   const mesher::PointSet none(Vec3{-20, -20, -20}, Vec3{60, 60, 60}, h);
@@ -143,7 +129,7 @@ TEST(wall_cells, keeps_clear_of_the_core_and_of_walls_too_thin) {
       EXPECT_GE((p.lattice.frame.to_world(q) - Vec3{-8.5, 0.5, 20}).norm(), 0.25 * h);
 
   const double thin_h = 3 / (0.9 * mesher::kThinnestWallCell);  // the wall 0.9 of the least
-  Prepared thin = prepare(BRepAlgoAPI_Cut(outer, bore).Shape(), thin_h);
+  Prepared thin = prepare(tube(), thin_h);
   repair_surface(thin);
   mesher::WallReport none_made;
   const mesher::WallCells no_cells =

@@ -40,16 +40,12 @@ constexpr double kTilt = 35.0;
 // Their tets (the lattice's split) keep kTetFloor, the mesher's floor for the tets it makes:
 // where the recombination does not take a hexahedron or pyramid, its tets stay.
 constexpr double kTetFloor = 0.2;
-// Tops lie at least kEdgeClearance h inside their face's edges, and the face's inner nodes
-// nearer than kNodeClearance h to a top's quad go (the triangles between are no needles).
-constexpr double kEdgeClearance = 0.3;
+// Tops lie at least kQuadEdgeClearance h inside their face's edges (face_chart.h: its limits
+// on the face triangulated again too), and the face's inner nodes nearer than kNodeClearance h to
+// a top's quad go (the triangles between are no needles).
 constexpr double kNodeClearance = 0.35;
-// A face triangulated again keeps its area to this fraction, and no new triangle's smallest
-// angle falls under the smaller of kLeastAngle degrees and the face's own smallest.
-constexpr double kAreaChange = 0.02;
 // A top's quad is a chord of its face: its middle at most kSagitta h off the face's triangles.
 constexpr double kSagitta = 0.05;
-constexpr double kLeastAngle = 15.0;
 
 // A base corner's projection onto the surface: its face, parameters and place (frame).
 struct Top {
@@ -68,12 +64,6 @@ double hex_quality(const std::array<Vec3, 4>& b, const std::array<Vec3, 4>& t, b
   }
   static const index_t kUp[8] = {0, 1, 2, 3, 4, 5, 6, 7}, kDown[8] = {0, 3, 2, 1, 4, 7, 6, 5};
   return scaled_jacobian(CellType::Hex, xyz, up ? kUp : kDown);
-}
-
-double tet_quality(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
-  const double xyz[12] = {a.x, a.y, a.z, b.x, b.y, b.z, c.x, c.y, c.z, d.x, d.y, d.z};
-  static const index_t kTet[4] = {0, 1, 2, 3};
-  return scaled_jacobian(CellType::Tet, xyz, kTet);
 }
 
 // The smallest scaled Jacobian of the six tets around the hexahedron's diagonal from its base's
@@ -175,7 +165,7 @@ BufferCells buffer_layer(const Shape& shape, const Lattice& lattice, const CoreL
     if ((at - on).norm() > 0.1 * h) return top;  // Newton went elsewhere
     miss = &BufferBaseCounts::no_top_clearance;
     // Clear of the other faces (across a thin wall or a concave edge), as of its face's edges.
-    if (around.every_face.any_within(at, kEdgeClearance * h, [&](int i) {
+    if (around.every_face.any_within(at, kQuadEdgeClearance * h, [&](int i) {
           return surface.triangles[static_cast<std::size_t>(i)].face != its_face;
         }))
       return top;
@@ -274,13 +264,8 @@ BufferCells buffer_layer(const Shape& shape, const Lattice& lattice, const CoreL
       const std::size_t p = base_of[i][m];
       if (!top_xy.count(p)) {
         UV uv = top_of(p)->uv;
-        const std::optional<P2> placed = place_in(chart, uv);
-        const bool clear = placed.has_value() &&
-                           !any_outline_side_near(
-                               chart, {*placed}, kEdgeClearance * h, [&](const P2& a, const P2& b) {
-                                 return !(to_segment(*placed, a, b) >= kEdgeClearance * h);
-                               });
-        if (!clear) {
+        const std::optional<P2> placed = place_clear(chart, uv, h);
+        if (!placed) {
           chosen[i] = 0;
           break;
         }
@@ -292,14 +277,7 @@ BufferCells buffer_layer(const Shape& shape, const Lattice& lattice, const CoreL
     if (!chosen[i]) continue;
     // The quad in the chart: its two triangles turning the same way, its sides crossing no edge
     // and passing the edges' nodes at half the clearance.
-    const double s0 = cross2(xy[0], xy[1], xy[2]), s1 = cross2(xy[0], xy[2], xy[3]);
-    bool ok = s0 != 0 && (s0 > 0) == (s1 > 0);
-    for (int k = 0; k < 4 && ok; ++k)
-      ok = !any_outline_side_near(
-          chart, {xy[k], xy[(k + 1) % 4]}, 0.5 * kEdgeClearance * h, [&](const P2& a, const P2& b) {
-            return !(!segments_meet(xy[k], xy[(k + 1) % 4], a, b) &&
-                     to_segment(a, xy[k], xy[(k + 1) % 4]) >= 0.5 * kEdgeClearance * h);
-          });
+    bool ok = quad_clear(chart, xy, h);
     if (ok) {
       Vec3 middle{0, 0, 0};
       for (int m = 0; m < 4; ++m) middle = middle + top_of(base_of[i][m])->at * 0.25;
@@ -375,16 +353,7 @@ BufferCells buffer_layer(const Shape& shape, const Lattice& lattice, const CoreL
   // 5. The side pyramids, the hexahedra that cannot have them dropped, until none drops; then
   // each face with tops triangulated again, a face where that fails losing its hexahedra, and
   // again. (The surface nodes any other face uses stay.)
-  std::vector<char> node_elsewhere(surface.nodes.size(), 0);
-  {
-    std::vector<int> first_face(surface.nodes.size(), -1);
-    for (const SurfaceTriangle& t : surface.triangles)
-      for (const int n : t.node) {
-        int& f = first_face[static_cast<std::size_t>(n)];
-        if (f < 0) f = t.face;
-        if (f != t.face) node_elsewhere[static_cast<std::size_t>(n)] = 1;
-      }
-  }
+  const std::vector<char> node_elsewhere = nodes_on_several_faces(surface);
   std::vector<BufferCells::SidePyramid> pyramids;
   const auto close_sides = [&]() {
     for (bool dropped = true; dropped;) {
@@ -424,6 +393,9 @@ BufferCells buffer_layer(const Shape& shape, const Lattice& lattice, const CoreL
   std::unordered_map<std::size_t, int> top_node;  // per lattice point, its top's node
   std::vector<Vec3> frame_points;                 // the surface's nodes, frame coordinates
   std::map<int, Retriangulated> remeshed;
+  // The tops in the faces triangulated again (-1 - k in their triangles): lattice point, world.
+  std::vector<std::size_t> top_point;
+  std::vector<Vec3> top_world;
   for (bool again = true; again;) {
     again = false;
     surface = original;
@@ -431,6 +403,8 @@ BufferCells buffer_layer(const Shape& shape, const Lattice& lattice, const CoreL
       failed = false;
       close_sides();
       remeshed.clear();
+      top_point.clear(), top_world.clear();
+      std::unordered_map<std::size_t, int> top_index;
       std::map<int, std::vector<std::size_t>> on_face;
       for (std::size_t i = 0; i < faces.size(); ++i)
         if (chosen[i]) on_face[face_of(i)].push_back(i);
@@ -457,7 +431,7 @@ BufferCells buffer_layer(const Shape& shape, const Lattice& lattice, const CoreL
         std::vector<int> poor_tops;
         std::optional<Retriangulated> made =
             retriangulate(charts.at(face), surface, quads, xy, uv, world, node_elsewhere, h,
-                          {kNodeClearance, kAreaChange, kLeastAngle}, &poor_tops);
+                          {kNodeClearance, kQuadAreaChange, kQuadLeastAngle}, &poor_tops);
         if (!made) {
           // Where only new triangles too thin fail it, the hexahedra whose tops they have (or
           // whose quads took the nodes beside them) go; else all of the face's.
@@ -475,12 +449,17 @@ BufferCells buffer_layer(const Shape& shape, const Lattice& lattice, const CoreL
           failed = true;
           continue;
         }
-        // Tops by lattice point: -1 - k is the k-th of this face's.
-        std::vector<std::size_t> point(index.size());
-        for (const auto& [p, k] : index) point[static_cast<std::size_t>(k)] = p;
+        // This face's k-th top is the lattice point's among all faces' tops.
+        std::vector<int> top(index.size());
+        for (const auto& [p, k] : index) {
+          const auto [it, fresh] = top_index.emplace(p, static_cast<int>(top_point.size()));
+          if (fresh)
+            top_point.push_back(p), top_world.push_back(world[static_cast<std::size_t>(k)]);
+          top[static_cast<std::size_t>(k)] = it->second;
+        }
         for (auto& t : made->node)
           for (int& n : t)
-            if (n < 0) n = -1 - static_cast<int>(point[static_cast<std::size_t>(-1 - n)]);
+            if (n < 0) n = -1 - top[static_cast<std::size_t>(-1 - n)];
         remeshed.emplace(face, std::move(*made));
       }
     }
@@ -490,43 +469,11 @@ BufferCells buffer_layer(const Shape& shape, const Lattice& lattice, const CoreL
       return out;
     }
     // 6. The surface with the new triangles and tops.
-    top_node.clear();
-    for (const auto& [face, made] : remeshed)
-      for (const auto& t : made.node)
-        for (const int n : t)
-          if (n < 0) {
-            const auto p = static_cast<std::size_t>(-1 - n);
-            if (top_node.count(p)) continue;
-            top_node[p] = static_cast<int>(surface.nodes.size());
-            surface.nodes.push_back(lattice.frame.to_world(top_of(p)->at));
-            surface.node_face.push_back(face);
-            if (!surface.seed.empty())
-              surface.seed.push_back(static_cast<int>(surface.seed.size()));
-          }
     {
-      std::vector<SurfaceTriangle> kept;
-      kept.reserve(surface.triangles.size());
-      for (const SurfaceTriangle& t : surface.triangles)
-        if (!remeshed.count(t.face)) kept.push_back(t);
-      for (const auto& [face, made] : remeshed)
-        for (std::size_t k = 0; k < made.node.size(); ++k) {
-          SurfaceTriangle t;
-          for (int c = 0; c < 3; ++c) {
-            const int n = made.node[k][c];
-            t.node[c] = n >= 0 ? n : top_node.at(static_cast<std::size_t>(-1 - n));
-          }
-          t.uv = made.uv[k];
-          t.face = face;
-          kept.push_back(t);
-        }
-      surface.triangles = std::move(kept);
-    }
-    drop_unused_nodes(surface);
-    {
-      NodeHash renumbered(surface.nodes, h);
-      for (int n = 0; n < static_cast<int>(surface.nodes.size()); ++n) renumbered.add(n);
-      for (auto& [p, n] : top_node)
-        n = renumbered.find(lattice.frame.to_world(top_of(p)->at), 1e-9 * h);
+      const std::vector<int> node = put_in_surface(surface, remeshed, top_world, h);
+      top_node.clear();
+      for (std::size_t k = 0; k < node.size(); ++k)
+        if (node[k] >= 0) top_node[top_point[k]] = node[k];
     }
     report.nb_faces = remeshed.size();
     report.faces.clear();

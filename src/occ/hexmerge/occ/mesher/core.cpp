@@ -11,6 +11,7 @@
 #include <utility>
 #include <vector>
 
+#include "hexmerge/geometry/quality.h"
 #include "hexmerge/occ/mesher/common.h"
 #include "hexmerge/occ/mesher/pull_core.h"
 
@@ -45,6 +46,12 @@ std::pair<Vec3, double> pyramid_sphere_of(const Lattice& lattice, int i, int j, 
   return {face_centre + towards * (c / d), d - c};
 }
 }  // namespace
+
+double tet_quality(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
+  const double xyz[12] = {a.x, a.y, a.z, b.x, b.y, b.z, c.x, c.y, c.z, d.x, d.y, d.z};
+  static const index_t kTet[4] = {0, 1, 2, 3};
+  return scaled_jacobian(CellType::Tet, xyz, kTet);
+}
 
 std::array<Vec3, 8> buffer_hex_corners(const std::array<Vec3, 4>& base,
                                        const std::array<Vec3, 4>& top, bool up) {

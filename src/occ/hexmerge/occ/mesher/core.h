@@ -101,6 +101,9 @@ inline constexpr double kBufferClearance = 0.25;
 /// any right-handed bits): {0, q[0], q[1], 7} for each q.
 inline constexpr int kKuhnPaths[6][2] = {{1, 3}, {1, 5}, {2, 3}, {2, 6}, {4, 5}, {4, 6}};
 
+/// The scaled Jacobian of tet (a, b, c, d) (negative when det(b - a, c - a, d - a) is).
+double tet_quality(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d);
+
 /// A buffer hexahedron's corners in kKuhnPaths' order: bits u, v across its base (corners in
 /// base_corners() order, the base facing +axis when `up`), w to its tops; u and v swapped on a
 /// base facing down its axis, so that the bits are right-handed.

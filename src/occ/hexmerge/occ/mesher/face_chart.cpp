@@ -14,6 +14,7 @@
 #include "hexmerge/geometry/quality.h"
 #include "hexmerge/occ/mesher/common.h"
 #include "hexmerge/occ/mesher/shape.h"
+#include "hexmerge/occ/mesher/spatial.h"
 
 namespace hexmerge::mesher {
 namespace {
@@ -190,6 +191,79 @@ std::optional<P2> place_in(const FaceChart& chart, UV& uv) {
     }
   }
   return std::nullopt;
+}
+
+std::optional<P2> place_clear(const FaceChart& chart, UV& uv, double h) {
+  const std::optional<P2> placed = place_in(chart, uv);
+  const bool clear = placed.has_value() &&
+                     !any_outline_side_near(
+                         chart, {*placed}, kQuadEdgeClearance * h, [&](const P2& a, const P2& b) {
+                           return !(to_segment(*placed, a, b) >= kQuadEdgeClearance * h);
+                         });
+  return clear ? placed : std::nullopt;
+}
+
+bool quad_clear(const FaceChart& chart, const std::array<P2, 4>& xy, double h) {
+  const double s0 = cross2(xy[0], xy[1], xy[2]), s1 = cross2(xy[0], xy[2], xy[3]);
+  bool ok = s0 != 0 && (s0 > 0) == (s1 > 0);
+  for (int k = 0; k < 4 && ok; ++k)
+    ok = !any_outline_side_near(
+        chart, {xy[k], xy[(k + 1) % 4]}, 0.5 * kQuadEdgeClearance * h,
+        [&](const P2& a, const P2& b) {
+          return !(!segments_meet(xy[k], xy[(k + 1) % 4], a, b) &&
+                   to_segment(a, xy[k], xy[(k + 1) % 4]) >= 0.5 * kQuadEdgeClearance * h);
+        });
+  return ok;
+}
+
+std::vector<char> nodes_on_several_faces(const Surface& surface) {
+  std::vector<char> several(surface.nodes.size(), 0);
+  std::vector<int> first_face(surface.nodes.size(), -1);
+  for (const SurfaceTriangle& t : surface.triangles)
+    for (const int n : t.node) {
+      int& f = first_face[static_cast<std::size_t>(n)];
+      if (f < 0) f = t.face;
+      if (f != t.face) several[static_cast<std::size_t>(n)] = 1;
+    }
+  return several;
+}
+
+std::vector<int> put_in_surface(Surface& surface, const std::map<int, Retriangulated>& remeshed,
+                                const std::vector<Vec3>& tops, double h) {
+  std::vector<int> node(tops.size(), -1);
+  for (const auto& [face, made] : remeshed)
+    for (const auto& t : made.node)
+      for (const int n : t)
+        if (n < 0) {
+          const auto k = static_cast<std::size_t>(-1 - n);
+          if (node[k] >= 0) continue;
+          node[k] = static_cast<int>(surface.nodes.size());
+          surface.nodes.push_back(tops[k]);
+          surface.node_face.push_back(face);
+          if (!surface.seed.empty()) surface.seed.push_back(static_cast<int>(surface.seed.size()));
+        }
+  std::vector<SurfaceTriangle> kept;
+  kept.reserve(surface.triangles.size());
+  for (const SurfaceTriangle& t : surface.triangles)
+    if (!remeshed.count(t.face)) kept.push_back(t);
+  for (const auto& [face, made] : remeshed)
+    for (std::size_t k = 0; k < made.node.size(); ++k) {
+      SurfaceTriangle t;
+      for (int c = 0; c < 3; ++c) {
+        const int n = made.node[k][static_cast<std::size_t>(c)];
+        t.node[static_cast<std::size_t>(c)] = n >= 0 ? n : node[static_cast<std::size_t>(-1 - n)];
+      }
+      t.uv = made.uv[k];
+      t.face = face;
+      kept.push_back(t);
+    }
+  surface.triangles = std::move(kept);
+  drop_unused_nodes(surface);
+  NodeHash renumbered(surface.nodes, h);
+  for (int n = 0; n < static_cast<int>(surface.nodes.size()); ++n) renumbered.add(n);
+  for (std::size_t k = 0; k < tops.size(); ++k)
+    if (node[k] >= 0) node[k] = renumbered.find(tops[k], 1e-9 * h);
+  return node;
 }
 
 std::optional<Retriangulated> retriangulate(

@@ -7,6 +7,7 @@
 
 #include <array>
 #include <initializer_list>
+#include <map>
 #include <optional>
 #include <utility>
 #include <vector>
@@ -91,6 +92,27 @@ bool any_outline_side_near(const FaceChart& chart, std::initializer_list<P2> poi
   });
 }
 
+/// Quads put into a face (the buffer layer's tops, the wall cells'): their corners at least
+/// kQuadEdgeClearance h inside the face's edges, their sides crossing none and passing the edges'
+/// nodes at half that; the face triangulated again keeps its area to kQuadAreaChange and no new
+/// triangle's smallest angle falls under kQuadLeastAngle degrees (or the face's own smallest).
+inline constexpr double kQuadEdgeClearance = 0.3;
+inline constexpr double kQuadAreaChange = 0.02;
+inline constexpr double kQuadLeastAngle = 15.0;
+
+/// The scaled parameters of uv inside the chart (place_in(), uv shifted with them) at least
+/// kQuadEdgeClearance h from its outline's sides, or none.
+std::optional<P2> place_clear(const FaceChart& chart, UV& uv, double h);
+
+/// Whether the quad `xy` (around) in the chart has its two triangles (on its diagonal from the
+/// first corner) turning the same way and its sides crossing no side of the outline and passing
+/// the outline's nodes at 0.5 kQuadEdgeClearance h or more.
+bool quad_clear(const FaceChart& chart, const std::array<P2, 4>& xy, double h);
+
+/// Per surface node, whether triangles of two faces or more use it (a face triangulated again
+/// keeps it: retriangulate()'s `node_elsewhere`).
+std::vector<char> nodes_on_several_faces(const Surface& surface);
+
 /// A face triangulated again: its triangles (nodes: the surface's, or -1 - k for the k-th top)
 /// and their parameters.
 struct Retriangulated {
@@ -120,5 +142,13 @@ std::optional<Retriangulated> retriangulate(
     const std::vector<P2>& top_xy, const std::vector<UV>& top_uv,
     const std::vector<Vec3>& top_world, const std::vector<char>& node_elsewhere, double h,
     const RetriangulateLimits& limits, std::vector<int>* poor_tops = nullptr);
+
+/// The surface with each face of `remeshed` triangulated again: its triangles replaced by the new
+/// ones, whose tops (-1 - k) are indices into `tops` (world coordinates; one node per top, on the
+/// first face that has it), and the nodes no triangle uses any more dropped (the others
+/// renumbered, as drop_unused_nodes()).
+/// @return per top, its node (-1: in no triangle)
+std::vector<int> put_in_surface(Surface& surface, const std::map<int, Retriangulated>& remeshed,
+                                const std::vector<Vec3>& tops, double h);
 
 }  // namespace hexmerge::mesher

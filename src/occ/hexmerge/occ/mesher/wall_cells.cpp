@@ -23,19 +23,15 @@ namespace hexmerge::mesher {
 
 namespace {
 
-// As the buffer layer's tops: corners at least kEdgeClearance h inside their face's edges, the
-// face's inner nodes nearer than kNodeClearance h to a quad gone, the face's area kept to
-// kAreaChange, no new triangle under kLeastAngle degrees (or the face's own smallest). Where a
-// face fails so, it is tried again with kWideNodeClearance (else the quads blamed go): a column
-// whose corners come within kEdgeClearance h of a seam or an edge is not made, and the nodes left
-// in such a strip, up to a column and kEdgeClearance h wide, made triangles of 9 degrees with the
-// seam's nodes on a tube at h 3. (Everywhere, the wide clearance lost walls: flanged_tee at h
-// 5.512 66.0 -> 55.1 % hex volume.)
-constexpr double kEdgeClearance = 0.3;
+// The quads' limits are the buffer layer's (face_chart.h: kQuadEdgeClearance, kQuadAreaChange,
+// kQuadLeastAngle), but the face's inner nodes nearer than kNodeClearance h to a quad go; where
+// a face fails so, it is tried again with kWideNodeClearance (else the quads blamed go): a
+// column whose corners come within kQuadEdgeClearance h of a seam or an edge is not made, and
+// the nodes left in such a strip, up to a column and that clearance wide, made triangles of 9
+// degrees with the seam's nodes on a tube at h 3. (Everywhere, the wide clearance lost walls:
+// flanged_tee at h 5.512 66.0 -> 55.1 % hex volume.)
 constexpr double kNodeClearance = 0.5;
 constexpr double kWideNodeClearance = 1.5;
-constexpr double kAreaChange = 0.02;
-constexpr double kLeastAngle = 15.0;
 // A cell's six tets keep the mesher's floor (where the recombination does not take the cell,
 // its tets stay).
 constexpr double kTetFloor = 0.2;
@@ -64,12 +60,6 @@ struct Wall {
   std::vector<int> outer_faces, inner_faces;
   double z_lo = 0, z_hi = 0;  // the faces' common length along the axis
 };
-
-double tet_quality(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
-  const double xyz[12] = {a.x, a.y, a.z, b.x, b.y, b.z, c.x, c.y, c.z, d.x, d.y, d.z};
-  static const index_t kTet[4] = {0, 1, 2, 3};
-  return scaled_jacobian(CellType::Tet, xyz, kTet);
-}
 
 }  // namespace
 
@@ -225,12 +215,8 @@ WallCells wall_cells(const Shape& shape, const Frame& frame, const std::vector<c
       const BRepAdaptor_Surface s(TopoDS::Face(shape.faces(face + 1)), false);
       UV uv;
       ElSLib::Parameters(s.Cylinder(), p, uv.u, uv.v);
-      const std::optional<P2> xy = place_in(*c, uv);
-      if (!xy ||
-          any_outline_side_near(*c, {*xy}, kEdgeClearance * h, [&](const P2& a, const P2& b) {
-            return !(to_segment(*xy, a, b) >= kEdgeClearance * h);
-          }))
-        return std::nullopt;
+      const std::optional<P2> xy = place_clear(*c, uv, h);
+      if (!xy) return std::nullopt;
       placed[key] = {*xy, uv};
       world[node] = of(p);
       return xy;
@@ -247,8 +233,7 @@ WallCells wall_cells(const Shape& shape, const Frame& frame, const std::vector<c
           if (ok) xy[static_cast<std::size_t>(c)] = *q;
         }
         if (!ok) continue;
-        const double s0 = cross2(xy[0], xy[1], xy[2]), s1 = cross2(xy[0], xy[2], xy[3]);
-        ok = s0 != 0 && (s0 > 0) == (s1 > 0);
+        ok = quad_clear(*chart(face), xy, h);
         // Its sides in the chart as long as on the face (the chart's metric is the face's): not
         // the way round a periodic face's parameters from one side of its seam to the other.
         for (int e = 0; e < 4 && ok; ++e) {
@@ -260,13 +245,6 @@ WallCells wall_cells(const Shape& shape, const Frame& frame, const std::vector<c
           ok = std::hypot(xy[e][0] - xy[(e + 1) % 4][0], xy[e][1] - xy[(e + 1) % 4][1]) <=
                kChartStretch * chord;
         }
-        const FaceChart& c = *chart(face);
-        for (int e = 0; e < 4 && ok; ++e)
-          ok = !any_outline_side_near(
-              c, {xy[e], xy[(e + 1) % 4]}, 0.5 * kEdgeClearance * h, [&](const P2& a, const P2& b) {
-                return segments_meet(xy[e], xy[(e + 1) % 4], a, b) ||
-                       !(to_segment(a, xy[e], xy[(e + 1) % 4]) >= 0.5 * kEdgeClearance * h);
-              });
         if (ok) return face;
       }
       return -1;
@@ -316,16 +294,7 @@ WallCells wall_cells(const Shape& shape, const Frame& frame, const std::vector<c
 
   // 5. Each face with quads triangulated again, until every face takes its quads and no cell
   // crosses the surface, holds a node or crosses another cell.
-  std::vector<char> node_elsewhere(surface.nodes.size(), 0);
-  {
-    std::vector<int> first_face(surface.nodes.size(), -1);
-    for (const SurfaceTriangle& t : surface.triangles)
-      for (const int n : t.node) {
-        int& f = first_face[static_cast<std::size_t>(n)];
-        if (f < 0) f = t.face;
-        if (f != t.face) node_elsewhere[static_cast<std::size_t>(n)] = 1;
-      }
-  }
+  const std::vector<char> node_elsewhere = nodes_on_several_faces(surface);
   const Surface original = surface;
   std::map<Node, int> node_of;  // the corners on the surface: their nodes
   for (bool again = true; again;) {
@@ -343,7 +312,11 @@ WallCells wall_cells(const Shape& shape, const Frame& frame, const std::vector<c
         quads_on[c.outer_face].push_back(
             {{c.corner[4], c.corner[5], c.corner[7], c.corner[6]}, column(c)});
     }
-    std::map<int, std::pair<Retriangulated, std::vector<Node>>> remeshed;
+    std::map<int, Retriangulated> remeshed;
+    // The corners in the faces triangulated again (-1 - k in their triangles): node, world.
+    std::vector<Node> top_node;
+    std::vector<Vec3> top_world;
+    std::map<Node, int> top_index;
     for (const auto& [face, quads] : quads_on) {
       std::map<Node, int> index;
       std::vector<Node> tops;
@@ -367,10 +340,10 @@ WallCells wall_cells(const Shape& shape, const Frame& frame, const std::vector<c
       std::vector<int> poor_tops;
       std::optional<Retriangulated> made =
           retriangulate(charts.at(face), surface, around, xy, uv, at, node_elsewhere, h,
-                        {kNodeClearance, kAreaChange, kLeastAngle}, &poor_tops);
+                        {kNodeClearance, kQuadAreaChange, kQuadLeastAngle}, &poor_tops);
       if (!made)
         made = retriangulate(charts.at(face), surface, around, xy, uv, at, node_elsewhere, h,
-                             {kWideNodeClearance, kAreaChange, kLeastAngle});
+                             {kWideNodeClearance, kQuadAreaChange, kQuadLeastAngle});
       if (!made) {
         std::set<Node> poor;
         for (const int k : poor_tops) poor.insert(tops[static_cast<std::size_t>(k)]);
@@ -386,45 +359,24 @@ WallCells wall_cells(const Shape& shape, const Frame& frame, const std::vector<c
         again = true;
         continue;
       }
-      remeshed.emplace(face, std::pair{std::move(*made), std::move(tops)});
+      // This face's k-th corner is the node's among all faces' corners.
+      for (auto& t : made->node)
+        for (int& n : t)
+          if (n < 0) {
+            const Node& node = tops[static_cast<std::size_t>(-1 - n)];
+            const auto [it, fresh] = top_index.emplace(node, static_cast<int>(top_node.size()));
+            if (fresh) top_node.push_back(node), top_world.push_back(world.at(node));
+            n = -1 - it->second;
+          }
+      remeshed.emplace(face, std::move(*made));
     }
     if (again) continue;
     if (remeshed.empty()) break;
     // The surface with the new triangles and the corners.
-    std::map<Node, int> added;
-    std::vector<SurfaceTriangle> kept;
-    for (const SurfaceTriangle& t : surface.triangles)
-      if (!remeshed.count(t.face)) kept.push_back(t);
-    for (const auto& [face, made] : remeshed) {
-      const auto& [tris, tops] = made;
-      for (std::size_t k = 0; k < tris.node.size(); ++k) {
-        SurfaceTriangle t;
-        for (int c = 0; c < 3; ++c) {
-          int n = tris.node[k][static_cast<std::size_t>(c)];
-          if (n < 0) {
-            const Node& node = tops[static_cast<std::size_t>(-1 - n)];
-            const auto [it, fresh] = added.emplace(node, static_cast<int>(surface.nodes.size()));
-            if (fresh) {
-              surface.nodes.push_back(world.at(node));
-              surface.node_face.push_back(face);
-              if (!surface.seed.empty())
-                surface.seed.push_back(static_cast<int>(surface.seed.size()));
-            }
-            n = it->second;
-          }
-          t.node[static_cast<std::size_t>(c)] = n;
-        }
-        t.uv = tris.uv[k];
-        t.face = face;
-        kept.push_back(t);
-      }
-    }
-    surface.triangles = std::move(kept);
-    drop_unused_nodes(surface);
-    NodeHash renumbered(surface.nodes, h);
-    for (int n = 0; n < static_cast<int>(surface.nodes.size()); ++n) renumbered.add(n);
+    const std::vector<int> put = put_in_surface(surface, remeshed, top_world, h);
     node_of.clear();
-    for (const auto& [node, n] : added) node_of[node] = renumbered.find(world.at(node), 1e-9 * h);
+    for (std::size_t k = 0; k < put.size(); ++k)
+      if (put[k] >= 0) node_of[top_node[k]] = put[k];
     // 6. The cells' faces inside the shape against the surface and each other; the surface's
     // nodes inside a cell.
     std::vector<Vec3> points(surface.nodes.size());
