@@ -139,5 +139,31 @@ TEST(wall_cells, keeps_clear_of_the_core_and_of_walls_too_thin) {
   EXPECT_EQ(none_made.nb_walls, 0u);
 }
 
+// At a coarse size the chord deflection makes the cells narrower than h round the axis: along
+// it they are at most twice as long as wide (a tube of radii 10 and 6 at h 7: 19 round, 2.6 wide
+// at the middle radius, 5.5 along, not 6.6).
+TEST(wall_cells, are_no_longer_than_twice_their_width) {
+  const double h = 7;
+  const TopoDS_Shape outer =
+      BRepPrimAPI_MakeCylinder(gp_Ax2(gp_Pnt(0, 0, 0), gp_Dir(0, 0, 1)), 10, 40).Shape();
+  const TopoDS_Shape bore =
+      BRepPrimAPI_MakeCylinder(gp_Ax2(gp_Pnt(0, 0, -1), gp_Dir(0, 0, 1)), 6, 42).Shape();
+  Prepared p = prepare(BRepAlgoAPI_Cut(outer, bore).Shape(), h);
+  repair_surface(p);
+  std::vector<char> eligible(static_cast<std::size_t>(p.shape.faces.Extent()), 1);
+  const mesher::PointSet none(Vec3{-20, -20, -20}, Vec3{60, 60, 60}, h);
+  mesher::WallReport report;
+  const mesher::WallCells cells =
+      mesher::wall_cells(p.shape, p.lattice.frame, eligible, none, h, 0.02 * h, p.surface, report);
+  ASSERT_GT(cells.hexes.size(), 0u);
+  for (const std::array<Vec3, 8>& at : cells.hexes) {
+    const Vec3 middle_0 = (at[0] + at[4]) * 0.5, middle_1 = (at[1] + at[5]) * 0.5,
+               middle_2 = (at[2] + at[6]) * 0.5;
+    const double round = (middle_1 - middle_0).norm(), along = (middle_2 - middle_0).norm();
+    EXPECT_LT(round, 0.5 * h);
+    EXPECT_LE(along, 2 * round * 1.05);
+  }
+}
+
 }  // namespace
 }  // namespace hexmerge::test

@@ -41,6 +41,8 @@ constexpr double kAxisAngle = 1e-9;
 constexpr double kAxisOffset = 1e-6;
 // A quad's side in its face's chart is at most this many times its length on the face.
 constexpr double kChartStretch = 1.5;
+// A cell is at most this many times as long (along the axis, across the wall) as it is wide.
+constexpr double kCellStretch = 2.0;
 
 // A cylinder of the shape: its face, axis, radius, and whether the solid lies inside it (the
 // outer face of a wall) or outside (a bore).
@@ -194,8 +196,12 @@ WallCells wall_cells(const Shape& shape, const Frame& frame, const std::vector<c
     const double chord_angle = 2 * std::acos(std::max(-1.0, 1 - deflection / w.outer_radius));
     g.n = std::max({8, static_cast<int>(std::lround(2 * M_PI * middle / h)),
                     static_cast<int>(std::ceil(2 * M_PI / chord_angle))});
-    g.m = std::max(1, static_cast<int>(std::lround(length / h)));
-    g.k = std::max(1, static_cast<int>(std::lround((w.outer_radius - w.inner_radius) / h)));
+    // Along the axis and across, cells at most kCellStretch times as long as round (where the
+    // chord deflection makes them narrower than h: coarse sizes on small tubes).
+    const double round_width = 2 * M_PI * middle / g.n;
+    const double size = std::min(h, kCellStretch * round_width);
+    g.m = std::max(1, static_cast<int>(std::lround(length / size)));
+    g.k = std::max(1, static_cast<int>(std::lround((w.outer_radius - w.inner_radius) / size)));
     g.z0 = w.z_lo + 0.5 * h, g.dz = length / g.m;
     const auto at = [&](int layer, int i, int j) {
       const double theta = (i + 0.5) * 2 * M_PI / g.n;
