@@ -22,6 +22,10 @@ inline std::uint64_t pair_key(int a, int b) {
          static_cast<std::uint32_t>(b);
 }
 
+/// The smaller and the larger of the pair whose pair_key() is `key`.
+inline int pair_lo(std::uint64_t key) { return static_cast<int>(key >> 32); }
+inline int pair_hi(std::uint64_t key) { return static_cast<int>(key & 0xffffffffu); }
+
 /// A triangle (a tet's face) by its sorted vertices, and its hash.
 using FaceKey = std::array<index_t, 3>;
 inline FaceKey face_key(index_t a, index_t b, index_t c) {

@@ -31,7 +31,7 @@ std::size_t coarsen_sharp_corners(const Shape& s, Surface& surface,
   // Per node, its segments: (the other node, the edge).
   std::vector<std::vector<std::pair<int, int>>> segments_at(nb_nodes);
   for (const auto& [key, segment] : surface.segments) {
-    const int a = static_cast<int>(key >> 32), b = static_cast<int>(key & 0xffffffffu);
+    const int a = pair_lo(key), b = pair_hi(key);
     segments_at[a].push_back({b, segment.edge});
     segments_at[b].push_back({a, segment.edge});
   }

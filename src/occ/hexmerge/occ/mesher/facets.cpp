@@ -104,8 +104,7 @@ std::vector<Facet> make_facets(const Surface& surface, const std::vector<Vec3>& 
     for (const auto& [key, count] : uses)
       if (count == 2 && surface.segments.count(key)) inside.push_back(key);
     std::sort(inside.begin(), inside.end());
-    for (const std::uint64_t key : inside)
-      facet.polygons.push_back({static_cast<int>(key >> 32), static_cast<int>(key & 0xffffffffu)});
+    for (const std::uint64_t key : inside) facet.polygons.push_back({pair_lo(key), pair_hi(key)});
     facets.push_back(std::move(facet));
   }
   return facets;

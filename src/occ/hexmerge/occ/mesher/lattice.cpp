@@ -118,8 +118,8 @@ void align_straight_edges(const Shape& s, const Surface& surface,
     const auto& faces = s.edge_faces[segment.edge];
     if (std::none_of(faces.begin(), faces.end(), [&](int f) { return lattice_face[f]; })) continue;
     auto& list = on_edge[segment.edge];
-    list.emplace_back(segment.t_lo, static_cast<int>(key >> 32));  // the smaller id
-    list.emplace_back(segment.t_hi, static_cast<int>(key & 0xffffffffu));
+    list.emplace_back(segment.t_lo, pair_lo(key));  // the smaller id
+    list.emplace_back(segment.t_hi, pair_hi(key));
   }
   const int exponent = std::ilogb(largest) - 40;
   // x rounded to a multiple of 2^e.

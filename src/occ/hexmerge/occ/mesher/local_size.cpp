@@ -177,7 +177,7 @@ std::vector<LocalSizeApplied> local_sizes_applied(const std::vector<LocalSize>& 
         tally(applied, applied.nb_triangles, surface.nodes, t.node.data(), 3);
     for (const auto& [key, segment] : surface.segments)
       if (on_edge[static_cast<std::size_t>(segment.edge)]) {
-        const int ends[2] = {static_cast<int>(key >> 32), static_cast<int>(key & 0xffffffffu)};
+        const int ends[2] = {pair_lo(key), pair_hi(key)};
         tally(applied, applied.nb_segments, surface.nodes, ends, 2);
       }
     out.push_back(applied);
@@ -338,8 +338,7 @@ void add_swept_segments(std::vector<LocalSizeApplied>& applied, const std::vecto
           if (sweep.cap[static_cast<std::size_t>(wall)] >= 0) continue;
           for (const auto& [key, segment] : surface.segments)
             if (is_wall_of(segment.edge, wall)) {
-              const int ends[2] = {static_cast<int>(key >> 32),
-                                   static_cast<int>(key & 0xffffffffu)};
+              const int ends[2] = {pair_lo(key), pair_hi(key)};
               tally(applied[k], applied[k].nb_segments, surface.nodes, ends, 2);
             }
         }
@@ -357,8 +356,8 @@ SizeField make_size_field(const Surface& surface, const LocalSizeItems& items, d
   for (const auto& [key, segment] : surface.segments) {
     const double size = items.edge_size[segment.edge];
     if (size >= h) continue;
-    const Vec3& a = surface.nodes[static_cast<int>(key >> 32)];
-    const Vec3& b = surface.nodes[static_cast<int>(key & 0xffffffffu)];
+    const Vec3& a = surface.nodes[pair_lo(key)];
+    const Vec3& b = surface.nodes[pair_hi(key)];
     field.add(a, b, b, size);
   }
   return field;

@@ -295,8 +295,7 @@ std::vector<int> corner_nodes(const std::vector<SharpCorner>& corners, const Sur
   std::vector<std::vector<int>> ends(wanted.size());  // per edge at a corner: its nodes
   for (const auto& [key, segment] : surface.segments)
     if (segment.edge >= 0 && segment.edge < static_cast<int>(wanted.size()) && wanted[segment.edge])
-      for (const int n : {static_cast<int>(key >> 32), static_cast<int>(key & 0xffffffffu)})
-        ends[segment.edge].push_back(n);
+      for (const int n : {pair_lo(key), pair_hi(key)}) ends[segment.edge].push_back(n);
   std::vector<int> out;
   for (const SharpCorner& c : corners) {
     int nearest = -1;
@@ -319,8 +318,7 @@ std::vector<int> nodes_at(const SharpFeatures& features, const Surface& surface)
   std::vector<int> out;
   for (const auto& [key, segment] : surface.segments)
     if (segment.edge >= 0 && segment.edge < static_cast<int>(sharp.size()) && sharp[segment.edge])
-      for (const int n : {static_cast<int>(key >> 32), static_cast<int>(key & 0xffffffffu)})
-        out.push_back(n);
+      for (const int n : {pair_lo(key), pair_hi(key)}) out.push_back(n);
   for (const int nearest : corner_nodes(features.corners, surface))
     if (nearest >= 0) out.push_back(nearest);
   std::sort(out.begin(), out.end());

@@ -84,7 +84,7 @@ std::vector<char> nodes_on_edges(const Surface& surface) {
   std::vector<char> on_edge(surface.nodes.size(), 0);
   for (const auto& [key, segment] : surface.segments) {
     (void)segment;
-    on_edge[key >> 32] = on_edge[key & 0xffffffffu] = 1;
+    on_edge[pair_lo(key)] = on_edge[pair_hi(key)] = 1;
   }
   return on_edge;
 }
@@ -294,7 +294,7 @@ void drop_unused_nodes(Surface& surface) {
     for (int& n : t.node) n = renumber[n];
   std::unordered_map<std::uint64_t, EdgeSegment> segments;
   for (const auto& [key, segment] : surface.segments) {
-    const int a = renumber[key >> 32], b = renumber[key & 0xffffffffu];
+    const int a = renumber[pair_lo(key)], b = renumber[pair_hi(key)];
     if (a >= 0 && b >= 0) segments[pair_key(a, b)] = segment;
   }
   surface.segments = std::move(segments);
@@ -325,7 +325,7 @@ void remove_folds(Surface& surface, double tolerance) {
     surface.triangles.swap(kept);
     std::unordered_map<std::uint64_t, EdgeSegment> segments;
     for (const auto& [key, segment] : surface.segments) {
-      const int a = to[key >> 32], b = to[key & 0xffffffffu];
+      const int a = to[pair_lo(key)], b = to[pair_hi(key)];
       if (a != b) segments[pair_key(a, b)] = segment;
     }
     surface.segments = std::move(segments);
@@ -504,7 +504,7 @@ std::vector<int> zip_lens_faces(const Shape& s, const TopTools_IndexedMapOfShape
       if (on_lens(segment.edge)) {
         keys.push_back(key);
         lens_segment.emplace(key, segment);
-        ++uses[static_cast<int>(key >> 32)], ++uses[static_cast<int>(key & 0xffffffffu)];
+        ++uses[pair_lo(key)], ++uses[pair_hi(key)];
       }
     for (const auto& [key, segment] : doubled) {
       const auto held = surface.segments.find(key);
@@ -513,7 +513,7 @@ std::vector<int> zip_lens_faces(const Shape& s, const TopTools_IndexedMapOfShape
         keys.push_back(key);
         lens_segment.emplace(key, segment);
         third.emplace(key, held->second);
-        ++uses[static_cast<int>(key >> 32)], ++uses[static_cast<int>(key & 0xffffffffu)];
+        ++uses[pair_lo(key)], ++uses[pair_hi(key)];
       } else if (!on_lens(segment.edge) && on_lens(held->second.edge)) {
         third.emplace(key, segment);
       }
@@ -524,7 +524,7 @@ std::vector<int> zip_lens_faces(const Shape& s, const TopTools_IndexedMapOfShape
         // an end is on both edges' chains: two segments (or one of each edge)
         int with_e1 = 0, with_e2 = 0;
         for (const std::uint64_t key : keys)
-          if (static_cast<int>(key >> 32) == n || static_cast<int>(key & 0xffffffffu) == n)
+          if (pair_lo(key) == n || pair_hi(key) == n)
             (lens_segment.at(key).edge == e1 ? with_e1 : with_e2) = 1;
         if (with_e1 && with_e2) ends.push_back(n);
       }
@@ -545,7 +545,7 @@ std::vector<int> zip_lens_faces(const Shape& s, const TopTools_IndexedMapOfShape
         bool on = false;
         double nearest = std::numeric_limits<double>::infinity();
         for (const std::uint64_t key : keys) {
-          const int x = static_cast<int>(key >> 32), y = static_cast<int>(key & 0xffffffffu);
+          const int x = pair_lo(key), y = pair_hi(key);
           if (lens_segment.at(key).edge != other) continue;
           on = on || x == n || y == n;
           const Vec3 xy = surface.nodes[y] - surface.nodes[x];
@@ -565,7 +565,7 @@ std::vector<int> zip_lens_faces(const Shape& s, const TopTools_IndexedMapOfShape
     for (const std::uint64_t key : keys) {
       const EdgeSegment& segment = lens_segment.at(key);
       if (segment.edge != e2) continue;
-      const int lo = static_cast<int>(key >> 32), hi = static_cast<int>(key & 0xffffffffu);
+      const int lo = pair_lo(key), hi = pair_hi(key);
       for (const auto& [n, t] : {std::pair<int, double>{lo, segment.t_lo}, {hi, segment.t_hi}}) {
         if (n == ends[0]) t_a = t, found_a = true;
         if (n == ends[1]) t_b = t, found_b = true;
@@ -667,7 +667,7 @@ void split_doubled_segments(const Shape& s, const TopTools_IndexedMapOfShape& fa
   for (const auto& [key, other] : doubled) {
     const auto it = surface.segments.find(key);
     if (it == surface.segments.end()) continue;
-    const int a = static_cast<int>(key >> 32), b = static_cast<int>(key & 0xffffffffu);
+    const int a = pair_lo(key), b = pair_hi(key);
     const Vec3 chord_middle = (surface.nodes[a] + surface.nodes[b]) * 0.5;
     const EdgeSegment first = it->second, second = other;
     const Vec3 m_first = middle(edges, first), m_second = middle(edges, second);

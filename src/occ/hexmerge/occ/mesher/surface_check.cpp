@@ -263,8 +263,7 @@ std::vector<OverusedSide> find_overused_sides(const Surface& surface,
           }))
         continue;  // one edge of them all
     }
-    if (face_sets.insert(faces).second)
-      found.push_back({static_cast<int>(key >> 32), static_cast<int>(key & 0xffffffffu), faces});
+    if (face_sets.insert(faces).second) found.push_back({pair_lo(key), pair_hi(key), faces});
   }
   std::sort(found.begin(), found.end(),
             [](const OverusedSide& x, const OverusedSide& y) { return x.faces < y.faces; });

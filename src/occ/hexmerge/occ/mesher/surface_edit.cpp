@@ -34,7 +34,7 @@ double FaceGaps::of(int face, const std::array<Vec3, 3>& p, const std::array<UV,
 void join_segments(Surface& surface, int r, int a, int b) {
   const auto ra = surface.segments.find(pair_key(r, a)), rb = surface.segments.find(pair_key(r, b));
   const auto t_at = [](const std::pair<const std::uint64_t, EdgeSegment>& segment, int n) {
-    return static_cast<int>(segment.first >> 32) == n ? segment.second.t_lo : segment.second.t_hi;
+    return pair_lo(segment.first) == n ? segment.second.t_lo : segment.second.t_hi;
   };
   const double ta = t_at(*ra, a), tb = t_at(*rb, b);
   const int edge = ra->second.edge;
@@ -85,7 +85,7 @@ void drop_removed(Surface& surface, const std::vector<char>& removed, const std:
   }
   out.unrefined_faces = surface.unrefined_faces;
   for (const auto& [key, segment] : surface.segments)
-    out.segments[pair_key(renumber[key >> 32], renumber[key & 0xffffffffu])] = segment;
+    out.segments[pair_key(renumber[pair_lo(key)], renumber[pair_hi(key)])] = segment;
   surface = std::move(out);
 }
 

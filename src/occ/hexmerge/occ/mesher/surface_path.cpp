@@ -67,8 +67,8 @@ class BoundaryPath final : public SurfacePath {
     std::vector<char> edge_mixed(surface.nodes.size(), 0);
     std::vector<int> sides(surface.nodes.size(), 0);
     for (const auto& [key, segment] : surface.segments) {
-      const auto lo = static_cast<std::size_t>(key >> 32),
-                 hi = static_cast<std::size_t>(key & 0xffffffffu);
+      const auto lo = static_cast<std::size_t>(pair_lo(key)),
+                 hi = static_cast<std::size_t>(pair_hi(key));
       for (const auto& [n, t] : {std::pair{lo, segment.t_lo}, std::pair{hi, segment.t_hi}}) {
         ++sides[n];
         if (edge_[n] >= 0 &&

@@ -564,7 +564,7 @@ void collapse_sides(const Shape& s, Surface& surface, double target, double max_
   std::vector<int> nb_segments(nb_nodes, 0);
   for (const auto& [key, segment] : surface.segments) {
     (void)segment;
-    ++nb_segments[key >> 32], ++nb_segments[key & 0xffffffffu];
+    ++nb_segments[pair_lo(key)], ++nb_segments[pair_hi(key)];
   }
   std::vector<std::vector<int>> around(nb_nodes);
   for (int ti = 0; ti < static_cast<int>(tris.size()); ++ti)
@@ -819,7 +819,7 @@ void collapse_sides(const Shape& s, Surface& surface, double target, double max_
     }
     std::sort(sides.begin(), sides.end());
     for (const auto& [priority, key] : sides) {
-      const int a = static_cast<int>(key >> 32), b = static_cast<int>(key & 0xffffffffu);
+      const int a = pair_lo(key), b = pair_hi(key);
       if (removed[a] || removed[b]) continue;
       // A cap's node may leave sides up to twice the target: a long side is better than a flat
       // triangle.

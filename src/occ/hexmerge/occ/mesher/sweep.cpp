@@ -307,7 +307,7 @@ std::optional<SweptSurface> sweep_surface(const Shape& s, const Sweep& sweep, co
   swept.seed = result.base;
   // The first plane's segments (the planes above repeat its nodes, see mesh_shape).
   for (const auto& [key, segment] : segments)
-    swept.segments[pair_key(renumber[key >> 32], renumber[key & 0xffffffffu])] = segment;
+    swept.segments[pair_key(renumber[pair_lo(key)], renumber[pair_hi(key)])] = segment;
   for (const SurfaceTriangle& t : bottom)
     swept.triangles.push_back(
         {{renumber[t.node[0]], renumber[t.node[1]], renumber[t.node[2]]}, {}, t.face});
@@ -579,8 +579,8 @@ std::optional<tetgen::TetrahedralizeOutput> tetrahedralize_swept(
   auto chain_of = [&](int a, int b) {
     std::vector<int> chain;
     for (const auto& [f, where] : in_loop[a]) {
-      const auto& loop = input.facets[f].polygons[where >> 32];
-      const std::size_t n = loop.size(), k = where & 0xffffffffu;
+      const auto& loop = input.facets[f].polygons[pair_lo(where)];
+      const std::size_t n = loop.size(), k = pair_hi(where);
       if (n < 3) continue;
       for (const int direction : {1, -1}) {
         chain = {a};
