@@ -469,59 +469,51 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
     const bool pull =
         strategy.pull && parameters.pull_core && nb_layers == 0 && layer_specs.empty();
     const CoreLayout layout = lay_core(lattice, *around, *parity, kept, sweep_axis, h, pull);
-    // 8a. The buffer layer: hexahedra from the core's closing pyramids' bases to the surface,
-    // their tops put into the faces' triangles (not on lattice faces, faces with a local size
-    // or face layers, faces between two solids); the surface's nodes and what lies near them
-    // then anew.
-    BufferCells buffer;
-    std::vector<int> buffered_faces;
-    if (pull && strategy.buffer && parameters.buffer_layer) {
-      std::vector<char> eligible(static_cast<std::size_t>(shape.faces.Extent()), 1);
-      for (std::size_t f = 0; f < eligible.size(); ++f)
-        eligible[f] = !lattice.lattice_face[f] && shape.face_solid_count[f] == 1 &&
-                      !(items_at_h.face_size[f] < h);
-      BufferReport made;
-      buffer = buffer_layer(shape, lattice, layout, nodes, *around, eligible, h, surface, made);
-      report.nb_buffer_hexes = made.nb_hexes;
-      report.nb_buffer_pyramids = made.nb_pyramids;
-      report.nb_buffer_faces = made.nb_faces;
-      report.buffer_bases = made.bases;
-      buffered_faces = made.faces;
-      if (made.nb_faces > 0) {
-        nodes = frame_nodes(shape, surface, lattice, sweep_axis, swept);
-        around = std::make_unique<Surroundings>(nodes, surface, lattice, h);
-        parity = std::make_unique<Parity>(nodes, surface, shape.face_solid_count, *around, h);
-      }
-    }
-    // 8b. Hexahedra across tube walls too thin for the core, their quads put into their
-    // cylinders' triangles (not faces the buffer layer took, nor those it may not take).
+    // The faces that may take quads (the wall cells', the buffer layer's tops): no lattice face,
+    // no face with a local size or face layers, none between two solids.
+    std::vector<char> eligible(static_cast<std::size_t>(shape.faces.Extent()), 1);
+    for (std::size_t f = 0; f < eligible.size(); ++f)
+      eligible[f] = !lattice.lattice_face[f] && shape.face_solid_count[f] == 1 &&
+                    !(items_at_h.face_size[f] < h);
+    const auto anew = [&] {
+      nodes = frame_nodes(shape, surface, lattice, sweep_axis, swept);
+      around = std::make_unique<Surroundings>(nodes, surface, lattice, h);
+      parity = std::make_unique<Parity>(nodes, surface, shape.face_solid_count, *around, h);
+    };
+    // 8b, before 8a. Hexahedra across tube walls too thin for the core (clear of its corners and
+    // its pyramids' apexes), their quads put into their cylinders' triangles; first, so that a wall
+    // the core reaches in places keeps its cylinders for them rather than for the buffer layer's
+    // few tops there (flanged_tee at h 3.5: its pipes' walls 1.7 h thick).
     WallCells tube_walls;
     if (pull && strategy.buffer && parameters.buffer_layer) {
-      std::vector<char> eligible(static_cast<std::size_t>(shape.faces.Extent()), 1);
-      for (std::size_t f = 0; f < eligible.size(); ++f)
-        eligible[f] = !lattice.lattice_face[f] && shape.face_solid_count[f] == 1 &&
-                      !(items_at_h.face_size[f] < h);
-      for (const int f : buffered_faces) eligible[static_cast<std::size_t>(f)] = 0;
-      // The core's corners, its pyramids' apexes and the buffer's tops keep clear of them.
       PointSet obstacles(around->box_lo, around->box_hi, h);
       for (std::size_t p = 0; p < layout.core_corner.size(); ++p)
         if (layout.core_corner[p]) obstacles.add(layout.point_at(lattice, p));
       for (std::size_t c = 0; c < layout.apex_cell.size(); ++c)
         if (layout.apex_cell[c]) obstacles.add(layout.apex_at(lattice, c));
-      for (const auto& [p, at] : buffer.top_of) obstacles.add(at);
       WallReport made;
       tube_walls =
           wall_cells(shape, lattice.frame, eligible, obstacles, h, deflection, surface, made);
       report.nb_wall_hexes = made.nb_hexes;
       report.nb_walls = made.nb_walls;
       report.nb_wall_faces = made.nb_faces;
-      if (made.nb_faces > 0) {
-        nodes = frame_nodes(shape, surface, lattice, sweep_axis, swept);
-        around = std::make_unique<Surroundings>(nodes, surface, lattice, h);
-        parity = std::make_unique<Parity>(nodes, surface, shape.face_solid_count, *around, h);
-      }
-      emit_wall_cells(tube_walls, *around, inserted);
+      for (const int f : made.faces) eligible[static_cast<std::size_t>(f)] = 0;
+      if (made.nb_faces > 0) anew();
     }
+    // 8a. The buffer layer: hexahedra from the core's closing pyramids' bases to the surface,
+    // their tops put into the faces' triangles (the faces above but the walls'); the surface's
+    // nodes and what lies near them then anew.
+    BufferCells buffer;
+    if (pull && strategy.buffer && parameters.buffer_layer) {
+      BufferReport made;
+      buffer = buffer_layer(shape, lattice, layout, nodes, *around, eligible, h, surface, made);
+      report.nb_buffer_hexes = made.nb_hexes;
+      report.nb_buffer_pyramids = made.nb_pyramids;
+      report.nb_buffer_faces = made.nb_faces;
+      report.buffer_bases = made.bases;
+      if (made.nb_faces > 0) anew();
+    }
+    emit_wall_cells(tube_walls, *around, inserted);
     const CoreCounts core = emit_core(lattice, layout, buffer, kept, h, *around, inserted);
     report.nb_core_cells = core.nb_core_cells;
     report.nb_lattice_points = core.nb_lattice_points;

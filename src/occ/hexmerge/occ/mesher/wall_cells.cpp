@@ -41,6 +41,8 @@ constexpr double kAxisAngle = 1e-9;
 constexpr double kAxisOffset = 1e-6;
 // A quad's side in its face's chart is at most this many times its length on the face.
 constexpr double kChartStretch = 1.5;
+// A wall keeps its cells where at least this share of its columns is clear of the core.
+constexpr double kLeastWallShare = 0.5;
 // A cell is at most this many times as long (along the axis, across the wall) as it is wide.
 constexpr double kCellStretch = 2.0;
 
@@ -296,6 +298,18 @@ WallCells wall_cells(const Shape& shape, const Frame& frame, const std::vector<c
     for (const Vec3& q : at) lo = vmin(lo, q), hi = vmax(hi, q);
     ok = ok && !obstacles.any_within((lo + hi) * 0.5, 0.5 * (hi - lo).norm() + 0.25 * h);
     if (!ok) dropped.insert(column(c));
+  }
+  // A wall where the core stands in most of it is the core's (and the buffer layer's): its
+  // cells go where fewer than kLeastWallShare of its columns are left.
+  {
+    std::vector<std::set<std::pair<int, int>>> placed_columns(walls.size()), left(walls.size());
+    for (const Cell& c : cells) {
+      placed_columns[c.wall].insert({c.i, c.j});
+      if (!dropped.count(column(c))) left[c.wall].insert({c.i, c.j});
+    }
+    for (const Cell& c : cells)
+      if (left[c.wall].size() < kLeastWallShare * placed_columns[c.wall].size())
+        dropped.insert(column(c));
   }
 
   // 5. Each face with quads triangulated again, until every face takes its quads and no cell

@@ -44,15 +44,16 @@ struct WallCells {
 /// The cells of the walls between two cylindrical faces of one solid, coaxial, the outer one's
 /// material inside its radius and the inner one's outside, kThinnestWallCell h to
 /// kThickestWallCell h apart (faces `eligible` only: no lattice face, no local size, not between
-/// two solids, not triangulated again by the buffer layer). Along each wall a grid of about h
-/// round its middle radius, finer where the outer face's chords would leave it by more than the
-/// chord deflection `deflection`, and h along its axis (round(thickness / h) cells across, rows h /
-/// 2 inside the faces' common length), half a cell off the outer face's seam; a cell is kept where
-/// its corners lie at least 0.3 h inside a face's edges on both sides, its six tets keep a scaled
-/// Jacobian of 0.2, no point of `obstacles` (the core's, frame coordinates) comes within h / 4
-/// of it, no surface node lies in it and its faces cross neither the surface nor each other.
-/// The faces with quads are triangulated again (a face where that fails keeps its triangles and
-/// gets no cells).
+/// two solids). Along each wall a grid of about h round its middle radius, finer where the outer
+/// face's chords would leave it by more than the chord deflection `deflection`, and h along its
+/// axis (round(thickness / h) cells across, rows h / 2 inside the faces' common length; along and
+/// across at most twice as long as round), half a cell off the outer face's seam; a cell is kept
+/// where its corners lie at least 0.3 h inside a face's edges on both sides, its six tets keep a
+/// scaled Jacobian of 0.2, no point of `obstacles` (the core's, frame coordinates) comes within
+/// h / 4 of it, no surface node lies in it and its faces cross neither the surface nor each
+/// other; a wall keeps none where under half its columns are clear of `obstacles` (the core's
+/// wall). The faces with quads are triangulated again (a face where that fails keeps its
+/// triangles and gets no cells).
 /// @param[in]     frame      the lattice's frame (the cells are given in it)
 /// @param[in,out] surface    the faces with quads triangulated again (world coordinates)
 WallCells wall_cells(const Shape& shape, const Frame& frame, const std::vector<char>& eligible,
