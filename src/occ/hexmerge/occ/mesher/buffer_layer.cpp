@@ -540,14 +540,7 @@ BufferCells buffer_layer(const Shape& shape, const Lattice& lattice, const CoreL
         const Vec3 centre = (lo_box + hi_box) * 0.5;
         const double radius = 0.5 * (hi_box - lo_box).norm();
         // (On its faces too: TetGen would split them there; not at its corners.)
-        const auto holds = [&](const Vec3& q) {
-          for (const Vec3& c : corner)
-            if ((c - q).norm() <= 1e-6 * h) return false;
-          for (const auto& path : kKuhnPaths)
-            if (in_tet(q, corner[0], corner[path[0]], corner[path[1]], corner[7], -1e-6))
-              return true;
-          return false;
-        };
+        const auto holds = [&](const Vec3& q) { return cell_holds(corner, q, h); };
         bool holds_node = false;
         node_at.for_each_within(centre, std::min(radius, h), [&](int n) {
           holds_node = holds_node || holds(frame_points[static_cast<std::size_t>(n)]);

@@ -14,6 +14,7 @@
 #include "hexmerge/geometry/quality.h"
 #include "hexmerge/occ/mesher/common.h"
 #include "hexmerge/occ/mesher/pull_core.h"
+#include "hexmerge/occ/mesher/spatial.h"
 
 namespace hexmerge::mesher {
 
@@ -51,6 +52,14 @@ double tet_quality(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
   const double xyz[12] = {a.x, a.y, a.z, b.x, b.y, b.z, c.x, c.y, c.z, d.x, d.y, d.z};
   static const index_t kTet[4] = {0, 1, 2, 3};
   return scaled_jacobian(CellType::Tet, xyz, kTet);
+}
+
+bool cell_holds(const std::array<Vec3, 8>& corner, const Vec3& q, double h) {
+  for (const Vec3& c : corner)
+    if ((c - q).norm() <= 1e-6 * h) return false;
+  for (const auto& path : kKuhnPaths)
+    if (in_tet(q, corner[0], corner[path[0]], corner[path[1]], corner[7], -1e-6)) return true;
+  return false;
 }
 
 std::array<Vec3, 8> buffer_hex_corners(const std::array<Vec3, 4>& base,

@@ -104,6 +104,10 @@ inline constexpr int kKuhnPaths[6][2] = {{1, 3}, {1, 5}, {2, 3}, {2, 6}, {4, 5},
 /// The scaled Jacobian of tet (a, b, c, d) (negative when det(b - a, c - a, d - a) is).
 double tet_quality(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d);
 
+/// Whether q lies in the cell of `corner` (kKuhnPaths' order: in one of its six tets, on its faces
+/// too, to 1e-6 of them), but not at a corner (within 1e-6 h): a point TetGen would put there.
+bool cell_holds(const std::array<Vec3, 8>& corner, const Vec3& q, double h);
+
 /// A buffer hexahedron's corners in kKuhnPaths' order: bits u, v across its base (corners in
 /// base_corners() order, the base facing +axis when `up`), w to its tops; u and v swapped on a
 /// base facing down its axis, so that the bits are right-handed.

@@ -62,11 +62,7 @@ class CellSplits {
     for (std::array<index_t, 3> f : faces) {
       if (det3(at(f[1]) - at(f[0]), at(f[2]) - at(f[0]), centre - at(f[0])) < 0)
         std::swap(f[1], f[2]);
-      const double xyz[12] = {at(f[0]).x, at(f[0]).y, at(f[0]).z, at(f[1]).x,
-                              at(f[1]).y, at(f[1]).z, at(f[2]).x, at(f[2]).y,
-                              at(f[2]).z, centre.x,   centre.y,   centre.z};
-      static const index_t kTet[4] = {0, 1, 2, 3};
-      if (scaled_jacobian(CellType::Tet, xyz, kTet) < floor) return false;
+      if (tet_quality(at(f[0]), at(f[1]), at(f[2]), centre) < floor) return false;
       made.insert(made.end(), {f[0], f[1], f[2], middle});
     }
     for (const index_t t : own) drop_[t] = 1;

@@ -9,7 +9,6 @@
 #include <map>
 #include <optional>
 #include <set>
-#include <unordered_map>
 #include <utility>
 
 #include "hexmerge/geometry/quality.h"
@@ -50,9 +49,7 @@ constexpr double kCellStretch = 2.0;
 // outer face of a wall) or outside (a bore).
 struct Cylinder {
   int face;
-  gp_Ax1 axis;
-  gp_Dir x_dir;
-  double radius;
+  gp_Cylinder surface;
   bool outer;
 };
 
@@ -64,6 +61,24 @@ struct Wall {
   std::vector<int> outer_faces, inner_faces;
   double z_lo = 0, z_hi = 0;  // the faces' common length along the axis
 };
+
+// The triangles of a cell's faces, as its six tets (kKuhnPaths) split them (corners in
+// kKuhnPaths' order), but those of its inner face (`on_surface` bit 1) and of its outer face (bit
+// 2) where those are the surface's.
+std::vector<std::array<int, 3>> cell_face_triangles(int on_surface) {
+  std::vector<std::array<int, 3>> out;
+  for (const auto& q : kKuhnPaths) {
+    const int tet[4] = {0, q[0], q[1], 7};
+    for (int f = 0; f < 4; ++f) {
+      const int a = tet[(f + 1) % 4], b = tet[(f + 2) % 4], d = tet[(f + 3) % 4];
+      const int shared = ~(a ^ b) & ~(a ^ d) & 7;  // the bits its corners share: its face
+      if (shared == 0) continue;
+      if ((shared & 4) && (on_surface & ((a & 4) ? 2 : 1))) continue;
+      out.push_back({a, b, d});
+    }
+  }
+  return out;
+}
 
 }  // namespace
 
@@ -97,7 +112,7 @@ WallCells wall_cells(const Shape& shape, const Frame& frame, const std::vector<c
       outward += normal.x * radial.X() + normal.y * radial.Y() + normal.z * radial.Z();
     }
     if (outward == 0) continue;
-    cylinders.push_back({f, c.Axis(), c.Position().XDirection(), c.Radius(), outward > 0});
+    cylinders.push_back({f, c, outward > 0});
   }
   // 2. The walls: per coaxial pair of radii, the outer faces and the inner ones.
   std::vector<Wall> walls;
@@ -107,25 +122,28 @@ WallCells wall_cells(const Shape& shape, const Frame& frame, const std::vector<c
     return (d - gp_Vec(a.Direction()) * d.Dot(a.Direction())).Magnitude() <= kAxisOffset * h;
   };
   const auto same = [&](double a, double b) { return std::abs(a - b) <= kAxisOffset * h; };
+  std::map<int, gp_Cylinder> cylinder_of;  // per face
+  for (const Cylinder& c : cylinders) cylinder_of.emplace(c.face, c.surface);
   for (const Cylinder& o : cylinders) {
     if (!o.outer) continue;
+    const gp_Ax1 axis = o.surface.Axis();
     for (const Cylinder& i : cylinders) {
-      if (i.outer || !coaxial(o.axis, i.axis)) continue;
-      const double t = o.radius - i.radius;
+      if (i.outer || !coaxial(axis, i.surface.Axis())) continue;
+      const double t = o.surface.Radius() - i.surface.Radius();
       if (!(t >= kThinnestWallCell * h && t <= kThickestWallCell * h)) continue;
       Wall* wall = nullptr;
       for (Wall& w : walls)
-        if (coaxial(gp_Ax1(w.origin, w.axis), o.axis) && same(w.outer_radius, o.radius) &&
-            same(w.inner_radius, i.radius))
+        if (coaxial(gp_Ax1(w.origin, w.axis), axis) && same(w.outer_radius, o.surface.Radius()) &&
+            same(w.inner_radius, i.surface.Radius()))
           wall = &w;
       if (!wall) {
         walls.emplace_back();
         wall = &walls.back();
-        wall->origin = o.axis.Location();
-        wall->axis = o.axis.Direction();
-        wall->x_dir = o.x_dir;
+        wall->origin = axis.Location();
+        wall->axis = axis.Direction();
+        wall->x_dir = o.surface.Position().XDirection();
         wall->y_dir = wall->axis.Crossed(wall->x_dir);
-        wall->outer_radius = o.radius, wall->inner_radius = i.radius;
+        wall->outer_radius = o.surface.Radius(), wall->inner_radius = i.surface.Radius();
       }
       if (std::find(wall->outer_faces.begin(), wall->outer_faces.end(), o.face) ==
           wall->outer_faces.end())
@@ -183,17 +201,15 @@ WallCells wall_cells(const Shape& shape, const Frame& frame, const std::vector<c
   std::vector<Cell> cells;
   std::map<Node, Vec3> world;                                // every corner's place
   std::map<std::pair<Node, int>, std::pair<P2, UV>> placed;  // per (node, face), in its chart
-  struct Grid {
-    int n, m, k;
-    double z0, dz;
-  };
-  std::vector<Grid> grids(walls.size());
   for (std::size_t wi = 0; wi < walls.size(); ++wi) {
     const Wall& w = walls[wi];
     const double middle = 0.5 * (w.outer_radius + w.inner_radius);
     const double length = w.z_hi - w.z_lo - h;  // rows h / 2 inside the ends
     if (!(length >= 0.5 * h)) continue;
-    Grid& g = grids[wi];
+    struct {
+      int n, m, k;  // cells round, along, across
+      double z0, dz;
+    } g;
     // About h round the middle, and the outer face's chords within the chord deflection.
     const double chord_angle = 2 * std::acos(std::max(-1.0, 1 - deflection / w.outer_radius));
     g.n = std::max({8, static_cast<int>(std::lround(2 * M_PI * middle / h)),
@@ -211,18 +227,19 @@ WallCells wall_cells(const Shape& shape, const Frame& frame, const std::vector<c
       const gp_Vec radial = gp_Vec(w.x_dir) * std::cos(theta) + gp_Vec(w.y_dir) * std::sin(theta);
       return w.origin.Translated(radial * r + gp_Vec(w.axis) * (g.z0 + j * g.dz));
     };
+    // Grid node (layer, i, j), i round the axis taken modulo n.
+    const auto node_at = [&](int layer, int i, int j) { return Node{wi, layer, i % g.n, j}; };
     // Where grid node (layer, i, j) on the wall's face places in that face's chart, clear of
     // its edges.
     const auto place = [&](int layer, int i, int j, int face) -> std::optional<P2> {
-      const Node node{wi, layer, ((i % g.n) + g.n) % g.n, j};
+      const Node node = node_at(layer, i, j);
       const auto key = std::pair{node, face};
       if (const auto it = placed.find(key); it != placed.end()) return it->second.first;
       const FaceChart* c = chart(face);
       if (!c) return std::nullopt;
       const gp_Pnt p = at(layer, i, j);
-      const BRepAdaptor_Surface s(TopoDS::Face(shape.faces(face + 1)), false);
       UV uv;
-      ElSLib::Parameters(s.Cylinder(), p, uv.u, uv.v);
+      ElSLib::Parameters(cylinder_of.at(face), p, uv.u, uv.v);
       const std::optional<P2> xy = place_clear(*c, uv, h);
       if (!xy) return std::nullopt;
       placed[key] = {*xy, uv};
@@ -245,11 +262,9 @@ WallCells wall_cells(const Shape& shape, const Frame& frame, const std::vector<c
         // Its sides in the chart as long as on the face (the chart's metric is the face's): not
         // the way round a periodic face's parameters from one side of its seam to the other.
         for (int e = 0; e < 4 && ok; ++e) {
-          const double chord =
-              (world.at(Node{wi, layer, ((i + di[e]) % g.n + g.n) % g.n, j + dj[e]}) -
-               world.at(
-                   Node{wi, layer, ((i + di[(e + 1) % 4]) % g.n + g.n) % g.n, j + dj[(e + 1) % 4]}))
-                  .norm();
+          const double chord = (world.at(node_at(layer, i + di[e], j + dj[e])) -
+                                world.at(node_at(layer, i + di[(e + 1) % 4], j + dj[(e + 1) % 4])))
+                                   .norm();
           ok = std::hypot(xy[e][0] - xy[(e + 1) % 4][0], xy[e][1] - xy[(e + 1) % 4][1]) <=
                kChartStretch * chord;
         }
@@ -266,7 +281,7 @@ WallCells wall_cells(const Shape& shape, const Frame& frame, const std::vector<c
         for (int layer = 0; layer < g.k; ++layer) {
           Cell cell{wi, i, j, layer == g.k - 1 ? outer : -1, layer == 0 ? inner : -1, {}};
           for (int b = 0; b < 8; ++b) {
-            const Node node{wi, layer + ((b >> 2) & 1), (i + (b & 1)) % g.n, j + ((b >> 1) & 1)};
+            const Node node = node_at(layer + ((b >> 2) & 1), i + (b & 1), j + ((b >> 1) & 1));
             cell.corner[static_cast<std::size_t>(b)] = node;
             if (!world.count(node)) world[node] = of(at(node.layer, i + (b & 1), node.j));
           }
@@ -284,6 +299,9 @@ WallCells wall_cells(const Shape& shape, const Frame& frame, const std::vector<c
     return at;
   };
   const auto column = [](const Cell& c) { return std::tuple{c.wall, c.i, c.j}; };
+  const auto on_surface = [](const Cell& c) {
+    return (c.inner_face >= 0 ? 1 : 0) | (c.outer_face >= 0 ? 2 : 0);
+  };
   std::set<std::tuple<std::size_t, int, int>> dropped;
   for (Cell& c : cells) {
     std::array<Vec3, 8> at = corners_of(c);
@@ -408,6 +426,12 @@ WallCells wall_cells(const Shape& shape, const Frame& frame, const std::vector<c
       if (fresh) points.push_back(frame.to_frame(world.at(node)));
       return it->second;
     };
+    // The surface's nodes, by place.
+    Vec3 box_lo = points[0], box_hi = points[0];
+    for (std::size_t n = 0; n < surface.nodes.size(); ++n)
+      box_lo = vmin(box_lo, points[n]), box_hi = vmax(box_hi, points[n]);
+    PointSet surface_nodes(box_lo, box_hi, h);
+    for (std::size_t n = 0; n < surface.nodes.size(); ++n) surface_nodes.add(points[n]);
     std::vector<std::array<int, 3>> inner;
     std::vector<std::tuple<std::size_t, int, int>> owner;
     std::set<std::array<int, 3>> seen;
@@ -415,39 +439,21 @@ WallCells wall_cells(const Shape& shape, const Frame& frame, const std::vector<c
       if (dropped.count(column(c))) continue;
       std::array<int, 8> id;
       for (int b = 0; b < 8; ++b) id[b] = point_of(c.corner[b]);
-      for (const auto& q : kKuhnPaths) {
-        const int tet[4] = {0, q[0], q[1], 7};
-        for (int f = 0; f < 4; ++f) {
-          const int a = tet[(f + 1) % 4], b = tet[(f + 2) % 4], d = tet[(f + 3) % 4];
-          // On a face of the cell (its corners share a bit), not on the surface.
-          const int shared = ~(a ^ b) & ~(a ^ d) & 7;
-          if (shared == 0) continue;
-          if (shared & 4) {
-            const bool top = (a & 4) != 0;
-            if ((top && c.outer_face >= 0) || (!top && c.inner_face >= 0)) continue;
-          }
-          std::array<int, 3> key{id[a], id[b], id[d]};
-          std::sort(key.begin(), key.end());
-          if (!seen.insert(key).second) continue;
-          inner.push_back({id[a], id[b], id[d]});
-          owner.push_back(column(c));
-        }
+      for (const auto& [a, b, d] : cell_face_triangles(on_surface(c))) {
+        std::array<int, 3> key{id[a], id[b], id[d]};
+        std::sort(key.begin(), key.end());
+        if (!seen.insert(key).second) continue;
+        inner.push_back({id[a], id[b], id[d]});
+        owner.push_back(column(c));
       }
       // A surface node inside it (on a face too; not at a corner).
       std::array<Vec3, 8> at;
       for (int b = 0; b < 8; ++b) at[b] = points[static_cast<std::size_t>(id[b])];
       Vec3 lo = at[0], hi = at[0];
       for (const Vec3& q : at) lo = vmin(lo, q), hi = vmax(hi, q);
-      bool holds = false;
-      for (std::size_t n = 0; n < surface.nodes.size() && !holds; ++n) {
-        const Vec3& q = points[n];
-        if (q.x < lo.x - 1e-6 * h || q.y < lo.y - 1e-6 * h || q.z < lo.z - 1e-6 * h ||
-            q.x > hi.x + 1e-6 * h || q.y > hi.y + 1e-6 * h || q.z > hi.z + 1e-6 * h)
-          continue;
-        if (std::find(id.begin(), id.end(), static_cast<int>(n)) != id.end()) continue;
-        for (const auto& path : kKuhnPaths)
-          holds = holds || in_tet(q, at[0], at[path[0]], at[path[1]], at[7], -1e-6);
-      }
+      const bool holds =
+          surface_nodes.any_within((lo + hi) * 0.5, 0.5 * (hi - lo).norm() + 1e-6 * h,
+                                   [&](const Vec3& q) { return cell_holds(at, q, h); });
       if (holds && dropped.insert(column(c)).second) again = true;
     }
     std::vector<std::array<int, 3>> against;
@@ -473,8 +479,7 @@ WallCells wall_cells(const Shape& shape, const Frame& frame, const std::vector<c
       if (!node_of.count(node) && inside.insert(node).second) out.points.push_back(at[b]);
     }
     out.hexes.push_back(at);
-    out.on_surface.push_back(
-        static_cast<char>((c.inner_face >= 0 ? 1 : 0) | (c.outer_face >= 0 ? 2 : 0)));
+    out.on_surface.push_back(static_cast<char>(on_surface(c)));
     walls_with.insert(c.wall);
   }
   if (report.nb_faces == 0) surface = original;
@@ -496,23 +501,18 @@ void emit_wall_cells(const WallCells& cells, Surroundings& around, InsertedPoint
     for (const auto& q : kKuhnPaths) {
       split.tets.push_back({0, q[0], q[1], 7});
       around.buffer_cells.add({at[0], at[q[0]], at[q[1]], at[7]});
-      // The tet's faces on the cell's faces: constraints (those on the surface are its own).
-      const int tet[4] = {0, q[0], q[1], 7};
-      for (int f = 0; f < 4; ++f) {
-        const int a = tet[(f + 1) % 4], b = tet[(f + 2) % 4], d = tet[(f + 3) % 4];
-        const int same = ~(a ^ b) & ~(a ^ d) & 7;
-        if (same == 0) continue;
-        if ((same & 4) && (cells.on_surface[hex] & ((a & 4) ? 2 : 1))) continue;
-        std::array<Vec3, 3> t{at[a], at[b], at[d]};
-        std::array<double, 9> key;
-        std::array<Vec3, 3> sorted = t;
-        std::sort(sorted.begin(), sorted.end(), [](const Vec3& u, const Vec3& v) {
-          return std::tie(u.x, u.y, u.z) < std::tie(v.x, v.y, v.z);
-        });
-        for (int k = 0; k < 3; ++k)
-          key[3 * k] = sorted[k].x, key[3 * k + 1] = sorted[k].y, key[3 * k + 2] = sorted[k].z;
-        if (seen.insert(key).second) inserted.constraints.push_back(t);
-      }
+    }
+    // Its faces' triangles: constraints (those on the surface are its own).
+    for (const auto& [a, b, d] : cell_face_triangles(cells.on_surface[hex])) {
+      std::array<Vec3, 3> t{at[a], at[b], at[d]};
+      std::array<double, 9> key;
+      std::array<Vec3, 3> sorted = t;
+      std::sort(sorted.begin(), sorted.end(), [](const Vec3& u, const Vec3& v) {
+        return std::tie(u.x, u.y, u.z) < std::tie(v.x, v.y, v.z);
+      });
+      for (int k = 0; k < 3; ++k)
+        key[3 * k] = sorted[k].x, key[3 * k + 1] = sorted[k].y, key[3 * k + 2] = sorted[k].z;
+      if (seen.insert(key).second) inserted.constraints.push_back(t);
     }
     inserted.kept_cells.push_back(split.corners);
     inserted.splits.push_back(std::move(split));
