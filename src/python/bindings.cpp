@@ -485,6 +485,7 @@ py::tuple run_mesh_shape(const std::string& brep, const std::map<std::string, st
   d["nb_walls"] = report.nb_walls;
   d["nb_wall_faces"] = report.nb_wall_faces;
   d["nb_buffer_cells_released"] = report.nb_buffer_cells_released;
+  d["nb_lattice_face_points_released"] = report.nb_lattice_face_points_released;
   d["nb_split_open_cells"] = report.nb_split_open_cells;
   {
     py::dict bases;

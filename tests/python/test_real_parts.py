@@ -315,6 +315,27 @@ def test_thin_blades_get_sizes_of_their_own() -> None:
     assert sj.min() > 0.15
 
 
+def test_lattice_face_points_beside_poor_tets_move_along_the_face() -> None:
+    """gmsh_1385_Laufrad_1000 at its 50k size (h 71.51): its disc is 25 mm thick, 0.35 h, too thin
+    for a core cell, but its bottom face lies on a lattice plane, and the lattice points on it
+    stood fixed under tets to the nodes of the face across: 109 tets under scaled Jacobian 0.2
+    (77 elements after the recombination), 88 of them at such a point. Released with the buffer's
+    cells after the last flips, they move along the face's plane: 32 tets, 25 elements (when this
+    was done). The boundary stays on the CAD."""
+    import numpy as np
+
+    h = 71.50683601918033
+    tets, report = hexmerge.mesh_shape(CAD / "gmsh_1385_Laufrad_1000.stp", h, recombine=False)
+    meshing = report["meshing"]
+    assert meshing["nb_lattice_face_points_released"] > 0
+    sj = tet_scaled_jacobians(tets.points, tets.cell_vertices.reshape(-1, 4).astype(np.int64))
+    assert int((sj < SJ_FLOOR).sum()) <= 50
+    assert sj.min() > 0.1
+    assert meshing["max_boundary_distance"] <= 1e-3 * h
+    _, _, mesh, _, _ = recombined_and_checked(tets)
+    assert int((scaled_jacobians(mesh) < SJ_FLOOR).sum()) <= 40
+
+
 def test_nodes_on_tolerant_cad_edges_are_on_the_cad() -> None:
     """gmsh_SampleCrankshaft4A's STEP edges carry tolerances up to 0.218 mm: Edge321 and Edge322
     lie that far off the B-spline surface of Face113. The boundary distance was measured to the

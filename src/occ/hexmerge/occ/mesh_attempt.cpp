@@ -785,6 +785,7 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
   report.nb_boundary_node_moves = improved.boundary_node_moves;
   report.nb_inserted_points = improved.inserted_vertices;
   report.nb_buffer_cells_released = improved.released_cells;
+  report.nb_lattice_face_points_released = improved.released_face_points;
   report.nb_split_open_cells = improved.split_open_cells;
   step("slivers", 0.9);
   // A tet the flips and moves left flat or folded (gmsh_Block at h 1.18: scaled Jacobian

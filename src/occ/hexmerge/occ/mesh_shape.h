@@ -296,6 +296,9 @@ struct MeshShapeReport {
   /// Buffer hexahedra and pyramids given up after TetGen: a tet under 0.2 beside them that the
   /// flips left (their tets and corners then improved as the others)
   std::size_t nb_buffer_cells_released = 0;
+  /// Lattice points inside a lattice face, corners of no core cell, at a tet under 0.2 that the
+  /// flips left: released with the buffer's cells to move along the face's plane
+  std::size_t nb_lattice_face_points_released = 0;
   /// Lattice cells and buffer hexahedra one of whose faces nothing closed after the tet
   /// improvement, split into six pyramids to a vertex at their centre (else the recombination's
   /// block loses them and cells beside them after them).

@@ -491,6 +491,51 @@ std::size_t split_open_cells(TetMesh& mesh, const std::vector<std::array<double,
 // stop sooner when no node moves.
 constexpr int kQualityRounds = 8;
 
+// The path of the boundary nodes along the CAD (the surface's, `boundary_path()`), and of the
+// lattice points inside a lattice face that are corners of no core cell along the face's plane
+// once released (`add`). The lattice places a lattice face's points for the core cells that reach
+// it; where none does (a disc 0.35 h thick holds no core: gmsh_1385_Laufrad_1000 at its 50k
+// size), they stood fixed under the tets from the other side's nodes, 88 of its 109 tets under
+// 0.2 among them.
+class LatticeFacePath final : public SurfacePath {
+ public:
+  explicit LatticeFacePath(SurfacePath* faces) : faces_(faces) {}
+
+  // Node v, standing at `at`, moves in the plane of unit normal n.
+  void add(index_t v, const Vec3& at, const Vec3& n) {
+    if (v >= planes_.size()) planes_.resize(static_cast<std::size_t>(v) + 1);
+    Vec3 u = n.cross(std::abs(n.x) < 0.6 ? Vec3{1, 0, 0} : Vec3{0, 1, 0});
+    u = u * (1.0 / u.norm());
+    planes_[v] = Plane{true, at, u, n.cross(u)};
+  }
+
+  int dimension(index_t v) const override {
+    return on_plane(v) ? 2 : faces_ != nullptr ? faces_->dimension(v) : 0;
+  }
+  void tangents(index_t v, Vec3& along_u, Vec3& along_v) const override {
+    if (!on_plane(v)) return faces_->tangents(v, along_u, along_v);
+    along_u = planes_[v].u, along_v = planes_[v].w;
+  }
+  bool at(index_t v, double a, double b, Vec3& point) const override {
+    if (!on_plane(v)) return faces_->at(v, a, b, point);
+    point = planes_[v].at + planes_[v].u * a + planes_[v].w * b;
+    return true;
+  }
+  void moved(index_t v, double a, double b) override {
+    if (!on_plane(v)) return faces_->moved(v, a, b);
+    planes_[v].at = planes_[v].at + planes_[v].u * a + planes_[v].w * b;
+  }
+
+ private:
+  struct Plane {
+    bool on = false;
+    Vec3 at, u, w;  // where the node stands; the plane's unit tangents
+  };
+  bool on_plane(index_t v) const { return v < planes_.size() && planes_[v].on; }
+  SurfacePath* faces_;
+  std::vector<Plane> planes_;
+};
+
 }  // namespace
 
 std::vector<std::array<index_t, 5>> closing_pyramids(
@@ -566,6 +611,7 @@ void improve_tets(TetMesh& mesh, const std::vector<double>& frame_points,
                   const std::vector<std::array<index_t, 3>>& boundary,
                   const std::vector<std::int32_t>& boundary_face,
                   const ImproveParameters& parameters, ImproveReport& report) {
+  report = ImproveReport{};
   const std::size_t made = frame_points.size() / 3;
   // TetGen leaves slivers where the lattice meets the boundary layers and the surface (four
   // nearly cocircular points, as the sides of the layers' prisms are): flips take them out, then
@@ -651,7 +697,32 @@ void improve_tets(TetMesh& mesh, const std::vector<double>& frame_points,
   const std::vector<std::array<index_t, 5>> pyramids = closing_pyramids(mesh, cell_of, nudged);
   // Boundary nodes inside a CAD face move along it, inside a CAD edge along that (a tet on a
   // needle of the surface gets better only so); swept, none.
-  SurfacePath* const surface = parameters.sweep_axis < 0 ? parameters.surface : nullptr;
+  LatticeFacePath paths(parameters.surface);
+  SurfacePath* const surface =
+      parameters.sweep_axis < 0 && parameters.surface != nullptr ? &paths : nullptr;
+  // The lattice points no core cell has kept (off the half lattice now) inside a lattice face
+  // (every boundary triangle at them of one face and in one plane), by that plane's normal: they
+  // are released with the kept cells, those at a tet under insert_below then.
+  std::vector<std::int32_t> face_at;  // -2: no triangle yet, -1: not inside one plane
+  std::vector<Vec3> normal_at;
+  if (surface) {
+    face_at.assign(made, -2), normal_at.resize(made);
+    for (std::size_t i = 0; i < boundary.size(); ++i) {
+      const std::array<index_t, 3>& c = boundary[i];
+      const Vec3 a = Vec3::of(mesh.point(c[0]));
+      const Vec3 n = (Vec3::of(mesh.point(c[1])) - a).cross(Vec3::of(mesh.point(c[2])) - a);
+      const double length = n.norm();
+      for (const index_t v : c) {
+        if (v < parameters.nb_surface_nodes || half_lattice[v] || face_at[v] == -1) continue;
+        if (!(length > 0))
+          face_at[v] = -1;
+        else if (face_at[v] == -2)
+          face_at[v] = boundary_face[i], normal_at[v] = n * (1.0 / length);
+        else if (face_at[v] != boundary_face[i] || n.cross(normal_at[v]).norm() > 1e-9 * length)
+          face_at[v] = -1;
+      }
+    }
+  }
   // A lattice point on the boundary (a corner of the core's cells on a lattice face) stays.
   if (surface)
     for (std::size_t v = 0; v < made; ++v)
@@ -662,7 +733,7 @@ void improve_tets(TetMesh& mesh, const std::vector<double>& frame_points,
   // tets and corners are the mesh's like any other) for one more round (gmsh_Angled at its 250k
   // size: 8 tets from 0.116 beside buffer cells).
   std::unordered_map<index_t, std::vector<std::size_t>> kept_cells_at;
-  const std::vector<char> movable_unkept = movable;
+  std::vector<char> movable_unkept = movable;
   std::vector<char> released(parameters.kept_cells.size(), 0);
   // (A pyramid's apex, a core pyramid's too, is nudged as the closing pyramids' are, the pyramid
   // kept at pyramid_floor.)
@@ -706,30 +777,35 @@ void improve_tets(TetMesh& mesh, const std::vector<double>& frame_points,
   settled.assign(mesh.nb_tets(), 0);
   std::vector<char> still(mesh.nb_vertices(), 0);
   // Releases the kept cells a tet under insert_below outside them touches at one of their
-  // boundary corners (the tops: their corners inside stay either way); how many.
-  const auto release_cells = [&]() {
-    std::size_t count = 0;
-    for (index_t t = 0; t < mesh.nb_tets() && !kept_cells_at.empty(); ++t) {
+  // boundary corners (the tops: their corners inside stay either way), and the lattice face's
+  // points (face_at) at such a tet; whether any.
+  const auto release = [&]() {
+    if (kept_cells_at.empty() && face_at.empty()) return false;
+    for (index_t t = 0; t < mesh.nb_tets(); ++t) {
       const index_t* v = mesh.tet(t);
       if (!(scaled_jacobian(CellType::Tet, mesh.points.data(), v) < parameters.insert_below) ||
           in_kept_cell(t))
         continue;
       for (int k = 0; k < 4; ++k) {
         if (!on_boundary[v[k]]) continue;
+        if (v[k] < face_at.size() && face_at[v[k]] >= 0) {
+          paths.add(v[k], Vec3::of(mesh.point(v[k])), normal_at[v[k]]);
+          face_at[v[k]] = -1, movable_unkept[v[k]] = kOnSurface, ++report.released_face_points;
+        }
         const auto it = kept_cells_at.find(v[k]);
         if (it == kept_cells_at.end()) continue;
         for (const std::size_t c : it->second)
-          if (!released[c]) released[c] = 1, ++count;
+          if (!released[c]) released[c] = 1, ++report.released_cells;
       }
     }
-    if (count > 0) keep_cells(), settled.assign(settled.size(), 0), still.assign(still.size(), 0);
-    return count;
+    if (report.released_cells + report.released_face_points == 0) return false;
+    keep_cells(), settled.assign(settled.size(), 0), still.assign(still.size(), 0);
+    return true;
   };
   int extra = 0;  // the round after a release
   const auto release_once = [&]() {
     if (extra > 0) return false;
-    report.released_cells = release_cells();
-    extra = report.released_cells > 0 ? 1 : 0;
+    extra = release() ? 1 : 0;
     return extra > 0;
   };
   std::vector<FaceKey> flat_before;  // the faces of the flat tets of the round before

@@ -24,6 +24,9 @@ struct ImproveReport {
   std::size_t boundary_node_moves = 0;  ///< of those, of boundary nodes along a CAD face or edge
   std::size_t inserted_vertices = 0;    ///< vertices inserted into tets no flip improved
   std::size_t released_cells = 0;       ///< kept cells released (ImproveParameters::kept_cells)
+  /// lattice points inside a lattice face, corners of no core cell, released with the cells to
+  /// move along the face's plane (ImproveParameters::surface)
+  std::size_t released_face_points = 0;
   /// cells (lattice cells, buffer hexahedra) with a face nothing closes, split into six pyramids
   /// to their centre (split_open_cells())
   std::size_t split_open_cells = 0;
@@ -40,8 +43,10 @@ struct ImproveParameters {
   /// than this (the surface's chord deflection).
   double max_boundary_shift = 0.0;
   /// The boundary nodes that may move along their CAD face or edge, and where (null: none; swept:
-  /// none move). They move while a tet at them is below 0.2, no more of their tets below it and
-  /// their boundary triangles' smallest angle kept (or above 10 degrees).
+  /// none move); with it, the lattice points inside a lattice face that are corners of no core
+  /// cell move along the face's plane once released (as the kept cells are). They move while a tet
+  /// at them is below 0.2, no more of their tets below it and their boundary triangles' smallest
+  /// angle kept (or above 10 degrees).
   SurfacePath* surface = nullptr;
   /// A tet below this scaled Jacobian that no flip improves gets a vertex inside
   /// (RemoveSliversParameters::insert_below); 0: never.
