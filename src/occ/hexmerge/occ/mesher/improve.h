@@ -77,7 +77,8 @@ std::vector<std::array<index_t, 5>> closing_pyramids(
 /// Flips take out slivers, then the free nodes (not on the surface, not on the half lattice,
 /// not in a swept mesh; the boundary nodes along their CAD face or edge, `surface`) move to raise
 /// the worst tet around them, then flips again, for 8 rounds of flips (a ninth where kept cells
-/// were released: ImproveParameters::kept_cells). Tets within one lattice cell or closing pyramid
+/// or lattice faces' points were released beside tets under insert_below after the eighth:
+/// ImproveParameters::kept_cells, surface). Tets within one lattice cell or closing pyramid
 /// (all corners on the half lattice, within one cell's width), or swept within one slab, stay as
 /// they are.
 /// @param[in,out] mesh           the tets (coordinates in the world)
