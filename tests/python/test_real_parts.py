@@ -319,9 +319,10 @@ def test_lattice_face_points_beside_poor_tets_move_along_the_face() -> None:
     """gmsh_1385_Laufrad_1000 at its 50k size (h 71.51): its disc is 25 mm thick, 0.35 h, too thin
     for a core cell, but its bottom face lies on a lattice plane, and the lattice points on it
     stood fixed under tets to the nodes of the face across: 109 tets under scaled Jacobian 0.2
-    (77 elements after the recombination), 88 of them at such a point. Released with the buffer's
-    cells after the last flips, they move along the face's plane: 32 tets, 25 elements (when this
-    was done). The boundary stays on the CAD."""
+    (77 elements after the recombination), 88 of them at such a point. Released beside the tets
+    still under 0.2 half way through the sliver stage's rounds and after them, they move along the
+    face's plane: 21 tets, 13 elements (when this was done; 25 elements released at the end only).
+    The boundary stays on the CAD."""
     import numpy as np
 
     h = 71.50683601918033
@@ -329,11 +330,11 @@ def test_lattice_face_points_beside_poor_tets_move_along_the_face() -> None:
     meshing = report["meshing"]
     assert meshing["nb_lattice_face_points_released"] > 0
     sj = tet_scaled_jacobians(tets.points, tets.cell_vertices.reshape(-1, 4).astype(np.int64))
-    assert int((sj < SJ_FLOOR).sum()) <= 50
+    assert int((sj < SJ_FLOOR).sum()) <= 40
     assert sj.min() > 0.1
     assert meshing["max_boundary_distance"] <= 1e-3 * h
     _, _, mesh, _, _ = recombined_and_checked(tets)
-    assert int((scaled_jacobians(mesh) < SJ_FLOOR).sum()) <= 40
+    assert int((scaled_jacobians(mesh) < SJ_FLOOR).sum()) <= 30
 
 
 def test_nodes_on_tolerant_cad_edges_are_on_the_cad() -> None:

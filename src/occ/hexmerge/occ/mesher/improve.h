@@ -44,9 +44,9 @@ struct ImproveParameters {
   double max_boundary_shift = 0.0;
   /// The boundary nodes that may move along their CAD face or edge, and where (null: none; swept:
   /// none move); with it, the lattice points inside a lattice face that are corners of no core
-  /// cell move along the face's plane once released (as the kept cells are). They move while a tet
-  /// at them is below 0.2, no more of their tets below it and their boundary triangles' smallest
-  /// angle kept (or above 10 degrees).
+  /// cell move along the face's plane once released (at a tet under insert_below after the fourth
+  /// or the last round). They move while a tet at them is below 0.2, no more of their tets below
+  /// it and their boundary triangles' smallest angle kept (or above 10 degrees).
   SurfacePath* surface = nullptr;
   /// A tet below this scaled Jacobian that no flip improves gets a vertex inside
   /// (RemoveSliversParameters::insert_below); 0: never.
@@ -77,10 +77,10 @@ std::vector<std::array<index_t, 5>> closing_pyramids(
 /// Flips take out slivers, then the free nodes (not on the surface, not on the half lattice,
 /// not in a swept mesh; the boundary nodes along their CAD face or edge, `surface`) move to raise
 /// the worst tet around them, then flips again, for 8 rounds of flips (a ninth where kept cells
-/// or lattice faces' points were released beside tets under insert_below after the eighth:
-/// ImproveParameters::kept_cells, surface). Tets within one lattice cell or closing pyramid
-/// (all corners on the half lattice, within one cell's width), or swept within one slab, stay as
-/// they are.
+/// or lattice faces' points were released beside tets under insert_below after the eighth, the
+/// points after the fourth too: ImproveParameters::kept_cells, surface). Tets within one lattice
+/// cell or closing pyramid (all corners on the half lattice, within one cell's width), or swept
+/// within one slab, stay as they are.
 /// @param[in,out] mesh           the tets (coordinates in the world)
 /// @param[in]     frame_points   #vertices by 3: the vertices in frame coordinates (lattice at
 ///                               multiples of the spacing)
