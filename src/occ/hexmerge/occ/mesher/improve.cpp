@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <optional>
 #include <unordered_map>
 #include <utility>
 
@@ -499,7 +500,7 @@ constexpr int kQualityRounds = 8;
 // 0.2 among them.
 class LatticeFacePath final : public SurfacePath {
  public:
-  explicit LatticeFacePath(SurfacePath* faces) : faces_(faces) {}
+  explicit LatticeFacePath(SurfacePath& faces) : faces_(faces) {}
 
   // Node v, standing at `at`, moves in the plane of unit normal n.
   void add(index_t v, const Vec3& at, const Vec3& n) {
@@ -509,20 +510,18 @@ class LatticeFacePath final : public SurfacePath {
     planes_[v] = Plane{true, at, u, n.cross(u)};
   }
 
-  int dimension(index_t v) const override {
-    return on_plane(v) ? 2 : faces_ != nullptr ? faces_->dimension(v) : 0;
-  }
+  int dimension(index_t v) const override { return on_plane(v) ? 2 : faces_.dimension(v); }
   void tangents(index_t v, Vec3& along_u, Vec3& along_v) const override {
-    if (!on_plane(v)) return faces_->tangents(v, along_u, along_v);
+    if (!on_plane(v)) return faces_.tangents(v, along_u, along_v);
     along_u = planes_[v].u, along_v = planes_[v].w;
   }
   bool at(index_t v, double a, double b, Vec3& point) const override {
-    if (!on_plane(v)) return faces_->at(v, a, b, point);
+    if (!on_plane(v)) return faces_.at(v, a, b, point);
     point = planes_[v].at + planes_[v].u * a + planes_[v].w * b;
     return true;
   }
   void moved(index_t v, double a, double b) override {
-    if (!on_plane(v)) return faces_->moved(v, a, b);
+    if (!on_plane(v)) return faces_.moved(v, a, b);
     planes_[v].at = planes_[v].at + planes_[v].u * a + planes_[v].w * b;
   }
 
@@ -532,7 +531,7 @@ class LatticeFacePath final : public SurfacePath {
     Vec3 at, u, w;  // where the node stands; the plane's unit tangents
   };
   bool on_plane(index_t v) const { return v < planes_.size() && planes_[v].on; }
-  SurfacePath* faces_;
+  SurfacePath& faces_;
   std::vector<Plane> planes_;
 };
 
@@ -697,9 +696,10 @@ void improve_tets(TetMesh& mesh, const std::vector<double>& frame_points,
   const std::vector<std::array<index_t, 5>> pyramids = closing_pyramids(mesh, cell_of, nudged);
   // Boundary nodes inside a CAD face move along it, inside a CAD edge along that (a tet on a
   // needle of the surface gets better only so); swept, none.
-  LatticeFacePath paths(parameters.surface);
-  SurfacePath* const surface =
-      parameters.sweep_axis < 0 && parameters.surface != nullptr ? &paths : nullptr;
+  std::optional<LatticeFacePath> paths;
+  if (parameters.sweep_axis < 0 && parameters.surface != nullptr)
+    paths.emplace(*parameters.surface);
+  SurfacePath* const surface = paths ? &*paths : nullptr;
   // The lattice points no core cell has kept (off the half lattice now) inside a lattice face
   // (every boundary triangle at them of one face and in one plane), by that plane's normal: they
   // are released with the kept cells, those at a tet under insert_below then.
@@ -791,23 +791,20 @@ void improve_tets(TetMesh& mesh, const std::vector<double>& frame_points,
       for (int k = 0; k < 4; ++k) {
         if (!on_boundary[v[k]]) continue;
         if (v[k] < face_at.size() && face_at[v[k]] >= 0) {
-          paths.add(v[k], Vec3::of(mesh.point(v[k])), normal_at[v[k]]);
+          paths->add(v[k], Vec3::of(mesh.point(v[k])), normal_at[v[k]]);
           face_at[v[k]] = -1, movable_unkept[v[k]] = kOnSurface, ++report.released_face_points;
         }
+        if (!cells) continue;
         const auto it = kept_cells_at.find(v[k]);
-        if (!cells || it == kept_cells_at.end()) continue;
+        if (it == kept_cells_at.end()) continue;
         for (const std::size_t c : it->second)
           if (!released[c]) released[c] = 1, ++report.released_cells;
       }
     }
-    if (!cells) {
-      if (report.released_face_points == points_before) return false;
-      keep_cells(), settled.assign(settled.size(), 0), still.assign(still.size(), 0);
-      return true;
-    }
-    if (report.released_cells + report.released_face_points == 0) return false;
-    keep_cells(), settled.assign(settled.size(), 0), still.assign(still.size(), 0);
-    return true;
+    const bool any = cells ? report.released_cells + report.released_face_points > 0
+                           : report.released_face_points > points_before;
+    if (any) keep_cells(), settled.assign(settled.size(), 0), still.assign(still.size(), 0);
+    return any;
   };
   int extra = 0;  // the round after a release
   const auto release_once = [&]() {
