@@ -486,6 +486,12 @@ py::tuple run_mesh_shape(const std::string& brep, const std::map<std::string, st
   d["nb_wall_faces"] = report.nb_wall_faces;
   d["nb_buffer_cells_released"] = report.nb_buffer_cells_released;
   d["nb_lattice_face_points_released"] = report.nb_lattice_face_points_released;
+  d["polish_tets_below_before"] = report.polish_tets_below_before;
+  d["polish_tets_below_after"] = report.polish_tets_below_after;
+  d["nb_polish_flips"] = report.nb_polish_flips;
+  d["nb_polish_node_moves"] = report.nb_polish_node_moves;
+  d["nb_polish_boundary_node_moves"] = report.nb_polish_boundary_node_moves;
+  d["nb_polish_inserted_points"] = report.nb_polish_inserted_points;
   d["nb_split_open_cells"] = report.nb_split_open_cells;
   {
     py::dict bases;

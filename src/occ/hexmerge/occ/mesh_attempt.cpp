@@ -29,6 +29,7 @@
 #include "hexmerge/occ/mesher/lattice.h"
 #include "hexmerge/occ/mesher/layers.h"
 #include "hexmerge/occ/mesher/local_size.h"
+#include "hexmerge/occ/mesher/polish.h"
 #include "hexmerge/occ/mesher/pull_core.h"
 #include "hexmerge/occ/mesher/second_order.h"
 #include "hexmerge/occ/mesher/shape.h"
@@ -794,6 +795,36 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
     validate_tet_mesh(mesh);
   } catch (const InputError& e) {
     throw TetrahedralizeFailure(std::string("the tets made are not all valid (") + e.what() + ")");
+  }
+
+  // 12b. The tets the recombination leaves, improved: its elements stay, the tets between them
+  // get flips and moves, also of the nodes of faces and edges sized for their features (held
+  // through step 12: moved there, they broke the prisms and hexahedra across narrow faces, KiCad's
+  // Samtec FMC connector 593 -> 119 hexahedra), keeping the elements at the nodes acceptable.
+  if (parameters.polish && sweep_axis < 0) {
+    std::vector<bool> sized_face(items_at_h.face_size.size(), false),
+        sized_edge(items_at_h.edge_size.size());
+    for (std::size_t f = 0; f < sized_face.size(); ++f)
+      sized_face[f] = local_items.face_size[f] < h || layered[f];
+    for (std::size_t e = 0; e < sized_edge.size(); ++e)
+      sized_edge[e] = local_items.edge_size[e] < h;
+    const std::unique_ptr<SurfacePath> along =
+        boundary_path(shape, surface, sized_face, sized_edge, 1e-6 * h);
+    std::vector<char> movable(mesh.nb_vertices(), kFree);
+    for (const std::array<index_t, 3>& triangle : tets.boundary)
+      for (const index_t v : triangle) movable[v] = kFixed;
+    for (index_t v = 0; v < improve.nb_surface_nodes; ++v)
+      movable[v] = along->dimension(v) > 0 ? kOnSurface : kFixed;
+    PolishReport polished;
+    polish_leftover_tets(mesh, std::move(movable), along.get(), RecombineParameters{}, 0.2,
+                         polished);
+    report.polish_tets_below_before = polished.below_before;
+    report.polish_tets_below_after = polished.below_after;
+    report.nb_polish_flips = polished.flips;
+    report.nb_polish_node_moves = polished.node_moves;
+    report.nb_polish_boundary_node_moves = polished.boundary_node_moves;
+    report.nb_polish_inserted_points = polished.inserted_vertices;
+    step("polish", 0.92);
   }
 
   // 13. How far the boundary nodes are from the CAD faces they lie on.

@@ -121,6 +121,12 @@ struct MeshShapeParameters {
   /// When TetGen fails on them, the next way of placing the points is the pulled core without the
   /// layer.
   bool buffer_layer = true;
+  /// After the sliver stage, the tets the recombination (at its default parameters) leaves
+  /// are improved: it is run once, its hexahedra, prisms and pyramids stay, and the tets left
+  /// under a scaled Jacobian of 0.2 get flips and moves of their nodes (those on faces and edges
+  /// sized for their features too, along them) that keep every element at the nodes acceptable
+  /// (mesher/polish.h). Not on swept shapes. Costs one more recombination.
+  bool polish = true;
   /// Time limit of one TetGen run, in seconds; 0: 30 s plus 1 ms per point (far above TetGen's
   /// own time, about 1 s per 20k points). A run past it (TetGen 1.5 can loop on a lattice face),
   /// or one that leaves no tet, is restarted with the lattice faces' loops started at other
@@ -299,6 +305,14 @@ struct MeshShapeReport {
   /// Lattice points inside a lattice face, corners of no core cell, at a tet under 0.2 that the
   /// flips left: released with the buffer's cells to move along the face's plane
   std::size_t nb_lattice_face_points_released = 0;
+  /// The polish (MeshShapeParameters::polish): the tets the recombination left under 0.2
+  /// before and after it (with the same elements), and what it did
+  std::size_t polish_tets_below_before = 0;
+  std::size_t polish_tets_below_after = 0;
+  std::size_t nb_polish_flips = 0;
+  std::size_t nb_polish_node_moves = 0;
+  std::size_t nb_polish_boundary_node_moves = 0;
+  std::size_t nb_polish_inserted_points = 0;
   /// Lattice cells and buffer hexahedra one of whose faces nothing closed after the tet
   /// improvement, split into six pyramids to a vertex at their centre (else the recombination's
   /// block loses them and cells beside them after them).

@@ -65,6 +65,12 @@ ParameterTable<MeshShapeParameters> make_table() {
            "tube walls (two coaxial cylinders 0.5 h to 2.5 h apart) too thin for the core, their "
            "quads put into both cylinders' triangles; when TetGen fails on them the pulled core "
            "is tried without"),
+      flag(&P::polish, "polish", "Polish the tets left",
+           "After the flips and moves against slivers, the recombination is run once to see "
+           "which tets its hexahedra, prisms and pyramids take; the other tets under a scaled "
+           "Jacobian of 0.2 get flips and moves of their nodes (those of faces and edges sized "
+           "for their features too, along them) that keep every element at the nodes "
+           "acceptable; not on swept shapes; costs one more recombination"),
       number(&P::tetgen_time_limit, "tetgen_time_limit", "s", 0, 86400, "TetGen time limit",
              "Time limit of one TetGen run (0: 30 s plus 1 ms per point); a run past it, or one "
              "that leaves no tet, is restarted with the lattice faces' loops started elsewhere, "

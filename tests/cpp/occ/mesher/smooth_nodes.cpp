@@ -50,6 +50,26 @@ TEST(smooth_nodes, moving_the_centre_raises_the_minimum_and_nothing_else_moves) 
   validate_tet_mesh(m);
 }
 
+// `keeps` refuses positions: the centre takes none it refuses (here, with x under 0.5: an
+// element relying on it would fail there), and none at all when it refuses every one.
+TEST(smooth_nodes, a_node_takes_no_position_keeps_refuses) {
+  TetMesh m = star_with_an_offset_centre();
+  std::vector<char> movable(m.nb_vertices(), 0);
+  movable[6] = 1;
+  SmoothNodesReport report;
+  smooth_nodes(m, movable, SmoothNodesParameters{}, report, nullptr, {}, nullptr,
+               [&](index_t v) { return v != 6 || m.points[18] >= 0.5; });
+  EXPECT_GE(m.points[18], 0.5);
+  EXPECT_GT(report.min_after, report.min_before);
+  EXPECT_LT(report.min_after, 0.5);  // the centre of the octahedron (0.707) is refused
+
+  TetMesh still = star_with_an_offset_centre();
+  smooth_nodes(still, movable, SmoothNodesParameters{}, report, nullptr, {}, nullptr,
+               [](index_t) { return false; });
+  EXPECT_EQ(still.points, star_with_an_offset_centre().points);
+  EXPECT_EQ(report.moves, 0u);
+}
+
 // Random stars (an octahedron's corners moved by up to 0.45, the centre anywhere near the
 // middle): the free centre's search raises its worst tet, but does not end with more of its tets
 // below the floor than where it started unless its worst tet was under half the floor. Raising

@@ -45,7 +45,7 @@ RowsByNode rows_by_node(index_t nb_nodes, const std::vector<index_t>& keys, std:
 void smooth_nodes(TetMesh& mesh, const std::vector<char>& movable,
                   const SmoothNodesParameters& parameters, SmoothNodesReport& report,
                   SurfacePath* surface, const std::vector<std::array<index_t, 5>>& pyramids,
-                  std::vector<char>* settled) {
+                  std::vector<char>* settled, const std::function<bool(index_t)>& keeps) {
   if (!(parameters.target > 0 && parameters.target <= 1) ||
       !(parameters.nudge_target > 0 && parameters.nudge_target <= 1) ||
       !(parameters.floor > 0 && parameters.floor <= 1) ||
@@ -204,7 +204,7 @@ void smooth_nodes(TetMesh& mesh, const std::vector<char>& movable,
         place(v, p);
         std::size_t now = 0;
         const double q = worst_above(v, best + 1e-12, now);
-        if (q > best + 1e-12 && pyramids_kept(v)) {
+        if (q > best + 1e-12 && pyramids_kept(v) && (!keeps || keeps(v))) {
           best = q, here = p;
           if (!on_surface && now <= below) kept_here = p, kept_worst = q;
           return true;

@@ -4,6 +4,7 @@
 
 #include <array>
 #include <cstddef>
+#include <functional>
 #include <vector>
 
 #include "hexmerge/geometry/vec3.h"
@@ -95,12 +96,16 @@ struct SmoothNodesReport {
 ///                            changed, since a call left it flagged),
 ///                            which are not searched until a node of a tet at them moves; out,
 ///                            the same as the mesh stands. The moves made do not depend on it.
+/// @param[in]     keeps       empty, or whether the elements made of the mesh's tets that rely on
+///                            node v stay acceptable where it stands now (asked of a position
+///                            that is otherwise better): a node takes no position it refuses
 /// @throws InputError for a `movable` or `settled` of another size than #V, a pyramid with a
 ///         node out of range, or bad parameters
 void smooth_nodes(TetMesh& mesh, const std::vector<char>& movable,
                   const SmoothNodesParameters& parameters, SmoothNodesReport& report,
                   SurfacePath* surface = nullptr,
                   const std::vector<std::array<index_t, 5>>& pyramids = {},
-                  std::vector<char>* settled = nullptr);
+                  std::vector<char>* settled = nullptr,
+                  const std::function<bool(index_t)>& keeps = {});
 
 }  // namespace hexmerge
