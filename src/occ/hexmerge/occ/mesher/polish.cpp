@@ -18,12 +18,6 @@
 namespace hexmerge::mesher {
 namespace {
 
-/// Rings of tets around the tets under the floor that the polish recombines and works in (the
-/// nodes it moves are those of its tets under the floor and the tets its flips make, a ring in;
-/// their elements reach a ring further, and the recombination sees the last ring's outer faces
-/// as the boundary).
-constexpr int kPolishRings = 3;
-
 /// Rounds of flips and node moves (gmsh_Block at its 50k size: the fourth moves 240 nodes of
 /// the first's 1,468, and changes no count under 0.2).
 constexpr int kPolishRounds = 4;
@@ -73,10 +67,17 @@ bool planar(const std::array<const double*, 4>& p) {
   return std::abs(n.dot(Vec3::of(p[3]) - a)) <= 1e-9 * scale;
 }
 
-// polish_leftover_tets() on the tets around the poor ones (the mesh's other tets left out; its
-// points all there): the recombination, the elements kept and the rounds.
-void polish_around(TetMesh& mesh, std::vector<char>& movable, SurfacePath* surface,
-                   const RecombineParameters& recombination, double floor, PolishReport& report) {
+}  // namespace
+
+void polish_leftover_tets(TetMesh& mesh, std::vector<char> movable, SurfacePath* surface,
+                          const RecombineParameters& recombination, double floor,
+                          PolishReport& report) {
+  report = PolishReport{};
+  // No tet under the floor: nothing left under it (not recombined).
+  bool any = false;
+  for (index_t t = 0; t < mesh.nb_tets() && !any; ++t)
+    any = scaled_jacobian(CellType::Tet, mesh.points.data(), mesh.tet(t)) < floor;
+  if (!any) return;
   RecombineReport recombined;
   const MixedMesh mixed = recombine(mesh, recombination, recombined);
   // The elements' tets, which stay; per quad face (corners sorted), how many elements have it
@@ -189,53 +190,6 @@ void polish_around(TetMesh& mesh, std::vector<char>& movable, SurfacePath* surfa
     if (flips.face_removals + flips.edge_removals + flips.insertions + moves.moves == 0) break;
   }
   report.below_after = leftover_below();
-}
-
-}  // namespace
-
-void polish_leftover_tets(TetMesh& mesh, std::vector<char> movable, SurfacePath* surface,
-                          const RecombineParameters& recombination, double floor,
-                          PolishReport& report) {
-  report = PolishReport{};
-  // The tets under the floor and kPolishRings rings of tets around them (sharing a vertex).
-  std::vector<char> in_reach(mesh.nb_tets(), 0);
-  bool any = false;
-  for (index_t t = 0; t < mesh.nb_tets(); ++t)
-    any |= in_reach[t] = scaled_jacobian(CellType::Tet, mesh.points.data(), mesh.tet(t)) < floor;
-  if (!any) return;
-  std::vector<char> reached(mesh.nb_vertices(), 0);
-  for (int ring = 0; ring < kPolishRings; ++ring) {
-    for (index_t t = 0; t < mesh.nb_tets(); ++t)
-      if (in_reach[t])
-        for (int k = 0; k < 4; ++k) reached[mesh.tet(t)[k]] = 1;
-    for (index_t t = 0; t < mesh.nb_tets(); ++t)
-      in_reach[t] = in_reach[t] || std::any_of(mesh.tet(t), mesh.tet(t) + 4,
-                                               [&](index_t v) { return reached[v] != 0; });
-  }
-  // Those tets on all the points; a node moves only where all its tets are among them.
-  TetMesh around;
-  around.points = mesh.points;
-  TetMesh rest;
-  std::vector<int> outside_star(mesh.nb_vertices(), 0);
-  for (index_t t = 0; t < mesh.nb_tets(); ++t) {
-    TetMesh& to = in_reach[t] ? around : rest;
-    to.tets.insert(to.tets.end(), mesh.tet(t), mesh.tet(t) + 4);
-    if (!mesh.regions.empty()) to.regions.push_back(mesh.regions[t]);
-    if (!in_reach[t])
-      for (int k = 0; k < 4; ++k) ++outside_star[mesh.tet(t)[k]];
-  }
-  for (index_t v = 0; v < mesh.nb_vertices(); ++v)
-    if (outside_star[v] > 0) movable[v] = kFixed;
-  polish_around(around, movable, surface, recombination, floor, report);
-  // The mesh: the tets out of reach as they were, then those around, moved, flipped and with
-  // their vertices inserted.
-  mesh.points = std::move(around.points);
-  mesh.tets = std::move(rest.tets);
-  mesh.tets.insert(mesh.tets.end(), around.tets.begin(), around.tets.end());
-  if (!mesh.regions.empty()) {
-    mesh.regions = std::move(rest.regions);
-    mesh.regions.insert(mesh.regions.end(), around.regions.begin(), around.regions.end());
-  }
 }
 
 }  // namespace hexmerge::mesher
