@@ -218,4 +218,11 @@ double quad_max_corner_angle(const double* a, const double* b, const double* c, 
   return worst;
 }
 
+bool quad_is_planar(const double* a, const double* b, const double* c, const double* d) {
+  const Vec3 p0 = Vec3::of(a), p1 = Vec3::of(b), p2 = Vec3::of(c), p3 = Vec3::of(d);
+  const Vec3 n = (p1 - p0).cross(p2 - p0);
+  const double scale = (p1 - p0).norm() * (p2 - p0).norm() * (p3 - p0).norm();
+  return !(std::abs(n.dot(p3 - p0)) > 1e-9 * scale);
+}
+
 }  // namespace hexmerge

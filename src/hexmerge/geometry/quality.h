@@ -30,6 +30,12 @@ double quad_dihedral_angle(const double* a, const double* b, const double* c, co
 /// between the two edges meeting at the corner). 90 for a rectangle.
 double quad_max_corner_angle(const double* a, const double* b, const double* c, const double* d);
 
+/// Whether the quad a-b-c-d lies in one plane to round-off: d off the plane of a, b and c by a
+/// volume |((b - a) x (c - a)) . (d - a)| of at most 1e-9 |b - a| |c - a| |d - a| (the
+/// hexahedra and prisms of swept meshes and lattices, a cross-section repeated from plane to
+/// plane).
+bool quad_is_planar(const double* a, const double* b, const double* c, const double* d);
+
 /// A bound on an angle, in degrees, with its cosine: the predicates below compare cosines and
 /// take an arccosine only when the angle is within about 1e-7 degrees of the bound (or the bound
 /// is outside [0, 180]).

@@ -37,6 +37,17 @@ TEST(quad_dihedral_angle, folding_along_the_diagonal) {
   EXPECT_NEAR(quad_dihedral_angle(p, q, s, t), 180.0, 1e-9);
 }
 
+TEST(quad_is_planar, to_round_off_only) {
+  // A square moved off the axes (its corners' coordinates not exact): planar.
+  const double a[3] = {0.1, 0.2, 0.3}, b[3] = {1.1, 0.2 + 1.0 / 3, 0.3},
+               c[3] = {1.1, 1.2 + 1.0 / 3, 0.3 + 1.0 / 7}, d[3] = {0.1, 1.2, 0.3 + 1.0 / 7};
+  EXPECT_TRUE(quad_is_planar(a, b, c, d));
+  // One corner lifted by 1e-6 of the sides: not planar (a fold of about 1e-4 degrees).
+  const double lifted[3] = {0.1, 1.2, 0.3 + 1.0 / 7 + 1e-6};
+  EXPECT_FALSE(quad_is_planar(a, b, c, lifted));
+  EXPECT_GT(quad_dihedral_angle(a, b, c, lifted), 179.99);
+}
+
 TEST(quad_max_corner_angle, known_quads) {
   const double a[3] = {0, 0, 0}, b[3] = {2, 0, 0}, c[3] = {2, 1, 0}, d[3] = {0, 1, 0};
   EXPECT_NEAR(quad_max_corner_angle(a, b, c, d), 90.0, 1e-9);  // rectangle

@@ -5,6 +5,7 @@
 #include <unordered_set>
 
 #include "hexmerge/core/work_queue.h"
+#include "hexmerge/geometry/quality.h"
 #include "hexmerge/geometry/vec3.h"
 #include "hexmerge/recombine/select/selector.h"
 
@@ -22,11 +23,8 @@ bool Selector::planar_quads(const Candidate& c) const {
   const CellDescriptor& d = descriptor(c.type);
   for (int f = 0; f < d.nb_faces; ++f) {
     if (d.face_size[f] != 4) continue;
-    Vec3 p[4];
-    for (int i = 0; i < 4; ++i) p[i] = Vec3::of(mesh_.point(c.vertices[d.face[f][i]]));
-    const Vec3 n = (p[1] - p[0]).cross(p[2] - p[0]);
-    const double scale = (p[1] - p[0]).norm() * (p[2] - p[0]).norm() * (p[3] - p[0]).norm();
-    if (std::abs(n.dot(p[3] - p[0])) > 1e-9 * scale) return false;
+    const auto corner = [&](int i) { return mesh_.point(c.vertices[d.face[f][i]]); };
+    if (!quad_is_planar(corner(0), corner(1), corner(2), corner(3))) return false;
   }
   return true;
 }

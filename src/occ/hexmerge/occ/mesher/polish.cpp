@@ -2,14 +2,12 @@
 
 #include <algorithm>
 #include <array>
-#include <cmath>
 #include <cstdint>
 #include <map>
 #include <utility>
 #include <vector>
 
 #include "hexmerge/geometry/quality.h"
-#include "hexmerge/geometry/vec3.h"
 #include "hexmerge/mesh/cell_type.h"
 #include "hexmerge/mesh/mixed_mesh.h"
 #include "hexmerge/occ/mesher/remove_slivers.h"
@@ -55,16 +53,6 @@ std::array<const double*, 4> quad(const double* points, const Element& e, int f)
 double fold(const std::array<const double*, 4>& p) {
   return std::min(quad_dihedral_angle(p[0], p[1], p[2], p[3]),
                   quad_dihedral_angle(p[1], p[2], p[3], p[0]));
-}
-
-/// Whether the quad's corners lie in one plane to round-off (the recombination's block takes
-/// elements of such quads first: Selector::planar_quads).
-bool planar(const std::array<const double*, 4>& p) {
-  const Vec3 a = Vec3::of(p[0]);
-  const Vec3 n = (Vec3::of(p[1]) - a).cross(Vec3::of(p[2]) - a);
-  const double scale =
-      (Vec3::of(p[1]) - a).norm() * (Vec3::of(p[2]) - a).norm() * (Vec3::of(p[3]) - a).norm();
-  return std::abs(n.dot(Vec3::of(p[3]) - a)) <= 1e-9 * scale;
 }
 
 }  // namespace
@@ -141,7 +129,7 @@ void polish_leftover_tets(TetMesh& mesh, std::vector<char> movable, SurfacePath*
       e.least_fold[f] = std::min(bound, fold(p));
       e.widest_corner[f] =
           std::max(recombination.max_face_angle, quad_max_corner_angle(p[0], p[1], p[2], p[3]));
-      all_planar = all_planar && planar(p);
+      all_planar = all_planar && quad_is_planar(p[0], p[1], p[2], p[3]);
     }
     block = block || (e.type != CellType::Pyramid && all_planar);
     for (int k = 0; k < d.nb_vertices; ++k) {
