@@ -835,7 +835,13 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
   // three, before its lattice edges kept their points) lie on the face of a triangle at them.
   const std::vector<int> vertex_face = point_faces(std::move(given_face), mesh.points.size() / 3,
                                                    tets.boundary, tets.boundary_marker);
-  report.max_boundary_distance = max_boundary_distance(shape, mesh, vertex_face, 1e-6 * h);
+  // A node lies on the CAD where it lies on the face of a boundary triangle at it: those faces
+  // too (KiCad's heatsink, swept: its fillets' profile nodes took the plane beside them).
+  std::vector<std::vector<int>> triangle_faces(mesh.nb_vertices());
+  for (std::size_t i = 0; i < tets.boundary.size(); ++i)
+    for (const index_t v : tets.boundary[i]) triangle_faces[v].push_back(boundary_face[i]);
+  report.max_boundary_distance =
+      max_boundary_distance(shape, mesh, vertex_face, 1e-6 * h, triangle_faces);
   report.local_sizes =
       local_sizes_applied(local_sizes, given_items.faces, given_items.edges, surface);
   if (sweep)

@@ -78,6 +78,21 @@ TEST(max_boundary_distance, moved_node_is_at_its_offset) {
   }
 }
 
+// A node given the wrong face (corner 7 of the box, on x = 10, given x = 0's) is measured
+// against the faces of the boundary triangles at it too: on one of them, it is on the CAD.
+TEST(max_boundary_distance, a_node_on_a_face_of_its_triangles_is_on_the_cad) {
+  BoxMesh box;
+  std::vector<int> faces = box.x_face;
+  faces[7] = box.x_face[0];
+  EXPECT_NEAR(mesher::max_boundary_distance(box.shape, box.mesh, faces, 1e-9), 10.0, 1e-9);
+  std::vector<std::vector<int>> others(8);
+  others[7] = {box.x_face[0], box.x_face[7]};
+  EXPECT_LT(mesher::max_boundary_distance(box.shape, box.mesh, faces, 1e-9, others), 1e-12);
+  // Moved off every face it may lie on: measured as before.
+  box.mesh.points[3 * 7] += 0.3;
+  EXPECT_NEAR(mesher::max_boundary_distance(box.shape, box.mesh, faces, 1e-9, others), 0.3, 1e-9);
+}
+
 TEST(max_boundary_distance, boundary_node_on_no_face_is_named) {
   BoxMesh box;
   std::vector<int> faces = box.x_face;

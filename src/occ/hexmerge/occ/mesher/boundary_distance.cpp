@@ -6,6 +6,7 @@
 #include <ShapeAnalysis_Surface.hxx>
 #include <TopoDS.hxx>
 #include <TopoDS_Face.hxx>
+#include <TopoDS_Vertex.hxx>
 #include <algorithm>
 #include <gp_Pnt2d.hxx>
 #include <limits>
@@ -31,7 +32,8 @@ std::vector<int> point_faces(std::vector<int> given_face, std::size_t nb_points,
 }
 
 double max_boundary_distance(const Shape& shape, const TetMesh& mesh,
-                             const std::vector<int>& vertex_face, double tolerance) {
+                             const std::vector<int>& vertex_face, double tolerance,
+                             const std::vector<std::vector<int>>& other_faces) {
   const std::size_t made = mesh.points.size() / 3;
   // The boundary nodes and, per node, the boundary nodes across a side of a boundary triangle
   // (face f of a tet is the one opposite its vertex f, TetTopology).
@@ -88,10 +90,17 @@ double max_boundary_distance(const Shape& shape, const TetMesh& mesh,
     // edge lies on that edge's curve, which a tolerant file puts off the face's surface by up to
     // the edge's tolerance (gmsh_SampleCrankshaft4A: Edge321 and Edge322 lie 0.218 mm off the
     // B-spline Face113, their tolerance; the node there is on the CAD, 1e-5 mm from that edge).
+    // Still that far: measured to the other faces it may lie on, the nearest taken.
     if (gap > std::max(worst, 100 * tolerance)) {
-      BRepExtrema_DistShapeShape to_face(BRepBuilderAPI_MakeVertex(p).Vertex(),
-                                         shape.faces(face + 1));
-      if (to_face.IsDone() && to_face.NbSolution() > 0) gap = std::min(gap, to_face.Value());
+      const TopoDS_Vertex node = BRepBuilderAPI_MakeVertex(p).Vertex();
+      const auto to = [&](int f) {
+        BRepExtrema_DistShapeShape to_face(node, shape.faces(f + 1));
+        if (to_face.IsDone() && to_face.NbSolution() > 0) gap = std::min(gap, to_face.Value());
+      };
+      to(face);
+      if (v < other_faces.size())
+        for (const int f : other_faces[v])
+          if (f >= 0 && f != face && gap > 100 * tolerance) to(f);
     }
     worst = std::max(worst, gap);
   };
