@@ -689,7 +689,8 @@ def test_engine_options_and_progress(shapes) -> None:
     assert phases[0] == ("mesh shape", 0.0) and ("mesh shape", 1.0) in phases
     # The mesher's own steps, in order, each fraction up to 1 before the engine's phases.
     steps = [p for p, _ in phases if p.startswith("mesh shape: ")]
-    for step in ("surface", "lattice", "core", "layers", "tetgen", "regions", "slivers", "check"):
+    for step in ("surface", "lattice", "core", "layers", "tetgen", "regions", "slivers", "polish",
+                 "check"):
         assert f"mesh shape: {step}" in steps
     assert steps.index("mesh shape: surface") < steps.index("mesh shape: tetgen") < steps.index(
         "mesh shape: check")

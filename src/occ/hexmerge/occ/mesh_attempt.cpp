@@ -815,9 +815,16 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
       for (const index_t v : triangle) movable[v] = kFixed;
     for (index_t v = 0; v < improve.nb_surface_nodes; ++v)
       movable[v] = along->dimension(v) > 0 ? kOnSurface : kFixed;
+    // The recombination's phases shown (at 1M tets it takes about 10 s), the fraction where the
+    // sliver stage left it.
+    ProgressCallback recombining;
+    if (progress)
+      recombining = [&](const std::string& phase, double) {
+        return progress("mesh shape: polish, recombining: " + phase + way, 0.9);
+      };
     PolishReport polished;
     polish_leftover_tets(mesh, std::move(movable), along.get(), RecombineParameters{}, 0.2,
-                         polished);
+                         polished, recombining);
     report.polish_tets_below_before = polished.below_before;
     report.polish_tets_below_after = polished.below_after;
     report.nb_polish_flips = polished.flips;

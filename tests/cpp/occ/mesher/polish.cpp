@@ -4,10 +4,12 @@
 
 #include <algorithm>
 #include <random>
+#include <string>
 #include <vector>
 
 #include "fixtures.h"
 #include "hexmerge/check/validate_tet_mesh.h"
+#include "hexmerge/core/error.h"
 #include "hexmerge/geometry/quality.h"
 #include "hexmerge/mesh/tet_topology.h"
 #include "hexmerge/recombine/recombine.h"
@@ -98,6 +100,29 @@ TEST(polish_leftover_tets, raises_the_tets_left_and_keeps_every_element) {
         if (i > 2 && movable[v] == kFree) continue;
         for (int c = 0; c < 3; ++c) EXPECT_EQ(m.points[3 * v + c], before.points[3 * v + c]);
       }
+}
+
+// The recombination's phases go to the progress callback; false from it cancels, the mesh as
+// it was.
+TEST(polish_leftover_tets, shows_the_recombinations_progress_and_can_be_cancelled) {
+  TetMesh m = half_shaken_grid();
+  std::vector<std::string> phases;
+  PolishReport report;
+  polish_leftover_tets(m, inner_nodes_free(m), nullptr, RecombineParameters{}, 0.2, report,
+                       [&](const std::string& phase, double) {
+                         phases.push_back(phase);
+                         return true;
+                       });
+  ASSERT_FALSE(phases.empty());
+  EXPECT_EQ(phases.front(), "topology");
+  EXPECT_EQ(phases.back(), "done");
+  TetMesh cancelled = half_shaken_grid();
+  EXPECT_THROW(
+      polish_leftover_tets(cancelled, inner_nodes_free(cancelled), nullptr, RecombineParameters{},
+                           0.2, report, [](const std::string&, double) { return false; }),
+      Cancelled);
+  EXPECT_EQ(cancelled.points, half_shaken_grid().points);
+  EXPECT_EQ(cancelled.tets, half_shaken_grid().tets);
 }
 
 TEST(polish_leftover_tets, does_nothing_where_no_tet_is_under_the_floor) {

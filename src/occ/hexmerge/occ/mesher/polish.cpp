@@ -59,7 +59,7 @@ double fold(const std::array<const double*, 4>& p) {
 
 void polish_leftover_tets(TetMesh& mesh, std::vector<char> movable, SurfacePath* surface,
                           const RecombineParameters& recombination, double floor,
-                          PolishReport& report) {
+                          PolishReport& report, const ProgressCallback& progress) {
   report = PolishReport{};
   // No tet under the floor: nothing left under it (not recombined).
   bool any = false;
@@ -67,7 +67,7 @@ void polish_leftover_tets(TetMesh& mesh, std::vector<char> movable, SurfacePath*
     any = scaled_jacobian(CellType::Tet, mesh.points.data(), mesh.tet(t)) < floor;
   if (!any) return;
   RecombineReport recombined;
-  const MixedMesh mixed = recombine(mesh, recombination, recombined);
+  const MixedMesh mixed = recombine(mesh, recombination, recombined, progress);
   // The elements' tets, which stay; per quad face (corners sorted), how many elements have it
   // and their region (-1: two regions, a face the recombination treats as the boundary).
   std::vector<TetKey> kept;

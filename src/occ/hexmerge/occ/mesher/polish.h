@@ -8,6 +8,7 @@
 #include <cstddef>
 #include <vector>
 
+#include "hexmerge/core/progress.h"
 #include "hexmerge/mesh/tet_mesh.h"
 #include "hexmerge/occ/mesher/smooth_nodes.h"
 #include "hexmerge/recombine/parameters.h"
@@ -48,8 +49,10 @@ struct PolishReport {
 /// @param[in]     recombination  the parameters recombine() will be called with
 /// @param[in]     floor          the scaled Jacobian the leftover tets are raised towards
 /// @param[out]    report         see PolishReport
+/// @param[in]     progress       the recombination's progress, its phases (empty: none);
+///                               false from it cancels (Cancelled)
 void polish_leftover_tets(TetMesh& mesh, std::vector<char> movable, SurfacePath* surface,
                           const RecombineParameters& recombination, double floor,
-                          PolishReport& report);
+                          PolishReport& report, const ProgressCallback& progress = {});
 
 }  // namespace hexmerge::mesher
