@@ -742,18 +742,22 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
   std::vector<std::int32_t> swappable = boundary_face;
   for (std::int32_t& face : swappable)
     if (face >= 0 && items_at_h.face_size[static_cast<std::size_t>(face)] < h) face = -1;
+  // The path of the boundary nodes but those of faces and edges under h in `sizes` and of
+  // face layers.
+  const auto path_holding = [&](const LocalSizeItems& sizes) {
+    std::vector<bool> kept_face(sizes.face_size.size(), false), kept_edge(sizes.edge_size.size());
+    for (std::size_t f = 0; f < kept_face.size(); ++f)
+      kept_face[f] = sizes.face_size[f] < h || layered[f];
+    for (std::size_t e = 0; e < kept_edge.size(); ++e) kept_edge[e] = sizes.edge_size[e] < h;
+    return boundary_path(shape, surface, kept_face, kept_edge, 1e-6 * h);
+  };
   // The boundary nodes inside a face or edge move along it (not swept: nothing moves there),
   // but for those of faces and edges with a local size or face layers, and the lattice points
   // (improve_tets() keeps them). Those of lattice faces and of faces between two solids move
   // (their tets on both sides kept positive): held, gmsh_as1-tu-203 at its 50k size kept 206 tets
   // under 0.2, 135 of them on faces between solids; moved, 36.
-  std::vector<bool> kept_face(items_at_h.face_size.size(), false),
-      kept_edge(items_at_h.edge_size.size());
-  for (std::size_t f = 0; f < kept_face.size(); ++f)
-    if (items_at_h.face_size[f] < h || layered[f]) kept_face[f] = true;
-  for (std::size_t e = 0; e < kept_edge.size(); ++e) kept_edge[e] = items_at_h.edge_size[e] < h;
   const std::unique_ptr<SurfacePath> along_faces =
-      sweep_axis < 0 ? boundary_path(shape, surface, kept_face, kept_edge, 1e-6 * h) : nullptr;
+      sweep_axis < 0 ? path_holding(items_at_h) : nullptr;
   improve.surface = along_faces.get();
   ImproveReport improved;
   std::vector<double> lattice_points = tets.points;
@@ -802,14 +806,7 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
   // through step 12: moved there, they broke the prisms and hexahedra across narrow faces, KiCad's
   // Samtec FMC connector 593 -> 119 hexahedra), keeping the elements at the nodes acceptable.
   if (parameters.polish && sweep_axis < 0) {
-    std::vector<bool> sized_face(items_at_h.face_size.size(), false),
-        sized_edge(items_at_h.edge_size.size());
-    for (std::size_t f = 0; f < sized_face.size(); ++f)
-      sized_face[f] = local_items.face_size[f] < h || layered[f];
-    for (std::size_t e = 0; e < sized_edge.size(); ++e)
-      sized_edge[e] = local_items.edge_size[e] < h;
-    const std::unique_ptr<SurfacePath> along =
-        boundary_path(shape, surface, sized_face, sized_edge, 1e-6 * h);
+    const std::unique_ptr<SurfacePath> along = path_holding(local_items);
     std::vector<char> movable(mesh.nb_vertices(), kFree);
     for (const std::array<index_t, 3>& triangle : tets.boundary)
       for (const index_t v : triangle) movable[v] = kFixed;
@@ -844,11 +841,9 @@ TetMesh mesh_attempt(const Shape& shape, const GivenItems& given_items, const Fr
                                                    tets.boundary, tets.boundary_marker);
   // A node lies on the CAD where it lies on the face of a boundary triangle at it: those faces
   // too (KiCad's heatsink, swept: its fillets' profile nodes took the plane beside them).
-  std::vector<std::vector<int>> triangle_faces(mesh.nb_vertices());
-  for (std::size_t i = 0; i < tets.boundary.size(); ++i)
-    for (const index_t v : tets.boundary[i]) triangle_faces[v].push_back(boundary_face[i]);
-  report.max_boundary_distance =
-      max_boundary_distance(shape, mesh, vertex_face, 1e-6 * h, triangle_faces);
+  report.max_boundary_distance = max_boundary_distance(
+      shape, mesh, vertex_face, 1e-6 * h,
+      vertex_faces(mesh.nb_vertices(), vertex_face, tets.boundary, boundary_face));
   report.local_sizes =
       local_sizes_applied(local_sizes, given_items.faces, given_items.edges, surface);
   if (sweep)

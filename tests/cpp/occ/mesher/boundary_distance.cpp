@@ -50,6 +50,15 @@ TEST(point_faces, points_added_on_the_boundary_take_a_triangles_face) {
   EXPECT_EQ(mesher::point_faces({1, 1, 1}, 2, {}, {}), (std::vector<int>{1, 1, 1}));
 }
 
+// Per vertex: its own face first, then its triangles' faces once each, in their order; faces
+// under 0 and vertices past the count left out.
+TEST(vertex_faces, own_face_then_the_triangles_faces_once_each) {
+  const std::vector<std::array<index_t, 3>> boundary = {{0, 1, 2}, {0, 2, 3}, {0, 3, 9}, {1, 2, 3}};
+  const std::vector<std::int32_t> face = {5, 4, 5, -1};
+  const auto faces = mesher::vertex_faces(4, {4, -1}, boundary, face);
+  EXPECT_EQ(faces, (std::vector<std::vector<int>>{{4, 5}, {5}, {5, 4}, {4, 5}}));
+}
+
 // A box's added point on its boundary, on no face before: measured (before: refused).
 TEST(point_faces, an_added_boundary_point_is_measured) {
   BoxMesh box;

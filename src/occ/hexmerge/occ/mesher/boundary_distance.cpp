@@ -31,6 +31,23 @@ std::vector<int> point_faces(std::vector<int> given_face, std::size_t nb_points,
   return given_face;
 }
 
+std::vector<std::vector<int>> vertex_faces(std::size_t nb_vertices,
+                                           const std::vector<int>& vertex_face,
+                                           const std::vector<std::array<index_t, 3>>& boundary,
+                                           const std::vector<std::int32_t>& boundary_face) {
+  std::vector<std::vector<int>> faces(nb_vertices);
+  for (std::size_t v = 0; v < nb_vertices && v < vertex_face.size(); ++v)
+    if (vertex_face[v] >= 0) faces[v].push_back(vertex_face[v]);
+  for (std::size_t i = 0; i < boundary.size() && i < boundary_face.size(); ++i) {
+    if (boundary_face[i] < 0) continue;
+    for (const index_t v : boundary[i])
+      if (v < nb_vertices &&
+          std::find(faces[v].begin(), faces[v].end(), boundary_face[i]) == faces[v].end())
+        faces[v].push_back(boundary_face[i]);
+  }
+  return faces;
+}
+
 double max_boundary_distance(const Shape& shape, const TetMesh& mesh,
                              const std::vector<int>& vertex_face, double tolerance,
                              const std::vector<std::vector<int>>& other_faces) {

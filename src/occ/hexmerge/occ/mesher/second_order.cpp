@@ -15,6 +15,7 @@
 #include <unordered_map>
 
 #include "hexmerge/mesh/tet_topology.h"
+#include "hexmerge/occ/mesher/boundary_distance.h"
 #include "hexmerge/occ/mesher/shape.h"
 
 namespace hexmerge::mesher {
@@ -110,22 +111,16 @@ Tet10Mesh second_order_mesh(const Shape& shape, const TetMesh& mesh,
       q[4 + k] = static_cast<index_t>(nv + edge_of(v[kEdge[k][0]], v[kEdge[k][1]]));
   }
 
-  // The faces each vertex lies on: its own and those of TetGen's boundary triangles around it.
-  std::vector<std::vector<int>> faces_of(nv);
-  for (std::size_t v = 0; v < nv && v < vertex_face.size(); ++v)
-    if (vertex_face[v] >= 0) faces_of[v].push_back(vertex_face[v]);
+  // The faces each vertex lies on: its own and those of TetGen's boundary triangles around it
+  // (sorted, for the searches below).
+  std::vector<std::vector<int>> faces_of = vertex_faces(nv, vertex_face, boundary, boundary_face);
+  for (auto& f : faces_of) std::sort(f.begin(), f.end());
   std::map<std::array<index_t, 3>, int> triangle_face;
   for (std::size_t i = 0; i < boundary.size() && i < boundary_face.size(); ++i) {
     if (boundary_face[i] < 0) continue;
     std::array<index_t, 3> key = boundary[i];
-    for (const index_t v : key)
-      if (v < nv) faces_of[v].push_back(boundary_face[i]);
     std::sort(key.begin(), key.end());
     triangle_face[key] = boundary_face[i];
-  }
-  for (auto& f : faces_of) {
-    std::sort(f.begin(), f.end());
-    f.erase(std::unique(f.begin(), f.end()), f.end());
   }
 
   // Per boundary edge, the CAD faces of the boundary triangles around it.
